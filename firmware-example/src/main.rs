@@ -1,0 +1,3 @@
+//! Firmware example (skeleton; see issue 3).
+#![no_std]
+#![no_main]

@@ -1,0 +1,1 @@
+//! Host side of the project (skeleton; see issue 5).
