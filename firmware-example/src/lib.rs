@@ -1,0 +1,28 @@
+//! Board support and the NAV440 pipeline shared by the firmware binaries.
+//!
+//! * [`uart`]: CMSDK APB UART0 of the QEMU `mps2-an38x` boards, interrupt-driven receive into a
+//!   `heapless` SPSC queue, exposed as `embedded_io::Read` and `embedded_hal_nb::serial::Read`.
+//! * [`host`]: semihosting output, exit codes, the panic handler and the HardFault handler
+//!   (every failure ends the run with a non-zero exit status instead of hanging).
+//! * [`cycles`]: instruction counting with SysTick under `qemu -icount` (see the bench binary).
+//! * [`pipeline`]: parser -> yaw sample -> `ItowClock` -> `YawBank` -> CSV rows.
+//!
+//! This is the only crate of the workspace with `unsafe` (register access); every `unsafe`
+//! block carries a `// SAFETY:` comment.
+#![no_std]
+
+pub mod cycles;
+pub mod host;
+// pub mod pipeline;
+pub mod uart;
+
+/// Numeric type of the estimator bank: `f32` on an FPU target (`thumbv7em-none-eabihf`), the
+/// saturating fixed-point [`estimators::Fx`] on targets without an FPU or with the
+/// `fixed-point` feature.
+#[cfg(not(any(feature = "fixed-point", not(target_abi = "eabihf"))))]
+pub type Num = f32;
+/// Numeric type of the estimator bank: `f32` on an FPU target (`thumbv7em-none-eabihf`), the
+/// saturating fixed-point [`estimators::Fx`] on targets without an FPU or with the
+/// `fixed-point` feature.
+#[cfg(any(feature = "fixed-point", not(target_abi = "eabihf")))]
+pub type Num = estimators::Fx;

@@ -1,0 +1,218 @@
+//! CMSDK APB UART0 of the QEMU `mps2-an385`/`mps2-an386` boards (base `0x4000_4000`, RX IRQ 0).
+//!
+//! Receive is interrupt driven: the RX interrupt moves bytes from the one-byte data register
+//! into a `heapless::spsc` queue (the interrupt is the single producer, [`Uart0`] the single
+//! consumer). When the queue is full the interrupt handler stops taking bytes and masks the RX
+//! interrupt; the consumer unmasks it once it has made room (back-pressure). The byte waits in
+//! the data register meanwhile. On QEMU the emulated line then simply waits (lossless); on real
+//! hardware a following byte would set the UART's RX-overrun flag, which the driver counts
+//! ([`Uart0::overruns`]) and clears, so a loss is never silent.
+//!
+//! Registers (CMSDK APB UART TRM): DATA +0x0, STATE +0x4 (bit0 TX full, bit1 RX full,
+//! bit2 TX overrun, bit3 RX overrun; write 1 to clear the overrun bits), CTRL +0x8 (bit0 TX
+//! enable, bit1 RX enable, bit3 RX interrupt enable), INTSTATUS/INTCLEAR +0xC (bit1 RX),
+//! BAUDDIV +0x10.
+
+use core::cell::RefCell;
+use core::convert::Infallible;
+use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use cortex_m::interrupt::InterruptNumber;
+use critical_section::{CriticalSection, Mutex};
+use heapless::spsc::{Consumer, Producer, Queue};
+
+/// Base address of UART0 on the mps2 boards.
+const BASE: usize = 0x4000_4000;
+const DATA: usize = 0x00;
+const STATE: usize = 0x04;
+const CTRL: usize = 0x08;
+const INTCLEAR: usize = 0x0C;
+const BAUDDIV: usize = 0x10;
+
+const STATE_RX_FULL: u32 = 1 << 1;
+const STATE_RX_OVERRUN: u32 = 1 << 3;
+const CTRL_TX_EN: u32 = 1 << 0;
+const CTRL_RX_EN: u32 = 1 << 1;
+const CTRL_RX_IE: u32 = 1 << 3;
+const INT_RX: u32 = 1 << 1;
+
+/// NVIC interrupt number of UART0 receive on the mps2 boards.
+pub const RX_IRQ: u16 = 0;
+
+/// Capacity of the receive queue in bytes (the queue holds `N - 1` of its `N` slots).
+pub const RX_QUEUE_BYTES: usize = 512 - 1;
+
+/// Producer end of the receive queue, owned by the RX interrupt once [`Uart0::take`] ran.
+static PRODUCER: Mutex<RefCell<Option<Producer<'static, u8>>>> = Mutex::new(RefCell::new(None));
+/// RX-overrun events seen in the UART's STATE register (bytes lost in hardware).
+static OVERRUNS: AtomicU32 = AtomicU32::new(0);
+/// Times the interrupt stopped on a full queue (back-pressure, no loss).
+static STALLS: AtomicU32 = AtomicU32::new(0);
+/// The RX interrupt is masked because the queue was full.
+static PAUSED: AtomicBool = AtomicBool::new(false);
+
+fn read_reg(offset: usize) -> u32 {
+    // SAFETY: BASE + offset is one of the UART0 registers listed above, a valid, aligned
+    // MMIO word on the mps2 boards; volatile reads of these registers have no side effect
+    // besides the documented ones (reading DATA pops the received byte).
+    unsafe { core::ptr::read_volatile((BASE + offset) as *const u32) }
+}
+
+fn write_reg(offset: usize, value: u32) {
+    // SAFETY: as in `read_reg`; the values written are those the TRM defines for the register.
+    unsafe { core::ptr::write_volatile((BASE + offset) as *mut u32, value) }
+}
+
+/// Single-core counter increment that also works on `thumbv6m` (no atomic read-modify-write).
+fn bump(counter: &AtomicU32) {
+    counter.store(counter.load(Ordering::Relaxed).wrapping_add(1), Ordering::Relaxed);
+}
+
+#[derive(Clone, Copy)]
+struct Irq(u16);
+
+// SAFETY: `number` returns a fixed, valid interrupt number of the mps2 boards' NVIC.
+unsafe impl InterruptNumber for Irq {
+    fn number(self) -> u16 {
+        self.0
+    }
+}
+
+/// Moves received bytes from the data register into the queue until the register is empty or
+/// the queue is full (then masks the RX interrupt). Runs in the interrupt or in a critical
+/// section, so it never races itself.
+fn service_rx(cs: CriticalSection<'_>) {
+    let state = read_reg(STATE);
+    if state & STATE_RX_OVERRUN != 0 {
+        bump(&OVERRUNS);
+        write_reg(STATE, STATE_RX_OVERRUN);
+    }
+    let mut producer = PRODUCER.borrow_ref_mut(cs);
+    let Some(producer) = producer.as_mut() else {
+        return;
+    };
+    while read_reg(STATE) & STATE_RX_FULL != 0 {
+        if !producer.ready() {
+            write_reg(CTRL, read_reg(CTRL) & !CTRL_RX_IE);
+            PAUSED.store(true, Ordering::Release);
+            bump(&STALLS);
+            return;
+        }
+        let byte = (read_reg(DATA) & 0xFF) as u8;
+        // Cannot fail: `ready()` was checked just above and only this code enqueues.
+        let _ = producer.enqueue(byte);
+    }
+}
+
+/// Body of the UART0 RX interrupt (dispatched from `DefaultHandler`, IRQ [`RX_IRQ`]).
+pub fn on_rx_interrupt() {
+    write_reg(INTCLEAR, INT_RX);
+    critical_section::with(service_rx);
+}
+
+/// UART0 with interrupt-driven receive. Created once by [`Uart0::take`].
+pub struct Uart0 {
+    rx: Consumer<'static, u8>,
+}
+
+impl Uart0 {
+    /// Configures UART0 (`bauddiv` = bus clock / baud rate, at least 16; QEMU ignores the
+    /// rate), enables TX, RX and the RX interrupt, and unmasks it in the NVIC.
+    /// Returns `None` if called a second time.
+    pub fn take(bauddiv: u32) -> Option<Self> {
+        let queue: &'static mut Queue<u8, { RX_QUEUE_BYTES + 1 }> =
+            cortex_m::singleton!(: Queue<u8, { RX_QUEUE_BYTES + 1 }> = Queue::new())?;
+        let (producer, consumer) = queue.split();
+        critical_section::with(|cs| PRODUCER.borrow(cs).replace(Some(producer)));
+        write_reg(BAUDDIV, bauddiv.max(16));
+        write_reg(STATE, STATE_RX_OVERRUN);
+        write_reg(INTCLEAR, INT_RX);
+        write_reg(CTRL, CTRL_TX_EN | CTRL_RX_EN | CTRL_RX_IE);
+        // SAFETY: the handler for this IRQ only touches PRODUCER (behind a critical section),
+        // the atomics above and UART0 registers, so unmasking it cannot break a critical
+        // section of the caller.
+        unsafe { cortex_m::peripheral::NVIC::unmask(Irq(RX_IRQ)) };
+        Some(Self { rx: consumer })
+    }
+
+    /// RX-overrun events flagged by the UART hardware since start (bytes lost before the
+    /// interrupt could read them). Always 0 under QEMU.
+    pub fn overruns(&self) -> u32 {
+        OVERRUNS.load(Ordering::Relaxed)
+    }
+
+    /// Times the receive queue was full and reception was paused (back-pressure, no loss).
+    pub fn stalls(&self) -> u32 {
+        STALLS.load(Ordering::Relaxed)
+    }
+
+    /// Copies queued bytes into `buf`; resumes reception if it was paused. Returns the count.
+    fn drain(&mut self, buf: &mut [u8]) -> usize {
+        let mut n = 0;
+        for slot in buf.iter_mut() {
+            match self.rx.dequeue() {
+                Some(b) => {
+                    *slot = b;
+                    n += 1;
+                }
+                None => break,
+            }
+        }
+        if n > 0 && PAUSED.load(Ordering::Acquire) {
+            critical_section::with(|cs| {
+                PAUSED.store(false, Ordering::Release);
+                write_reg(CTRL, read_reg(CTRL) | CTRL_RX_IE);
+                // The byte left in the data register raised no new interrupt: take it now.
+                service_rx(cs);
+            });
+        }
+        n
+    }
+
+    /// Sleeps until an interrupt arrives if the queue is empty (race-free: the check and the
+    /// `wfi` run with interrupts masked; a pending interrupt still wakes the core).
+    fn wait_for_data(&mut self) {
+        cortex_m::interrupt::disable();
+        if !self.rx.ready() {
+            cortex_m::asm::wfi();
+        }
+        // SAFETY: re-enables interrupts disabled 3 lines above; no critical section of the
+        // caller is open here (this function is never called from one).
+        unsafe { cortex_m::interrupt::enable() };
+    }
+}
+
+impl embedded_io::ErrorType for Uart0 {
+    type Error = Infallible;
+}
+
+impl embedded_io::Read for Uart0 {
+    /// Blocks (in `wfi`) until at least one byte is available, then returns what is queued.
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Infallible> {
+        if buf.is_empty() {
+            return Ok(0);
+        }
+        loop {
+            let n = self.drain(buf);
+            if n > 0 {
+                return Ok(n);
+            }
+            self.wait_for_data();
+        }
+    }
+}
+
+impl embedded_hal_nb::serial::ErrorType for Uart0 {
+    type Error = Infallible;
+}
+
+impl embedded_hal_nb::serial::Read<u8> for Uart0 {
+    /// One byte from the queue, or `WouldBlock` when it is empty.
+    fn read(&mut self) -> nb::Result<u8, Infallible> {
+        let mut b = [0u8; 1];
+        if self.drain(&mut b) == 1 {
+            Ok(b[0])
+        } else {
+            Err(nb::Error::WouldBlock)
+        }
+    }
+}
