@@ -1,0 +1,151 @@
+//! From samples at the sensor rate to steps of size `h`.
+
+use crate::{ConfigError, Estimator, Hold, Real, SampleError};
+
+/// What the sample clock decided for one accepted sample.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Tick {
+    /// First sample (k = 0): initialise every state from it, report 0.
+    Init,
+    /// Run this many steps `n_k = round((t_k - t_{k-1}) / h) >= 1` from the previous sample to
+    /// this one.
+    Steps(u32),
+    /// The interval exceeded the maximum gap: re-initialise from this sample, report 0.
+    Gap,
+}
+
+/// Counts steps between integer-microsecond timestamps.
+///
+/// At sample `k >= 1`, `n_k = round((t_k - t_{k-1}) / h)`, at least 1 (an interval shorter than
+/// `h/2` still runs one step, so every accepted sample is seen). An interval longer than
+/// `max_gap` gives [`Tick::Gap`]. A timestamp not later than the previous one is refused and
+/// leaves the clock unchanged.
+#[derive(Clone, Copy, Debug)]
+pub struct SampleClock {
+    h_us: u64,
+    max_gap_us: u64,
+    last: Option<u64>,
+}
+
+impl SampleClock {
+    /// `h`: step in s, a whole number of microseconds in `[1e-6, 1]`; `max_gap_s`: longest
+    /// interval integrated across, s (`>= h`).
+    pub fn new(h: f32, max_gap_s: f32) -> Result<Self, ConfigError> {
+        let h_us = step_us(h)?;
+        let g = f64::from(max_gap_s);
+        if !g.is_finite() {
+            return Err(ConfigError::NotFinite("max_gap_s"));
+        }
+        let gap_us = libm::round(g * 1e6);
+        if gap_us < h_us as f64 || gap_us > 4.0e9 {
+            return Err(ConfigError::GapTooShort);
+        }
+        Ok(Self {
+            h_us,
+            max_gap_us: gap_us as u64,
+            last: None,
+        })
+    }
+
+    /// The step `h` in microseconds.
+    pub fn step_us(&self) -> u64 {
+        self.h_us
+    }
+
+    /// Classifies the sample at `t_us` (µs) and, if accepted, records it as the last one.
+    pub fn tick(&mut self, t_us: u64) -> Result<Tick, SampleError> {
+        let tick = self.peek(t_us)?;
+        self.last = Some(t_us);
+        Ok(tick)
+    }
+
+    /// Like [`SampleClock::tick`] without recording the sample.
+    pub fn peek(&self, t_us: u64) -> Result<Tick, SampleError> {
+        match self.last {
+            None => Ok(Tick::Init),
+            Some(prev) if t_us <= prev => Err(SampleError::NonIncreasingTime),
+            Some(prev) => {
+                let dt = t_us - prev;
+                if dt > self.max_gap_us {
+                    Ok(Tick::Gap)
+                } else {
+                    let n = (dt + self.h_us / 2) / self.h_us;
+                    // dt <= max_gap <= 4e9 us, h >= 1 us: n fits in u32.
+                    Ok(Tick::Steps(u32::try_from(n.max(1)).unwrap_or(u32::MAX)))
+                }
+            }
+        }
+    }
+
+    /// Forgets the last sample (the next one is a k = 0 sample).
+    pub fn clear(&mut self) {
+        self.last = None;
+    }
+}
+
+/// Checks and converts the step `h` (s) to whole microseconds.
+pub(crate) fn step_us(h: f32) -> Result<u64, ConfigError> {
+    let h = f64::from(h);
+    if !h.is_finite() {
+        return Err(ConfigError::NotFinite("h"));
+    }
+    let us = libm::round(h * 1e6);
+    if !(1.0..=1e6).contains(&us) || libm::fabs(us - h * 1e6) > 1e-3 {
+        return Err(ConfigError::StepNotWholeMicroseconds);
+    }
+    Ok(us as u64)
+}
+
+/// One estimator behind the sample adapter: feed it `(t_us, y)` samples at the sensor rate.
+///
+/// * k = 0: the estimator is reset to `y_0` (position = `y_0`, all velocity / learning /
+///   delay states 0) and the reported estimate is 0.
+/// * k >= 1: `n_k = round((t_k - t_{k-1}) / h)` steps as [`Hold`] prescribes, then the output
+///   of the last step is reported.
+/// * interval > `max_gap`: re-initialised from the new sample as at k = 0, reports 0.
+/// * NaN / infinite `y` or non-increasing `t`: error, state unchanged.
+#[derive(Clone, Copy, Debug)]
+pub struct SampleAdapter<T: Real, E: Estimator<T>> {
+    est: E,
+    clock: SampleClock,
+    hold: Hold,
+    y_prev: T,
+}
+
+impl<T: Real, E: Estimator<T>> SampleAdapter<T, E> {
+    /// Wraps `est`, which must have been built for the same step `h` (s).
+    pub fn new(est: E, h: f32, max_gap_s: f32, hold: Hold) -> Result<Self, ConfigError> {
+        Ok(Self {
+            est,
+            clock: SampleClock::new(h, max_gap_s)?,
+            hold,
+            y_prev: T::ZERO,
+        })
+    }
+
+    /// Feeds one sample: `t_us` in µs, `y` in the estimator's input unit.
+    pub fn update(&mut self, t_us: u64, y: f32) -> Result<T, SampleError> {
+        if !y.is_finite() {
+            return Err(SampleError::NotFinite);
+        }
+        let yt = T::from_f32(y);
+        match self.clock.tick(t_us)? {
+            Tick::Init | Tick::Gap => {
+                self.est.reset(yt);
+                self.y_prev = yt;
+                Ok(T::ZERO)
+            }
+            Tick::Steps(n) => {
+                let out = self.est.advance(self.y_prev, yt, n, self.hold);
+                self.y_prev = yt;
+                Ok(out)
+            }
+        }
+    }
+
+    /// The wrapped estimator.
+    pub fn estimator(&self) -> &E {
+        &self.est
+    }
+}

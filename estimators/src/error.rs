@@ -1,0 +1,88 @@
+//! Typed errors.
+
+/// A parameter set that a constructor rejects. Every constructor validates its physical
+/// parameters once; an accepted configuration can never make an update panic.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ConfigError {
+    /// A parameter is NaN or infinite (the payload names it, e.g. `"gamma1"`).
+    NotFinite(&'static str),
+    /// A gain or time constant that must be `> 0` is not (the payload names it).
+    NotPositive(&'static str),
+    /// A gain that must be `>= 0` is negative (the payload names it).
+    Negative(&'static str),
+    /// `K1` is outside `(0, 1]` (Theorem 3.1 needs `0 < K1^T K1 <= 1`).
+    K1OutOfRange,
+    /// The step `h` is not a whole number of microseconds in `[1 us, 1 s]` (the sample adapter
+    /// counts steps on integer microsecond timestamps).
+    StepNotWholeMicroseconds,
+    /// The explicit-Euler step is too large for a gain: `h * gain` must stay below 1 (stability
+    /// of the forward-Euler update; the payload names the gain).
+    StepTooLarge(&'static str),
+    /// The maximum gap is shorter than one step `h`.
+    GapTooShort,
+    /// The nominal sample period is not at least one step `h`.
+    SamplePeriodTooShort,
+}
+
+/// A sample that [`crate::YawBank::update`] (or [`crate::SampleAdapter`]) refuses. The state is
+/// left exactly as it was before the call.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SampleError {
+    /// The sample value is NaN or infinite.
+    NotFinite,
+    /// The timestamp is not later than the previous accepted one.
+    NonIncreasingTime,
+}
+
+impl core::fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::NotFinite(p) => write!(f, "parameter `{p}` is not finite"),
+            Self::NotPositive(p) => write!(f, "parameter `{p}` must be > 0"),
+            Self::Negative(p) => write!(f, "parameter `{p}` must be >= 0"),
+            Self::K1OutOfRange => f.write_str("K1 must be in (0, 1]"),
+            Self::StepNotWholeMicroseconds => {
+                f.write_str("step h must be a whole number of microseconds in [1e-6, 1] s")
+            }
+            Self::StepTooLarge(p) => write!(f, "h * `{p}` must be < 1 for the Euler step"),
+            Self::GapTooShort => f.write_str("max_gap_s must be at least one step h"),
+            Self::SamplePeriodTooShort => f.write_str("sample period must be at least h"),
+        }
+    }
+}
+
+impl core::fmt::Display for SampleError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::NotFinite => f.write_str("sample is NaN or infinite"),
+            Self::NonIncreasingTime => f.write_str("timestamp not later than the previous one"),
+        }
+    }
+}
+
+impl core::error::Error for ConfigError {}
+impl core::error::Error for SampleError {}
+
+/// Checks that `x` is finite and `> 0`.
+pub(crate) fn positive(name: &'static str, x: f64) -> Result<f64, ConfigError> {
+    if !x.is_finite() {
+        Err(ConfigError::NotFinite(name))
+    } else if x <= 0.0 {
+        Err(ConfigError::NotPositive(name))
+    } else {
+        Ok(x)
+    }
+}
+
+/// Checks that `x` is finite and `>= 0`.
+pub(crate) fn non_negative(name: &'static str, x: f64) -> Result<f64, ConfigError> {
+    if !x.is_finite() {
+        Err(ConfigError::NotFinite(name))
+    } else if x < 0.0 {
+        Err(ConfigError::Negative(name))
+    } else {
+        Ok(x)
+    }
+}

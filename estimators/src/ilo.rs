@@ -1,0 +1,183 @@
+//! Iterative learning observer (Chen & Chowdhury 2007, paper eq. 9) as a velocity estimator
+//! (paper eq. 13).
+
+use crate::error::positive;
+use crate::linear::{LinearLaw, LIN_MAX};
+use crate::{ConfigError, Estimator, Real};
+
+/// Parameters of the ILO velocity estimator in physical units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct IloConfig {
+    /// Learning gain `K1`, dimensionless, in `(0, 1]` (1: pure discrete integral update,
+    /// < 1: leaky).
+    pub k1: f32,
+    /// Observer gain `L`, 1/s, `> 0`.
+    pub l: f32,
+    /// Learning gain `K2`, dimensionless per update (velocity per unit position error per
+    /// `tau`), `> 0`. From a Lyapunov weight `Q` use [`IloConfig::from_lq`].
+    pub k2: f32,
+}
+
+impl IloConfig {
+    /// Gains from `(K1, L, Q)` by Theorem 3.1 for the scalar case `A = 0, C = F = 1`:
+    /// `(-L) P + P (-L) = -Q` gives `P = Q / (2L)` and `P F = K2 C` gives `K2 = Q / (2L)`.
+    pub const fn from_lq(k1: f32, l: f32, q: f32) -> Self {
+        Self {
+            k1,
+            l,
+            k2: q / (2.0 * l),
+        }
+    }
+}
+
+/// The ILO velocity estimator (`A = 0, B = 0, C = 1, F = 1`) with learning delay
+/// `tau = D * h` held in a statically sized buffer `[T; D]`:
+///
+/// ```text
+/// dxhat/dt = L (y - xhat) + v(t)
+/// v(t)     = K1 v(t - tau) + K2 (y - xhat)
+/// ```
+///
+/// Output: `v` (deg/s for `y` in deg). `D = 0` does not compile.
+///
+/// RAM: `(D + 6)` words of `T` plus the ring index (see [`crate::ram`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Ilo<T: Real, const D: usize> {
+    hl: T,
+    h: T,
+    k1: T,
+    k2: T,
+    xhat: T,
+    out: T,
+    /// `buf[head]` is the oldest value `v_{n-D}`.
+    buf: [T; D],
+    head: usize,
+}
+
+impl<T: Real, const D: usize> Ilo<T, D> {
+    const D_POSITIVE: () = assert!(D >= 1, "the ILO delay D must be at least 1 step");
+
+    /// Builds the estimator for step `h` (s); `tau = D * h`. Errors: `K1` outside `(0, 1]`,
+    /// non-positive or non-finite `L`, `K2`, `h`; `h * L >= 1`.
+    pub fn new(cfg: &IloConfig, h: f32) -> Result<Self, ConfigError> {
+        #[allow(clippy::let_unit_value)]
+        let () = Self::D_POSITIVE;
+        let h = positive("h", f64::from(h))?;
+        let l = positive("L", f64::from(cfg.l))?;
+        let k2 = positive("K2", f64::from(cfg.k2))?;
+        let k1 = f64::from(cfg.k1);
+        if !k1.is_finite() {
+            return Err(ConfigError::NotFinite("K1"));
+        }
+        if !(k1 > 0.0 && k1 <= 1.0) {
+            return Err(ConfigError::K1OutOfRange);
+        }
+        if h * l >= 1.0 {
+            return Err(ConfigError::StepTooLarge("L"));
+        }
+        Ok(Self {
+            hl: T::from_f64(h * l),
+            h: T::from_f64(h),
+            k1: T::from_f64(k1),
+            k2: T::from_f64(k2),
+            xhat: T::ZERO,
+            out: T::ZERO,
+            buf: [T::ZERO; D],
+            head: 0,
+        })
+    }
+
+    /// Position estimate `xhat` (unit of `y`).
+    pub fn xhat(&self) -> T {
+        self.xhat
+    }
+
+    /// The learning delay `tau = D * h` in steps.
+    pub const DELAY_STEPS: usize = D;
+}
+
+impl<T: Real, const D: usize> Estimator<T> for Ilo<T, D> {
+    fn reset(&mut self, y0: T) {
+        self.xhat = y0;
+        self.out = T::ZERO;
+        self.buf = [T::ZERO; D];
+        self.head = 0;
+    }
+
+    /// Explicit Euler step with `e_n = y_n - xhat_n`:
+    ///
+    /// ```text
+    /// v_n        = K1 v_{n-D} + K2 e_n
+    /// xhat_{n+1} = xhat_n + h (L e_n + v_n)
+    /// ```
+    /// Returns `v_n`.
+    #[inline]
+    fn step(&mut self, y: T) -> T {
+        let e = y - self.xhat;
+        let old = self.buf.get(self.head).copied().unwrap_or(T::ZERO);
+        let v = self.k1 * old + self.k2 * e;
+        if let Some(slot) = self.buf.get_mut(self.head) {
+            *slot = v;
+        }
+        self.head += 1;
+        if self.head >= D {
+            self.head = 0;
+        }
+        self.xhat = self.xhat + (self.hl * e + self.h * v);
+        self.out = v;
+        v
+    }
+
+    fn output(&self) -> T {
+        self.out
+    }
+}
+
+impl<T: Real, const D: usize> LinearLaw<T> for Ilo<T, D> {
+    const DIM: usize = 1 + D;
+    const POSITION: [bool; LIN_MAX] = [true, false, false, false];
+
+    /// `[xhat, v_{n-1}, v_{n-2}, .., v_{n-D}]` (newest first).
+    fn lin_state(&self) -> [T; LIN_MAX] {
+        let mut s = [T::ZERO; LIN_MAX];
+        if let Some(x) = s.get_mut(0) {
+            *x = self.xhat;
+        }
+        for i in 0..D.min(LIN_MAX - 1) {
+            // newest is at head - 1, then head - 2, ...
+            let idx = (self.head + D - 1 - i) % D;
+            if let (Some(dst), Some(src)) = (s.get_mut(1 + i), self.buf.get(idx)) {
+                *dst = *src;
+            }
+        }
+        s
+    }
+
+    fn set_lin_state(&mut self, s: &[T; LIN_MAX]) {
+        self.xhat = s[0];
+        self.head = 0;
+        // buf[0] must be the oldest: v_{n-D} = s[D], ..., newest v_{n-1} = s[1] at buf[D-1].
+        for j in 0..D.min(LIN_MAX - 1) {
+            if let (Some(dst), Some(src)) = (self.buf.get_mut(j), s.get(D - j)) {
+                *dst = *src;
+            }
+        }
+        self.out = s[1];
+    }
+
+    fn lin_step_f64(&self, s: &mut [f64; LIN_MAX], y: f64) -> f64 {
+        let e = y - s[0];
+        let oldest = s.get(D).copied().unwrap_or(0.0);
+        let v = self.k1.to_f64() * oldest + self.k2.to_f64() * e;
+        s[0] += self.hl.to_f64() * e + self.h.to_f64() * v;
+        // shift the delay line: newest first
+        let mut i = D.min(LIN_MAX - 1);
+        while i > 1 {
+            s[i] = s[i - 1];
+            i -= 1;
+        }
+        s[1] = v;
+        v
+    }
+}

@@ -1,0 +1,167 @@
+//! Steady-state constant-acceleration Kalman tracker (alpha-beta-gamma filter): the reference
+//! an engineer would otherwise use. Not from the paper.
+
+use crate::error::positive;
+use crate::{ConfigError, Real};
+
+/// Parameters of the tracker in physical units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct KalmanConfig {
+    /// Nominal sample period `dt0`, s (NAV440 at 100 Hz: 0.01). The steady-state gains are for
+    /// this period; the prediction uses each sample's actual `dt`.
+    pub dt: f32,
+    /// Power spectral density `q` of the white jerk driving the model, unit^2/s^5
+    /// (deg^2/s^5 for yaw).
+    pub q: f32,
+    /// Measurement noise variance `r`, unit^2 (deg^2).
+    pub r: f32,
+}
+
+/// Constant-acceleration model `x' = v, v' = a, a' = w` (white jerk of PSD `q`), position
+/// measured with variance `r`, discretised exactly at `dt0`:
+///
+/// ```text
+/// F = [[1, dt, dt^2/2], [0, 1, dt], [0, 0, 1]],   H = [1, 0, 0]
+/// Q = q [[dt^5/20, dt^4/8, dt^3/6], [dt^4/8, dt^3/3, dt^2/2], [dt^3/6, dt^2/2, dt]]
+/// ```
+///
+/// The steady-state gain `K = [alpha, beta/dt0, 2 gamma/dt0^2]` solves the discrete Riccati
+/// equation (iterated once at construction in `f64`). Per sample (`dt` = actual interval):
+///
+/// ```text
+/// predict: x- = x + v dt + a dt^2/2,  v- = v + a dt,  a- = a
+/// update:  r = y - x-;  x = x- + K0 r,  v = v- + K1 r,  a = a- + K2 r
+/// ```
+///
+/// Outputs `v` (deg/s) and `a` (deg/s^2). RAM: 6 words of `T`.
+#[derive(Clone, Copy, Debug)]
+pub struct Kalman<T: Real> {
+    k: [T; 3],
+    x: T,
+    v: T,
+    a: T,
+}
+
+impl<T: Real> Kalman<T> {
+    /// Builds the tracker; the Riccati iteration runs here (at most 2000 iterations of 3x3
+    /// `f64` algebra). Errors: non-positive or non-finite `dt`, `q`, `r`.
+    pub fn new(cfg: &KalmanConfig) -> Result<Self, ConfigError> {
+        let dt = positive("dt", f64::from(cfg.dt))?;
+        let q = positive("q", f64::from(cfg.q))?;
+        let r = positive("r", f64::from(cfg.r))?;
+        let k = steady_state_gain(dt, q, r);
+        Ok(Self {
+            k: [T::from_f64(k[0]), T::from_f64(k[1]), T::from_f64(k[2])],
+            x: T::ZERO,
+            v: T::ZERO,
+            a: T::ZERO,
+        })
+    }
+
+    /// The steady-state gain `[K0, K1 (1/s), K2 (1/s^2)]`.
+    pub fn gain(&self) -> [T; 3] {
+        self.k
+    }
+
+    /// Starts at position `y0` with zero velocity and acceleration.
+    pub fn reset(&mut self, y0: T) {
+        self.x = y0;
+        self.v = T::ZERO;
+        self.a = T::ZERO;
+    }
+
+    /// One predict + update with measurement `y` taken `dt` (s, as `T`) after the previous one.
+    #[inline]
+    pub fn update(&mut self, y: T, dt: T) {
+        let half = T::from_f64(0.5);
+        let xp = self.x + dt * (self.v + half * self.a * dt);
+        let vp = self.v + self.a * dt;
+        let r = y - xp;
+        let [k0, k1, k2] = self.k;
+        self.x = xp + k0 * r;
+        self.v = vp + k1 * r;
+        self.a = self.a + k2 * r;
+    }
+
+    /// Position estimate (unit of `y`).
+    pub fn position(&self) -> T {
+        self.x
+    }
+
+    /// Velocity estimate (unit/s).
+    pub fn velocity(&self) -> T {
+        self.v
+    }
+
+    /// Acceleration estimate (unit/s^2).
+    pub fn acceleration(&self) -> T {
+        self.a
+    }
+}
+
+type M3 = [[f64; 3]; 3];
+
+fn mat_mul(a: &M3, b: &M3) -> M3 {
+    let mut c = [[0.0; 3]; 3];
+    for (i, row) in c.iter_mut().enumerate() {
+        for (j, x) in row.iter_mut().enumerate() {
+            *x = (0..3).map(|k| a[i][k] * b[k][j]).sum();
+        }
+    }
+    c
+}
+
+fn transpose(a: &M3) -> M3 {
+    let mut t = [[0.0; 3]; 3];
+    for (i, row) in t.iter_mut().enumerate() {
+        for (j, x) in row.iter_mut().enumerate() {
+            *x = a[j][i];
+        }
+    }
+    t
+}
+
+/// Steady-state Kalman gain of the constant-acceleration model (see [`Kalman`]).
+pub fn steady_state_gain(dt: f64, q: f64, r: f64) -> [f64; 3] {
+    let f: M3 = [[1.0, dt, dt * dt / 2.0], [0.0, 1.0, dt], [0.0, 0.0, 1.0]];
+    let d2 = dt * dt;
+    let d3 = d2 * dt;
+    let d4 = d3 * dt;
+    let d5 = d4 * dt;
+    let qm: M3 = [
+        [q * d5 / 20.0, q * d4 / 8.0, q * d3 / 6.0],
+        [q * d4 / 8.0, q * d3 / 3.0, q * d2 / 2.0],
+        [q * d3 / 6.0, q * d2 / 2.0, q * dt],
+    ];
+    let ft = transpose(&f);
+    let mut p = qm;
+    let mut k = [0.0; 3];
+    for _ in 0..2000 {
+        // predict
+        let mut pp = mat_mul(&mat_mul(&f, &p), &ft);
+        for (row, qr) in pp.iter_mut().zip(qm.iter()) {
+            for (x, qv) in row.iter_mut().zip(qr.iter()) {
+                *x += qv;
+            }
+        }
+        // update
+        let s = pp[0][0] + r;
+        let kn = [pp[0][0] / s, pp[1][0] / s, pp[2][0] / s];
+        let mut pn = pp;
+        for i in 0..3 {
+            for j in 0..3 {
+                pn[i][j] = pp[i][j] - kn[i] * pp[0][j];
+            }
+        }
+        let change = (0..3)
+            .map(|i| libm::fabs(kn[i] - k[i]) / (libm::fabs(kn[i]) + 1e-300))
+            .fold(0.0, f64::max);
+        k = kn;
+        p = pn;
+        if change < 1e-13 {
+            break;
+        }
+    }
+    k
+}
