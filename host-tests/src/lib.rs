@@ -1,1 +1,16 @@
-//! Host side of the project (skeleton; see issue 5).
+//! Host side of the project: replay of NAV440 captures through the same parser and estimator
+//! bank the firmware runs, capture synthesis, the paper's experiment, gain tuning and plots.
+//! The `nav440` binary (src/main.rs) is a thin command-line layer over these modules, so the
+//! integration tests (and the firmware's equivalence test) can call the pipeline directly.
+
+pub mod corrupt;
+pub mod decode;
+pub mod error;
+pub mod gains;
+pub mod motion;
+pub mod paper;
+pub mod plot;
+pub mod plots;
+pub mod replay;
+pub mod synth;
+pub mod tune;

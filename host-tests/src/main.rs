@@ -1,2 +1,452 @@
-//! The `nav440` command-line tool (skeleton; see issue 5).
-fn main() {}
+//! `nav440`: replay, synthesise, estimate, reproduce the paper, tune and plot NAV440 captures.
+//!
+//! Exit codes: 0 success; 1 other failure (estimator/encoder error); 2 usage error (bad
+//! argument); 3 input file missing, unreadable or empty; 4 input holds no NAV440 frame (or no
+//! packet carrying yaw); 5 output could not be written. Every error is one line on stderr.
+
+use clap::{Parser, Subcommand, ValueEnum};
+use host_tests::error::{Error, Result};
+use host_tests::{
+    corrupt::Corruption, gains, motion::ProfileKind, paper, plots, replay, synth, tune,
+};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "nav440",
+    version,
+    about = "Replay, synthesise and analyse Crossbow NAV440 captures (yaw velocity/acceleration estimators of Kawakami et al. 2013)",
+    after_help = "Units: s, deg, deg/s, deg/s^2.\nExit codes: 0 ok, 1 other failure, 2 usage, 3 input missing/unreadable/empty, 4 not NAV440 data, 5 output failure."
+)]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum HoldArg {
+    /// Linear interpolation between the last two samples (causal, no added latency).
+    Linear,
+    /// Zero-order hold of the newest sample.
+    Zoh,
+}
+
+impl From<HoldArg> for estimators::Hold {
+    fn from(h: HoldArg) -> Self {
+        match h {
+            HoldArg::Linear => estimators::Hold::Linear,
+            HoldArg::Zoh => estimators::Hold::ZeroOrder,
+        }
+    }
+}
+
+/// Options shared by every command that runs the estimator bank.
+#[derive(clap::Args, Debug, Clone)]
+struct BankArgs {
+    /// Sample adapter: linear interpolation or zero-order hold.
+    #[arg(long, value_enum, default_value = "linear")]
+    hold: HoldArg,
+    /// Observer integration step h, s.
+    #[arg(long, default_value_t = 1e-4)]
+    step: f32,
+    /// Gains file (TOML written by `nav440 tune`); default: the paper's presets.
+    #[arg(long, value_name = "FILE")]
+    gains: Option<PathBuf>,
+}
+
+#[derive(Subcommand, Debug)]
+enum Cmd {
+    /// Print parser statistics as one JSON object.
+    Stats {
+        /// Capture file (raw NAV440 byte stream).
+        file: PathBuf,
+    },
+    /// Print one CSV row per frame with its fields in SI units.
+    Decode {
+        /// Capture file.
+        file: PathBuf,
+        /// Only frames of this type (e.g. A2, N1, S1, NAK).
+        #[arg(long = "type", value_name = "TYPE")]
+        packet_type: Option<String>,
+    },
+    /// Run the estimator bank; CSV (t,yaw,yaw_rate,<7 velocities>,<7 accelerations>) on stdout.
+    Estimate {
+        /// Capture file.
+        file: PathBuf,
+        #[command(flatten)]
+        bank: BankArgs,
+        /// Add N(0, V) deg^2 noise to yaw before estimation.
+        #[arg(long, value_name = "V")]
+        noise_var: Option<f64>,
+        /// Seed of the noise.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Run the fixed-point bank (YawBank<Fx>, as the no-FPU firmware) instead of f32.
+        #[arg(long)]
+        fixed: bool,
+        /// Write the CSV here instead of stdout.
+        #[arg(short, long, value_name = "FILE")]
+        output: Option<PathBuf>,
+    },
+    /// Reproduce the paper's Tables 1 and 3 (noise 0.01 and 0.5 deg^2, 3 seeds, MSE over 0-30 s).
+    Paper {
+        /// Capture file.
+        file: PathBuf,
+        #[command(flatten)]
+        bank: BankArgs,
+        /// Print JSON instead of tables.
+        #[arg(long)]
+        json: bool,
+        /// MSE window end, s.
+        #[arg(long, default_value_t = 30.0)]
+        window: f64,
+    },
+    /// Calibrate each estimator family's gains to a capture and noise level.
+    Tune {
+        /// Capture file.
+        file: PathBuf,
+        /// Noise variance added to yaw, deg^2.
+        #[arg(long, value_name = "V")]
+        noise_var: f64,
+        /// Number of noise seeds averaged per evaluation.
+        #[arg(long, default_value_t = 3)]
+        seeds: u64,
+        /// MSE window end, s.
+        #[arg(long, default_value_t = 30.0)]
+        window: f64,
+        /// Sample adapter.
+        #[arg(long, value_enum, default_value = "linear")]
+        hold: HoldArg,
+        /// Observer step h, s.
+        #[arg(long, default_value_t = 1e-4)]
+        step: f32,
+        /// Write the tuned gains (TOML, accepted by `--gains`) here.
+        #[arg(short, long, value_name = "FILE")]
+        output: Option<PathBuf>,
+        /// Also write a Rust snippet (BankConfig literal for the firmware) here.
+        #[arg(long, value_name = "FILE")]
+        rust: Option<PathBuf>,
+    },
+    /// Plot yaw, measured rate, velocity and acceleration estimates (stacked panels, SVG).
+    Plot {
+        /// Capture file.
+        file: PathBuf,
+        /// Output SVG file.
+        #[arg(short, long, value_name = "OUT.svg")]
+        output: PathBuf,
+        #[command(flatten)]
+        bank: BankArgs,
+        /// Add N(0, V) deg^2 noise to yaw before estimation.
+        #[arg(long, value_name = "V")]
+        noise_var: Option<f64>,
+        /// Seed of the noise.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Plot from this time, s.
+        #[arg(long)]
+        from: Option<f64>,
+        /// Plot up to this time, s.
+        #[arg(long)]
+        to: Option<f64>,
+    },
+    /// Synthesise a capture: motion profile -> NAV440 byte stream (optionally corrupted).
+    Synth {
+        /// Motion profile: fig5 (paper Fig. 5-like hand rotation), spin (many turns), sin5 (section 3.2).
+        #[arg(long, default_value = "fig5")]
+        profile: ProfileKind,
+        /// Packet type: A1, A2 or N1.
+        #[arg(long = "packet", default_value = "A2")]
+        packet: synth::PacketKind,
+        /// Packet rate, Hz (100, 50, 25, 20, 10, 5, 4 or 2).
+        #[arg(long, default_value_t = 100)]
+        rate: u32,
+        /// Duration, s.
+        #[arg(long, default_value_t = 35.0)]
+        duration: f64,
+        /// Seed of the motion shape (fig5).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// timeITOW of the first packet, ms.
+        #[arg(long, default_value_t = synth::SynthConfig::default().start_itow_ms)]
+        start_itow: u64,
+        /// BIT word of every packet (e.g. 0x0002).
+        #[arg(long, default_value = "0", value_parser = parse_u16)]
+        bit: u16,
+        /// Flip this many random bits.
+        #[arg(long, default_value_t = 0)]
+        flip_bits: usize,
+        /// Delete this many random bytes.
+        #[arg(long, default_value_t = 0)]
+        drop_bytes: usize,
+        /// Leave out this many random packets.
+        #[arg(long, default_value_t = 0)]
+        drop_packets: usize,
+        /// Insert this many bursts of random bytes between packets.
+        #[arg(long, default_value_t = 0)]
+        garbage: usize,
+        /// Longest garbage burst, bytes.
+        #[arg(long, default_value_t = 32)]
+        garbage_max_len: usize,
+        /// Seed of the corruption.
+        #[arg(long, default_value_t = 1)]
+        corrupt_seed: u64,
+        /// Output capture file.
+        #[arg(short, long, value_name = "FILE")]
+        output: PathBuf,
+    },
+}
+
+fn parse_u16(s: &str) -> std::result::Result<u16, String> {
+    let r = match s.strip_prefix("0x").or_else(|| s.strip_prefix("0X")) {
+        Some(h) => u16::from_str_radix(h, 16),
+        None => s.parse(),
+    };
+    r.map_err(|_| format!("`{s}` is not a 16-bit value"))
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            // --help / --version print normally and exit 0; usage errors exit 2.
+            let code = if e.use_stderr() { 2 } else { 0 };
+            let _ = e.print();
+            return ExitCode::from(code);
+        }
+    };
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("nav440: {e}");
+            ExitCode::from(e.exit_code())
+        }
+    }
+}
+
+fn with_file<T>(file: &Path, r: Result<T>) -> Result<T> {
+    r.map_err(|e| match e {
+        Error::NotNav440(m) => Error::NotNav440(format!("{}: {m}", file.display())),
+        other => other,
+    })
+}
+
+fn load_samples(file: &Path) -> Result<Vec<replay::Sample>> {
+    let bytes = replay::read_capture(file)?;
+    with_file(file, replay::samples(&bytes))
+}
+
+fn bank_options(b: &BankArgs) -> Result<replay::EstimateOptions> {
+    if !(b.step.is_finite() && b.step > 0.0) {
+        return Err(Error::Usage(format!(
+            "--step must be a positive number of seconds, got {}",
+            b.step
+        )));
+    }
+    let config = match &b.gains {
+        Some(p) => Some(gains::load(p)?),
+        None => None,
+    };
+    Ok(replay::EstimateOptions {
+        hold: b.hold.into(),
+        step_s: b.step,
+        noise: None,
+        fixed: false,
+        config,
+    })
+}
+
+fn noise(var: Option<f64>, seed: u64) -> Result<Option<replay::Noise>> {
+    match var {
+        Some(v) if !(v.is_finite() && v >= 0.0) => Err(Error::Usage(format!(
+            "--noise-var must be >= 0 deg^2, got {v}"
+        ))),
+        Some(v) => Ok(Some(replay::Noise { var: v, seed })),
+        None => Ok(None),
+    }
+}
+
+fn stdout_or_file(
+    output: Option<&Path>,
+    write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<()> {
+    let res = match output {
+        Some(p) => {
+            let f = std::fs::File::create(p)
+                .map_err(|e| Error::Output(format!("cannot create {}: {e}", p.display())))?;
+            let mut w = std::io::BufWriter::new(f);
+            write(&mut w).and_then(|_| w.flush())
+        }
+        None => {
+            let out = std::io::stdout();
+            let mut w = std::io::BufWriter::new(out.lock());
+            write(&mut w).and_then(|_| w.flush())
+        }
+    };
+    match res {
+        // A closed pipe (`nav440 estimate f | head`) is not an error worth reporting.
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        Err(e) => Err(Error::Output(format!("cannot write output: {e}"))),
+        Ok(()) => Ok(()),
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.cmd {
+        Cmd::Stats { file } => {
+            let bytes = replay::read_capture(&file)?;
+            let stats = replay::stream_stats(&bytes);
+            if stats.total_frames() == 0 {
+                return Err(Error::NotNav440(format!(
+                    "{}: no NAV440 frame found (not a NAV440 capture?)",
+                    file.display()
+                )));
+            }
+            stdout_or_file(None, |w| writeln!(w, "{}", stats.to_json()))
+        }
+        Cmd::Decode { file, packet_type } => {
+            let bytes = replay::read_capture(&file)?;
+            let text = with_file(
+                &file,
+                host_tests::decode::decode_csv(&bytes, packet_type.as_deref()),
+            )?;
+            stdout_or_file(None, |w| w.write_all(text.as_bytes()))
+        }
+        Cmd::Estimate {
+            file,
+            bank,
+            noise_var,
+            seed,
+            fixed,
+            output,
+        } => {
+            let mut opts = bank_options(&bank)?;
+            opts.noise = noise(noise_var, seed)?;
+            opts.fixed = fixed;
+            let samples = load_samples(&file)?;
+            let (rows, rejected) = replay::estimate(&samples, &opts)?;
+            if rejected > 0 {
+                eprintln!("nav440: warning: {rejected} samples rejected by the estimator bank (time not increasing)");
+            }
+            stdout_or_file(output.as_deref(), |w| replay::write_csv(&rows, w))
+        }
+        Cmd::Paper {
+            file,
+            bank,
+            json,
+            window,
+        } => {
+            let opts = bank_options(&bank)?;
+            let samples = load_samples(&file)?;
+            let res = paper::run(&samples, &opts, window, &file.display().to_string())?;
+            let text = if json {
+                format!("{}\n", res.to_json())
+            } else {
+                res.to_text()
+            };
+            stdout_or_file(None, |w| w.write_all(text.as_bytes()))
+        }
+        Cmd::Tune {
+            file,
+            noise_var,
+            seeds,
+            window,
+            hold,
+            step,
+            output,
+            rust,
+        } => {
+            noise(Some(noise_var), 0)?;
+            let samples = load_samples(&file)?;
+            let opts = replay::EstimateOptions {
+                hold: hold.into(),
+                step_s: step,
+                noise: None,
+                fixed: false,
+                config: None,
+            };
+            let res = tune::tune(&samples, &opts, noise_var, seeds.max(1), window)?;
+            stdout_or_file(None, |w| w.write_all(res.to_text().as_bytes()))?;
+            if let Some(p) = output {
+                write_file(&p, &res.to_toml())?;
+            }
+            if let Some(p) = rust {
+                write_file(&p, &res.to_rust())?;
+            }
+            Ok(())
+        }
+        Cmd::Plot {
+            file,
+            output,
+            bank,
+            noise_var,
+            seed,
+            from,
+            to,
+        } => {
+            let mut opts = bank_options(&bank)?;
+            opts.noise = noise(noise_var, seed)?;
+            let samples = load_samples(&file)?;
+            plots::plot_capture(
+                &samples,
+                &opts,
+                &file.display().to_string(),
+                &output,
+                from,
+                to,
+            )
+        }
+        Cmd::Synth {
+            profile,
+            packet,
+            rate,
+            duration,
+            seed,
+            start_itow,
+            bit,
+            flip_bits,
+            drop_bytes,
+            drop_packets,
+            garbage,
+            garbage_max_len,
+            corrupt_seed,
+            output,
+        } => {
+            let cfg = synth::SynthConfig {
+                profile,
+                seed,
+                duration_s: duration,
+                rate_hz: rate,
+                packet,
+                start_itow_ms: start_itow,
+                bit,
+                corruption: Corruption {
+                    bit_flips: flip_bits,
+                    dropped_bytes: drop_bytes,
+                    dropped_packets: drop_packets,
+                    garbage_bursts: garbage,
+                    garbage_max_len,
+                    seed: corrupt_seed,
+                },
+            };
+            let cap = synth::generate(&cfg)?;
+            std::fs::write(&output, &cap.bytes)
+                .map_err(|e| Error::Output(format!("cannot write {}: {e}", output.display())))?;
+            let summary = serde_json::json!({
+                "file": output.display().to_string(),
+                "bytes": cap.bytes.len(),
+                "packets": cap.packets,
+                "dropped_packets": cap.report.dropped.len(),
+                "damaged_packets": cap.report.damaged.len(),
+                "intact_packets": cap.report.intact(),
+                "garbage_bytes": cap.report.garbage_bytes,
+            });
+            stdout_or_file(None, |w| writeln!(w, "{summary}"))
+        }
+    }
+}
+
+fn write_file(p: &Path, text: &str) -> Result<()> {
+    std::fs::write(p, text).map_err(|e| Error::Output(format!("cannot write {}: {e}", p.display())))
+}

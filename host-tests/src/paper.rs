@@ -1,0 +1,357 @@
+//! The paper's experiment (section 5, Tables 1 and 3) on a capture.
+//!
+//! Protocol: Gaussian noise of variance 0.01 and 0.5 deg^2 is added to the yaw angle; each
+//! estimator's output is compared, at every packet time `t <= window` (30 s), with the
+//! reference; the mean square error is averaged over 3 noise seeds (1, 2, 3).
+//! Velocity reference: the packet's measured z rate. Acceleration reference: the AVE with the
+//! paper's gains (k = 500, gamma1 = 20000) applied to the measured rate, stepped by the same
+//! sample adapter (hold mode, step) as the estimators.
+
+use crate::error::{Error, Result};
+use crate::replay::{self, EstimateOptions, Noise, Row, Sample};
+use estimators::{Ave, AveConfig, DeltaMode, Estimator};
+
+/// Noise variances of the paper's Tables 1 and 3, deg^2.
+pub const NOISE_VARS: [f64; 2] = [0.01, 0.5];
+/// Noise seeds averaged (the paper: "mean of 3 runs").
+pub const SEEDS: [u64; 3] = [1, 2, 3];
+/// Column names: the six estimators of the paper, then our Kalman filter.
+pub const COLUMNS: [&str; 7] = ["AVE", "ILO1", "ILO2", "ILO3", "AD", "ED", "KF"];
+/// Paper Table 1: velocity MSE, (deg/s)^2, rows sigma^2 = 0.01, 0.5; columns AVE..ED.
+pub const PAPER_VEL_MSE: [[f64; 6]; 2] = [
+    [11.1, 18.1, 11.0, 10.9, 18.7, 14.7],
+    [12.4, 31.6, 13.9, 15.3, 71.7, 26.7],
+];
+/// Paper Table 3: acceleration MSE, (deg/s^2)^2, rows sigma^2 = 0.01, 0.5; columns AVE..ED.
+pub const PAPER_ACC_MSE: [[f64; 6]; 2] = [
+    [232.3, 500.8, 212.4, 222.6, 289.5, 378.6],
+    [261.0, 500.9, 246.3, 275.7, 297.8, 392.1],
+];
+/// Paper gains of the acceleration reference AVE.
+pub const REFERENCE_AVE: AveConfig = AveConfig {
+    k: 500.0,
+    gamma1: 20000.0,
+    delta: DeltaMode::Paper,
+};
+
+/// Applies an AVE (`cfg`) to the measured rate of `samples`, stepped like the bank: reset to
+/// the first sample, then for each new sample `n = round(dt / h)` steps with `hold`.
+/// Returns one acceleration per sample, deg/s^2.
+pub fn ave_on_rate(
+    samples: &[Sample],
+    cfg: &AveConfig,
+    opts: &EstimateOptions,
+) -> Result<Vec<f32>> {
+    let mut ave = Ave::<f32>::new(cfg, opts.step_s)
+        .map_err(|e| Error::Usage(format!("bad reference AVE configuration: {e:?}")))?;
+    let mut out = Vec::with_capacity(samples.len());
+    let Some(first) = samples.first() else {
+        return Ok(out);
+    };
+    ave.reset(first.rate_deg_s);
+    out.push(ave.output());
+    let h_us = f64::from(opts.step_s) * 1e6;
+    for w in samples.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let n = steps_between(a.t_us, b.t_us, h_us);
+        out.push(ave.advance(a.rate_deg_s, b.rate_deg_s, n, opts.hold));
+    }
+    Ok(out)
+}
+
+/// Number of observer steps between two sample times (us) for step `h_us`.
+pub fn steps_between(t0_us: u64, t1_us: u64, h_us: f64) -> u32 {
+    let dt = t1_us.saturating_sub(t0_us) as f64;
+    (dt / h_us).round().min(f64::from(u32::MAX)) as u32
+}
+
+/// Mean square error of `est` against `reference` over the rows with `t <= window_s`.
+pub fn mse(t_us: &[u64], est: &[f32], reference: &[f32], window_s: f64) -> f64 {
+    let lim = (window_s * 1e6).round() as u64;
+    let (mut sum, mut n) = (0.0f64, 0usize);
+    for ((&t, &e), &r) in t_us.iter().zip(est).zip(reference) {
+        if t <= lim {
+            let d = f64::from(e) - f64::from(r);
+            sum += d * d;
+            n += 1;
+        }
+    }
+    if n == 0 {
+        f64::NAN
+    } else {
+        sum / n as f64
+    }
+}
+
+/// MSE of every velocity and acceleration column of `rows` (against the measured rate and
+/// `acc_ref`, matched by time).
+pub fn row_mse(
+    rows: &[Row],
+    samples: &[Sample],
+    acc_ref: &[f32],
+    window_s: f64,
+) -> ([f64; 7], [f64; 7]) {
+    // Rows are a subsequence of samples (rejected samples are missing): match by time.
+    let mut accr = Vec::with_capacity(rows.len());
+    let mut j = 0;
+    for r in rows {
+        while j < samples.len() && samples[j].t_us < r.t_us {
+            j += 1;
+        }
+        accr.push(acc_ref.get(j).copied().unwrap_or(f32::NAN));
+    }
+    let t: Vec<u64> = rows.iter().map(|r| r.t_us).collect();
+    let rate: Vec<f32> = rows.iter().map(|r| r.yaw_rate).collect();
+    let mut v = [0.0; 7];
+    let mut a = [0.0; 7];
+    for i in 0..7 {
+        let ev: Vec<f32> = rows.iter().map(|r| r.out.vel[i]).collect();
+        let ea: Vec<f32> = rows.iter().map(|r| r.out.acc[i]).collect();
+        v[i] = mse(&t, &ev, &rate, window_s);
+        a[i] = mse(&t, &ea, &accr, window_s);
+    }
+    (v, a)
+}
+
+/// (noise variance index, velocity MSE, acceleration MSE) of one run.
+type RunMse = (usize, [f64; 7], [f64; 7]);
+
+/// Result of the paper protocol.
+#[derive(Clone, Debug)]
+pub struct PaperResult {
+    /// Capture name.
+    pub capture: String,
+    /// Samples (packets with yaw) in the capture.
+    pub samples: usize,
+    /// Capture duration, s.
+    pub duration_s: f64,
+    /// Hold mode used.
+    pub hold: estimators::Hold,
+    /// Observer step, s.
+    pub step_s: f32,
+    /// MSE window end, s.
+    pub window_s: f64,
+    /// Gains: "paper presets" or the gains file.
+    pub gains: String,
+    /// Velocity MSE per noise variance and column, (deg/s)^2.
+    pub vel: [[f64; 7]; 2],
+    /// Acceleration MSE per noise variance and column, (deg/s^2)^2.
+    pub acc: [[f64; 7]; 2],
+}
+
+/// Runs the protocol. The 6 (variance, seed) runs are spread over 2 threads.
+pub fn run(
+    samples: &[Sample],
+    opts: &EstimateOptions,
+    window_s: f64,
+    capture: &str,
+) -> Result<PaperResult> {
+    if !(window_s.is_finite() && window_s > 0.0) {
+        return Err(Error::Usage(format!(
+            "--window must be a positive number of seconds, got {window_s}"
+        )));
+    }
+    let acc_ref = ave_on_rate(samples, &REFERENCE_AVE, opts)?;
+    let jobs: Vec<(usize, u64)> = (0..NOISE_VARS.len())
+        .flat_map(|i| SEEDS.iter().map(move |&s| (i, s)))
+        .collect();
+    let results: Vec<Result<RunMse>> = std::thread::scope(|scope| {
+        let chunks: Vec<Vec<(usize, u64)>> = vec![
+            jobs.iter().copied().step_by(2).collect(),
+            jobs.iter().copied().skip(1).step_by(2).collect(),
+        ];
+        let handles: Vec<_> = chunks
+            .into_iter()
+            .map(|chunk| {
+                let acc_ref = &acc_ref;
+                scope.spawn(move || {
+                    chunk
+                        .into_iter()
+                        .map(|(i, seed)| {
+                            let mut o = opts.clone();
+                            o.noise = Some(Noise {
+                                var: NOISE_VARS[i],
+                                seed,
+                            });
+                            let (rows, _) = replay::estimate(samples, &o)?;
+                            let (v, a) = row_mse(&rows, samples, acc_ref, window_s);
+                            Ok((i, v, a))
+                        })
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|h| {
+                h.join()
+                    .unwrap_or_else(|_| vec![Err(Error::Other("worker thread panicked".into()))])
+            })
+            .collect()
+    });
+    let mut vel = [[0.0; 7]; 2];
+    let mut acc = [[0.0; 7]; 2];
+    for r in results {
+        let (i, v, a) = r?;
+        for c in 0..7 {
+            vel[i][c] += v[c] / SEEDS.len() as f64;
+            acc[i][c] += a[c] / SEEDS.len() as f64;
+        }
+    }
+    let duration_s = samples.last().map_or(0.0, |s| s.t_s());
+    Ok(PaperResult {
+        capture: capture.to_string(),
+        samples: samples.len(),
+        duration_s,
+        hold: opts.hold,
+        step_s: opts.step_s,
+        window_s,
+        gains: if opts.config.is_some() {
+            "from --gains file".into()
+        } else {
+            "paper presets (Tables 2 and 4)".into()
+        },
+        vel,
+        acc,
+    })
+}
+
+fn hold_name(h: estimators::Hold) -> &'static str {
+    match h {
+        estimators::Hold::Linear => "linear",
+        estimators::Hold::ZeroOrder => "zoh",
+    }
+}
+
+fn fmt_val(v: f64) -> String {
+    if !v.is_finite() {
+        "diverged".to_string()
+    } else if v.abs() >= 1e5 {
+        format!("{v:.2e}")
+    } else {
+        format!("{v:.1}")
+    }
+}
+
+impl PaperResult {
+    /// Human-readable tables: ours next to the paper's.
+    pub fn to_text(&self) -> String {
+        let mut s = String::new();
+        s.push_str(&format!(
+            "capture {} ({} samples, {:.2} s); hold {}, step h = {} s, MSE over 0-{} s, mean of seeds {:?}\n",
+            self.capture,
+            self.samples,
+            self.duration_s,
+            hold_name(self.hold),
+            self.step_s,
+            self.window_s,
+            SEEDS
+        ));
+        s.push_str(&format!("gains: {}\n", self.gains));
+        s.push_str("velocity reference: packet z rate; acceleration reference: AVE (k=500, gamma1=20000) on the packet z rate, same adapter\n");
+        for (title, ours, paper) in [
+            (
+                "Table 1 - velocity MSE ((deg/s)^2)",
+                &self.vel,
+                &PAPER_VEL_MSE,
+            ),
+            (
+                "Table 3 - acceleration MSE ((deg/s^2)^2), series connections",
+                &self.acc,
+                &PAPER_ACC_MSE,
+            ),
+        ] {
+            s.push_str(&format!("\n{title}\n"));
+            s.push_str(&format!("{:<14}", "sigma^2"));
+            for c in COLUMNS {
+                s.push_str(&format!("{c:>10}"));
+            }
+            s.push('\n');
+            for (i, var) in NOISE_VARS.iter().enumerate() {
+                s.push_str(&format!("{:<14}", format!("{var} ours")));
+                for v in ours[i] {
+                    s.push_str(&format!("{:>10}", fmt_val(v)));
+                }
+                s.push('\n');
+                s.push_str(&format!("{:<14}", format!("{var} paper")));
+                for v in paper[i] {
+                    s.push_str(&format!("{:>10}", fmt_val(v)));
+                }
+                s.push_str(&format!("{:>10}\n", "-"));
+            }
+        }
+        s
+    }
+
+    /// Markdown tables (for the README).
+    pub fn to_markdown(&self) -> String {
+        let mut s = String::new();
+        for (title, ours, paper) in [
+            (
+                "Velocity MSE ((deg/s)^2), Table 1",
+                &self.vel,
+                &PAPER_VEL_MSE,
+            ),
+            (
+                "Acceleration MSE ((deg/s^2)^2), Table 3",
+                &self.acc,
+                &PAPER_ACC_MSE,
+            ),
+        ] {
+            s.push_str(&format!(
+                "\n{title}\n\n| sigma^2 | | {} |\n|---|---|{}\n",
+                COLUMNS.join(" | "),
+                "---|".repeat(7)
+            ));
+            for (i, var) in NOISE_VARS.iter().enumerate() {
+                let o: Vec<String> = ours[i].iter().map(|&v| fmt_val(v)).collect();
+                let p: Vec<String> = paper[i].iter().map(|&v| fmt_val(v)).collect();
+                s.push_str(&format!("| {var} | ours | {} |\n", o.join(" | ")));
+                s.push_str(&format!("| {var} | paper | {} | - |\n", p.join(" | ")));
+            }
+        }
+        s
+    }
+
+    /// The `--json` object.
+    pub fn to_json(&self) -> serde_json::Value {
+        let table = |ours: &[[f64; 7]; 2], paper: &[[f64; 6]; 2]| {
+            let mut m = serde_json::Map::new();
+            for (i, var) in NOISE_VARS.iter().enumerate() {
+                let o: serde_json::Map<String, serde_json::Value> = COLUMNS
+                    .iter()
+                    .zip(ours[i])
+                    .map(|(c, v)| (c.to_string(), json_num(v)))
+                    .collect();
+                let p: serde_json::Map<String, serde_json::Value> = COLUMNS
+                    .iter()
+                    .zip(paper[i])
+                    .map(|(c, v)| (c.to_string(), json_num(v)))
+                    .collect();
+                m.insert(var.to_string(), serde_json::json!({"ours": o, "paper": p}));
+            }
+            serde_json::Value::Object(m)
+        };
+        serde_json::json!({
+            "capture": self.capture,
+            "samples": self.samples,
+            "duration_s": self.duration_s,
+            "settings": {
+                "hold": hold_name(self.hold),
+                "step_s": self.step_s,
+                "window_s": self.window_s,
+                "seeds": SEEDS,
+                "noise_vars": NOISE_VARS,
+                "gains": self.gains,
+                "velocity_reference": "packet z rate",
+                "acceleration_reference": "AVE k=500 gamma1=20000 on the packet z rate, same sample adapter",
+            },
+            "velocity_mse": table(&self.vel, &PAPER_VEL_MSE),
+            "acceleration_mse": table(&self.acc, &PAPER_ACC_MSE),
+        })
+    }
+}
+
+fn json_num(v: f64) -> serde_json::Value {
+    serde_json::Number::from_f64(v).map_or(serde_json::Value::Null, serde_json::Value::Number)
+}

@@ -1,0 +1,137 @@
+//! `nav440 plot`: the paper's Figs. 5-9 for a capture, as stacked SVG panels.
+
+use crate::error::{Error, Result};
+use crate::paper::{ave_on_rate, REFERENCE_AVE};
+use crate::plot::{render_svg, Panel, Series, ESTIMATOR_COLORS};
+use crate::replay::{self, EstimateOptions, Sample};
+use plotters::style::{RGBColor, BLACK};
+use std::path::Path;
+
+const NAMES: [&str; 7] = ["AVE", "ILO1", "ILO2", "ILO3", "AD", "ED", "KF"];
+const GREY: RGBColor = RGBColor(0x60, 0x60, 0x60);
+
+/// Builds the panels: yaw; velocity (AVE, ILOs) and (AD, ED, KF) against the measured rate;
+/// acceleration likewise against the reference (AVE on the measured rate). Only rows with
+/// `from <= t <= to` are drawn. Estimates far outside the reference's range (a diverging
+/// series) are clipped to the panel, whose y range follows the reference.
+pub fn panels(
+    samples: &[Sample],
+    opts: &EstimateOptions,
+    from: Option<f64>,
+    to: Option<f64>,
+) -> Result<Vec<Panel>> {
+    let (rows, _) = replay::estimate(samples, opts)?;
+    let acc_ref = ave_on_rate(samples, &REFERENCE_AVE, opts)?;
+    let lo = from.unwrap_or(f64::NEG_INFINITY);
+    let hi = to.unwrap_or(f64::INFINITY);
+    let keep = |t: f64| t >= lo && t <= hi;
+    let t_of = |us: u64| us as f64 * 1e-6;
+    let mut accr_by_t = std::collections::HashMap::new();
+    for (s, a) in samples.iter().zip(&acc_ref) {
+        accr_by_t.insert(s.t_us, *a);
+    }
+    let rows: Vec<_> = rows.into_iter().filter(|r| keep(t_of(r.t_us))).collect();
+    if rows.is_empty() {
+        return Err(Error::Usage("no sample in the requested time range".into()));
+    }
+    let line = |name: &str, color: RGBColor, width: u32, f: &dyn Fn(&replay::Row) -> f64| Series {
+        name: name.to_string(),
+        color,
+        width,
+        points: rows.iter().map(|r| (t_of(r.t_us), f(r))).collect(),
+    };
+    let yaw = Panel {
+        title: "Yaw angle (unwrapped, with the added noise)".into(),
+        y_label: "yaw (deg)".into(),
+        series: vec![line("yaw", BLACK, 1, &|r| {
+            f64::from(r.out.yaw_unwrapped_deg)
+        })],
+        y_range: None,
+    };
+    let rate_ref = |r: &replay::Row| f64::from(r.yaw_rate);
+    let acc_ref_f =
+        |r: &replay::Row| f64::from(accr_by_t.get(&r.t_us).copied().unwrap_or(f32::NAN));
+    let range_of = |f: &dyn Fn(&replay::Row) -> f64| {
+        let (mut a, mut b) = (f64::INFINITY, f64::NEG_INFINITY);
+        for r in &rows {
+            let v = f(r);
+            if v.is_finite() {
+                a = a.min(v);
+                b = b.max(v);
+            }
+        }
+        let pad = ((b - a) * 0.25).max(1.0);
+        (a - pad, b + pad)
+    };
+    let vr = range_of(&rate_ref);
+    let ar = range_of(&acc_ref_f);
+    let group = |title: &str, unit: &str, idx: &[usize], acc: bool| {
+        let mut series = vec![if acc {
+            line("reference (AVE on measured rate)", GREY, 3, &acc_ref_f)
+        } else {
+            line("measured rate (reference)", GREY, 3, &rate_ref)
+        }];
+        for &i in idx {
+            series.push(line(
+                NAMES[i],
+                ESTIMATOR_COLORS[i],
+                1,
+                &|r: &replay::Row| f64::from(if acc { r.out.acc[i] } else { r.out.vel[i] }),
+            ));
+        }
+        Panel {
+            title: title.to_string(),
+            y_label: unit.to_string(),
+            series,
+            y_range: Some(if acc { ar } else { vr }),
+        }
+    };
+    Ok(vec![
+        yaw,
+        group(
+            "Velocity: AVE and ILO1-3 vs measured rate",
+            "rate (deg/s)",
+            &[0, 1, 2, 3],
+            false,
+        ),
+        group(
+            "Velocity: AD, ED, KF vs measured rate",
+            "rate (deg/s)",
+            &[4, 5, 6],
+            false,
+        ),
+        group(
+            "Acceleration (series): AVE and ILO1-3 vs reference",
+            "acc (deg/s^2)",
+            &[0, 1, 2, 3],
+            true,
+        ),
+        group(
+            "Acceleration (series): AD, ED, KF vs reference",
+            "acc (deg/s^2)",
+            &[4, 5, 6],
+            true,
+        ),
+    ])
+}
+
+/// Renders the capture's plot into `out` (SVG).
+pub fn plot_capture(
+    samples: &[Sample],
+    opts: &EstimateOptions,
+    capture: &str,
+    out: &Path,
+    from: Option<f64>,
+    to: Option<f64>,
+) -> Result<()> {
+    let p = panels(samples, opts, from, to)?;
+    let noise = match opts.noise {
+        Some(n) => format!("noise var {} deg^2 (seed {})", n.var, n.seed),
+        None => "no added noise".into(),
+    };
+    let title = format!(
+        "{capture}: {noise}, hold {:?}, h = {} s",
+        opts.hold, opts.step_s
+    );
+    render_svg(out, &title, &p, 1400, 300).map_err(Error::Output)
+}

@@ -1,0 +1,258 @@
+//! Replay of a recorded byte stream: parser -> packets -> timed yaw samples -> estimator bank.
+//!
+//! This is the host twin of the firmware's pipeline, and what `nav440 stats|decode|estimate`,
+//! the paper protocol, the tuner, the plots and the integration tests all call.
+
+use crate::error::{Error, Result};
+use estimators::{BankConfig, BankOutput, Fx, Hold, YawBank};
+use nav440_proto::{ItowClock, Packet, Parser};
+use rand::rngs::Xoshiro256PlusPlus;
+use rand::SeedableRng;
+use rand_distr::{Distribution, Normal};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Reads a capture file; a missing, unreadable or empty file is an [`Error::Input`].
+pub fn read_capture(path: &Path) -> Result<Vec<u8>> {
+    let bytes = std::fs::read(path)
+        .map_err(|e| Error::Input(format!("cannot read {}: {}", path.display(), io_reason(&e))))?;
+    if bytes.is_empty() {
+        return Err(Error::Input(format!("{} is empty", path.display())));
+    }
+    Ok(bytes)
+}
+
+fn io_reason(e: &std::io::Error) -> String {
+    match e.kind() {
+        std::io::ErrorKind::NotFound => "no such file".to_string(),
+        std::io::ErrorKind::PermissionDenied => "permission denied".to_string(),
+        _ => e.to_string(),
+    }
+}
+
+/// Parser statistics of a whole stream, with frames counted by type name.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct StreamStats {
+    /// Bytes fed to the parser.
+    pub bytes: u64,
+    /// CRC-checked frames by type name ("A2", "NAK", "z1", "??").
+    pub frames: BTreeMap<String, u64>,
+    /// Candidate frames rejected by their CRC.
+    pub crc_errors: u64,
+    /// Bytes that were not part of any valid frame.
+    pub skipped_bytes: u64,
+}
+
+impl StreamStats {
+    /// Total number of valid frames.
+    pub fn total_frames(&self) -> u64 {
+        self.frames.values().sum()
+    }
+
+    /// The `nav440 stats` JSON object.
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "bytes": self.bytes,
+            "frames": self.frames,
+            "crc_errors": self.crc_errors,
+            "skipped_bytes": self.skipped_bytes,
+        })
+    }
+}
+
+/// Runs the parser over `bytes` and counts frames by type.
+pub fn stream_stats(bytes: &[u8]) -> StreamStats {
+    let mut parser = Parser::new();
+    let mut frames: BTreeMap<String, u64> = BTreeMap::new();
+    parser.feed(bytes, |f| {
+        *frames.entry(f.packet_type.name().to_string()).or_default() += 1
+    });
+    let s = parser.stats();
+    StreamStats {
+        bytes: s.bytes,
+        frames,
+        crc_errors: s.crc_errors,
+        skipped_bytes: s.skipped_bytes,
+    }
+}
+
+/// One timed yaw sample taken from a packet.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// Time since the first yaw packet, microseconds (from timeITOW / GPSITOW, wraps handled).
+    pub t_us: u64,
+    /// Yaw as sent (wrapped), degrees.
+    pub yaw_deg: f32,
+    /// Body z rate as sent (the measured reference), deg/s.
+    pub rate_deg_s: f32,
+}
+
+impl Sample {
+    /// Time in seconds.
+    pub fn t_s(&self) -> f64 {
+        self.t_us as f64 * 1e-6
+    }
+}
+
+/// Extracts the timed yaw samples of every packet that carries yaw, in stream order.
+/// A stream without any valid frame, or without any yaw packet, is an [`Error::NotNav440`].
+pub fn samples(bytes: &[u8]) -> Result<Vec<Sample>> {
+    let mut parser = Parser::new();
+    let mut clock = ItowClock::new();
+    let mut out = Vec::new();
+    let mut frames = 0u64;
+    parser.feed(bytes, |f| {
+        frames += 1;
+        if let Ok(p) = Packet::decode(f) {
+            if let Some(y) = p.yaw_sample() {
+                if let Some(t_us) = clock.update(y.time) {
+                    out.push(Sample {
+                        t_us,
+                        yaw_deg: y.yaw_deg,
+                        rate_deg_s: y.yaw_rate_deg_s,
+                    });
+                }
+            }
+        }
+    });
+    if frames == 0 {
+        return Err(Error::NotNav440(
+            "no NAV440 frame found (not a NAV440 capture?)".into(),
+        ));
+    }
+    if out.is_empty() {
+        return Err(Error::NotNav440(format!(
+            "{frames} NAV440 frames but none carries yaw with a time stamp (need A0/A1/A2/N0/N1/B1)"
+        )));
+    }
+    Ok(out)
+}
+
+/// Gaussian noise added to yaw before estimation (the paper's protocol).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Noise {
+    /// Variance, deg^2.
+    pub var: f64,
+    /// Seed of the generator (xoshiro256++, one N(0, var) draw per sample in order).
+    pub seed: u64,
+}
+
+/// The yaw of each sample plus noise (if any), degrees.
+pub fn noisy_yaw(samples: &[Sample], noise: Option<Noise>) -> Result<Vec<f32>> {
+    match noise {
+        None => Ok(samples.iter().map(|s| s.yaw_deg).collect()),
+        Some(n) => {
+            let normal = Normal::new(0.0, n.var.max(0.0).sqrt())
+                .map_err(|e| Error::Usage(format!("bad noise variance {}: {e}", n.var)))?;
+            let mut rng = Xoshiro256PlusPlus::seed_from_u64(n.seed);
+            Ok(samples
+                .iter()
+                .map(|s| (f64::from(s.yaw_deg) + normal.sample(&mut rng)) as f32)
+                .collect())
+        }
+    }
+}
+
+/// Options of `nav440 estimate` (and of every replay through the bank).
+#[derive(Clone, Debug)]
+pub struct EstimateOptions {
+    /// Sample adapter input mode.
+    pub hold: Hold,
+    /// Observer step h, s.
+    pub step_s: f32,
+    /// Noise added to yaw.
+    pub noise: Option<Noise>,
+    /// Run the fixed-point bank (`YawBank<Fx>`) instead of f32.
+    pub fixed: bool,
+    /// Bank configuration with gains (from `--gains`), `None` = paper presets.
+    pub config: Option<BankConfig>,
+}
+
+impl Default for EstimateOptions {
+    fn default() -> Self {
+        EstimateOptions {
+            hold: Hold::Linear,
+            step_s: 1e-4,
+            noise: None,
+            fixed: false,
+            config: None,
+        }
+    }
+}
+
+impl EstimateOptions {
+    /// The bank configuration these options describe.
+    pub fn bank_config(&self) -> BankConfig {
+        let mut cfg = self.config.unwrap_or_default();
+        cfg.h = self.step_s;
+        cfg.hold = self.hold;
+        cfg
+    }
+}
+
+/// One output row: the sample's time and reference, and the bank's output.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Row {
+    /// Sample time, us since the first sample.
+    pub t_us: u64,
+    /// Measured yaw rate (packet z rate), deg/s.
+    pub yaw_rate: f32,
+    /// Unwrapped yaw, velocities and accelerations.
+    pub out: BankOutput,
+}
+
+/// Runs the estimator bank over `samples`. A sample the bank rejects (e.g. time going
+/// backwards) yields no row; the count of those is returned too.
+pub fn estimate(samples: &[Sample], opts: &EstimateOptions) -> Result<(Vec<Row>, usize)> {
+    let cfg = opts.bank_config();
+    let yaw = noisy_yaw(samples, opts.noise)?;
+    if opts.fixed {
+        let mut bank = YawBank::<Fx>::new(&cfg)
+            .map_err(|e| Error::Usage(format!("bad estimator configuration: {e:?}")))?;
+        Ok(run(samples, &yaw, |t, y| bank.update(t, y).ok()))
+    } else {
+        let mut bank = YawBank::<f32>::new(&cfg)
+            .map_err(|e| Error::Usage(format!("bad estimator configuration: {e:?}")))?;
+        Ok(run(samples, &yaw, |t, y| bank.update(t, y).ok()))
+    }
+}
+
+fn run(
+    samples: &[Sample],
+    yaw: &[f32],
+    mut update: impl FnMut(u64, f32) -> Option<BankOutput>,
+) -> (Vec<Row>, usize) {
+    let mut rows = Vec::with_capacity(samples.len());
+    let mut rejected = 0;
+    for (s, &y) in samples.iter().zip(yaw) {
+        match update(s.t_us, y) {
+            Some(out) => rows.push(Row {
+                t_us: s.t_us,
+                yaw_rate: s.rate_deg_s,
+                out,
+            }),
+            None => rejected += 1,
+        }
+    }
+    (rows, rejected)
+}
+
+/// The CSV header shared with the firmware.
+pub const CSV_HEADER: &str = estimators::csv::HEADER;
+
+/// Writes the header and one line per row, formatted by `estimators::csv` (identical text to
+/// the firmware's for identical f32 values).
+pub fn write_csv<W: std::io::Write + ?Sized>(rows: &[Row], w: &mut W) -> std::io::Result<()> {
+    writeln!(w, "{CSV_HEADER}")?;
+    let mut line = String::new();
+    for r in rows {
+        line.clear();
+        estimators::csv::write_row(&mut line, r.t_us, r.yaw_rate, &r.out)
+            .map_err(|_| std::io::Error::other("formatting error"))?;
+        w.write_all(line.as_bytes())?;
+        if !line.ends_with('\n') {
+            w.write_all(b"\n")?;
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,271 @@
+//! Capture generator: a motion profile -> the byte stream a NAV440 sends.
+//!
+//! Each packet holds the motion at its time stamp, quantised to the protocol's LSBs
+//! (`../shared/NAV440-PROTOCOL.md`): yaw wrapped to [-180, 180) deg in 360/2^16 deg steps, the
+//! body z rate (the analytic derivative of the motion) in 1260/2^16 deg/s steps (saturating),
+//! timeITOW in ms (wrapping at the end of the GPS week), and the BIT word. The unit is level
+//! (roll = pitch = 0, x/y rates 0, accelerometers read (0, 0, 1) g as in the protocol's example
+//! packet), temperatures 25 degC. Frames are built by `nav440-proto`'s encoders.
+
+use crate::corrupt::{self, Corruption, CorruptionReport};
+use crate::error::{Error, Result};
+use crate::motion::{Profile, ProfileKind};
+use std::fmt;
+use std::str::FromStr;
+
+/// Milliseconds in a GPS week (timeITOW wraps here).
+pub const MS_PER_WEEK: u64 = 604_800_000;
+/// Output rates the unit supports (100 Hz divided by its rate-divider field 0x0001), Hz.
+pub const RATES_HZ: [u32; 8] = [100, 50, 25, 20, 10, 5, 4, 2];
+
+/// Angle LSB, degrees (2 pi / 2^16 rad).
+pub const ANGLE_LSB_DEG: f64 = 360.0 / 65536.0;
+/// Angular-rate LSB, deg/s (7 pi / 2^16 rad/s).
+pub const RATE_LSB_DEG_S: f64 = 1260.0 / 65536.0;
+/// Acceleration LSB, g.
+pub const ACCEL_LSB_G: f64 = 20.0 / 65536.0;
+/// Magnetic field LSB, gauss.
+pub const MAG_LSB_G: f64 = 2.0 / 65536.0;
+/// Temperature LSB, degC.
+pub const TEMP_LSB_C: f64 = 200.0 / 65536.0;
+/// Velocity LSB, m/s.
+pub const VEL_LSB_M_S: f64 = 512.0 / 65536.0;
+/// Latitude/longitude LSB (I4), degrees (2 pi / 2^32 rad).
+pub const LATLON_LSB_DEG: f64 = 360.0 / 4_294_967_296.0;
+/// Altitude LSB, m.
+pub const ALT_LSB_M: f64 = 0.25;
+
+/// Which packet the synthetic unit sends continuously.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PacketKind {
+    /// Angle packet 1 (yaw from the magnetometer, timeITOW U4), 32-byte payload.
+    A1,
+    /// Angle packet 2 (free/true yaw, timeITOW U4), 30-byte payload.
+    A2,
+    /// Navigation packet 1 (the NAV440's default), 42-byte payload.
+    N1,
+}
+
+impl PacketKind {
+    /// Two-letter name.
+    pub fn name(self) -> &'static str {
+        match self {
+            PacketKind::A1 => "A1",
+            PacketKind::A2 => "A2",
+            PacketKind::N1 => "N1",
+        }
+    }
+    /// Whole frame length in bytes (preamble, type, length, payload, CRC).
+    pub fn frame_len(self) -> usize {
+        7 + match self {
+            PacketKind::A1 => 32,
+            PacketKind::A2 => 30,
+            PacketKind::N1 => 42,
+        }
+    }
+}
+
+impl fmt::Display for PacketKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for PacketKind {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s.to_ascii_uppercase().as_str() {
+            "A1" => Ok(PacketKind::A1),
+            "A2" => Ok(PacketKind::A2),
+            "N1" => Ok(PacketKind::N1),
+            _ => Err(format!(
+                "unsupported packet type `{s}` (expected A1, A2 or N1)"
+            )),
+        }
+    }
+}
+
+/// Everything `nav440 synth` needs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SynthConfig {
+    /// Motion profile.
+    pub profile: ProfileKind,
+    /// Seed of the profile's shape (Fig5 only).
+    pub seed: u64,
+    /// Duration, s (packets at t = 0, 1/rate, ... while t <= duration).
+    pub duration_s: f64,
+    /// Packet rate, Hz: one of [`RATES_HZ`].
+    pub rate_hz: u32,
+    /// Packet type.
+    pub packet: PacketKind,
+    /// timeITOW of the first packet, ms (taken modulo one week).
+    pub start_itow_ms: u64,
+    /// BIT word put in every packet.
+    pub bit: u16,
+    /// Corruption applied to the stream.
+    pub corruption: Corruption,
+}
+
+impl Default for SynthConfig {
+    fn default() -> Self {
+        SynthConfig {
+            profile: ProfileKind::Fig5,
+            seed: 1,
+            duration_s: 35.0,
+            rate_hz: 100,
+            packet: PacketKind::A2,
+            // Tuesday 10:00:00 GPS time: far from the week rollover unless asked.
+            start_itow_ms: 2 * 86_400_000 + 10 * 3_600_000,
+            bit: 0,
+            corruption: Corruption::default(),
+        }
+    }
+}
+
+/// A generated capture.
+#[derive(Clone, Debug)]
+pub struct Capture {
+    /// The byte stream.
+    pub bytes: Vec<u8>,
+    /// Number of packets generated before corruption.
+    pub packets: usize,
+    /// What the corruption did.
+    pub report: CorruptionReport,
+}
+
+/// Packet period in ms for a supported rate.
+pub fn period_ms(rate_hz: u32) -> Result<u64> {
+    if RATES_HZ.contains(&rate_hz) {
+        Ok(1000 / u64::from(rate_hz))
+    } else {
+        Err(Error::Usage(format!(
+            "unsupported rate {rate_hz} Hz (the NAV440 sends at 100/divider: 100, 50, 25, 20, 10, 5, 4 or 2 Hz)"
+        )))
+    }
+}
+
+/// Number of packets of a capture: t_k = k * period for k = 0.. while t_k <= duration.
+pub fn packet_count(duration_s: f64, rate_hz: u32) -> Result<usize> {
+    let p = period_ms(rate_hz)?;
+    if !(duration_s.is_finite() && duration_s >= 0.0) {
+        return Err(Error::Usage(format!("bad duration {duration_s} s")));
+    }
+    Ok(((duration_s * 1000.0 + 1e-6) / p as f64).floor() as usize + 1)
+}
+
+/// Quantises an angle (deg) to the I2 angle field, wrapping into [-180, 180).
+pub fn angle_raw(deg: f64) -> i16 {
+    let raw = (deg / ANGLE_LSB_DEG).round() as i64;
+    ((raw + 32768).rem_euclid(65536) - 32768) as i16
+}
+
+/// Quantises a value to an I2 field of the given LSB, saturating at the field's range.
+pub fn sat_i16(value: f64, lsb: f64) -> i16 {
+    (value / lsb).round().clamp(-32768.0, 32767.0) as i16
+}
+
+/// Generates the frames (uncorrupted) of `cfg`, one `Vec<u8>` per frame.
+pub fn frames(cfg: &SynthConfig) -> Result<Vec<Vec<u8>>> {
+    let period = period_ms(cfg.rate_hz)?;
+    let n = packet_count(cfg.duration_s, cfg.rate_hz)?;
+    let profile = Profile::new(cfg.profile, cfg.duration_s, cfg.seed);
+    let mut out = Vec::with_capacity(n);
+    for k in 0..n {
+        let ms = k as u64 * period;
+        let t = ms as f64 / 1000.0;
+        let m = profile.at(t);
+        let itow = ((cfg.start_itow_ms + ms) % MS_PER_WEEK) as u32;
+        out.push(encode_packet(
+            cfg.packet,
+            m.yaw_deg,
+            m.rate_deg_s,
+            itow,
+            cfg.bit,
+        )?);
+    }
+    Ok(out)
+}
+
+/// Generates the capture of `cfg` (frames, then corruption).
+pub fn generate(cfg: &SynthConfig) -> Result<Capture> {
+    let f = frames(cfg)?;
+    let (bytes, report) = corrupt::apply(&f, &cfg.corruption);
+    Ok(Capture {
+        bytes,
+        packets: f.len(),
+        report,
+    })
+}
+
+/// Encodes one packet of a level unit with the given yaw (deg, any range), z rate (deg/s),
+/// timeITOW (ms) and BIT word.
+pub fn encode_packet(
+    kind: PacketKind,
+    yaw_deg: f64,
+    rate_deg_s: f64,
+    itow: u32,
+    bit: u16,
+) -> Result<Vec<u8>> {
+    let yaw = angle_raw(yaw_deg);
+    let rz = sat_i16(rate_deg_s, RATE_LSB_DEG_S);
+    let one_g = sat_i16(1.0, ACCEL_LSB_G);
+    let temp = sat_i16(25.0, TEMP_LSB_C);
+    let mut buf = [0u8; nav440_proto::MAX_FRAME];
+    let len = match kind {
+        PacketKind::A1 => {
+            // A magnetometer that sees a horizontal field of 0.25 G along magnetic north.
+            let y = yaw_deg.to_radians();
+            nav440_proto::A1Fields {
+                yaw_mag: yaw,
+                rate_z: rz,
+                accel_z: one_g,
+                mag_x: sat_i16(0.25 * y.cos(), MAG_LSB_G),
+                mag_y: sat_i16(-0.25 * y.sin(), MAG_LSB_G),
+                mag_z: sat_i16(0.4, MAG_LSB_G),
+                x_rate_temp: temp,
+                time_itow: itow,
+                bit,
+                ..Default::default()
+            }
+            .encode(&mut buf)
+        }
+        PacketKind::A2 => nav440_proto::A2Fields {
+            yaw_true: yaw,
+            rate_z: rz,
+            accel_z: one_g,
+            rate_temp_x: temp,
+            rate_temp_y: temp,
+            rate_temp_z: temp,
+            time_itow: itow,
+            bit,
+            ..Default::default()
+        }
+        .encode(&mut buf),
+        PacketKind::N1 => nav440_proto::N1Fields {
+            yaw_true: yaw,
+            rate_z: rz,
+            accel_z: one_g,
+            // A bench somewhere at 35.0 N, 139.0 E, 40 m, standing still.
+            longitude: (139.0 / LATLON_LSB_DEG).round() as i32,
+            latitude: (35.0 / LATLON_LSB_DEG).round() as i32,
+            altitude: (40.0 / ALT_LSB_M) as i16,
+            x_rate_temp: temp,
+            time_itow: itow,
+            bit,
+            ..Default::default()
+        }
+        .encode(&mut buf),
+    }
+    .map_err(|e| Error::Other(format!("cannot encode {kind} packet: {e:?}")))?;
+    Ok(buf.get(..len).unwrap_or(&[]).to_vec())
+}
+
+/// Angle in degrees of a quantised I2 angle field.
+pub fn angle_deg(raw: i16) -> f64 {
+    f64::from(raw) * ANGLE_LSB_DEG
+}
+
+/// Rate in deg/s of a quantised I2 rate field.
+pub fn rate_deg_s(raw: i16) -> f64 {
+    f64::from(raw) * RATE_LSB_DEG_S
+}
