@@ -13,7 +13,7 @@
 
 pub mod cycles;
 pub mod host;
-// pub mod pipeline;
+pub mod pipeline;
 pub mod uart;
 
 /// Numeric type of the estimator bank: `f32` on an FPU target (`thumbv7em-none-eabihf`), the

@@ -1,39 +1,88 @@
-//! Firmware example: NAV440 bytes on UART0 -> parser -> estimator bank -> CSV (semihosting).
+//! Firmware example: NAV440 bytes on UART0 -> parser -> estimator bank -> CSV rows on the
+//! host's stdout (semihosting), counters on its stderr, then exit status 0.
+//!
+//! End-of-input convention (emulated boards): the byte stream on UART0 starts with the 4 bytes
+//! `N4LP` and the capture's length in bytes as u32 little-endian (`cargo xtask qemu/demo`
+//! prepend them); the firmware processes exactly that many bytes, prints its counters and exits.
+//! QEMU's UART never signals end-of-file, and a length prefix, unlike a trailer or idle
+//! detection, cannot be confused with capture content nor depends on timing. On the emulated
+//! boards a stream without the prefix is refused (exit 1) so that a wrong input never hangs a
+//! run; with the real-board profile (`board-stm32f405`) it is a live NAV440 stream and the
+//! firmware runs until reset.
 #![no_std]
 #![no_main]
 
 use cortex_m_rt::entry;
 use embedded_io::Read as _;
-use firmware_example::{host, uart::Uart0};
+use firmware_example::{host, pipeline, uart::Uart0};
+
+/// Magic at the start of a finite input.
+const LENGTH_MAGIC: [u8; 4] = *b"N4LP";
+
+/// NAV440 default baud rate (8N1); QEMU ignores the rate.
+const BAUD: u32 = 38_400;
+
+fn read_exact(uart: &mut Uart0, buf: &mut [u8]) {
+    let mut got = 0;
+    while got < buf.len() {
+        let Ok(n) = uart.read(&mut buf[got..]);
+        got += n;
+    }
+}
 
 #[entry]
 fn main() -> ! {
-    let Some(mut uart) = Uart0::take(16) else {
+    let Some(mut uart) = Uart0::take(BAUD) else {
         host::stderr(format_args!("firmware: UART0 already taken\n"));
         host::exit(false)
     };
-    let mut hdr = [0u8; 8];
-    let mut got = 0;
-    while got < 8 {
-        let Ok(n) = uart.read(&mut hdr[got..]);
-        got += n;
+    let mut pipe = match pipeline::Pipeline::new() {
+        Ok(p) => p,
+        Err(e) => {
+            host::stderr(format_args!(
+                "firmware: bank configuration rejected: {e:?}\n"
+            ));
+            host::exit(false)
+        }
+    };
+    let mut prefix = [0u8; 8];
+    read_exact(&mut uart, &mut prefix);
+    let (magic, len) = prefix.split_at(4);
+    if magic != LENGTH_MAGIC {
+        #[cfg(feature = "board-stm32f405")]
+        live(&mut uart, &mut pipe, &prefix);
+        #[cfg(not(feature = "board-stm32f405"))]
+        {
+            host::stderr(format_args!(
+                "firmware: input does not start with the N4LP length prefix (got {magic:02x?}); use `cargo xtask qemu FILE`\n"
+            ));
+            host::exit(false)
+        }
     }
-    let len = u32::from_le_bytes([hdr[4], hdr[5], hdr[6], hdr[7]]) as usize;
-    let mut remaining = len;
+    let mut remaining = u32::from_le_bytes([len[0], len[1], len[2], len[3]]) as usize;
+    host::stdout(pipeline::CSV_HEADER.as_bytes());
     let mut buf = [0u8; 64];
-    let crc = crc::Crc::<u16>::new(&crc::CRC_16_IBM_3740);
-    let mut digest = crc.digest();
     while remaining > 0 {
         let want = remaining.min(buf.len());
         let Ok(n) = uart.read(&mut buf[..want]);
-        digest.update(&buf[..n]);
+        pipe.feed(&buf[..n], |row| host::stdout(row.as_bytes()));
         remaining -= n;
     }
-    host::stderr(format_args!(
-        "bytes={len} crc={:#06x} overruns={} stalls={}\n",
-        digest.finalize(),
-        uart.overruns(),
-        uart.stalls()
-    ));
+    let mut line: heapless::String<400> = heapless::String::new();
+    let _ = pipe.summary(&mut line, uart.overruns(), uart.stalls());
+    host::stderr(format_args!("firmware: {line}\n"));
     host::exit(true)
+}
+
+/// Real board: a live NAV440 stream (no length prefix) is processed until reset; `first` are
+/// the bytes already read while looking for a prefix.
+#[cfg(feature = "board-stm32f405")]
+fn live(uart: &mut Uart0, pipe: &mut pipeline::Pipeline, first: &[u8]) -> ! {
+    host::stdout(pipeline::CSV_HEADER.as_bytes());
+    pipe.feed(first, |row| host::stdout(row.as_bytes()));
+    let mut buf = [0u8; 64];
+    loop {
+        let Ok(n) = uart.read(&mut buf);
+        pipe.feed(&buf[..n], |row| host::stdout(row.as_bytes()));
+    }
 }

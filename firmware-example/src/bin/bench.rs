@@ -1,25 +1,311 @@
-//! Instruction-count benchmark (run by `cargo xtask bench` under `qemu -icount shift=6`).
+//! Instruction-count benchmark, run by `cargo xtask bench` under `qemu -icount shift=6`.
+//!
+//! Prints tab-separated lines on the host's stdout (semihosting):
+//! * `instr <label> <instructions per unit> <unit>` - unit `sample` (one 10 ms NAV440 sample =
+//!   100 steps of h = 1e-4 s for a stepped law), `byte` (parser) or `call`;
+//! * `ram <label> <bytes>` - `core::mem::size_of` of each estimator's state.
+//!
+//! Each region is timed with two SysTick reads ([`Counter`]); the counter overhead (an empty
+//! region) is subtracted. Inputs are a yaw signal of the Fig. 5 kind (sine sweep in degrees)
+//! sampled at 100 Hz, after a warm-up so that steady-state code paths are measured.
 #![no_std]
 #![no_main]
 
+use core::hint::black_box;
 use cortex_m_rt::entry;
-use firmware_example::{cycles::Counter, host};
+use estimators::{
+    advance_by_steps, Ad, Ave, BankConfig, ClosedForm, Ed, Estimator, Hold, Ilo, Kalman,
+    KalmanConfig, Real, Series, YawBank,
+};
+use firmware_example::{cycles::Counter, host, Num};
+use heapless::String;
+use nav440_proto::{encode_frame, ItowClock, PacketType, Parser};
+
+/// Steps per sample: h = 1e-4 s, 100 Hz samples (the paper's step).
+const STEPS: u32 = 100;
+/// Sample period, us.
+const DT_US: u64 = 10_000;
+/// Measured samples per estimator (after [`WARMUP`]).
+const SAMPLES: u32 = 50;
+/// Warm-up samples.
+const WARMUP: u32 = 20;
+
+/// Test yaw at sample `k`, degrees (wrapped to +-180 only where the bank is fed).
+fn yaw(k: u32) -> f32 {
+    let t = k as f32 * 0.01;
+    // Polynomial stand-in for a smooth sweep (no libm needed in the harness): a triangle-ish
+    // back-and-forth of +-90 deg with a 4 s period.
+    let p = t % 4.0;
+    let x = if p < 2.0 { p - 1.0 } else { 3.0 - p };
+    90.0 * x * (1.5 - 0.5 * x * x)
+}
+
+fn line(kind: &str, label: &str, value: f32, unit: &str) {
+    let mut s: String<96> = String::new();
+    use core::fmt::Write as _;
+    let _ = if unit.is_empty() {
+        writeln!(s, "{kind}\t{label}\t{value}")
+    } else {
+        writeln!(s, "{kind}\t{label}\t{value}\t{unit}")
+    };
+    host::stdout(s.as_bytes());
+}
+
+fn ram(label: &str, bytes: usize) {
+    line("ram", label, bytes as f32, "");
+}
+
+/// Per-sample instructions of `advance` over `SAMPLES` samples of 100 steps each.
+fn per_sample<E: Estimator<Num>>(c: &Counter, overhead: u64, label: &str, mut e: E) {
+    let mut total = 0u64;
+    let mut prev = Num::from_f32(yaw(0));
+    e.reset(prev);
+    for k in 1..=(WARMUP + SAMPLES) {
+        let y = Num::from_f32(yaw(k));
+        let (n, out) = c.measure(|| {
+            black_box(&mut e).advance(black_box(prev), black_box(y), STEPS, Hold::Linear)
+        });
+        black_box(out);
+        if k > WARMUP {
+            total += n.saturating_sub(overhead);
+        }
+        prev = y;
+    }
+    line("instr", label, total as f32 / SAMPLES as f32, "sample");
+}
+
+/// Same as [`per_sample`] but always stepping (explicit Euler, the paper's method), even for
+/// laws that have a closed form.
+fn per_sample_stepped<E: Estimator<Num>>(c: &Counter, overhead: u64, label: &str, mut e: E) {
+    let mut total = 0u64;
+    let mut prev = Num::from_f32(yaw(0));
+    e.reset(prev);
+    for k in 1..=(WARMUP + SAMPLES) {
+        let y = Num::from_f32(yaw(k));
+        let (n, out) = c.measure(|| {
+            advance_by_steps(
+                black_box(&mut e),
+                black_box(prev),
+                black_box(y),
+                STEPS,
+                Hold::Linear,
+            )
+        });
+        black_box(out);
+        if k > WARMUP {
+            total += n.saturating_sub(overhead);
+        }
+        prev = y;
+    }
+    line("instr", label, total as f32 / SAMPLES as f32, "sample");
+}
+
+fn fail(what: &str) -> ! {
+    host::stderr(format_args!("bench: cannot build {what}\n"));
+    host::exit(false)
+}
 
 #[entry]
 fn main() -> ! {
     let Some(p) = cortex_m::Peripherals::take() else {
-        host::exit(false)
+        fail("peripherals")
     };
-    let counter = Counter::new(p.SYST);
-    let overhead = counter.overhead();
-    let data = [0x55u8; 4096];
-    let crc = crc::Crc::<u16>::new(&crc::CRC_16_IBM_3740);
-    let (n, c) = counter.measure(|| crc.checksum(core::hint::black_box(&data)));
-    host::stderr(format_args!(
-        "overhead={overhead} crc {} bytes: {} instr ({}/byte) {c:#x}\n",
-        data.len(),
-        n - overhead,
-        (n - overhead) as f32 / data.len() as f32
-    ));
+    let c = Counter::new(p.SYST);
+    let overhead = c.overhead();
+    let cfg = BankConfig::default();
+    let h = cfg.h;
+    let v = cfg.velocity;
+    let a = cfg.acceleration;
+
+    let ave = Ave::<Num>::new(&v.ave, h).unwrap_or_else(|_| fail("AVE"));
+    let ilo = |g| Ilo::<Num, 1>::new(g, h).unwrap_or_else(|_| fail("ILO"));
+    let ad = |t| Ad::<Num>::new(t, h).unwrap_or_else(|_| fail("AD"));
+    let ed = Ed::<Num>::new(&v.ed, h).unwrap_or_else(|_| fail("ED"));
+
+    // Velocity estimators, explicit Euler, 100 steps per sample.
+    per_sample_stepped(&c, overhead, "AVE (Euler x100)", ave);
+    per_sample_stepped(&c, overhead, "ILO1 (Euler x100)", ilo(&v.ilo[0]));
+    per_sample_stepped(&c, overhead, "AD T=0.01 (Euler x100)", ad(v.ad_t));
+    per_sample_stepped(&c, overhead, "ED (Euler x100)", ed);
+    // Acceleration: series of two, explicit Euler.
+    per_sample_stepped(&c, overhead, "AVE-AVE (Euler x100)", Series::new(ave, ave));
+    per_sample_stepped(
+        &c,
+        overhead,
+        "ILO1-ILO1 T4 (Euler x100)",
+        Series::new(ilo(&a.ilo[0]), ilo(&a.ilo[0])),
+    );
+    per_sample_stepped(
+        &c,
+        overhead,
+        "AD-AD T=0.1 (Euler x100)",
+        Series::new(ad(a.ad_t), ad(a.ad_t)),
+    );
+    per_sample_stepped(&c, overhead, "ED-ED (Euler x100)", Series::new(ed, ed));
+    // Linear laws through their exact 100-step map (what the bank uses).
+    per_sample(
+        &c,
+        overhead,
+        "ILO1 (closed form)",
+        ClosedForm::new(ilo(&v.ilo[0]), STEPS, Hold::Linear),
+    );
+    per_sample(
+        &c,
+        overhead,
+        "AD T=0.01 (closed form)",
+        ClosedForm::new(ad(v.ad_t), STEPS, Hold::Linear),
+    );
+    per_sample(
+        &c,
+        overhead,
+        "ILO1-ILO1 T4 (closed form)",
+        ClosedForm::new(
+            Series::new(ilo(&a.ilo[0]), ilo(&a.ilo[0])),
+            STEPS,
+            Hold::Linear,
+        ),
+    );
+    per_sample(
+        &c,
+        overhead,
+        "AD-AD T=0.1 (closed form)",
+        ClosedForm::new(Series::new(ad(a.ad_t), ad(a.ad_t)), STEPS, Hold::Linear),
+    );
+    // Kalman tracker: one predict/update per sample.
+    {
+        let kcfg = KalmanConfig {
+            dt: cfg.sample_period_s,
+            q: v.kf.q,
+            r: v.kf.r,
+        };
+        let mut kf = Kalman::<Num>::new(&kcfg).unwrap_or_else(|_| fail("Kalman"));
+        kf.reset(Num::from_f32(yaw(0)));
+        let dt = Num::from_f32(0.01);
+        let mut total = 0;
+        for k in 1..=(WARMUP + SAMPLES) {
+            let y = Num::from_f32(yaw(k));
+            let (n, ()) = c.measure(|| {
+                let kf = black_box(&mut kf);
+                kf.update(black_box(y), black_box(dt));
+                black_box(kf.velocity());
+            });
+            if k > WARMUP {
+                total += n.saturating_sub(overhead);
+            }
+        }
+        line(
+            "instr",
+            "Kalman (1 update)",
+            total as f32 / SAMPLES as f32,
+            "sample",
+        );
+    }
+
+    // The whole bank as the firmware runs it (unwrap, adapter, 14 estimators).
+    let mut bank = YawBank::<Num>::new(&cfg).unwrap_or_else(|_| fail("YawBank"));
+    let mut total = 0;
+    let mut rejected = 0u32;
+    for k in 0..(WARMUP + SAMPLES) {
+        let y = yaw(k);
+        let wrapped = if y > 180.0 { y - 360.0 } else { y };
+        let (n, r) = c.measure(|| {
+            black_box(
+                black_box(&mut bank).update(black_box(u64::from(k) * DT_US), black_box(wrapped)),
+            )
+        });
+        if r.is_err() {
+            rejected += 1;
+        }
+        if k >= WARMUP {
+            total += n.saturating_sub(overhead);
+        }
+    }
+    if rejected > 0 {
+        fail("a bank run without rejected samples");
+    }
+    line(
+        "instr",
+        "whole bank",
+        total as f32 / SAMPLES as f32,
+        "sample",
+    );
+
+    // Parser per byte: a stream of A2 frames (the capture's packet type), and the CRC alone.
+    let mut stream = [0u8; 37 * 64];
+    let mut len = 0;
+    for k in 0..64u32 {
+        let mut payload = [0u8; 30];
+        for (i, b) in payload.iter_mut().enumerate() {
+            *b = (k as u8)
+                .wrapping_mul(31)
+                .wrapping_add(i as u8)
+                .wrapping_mul(7);
+        }
+        match stream
+            .get_mut(len..)
+            .map(|out| encode_frame(PacketType::A2, &payload, out))
+        {
+            Some(Ok(n)) => len += n,
+            _ => fail("the parser input"),
+        }
+    }
+    let bytes = stream.get(..len).unwrap_or_default();
+    let mut parser = Parser::new();
+    let mut frames = 0u32;
+    let (n, ()) = c.measure(|| black_box(&mut parser).feed(black_box(bytes), |_| frames += 1));
+    if frames != 64 {
+        fail("64 frames from the parser input");
+    }
+    line(
+        "instr",
+        "parser",
+        n.saturating_sub(overhead) as f32 / len as f32,
+        "byte",
+    );
+    let (n, crc) = c.measure(|| nav440_proto::crc16(black_box(bytes)));
+    black_box(crc);
+    line(
+        "instr",
+        "CRC-16 alone (baseline)",
+        n.saturating_sub(overhead) as f32 / len as f32,
+        "byte",
+    );
+
+    // RAM (state size) per estimator and of the pipeline parts.
+    ram("AVE", core::mem::size_of::<Ave<Num>>());
+    ram("ILO (D=1)", core::mem::size_of::<Ilo<Num, 1>>());
+    ram(
+        "ILO (D=1) closed form",
+        core::mem::size_of::<ClosedForm<Num, Ilo<Num, 1>>>(),
+    );
+    ram("AD", core::mem::size_of::<Ad<Num>>());
+    ram(
+        "AD closed form",
+        core::mem::size_of::<ClosedForm<Num, Ad<Num>>>(),
+    );
+    ram("ED", core::mem::size_of::<Ed<Num>>());
+    ram("Kalman", core::mem::size_of::<Kalman<Num>>());
+    ram(
+        "AVE-AVE",
+        core::mem::size_of::<Series<Ave<Num>, Ave<Num>>>(),
+    );
+    ram(
+        "ILO-ILO closed form",
+        core::mem::size_of::<ClosedForm<Num, Series<Ilo<Num, 1>, Ilo<Num, 1>>>>(),
+    );
+    ram(
+        "AD-AD closed form",
+        core::mem::size_of::<ClosedForm<Num, Series<Ad<Num>, Ad<Num>>>>(),
+    );
+    ram("ED-ED", core::mem::size_of::<Series<Ed<Num>, Ed<Num>>>());
+    ram("YawBank (whole bank)", core::mem::size_of::<YawBank<Num>>());
+    ram("Parser", core::mem::size_of::<Parser>());
+    ram("ItowClock", core::mem::size_of::<ItowClock>());
+    ram(
+        "UART RX queue",
+        core::mem::size_of::<
+            heapless::spsc::Queue<u8, { firmware_example::uart::RX_QUEUE_BYTES + 1 }>,
+        >(),
+    );
     host::exit(true)
 }

@@ -1,17 +1,14 @@
-//! CMSDK APB UART0 of the QEMU `mps2-an385`/`mps2-an386` boards (base `0x4000_4000`, RX IRQ 0).
+//! Interrupt-driven UART receive shared by the boards; the register access lives in
+//! [`hw`] (CMSDK APB UART0 of the QEMU `mps2-an385`/`mps2-an386` boards by default,
+//! STM32F4 USART1 with the `board-stm32f405` feature).
 //!
-//! Receive is interrupt driven: the RX interrupt moves bytes from the one-byte data register
-//! into a `heapless::spsc` queue (the interrupt is the single producer, [`Uart0`] the single
-//! consumer). When the queue is full the interrupt handler stops taking bytes and masks the RX
-//! interrupt; the consumer unmasks it once it has made room (back-pressure). The byte waits in
-//! the data register meanwhile. On QEMU the emulated line then simply waits (lossless); on real
-//! hardware a following byte would set the UART's RX-overrun flag, which the driver counts
+//! The RX interrupt moves bytes from the UART's one-byte data register into a `heapless`
+//! SPSC queue (the interrupt is the single producer, [`Uart0`] the single consumer). When the
+//! queue is full the interrupt handler stops taking bytes and masks the RX interrupt; the
+//! consumer unmasks it once it has made room (back-pressure). The byte waits in the data
+//! register meanwhile. On QEMU the emulated line then simply waits (lossless); on real
+//! hardware a following byte sets the UART's RX-overrun flag, which the driver counts
 //! ([`Uart0::overruns`]) and clears, so a loss is never silent.
-//!
-//! Registers (CMSDK APB UART TRM): DATA +0x0, STATE +0x4 (bit0 TX full, bit1 RX full,
-//! bit2 TX overrun, bit3 RX overrun; write 1 to clear the overrun bits), CTRL +0x8 (bit0 TX
-//! enable, bit1 RX enable, bit3 RX interrupt enable), INTSTATUS/INTCLEAR +0xC (bit1 RX),
-//! BAUDDIV +0x10.
 
 use core::cell::RefCell;
 use core::convert::Infallible;
@@ -20,23 +17,15 @@ use cortex_m::interrupt::InterruptNumber;
 use critical_section::{CriticalSection, Mutex};
 use heapless::spsc::{Consumer, Producer, Queue};
 
-/// Base address of UART0 on the mps2 boards.
-const BASE: usize = 0x4000_4000;
-const DATA: usize = 0x00;
-const STATE: usize = 0x04;
-const CTRL: usize = 0x08;
-const INTCLEAR: usize = 0x0C;
-const BAUDDIV: usize = 0x10;
+#[cfg(not(feature = "board-stm32f405"))]
+#[path = "cmsdk.rs"]
+pub mod hw;
+#[cfg(feature = "board-stm32f405")]
+#[path = "stm32f4.rs"]
+pub mod hw;
 
-const STATE_RX_FULL: u32 = 1 << 1;
-const STATE_RX_OVERRUN: u32 = 1 << 3;
-const CTRL_TX_EN: u32 = 1 << 0;
-const CTRL_RX_EN: u32 = 1 << 1;
-const CTRL_RX_IE: u32 = 1 << 3;
-const INT_RX: u32 = 1 << 1;
-
-/// NVIC interrupt number of UART0 receive on the mps2 boards.
-pub const RX_IRQ: u16 = 0;
+/// NVIC interrupt number of the receive interrupt.
+pub const RX_IRQ: u16 = hw::RX_IRQ;
 
 /// Capacity of the receive queue in bytes (the queue holds `N - 1` of its `N` slots).
 pub const RX_QUEUE_BYTES: usize = 512 - 1;
@@ -50,21 +39,12 @@ static STALLS: AtomicU32 = AtomicU32::new(0);
 /// The RX interrupt is masked because the queue was full.
 static PAUSED: AtomicBool = AtomicBool::new(false);
 
-fn read_reg(offset: usize) -> u32 {
-    // SAFETY: BASE + offset is one of the UART0 registers listed above, a valid, aligned
-    // MMIO word on the mps2 boards; volatile reads of these registers have no side effect
-    // besides the documented ones (reading DATA pops the received byte).
-    unsafe { core::ptr::read_volatile((BASE + offset) as *const u32) }
-}
-
-fn write_reg(offset: usize, value: u32) {
-    // SAFETY: as in `read_reg`; the values written are those the TRM defines for the register.
-    unsafe { core::ptr::write_volatile((BASE + offset) as *mut u32, value) }
-}
-
 /// Single-core counter increment that also works on `thumbv6m` (no atomic read-modify-write).
 fn bump(counter: &AtomicU32) {
-    counter.store(counter.load(Ordering::Relaxed).wrapping_add(1), Ordering::Relaxed);
+    counter.store(
+        counter.load(Ordering::Relaxed).wrapping_add(1),
+        Ordering::Relaxed,
+    );
 }
 
 #[derive(Clone, Copy)]
@@ -81,52 +61,46 @@ unsafe impl InterruptNumber for Irq {
 /// the queue is full (then masks the RX interrupt). Runs in the interrupt or in a critical
 /// section, so it never races itself.
 fn service_rx(cs: CriticalSection<'_>) {
-    let state = read_reg(STATE);
-    if state & STATE_RX_OVERRUN != 0 {
+    if hw::take_overrun() {
         bump(&OVERRUNS);
-        write_reg(STATE, STATE_RX_OVERRUN);
     }
     let mut producer = PRODUCER.borrow_ref_mut(cs);
     let Some(producer) = producer.as_mut() else {
         return;
     };
-    while read_reg(STATE) & STATE_RX_FULL != 0 {
+    while hw::rx_full() {
         if !producer.ready() {
-            write_reg(CTRL, read_reg(CTRL) & !CTRL_RX_IE);
+            hw::set_rx_interrupt(false);
             PAUSED.store(true, Ordering::Release);
             bump(&STALLS);
             return;
         }
-        let byte = (read_reg(DATA) & 0xFF) as u8;
+        let byte = hw::read_data();
         // Cannot fail: `ready()` was checked just above and only this code enqueues.
         let _ = producer.enqueue(byte);
     }
 }
 
-/// Body of the UART0 RX interrupt (dispatched from `DefaultHandler`, IRQ [`RX_IRQ`]).
+/// Body of the RX interrupt (dispatched from `DefaultHandler`, IRQ [`RX_IRQ`]).
 pub fn on_rx_interrupt() {
-    write_reg(INTCLEAR, INT_RX);
+    hw::clear_rx_interrupt();
     critical_section::with(service_rx);
 }
 
-/// UART0 with interrupt-driven receive. Created once by [`Uart0::take`].
+/// The board's NAV440 UART with interrupt-driven receive. Created once by [`Uart0::take`].
 pub struct Uart0 {
     rx: Consumer<'static, u8>,
 }
 
 impl Uart0 {
-    /// Configures UART0 (`bauddiv` = bus clock / baud rate, at least 16; QEMU ignores the
-    /// rate), enables TX, RX and the RX interrupt, and unmasks it in the NVIC.
-    /// Returns `None` if called a second time.
-    pub fn take(bauddiv: u32) -> Option<Self> {
+    /// Configures the board's UART for `baud` Bd 8N1 (QEMU ignores the rate), enables TX,
+    /// RX and the RX interrupt, and unmasks it in the NVIC. `None` if called a second time.
+    pub fn take(baud: u32) -> Option<Self> {
         let queue: &'static mut Queue<u8, { RX_QUEUE_BYTES + 1 }> =
             cortex_m::singleton!(: Queue<u8, { RX_QUEUE_BYTES + 1 }> = Queue::new())?;
         let (producer, consumer) = queue.split();
         critical_section::with(|cs| PRODUCER.borrow(cs).replace(Some(producer)));
-        write_reg(BAUDDIV, bauddiv.max(16));
-        write_reg(STATE, STATE_RX_OVERRUN);
-        write_reg(INTCLEAR, INT_RX);
-        write_reg(CTRL, CTRL_TX_EN | CTRL_RX_EN | CTRL_RX_IE);
+        hw::init(baud);
         // SAFETY: the handler for this IRQ only touches PRODUCER (behind a critical section),
         // the atomics above and UART0 registers, so unmasking it cannot break a critical
         // section of the caller.
@@ -160,7 +134,7 @@ impl Uart0 {
         if n > 0 && PAUSED.load(Ordering::Acquire) {
             critical_section::with(|cs| {
                 PAUSED.store(false, Ordering::Release);
-                write_reg(CTRL, read_reg(CTRL) | CTRL_RX_IE);
+                hw::set_rx_interrupt(true);
                 // The byte left in the data register raised no new interrupt: take it now.
                 service_rx(cs);
             });

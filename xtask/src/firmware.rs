@@ -1,0 +1,686 @@
+//! Firmware subcommands: demo, qemu, bench, size, and the firmware part of `ci`.
+
+use crate::cargo;
+use crate::qemu::{self, Board, Output};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Duration;
+
+/// The firmware crate.
+const FW: &str = "firmware-example";
+/// Main firmware binary.
+const FW_BIN: &str = "firmware-example";
+/// Instruction-count benchmark binary.
+const BENCH_BIN: &str = "bench";
+/// Feature of the real-board profile (STM32F405, see the firmware README section).
+const STM32_FEATURE: &str = "board-stm32f405";
+
+/// Clock of the reference real target for the budget (STM32F405-class Cortex-M4F), Hz.
+const REF_CLOCK_HZ: f64 = 168e6;
+/// NAV440 output rate of the budget, Hz.
+const SAMPLE_RATE_HZ: f64 = 100.0;
+/// Assumed cycles per instruction of the reference target for the *estimated* cycle column
+/// (Cortex-M4F: most ALU/FP ops 1 cycle, loads 2, taken branches 2-4, VDIV/VSQRT 14, zero
+/// wait-state flash through the ART accelerator). Only an estimate: QEMU counts instructions.
+const ASSUMED_CPI: f64 = 1.5;
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("xtask lives in the workspace")
+        .to_path_buf()
+}
+
+fn target_dir() -> PathBuf {
+    match std::env::var_os("CARGO_TARGET_DIR") {
+        Some(d) => {
+            let d = PathBuf::from(d);
+            if d.is_absolute() {
+                d
+            } else {
+                root().join(d)
+            }
+        }
+        None => root().join("target"),
+    }
+}
+
+fn work_dir() -> Result<PathBuf, String> {
+    let d = target_dir().join("xtask");
+    std::fs::create_dir_all(&d).map_err(|e| format!("cannot create {}: {e}", d.display()))?;
+    Ok(d)
+}
+
+/// Builds the firmware binaries for `target` (release) and returns the path of `bin`.
+fn build(target: &str, features: &[&str], bin: &str) -> Result<PathBuf, String> {
+    let feats = features.join(",");
+    let mut args = vec!["build", "-p", FW, "--target", target, "--release", "--bins"];
+    if !feats.is_empty() {
+        args.extend(["--features", &feats]);
+    }
+    cargo(&args)?;
+    let elf = target_dir().join(target).join("release").join(bin);
+    if elf.is_file() {
+        Ok(elf)
+    } else {
+        Err(format!("built firmware not found at {}", elf.display()))
+    }
+}
+
+/// Parses `--board B` and other `--key value` options plus positional arguments.
+struct Opts {
+    board: Board,
+    capture: Option<PathBuf>,
+    positional: Vec<String>,
+}
+
+fn parse_opts(args: &[String]) -> Result<Opts, String> {
+    let mut board = qemu::BOARDS[0];
+    let mut capture = None;
+    let mut positional = Vec::new();
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        match a.as_str() {
+            "--board" => board = qemu::board(it.next().ok_or("--board needs a value")?)?,
+            "--capture" => {
+                capture = Some(PathBuf::from(it.next().ok_or("--capture needs a file")?))
+            }
+            s if s.starts_with("--") => return Err(format!("unknown option `{s}`")),
+            s => positional.push(s.to_owned()),
+        }
+    }
+    Ok(Opts {
+        board,
+        capture,
+        positional,
+    })
+}
+
+/// The bundled Fig. 5-like capture: `host-tests/data/*fig5*.bin` (else any `.bin` there);
+/// if the data directory has none, one is synthesised with `nav440 synth --profile fig5`.
+fn bundled_capture() -> Result<PathBuf, String> {
+    let data = root().join("host-tests").join("data");
+    let mut bins: Vec<PathBuf> = std::fs::read_dir(&data)
+        .map(|rd| {
+            rd.filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|x| x == "bin"))
+                .collect()
+        })
+        .unwrap_or_default();
+    bins.sort();
+    if let Some(p) = bins
+        .iter()
+        .find(|p| {
+            p.file_name()
+                .is_some_and(|n| n.to_string_lossy().contains("fig5"))
+        })
+        .or(bins.first())
+    {
+        return Ok(p.clone());
+    }
+    let out = work_dir()?.join("fig5-synth.bin");
+    eprintln!(
+        "xtask: no capture in {}, synthesising one with `nav440 synth`",
+        data.display()
+    );
+    let out_s = out.display().to_string();
+    cargo(&[
+        "run",
+        "-q",
+        "-p",
+        "host-tests",
+        "--bin",
+        "nav440",
+        "--",
+        "synth",
+        "--profile",
+        "fig5",
+        "-o",
+        &out_s,
+    ])?;
+    Ok(out)
+}
+
+fn read_file(p: &Path) -> Result<Vec<u8>, String> {
+    std::fs::read(p).map_err(|e| format!("cannot read {}: {e}", p.display()))
+}
+
+/// Runs `capture` through the firmware on `board`; returns (CSV, firmware counters line, run).
+fn run_capture(
+    board: &Board,
+    elf: &Path,
+    capture: &[u8],
+    output: Output,
+) -> Result<qemu::RunResult, String> {
+    let input = qemu::framed_input(capture)?;
+    let path = qemu::input_path(&work_dir()?, board.name);
+    let r = qemu::run_uart(
+        board,
+        elf,
+        &path,
+        &input,
+        output,
+        qemu::uart_timeout(input.len()),
+    );
+    let _ = std::fs::remove_file(&path);
+    r
+}
+
+/// The firmware's `key=value` counters line from its stderr.
+fn counters(stderr: &str) -> Vec<(String, u64)> {
+    stderr
+        .lines()
+        .filter_map(|l| l.strip_prefix("firmware: bytes="))
+        .flat_map(|rest| {
+            format!("bytes={rest}")
+                .split_whitespace()
+                .filter_map(|kv| {
+                    let (k, v) = kv.split_once('=')?;
+                    Some((k.to_owned(), v.parse().ok()?))
+                })
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+fn counter(c: &[(String, u64)], key: &str) -> Option<u64> {
+    c.iter().find(|(k, _)| k == key).map(|(_, v)| *v)
+}
+
+/// `cargo xtask demo`.
+pub fn demo(args: &[String]) -> Result<(), String> {
+    let opts = parse_opts(args)?;
+    if !opts.positional.is_empty() {
+        return Err("demo takes no positional argument (use --capture FILE)".into());
+    }
+    qemu::ensure_qemu()?;
+    let board = opts.board;
+    let elf = build(board.target, &[], FW_BIN)?;
+    let capture_path = match opts.capture {
+        Some(p) => p,
+        None => bundled_capture()?,
+    };
+    let capture = read_file(&capture_path)?;
+    eprintln!(
+        "xtask: feeding {} ({} bytes) through UART0 of QEMU {} ({})",
+        capture_path.display(),
+        capture.len(),
+        board.machine,
+        board.about
+    );
+    let r = run_capture(&board, &elf, &capture, Output::Capture)?;
+    let csv_path = work_dir()?.join(format!("demo-{}.csv", board.name));
+    std::fs::write(&csv_path, &r.stdout)
+        .map_err(|e| format!("cannot write {}: {e}", csv_path.display()))?;
+    print_estimates(&r.stdout)?;
+    let c = counters(&r.stderr);
+    println!();
+    println!("== summary ==");
+    println!(
+        "board           QEMU {} ({}, target {})",
+        board.machine, board.about, board.target
+    );
+    println!("capture         {}", capture_path.display());
+    for (k, label) in [
+        ("bytes", "bytes parsed"),
+        ("frames", "frames (CRC ok)"),
+        ("crc_errors", "CRC errors"),
+        ("skipped", "skipped bytes"),
+        ("decode_errors", "decode errors"),
+        ("samples", "yaw samples"),
+        ("rows", "estimate rows"),
+        ("rejected", "rejected samples"),
+        ("uart_overruns", "UART overruns"),
+        ("uart_stalls", "UART RX stalls (back-pressure, no loss)"),
+    ] {
+        match counter(&c, k) {
+            Some(v) => println!("{label:<16}{v}"),
+            None => println!("{label:<16}?"),
+        }
+    }
+    let secs = r.elapsed.as_secs_f64();
+    println!(
+        "QEMU run        {secs:.1} s wall, {:.1} KB/s through the emulated UART",
+        capture.len() as f64 / secs.max(1e-9) / 1e3
+    );
+    println!("full CSV        {}", csv_path.display());
+    Ok(())
+}
+
+/// Prints the CSV one row per second of capture time, plus velocity RMS errors vs the gyro.
+fn print_estimates(csv: &str) -> Result<(), String> {
+    let mut lines = csv.lines();
+    let header = lines.next().ok_or("the firmware printed no CSV header")?;
+    let cols: Vec<&str> = header.split(',').collect();
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| {
+            l.split(',')
+                .map(|v| v.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
+        .collect();
+    println!("== estimates (one row per second of the capture; deg, deg/s, deg/s^2) ==");
+    let line: Vec<String> = cols.iter().map(|c| format!("{c:>8}")).collect();
+    println!("{}", line.join(""));
+    let mut next_t = 0.0;
+    for r in &rows {
+        let t = r.first().copied().unwrap_or(f64::NAN);
+        if t >= next_t {
+            let line: Vec<String> = r.iter().map(|v| format!("{v:>8.2}")).collect();
+            println!("{}", line.join(""));
+            next_t = t.floor() + 1.0;
+        }
+    }
+    // Velocity estimates against the measured body rate (column yaw_rate).
+    if rows.len() > 1 && cols.len() >= 10 {
+        println!();
+        println!(
+            "velocity RMS difference to the gyro rate over {} rows (deg/s):",
+            rows.len()
+        );
+        let mut parts = Vec::new();
+        for (i, name) in cols.iter().enumerate().take(10).skip(3) {
+            let (mut s, mut n) = (0.0, 0usize);
+            for r in &rows {
+                if let (Some(v), Some(g)) = (r.get(i), r.get(2)) {
+                    if v.is_finite() && g.is_finite() {
+                        s += (v - g) * (v - g);
+                        n += 1;
+                    }
+                }
+            }
+            parts.push(format!("{name} {:.3}", (s / n.max(1) as f64).sqrt()));
+        }
+        println!("  {}", parts.join(", "));
+    }
+    Ok(())
+}
+
+/// `cargo xtask qemu FILE [--board B]`.
+pub fn qemu(args: &[String]) -> Result<(), String> {
+    let opts = parse_opts(args)?;
+    let [file] = opts.positional.as_slice() else {
+        return Err("usage: cargo xtask qemu FILE [--board an386|an385|an385-v6m]".into());
+    };
+    qemu::ensure_qemu()?;
+    let elf = build(opts.board.target, &[], FW_BIN)?;
+    let capture = read_file(Path::new(file))?;
+    let r = run_capture(&opts.board, &elf, &capture, Output::Inherit)?;
+    eprint!("{}", r.stderr);
+    Ok(())
+}
+
+/// One measurement line of the bench firmware: `instr<TAB>label<TAB>count<TAB>unit`.
+struct Measure {
+    label: String,
+    instr: f64,
+    unit: String,
+}
+
+/// Measurements and `size_of` lines (label, bytes) printed by the bench firmware.
+type BenchOutput = (Vec<Measure>, Vec<(String, u64)>);
+
+fn run_bench(board: &Board) -> Result<BenchOutput, String> {
+    let elf = build(board.target, &[], BENCH_BIN)?;
+    let r = qemu::run_plain(
+        board,
+        &elf,
+        &["-icount", "shift=6"],
+        Duration::from_secs(600),
+    )?;
+    let mut m = Vec::new();
+    let mut ram = Vec::new();
+    for l in r.stdout.lines() {
+        let f: Vec<&str> = l.split('\t').collect();
+        match f.as_slice() {
+            ["instr", label, n, unit] => m.push(Measure {
+                label: (*label).to_owned(),
+                instr: n.parse().map_err(|_| format!("bad bench line `{l}`"))?,
+                unit: (*unit).to_owned(),
+            }),
+            ["ram", label, n] => ram.push((
+                (*label).to_owned(),
+                n.parse().map_err(|_| format!("bad bench line `{l}`"))?,
+            )),
+            _ => {}
+        }
+    }
+    if m.is_empty() {
+        return Err(format!(
+            "the bench firmware printed no measurement; stdout:\n{}\nstderr:\n{}",
+            r.stdout, r.stderr
+        ));
+    }
+    Ok((m, ram))
+}
+
+/// `cargo xtask bench`.
+pub fn bench(args: &[String]) -> Result<(), String> {
+    let opts = parse_opts(args)?;
+    qemu::ensure_qemu()?;
+    let board = opts.board;
+    let (m, _) = run_bench(&board)?;
+    println!(
+        "== instructions on QEMU {} ({}), counted with -icount shift=6 + SysTick ==",
+        board.machine, board.about
+    );
+    println!(
+        "cycle column: ESTIMATE = instructions x {ASSUMED_CPI} (assumed CPI of a Cortex-M4F); CPU share: estimated cycles x {SAMPLE_RATE_HZ} Hz / {} MHz",
+        REF_CLOCK_HZ / 1e6
+    );
+    println!(
+        "{:<44} {:>12} {:>14} {:>10}",
+        "what", "instructions", "cycles (est.)", "CPU share"
+    );
+    for x in &m {
+        let cyc = x.instr * ASSUMED_CPI;
+        let share = if x.unit == "sample" {
+            format!("{:.3} %", cyc * SAMPLE_RATE_HZ / REF_CLOCK_HZ * 100.0)
+        } else {
+            "-".to_owned()
+        };
+        let label = format!("{} (per {})", x.label, x.unit);
+        println!("{label:<44} {:>12.1} {cyc:>14.0} {share:>10}", x.instr);
+    }
+    if let Some(b) = m.iter().find(|x| x.label == "whole bank") {
+        let share = b.instr * ASSUMED_CPI * SAMPLE_RATE_HZ / REF_CLOCK_HZ * 100.0;
+        println!(
+            "goal: whole bank < 2 % of a 168 MHz M4F at 100 Hz -> {share:.3} % (estimate): {}",
+            if share < 2.0 { "met" } else { "NOT met" }
+        );
+    }
+    if let Some(p) = m.iter().find(|x| x.label == "parser") {
+        println!(
+            "goal: parser < 30 instructions/byte -> {:.1}: {}",
+            p.instr,
+            if p.instr < 30.0 { "met" } else { "NOT met" }
+        );
+    }
+    Ok(())
+}
+
+fn llvm_size() -> Result<PathBuf, String> {
+    let out = |args: &[&str]| -> Result<String, String> {
+        let o = Command::new("rustc")
+            .args(args)
+            .output()
+            .map_err(|e| format!("cannot run rustc: {e}"))?;
+        Ok(String::from_utf8_lossy(&o.stdout).into_owned())
+    };
+    let sysroot = out(&["--print", "sysroot"])?;
+    let host = out(&["-vV"])?
+        .lines()
+        .find_map(|l| l.strip_prefix("host: ").map(str::to_owned))
+        .ok_or("cannot find the host triple in `rustc -vV`")?;
+    let p = Path::new(sysroot.trim())
+        .join("lib/rustlib")
+        .join(host)
+        .join("bin/llvm-size");
+    if p.is_file() {
+        Ok(p)
+    } else {
+        Err(format!(
+            "{} missing: run `rustup component add llvm-tools`",
+            p.display()
+        ))
+    }
+}
+
+/// (text, data, bss) of an ELF from `llvm-size` (Berkeley format).
+fn sizes(tool: &Path, elf: &Path) -> Result<(u64, u64, u64), String> {
+    let o = Command::new(tool)
+        .arg(elf)
+        .output()
+        .map_err(|e| format!("cannot run llvm-size: {e}"))?;
+    let text = String::from_utf8_lossy(&o.stdout);
+    let nums: Vec<u64> = text
+        .lines()
+        .nth(1)
+        .ok_or("unexpected llvm-size output")?
+        .split_whitespace()
+        .take(3)
+        .filter_map(|v| v.parse().ok())
+        .collect();
+    match nums.as_slice() {
+        [t, d, b] => Ok((*t, *d, *b)),
+        _ => Err(format!("unexpected llvm-size output:\n{text}")),
+    }
+}
+
+/// `cargo xtask size`.
+pub fn size(_args: &[String]) -> Result<(), String> {
+    let tool = llvm_size()?;
+    println!("== firmware size (llvm-size, release, {FW_BIN}) ==");
+    println!(
+        "{:<24} {:>9} {:>7} {:>7} {:>13} {:>15}",
+        "target", "text", "data", "bss", "flash (t+d)", "static RAM (d+b)"
+    );
+    for target in crate::THUMB_TARGETS {
+        let elf = build(target, &[], FW_BIN)?;
+        let (t, d, b) = sizes(&tool, &elf)?;
+        println!(
+            "{target:<24} {t:>9} {d:>7} {b:>7} {:>13} {:>15}",
+            t + d,
+            d + b
+        );
+    }
+    println!("(stack not included: it grows down from the top of the 128 KiB RAM)");
+    if qemu::qemu_available() {
+        let (_, ram) = run_bench(&qemu::BOARDS[0])?;
+        println!();
+        println!("== RAM per estimator (core::mem::size_of on thumbv7em, f32) ==");
+        for (label, n) in &ram {
+            println!("{label:<40} {n:>6} B");
+        }
+    } else {
+        println!("(RAM per estimator needs qemu-system-arm: run `cargo xtask bench` after installing it)");
+    }
+    Ok(())
+}
+
+/// `nav440 estimate FILE [extra]` on the host; its CSV.
+fn host_estimate(file: &Path, extra: &[&str]) -> Result<String, String> {
+    let f = file.display().to_string();
+    let mut args = vec![
+        "run",
+        "-q",
+        "-p",
+        "host-tests",
+        "--bin",
+        "nav440",
+        "--",
+        "estimate",
+        &f,
+    ];
+    args.extend_from_slice(extra);
+    eprintln!("+ cargo {}", args.join(" "));
+    let o = Command::new(env!("CARGO"))
+        .args(&args)
+        .output()
+        .map_err(|e| format!("cannot run cargo: {e}"))?;
+    if !o.status.success() {
+        return Err(format!(
+            "`nav440 estimate` failed: {}",
+            String::from_utf8_lossy(&o.stderr)
+        ));
+    }
+    String::from_utf8(o.stdout).map_err(|_| "nav440 printed non-UTF-8".into())
+}
+
+/// Compares two CSV texts; Ok(description) when identical, Err(first difference) otherwise.
+fn compare_csv(fw: &str, host: &str) -> Result<usize, String> {
+    let (a, b): (Vec<&str>, Vec<&str>) = (fw.lines().collect(), host.lines().collect());
+    for (i, (x, y)) in a.iter().zip(&b).enumerate() {
+        if x != y {
+            return Err(format!("line {}: firmware `{x}` != host `{y}`", i + 1));
+        }
+    }
+    if a.len() != b.len() {
+        return Err(format!(
+            "firmware printed {} lines, host {}",
+            a.len(),
+            b.len()
+        ));
+    }
+    Ok(a.len())
+}
+
+/// Largest absolute difference per column between two CSVs of the same shape.
+fn max_abs_diff(a: &str, b: &str) -> Result<Vec<(String, f64)>, String> {
+    let mut la = a.lines();
+    let mut lb = b.lines();
+    let header: Vec<String> = la
+        .next()
+        .ok_or("empty CSV")?
+        .split(',')
+        .map(str::to_owned)
+        .collect();
+    lb.next();
+    let mut max = vec![0.0f64; header.len()];
+    let mut n = 0;
+    for (x, y) in la.zip(lb) {
+        n += 1;
+        for (i, (u, v)) in x.split(',').zip(y.split(',')).enumerate() {
+            let (u, v): (f64, f64) = (u.parse().unwrap_or(f64::NAN), v.parse().unwrap_or(f64::NAN));
+            let d = (u - v).abs();
+            if let Some(m) = max.get_mut(i) {
+                if d.is_nan() || d > *m {
+                    *m = d;
+                }
+            }
+        }
+    }
+    if n == 0 {
+        return Err("no rows to compare".into());
+    }
+    Ok(header.into_iter().zip(max).collect())
+}
+
+/// Equivalence of the firmware and `nav440 estimate` on one capture, for one board.
+fn equivalence(
+    board: &Board,
+    elf: &Path,
+    capture: &Path,
+    host_extra: &[&str],
+) -> Result<(), String> {
+    let bytes = read_file(capture)?;
+    let fw = run_capture(board, elf, &bytes, Output::Capture)?;
+    let host = host_estimate(capture, host_extra)?;
+    let c = counters(&fw.stderr);
+    match compare_csv(&fw.stdout, &host) {
+        Ok(lines) => {
+            eprintln!(
+                "xtask: EQUIVALENT: firmware on {} ({}) and `nav440 estimate {}` print identical CSV for {} ({lines} lines); firmware counters: {}",
+                board.machine,
+                board.target,
+                host_extra.join(" "),
+                capture.display(),
+                fw.stderr.trim()
+            );
+            if counter(&c, "uart_overruns").unwrap_or(0) != 0 {
+                return Err("UART overruns reported under QEMU".into());
+            }
+            Ok(())
+        }
+        Err(diff) => {
+            let detail = max_abs_diff(&fw.stdout, &host)
+                .map(|v| {
+                    v.iter()
+                        .map(|(k, d)| format!("{k}:{d:.3e}"))
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                })
+                .unwrap_or_default();
+            Err(format!(
+                "firmware CSV differs from `nav440 estimate` for {} on {}: {diff}\nmax |diff| per column: {detail}",
+                capture.display(),
+                board.name
+            ))
+        }
+    }
+}
+
+/// The firmware part of `cargo xtask ci`.
+pub fn ci_steps() -> Result<(), String> {
+    qemu::ensure_qemu()?;
+    // Lints: the FPU build and the no-FPU (fixed-point) builds.
+    for target in crate::THUMB_TARGETS {
+        cargo(&[
+            "clippy", "-p", FW, "--target", target, "--bins", "--", "-D", "warnings",
+        ])?;
+    }
+    let mut elfs = Vec::new();
+    for board in qemu::BOARDS {
+        elfs.push((*board, build(board.target, &[], FW_BIN)?));
+    }
+    // The real-board profile: same code, its own memory map (see firmware README section).
+    cargo(&[
+        "clippy",
+        "-p",
+        FW,
+        "--target",
+        "thumbv7em-none-eabihf",
+        "--bins",
+        "--features",
+        STM32_FEATURE,
+        "--",
+        "-D",
+        "warnings",
+    ])?;
+    build("thumbv7em-none-eabihf", &[STM32_FEATURE], FW_BIN)?;
+
+    // Equivalence: bundled capture, plus a short corrupted capture (CRC errors, garbage,
+    // dropped packets) synthesised by the CLI.
+    let bundled = bundled_capture()?;
+    let corrupted = work_dir()?.join("ci-corrupted.bin");
+    let corrupted_s = corrupted.display().to_string();
+    cargo(&[
+        "run",
+        "-q",
+        "-p",
+        "host-tests",
+        "--bin",
+        "nav440",
+        "--",
+        "synth",
+        "--profile",
+        "spin",
+        "--duration",
+        "5",
+        "--flip-bits",
+        "20",
+        "--garbage",
+        "10",
+        "--drop-packets",
+        "5",
+        "--seed",
+        "7",
+        "-o",
+        &corrupted_s,
+    ])?;
+    for (board, elf) in &elfs {
+        let host_extra: &[&str] = if board.target == "thumbv7em-none-eabihf" {
+            &[]
+        } else {
+            &["--fixed"]
+        };
+        for capture in [&bundled, &corrupted] {
+            equivalence(board, elf, capture, host_extra)?;
+        }
+    }
+    // A hard-float image on the FPU-less board must fault and exit non-zero, not hang.
+    let m4f = &elfs[0].1;
+    let an385 = qemu::board("an385")?;
+    match qemu::run_plain(&an385, m4f, &[], Duration::from_secs(60)) {
+        Err(e) if e.contains("HardFault") => {
+            eprintln!(
+                "xtask: OK: hard-float image on the Cortex-M3 board ends with a HardFault exit"
+            )
+        }
+        Err(e) => return Err(format!("unexpected failure of the fault check: {e}")),
+        Ok(_) => return Err("hard-float image ran on the FPU-less board without a fault".into()),
+    }
+    bench(&[])?;
+    size(&[])?;
+    Ok(())
+}

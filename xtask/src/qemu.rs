@@ -1,0 +1,310 @@
+//! Finding or installing `qemu-system-arm`, the emulated boards, and running firmware in QEMU.
+
+use std::fs::File;
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::thread;
+use std::time::{Duration, Instant};
+
+/// An emulated board the firmware runs on, and the Rust target built for it.
+#[derive(Clone, Copy, Debug)]
+pub struct Board {
+    /// Name used on the command line (`--board`).
+    pub name: &'static str,
+    /// QEMU `-machine`.
+    pub machine: &'static str,
+    /// QEMU `-cpu`.
+    pub cpu: &'static str,
+    /// Rust target triple of the image.
+    pub target: &'static str,
+    /// What it is, for help texts.
+    pub about: &'static str,
+}
+
+/// Boards `cargo xtask qemu/demo --board` accepts; the first is the default.
+pub const BOARDS: &[Board] = &[
+    Board {
+        name: "an386",
+        machine: "mps2-an386",
+        cpu: "cortex-m4",
+        target: "thumbv7em-none-eabihf",
+        about: "Cortex-M4F, f32 bank (default)",
+    },
+    Board {
+        name: "an385",
+        machine: "mps2-an385",
+        cpu: "cortex-m3",
+        target: "thumbv7m-none-eabi",
+        about: "Cortex-M3, no FPU, fixed-point bank",
+    },
+    Board {
+        name: "an385-v6m",
+        machine: "mps2-an385",
+        cpu: "cortex-m3",
+        target: "thumbv6m-none-eabi",
+        about: "thumbv6m (Cortex-M0 instruction set) image run on the Cortex-M3 board, fixed-point bank",
+    },
+];
+
+/// Looks a board up by name.
+pub fn board(name: &str) -> Result<Board, String> {
+    BOARDS
+        .iter()
+        .copied()
+        .find(|b| b.name == name)
+        .ok_or_else(|| {
+            let names: Vec<_> = BOARDS.iter().map(|b| b.name).collect();
+            format!("unknown board `{name}` (known: {})", names.join(", "))
+        })
+}
+
+const QEMU: &str = "qemu-system-arm";
+
+fn qemu_version() -> Option<String> {
+    let out = Command::new(QEMU).arg("--version").output().ok()?;
+    if !out.status.success() {
+        return None;
+    }
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .next()
+        .map(str::to_owned)
+}
+
+fn is_root() -> bool {
+    Command::new("id")
+        .arg("-u")
+        .output()
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
+        .unwrap_or(false)
+}
+
+fn have(program: &str) -> bool {
+    Command::new("sh")
+        .args(["-c", &format!("command -v {program}")])
+        .stdout(Stdio::null())
+        .status()
+        .map(|s| s.success())
+        .unwrap_or(false)
+}
+
+/// Makes sure `qemu-system-arm` is runnable: installs it with apt-get (as root, or through
+/// `sudo -n`) when missing; otherwise fails with the exact command to run.
+pub fn ensure_qemu() -> Result<(), String> {
+    if let Some(v) = qemu_version() {
+        eprintln!("xtask: using {v}");
+        return Ok(());
+    }
+    let hint = "install it with `sudo apt-get install qemu-system-arm` (Debian/Ubuntu), \
+                `sudo dnf install qemu-system-arm` (Fedora) or `brew install qemu` (macOS)";
+    if !have("apt-get") {
+        return Err(format!(
+            "`{QEMU}` not found and apt-get is not available: {hint}"
+        ));
+    }
+    let sudo: &[&str] = if is_root() {
+        &[]
+    } else if have("sudo") {
+        &["sudo", "-n"]
+    } else {
+        return Err(format!("`{QEMU}` not found and not root (no sudo): {hint}"));
+    };
+    eprintln!("xtask: `{QEMU}` not found, installing it with apt-get");
+    let apt = |args: &[&str]| -> Result<(), String> {
+        let mut all: Vec<&str> = sudo.to_vec();
+        all.push("apt-get");
+        all.extend_from_slice(args);
+        let (prog, rest) = all.split_first().expect("non-empty");
+        crate::run_env(prog, rest, &[("DEBIAN_FRONTEND", "noninteractive")])
+    };
+    apt(&["update"])
+        .and_then(|()| apt(&["install", "-y", "--no-install-recommends", QEMU]))
+        .map_err(|e| format!("installing QEMU failed ({e}); {hint}"))?;
+    match qemu_version() {
+        Some(v) => {
+            eprintln!("xtask: installed {v}");
+            Ok(())
+        }
+        None => Err(format!("`{QEMU}` still not runnable after apt-get; {hint}")),
+    }
+}
+
+/// True when `qemu-system-arm` runs (no install attempt).
+pub fn qemu_available() -> bool {
+    qemu_version().is_some()
+}
+
+/// Magic of the length prefix that announces a finite capture to the firmware.
+pub const LENGTH_MAGIC: &[u8; 4] = b"N4LP";
+
+/// The byte stream sent through the emulated UART: `"N4LP"`, the capture's length as u32
+/// little-endian, then the capture itself (see the firmware's end-of-input convention).
+pub fn framed_input(capture: &[u8]) -> Result<Vec<u8>, String> {
+    let len = u32::try_from(capture.len()).map_err(|_| "capture larger than 4 GiB".to_owned())?;
+    let mut v = Vec::with_capacity(capture.len() + 8);
+    v.extend_from_slice(LENGTH_MAGIC);
+    v.extend_from_slice(&len.to_le_bytes());
+    v.extend_from_slice(capture);
+    Ok(v)
+}
+
+/// Where the firmware's standard output goes.
+pub enum Output {
+    /// Straight to this process's stdout (streaming).
+    Inherit,
+    /// Collected and returned.
+    Capture,
+}
+
+/// What one QEMU run produced.
+pub struct RunResult {
+    /// The firmware's semihosting stdout (empty with [`Output::Inherit`]).
+    pub stdout: String,
+    /// The firmware's semihosting stderr (counters, diagnostics) and QEMU's own messages.
+    pub stderr: String,
+    /// Wall time of the run.
+    pub elapsed: Duration,
+}
+
+/// Common QEMU arguments for `board` running `elf`.
+fn base_args(board: &Board, elf: &Path) -> Vec<String> {
+    [
+        "-machine",
+        board.machine,
+        "-cpu",
+        board.cpu,
+        "-display",
+        "none",
+        "-monitor",
+        "none",
+        "-semihosting-config",
+        "enable=on,target=native",
+        "-kernel",
+    ]
+    .iter()
+    .map(|s| (*s).to_owned())
+    .chain([elf.display().to_string()])
+    .collect()
+}
+
+/// Runs `elf` on `board`, feeding `input` (already framed) through UART0 via QEMU's stdio
+/// chardev (`mux=off` so no byte is taken as an escape). Fails on a non-zero exit status or
+/// when the run exceeds `timeout` (then QEMU is killed: a hung firmware never hangs CI).
+pub fn run_uart(
+    board: &Board,
+    elf: &Path,
+    input_file: &Path,
+    input: &[u8],
+    output: Output,
+    timeout: Duration,
+) -> Result<RunResult, String> {
+    File::create(input_file)
+        .and_then(|mut f| f.write_all(input))
+        .map_err(|e| format!("cannot write {}: {e}", input_file.display()))?;
+    let stdin = File::open(input_file).map_err(|e| format!("{}: {e}", input_file.display()))?;
+    let mut args = base_args(board, elf);
+    args.extend(
+        [
+            "-chardev",
+            "stdio,id=u0,mux=off,signal=off",
+            "-serial",
+            "chardev:u0",
+        ]
+        .map(str::to_owned),
+    );
+    run(&args, Stdio::from(stdin), output, timeout)
+}
+
+/// Runs `elf` on `board` without UART input; `extra` QEMU arguments (e.g. `-icount`).
+pub fn run_plain(
+    board: &Board,
+    elf: &Path,
+    extra: &[&str],
+    timeout: Duration,
+) -> Result<RunResult, String> {
+    let mut args = base_args(board, elf);
+    args.extend(["-serial", "none"].map(str::to_owned));
+    args.extend(extra.iter().map(|s| (*s).to_owned()));
+    run(&args, Stdio::null(), Output::Capture, timeout)
+}
+
+fn run(
+    args: &[String],
+    stdin: Stdio,
+    output: Output,
+    timeout: Duration,
+) -> Result<RunResult, String> {
+    eprintln!("+ {QEMU} {}", args.join(" "));
+    let start = Instant::now();
+    let mut child = Command::new(QEMU)
+        .args(args)
+        .stdin(stdin)
+        .stdout(match output {
+            Output::Inherit => Stdio::inherit(),
+            Output::Capture => Stdio::piped(),
+        })
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(|e| format!("cannot start {QEMU}: {e} (run `cargo xtask ci` or install it)"))?;
+    let out_reader = child.stdout.take().map(|mut s| {
+        thread::spawn(move || {
+            let mut buf = String::new();
+            let _ = s.read_to_string(&mut buf);
+            buf
+        })
+    });
+    let mut err_pipe = child.stderr.take().expect("piped");
+    let err_reader = thread::spawn(move || {
+        // Echo stderr lines live as well as keeping them.
+        let mut all = Vec::new();
+        let mut chunk = [0u8; 4096];
+        loop {
+            match err_pipe.read(&mut chunk) {
+                Ok(0) | Err(_) => break,
+                Ok(n) => all.extend_from_slice(&chunk[..n]),
+            }
+        }
+        String::from_utf8_lossy(&all).into_owned()
+    });
+    let status = loop {
+        match child.try_wait() {
+            Ok(Some(status)) => break status,
+            Ok(None) if start.elapsed() > timeout => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Err(format!(
+                    "QEMU did not finish within {} s (killed)",
+                    timeout.as_secs()
+                ));
+            }
+            Ok(None) => thread::sleep(Duration::from_millis(20)),
+            Err(e) => return Err(format!("waiting for QEMU: {e}")),
+        }
+    };
+    let stdout = out_reader
+        .map(|h| h.join().unwrap_or_default())
+        .unwrap_or_default();
+    let stderr = err_reader.join().unwrap_or_default();
+    let elapsed = start.elapsed();
+    if !status.success() {
+        return Err(format!(
+            "firmware run failed ({status}); its stderr:\n{stderr}"
+        ));
+    }
+    Ok(RunResult {
+        stdout,
+        stderr,
+        elapsed,
+    })
+}
+
+/// Time limit for a UART run of `bytes` bytes (QEMU's UART moves 10-40 KB/s; generous).
+pub fn uart_timeout(bytes: usize) -> Duration {
+    Duration::from_secs(120 + (bytes / 2_000) as u64)
+}
+
+/// Path of an input file for a run, inside the target directory.
+pub fn input_path(dir: &Path, tag: &str) -> PathBuf {
+    dir.join(format!("uart-input-{tag}-{}.bin", std::process::id()))
+}
