@@ -32,7 +32,44 @@ pub const ALGORITHM: &crc::Algorithm<u16> = &CRC_16_SPI_FUJITSU;
 pub trait Crc16Table {
     /// CRC of `bytes` (the whole message; init 0x1D0F, no final xor).
     fn checksum(bytes: &[u8]) -> u16;
+
+    /// Same value as [`checksum`](Self::checksum); the parser calls this once per candidate
+    /// frame. Implementations may trade a small copy for speed on short messages.
+    #[inline]
+    fn message_crc(msg: &[u8]) -> u16 {
+        Self::checksum(msg)
+    }
 }
+
+/// Register value that becomes 0x1D0F (the algorithm's init) after `k` zero bytes:
+/// init * x^(-8k) mod P, by running the zero-input bit step backwards 8k times.
+const fn init_before_zeros(k: usize) -> u16 {
+    let poly = CRC_16_SPI_FUJITSU.poly;
+    let mut reg = CRC_16_SPI_FUJITSU.init;
+    let mut i = 0;
+    while i < 8 * k {
+        // forward: reg' = (reg << 1) ^ (msb ? poly : 0); poly has bit 0 set, so bit 0 of reg'
+        // tells the old msb.
+        reg = if reg & 1 == 1 {
+            ((reg ^ poly) >> 1) | 0x8000
+        } else {
+            reg >> 1
+        };
+        i += 1;
+    }
+    reg
+}
+
+/// `INIT_BEFORE_ZEROS[k]`: see [`init_before_zeros`].
+const INIT_BEFORE_ZEROS: [u16; 16] = {
+    let mut t = [0u16; 16];
+    let mut k = 0;
+    while k < 16 {
+        t[k] = init_before_zeros(k);
+        k += 1;
+    }
+    t
+};
 
 static CRC_T0: Crc<u16, Table<0>> = Crc::<u16, Table<0>>::new(&CRC_16_SPI_FUJITSU);
 static CRC_T1: Crc<u16, Table<1>> = Crc::<u16, Table<1>>::new(&CRC_16_SPI_FUJITSU);
@@ -56,6 +93,26 @@ impl Crc16Table for Table<16> {
     #[inline]
     fn checksum(bytes: &[u8]) -> u16 {
         CRC_T16.checksum(bytes)
+    }
+
+    /// Slice-by-16 handles whole 16-byte blocks fast but the last `len % 16` bytes one at a
+    /// time, which dominates for 30-50 byte frames. Leading zero bytes are absorbed by
+    /// starting from `INIT_BEFORE_ZEROS[k]`, so the message is checked as `0^k || msg` with
+    /// `k` chosen to make the length a multiple of 16: only the first block is copied (16
+    /// bytes on the stack), everything runs in 16-byte steps.
+    #[inline]
+    fn message_crc(msg: &[u8]) -> u16 {
+        let k = (16 - msg.len() % 16) % 16;
+        let (head, rest) = msg.split_at((16 - k).min(msg.len()));
+        let mut first = [0u8; 16];
+        if let Some(dst) = first.get_mut(k..k + head.len()) {
+            dst.copy_from_slice(head);
+        }
+        let mut d = CRC_T16
+            .digest_with_initial(INIT_BEFORE_ZEROS.get(k).copied().unwrap_or(ALGORITHM.init));
+        d.update(first.get(..k + head.len()).unwrap_or(&first));
+        d.update(rest);
+        d.finalize()
     }
 }
 

@@ -212,7 +212,7 @@ fn scan<C: Crc16Table>(
                     return i; // incomplete
                 };
                 let got = u16::from_be_bytes([crc[0], crc[1]]);
-                if C::checksum(msg) == got {
+                if C::message_crc(msg) == got {
                     let packet_type = PacketType([*t0, *t1]);
                     let payload = msg.get(3..).unwrap_or(&[]);
                     stats.count_frame(packet_type, end + 2);
@@ -305,6 +305,10 @@ impl<C: Crc16Table> Parser<C> {
             }
             self.len += take;
             input = tail;
+            if self.len >= 5 && self.len < need {
+                // Header already checked when the first 5 bytes were in; wait for the rest.
+                return;
+            }
             let consumed = scan::<C>(
                 self.buf.get(..self.len).unwrap_or(&[]),
                 &mut self.stats,

@@ -100,34 +100,40 @@ impl PacketType {
     }
 
     /// Index into [`PacketType::KNOWN`], `None` for other types.
+    ///
+    /// Branch-free perfect hash of the 22 known codes (checked at compile time), so the
+    /// per-frame type count costs a multiply, a table load and one compare.
+    #[inline]
     pub fn known_index(self) -> Option<usize> {
-        Some(match &self.0 {
-            b"S0" => 0,
-            b"S1" => 1,
-            b"S2" => 2,
-            b"A0" => 3,
-            b"A1" => 4,
-            b"A2" => 5,
-            b"N0" => 6,
-            b"N1" => 7,
-            b"B1" => 8,
-            b"T0" => 9,
-            b"ID" => 10,
-            b"VR" => 11,
-            [0x15, 0x15] => 12,
-            b"PK" => 13,
-            b"CH" => 14,
-            b"GP" => 15,
-            b"AR" => 16,
-            b"SR" => 17,
-            b"SF" => 18,
-            b"WF" => 19,
-            b"GF" => 20,
-            b"RF" => 21,
-            _ => return None,
-        })
+        let i = *KNOWN_BY_HASH.get(type_hash(self.code()))? as usize;
+        match Self::KNOWN.get(i) {
+            Some(k) if *k == self => Some(i),
+            _ => None,
+        }
     }
 }
+
+/// Multiplier of the perfect hash of [`PacketType::KNOWN`] (found by search; any multiplier
+/// that makes the 22 codes' top 5 product bits distinct works).
+const TYPE_HASH_MUL: u32 = 0xB452_A4CF;
+
+#[inline(always)]
+const fn type_hash(code: u16) -> usize {
+    ((code as u32).wrapping_mul(TYPE_HASH_MUL) >> 27) as usize
+}
+
+/// hash -> index into `KNOWN` (0xFF: no known type). Built and collision-checked at compile time.
+const KNOWN_BY_HASH: [u8; 32] = {
+    let mut t = [0xFF_u8; 32];
+    let mut i = 0;
+    while i < PacketType::KNOWN.len() {
+        let h = type_hash(PacketType::KNOWN[i].code());
+        assert!(t[h] == 0xFF, "perfect hash collision");
+        t[h] = i as u8;
+        i += 1;
+    }
+    t
+};
 
 impl core::fmt::Display for PacketType {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
