@@ -43,7 +43,7 @@ pub fn ave_on_rate(
     opts: &EstimateOptions,
 ) -> Result<Vec<f32>> {
     let mut ave = Ave::<f32>::new(cfg, opts.step_s)
-        .map_err(|e| Error::Usage(format!("bad reference AVE configuration: {e:?}")))?;
+        .map_err(|e| Error::Usage(format!("bad reference AVE configuration: {e}")))?;
     let mut out = Vec::with_capacity(samples.len());
     let Some(first) = samples.first() else {
         return Ok(out);

@@ -94,7 +94,7 @@ fn draw<DB: DrawingBackend>(
         chart
             .configure_series_labels()
             .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
+            .background_style(WHITE.mix(0.7))
             .border_style(BLACK)
             .label_font(("sans-serif", 13))
             .draw()?;

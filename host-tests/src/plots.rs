@@ -8,7 +8,6 @@ use plotters::style::{RGBColor, BLACK};
 use std::path::Path;
 
 const NAMES: [&str; 7] = ["AVE", "ILO1", "ILO2", "ILO3", "AD", "ED", "KF"];
-const GREY: RGBColor = RGBColor(0x60, 0x60, 0x60);
 
 /// Builds the panels: yaw; velocity (AVE, ILOs) and (AD, ED, KF) against the measured rate;
 /// acceleration likewise against the reference (AVE on the measured rate). Only rows with
@@ -66,11 +65,7 @@ pub fn panels(
     let vr = range_of(&rate_ref);
     let ar = range_of(&acc_ref_f);
     let group = |title: &str, unit: &str, idx: &[usize], acc: bool| {
-        let mut series = vec![if acc {
-            line("reference (AVE on measured rate)", GREY, 3, &acc_ref_f)
-        } else {
-            line("measured rate (reference)", GREY, 3, &rate_ref)
-        }];
+        let mut series = Vec::new();
         for &i in idx {
             series.push(line(
                 NAMES[i],
@@ -79,6 +74,12 @@ pub fn panels(
                 &|r: &replay::Row| f64::from(if acc { r.out.acc[i] } else { r.out.vel[i] }),
             ));
         }
+        // The reference last, in black over the estimates, so it stays visible.
+        series.push(if acc {
+            line("reference: AVE on measured rate", BLACK, 2, &acc_ref_f)
+        } else {
+            line("reference: measured rate", BLACK, 2, &rate_ref)
+        });
         Panel {
             title: title.to_string(),
             y_label: unit.to_string(),

@@ -128,6 +128,16 @@ pub fn samples(bytes: &[u8]) -> Result<Vec<Sample>> {
     Ok(out)
 }
 
+/// Median interval between samples, s (`None` for fewer than 2 samples).
+pub fn nominal_period_s(samples: &[Sample]) -> Option<f32> {
+    let mut d: Vec<u64> = samples
+        .windows(2)
+        .map(|w| w[1].t_us.saturating_sub(w[0].t_us))
+        .collect();
+    d.sort_unstable();
+    d.get(d.len() / 2).map(|&x| x as f32 * 1e-6)
+}
+
 /// Gaussian noise added to yaw before estimation (the paper's protocol).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Noise {
@@ -181,11 +191,21 @@ impl Default for EstimateOptions {
 }
 
 impl EstimateOptions {
-    /// The bank configuration these options describe.
+    /// The bank configuration these options describe (gains from `config` or the paper's
+    /// presets, step and hold from the options), before adapting it to a capture.
     pub fn bank_config(&self) -> BankConfig {
         let mut cfg = self.config.unwrap_or_default();
         cfg.h = self.step_s;
         cfg.hold = self.hold;
+        cfg
+    }
+
+    /// [`EstimateOptions::bank_config`] with the nominal sample period set to the capture's
+    /// median packet interval (0.01 s for a 100 Hz capture, i.e. `BankConfig::PAPER`'s value):
+    /// the closed-form maps and the Kalman gains are computed for it.
+    pub fn bank_config_for(&self, samples: &[Sample]) -> BankConfig {
+        let mut cfg = self.bank_config();
+        cfg.sample_period_s = nominal_period_s(samples).unwrap_or(cfg.sample_period_s);
         cfg
     }
 }
@@ -204,15 +224,15 @@ pub struct Row {
 /// Runs the estimator bank over `samples`. A sample the bank rejects (e.g. time going
 /// backwards) yields no row; the count of those is returned too.
 pub fn estimate(samples: &[Sample], opts: &EstimateOptions) -> Result<(Vec<Row>, usize)> {
-    let cfg = opts.bank_config();
+    let cfg = opts.bank_config_for(samples);
     let yaw = noisy_yaw(samples, opts.noise)?;
     if opts.fixed {
         let mut bank = YawBank::<Fx>::new(&cfg)
-            .map_err(|e| Error::Usage(format!("bad estimator configuration: {e:?}")))?;
+            .map_err(|e| Error::Usage(format!("bad estimator configuration: {e}")))?;
         Ok(run(samples, &yaw, |t, y| bank.update(t, y).ok()))
     } else {
         let mut bank = YawBank::<f32>::new(&cfg)
-            .map_err(|e| Error::Usage(format!("bad estimator configuration: {e:?}")))?;
+            .map_err(|e| Error::Usage(format!("bad estimator configuration: {e}")))?;
         Ok(run(samples, &yaw, |t, y| bank.update(t, y).ok()))
     }
 }
@@ -255,4 +275,15 @@ pub fn write_csv<W: std::io::Write + ?Sized>(rows: &[Row], w: &mut W) -> std::io
         }
     }
     Ok(())
+}
+
+/// The whole `nav440 estimate` pipeline on a byte stream: parse, extract yaw samples, run the
+/// bank, format the CSV (header included). Returns the CSV text and the number of samples the
+/// bank rejected. This is what the firmware's equivalence test compares its output against.
+pub fn estimate_csv(bytes: &[u8], opts: &EstimateOptions) -> Result<(String, usize)> {
+    let samples = samples(bytes)?;
+    let (rows, rejected) = estimate(&samples, opts)?;
+    let mut out = Vec::new();
+    write_csv(&rows, &mut out).map_err(|e| Error::Other(e.to_string()))?;
+    Ok((String::from_utf8_lossy(&out).into_owned(), rejected))
 }

@@ -15,7 +15,7 @@
 
 use crate::error::{Error, Result};
 use crate::gains::{AdGains, AveGains, EdGains, FamilyGains, GainsFile, IloGains, KfGains};
-use crate::paper::{ave_on_rate, mse, row_mse, REFERENCE_AVE};
+use crate::paper::{ave_on_rate, mse, row_mse, steps_between, REFERENCE_AVE};
 use crate::replay::{self, EstimateOptions, Noise, Sample};
 use estimators::{
     Ad, Ave, AveConfig, BankConfig, DeltaMode, Ed, EdConfig, Estimator, Ilo, IloConfig, Kalman,
@@ -57,6 +57,7 @@ struct Problem<'a> {
     acc_ref: Vec<f32>,
     opts: &'a EstimateOptions,
     max_gap_s: f32,
+    sample_period_s: f32,
     window_s: f64,
 }
 
@@ -92,6 +93,8 @@ impl Problem<'_> {
     fn eval_kf(&self, cfg: &KalmanConfig, acc: bool) -> f64 {
         let reference = if acc { &self.acc_ref } else { &self.vel_ref };
         let t: Vec<u64> = self.samples.iter().map(|s| s.t_us).collect();
+        let h_s = (f64::from(self.opts.step_s) * 1e6).round() as f32 * 1e-6;
+        let h_us = f64::from(h_s) * 1e6;
         let mut total = 0.0;
         for y in &self.ys {
             let Ok(mut kf) = Kalman::<f32>::new(cfg) else {
@@ -102,7 +105,8 @@ impl Problem<'_> {
             for (s, &v) in self.samples.iter().zip(y) {
                 match prev {
                     None => kf.reset(v),
-                    Some(p) => kf.update(v, (s.t_us.saturating_sub(p)) as f32 * 1e-6),
+                    // Like the bank: dt = (number of steps h in the interval) * h.
+                    Some(p) => kf.update(v, steps_between(p, s.t_us, h_us) as f32 * h_s),
                 }
                 prev = Some(s.t_us);
                 out.push(if acc {
@@ -302,7 +306,7 @@ fn tune_family(p: &Problem<'_>, start: &FamilyGains, acc: bool) -> FamilyGains {
         });
     }
     if let Some(k) = start.kf {
-        let dt = nominal_period_s(p.samples);
+        let dt = p.sample_period_s;
         // Only q/r matters for the steady-state gain: r is kept, q is searched.
         let f = |g: &[f64]| {
             p.eval_kf(
@@ -323,16 +327,6 @@ fn tune_family(p: &Problem<'_>, start: &FamilyGains, acc: bool) -> FamilyGains {
     out
 }
 
-/// Median sample interval, s.
-pub fn nominal_period_s(samples: &[Sample]) -> f32 {
-    let mut d: Vec<u64> = samples
-        .windows(2)
-        .map(|w| w[1].t_us.saturating_sub(w[0].t_us))
-        .collect();
-    d.sort_unstable();
-    d.get(d.len() / 2).map_or(0.01, |&x| x as f32 * 1e-6)
-}
-
 /// Runs the tuner. The velocity and acceleration halves run on 2 threads.
 pub fn tune(
     samples: &[Sample],
@@ -341,7 +335,7 @@ pub fn tune(
     seeds: u64,
     window_s: f64,
 ) -> Result<TuneResult> {
-    let base = opts.bank_config();
+    let base = opts.bank_config_for(samples);
     let paper = GainsFile::from_bank(&base);
     let ys = (1..=seeds)
         .map(|seed| {
@@ -362,6 +356,7 @@ pub fn tune(
         acc_ref: ave_on_rate(samples, &REFERENCE_AVE, opts)?,
         opts,
         max_gap_s: base.max_gap_s,
+        sample_period_s: base.sample_period_s,
         window_s,
     };
     let (velocity, acceleration) = std::thread::scope(|s| {

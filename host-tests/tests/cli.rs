@@ -1,0 +1,431 @@
+//! Every `nav440` command on the committed captures and on fresh `synth` captures, through the
+//! real binary; error cases with their exit codes.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const BIN: &str = env!("CARGO_BIN_EXE_nav440");
+const HEADER: &str =
+    "t,yaw,yaw_rate,ave_v,ilo1_v,ilo2_v,ilo3_v,ad_v,ed_v,kf_v,ave_a,ilo1_a,ilo2_a,ilo3_a,ad_a,ed_a,kf_a";
+
+fn data(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("data")
+        .join(name)
+}
+
+/// A fresh scratch directory per test.
+fn scratch(test: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("nav440-cli-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn run(args: &[&str]) -> Output {
+    Command::new(BIN).args(args).output().expect("run nav440")
+}
+
+fn ok(args: &[&str]) -> String {
+    let o = run(args);
+    assert!(
+        o.status.success(),
+        "{args:?} failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8(o.stdout).unwrap()
+}
+
+/// Runs a command expected to fail: returns (exit code, stderr); stderr must be one line.
+fn fails(args: &[&str]) -> (i32, String) {
+    let o = run(args);
+    assert!(!o.status.success(), "{args:?} unexpectedly succeeded");
+    let err = String::from_utf8(o.stderr).unwrap();
+    assert_eq!(
+        err.trim_end().lines().count(),
+        1,
+        "{args:?}: not one line: {err:?}"
+    );
+    assert!(o.stdout.is_empty(), "{args:?} printed to stdout on error");
+    (o.status.code().unwrap(), err)
+}
+
+fn json(text: &str) -> serde_json::Value {
+    serde_json::from_str(text.trim()).unwrap_or_else(|e| panic!("not JSON ({e}): {text}"))
+}
+
+fn p(path: &Path) -> &str {
+    path.to_str().unwrap()
+}
+
+#[test]
+fn stats_on_committed_captures() {
+    // (file, type, frames = duration * rate + 1, frame length)
+    for (name, ty, n, flen) in [
+        ("fig5_a2_100hz.bin", "A2", 3501u64, 37u64),
+        ("sin5_a1_50hz.bin", "A1", 501, 39),
+        ("spin_n1_20hz.bin", "N1", 401, 49),
+        ("sin5_a2_25hz_weekwrap.bin", "A2", 251, 37),
+    ] {
+        let v = json(&ok(&["stats", p(&data(name))]));
+        assert_eq!(
+            v,
+            serde_json::json!({"bytes": n * flen, "frames": {ty: n}, "crc_errors": 0, "skipped_bytes": 0})
+        );
+    }
+    // Corrupted: 501 packets, 5 dropped, 14 damaged (the synth report; see data/README.md).
+    let v = json(&ok(&["stats", p(&data("fig5_a2_100hz_corrupt.bin"))]));
+    assert_eq!(v["frames"], serde_json::json!({"A2": 482}));
+    assert_eq!(v["bytes"], 18470);
+    assert!(v["crc_errors"].as_u64().unwrap() >= 1);
+}
+
+#[test]
+fn synth_then_every_command_on_a_fresh_capture() {
+    let d = scratch("fresh");
+    let cap = d.join("spin.bin");
+    let s = json(&ok(&[
+        "synth",
+        "--profile",
+        "spin",
+        "--packet",
+        "N1",
+        "--rate",
+        "10",
+        "--duration",
+        "3",
+        "--bit",
+        "0x0002",
+        "-o",
+        p(&cap),
+    ]));
+    // 3 s at 10 Hz: 31 packets of 7 + 42 bytes.
+    assert_eq!(s["packets"], 31);
+    assert_eq!(s["bytes"], 31 * 49);
+    assert_eq!(std::fs::metadata(&cap).unwrap().len(), 31 * 49);
+    assert_eq!(
+        json(&ok(&["stats", p(&cap)]))["frames"],
+        serde_json::json!({"N1": 31})
+    );
+
+    // decode: one row per frame, SI units, values from the spin profile's formulas.
+    let csv = ok(&["decode", p(&cap)]);
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let rows: Vec<Vec<String>> = lines
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect();
+    assert_eq!(rows.len(), 31);
+    let col = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .unwrap_or_else(|| panic!("no column {name}"))
+    };
+    for (k, r) in rows.iter().enumerate() {
+        let t = k as f64 * 0.1;
+        assert_eq!(r[col("type")], "N1");
+        assert_eq!(r[col("bit")], "0x0002");
+        let w = 2.0 * std::f64::consts::PI * 0.2;
+        let yaw = 200.0 * t + 100.0 / w * (1.0 - (w * t).cos());
+        let rate = 200.0 + 100.0 * (w * t).sin();
+        let yaw_wrapped = ((yaw + 180.0).rem_euclid(360.0) - 180.0).to_radians();
+        let got: f64 = r[col("yaw_rad")].parse().unwrap();
+        let mut dy = (got - yaw_wrapped).abs();
+        dy = dy.min(2.0 * std::f64::consts::PI - dy);
+        assert!(dy < 1e-4, "yaw {k}: {got} vs {yaw_wrapped}");
+        let rz: f64 = r[col("rate_z_rad_s")].parse().unwrap();
+        assert!((rz - rate.to_radians()).abs() < 2e-4, "rate {k}");
+        let az: f64 = r[col("accel_z_m_s2")].parse().unwrap();
+        assert!((az - 9.80665).abs() < 0.003, "1 g in m/s^2: {az}");
+        let lat: f64 = r[col("latitude_rad")].parse().unwrap();
+        assert!((lat - 35f64.to_radians()).abs() < 1e-8);
+        let itow: f64 = r[col("time_itow_s")].parse().unwrap();
+        assert!((itow - (208_800.0 + t)).abs() < 1e-6);
+    }
+    assert_eq!(
+        ok(&["decode", p(&cap), "--type", "A2"]).lines().count(),
+        1,
+        "header only"
+    );
+
+    // estimate: header, one row per packet, t from timeITOW.
+    let est = ok(&["estimate", p(&cap)]);
+    let mut lines = est.lines();
+    assert_eq!(lines.next(), Some(HEADER));
+    let rows: Vec<&str> = lines.collect();
+    assert_eq!(rows.len(), 31);
+    for (k, r) in rows.iter().enumerate() {
+        assert!(r.starts_with(&format!("{:.4},", k as f64 * 0.1)), "{r}");
+    }
+
+    // plot
+    let svg = d.join("p.svg");
+    ok(&["plot", p(&cap), "-o", p(&svg)]);
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.starts_with("<svg") || text.starts_with("<?xml"));
+    assert!(text.contains("Velocity: AVE and ILO1-3 vs measured rate"));
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn synth_corruption_is_recovered_by_the_parser() {
+    let d = scratch("corrupt");
+    let cap = d.join("c.bin");
+    let s = json(&ok(&[
+        "synth",
+        "--profile",
+        "sin5",
+        "--packet",
+        "A1",
+        "--rate",
+        "50",
+        "--duration",
+        "4",
+        "--flip-bits",
+        "6",
+        "--drop-bytes",
+        "3",
+        "--drop-packets",
+        "4",
+        "--garbage",
+        "5",
+        "--corrupt-seed",
+        "11",
+        "-o",
+        p(&cap),
+    ]));
+    assert_eq!(s["packets"], 201);
+    assert_eq!(s["dropped_packets"], 4);
+    let intact = s["intact_packets"].as_u64().unwrap();
+    assert_eq!(intact, 201 - 4 - s["damaged_packets"].as_u64().unwrap());
+    assert!(intact < 197, "some packets damaged");
+    let st = json(&ok(&["stats", p(&cap)]));
+    assert_eq!(st["frames"]["A1"].as_u64(), Some(intact));
+    // estimate still gives one row per surviving packet.
+    assert_eq!(
+        ok(&["estimate", p(&cap)]).lines().count() as u64,
+        intact + 1
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn estimate_options() {
+    let f = data("sin5_a1_50hz.bin");
+    let f = p(&f);
+    let base = ok(&["estimate", f]);
+    assert_eq!(base.lines().count(), 502);
+    // Noise: reproducible per seed, different across seeds, absent when the variance is 0.
+    let n1 = ok(&["estimate", f, "--noise-var", "0.5", "--seed", "2"]);
+    assert_eq!(
+        n1,
+        ok(&["estimate", f, "--noise-var", "0.5", "--seed", "2"])
+    );
+    assert_ne!(
+        n1,
+        ok(&["estimate", f, "--noise-var", "0.5", "--seed", "3"])
+    );
+    assert_ne!(n1, base);
+    assert_eq!(ok(&["estimate", f, "--noise-var", "0"]), base);
+    // Hold mode and step change the result; the yaw and rate columns do not depend on them.
+    let zoh = ok(&["estimate", f, "--hold", "zoh"]);
+    assert_ne!(zoh, base);
+    let cols = |s: &str| {
+        s.lines()
+            .map(|l| l.split(',').take(3).collect::<Vec<_>>().join(","))
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(cols(&zoh), cols(&base));
+    assert_ne!(ok(&["estimate", f, "--step", "0.0002"]), base);
+    // Fixed point: same rows, velocities close to f32.
+    let fx = ok(&["estimate", f, "--fixed"]);
+    assert_eq!(fx.lines().count(), 502);
+    // -o writes the same text to a file.
+    let d = scratch("est");
+    let out = d.join("e.csv");
+    assert!(ok(&["estimate", f, "-o", p(&out)]).is_empty());
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), base);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn paper_json_has_both_tables_next_to_the_paper_values() {
+    let v = json(&ok(&[
+        "paper",
+        p(&data("sin5_a1_50hz.bin")),
+        "--json",
+        "--window",
+        "8",
+    ]));
+    assert_eq!(v["settings"]["hold"], "linear");
+    assert_eq!(
+        v["settings"]["step_s"].as_f64().unwrap(),
+        f64::from(1e-4f32)
+    );
+    assert_eq!(v["settings"]["seeds"], serde_json::json!([1, 2, 3]));
+    // The paper's values (Tables 1 and 3 as restated in PAPER.md).
+    assert_eq!(v["velocity_mse"]["0.01"]["paper"]["AVE"], 11.1);
+    assert_eq!(v["velocity_mse"]["0.5"]["paper"]["AD"], 71.7);
+    assert_eq!(v["acceleration_mse"]["0.01"]["paper"]["ILO2"], 212.4);
+    assert_eq!(v["acceleration_mse"]["0.5"]["paper"]["ED"], 392.1);
+    for table in ["velocity_mse", "acceleration_mse"] {
+        for c in ["AVE", "ILO1", "ILO2", "ILO3", "AD", "KF"] {
+            let lo = v[table]["0.01"]["ours"][c].as_f64().unwrap();
+            let hi = v[table]["0.5"]["ours"][c].as_f64().unwrap();
+            // Linear estimators: MSE = signal error + noise gain * variance, so 50x the noise
+            // variance can only raise it.
+            assert!(lo > 0.0 && hi > lo, "{table} {c}: {lo} {hi}");
+        }
+    }
+    let text = ok(&["paper", p(&data("sin5_a1_50hz.bin")), "--window", "8"]);
+    assert!(text.contains("Table 1") && text.contains("Table 3") && text.contains("0.5 paper"));
+}
+
+#[test]
+fn tune_improves_and_writes_gains_that_estimate_accepts() {
+    let d = scratch("tune");
+    let cap = d.join("short.bin");
+    ok(&[
+        "synth",
+        "--profile",
+        "fig5",
+        "--rate",
+        "50",
+        "--duration",
+        "3",
+        "-o",
+        p(&cap),
+    ]);
+    let gains = d.join("g.toml");
+    let rust = d.join("g.rs");
+    let text = ok(&[
+        "tune",
+        p(&cap),
+        "--noise-var",
+        "0.1",
+        "--seeds",
+        "1",
+        "-o",
+        p(&gains),
+        "--rust",
+        p(&rust),
+    ]);
+    // Each table line: NAME before after ...; the search starts from the paper gains and only
+    // keeps improvements, so after <= before (up to the bank's closed-form rounding).
+    let mut seen = 0;
+    for l in text.lines() {
+        let w: Vec<&str> = l.split_whitespace().collect();
+        if w.len() >= 3 && ["AVE", "ILO1", "ILO2", "ILO3", "AD", "ED", "KF"].contains(&w[0]) {
+            let (b, a): (f64, f64) = (w[1].parse().unwrap(), w[2].parse().unwrap());
+            assert!(a <= b * 1.01 + 1e-6, "{l}");
+            seen += 1;
+        }
+    }
+    assert_eq!(seen, 14);
+    let toml = std::fs::read_to_string(&gains).unwrap();
+    assert!(toml.contains("[velocity.ave]") && toml.contains("[acceleration.ilo3]"));
+    assert!(std::fs::read_to_string(&rust)
+        .unwrap()
+        .contains("pub const TUNED: BankConfig"));
+    let tuned = ok(&["estimate", p(&cap), "--gains", p(&gains)]);
+    assert_ne!(tuned, ok(&["estimate", p(&cap)]));
+    // A gains file restating the paper's presets reproduces the default output exactly.
+    let paper = d.join("paper.toml");
+    std::fs::write(
+        &paper,
+        "[velocity.ave]\nk = 500.0\ngamma1 = 20000.0\n[acceleration.ad]\nt = 0.1\n",
+    )
+    .unwrap();
+    assert_eq!(
+        ok(&["estimate", p(&cap), "--gains", p(&paper)]),
+        ok(&["estimate", p(&cap)])
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+#[test]
+fn errors_are_one_line_with_documented_exit_codes() {
+    let d = scratch("errors");
+    let missing = d.join("missing.bin");
+    let empty = d.join("empty.bin");
+    std::fs::write(&empty, b"").unwrap();
+    let text = d.join("text.bin");
+    std::fs::write(
+        &text,
+        "this is not a NAV440 capture, just text\n".repeat(50),
+    )
+    .unwrap();
+    for cmd in ["stats", "decode", "estimate", "paper", "plot"] {
+        let mut extra: Vec<&str> = Vec::new();
+        if cmd == "plot" {
+            extra = vec!["-o", "/dev/null"];
+        }
+        let args = |f: &Path| {
+            let mut a = vec![cmd, p(f)];
+            a.extend(extra.iter().copied());
+            a.iter().map(|s| s.to_string()).collect::<Vec<_>>()
+        };
+        let run_args = |f: &Path| {
+            let a = args(f);
+            fails(&a.iter().map(String::as_str).collect::<Vec<_>>())
+        };
+        let (code, err) = run_args(&missing);
+        assert_eq!(code, 3, "{cmd} missing: {err}");
+        assert!(
+            err.starts_with("nav440: cannot read") && err.contains("missing.bin"),
+            "{err}"
+        );
+        let (code, err) = run_args(&empty);
+        assert_eq!(code, 3, "{cmd} empty: {err}");
+        assert!(err.contains("is empty"), "{err}");
+        let (code, err) = run_args(&text);
+        assert_eq!(code, 4, "{cmd} text: {err}");
+        assert!(err.contains("no NAV440 frame"), "{err}");
+    }
+    let (code, _) = fails(&["tune", p(&missing), "--noise-var", "0.1"]);
+    assert_eq!(code, 3);
+    // Usage errors: exit 2.
+    let f = data("sin5_a1_50hz.bin");
+    assert_eq!(fails(&["estimate", p(&f), "--hold", "cubic"]).0, 2);
+    assert_eq!(fails(&["estimate", p(&f), "--noise-var", "-1"]).0, 2);
+    assert_eq!(
+        fails(&["estimate", p(&f), "--step", "1.5e-7"]).0,
+        2,
+        "not whole microseconds"
+    );
+    assert_eq!(
+        fails(&["synth", "--rate", "3", "-o", p(&d.join("x.bin"))]).0,
+        2
+    );
+    assert_eq!(
+        fails(&["synth", "--profile", "zigzag", "-o", p(&d.join("x.bin"))]).0,
+        2
+    );
+    assert_eq!(fails(&["frobnicate"]).0, 2);
+    let bad = d.join("bad.toml");
+    std::fs::write(&bad, "[velocity.ave]\nk = \"fast\"\n").unwrap();
+    let (code, err) = fails(&["estimate", p(&f), "--gains", p(&bad)]);
+    assert_eq!(code, 2, "{err}");
+    std::fs::write(&bad, "[velocity.ilo1]\nk1 = 2.0\nl = 1.0\nk2 = 1.0\n").unwrap();
+    let (code, err) = fails(&["estimate", p(&f), "--gains", p(&bad)]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("K1"), "{err}");
+    // Output failure: exit 5.
+    assert_eq!(
+        fails(&[
+            "synth",
+            "--duration",
+            "1",
+            "-o",
+            p(&d.join("no/such/dir/x.bin"))
+        ])
+        .0,
+        5
+    );
+    // Help works and exits 0.
+    let h = run(&["--help"]);
+    assert!(h.status.success());
+    assert!(String::from_utf8_lossy(&h.stdout).contains("Exit codes"));
+    let _ = std::fs::remove_dir_all(&d);
+}

@@ -1,0 +1,365 @@
+//! Replays the committed captures through parser + estimators (library API) and checks counts
+//! and values computed independently: frame counts from the synth parameters, frame bytes
+//! against an independent CRC (the `crc` crate's CRC-16/SPI-FUJITSU), sample times from the
+//! packet period, yaw and rate against the closed-form motion, velocities against the
+//! analytic rate with bounds from the estimators' linear error transfer functions.
+
+use host_tests::corrupt::Corruption;
+use host_tests::motion::{Profile, ProfileKind};
+use host_tests::replay::{self, EstimateOptions, Noise};
+use host_tests::synth::{self, PacketKind, SynthConfig};
+use std::path::PathBuf;
+
+const ANGLE_LSB: f64 = 360.0 / 65536.0;
+const RATE_LSB: f64 = 1260.0 / 65536.0;
+
+fn data(name: &str) -> Vec<u8> {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("data")
+        .join(name);
+    std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+/// Splits a clean capture into frames by walking lengths, checking every CRC independently.
+fn frames_checked(bytes: &[u8]) -> Vec<&[u8]> {
+    let crc = crc::Crc::<u16>::new(&crc::CRC_16_SPI_FUJITSU);
+    assert_eq!(
+        crc.checksum(b"123456789"),
+        0xE5CC,
+        "catalogue check value of the protocol doc"
+    );
+    let mut out = Vec::new();
+    let mut rest = bytes;
+    while !rest.is_empty() {
+        assert_eq!(&rest[..2], &[0x55, 0x55]);
+        let n = rest[4] as usize;
+        let (frame, tail) = rest.split_at(7 + n);
+        let want = u16::from_be_bytes([frame[5 + n], frame[6 + n]]);
+        assert_eq!(crc.checksum(&frame[2..5 + n]), want);
+        out.push(frame);
+        rest = tail;
+    }
+    out
+}
+
+/// (file, profile, packet, rate Hz, duration s, frame length, first timeITOW ms)
+const CLEAN: [(&str, ProfileKind, &[u8; 2], u32, f64, usize, u64); 4] = [
+    (
+        "fig5_a2_100hz.bin",
+        ProfileKind::Fig5,
+        b"A2",
+        100,
+        35.0,
+        37,
+        208_800_000,
+    ),
+    (
+        "sin5_a1_50hz.bin",
+        ProfileKind::Sin5,
+        b"A1",
+        50,
+        10.0,
+        39,
+        208_800_000,
+    ),
+    (
+        "spin_n1_20hz.bin",
+        ProfileKind::Spin,
+        b"N1",
+        20,
+        20.0,
+        49,
+        208_800_000,
+    ),
+    (
+        "sin5_a2_25hz_weekwrap.bin",
+        ProfileKind::Sin5,
+        b"A2",
+        25,
+        10.0,
+        37,
+        604_795_000,
+    ),
+];
+
+#[test]
+fn committed_captures_have_the_frames_their_parameters_imply() {
+    for (name, _, ty, rate, dur, flen, itow0) in CLEAN {
+        let bytes = data(name);
+        let n = (dur * f64::from(rate)).round() as usize + 1;
+        assert_eq!(bytes.len(), n * flen, "{name}");
+        let frames = frames_checked(&bytes);
+        assert_eq!(frames.len(), n, "{name}");
+        let period = 1000 / u64::from(rate);
+        for (k, f) in frames.iter().enumerate() {
+            assert_eq!(&f[2..4], ty, "{name}");
+            // timeITOW is the U4 before the trailing BIT word.
+            let p = &f[5..f.len() - 2];
+            let itow = u32::from_be_bytes(p[p.len() - 6..p.len() - 2].try_into().unwrap());
+            assert_eq!(
+                u64::from(itow),
+                (itow0 + k as u64 * period) % 604_800_000,
+                "{name} frame {k}"
+            );
+            assert_eq!(&p[p.len() - 2..], &[0, 0], "BIT word");
+        }
+        let stats = replay::stream_stats(&bytes);
+        assert_eq!(stats.total_frames(), n as u64);
+        assert_eq!(
+            stats.frames.get(std::str::from_utf8(ty).unwrap()),
+            Some(&(n as u64))
+        );
+        assert_eq!(
+            (stats.crc_errors, stats.skipped_bytes, stats.bytes),
+            (0, 0, bytes.len() as u64)
+        );
+    }
+}
+
+#[test]
+fn committed_captures_are_reproducible_from_their_manifest_commands() {
+    for (name, profile, ty, rate, dur, _, itow0) in CLEAN {
+        let packet = std::str::from_utf8(ty)
+            .unwrap()
+            .parse::<PacketKind>()
+            .unwrap();
+        let cfg = SynthConfig {
+            profile,
+            seed: 1,
+            duration_s: dur,
+            rate_hz: rate,
+            packet,
+            start_itow_ms: itow0,
+            ..SynthConfig::default()
+        };
+        assert_eq!(synth::generate(&cfg).unwrap().bytes, data(name), "{name}");
+    }
+}
+
+#[test]
+fn samples_match_the_motion_within_one_lsb() {
+    for (name, profile, _, rate, dur, _, _) in CLEAN {
+        let samples = replay::samples(&data(name)).unwrap();
+        let motion = Profile::new(profile, dur, 1);
+        let period_us = 1_000_000 / u64::from(rate);
+        for (k, s) in samples.iter().enumerate() {
+            // ItowClock: time since the first packet, across the week rollover.
+            assert_eq!(s.t_us, k as u64 * period_us, "{name} sample {k}");
+            let m = motion.at(k as f64 / f64::from(rate));
+            let wrapped = (m.yaw_deg + 180.0).rem_euclid(360.0) - 180.0;
+            let mut d = (f64::from(s.yaw_deg) - wrapped).abs();
+            d = d.min(360.0 - d);
+            assert!(d <= ANGLE_LSB / 2.0 + 1e-4, "{name} yaw at sample {k}: {d}");
+            assert!(
+                (f64::from(s.rate_deg_s) - m.rate_deg_s).abs() <= RATE_LSB / 2.0 + 1e-4,
+                "{name} rate {k}"
+            );
+        }
+    }
+}
+
+#[test]
+fn spin_is_unwrapped_through_many_turns() {
+    let samples = replay::samples(&data("spin_n1_20hz.bin")).unwrap();
+    let (rows, rejected) = replay::estimate(&samples, &EstimateOptions::default()).unwrap();
+    assert_eq!((rows.len(), rejected), (401, 0));
+    let motion = Profile::new(ProfileKind::Spin, 20.0, 1);
+    let last = rows.last().unwrap();
+    assert!(motion.at(20.0).yaw_deg > 10.0 * 360.0);
+    for r in &rows {
+        let m = motion.at(r.t_us as f64 * 1e-6);
+        assert!(
+            (f64::from(r.out.yaw_unwrapped_deg) - m.yaw_deg).abs() < 0.01,
+            "t={}",
+            r.t_us
+        );
+    }
+    // After the start-up transient every velocity estimate but ED follows the rate (200 deg/s
+    // at t = 20 s, acceleration 126 deg/s^2 there: delays of <= 35 ms give < 5 deg/s). A leaky
+    // ILO (K1 < 1) has a steady-state gain below 1 on a constant rate: with v = K1 v + K2 e per
+    // step and L e + v = rate, v = rate * g, g = c / (L + c), c = K2 / (1 - K1)
+    // (ILO2: c = 100, L = 5, g = 0.952; ILO3: c = 66.7, L = 1, g = 0.985). ED's switching law
+    // chatters on a 20 Hz piecewise-linear input (a kink every 50 ms), so it is only required
+    // to stay bounded.
+    let rate = motion.at(20.0).rate_deg_s;
+    let g = |k1: f64, l: f64, k2: f64| {
+        if k1 >= 1.0 {
+            1.0
+        } else {
+            (k2 / (1.0 - k1)) / (l + k2 / (1.0 - k1))
+        }
+    };
+    let gains = [
+        1.0,
+        1.0,
+        g(0.9, 5.0, 10.0),
+        g(0.7, 1.0, 20.0),
+        1.0,
+        1.0,
+        1.0,
+    ];
+    for i in [0, 1, 2, 3, 4, 6] {
+        let want = rate * gains[i];
+        assert!(
+            (f64::from(last.out.vel[i]) - want).abs() < 5.0,
+            "estimator {i}: {} vs {want}",
+            last.out.vel[i]
+        );
+    }
+    assert!(rows.iter().all(|r| r.out.vel[5].abs() < 1000.0));
+}
+
+/// Velocity vs the analytic rate of sin5 (section 3.2: rate = (180/pi) sin 5t deg/s,
+/// amplitude A = 57.3 deg/s, omega = 5 rad/s), no noise, 50 Hz samples (Ts = 0.02 s).
+/// At this omega each estimator acts as a pure delay (error ~ A omega delay):
+/// AVE (deltahat ignored) has velocity error transfer s (s + k) / (s^2 + k s + gamma1), i.e. a
+/// delay k / gamma1 = 25 ms; AD s/(Ts+1) a delay T = 10 ms. The linearly interpolated input's
+/// slope is the chord slope, delayed by Ts/2 = 10 ms. Bound: A omega (delay + Ts/2) + 0.5 deg/s
+/// (quantisation, higher-order terms): AVE 10.5, AD 6.2 deg/s.
+#[test]
+fn sin5_velocity_follows_the_analytic_rate() {
+    let samples = replay::samples(&data("sin5_a1_50hz.bin")).unwrap();
+    let (rows, _) = replay::estimate(&samples, &EstimateOptions::default()).unwrap();
+    let motion = Profile::new(ProfileKind::Sin5, 10.0, 1);
+    let a = 180.0 / std::f64::consts::PI;
+    let bounds = [
+        (0usize, a * 5.0 * (0.025 + 0.01) + 0.5),
+        (4, a * 5.0 * (0.01 + 0.01) + 0.5),
+    ];
+    for r in rows.iter().filter(|r| r.t_us >= 3_000_000) {
+        let rate = motion.at(r.t_us as f64 * 1e-6).rate_deg_s;
+        for (i, b) in bounds {
+            let e = (f64::from(r.out.vel[i]) - rate).abs();
+            assert!(e < b, "estimator {i} at t={} us: error {e} >= {b}", r.t_us);
+        }
+    }
+    // And the same run is an honest one: the estimates are not a copy of the reference.
+    assert!(rows.iter().any(|r| r.out.vel[0] != r.yaw_rate));
+}
+
+#[test]
+fn fixed_point_bank_matches_f32_bank() {
+    let samples = replay::samples(&data("sin5_a1_50hz.bin")).unwrap();
+    let f = replay::estimate(&samples, &EstimateOptions::default())
+        .unwrap()
+        .0;
+    let x = replay::estimate(
+        &samples,
+        &EstimateOptions {
+            fixed: true,
+            ..Default::default()
+        },
+    )
+    .unwrap()
+    .0;
+    assert_eq!(f.len(), x.len());
+    for (a, b) in f.iter().zip(&x) {
+        // ED is left out: its sgn terms switch on rounding-level differences (chattering).
+        for i in [0, 1, 2, 3, 4, 6] {
+            assert!(
+                (a.out.vel[i] - b.out.vel[i]).abs() < 0.05,
+                "vel {i} at {}",
+                a.t_us
+            );
+        }
+    }
+}
+
+#[test]
+fn corrupted_capture_recovers_exactly_the_intact_frames() {
+    let cfg = SynthConfig {
+        duration_s: 5.0,
+        corruption: Corruption {
+            bit_flips: 10,
+            dropped_bytes: 5,
+            dropped_packets: 5,
+            garbage_bursts: 10,
+            garbage_max_len: 32,
+            seed: 7,
+        },
+        ..SynthConfig::default()
+    };
+    let cap = synth::generate(&cfg).unwrap();
+    assert_eq!(
+        cap.bytes,
+        data("fig5_a2_100hz_corrupt.bin"),
+        "manifest command reproduces the file"
+    );
+    assert_eq!(cap.packets, 501);
+    let intact = cap.report.intact();
+    assert_eq!(intact, 501 - 5 - cap.report.damaged.len());
+    let stats = replay::stream_stats(&cap.bytes);
+    assert_eq!(stats.total_frames(), intact as u64);
+    assert!(stats.crc_errors >= 1 && stats.skipped_bytes >= cap.report.garbage_bytes as u64);
+    // Every surviving sample sits on the 10 ms grid at its original index; no velocity spike
+    // at the holes (the bank integrates across gaps of a few packets).
+    let samples = replay::samples(&cap.bytes).unwrap();
+    let lost: Vec<usize> = cap
+        .report
+        .dropped
+        .union(&cap.report.damaged)
+        .copied()
+        .collect();
+    let first = (0..501).find(|k| !lost.contains(k)).unwrap() as u64;
+    let kept: Vec<u64> = (0..501u64)
+        .filter(|k| !lost.contains(&(*k as usize)))
+        .map(|k| (k - first) * 10_000)
+        .collect();
+    assert_eq!(samples.iter().map(|s| s.t_us).collect::<Vec<_>>(), kept);
+    let (rows, _) = replay::estimate(&samples, &EstimateOptions::default()).unwrap();
+    for r in &rows {
+        assert!(
+            (r.out.vel[0] - r.yaw_rate).abs() < 40.0,
+            "AVE spike at {} us",
+            r.t_us
+        );
+    }
+}
+
+#[test]
+fn noise_is_seeded_and_has_the_requested_variance() {
+    let samples = replay::samples(&data("fig5_a2_100hz.bin")).unwrap();
+    let clean = replay::noisy_yaw(&samples, None).unwrap();
+    let n1 = replay::noisy_yaw(&samples, Some(Noise { var: 0.5, seed: 3 })).unwrap();
+    let n2 = replay::noisy_yaw(&samples, Some(Noise { var: 0.5, seed: 3 })).unwrap();
+    let n3 = replay::noisy_yaw(&samples, Some(Noise { var: 0.5, seed: 4 })).unwrap();
+    assert_eq!(n1, n2);
+    assert_ne!(n1, n3);
+    let d: Vec<f64> = n1
+        .iter()
+        .zip(&clean)
+        .map(|(a, b)| f64::from(*a) - f64::from(*b))
+        .collect();
+    let mean = d.iter().sum::<f64>() / d.len() as f64;
+    let var = d.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (d.len() - 1) as f64;
+    // 3501 draws: the sample variance's standard error is var * sqrt(2/n) = 0.012.
+    assert!((var - 0.5).abs() < 0.05, "variance {var}");
+    assert!(mean.abs() < 0.05, "mean {mean}");
+}
+
+#[test]
+fn csv_pipeline_matches_the_contract_format() {
+    let (csv, rejected) = replay::estimate_csv(
+        &data("sin5_a2_25hz_weekwrap.bin"),
+        &EstimateOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(rejected, 0);
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next(),
+        Some("t,yaw,yaw_rate,ave_v,ilo1_v,ilo2_v,ilo3_v,ad_v,ed_v,kf_v,ave_a,ilo1_a,ilo2_a,ilo3_a,ad_a,ed_a,kf_a")
+    );
+    let rows: Vec<&str> = lines.collect();
+    assert_eq!(rows.len(), 251);
+    for (k, row) in rows.iter().enumerate() {
+        let cells: Vec<&str> = row.split(',').collect();
+        assert_eq!(cells.len(), 17);
+        // 25 Hz: t = k * 0.04 s, printed with 4 decimals, straight through the week rollover.
+        assert_eq!(cells[0], format!("{:.4}", k as f64 * 0.04));
+        for c in &cells[1..] {
+            let v: f32 = c.parse().unwrap();
+            assert_eq!(&format!("{v}"), c, "shortest round-trip f32 text");
+        }
+    }
+}
