@@ -9,7 +9,7 @@
 //!   first, [`Error::NotAccepted`].
 //!
 //! Frames that arrive while waiting (continuous output) are dropped; they are still counted
-//! in the parser's [`Stats`](crate::Stats). The wait is bounded by a byte budget
+//! in the parser's [`Stats`]. The wait is bounded by a byte budget
 //! ([`DEFAULT_REPLY_BUDGET`] bytes), not by time: the crate has no clock.
 
 use crate::encode::{command, EncodeError};

@@ -105,7 +105,7 @@ impl Stats {
 ///   (0x55, which would make the preamble ambiguous), or NAK `15 15`. Anything else is an
 ///   impossible header and is rejected without waiting for its length.
 ///
-/// `C` picks the CRC table variant (see [`crate::crc16`]); `Parser::new()` uses
+/// `C` picks the CRC table variant (see [module `crc16`](mod@crate::crc16)); `Parser::new()` uses
 /// [`DefaultCrcTable`].
 pub struct Parser<C: Crc16Table = DefaultCrcTable> {
     buf: [u8; MAX_FRAME],

@@ -1,0 +1,95 @@
+//! Stable-toolchain equivalent of the `fuzz/` target: bounded random streams (raw bytes,
+//! `55`-heavy bytes, fragments and bit-flipped copies of valid frames) fed in random chunks;
+//! nothing panics and the parser's invariants hold.
+
+use nav440_proto::*;
+
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+    fn below(&mut self, n: u64) -> u64 {
+        self.next() % n
+    }
+}
+
+/// The same checks as fuzz/fuzz_targets/parser.rs.
+fn check(stream: &[u8], chunk: usize) {
+    let mut parser = Parser::new();
+    let mut frames = 0u64;
+    for c in stream.chunks(chunk.max(1)) {
+        parser.feed(c, |f| {
+            frames += 1;
+            let mut buf = [0u8; MAX_FRAME];
+            let n = encode_frame(f.packet_type, f.payload, &mut buf).expect("payload <= 255");
+            assert_eq!(n, f.wire_len());
+            let _ = Packet::decode(f).map(|p| (p.yaw_sample(), p.bit(), p.time()));
+            let _ = Request::decode(f);
+        });
+    }
+    let s = parser.stats();
+    assert_eq!(s.bytes, stream.len() as u64);
+    assert_eq!(s.frames, frames);
+    assert_eq!(
+        s.frame_bytes + s.skipped_bytes + parser.pending() as u64,
+        s.bytes
+    );
+    assert!(parser.pending() < MAX_FRAME);
+    assert_eq!(s.per_type.iter().sum::<u64>() + s.other_types, frames);
+}
+
+#[test]
+fn random_streams_never_panic_and_keep_invariants() {
+    let mut r = Rng(0x0123_4567_89AB_CDEF);
+    let mut buf = [0u8; MAX_FRAME];
+    for _ in 0..3000 {
+        let mut stream = Vec::new();
+        let target = r.below(2048) as usize;
+        while stream.len() < target {
+            match r.below(5) {
+                0 => stream.extend((0..r.below(64)).map(|_| r.next() as u8)),
+                1 => stream.extend((0..r.below(16)).map(|_| {
+                    if r.below(2) == 0 {
+                        0x55
+                    } else {
+                        r.next() as u8
+                    }
+                })),
+                k => {
+                    let t = PacketType::KNOWN[r.below(PacketType::KNOWN.len() as u64) as usize];
+                    let t = if r.below(4) == 0 {
+                        PacketType(*b"z1")
+                    } else {
+                        t
+                    };
+                    let len = if r.below(2) == 0 {
+                        30
+                    } else {
+                        r.below(256) as usize
+                    };
+                    let payload: Vec<u8> = (0..len).map(|_| r.next() as u8).collect();
+                    let n = encode_frame(t, &payload, &mut buf).unwrap();
+                    let mut f = buf[..n].to_vec();
+                    if k == 3 {
+                        let bit = r.below(n as u64 * 8) as usize;
+                        f[bit / 8] ^= 1 << (bit % 8);
+                    }
+                    if k == 4 {
+                        f.truncate(r.below(n as u64) as usize);
+                    }
+                    stream.extend(f);
+                }
+            }
+        }
+        let chunk = match r.below(3) {
+            0 => 1,
+            1 => 1 + r.below(64) as usize,
+            _ => stream.len(),
+        };
+        check(&stream, chunk);
+    }
+}
