@@ -61,6 +61,10 @@ impl<T: Real> Estimator<T> for Ad<T> {
     fn output(&self) -> T {
         self.u
     }
+
+    fn translate(&mut self, d: T) {
+        self.z = self.z + d;
+    }
 }
 
 impl<T: Real> LinearLaw<T> for Ad<T> {

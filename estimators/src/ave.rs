@@ -153,4 +153,8 @@ impl<T: Real> Estimator<T> for Ave<T> {
     fn output(&self) -> T {
         self.theta
     }
+
+    fn translate(&mut self, d: T) {
+        self.xhat = self.xhat + d;
+    }
 }

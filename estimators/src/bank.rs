@@ -245,16 +245,28 @@ impl<T: Real> YawBank<T> {
             return Err(SampleError::NotFinite);
         }
         let tick = self.clock.tick(t_us)?;
-        let y = self.unwrap.unwrap(T::from_f32(yaw_deg));
+        // The laws run in a local frame whose origin is the unwrapper's current multiple of
+        // 360 deg: they see the wrapped yaw, so f32 states stay within about +-180 deg (full
+        // f32 resolution) however many turns the unwrapped yaw makes. When the offset changes,
+        // every law is translated into the new frame (exact: the laws are invariant to input
+        // offsets, see `Estimator::translate`).
+        let yw = T::from_f32(yaw_deg);
+        let before = self.unwrap.offset();
+        let unwrapped = self.unwrap.unwrap(yw);
+        let shift = self.unwrap.offset() - before;
+        if shift != T::ZERO && tick != Tick::Init && tick != Tick::Gap {
+            self.translate_all(-shift);
+        }
+        let y = yw;
         let n = match tick {
             Tick::Init => {
                 self.reset_all(y);
-                return Ok(self.zero_output(y));
+                return Ok(self.zero_output(unwrapped));
             }
             Tick::Gap => {
                 self.reinits = self.reinits.saturating_add(1);
                 self.reset_all(y);
-                return Ok(self.zero_output(y));
+                return Ok(self.zero_output(unwrapped));
             }
             Tick::Steps(n) => n,
         };
@@ -284,10 +296,28 @@ impl<T: Real> YawBank<T> {
         ];
         self.y_prev = y;
         Ok(BankOutput {
-            yaw_unwrapped_deg: y.to_f32(),
+            yaw_unwrapped_deg: unwrapped.to_f32(),
             vel: vel.map(Real::to_f32),
             acc: acc.map(Real::to_f32),
         })
+    }
+
+    fn translate_all(&mut self, d: T) {
+        self.y_prev = self.y_prev + d;
+        self.ave.translate(d);
+        for e in &mut self.ilo {
+            e.translate(d);
+        }
+        self.ad.translate(d);
+        self.ed.translate(d);
+        self.kf_v.translate(d);
+        self.ave2.translate(d);
+        for e in &mut self.ilo2 {
+            e.translate(d);
+        }
+        self.ad2.translate(d);
+        self.ed2.translate(d);
+        self.kf_a.translate(d);
     }
 
     fn zero_output(&self, y: T) -> BankOutput {

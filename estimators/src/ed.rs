@@ -109,4 +109,8 @@ impl<T: Real> Estimator<T> for Ed<T> {
     fn output(&self) -> T {
         self.u
     }
+
+    fn translate(&mut self, d: T) {
+        self.z = self.z + d;
+    }
 }

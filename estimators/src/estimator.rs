@@ -33,6 +33,13 @@ pub trait Estimator<T: Real> {
     /// The estimate of the last step (0 after [`Estimator::reset`]).
     fn output(&self) -> T;
 
+    /// Adds `d` (unit of the input) to every position state. Every law here is invariant to a
+    /// constant input offset (`y -> y + d` with positions `+ d` gives the same velocities),
+    /// so this moves the estimator to a shifted input frame without any transient; the
+    /// [`crate::YawBank`] uses it to keep its `f32` states near the wrapped yaw (+-180 deg)
+    /// instead of an unwrapped angle that grows by 360 deg per turn and loses `f32` precision.
+    fn translate(&mut self, d: T);
+
     /// Runs the `n >= 1` steps of one sample interval from `y_prev` to `y_new` as
     /// [`Hold`] prescribes and returns the output of the last step. `n = 0` does nothing and
     /// returns the current output.

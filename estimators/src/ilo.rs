@@ -52,11 +52,14 @@ pub struct Ilo<T: Real, const D: usize> {
     out: T,
     /// `buf[head]` is the oldest value `v_{n-D}`.
     buf: [T; D],
-    head: usize,
+    head: u32,
 }
 
 impl<T: Real, const D: usize> Ilo<T, D> {
-    const D_POSITIVE: () = assert!(D >= 1, "the ILO delay D must be at least 1 step");
+    const D_POSITIVE: () = assert!(
+        D >= 1 && D <= u32::MAX as usize,
+        "the ILO delay D must be at least 1 step"
+    );
 
     /// Builds the estimator for step `h` (s); `tau = D * h`. Errors: `K1` outside `(0, 1]`,
     /// non-positive or non-finite `L`, `K2`, `h`; `h * L >= 1`.
@@ -115,15 +118,13 @@ impl<T: Real, const D: usize> Estimator<T> for Ilo<T, D> {
     #[inline]
     fn step(&mut self, y: T) -> T {
         let e = y - self.xhat;
-        let old = self.buf.get(self.head).copied().unwrap_or(T::ZERO);
+        let hd = self.head as usize;
+        let old = self.buf.get(hd).copied().unwrap_or(T::ZERO);
         let v = self.k1 * old + self.k2 * e;
-        if let Some(slot) = self.buf.get_mut(self.head) {
+        if let Some(slot) = self.buf.get_mut(hd) {
             *slot = v;
         }
-        self.head += 1;
-        if self.head >= D {
-            self.head = 0;
-        }
+        self.head = if hd + 1 >= D { 0 } else { self.head + 1 };
         self.xhat = self.xhat + (self.hl * e + self.h * v);
         self.out = v;
         v
@@ -131,6 +132,10 @@ impl<T: Real, const D: usize> Estimator<T> for Ilo<T, D> {
 
     fn output(&self) -> T {
         self.out
+    }
+
+    fn translate(&mut self, d: T) {
+        self.xhat = self.xhat + d;
     }
 }
 
@@ -146,7 +151,7 @@ impl<T: Real, const D: usize> LinearLaw<T> for Ilo<T, D> {
         }
         for i in 0..D.min(LIN_MAX - 1) {
             // newest is at head - 1, then head - 2, ...
-            let idx = (self.head + D - 1 - i) % D;
+            let idx = (self.head as usize + D - 1 - i) % D;
             if let (Some(dst), Some(src)) = (s.get_mut(1 + i), self.buf.get(idx)) {
                 *dst = *src;
             }

@@ -84,6 +84,11 @@ impl<T: Real> Kalman<T> {
         self.a = self.a + k2 * r;
     }
 
+    /// Adds `d` to the position estimate (moves the tracker to a shifted input frame).
+    pub fn translate(&mut self, d: T) {
+        self.x = self.x + d;
+    }
+
     /// Position estimate (unit of `y`).
     pub fn position(&self) -> T {
         self.x

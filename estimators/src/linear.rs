@@ -120,6 +120,10 @@ impl<T: Real, E: LinearLaw<T>> Estimator<T> for ClosedForm<T, E> {
         self.inner.output()
     }
 
+    fn translate(&mut self, d: T) {
+        self.inner.translate(d);
+    }
+
     /// `s' = P y_prev + Phi (s - P y_prev) + g (y_new - y_prev)` when `n` and `hold` match the
     /// precomputed map, else `n` Euler steps.
     fn advance(&mut self, y_prev: T, y_new: T, n: u32, hold: Hold) -> T {

@@ -1,1 +1,90 @@
-//! placeholder
+//! RAM per estimator (`core::mem::size_of`, bytes). No estimator allocates: every state,
+//! coefficient, delay line and closed-form map is inline in the struct, `update`/`step`/
+//! `advance` only read and write it (the crate is `no_std` without `alloc`).
+//!
+//! The numbers are the same on the host and on every Cortex-M target (no `usize` fields;
+//! `i64`/`u64` are 8-aligned on both); they are checked at compile time for every target
+//! (the constants below feed `const` assertions), so this table cannot go stale.
+//!
+//! | type | f32 | Fx (Q31.32) |
+//! |---|---|---|
+//! | [`Ave`] | 36 | 72 |
+//! | [`Ilo`]`<T, 1>` | 32 | 64 |
+//! | [`Ad`] | 16 | 32 |
+//! | [`Ed`] | 24 | 48 |
+//! | [`Kalman`] | 24 | 48 |
+//! | [`Unwrapper`] | 12 | 24 |
+//! | [`ClosedForm`]`<T, Ilo<T, 1>>` | 120 | 232 |
+//! | [`ClosedForm`]`<T, Ad<T>>` | 104 | 200 |
+//! | [`ClosedForm`]`<T, Series<Ilo<T, 1>, Ilo<T, 1>>>` | 152 | 296 |
+//! | [`YawBank`] (whole bank, one axis) | 1328 | 2552 |
+//!
+//! A [`Series`] is the sum of its stages; an `Ilo<T, D>` adds `D - 1` words of `T`; a closed
+//! form adds `(LIN_MAX^2 + LIN_MAX) = 20` words of `T` plus 8 bytes to its law.
+
+use crate::*;
+use core::mem::size_of;
+
+/// `(f32 size, Fx size)` of [`Ave`].
+pub const AVE: (usize, usize) = (36, 72);
+/// `(f32, Fx)` of [`Ilo`]`<T, 1>`.
+pub const ILO_D1: (usize, usize) = (32, 64);
+/// `(f32, Fx)` of [`Ad`].
+pub const AD: (usize, usize) = (16, 32);
+/// `(f32, Fx)` of [`Ed`].
+pub const ED: (usize, usize) = (24, 48);
+/// `(f32, Fx)` of [`Kalman`].
+pub const KALMAN: (usize, usize) = (24, 48);
+/// `(f32, Fx)` of [`Unwrapper`].
+pub const UNWRAPPER: (usize, usize) = (12, 24);
+/// `(f32, Fx)` of [`ClosedForm`]`<T, Ilo<T, 1>>`.
+pub const CLOSED_ILO: (usize, usize) = (120, 232);
+/// `(f32, Fx)` of [`ClosedForm`]`<T, Ad<T>>`.
+pub const CLOSED_AD: (usize, usize) = (104, 200);
+/// `(f32, Fx)` of [`ClosedForm`]`<T, Series<Ilo<T, 1>, Ilo<T, 1>>>`.
+pub const CLOSED_ILO_ILO: (usize, usize) = (152, 296);
+/// `(f32, Fx)` of the whole [`YawBank`].
+pub const YAW_BANK: (usize, usize) = (1328, 2552);
+
+macro_rules! check {
+    ($c:expr, $f:ty, $x:ty) => {
+        const _: () = assert!(size_of::<$f>() == $c.0 && size_of::<$x>() == $c.1);
+    };
+}
+check!(AVE, Ave<f32>, Ave<Fx>);
+check!(ILO_D1, Ilo<f32, 1>, Ilo<Fx, 1>);
+check!(AD, Ad<f32>, Ad<Fx>);
+check!(ED, Ed<f32>, Ed<Fx>);
+check!(KALMAN, Kalman<f32>, Kalman<Fx>);
+check!(UNWRAPPER, Unwrapper<f32>, Unwrapper<Fx>);
+check!(CLOSED_ILO, ClosedForm<f32, Ilo<f32, 1>>, ClosedForm<Fx, Ilo<Fx, 1>>);
+check!(CLOSED_AD, ClosedForm<f32, Ad<f32>>, ClosedForm<Fx, Ad<Fx>>);
+check!(
+    CLOSED_ILO_ILO,
+    ClosedForm<f32, Series<Ilo<f32, 1>, Ilo<f32, 1>>>,
+    ClosedForm<Fx, Series<Ilo<Fx, 1>, Ilo<Fx, 1>>>
+);
+check!(YAW_BANK, YawBank<f32>, YawBank<Fx>);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The documented table (module docs) against `size_of` (runtime twin of the const
+    /// assertions, so a mismatch also shows up as a failing test with both numbers).
+    #[test]
+    fn documented_sizes() {
+        assert_eq!((size_of::<Ave<f32>>(), size_of::<Ave<Fx>>()), AVE);
+        assert_eq!(
+            (size_of::<YawBank<f32>>(), size_of::<YawBank<Fx>>()),
+            YAW_BANK
+        );
+        assert_eq!(
+            (
+                size_of::<ClosedForm<f32, Ilo<f32, 1>>>(),
+                size_of::<ClosedForm<Fx, Ilo<Fx, 1>>>()
+            ),
+            CLOSED_ILO
+        );
+    }
+}

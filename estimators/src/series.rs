@@ -43,6 +43,11 @@ impl<T: Real, A: Estimator<T>, B: Estimator<T>> Estimator<T> for Series<A, B> {
     fn output(&self) -> T {
         self.b.output()
     }
+
+    /// Only `A` sees the input; `B`'s input (a velocity) does not move.
+    fn translate(&mut self, d: T) {
+        self.a.translate(d);
+    }
 }
 
 impl<T: Real, A: LinearLaw<T>, B: LinearLaw<T>> LinearLaw<T> for Series<A, B> {

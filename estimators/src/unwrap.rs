@@ -46,6 +46,11 @@ impl<T: Real> Unwrapper<T> {
         yaw + self.offset
     }
 
+    /// The multiple of 360 deg currently added to the wrapped input (deg).
+    pub fn offset(&self) -> T {
+        self.offset
+    }
+
     /// The unwrapped value of the last sample, without a new sample.
     pub fn last(&self) -> T {
         self.prev + self.offset
