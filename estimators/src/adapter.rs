@@ -70,7 +70,8 @@ impl SampleClock {
                 if dt > self.max_gap_us {
                     Ok(Tick::Gap)
                 } else {
-                    let n = (dt + self.h_us / 2) / self.h_us;
+                    // h_us >= 1 by construction; checked_div keeps the path panic-free.
+                    let n = (dt + self.h_us / 2).checked_div(self.h_us).unwrap_or(dt);
                     // dt <= max_gap <= 4e9 us, h >= 1 us: n fits in u32.
                     Ok(Tick::Steps(u32::try_from(n.max(1)).unwrap_or(u32::MAX)))
                 }

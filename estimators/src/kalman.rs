@@ -74,8 +74,7 @@ impl<T: Real> Kalman<T> {
     /// One predict + update with measurement `y` taken `dt` (s, as `T`) after the previous one.
     #[inline]
     pub fn update(&mut self, y: T, dt: T) {
-        let half = T::from_f64(0.5);
-        let xp = self.x + dt * (self.v + half * self.a * dt);
+        let xp = self.x + dt * (self.v + (self.a * dt).div_int(2));
         let vp = self.v + self.a * dt;
         let r = y - xp;
         let [k0, k1, k2] = self.k;

@@ -184,18 +184,22 @@ impl Real for Fx {
     const ONE: Self = Saturating(I32F32::ONE);
     #[inline]
     fn from_f64(x: f64) -> Self {
-        if x.is_nan() {
-            Self::ZERO
-        } else {
-            Saturating(I32F32::saturating_from_num(x))
+        // `checked_from_num` (not `saturating_from_num`, which panics on NaN) keeps the
+        // conversion panic-free; out of range saturates by the sign bit, NaN gives 0.
+        match I32F32::checked_from_num(x) {
+            Some(v) => Saturating(v),
+            None if x.is_nan() => Self::ZERO,
+            None if x.is_sign_negative() => Saturating(I32F32::MIN),
+            None => Saturating(I32F32::MAX),
         }
     }
     #[inline]
     fn from_f32(x: f32) -> Self {
-        if x.is_nan() {
-            Self::ZERO
-        } else {
-            Saturating(I32F32::saturating_from_num(x))
+        match I32F32::checked_from_num(x) {
+            Some(v) => Saturating(v),
+            None if x.is_nan() => Self::ZERO,
+            None if x.is_sign_negative() => Saturating(I32F32::MIN),
+            None => Saturating(I32F32::MAX),
         }
     }
     #[inline]
