@@ -6,6 +6,7 @@
 //!   (every failure ends the run with a non-zero exit status instead of hanging).
 //! * [`cycles`]: instruction counting with SysTick under `qemu -icount` (see the bench binary).
 //! * [`pipeline`]: parser -> yaw sample -> `ItowClock` -> `YawBank` -> CSV rows.
+//! * [`stack`]: stack high-water mark (painted stack).
 //!
 //! This is the only crate of the workspace with `unsafe` (register access); every `unsafe`
 //! block carries a `// SAFETY:` comment.
@@ -14,6 +15,7 @@
 pub mod cycles;
 pub mod host;
 pub mod pipeline;
+pub mod stack;
 pub mod uart;
 
 /// Numeric type of the estimator bank: `f32` on an FPU target (`thumbv7em-none-eabihf`), the

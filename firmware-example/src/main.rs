@@ -14,7 +14,7 @@
 
 use cortex_m_rt::entry;
 use embedded_io::Read as _;
-use firmware_example::{host, pipeline, uart::Uart0};
+use firmware_example::{host, pipeline, stack, uart::Uart0};
 
 /// Magic at the start of a finite input.
 const LENGTH_MAGIC: [u8; 4] = *b"N4LP";
@@ -32,6 +32,7 @@ fn read_exact(uart: &mut Uart0, buf: &mut [u8]) {
 
 #[entry]
 fn main() -> ! {
+    stack::paint();
     let Some(mut uart) = Uart0::take(BAUD) else {
         host::stderr(format_args!("firmware: UART0 already taken\n"));
         host::exit(false)
@@ -70,7 +71,10 @@ fn main() -> ! {
     }
     let mut line: heapless::String<400> = heapless::String::new();
     let _ = pipe.summary(&mut line, uart.overruns(), uart.stalls());
-    host::stderr(format_args!("firmware: {line}\n"));
+    host::stderr(format_args!(
+        "firmware: {line} stack_peak={}\n",
+        stack::peak()
+    ));
     host::exit(true)
 }
 

@@ -23,6 +23,7 @@ const THUMB_TARGETS: &[&str] = &[
 
 const USAGE: &str = "usage: cargo xtask <command>
   ci                          everything CI checks
+  ci-firmware                 only the firmware part of ci (QEMU runs, equivalence, cross builds)
   demo [--board B] [--capture FILE]
                               firmware in QEMU fed the bundled capture over UART0: estimates + summary
   qemu FILE [--board B]       FILE through the firmware in QEMU; CSV on stdout, counters on stderr
@@ -36,6 +37,7 @@ fn main() -> ExitCode {
     let rest = args.get(1..).unwrap_or_default();
     let result = match args.first().map(String::as_str) {
         Some("ci") => ci(),
+        Some("ci-firmware") => firmware::ci_steps(),
         Some("demo") => firmware::demo(rest),
         Some("qemu") => firmware::qemu(rest),
         Some("bench") => firmware::bench(rest),

@@ -301,7 +301,7 @@ fn run(
 
 /// Time limit for a UART run of `bytes` bytes (QEMU's UART moves 10-40 KB/s; generous).
 pub fn uart_timeout(bytes: usize) -> Duration {
-    Duration::from_secs(120 + (bytes / 2_000) as u64)
+    Duration::from_secs(60 + (bytes / 2_000) as u64)
 }
 
 /// Path of an input file for a run, inside the target directory.
