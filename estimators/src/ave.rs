@@ -30,7 +30,7 @@ pub enum DeltaMode {
 pub struct AveConfig {
     /// Position feedback gain `k`, 1/s (paper: 500). `h * k < 1`.
     pub k: f32,
-    /// Velocity adaptation gain `gamma1`, 1/s^2 (paper: 20000). `h * gamma1 < 1/h` in practice.
+    /// Velocity adaptation gain `gamma1`, 1/s^2 (paper: 20000). `h^2 * gamma1 < 1`.
     pub gamma1: f32,
     /// `deltahat` law.
     pub delta: DeltaMode,
@@ -67,7 +67,8 @@ const MODE_LEAKY: u8 = 2;
 
 impl<T: Real> Ave<T> {
     /// Builds the estimator for step `h` (s). Errors: non-finite or non-positive `k`,
-    /// `gamma1`, `h`; `h * k >= 1`; negative bound or leakage; `h * sigma >= 1`.
+    /// `gamma1`, `h`; `h * k >= 1` or `h^2 * gamma1 >= 1` (forward-Euler stability); negative
+    /// bound or leakage; `h * sigma >= 1`.
     pub fn new(cfg: &AveConfig, h: f32) -> Result<Self, ConfigError> {
         let h = positive("h", f64::from(h))?;
         let k = positive("k", f64::from(cfg.k))?;
