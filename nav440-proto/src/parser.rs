@@ -208,10 +208,11 @@ fn scan<C: Crc16Table>(
                 }
                 let n = *n as usize;
                 let end = n + 5;
-                let (Some(msg), Some(crc)) = (cand.get(2..end), cand.get(end..end + 2)) else {
+                let (Some(msg), Some(&[hi, lo])) = (cand.get(2..end), cand.get(end..end + 2))
+                else {
                     return i; // incomplete
                 };
-                let got = u16::from_be_bytes([crc[0], crc[1]]);
+                let got = u16::from_be_bytes([hi, lo]);
                 if C::message_crc(msg) == got {
                     let packet_type = PacketType([*t0, *t1]);
                     let payload = msg.get(3..).unwrap_or(&[]);
