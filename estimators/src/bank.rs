@@ -4,8 +4,8 @@ use crate::adapter::{SampleClock, Tick};
 use crate::kalman::{Kalman, KalmanConfig};
 use crate::presets::*;
 use crate::{
-    Ad, Ave, AveConfig, ClosedForm, ConfigError, Ed, EdConfig, Estimator, Hold, Ilo, IloConfig,
-    Real, SampleError, Series, Unwrapper,
+    Ad, Ave, AveConfig, ClosedForm, ConfigError, Ed, EdConfig, Estimator, ExactSqrt, Hold, Ilo,
+    IloConfig, Real, SampleError, Series, SqrtFn, Unwrapper,
 };
 
 /// Names of the seven columns of [`BankOutput::vel`] and [`BankOutput::acc`], in order.
@@ -128,9 +128,10 @@ type Ilo2Cf<T> = ClosedForm<T, Series<Ilo<T, 1>, Ilo<T, 1>>>;
 ///
 /// Generic over [`Real`]: `YawBank<f32>` for FPU targets, `YawBank<Fx>` for Cortex-M0/M3 (the
 /// `f32` inputs and outputs are only converted; all arithmetic is integer). No heap; the whole
-/// state is inline (see [`crate::ram`] for its size).
+/// state is inline (see [`crate::ram`] for its size). `S` is the ED's square root (default
+/// [`ExactSqrt`]; see [`SqrtFn`] for plugging in an FPU instruction with identical results).
 #[derive(Clone, Copy, Debug)]
-pub struct YawBank<T: Real> {
+pub struct YawBank<T: Real, S: SqrtFn<T> = ExactSqrt> {
     clock: SampleClock,
     hold: Hold,
     h: T,
@@ -140,16 +141,16 @@ pub struct YawBank<T: Real> {
     ave: Ave<T>,
     ilo: [IloCf<T>; 3],
     ad: ClosedForm<T, Ad<T>>,
-    ed: Ed<T>,
+    ed: Ed<T, S>,
     kf_v: Kalman<T>,
     ave2: Series<Ave<T>, Ave<T>>,
     ilo2: [Ilo2Cf<T>; 3],
     ad2: ClosedForm<T, Series<Ad<T>, Ad<T>>>,
-    ed2: Series<Ed<T>, Ed<T>>,
+    ed2: Series<Ed<T, S>, Ed<T, S>>,
     kf_a: Kalman<T>,
 }
 
-impl<T: Real> YawBank<T> {
+impl<T: Real, S: SqrtFn<T>> YawBank<T, S> {
     /// Builds the bank (validates every parameter; computes the closed-form maps and the
     /// Kalman gains).
     pub fn new(cfg: &BankConfig) -> Result<Self, ConfigError> {

@@ -1,7 +1,8 @@
 //! Levant's robust exact differentiator, ED (paper eqs. 5-7; Levant 1998).
 
 use crate::error::positive;
-use crate::{ConfigError, Estimator, Real};
+use crate::{ConfigError, Estimator, ExactSqrt, Real, SqrtFn};
+use core::marker::PhantomData;
 
 /// Parameters of the exact differentiator.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -26,21 +27,23 @@ pub struct EdConfig {
 /// time on noise-free inputs with `|y''| <= C < alpha` and `lambda` large enough; with noise of
 /// amplitude `eps` the error is of order `sqrt(eps)`.
 ///
-/// `|e|^(1/2)` uses the exact square root of [`Real::sqrt`]; `micromath`'s fast approximation
+/// `|e|^(1/2)` uses the exact square root `S` (default [`ExactSqrt`] = [`Real::sqrt`]; a
+/// firmware may plug in its FPU instruction, see [`SqrtFn`]); `micromath`'s fast approximation
 /// would bias it (measured in the tests, see the crate README).
 ///
 /// RAM: 6 words of `T` (see [`crate::ram`]).
 #[derive(Clone, Copy, Debug)]
-pub struct Ed<T: Real> {
+pub struct Ed<T: Real, S: SqrtFn<T> = ExactSqrt> {
     h: T,
     halpha: T,
     lambda: T,
     z: T,
     u1: T,
     u: T,
+    sqrt: PhantomData<S>,
 }
 
-impl<T: Real> Ed<T> {
+impl<T: Real, S: SqrtFn<T>> Ed<T, S> {
     /// Builds the differentiator for step `h` (s). Errors: non-positive or non-finite
     /// `lambda`, `alpha`, `h`.
     pub fn new(cfg: &EdConfig, h: f32) -> Result<Self, ConfigError> {
@@ -54,6 +57,7 @@ impl<T: Real> Ed<T> {
             z: T::ZERO,
             u1: T::ZERO,
             u: T::ZERO,
+            sqrt: PhantomData,
         })
     }
 
@@ -73,7 +77,7 @@ impl<T: Real> Ed<T> {
     }
 }
 
-impl<T: Real> Estimator<T> for Ed<T> {
+impl<T: Real, S: SqrtFn<T>> Estimator<T> for Ed<T, S> {
     fn reset(&mut self, y0: T) {
         self.z = y0;
         self.u1 = T::ZERO;
@@ -92,7 +96,7 @@ impl<T: Real> Estimator<T> for Ed<T> {
     #[inline]
     fn step(&mut self, y: T) -> T {
         let e = self.z - y;
-        let r = self.lambda * e.abs().sqrt();
+        let r = self.lambda * S::sqrt(e.abs());
         let (u, du1) = if e > T::ZERO {
             (self.u1 - r, -self.halpha)
         } else if e < T::ZERO {

@@ -73,6 +73,6 @@ pub use estimator::{advance_by_steps, Estimator, Hold};
 pub use ilo::{Ilo, IloConfig};
 pub use kalman::{Kalman, KalmanConfig};
 pub use linear::{ClosedForm, LinearLaw};
-pub use real::{Fx, Real};
+pub use real::{ExactSqrt, Fx, Real, SqrtFn};
 pub use series::Series;
 pub use unwrap::Unwrapper;

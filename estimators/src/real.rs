@@ -237,3 +237,26 @@ impl Real for Fx {
         }
     }
 }
+
+/// The square root the [`crate::Ed`] uses for its `|e|^(1/2)` term (a type parameter, so a
+/// firmware can plug in its FPU's square-root instruction without `unsafe` in this crate).
+///
+/// Contract: `sqrt(x)` for `x >= 0` must return exactly what [`Real::sqrt`] returns (for `f32`:
+/// the correctly rounded IEEE 754 root, which the Cortex-M4F `VSQRT.F32` instruction also
+/// computes), so that every implementation gives bit-identical estimator outputs.
+pub trait SqrtFn<T: Real>: Copy + Default + Debug {
+    /// Square root of `x >= 0`.
+    fn sqrt(x: T) -> T;
+}
+
+/// The portable exact square root, [`Real::sqrt`] (`libm::sqrtf` for `f32`: about 45
+/// instructions on a Cortex-M4F, which has no stable Rust path to `VSQRT` without `unsafe`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ExactSqrt;
+
+impl<T: Real> SqrtFn<T> for ExactSqrt {
+    #[inline]
+    fn sqrt(x: T) -> T {
+        x.sqrt()
+    }
+}

@@ -175,3 +175,33 @@ fn micromath_sqrt_bias() {
     println!("ED f32: max |u_exact - u_micromath| = {max_diff:.3} deg/s; rms err exact {rms_exact:.4}, micromath {rms_fast:.4}");
     assert!(max_diff > 0.0, "the approximation changes the ED's output");
 }
+
+/// A plugged-in square root that honours the `SqrtFn` contract (here: the f64 root rounded to
+/// f32, which is correctly rounded since 53 >= 2 * 24 + 2; on a Cortex-M4F: `VSQRT.F32`) gives
+/// bit-identical ED and bank outputs.
+#[test]
+fn pluggable_sqrt_gives_identical_results() {
+    use estimators::{BankConfig, SqrtFn, YawBank};
+    #[derive(Clone, Copy, Debug, Default)]
+    struct ViaF64;
+    impl SqrtFn<f32> for ViaF64 {
+        fn sqrt(x: f32) -> f32 {
+            f64::from(x).sqrt() as f32
+        }
+    }
+    let mut a = YawBank::<f32>::new(&BankConfig::default()).unwrap();
+    let mut b = YawBank::<f32, ViaF64>::new(&BankConfig::default()).unwrap();
+    for k in 0..300u64 {
+        let y = (50.0 * (k as f64 * 0.02).sin() + 0.1 * ((k * 7919) % 13) as f64) as f32;
+        let (oa, ob) = (
+            a.update(k * 10_000, y).unwrap(),
+            b.update(k * 10_000, y).unwrap(),
+        );
+        assert_eq!(oa.vel[5].to_bits(), ob.vel[5].to_bits());
+        assert_eq!(oa.acc[5].to_bits(), ob.acc[5].to_bits());
+    }
+    for i in 0..1_000_000u32 {
+        let x = f32::from_bits(0x3000_0000 + i * 997);
+        assert_eq!(ViaF64::sqrt(x).to_bits(), libm::sqrtf(x).to_bits());
+    }
+}
