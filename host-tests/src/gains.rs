@@ -248,3 +248,49 @@ impl GainsFile {
         )
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn paper_gains_round_trip_through_toml() {
+        let paper = GainsFile::from_bank(&BankConfig::PAPER);
+        let back = GainsFile::from_toml(&paper.to_toml()).unwrap();
+        assert_eq!(back, paper);
+        assert_eq!(back.apply(BankConfig::PAPER), BankConfig::PAPER);
+        // Table 2, ILO3 and Table 4, ILO2 as the paper gives them.
+        assert_eq!(
+            paper.velocity.ilo3,
+            Some(IloGains {
+                k1: 0.7,
+                l: 1.0,
+                k2: 20.0
+            })
+        );
+        assert_eq!(
+            paper.acceleration.ilo2,
+            Some(IloGains {
+                k1: 0.9,
+                l: 3.0,
+                k2: 3.333
+            })
+        );
+    }
+
+    #[test]
+    fn partial_files_override_only_what_they_name() {
+        let g = GainsFile::from_toml("[acceleration.ad]\nt = 0.05\n").unwrap();
+        let cfg = g.apply(BankConfig::PAPER);
+        assert_eq!(cfg.acceleration.ad_t, 0.05);
+        assert_eq!(cfg.velocity, BankConfig::PAPER.velocity);
+        assert!(
+            GainsFile::from_toml("[velocity.ave]\nk = 1.0\n").is_err(),
+            "gamma1 missing"
+        );
+        assert!(
+            GainsFile::from_toml("[velocity.avx]\nk = 1.0\n").is_err(),
+            "unknown table"
+        );
+    }
+}

@@ -54,6 +54,27 @@ struct BankArgs {
     /// Gains file (TOML written by `nav440 tune`); default: the paper's presets.
     #[arg(long, value_name = "FILE")]
     gains: Option<PathBuf>,
+    /// Where added noise enters: one draw per packet (sample), or one per observer step on the
+    /// yaw interpolated to the step grid (step; our reading of the paper's simulation).
+    #[arg(long, value_enum, default_value = "sample")]
+    noise_at: NoiseAtArg,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum NoiseAtArg {
+    /// One N(0, V) draw per packet.
+    Sample,
+    /// One N(0, V) draw per observer step h (yaw linearly interpolated to the step grid).
+    Step,
+}
+
+impl From<NoiseAtArg> for replay::NoiseAt {
+    fn from(n: NoiseAtArg) -> Self {
+        match n {
+            NoiseAtArg::Sample => replay::NoiseAt::Sample,
+            NoiseAtArg::Step => replay::NoiseAt::Step,
+        }
+    }
 }
 
 #[derive(Subcommand, Debug)]
@@ -273,6 +294,7 @@ fn bank_options(b: &BankArgs) -> Result<replay::EstimateOptions> {
         noise: None,
         fixed: false,
         config,
+        noise_at: b.noise_at.into(),
     })
 }
 
@@ -381,9 +403,7 @@ fn run(cli: Cli) -> Result<()> {
             let opts = replay::EstimateOptions {
                 hold: hold.into(),
                 step_s: step,
-                noise: None,
-                fixed: false,
-                config: None,
+                ..Default::default()
             };
             let res = tune::tune(&samples, &opts, noise_var, seeds.max(1), window)?;
             stdout_or_file(None, |w| w.write_all(res.to_text().as_bytes()))?;

@@ -133,10 +133,16 @@ pub struct PaperResult {
     pub window_s: f64,
     /// Gains: "paper presets" or the gains file.
     pub gains: String,
+    /// Where the noise entered.
+    pub noise_at: crate::replay::NoiseAt,
     /// Velocity MSE per noise variance and column, (deg/s)^2.
     pub vel: [[f64; 7]; 2],
     /// Acceleration MSE per noise variance and column, (deg/s^2)^2.
     pub acc: [[f64; 7]; 2],
+    /// Velocity MSE without added noise (the tracking-error floor), (deg/s)^2.
+    pub vel_clean: [f64; 7],
+    /// Acceleration MSE without added noise, (deg/s^2)^2.
+    pub acc_clean: [f64; 7],
 }
 
 /// Runs the protocol. The 6 (variance, seed) runs are spread over 2 threads.
@@ -198,6 +204,11 @@ pub fn run(
             acc[i][c] += a[c] / SEEDS.len() as f64;
         }
     }
+    // Baseline without noise: the estimators' own tracking error (lag) on this motion.
+    let mut o = opts.clone();
+    o.noise = None;
+    let (rows, _) = replay::estimate(samples, &o)?;
+    let (vel_clean, acc_clean) = row_mse(&rows, samples, &acc_ref, window_s);
     let duration_s = samples.last().map_or(0.0, |s| s.t_s());
     Ok(PaperResult {
         capture: capture.to_string(),
@@ -211,8 +222,11 @@ pub fn run(
         } else {
             "paper presets (Tables 2 and 4)".into()
         },
+        noise_at: opts.noise_at,
         vel,
         acc,
+        vel_clean,
+        acc_clean,
     })
 }
 
@@ -220,6 +234,15 @@ fn hold_name(h: estimators::Hold) -> &'static str {
     match h {
         estimators::Hold::Linear => "linear",
         estimators::Hold::ZeroOrder => "zoh",
+    }
+}
+
+fn noise_at_name(n: crate::replay::NoiseAt) -> &'static str {
+    match n {
+        crate::replay::NoiseAt::Sample => "one N(0, var) draw per packet",
+        crate::replay::NoiseAt::Step => {
+            "one N(0, var) draw per observer step h (yaw interpolated to the step grid)"
+        }
     }
 }
 
@@ -234,7 +257,33 @@ fn fmt_val(v: f64) -> String {
 }
 
 impl PaperResult {
-    /// Human-readable tables: ours next to the paper's.
+    /// (title, ours, paper, no-noise baseline) of Tables 1 and 3.
+    #[allow(clippy::type_complexity)]
+    fn tables(
+        &self,
+    ) -> [(
+        &'static str,
+        &[[f64; 7]; 2],
+        &'static [[f64; 6]; 2],
+        &[f64; 7],
+    ); 2] {
+        [
+            (
+                "Table 1 - velocity MSE ((deg/s)^2)",
+                &self.vel,
+                &PAPER_VEL_MSE,
+                &self.vel_clean,
+            ),
+            (
+                "Table 3 - acceleration MSE ((deg/s^2)^2), series connections",
+                &self.acc,
+                &PAPER_ACC_MSE,
+                &self.acc_clean,
+            ),
+        ]
+    }
+
+    /// Human-readable tables: ours next to the paper's, plus our no-noise baseline.
     pub fn to_text(&self) -> String {
         let mut s = String::new();
         s.push_str(&format!(
@@ -247,20 +296,13 @@ impl PaperResult {
             self.window_s,
             SEEDS
         ));
-        s.push_str(&format!("gains: {}\n", self.gains));
+        s.push_str(&format!(
+            "gains: {}; noise: {}\n",
+            self.gains,
+            noise_at_name(self.noise_at)
+        ));
         s.push_str("velocity reference: packet z rate; acceleration reference: AVE (k=500, gamma1=20000) on the packet z rate, same adapter\n");
-        for (title, ours, paper) in [
-            (
-                "Table 1 - velocity MSE ((deg/s)^2)",
-                &self.vel,
-                &PAPER_VEL_MSE,
-            ),
-            (
-                "Table 3 - acceleration MSE ((deg/s^2)^2), series connections",
-                &self.acc,
-                &PAPER_ACC_MSE,
-            ),
-        ] {
+        for (title, ours, paper, clean) in self.tables() {
             s.push_str(&format!("\n{title}\n"));
             s.push_str(&format!("{:<14}", "sigma^2"));
             for c in COLUMNS {
@@ -279,6 +321,11 @@ impl PaperResult {
                 }
                 s.push_str(&format!("{:>10}\n", "-"));
             }
+            s.push_str(&format!("{:<14}", "0 (no noise)"));
+            for v in clean {
+                s.push_str(&format!("{:>10}", fmt_val(*v)));
+            }
+            s.push('\n');
         }
         s
     }
@@ -286,18 +333,7 @@ impl PaperResult {
     /// Markdown tables (for the README).
     pub fn to_markdown(&self) -> String {
         let mut s = String::new();
-        for (title, ours, paper) in [
-            (
-                "Velocity MSE ((deg/s)^2), Table 1",
-                &self.vel,
-                &PAPER_VEL_MSE,
-            ),
-            (
-                "Acceleration MSE ((deg/s^2)^2), Table 3",
-                &self.acc,
-                &PAPER_ACC_MSE,
-            ),
-        ] {
+        for (title, ours, paper, clean) in self.tables() {
             s.push_str(&format!(
                 "\n{title}\n\n| sigma^2 | | {} |\n|---|---|{}\n",
                 COLUMNS.join(" | "),
@@ -309,27 +345,30 @@ impl PaperResult {
                 s.push_str(&format!("| {var} | ours | {} |\n", o.join(" | ")));
                 s.push_str(&format!("| {var} | paper | {} | - |\n", p.join(" | ")));
             }
+            let c: Vec<String> = clean.iter().map(|&v| fmt_val(v)).collect();
+            s.push_str(&format!("| 0 | ours, no noise | {} |\n", c.join(" | ")));
         }
         s
     }
 
     /// The `--json` object.
     pub fn to_json(&self) -> serde_json::Value {
-        let table = |ours: &[[f64; 7]; 2], paper: &[[f64; 6]; 2]| {
+        let row = |vals: &[f64]| -> serde_json::Map<String, serde_json::Value> {
+            COLUMNS
+                .iter()
+                .zip(vals)
+                .map(|(c, v)| (c.to_string(), json_num(*v)))
+                .collect()
+        };
+        let table = |ours: &[[f64; 7]; 2], paper: &[[f64; 6]; 2], clean: &[f64; 7]| {
             let mut m = serde_json::Map::new();
             for (i, var) in NOISE_VARS.iter().enumerate() {
-                let o: serde_json::Map<String, serde_json::Value> = COLUMNS
-                    .iter()
-                    .zip(ours[i])
-                    .map(|(c, v)| (c.to_string(), json_num(v)))
-                    .collect();
-                let p: serde_json::Map<String, serde_json::Value> = COLUMNS
-                    .iter()
-                    .zip(paper[i])
-                    .map(|(c, v)| (c.to_string(), json_num(v)))
-                    .collect();
-                m.insert(var.to_string(), serde_json::json!({"ours": o, "paper": p}));
+                m.insert(
+                    var.to_string(),
+                    serde_json::json!({"ours": row(&ours[i]), "paper": row(&paper[i])}),
+                );
             }
+            m.insert("0".to_string(), serde_json::json!({"ours": row(clean)}));
             serde_json::Value::Object(m)
         };
         serde_json::json!({
@@ -343,15 +382,38 @@ impl PaperResult {
                 "seeds": SEEDS,
                 "noise_vars": NOISE_VARS,
                 "gains": self.gains,
+                "noise_at": noise_at_name(self.noise_at),
                 "velocity_reference": "packet z rate",
                 "acceleration_reference": "AVE k=500 gamma1=20000 on the packet z rate, same sample adapter",
             },
-            "velocity_mse": table(&self.vel, &PAPER_VEL_MSE),
-            "acceleration_mse": table(&self.acc, &PAPER_ACC_MSE),
+            "velocity_mse": table(&self.vel, &PAPER_VEL_MSE, &self.vel_clean),
+            "acceleration_mse": table(&self.acc, &PAPER_ACC_MSE, &self.acc_clean),
         })
     }
 }
 
 fn json_num(v: f64) -> serde_json::Value {
     serde_json::Number::from_f64(v).map_or(serde_json::Value::Null, serde_json::Value::Number)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mse_uses_only_the_window() {
+        let t = [0, 10_000_000, 30_000_000, 30_000_001];
+        let est = [1.0f32, 3.0, 0.0, 100.0];
+        let reference = [0.0f32, 0.0, 0.0, 0.0];
+        assert_eq!(mse(&t, &est, &reference, 30.0), (1.0 + 9.0) / 3.0);
+        assert!(mse(&[], &[], &[], 30.0).is_nan());
+    }
+
+    #[test]
+    fn steps_between_rounds_to_whole_steps() {
+        assert_eq!(steps_between(0, 10_000, 100.0), 100);
+        assert_eq!(steps_between(0, 10_049, 100.0), 100);
+        assert_eq!(steps_between(0, 10_050, 100.0), 101);
+        assert_eq!(steps_between(10, 0, 100.0), 0);
+    }
 }

@@ -269,3 +269,76 @@ pub fn angle_deg(raw: i16) -> f64 {
 pub fn rate_deg_s(raw: i16) -> f64 {
     f64::from(raw) * RATE_LSB_DEG_S
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The protocol document's synthetic A2 frame (roll 10 deg, pitch -5, yaw 90, rates
+    /// 1/2/3 deg/s, accel 0/0/1 g, temps 25 degC, ITOW 123456 ms, BIT 0), rebuilt with this
+    /// module's quantisers.
+    #[test]
+    fn quantisers_reproduce_the_protocol_test_vector() {
+        let f = nav440_proto::A2Fields {
+            roll: angle_raw(10.0),
+            pitch: angle_raw(-5.0),
+            yaw_true: angle_raw(90.0),
+            rate_x: sat_i16(1.0, RATE_LSB_DEG_S),
+            rate_y: sat_i16(2.0, RATE_LSB_DEG_S),
+            rate_z: sat_i16(3.0, RATE_LSB_DEG_S),
+            accel_x: 0,
+            accel_y: 0,
+            accel_z: sat_i16(1.0, ACCEL_LSB_G),
+            rate_temp_x: sat_i16(25.0, TEMP_LSB_C),
+            rate_temp_y: sat_i16(25.0, TEMP_LSB_C),
+            rate_temp_z: sat_i16(25.0, TEMP_LSB_C),
+            time_itow: 123_456,
+            bit: 0,
+        };
+        let mut buf = [0u8; 64];
+        let n = f.encode(&mut buf).unwrap();
+        let want = "55 55 41 32 1e 07 1c fc 72 40 00 00 34 00 68 00 9c 00 00 00 00 0c cd 20 00 20 00 20 00 00 01 e2 40 00 00 9d 25";
+        let want: Vec<u8> = want
+            .split(' ')
+            .map(|h| u8::from_str_radix(h, 16).unwrap())
+            .collect();
+        assert_eq!(&buf[..n], &want[..]);
+    }
+
+    #[test]
+    fn angles_wrap_and_rates_saturate() {
+        assert_eq!(angle_raw(180.0), -32768);
+        assert_eq!(angle_raw(-180.0), -32768);
+        assert_eq!(angle_raw(360.0 + 90.0), 16384);
+        assert_eq!(angle_raw(-90.0 - 720.0), -16384);
+        assert_eq!(sat_i16(1000.0, RATE_LSB_DEG_S), 32767);
+        assert_eq!(sat_i16(-1000.0, RATE_LSB_DEG_S), -32768);
+    }
+
+    #[test]
+    fn packet_counts_and_rates() {
+        assert_eq!(packet_count(35.0, 100).unwrap(), 3501);
+        assert_eq!(packet_count(10.0, 4).unwrap(), 41);
+        assert_eq!(packet_count(0.0, 2).unwrap(), 1);
+        assert!(packet_count(1.0, 3).is_err());
+        assert!(packet_count(f64::NAN, 100).is_err());
+        for r in RATES_HZ {
+            assert_eq!(1000 % period_ms(r).unwrap(), 0);
+        }
+    }
+
+    #[test]
+    fn itow_wraps_at_the_end_of_the_week() {
+        let cfg = SynthConfig {
+            duration_s: 0.05,
+            start_itow_ms: MS_PER_WEEK - 20,
+            ..SynthConfig::default()
+        };
+        let f = frames(&cfg).unwrap();
+        let itow: Vec<u32> = f
+            .iter()
+            .map(|b| u32::from_be_bytes([b[29], b[30], b[31], b[32]]))
+            .collect();
+        assert_eq!(itow, vec![604_799_980, 604_799_990, 0, 10, 20, 30]);
+    }
+}

@@ -157,23 +157,6 @@ fn coord_search(x0: &[f64], lo: &[f64], hi: &[f64], f: &dyn Fn(&[f64]) -> f64) -
     x
 }
 
-/// Unwraps a wrapped angle sequence (deg) so consecutive values differ by at most 180 deg.
-pub fn unwrap_deg(wrapped: &[f32]) -> Vec<f32> {
-    let mut out = Vec::with_capacity(wrapped.len());
-    let mut offset = 0.0f64;
-    let mut prev: Option<f64> = None;
-    for &w in wrapped {
-        let w = f64::from(w);
-        if let Some(p) = prev {
-            let d = w - p;
-            offset -= 360.0 * (d / 360.0).round();
-        }
-        prev = Some(w);
-        out.push((w + offset) as f32);
-    }
-    out
-}
-
 fn ave(g: &[f64]) -> AveConfig {
     AveConfig {
         k: g[0] as f32,
@@ -346,7 +329,7 @@ pub fn tune(
                     seed,
                 }),
             )?;
-            Ok(unwrap_deg(&y))
+            Ok(replay::unwrap_deg(&y))
         })
         .collect::<Result<Vec<_>>>()?;
     let problem = Problem {
@@ -475,5 +458,24 @@ impl TuneResult {
     pub fn to_rust(&self) -> String {
         self.gains
             .to_rust(&format!("noise variance {} deg^2", self.noise_var))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn coordinate_search_finds_the_minimum_of_a_log_quadratic() {
+        // Minimum at (50, 0.02); start two decades away.
+        let f = |x: &[f64]| (x[0] / 50.0).ln().powi(2) + (x[1] / 0.02).ln().powi(2);
+        let x = coord_search(&[1.0, 1.0], &[1e-6, 1e-6], &[1e6, 1e6], &f);
+        assert!(
+            (x[0] / 50.0 - 1.0).abs() < 0.05 && (x[1] / 0.02 - 1.0).abs() < 0.05,
+            "{x:?}"
+        );
+        // Bounds are respected.
+        let x = coord_search(&[0.5], &[0.05], &[1.0], &|x: &[f64]| -x[0]);
+        assert_eq!(x, vec![1.0]);
     }
 }
