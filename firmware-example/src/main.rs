@@ -32,11 +32,13 @@ fn read_exact(uart: &mut Uart0, buf: &mut [u8]) {
 
 #[entry]
 fn main() -> ! {
-    stack::paint();
+    // UART first: on some UART models (QEMU's STM32 USART) bytes arriving before the
+    // receiver is enabled are dropped.
     let Some(mut uart) = Uart0::take(BAUD) else {
         host::stderr(format_args!("firmware: UART0 already taken\n"));
         host::exit(false)
     };
+    stack::paint();
     let mut pipe = match pipeline::Pipeline::new() {
         Ok(p) => p,
         Err(e) => {

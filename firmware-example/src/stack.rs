@@ -4,8 +4,9 @@
 //! `llvm-size` is the firmware's whole RAM use (no heap).
 
 const PATTERN: u32 = 0xC0FF_EE55;
-/// Words left unpainted just below the current stack pointer (the painting code's own frame).
-const GUARD_WORDS: usize = 64;
+/// Words left unpainted just below the current stack pointer: room for this function and for
+/// interrupt handlers that run while it paints (the UART is already receiving).
+const GUARD_WORDS: usize = 256;
 
 extern "C" {
     /// End of `.bss`/`.uninit`: the lowest address the stack may grow to (cortex-m-rt).

@@ -25,6 +25,9 @@ const PCLK_HZ: u32 = 25_000_000;
 /// NVIC number of the UART0 receive interrupt.
 pub const RX_IRQ: u16 = 0;
 
+/// A received byte can wait in the data register with the RX interrupt masked.
+pub const HOLD_WHEN_FULL: bool = true;
+
 fn read_reg(offset: usize) -> u32 {
     // SAFETY: BASE + offset is one of the UART0 registers listed above, a valid, aligned MMIO
     // word on the mps2 boards; reading has no side effect besides the documented one (reading

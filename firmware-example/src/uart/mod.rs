@@ -4,11 +4,16 @@
 //!
 //! The RX interrupt moves bytes from the UART's one-byte data register into a `heapless`
 //! SPSC queue (the interrupt is the single producer, [`Uart0`] the single consumer). When the
-//! queue is full the interrupt handler stops taking bytes and masks the RX interrupt; the
-//! consumer unmasks it once it has made room (back-pressure). The byte waits in the data
-//! register meanwhile. On QEMU the emulated line then simply waits (lossless); on real
-//! hardware a following byte sets the UART's RX-overrun flag, which the driver counts
-//! ([`Uart0::overruns`]) and clears, so a loss is never silent.
+//! queue is full:
+//! * CMSDK UART ([`hw::HOLD_WHEN_FULL`]): the interrupt handler stops taking bytes and masks
+//!   the RX interrupt; the consumer unmasks it once it has made room (back-pressure). The byte
+//!   waits in the data register meanwhile. QEMU's emulated line then simply waits (lossless);
+//!   on real hardware a following byte sets the UART's RX-overrun flag, which is counted.
+//! * STM32 USART: the byte is read and dropped, and counted as an overrun (a real USART would
+//!   overrun anyway; QEMU's model keeps its interrupt line high while RXNE is set even with
+//!   RXNEIE masked, so holding the byte would livelock there).
+//!
+//! Every lost byte is counted in [`Uart0::overruns`]: a loss is never silent.
 
 use core::cell::RefCell;
 use core::convert::Infallible;
@@ -32,7 +37,7 @@ pub const RX_QUEUE_BYTES: usize = 512 - 1;
 
 /// Producer end of the receive queue, owned by the RX interrupt once [`Uart0::take`] ran.
 static PRODUCER: Mutex<RefCell<Option<Producer<'static, u8>>>> = Mutex::new(RefCell::new(None));
-/// RX-overrun events seen in the UART's STATE register (bytes lost in hardware).
+/// Bytes lost: hardware RX-overrun events plus bytes dropped on a full queue.
 static OVERRUNS: AtomicU32 = AtomicU32::new(0);
 /// Times the interrupt stopped on a full queue (back-pressure, no loss).
 static STALLS: AtomicU32 = AtomicU32::new(0);
@@ -70,10 +75,16 @@ fn service_rx(cs: CriticalSection<'_>) {
     };
     while hw::rx_full() {
         if !producer.ready() {
-            hw::set_rx_interrupt(false);
-            PAUSED.store(true, Ordering::Release);
-            bump(&STALLS);
-            return;
+            if hw::HOLD_WHEN_FULL {
+                hw::set_rx_interrupt(false);
+                PAUSED.store(true, Ordering::Release);
+                bump(&STALLS);
+                return;
+            }
+            // This UART cannot hold the byte with its interrupt masked: drop it, counted.
+            let _ = hw::read_data();
+            bump(&OVERRUNS);
+            continue;
         }
         let byte = hw::read_data();
         // Cannot fail: `ready()` was checked just above and only this code enqueues.
@@ -108,8 +119,8 @@ impl Uart0 {
         Some(Self { rx: consumer })
     }
 
-    /// RX-overrun events flagged by the UART hardware since start (bytes lost before the
-    /// interrupt could read them). Always 0 under QEMU.
+    /// Bytes lost since start: RX-overrun events flagged by the UART hardware plus bytes
+    /// dropped on a full queue (STM32 backend). 0 in the QEMU mps2 runs.
     pub fn overruns(&self) -> u32 {
         OVERRUNS.load(Ordering::Relaxed)
     }

@@ -31,6 +31,10 @@ pub const PCLK2_HZ: u32 = 16_000_000;
 /// NVIC number of the USART1 interrupt.
 pub const RX_IRQ: u16 = 37;
 
+/// QEMU's USART model keeps the interrupt asserted while RXNE is set, even with RXNEIE masked:
+/// the driver drops (and counts) bytes on a full queue instead of holding them.
+pub const HOLD_WHEN_FULL: bool = false;
+
 fn read_reg(addr: usize) -> u32 {
     // SAFETY: `addr` is one of the RCC/GPIOA/USART1 registers listed above, valid aligned
     // MMIO words on STM32F405/F407; reading DR pops the received byte, which callers intend.
