@@ -4,8 +4,8 @@ use crate::adapter::{SampleClock, Tick};
 use crate::kalman::{Kalman, KalmanConfig};
 use crate::presets::*;
 use crate::{
-    Ad, Ave, AveConfig, ClosedForm, ConfigError, Ed, EdConfig, Estimator, ExactSqrt, Hold, Ilo,
-    IloConfig, Real, SampleError, Series, SqrtFn, Unwrapper,
+    Ad, Ave, AveConfig, ClosedForm, ConfigError, Ed, EdConfig, EdScheme, Estimator, ExactSqrt,
+    Hold, Ilo, IloConfig, Real, SampleError, Series, SqrtFn, Unwrapper,
 };
 
 /// Names of the seven columns of [`BankOutput::vel`] and [`BankOutput::acc`], in order.
@@ -80,6 +80,8 @@ pub struct BankConfig {
     /// Use the exact closed-form multi-step maps for the linear laws (default `true`); `false`
     /// steps every law `n` times (same results to rounding).
     pub closed_form: bool,
+    /// Discretisation of the ED and ED-ED (default [`EdScheme::Euler`], the paper's).
+    pub ed_scheme: EdScheme,
     /// Velocity estimators' gains.
     pub velocity: BankGains,
     /// Acceleration series' gains.
@@ -94,6 +96,7 @@ impl BankConfig {
         max_gap_s: 0.25,
         sample_period_s: 0.01,
         closed_form: true,
+        ed_scheme: EdScheme::Euler,
         velocity: BankGains::PAPER_VELOCITY,
         acceleration: BankGains::PAPER_ACCELERATION,
     };
@@ -198,7 +201,7 @@ impl<T: Real, S: SqrtFn<T>> YawBank<T, S> {
             ave: Ave::new(&v.ave, h)?,
             ilo: [ilo_cf(v1)?, ilo_cf(v2)?, ilo_cf(v3)?],
             ad: ClosedForm::new(Ad::new(v.ad_t, h)?, n0, hold),
-            ed: Ed::new(&v.ed, h)?,
+            ed: Ed::with_scheme(&v.ed, h, cfg.ed_scheme)?,
             kf_v: kf(&v.kf)?,
             ave2: Series::new(Ave::new(&a.ave, h)?, Ave::new(&a.ave, h)?),
             ilo2: [ilo2_cf(a1)?, ilo2_cf(a2)?, ilo2_cf(a3)?],
@@ -207,7 +210,10 @@ impl<T: Real, S: SqrtFn<T>> YawBank<T, S> {
                 n0,
                 hold,
             ),
-            ed2: Series::new(Ed::new(&a.ed, h)?, Ed::new(&a.ed, h)?),
+            ed2: Series::new(
+                Ed::with_scheme(&a.ed, h, cfg.ed_scheme)?,
+                Ed::with_scheme(&a.ed, h, cfg.ed_scheme)?,
+            ),
             kf_a: kf(&a.kf)?,
         };
         bank.reset_all(T::ZERO);

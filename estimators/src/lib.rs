@@ -67,7 +67,7 @@ pub use ave::{Ave, AveConfig, DeltaMode};
 pub use bank::{
     BankConfig, BankGains, BankOutput, KalmanNoise, YawBank, KF_DEFAULT, VELOCITY_NAMES,
 };
-pub use ed::{Ed, EdConfig};
+pub use ed::{Ed, EdConfig, EdScheme};
 pub use error::{ConfigError, SampleError};
 pub use estimator::{advance_by_steps, Estimator, Hold};
 pub use ilo::{Ilo, IloConfig};

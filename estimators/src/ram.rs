@@ -11,13 +11,13 @@
 //! | [`Ave`] | 36 | 72 |
 //! | [`Ilo`]`<T, 1>` | 32 | 64 |
 //! | [`Ad`] | 16 | 32 |
-//! | [`Ed`] | 24 | 48 |
+//! | [`Ed`] | 44 | 88 |
 //! | [`Kalman`] | 24 | 48 |
 //! | [`Unwrapper`] | 12 | 24 |
 //! | [`ClosedForm`]`<T, Ilo<T, 1>>` | 120 | 232 |
 //! | [`ClosedForm`]`<T, Ad<T>>` | 104 | 200 |
 //! | [`ClosedForm`]`<T, Series<Ilo<T, 1>, Ilo<T, 1>>>` | 152 | 296 |
-//! | [`YawBank`] (whole bank, one axis) | 1328 | 2552 |
+//! | [`YawBank`] (whole bank, one axis) | 1392 | 2672 |
 //!
 //! A [`Series`] is the sum of its stages; an `Ilo<T, D>` adds `D - 1` words of `T`; a closed
 //! form adds `(LIN_MAX^2 + LIN_MAX) = 20` words of `T` plus 8 bytes to its law.
@@ -32,7 +32,7 @@ pub const ILO_D1: (usize, usize) = (32, 64);
 /// `(f32, Fx)` of [`Ad`].
 pub const AD: (usize, usize) = (16, 32);
 /// `(f32, Fx)` of [`Ed`].
-pub const ED: (usize, usize) = (24, 48);
+pub const ED: (usize, usize) = (44, 88);
 /// `(f32, Fx)` of [`Kalman`].
 pub const KALMAN: (usize, usize) = (24, 48);
 /// `(f32, Fx)` of [`Unwrapper`].
@@ -44,7 +44,7 @@ pub const CLOSED_AD: (usize, usize) = (104, 200);
 /// `(f32, Fx)` of [`ClosedForm`]`<T, Series<Ilo<T, 1>, Ilo<T, 1>>>`.
 pub const CLOSED_ILO_ILO: (usize, usize) = (152, 296);
 /// `(f32, Fx)` of the whole [`YawBank`].
-pub const YAW_BANK: (usize, usize) = (1328, 2552);
+pub const YAW_BANK: (usize, usize) = (1392, 2672);
 
 macro_rules! check {
     ($c:expr, $f:ty, $x:ty) => {
