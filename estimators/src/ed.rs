@@ -106,8 +106,9 @@ impl<T: Real, S: SqrtFn<T>> Ed<T, S> {
         self.z
     }
 
-    /// One step of [`EdScheme::Implicit`] (see [`Estimator::step`]).
-    #[inline]
+    /// One step of [`EdScheme::Implicit`] (see [`Estimator::step`]). Kept out of line so the
+    /// default explicit step stays as short as without the option.
+    #[inline(never)]
     fn step_implicit(&mut self, y: T) -> T {
         let p = (self.z - y) + self.h * self.u1;
         let ap = p.abs();
