@@ -118,8 +118,11 @@ enum Cmd {
         #[command(flatten)]
         bank: BankArgs,
         /// Print JSON instead of tables.
-        #[arg(long)]
+        #[arg(long, conflicts_with = "markdown")]
         json: bool,
+        /// Print Markdown tables (for a README) instead of text tables.
+        #[arg(long)]
+        markdown: bool,
         /// MSE window end, s.
         #[arg(long, default_value_t = 30.0)]
         window: f64,
@@ -376,6 +379,7 @@ fn run(cli: Cli) -> Result<()> {
             file,
             bank,
             json,
+            markdown,
             window,
         } => {
             let opts = bank_options(&bank)?;
@@ -383,6 +387,8 @@ fn run(cli: Cli) -> Result<()> {
             let res = paper::run(&samples, &opts, window, &file.display().to_string())?;
             let text = if json {
                 format!("{}\n", res.to_json())
+            } else if markdown {
+                res.to_markdown()
             } else {
                 res.to_text()
             };

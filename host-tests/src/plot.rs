@@ -81,7 +81,8 @@ fn draw<DB: DrawingBackend>(
             .y_desc(&panel.y_label)
             .label_style(("sans-serif", 13))
             .axis_desc_style(("sans-serif", 14))
-            .light_line_style(RGBColor(0xee, 0xee, 0xee))
+            .max_light_lines(1)
+            .light_line_style(RGBColor(0xf0, 0xf0, 0xf0))
             .draw()?;
         for s in &panel.series {
             let style = ShapeStyle::from(&s.color).stroke_width(s.width);
