@@ -113,12 +113,22 @@ fn unwrap_across_many_turns() {
     }
 }
 
-/// A gap longer than `max_gap_s` (0.25 s) re-initialises (zeros, counter), shorter gaps are
-/// integrated across without a spike.
+/// The first sample reports zeros; a gap longer than `max_gap_s` (0.25 s) re-initialises
+/// (zeros, counter), shorter gaps are integrated across without a spike.
 #[test]
 fn gap_handling() {
     let mut bank = YawBank::<f32>::new(&BankConfig::default()).unwrap();
     let rate = 100.0;
+    let first = bank.update(0, 12.5).unwrap();
+    assert_eq!(
+        first,
+        BankOutput {
+            yaw_unwrapped_deg: 12.5,
+            vel: [0.0; 7],
+            acc: [0.0; 7]
+        }
+    );
+    bank.restart();
     let mut t_us = 0u64;
     let mut yaw = 0.0f64;
     for _ in 0..200 {
