@@ -164,11 +164,10 @@ impl<T: Real, S: SqrtFn<T>> Estimator<T> for Ed<T, S> {
             return self.step_implicit(y);
         }
         let e = self.z - y;
-        let r = self.lambda * S::sqrt(e.abs());
         let (u, du1) = if e > T::ZERO {
-            (self.u1 - r, -self.halpha)
+            (self.u1 - self.lambda * S::sqrt(e), -self.halpha)
         } else if e < T::ZERO {
-            (self.u1 + r, self.halpha)
+            (self.u1 + self.lambda * S::sqrt(-e), self.halpha)
         } else {
             (self.u1, T::ZERO)
         };
