@@ -24,6 +24,13 @@ pub type Fx = Saturating<I32F32>;
 /// A real-number type the estimators compute in: `f32` (Cortex-M4F FPU), `f64` (host
 /// reference) or [`Fx`] (fixed point, Cortex-M0/M3 without FPU).
 ///
+/// Where `f32` runs out: its resolution is relative (ulp(100 deg) = 7.6e-6 deg). On an
+/// unwrapped yaw after 11 turns (4000 deg, ulp 4.9e-4) the AVE's per-step increments of
+/// `0.04 deg` at 400 deg/s rounded to a 0.5 % velocity bias; the [`crate::YawBank`] therefore
+/// runs every law on the wrapped yaw in a translated frame ([`crate::Estimator::translate`]).
+/// The implicit ED's sliding band `h^2 alpha = 7.7e-6` is below f32's resolution of a
+/// 300 deg/s input, so ED-ED differs between `f32` and [`Fx`] (tests/bank.rs).
+///
 /// Only `+ - *`, comparisons, `abs`, `sqrt` and division by a positive integer are used in the
 /// update paths; every coefficient (which may involve division or `exp`) is computed once at
 /// construction time in `f64` and converted with [`Real::from_f64`].
