@@ -7,6 +7,7 @@
 //! * [`cycles`]: instruction counting with SysTick under `qemu -icount` (see the bench binary).
 //! * [`pipeline`]: parser -> yaw sample -> `ItowClock` -> `YawBank` -> CSV rows.
 //! * [`stack`]: stack high-water mark (painted stack).
+//! * `sqrt`: the ED's square root as the `VSQRT.F32` instruction (FPU builds).
 //!
 //! This is the only crate of the workspace with `unsafe` (register access); every `unsafe`
 //! block carries a `// SAFETY:` comment.
@@ -15,6 +16,8 @@
 pub mod cycles;
 pub mod host;
 pub mod pipeline;
+#[cfg(not(any(feature = "fixed-point", not(target_abi = "eabihf"))))]
+pub mod sqrt;
 pub mod stack;
 pub mod uart;
 
@@ -28,3 +31,15 @@ pub type Num = f32;
 /// `fixed-point` feature.
 #[cfg(any(feature = "fixed-point", not(target_abi = "eabihf")))]
 pub type Num = estimators::Fx;
+
+/// Square root used by the bank's ED: `VSQRT.F32` on an FPU target (bit-identical to the
+/// host's `libm::sqrtf`), the portable exact root otherwise.
+#[cfg(not(any(feature = "fixed-point", not(target_abi = "eabihf"))))]
+pub type BankSqrt = sqrt::Vsqrt;
+/// Square root used by the bank's ED: `VSQRT.F32` on an FPU target (bit-identical to the
+/// host's `libm::sqrtf`), the portable exact root otherwise.
+#[cfg(any(feature = "fixed-point", not(target_abi = "eabihf")))]
+pub type BankSqrt = estimators::ExactSqrt;
+
+/// The estimator bank the firmware runs.
+pub type Bank = estimators::YawBank<Num, BankSqrt>;

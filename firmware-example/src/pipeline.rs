@@ -1,16 +1,16 @@
 //! The firmware's pipeline, the embedded twin of `host-tests`' replay (`nav440 estimate`):
 //! bytes -> `nav440_proto::Parser` -> `Packet::decode` -> `Packet::yaw_sample` ->
-//! `ItowClock` (time in us since the first sample) -> `estimators::YawBank` (the paper's
+//! `ItowClock` (time in us since the first sample) -> `estimators::YawBank` ([`crate::Bank`], the paper's
 //! presets, `BankConfig::default()`: h = 1e-4 s, linear hold) -> one CSV row per sample,
 //! formatted by `estimators::csv` exactly as the host does.
 //!
 //! A sample the bank rejects (time not increasing, non-finite yaw) yields no row and is
 //! counted, as on the host.
 
-use estimators::{BankConfig, YawBank};
+use estimators::BankConfig;
 use nav440_proto::{ItowClock, Packet, Parser};
 
-use crate::Num;
+use crate::Bank;
 
 /// Longest CSV row: 17 fields of at most ~16 characters plus separators.
 pub const ROW_CAPACITY: usize = 512;
@@ -40,7 +40,7 @@ pub struct Counters {
 pub struct Pipeline {
     parser: Parser,
     clock: ItowClock,
-    bank: YawBank<Num>,
+    bank: Bank,
     counters: Counters,
 }
 
@@ -55,7 +55,7 @@ impl Pipeline {
         Ok(Self {
             parser: Parser::new(),
             clock: ItowClock::new(),
-            bank: YawBank::new(&cfg).map_err(ConfigError)?,
+            bank: Bank::new(&cfg).map_err(ConfigError)?,
             counters: Counters::default(),
         })
     }

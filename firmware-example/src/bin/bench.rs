@@ -12,12 +12,13 @@
 #![no_main]
 
 use core::hint::black_box;
+use core::sync::atomic::{AtomicU32, Ordering};
 use cortex_m_rt::entry;
 use estimators::{
     advance_by_steps, Ad, Ave, BankConfig, ClosedForm, Ed, Estimator, Hold, Ilo, Kalman,
     KalmanConfig, Real, Series, YawBank,
 };
-use firmware_example::{cycles::Counter, host, Num};
+use firmware_example::{cycles::Counter, host, Bank, BankSqrt, Num};
 use heapless::String;
 use nav440_proto::{encode_frame, ItowClock, PacketType, Parser};
 
@@ -100,6 +101,68 @@ fn per_sample_stepped<E: Estimator<Num>>(c: &Counter, overhead: u64, label: &str
     line("instr", label, total as f32 / SAMPLES as f32, "sample");
 }
 
+/// Square roots executed (counted by [`Counting`]).
+static SQRTS: AtomicU32 = AtomicU32::new(0);
+
+/// The firmware's square root, counting its calls (for the cycle estimate: `VSQRT.F32` takes
+/// 14 cycles on a Cortex-M4F, far from the average instruction).
+#[derive(Clone, Copy, Debug, Default)]
+struct Counting;
+
+impl estimators::SqrtFn<Num> for Counting {
+    fn sqrt(x: Num) -> Num {
+        SQRTS.store(SQRTS.load(Ordering::Relaxed) + 1, Ordering::Relaxed);
+        <BankSqrt as estimators::SqrtFn<Num>>::sqrt(x)
+    }
+}
+
+/// Square roots per sample of `e` (100 steps) or of a bank, printed as `sqrt` lines.
+fn sqrt_count_stepped<E: Estimator<Num>>(label: &str, mut e: E) {
+    let mut prev = Num::from_f32(yaw(0));
+    e.reset(prev);
+    SQRTS.store(0, Ordering::Relaxed);
+    for k in 1..=SAMPLES {
+        let y = Num::from_f32(yaw(k));
+        black_box(advance_by_steps(&mut e, prev, y, STEPS, Hold::Linear));
+        prev = y;
+    }
+    line(
+        "sqrt",
+        label,
+        SQRTS.load(Ordering::Relaxed) as f32 / SAMPLES as f32,
+        "sample",
+    );
+}
+
+/// Per-sample instructions of a whole bank's `update` at 100 Hz.
+fn bank_per_sample<S: estimators::SqrtFn<Num>>(
+    c: &Counter,
+    overhead: u64,
+    label: &str,
+    bank: Option<YawBank<Num, S>>,
+) {
+    let Some(mut bank) = bank else {
+        fail("YawBank")
+    };
+    let mut total = 0;
+    for k in 0..(WARMUP + SAMPLES) {
+        let y = yaw(k);
+        let wrapped = if y > 180.0 { y - 360.0 } else { y };
+        let (n, r) = c.measure(|| {
+            black_box(
+                black_box(&mut bank).update(black_box(u64::from(k) * DT_US), black_box(wrapped)),
+            )
+        });
+        if r.is_err() {
+            fail("a bank run without rejected samples");
+        }
+        if k >= WARMUP {
+            total += n.saturating_sub(overhead);
+        }
+    }
+    line("instr", label, total as f32 / SAMPLES as f32, "sample");
+}
+
 fn fail(what: &str) -> ! {
     host::stderr(format_args!("bench: cannot build {what}\n"));
     host::exit(false)
@@ -127,6 +190,16 @@ fn main() -> ! {
     per_sample_stepped(&c, overhead, "ILO1 (Euler x100)", ilo(&v.ilo[0]));
     per_sample_stepped(&c, overhead, "AD T=0.01 (Euler x100)", ad(v.ad_t));
     per_sample_stepped(&c, overhead, "ED (Euler x100)", ed);
+    if core::any::type_name::<BankSqrt>() != core::any::type_name::<estimators::ExactSqrt>() {
+        let ed_fw = Ed::<Num, BankSqrt>::new(&v.ed, h).unwrap_or_else(|_| fail("ED"));
+        per_sample_stepped(&c, overhead, "ED, VSQRT (Euler x100)", ed_fw);
+        per_sample_stepped(
+            &c,
+            overhead,
+            "ED-ED, VSQRT (Euler x100)",
+            Series::new(ed_fw, ed_fw),
+        );
+    }
     // Acceleration: series of two, explicit Euler.
     per_sample_stepped(&c, overhead, "AVE-AVE (Euler x100)", Series::new(ave, ave));
     per_sample_stepped(
@@ -201,34 +274,34 @@ fn main() -> ! {
         );
     }
 
-    // The whole bank as the firmware runs it (unwrap, adapter, 14 estimators).
-    let mut bank = YawBank::<Num>::new(&cfg).unwrap_or_else(|_| fail("YawBank"));
-    let mut total = 0;
-    let mut rejected = 0u32;
-    for k in 0..(WARMUP + SAMPLES) {
-        let y = yaw(k);
-        let wrapped = if y > 180.0 { y - 360.0 } else { y };
-        let (n, r) = c.measure(|| {
-            black_box(
-                black_box(&mut bank).update(black_box(u64::from(k) * DT_US), black_box(wrapped)),
-            )
-        });
-        if r.is_err() {
-            rejected += 1;
+    // The whole bank as the firmware runs it (unwrap, adapter, 14 estimators), and with the
+    // portable libm square root if the firmware uses VSQRT.
+    bank_per_sample(&c, overhead, "whole bank", Bank::new(&cfg).ok());
+    if core::any::type_name::<BankSqrt>() != core::any::type_name::<estimators::ExactSqrt>() {
+        // VSQRT count per sample, for the cycle estimate.
+        let ed_c = Ed::<Num, Counting>::new(&v.ed, h).unwrap_or_else(|_| fail("ED"));
+        sqrt_count_stepped("ED, VSQRT (Euler x100)", ed_c);
+        sqrt_count_stepped("ED-ED, VSQRT (Euler x100)", Series::new(ed_c, ed_c));
+        let mut counted = YawBank::<Num, Counting>::new(&cfg).unwrap_or_else(|_| fail("YawBank"));
+        SQRTS.store(0, Ordering::Relaxed);
+        for k in 0..SAMPLES {
+            let y = yaw(k);
+            let wrapped = if y > 180.0 { y - 360.0 } else { y };
+            let _ = black_box(counted.update(u64::from(k) * DT_US, wrapped));
         }
-        if k >= WARMUP {
-            total += n.saturating_sub(overhead);
-        }
+        line(
+            "sqrt",
+            "whole bank",
+            SQRTS.load(Ordering::Relaxed) as f32 / SAMPLES as f32,
+            "sample",
+        );
+        bank_per_sample(
+            &c,
+            overhead,
+            "whole bank, libm sqrtf",
+            YawBank::<Num>::new(&cfg).ok(),
+        );
     }
-    if rejected > 0 {
-        fail("a bank run without rejected samples");
-    }
-    line(
-        "instr",
-        "whole bank",
-        total as f32 / SAMPLES as f32,
-        "sample",
-    );
 
     // Parser per byte: a stream of A2 frames (the capture's packet type), and the CRC alone.
     let mut stream = [0u8; 37 * 64];
@@ -298,7 +371,7 @@ fn main() -> ! {
         core::mem::size_of::<ClosedForm<Num, Series<Ad<Num>, Ad<Num>>>>(),
     );
     ram("ED-ED", core::mem::size_of::<Series<Ed<Num>, Ed<Num>>>());
-    ram("YawBank (whole bank)", core::mem::size_of::<YawBank<Num>>());
+    ram("YawBank (whole bank)", core::mem::size_of::<Bank>());
     ram("Parser", core::mem::size_of::<Parser>());
     ram("ItowClock", core::mem::size_of::<ItowClock>());
     ram(
