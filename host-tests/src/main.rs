@@ -476,6 +476,9 @@ fn run(cli: Cli) -> Result<()> {
                 },
             };
             let cap = synth::generate(&cfg)?;
+            let motion = host_tests::motion::Profile::new(profile, duration, seed);
+            let peaks = motion.peaks(1e-3);
+            let rms_acc = motion.rms_acc(1e-3);
             std::fs::write(&output, &cap.bytes)
                 .map_err(|e| Error::Output(format!("cannot write {}: {e}", output.display())))?;
             let summary = serde_json::json!({
@@ -486,6 +489,10 @@ fn run(cli: Cli) -> Result<()> {
                 "damaged_packets": cap.report.damaged.len(),
                 "intact_packets": cap.report.intact(),
                 "garbage_bytes": cap.report.garbage_bytes,
+                "peak_yaw_deg": peaks.0,
+                "peak_rate_deg_s": peaks.1,
+                "peak_acc_deg_s2": peaks.2,
+                "rms_acc_deg_s2": rms_acc,
             });
             stdout_or_file(None, |w| writeln!(w, "{summary}"))
         }

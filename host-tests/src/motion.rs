@@ -146,6 +146,15 @@ impl Profile {
         m
     }
 
+    /// Root mean square of the acceleration over the profile, deg/s^2, sampled every `dt` s.
+    pub fn rms_acc(&self, dt: f64) -> f64 {
+        let n = (self.duration_s / dt).ceil() as usize;
+        let sum: f64 = (0..=n)
+            .map(|i| self.at(i as f64 * dt).acc_deg_s2.powi(2))
+            .sum();
+        (sum / (n + 1) as f64).sqrt()
+    }
+
     /// Evaluates the motion at time `t` (s since the start).
     pub fn at(&self, t: f64) -> MotionPoint {
         match self.kind {

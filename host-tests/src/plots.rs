@@ -130,9 +130,14 @@ pub fn plot_capture(
         Some(n) => format!("noise var {} deg^2 (seed {})", n.var, n.seed),
         None => "no added noise".into(),
     };
-    let title = format!(
-        "{capture}: {noise}, hold {:?}, h = {} s",
-        opts.hold, opts.step_s
-    );
+    let hold = match opts.hold {
+        estimators::Hold::Linear => "linear",
+        estimators::Hold::ZeroOrder => "zoh",
+    };
+    let at = match (opts.noise, opts.noise_at) {
+        (Some(_), crate::replay::NoiseAt::Step) => " per step",
+        _ => "",
+    };
+    let title = format!("{capture}: {noise}{at}, hold {hold}, h = {} s", opts.step_s);
     render_svg(out, &title, &p, 1400, 300).map_err(Error::Output)
 }

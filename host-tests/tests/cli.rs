@@ -101,6 +101,8 @@ fn synth_then_every_command_on_a_fresh_capture() {
     ]));
     // 3 s at 10 Hz: 31 packets of 7 + 42 bytes.
     assert_eq!(s["packets"], 31);
+    // spin: rate 200 + 100 sin(0.4 pi t): 3 s reach the peak 300 deg/s at t = 1.25 s.
+    assert!((s["peak_rate_deg_s"].as_f64().unwrap() - 300.0).abs() < 1e-3);
     assert_eq!(s["bytes"], 31 * 49);
     assert_eq!(std::fs::metadata(&cap).unwrap().len(), 31 * 49);
     assert_eq!(
@@ -286,7 +288,7 @@ fn paper_json_has_both_tables_next_to_the_paper_values() {
 fn tune_improves_and_writes_gains_that_estimate_accepts() {
     let d = scratch("tune");
     let cap = d.join("short.bin");
-    ok(&[
+    let s = json(&ok(&[
         "synth",
         "--profile",
         "fig5",
@@ -296,7 +298,11 @@ fn tune_improves_and_writes_gains_that_estimate_accepts() {
         "3",
         "-o",
         p(&cap),
-    ]);
+    ]));
+    // The paper's Fig. 5 bounds.
+    assert!(s["peak_yaw_deg"].as_f64().unwrap() <= 100.0);
+    assert!(s["peak_rate_deg_s"].as_f64().unwrap() <= 300.0);
+    assert!(s["peak_acc_deg_s2"].as_f64().unwrap() <= 2000.0);
     let gains = d.join("g.toml");
     let rust = d.join("g.rs");
     let text = ok(&[
