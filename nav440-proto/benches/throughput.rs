@@ -153,6 +153,14 @@ fn measure<C: Crc16Table>(name: &str, data: &[u8], chunk: usize, runs: usize) ->
 }
 
 fn main() {
+    // `cargo bench` passes `--bench`; under `cargo test --all-targets` only a quick smoke run
+    // (figures of an unoptimized build would mean nothing).
+    if !std::env::args().any(|a| a == "--bench") {
+        let data = stream(64 << 10, 1);
+        measure::<Table<16>>("smoke", &data, 4096, 1);
+        println!("smoke run only; measure with `cargo bench -p nav440-proto --bench throughput`");
+        return;
+    }
     let runs = 15;
     let mut headline = (0.0, 0.0);
     for (label, run) in [
