@@ -440,3 +440,54 @@ fn errors_are_one_line_with_documented_exit_codes() {
     assert!(String::from_utf8_lossy(&h.stdout).contains("Exit codes"));
     let _ = std::fs::remove_dir_all(&d);
 }
+
+#[test]
+fn stats_and_decode_name_nak_and_unknown_types() {
+    let d = scratch("types");
+    let f = d.join("mixed.bin");
+    let mut bytes = Vec::new();
+    let mut buf = [0u8; nav440_proto::MAX_FRAME];
+    // A NAK for a failed GP request, an OpenIMU-style lower-case packet, a ping reply (len 0),
+    // and the protocol document's real S1 frame.
+    let n = nav440_proto::encode_frame(nav440_proto::PacketType::NAK, b"GP", &mut buf).unwrap();
+    bytes.extend_from_slice(&buf[..n]);
+    let n = nav440_proto::encode_frame(nav440_proto::PacketType(*b"z1"), &[1, 2, 3, 4], &mut buf)
+        .unwrap();
+    bytes.extend_from_slice(&buf[..n]);
+    bytes.extend_from_slice(&[0x55, 0x55, 0x50, 0x4B, 0x00, 0x9E, 0xF4]);
+    let s1 = "55 55 53 31 18 ff e0 00 16 0c c0 ff fe ff f9 ff ff 27 eb 27 eb 27 eb 27 f7 28 f5 00 02 23 bc";
+    bytes.extend(s1.split(' ').map(|h| u8::from_str_radix(h, 16).unwrap()));
+    std::fs::write(&f, &bytes).unwrap();
+    let v = json(&ok(&["stats", p(&f)]));
+    assert_eq!(
+        v["frames"],
+        serde_json::json!({"NAK": 1, "z1": 1, "PK": 1, "S1": 1})
+    );
+    assert_eq!(v["bytes"], bytes.len());
+    let csv = ok(&["decode", p(&f)]);
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines.len(), 5);
+    let header: Vec<&str> = lines[0].split(',').collect();
+    let cell = |row: usize, name: &str| {
+        let i = header.iter().position(|h| *h == name).unwrap();
+        lines[row].split(',').nth(i).unwrap().to_string()
+    };
+    assert_eq!(cell(1, "type"), "NAK");
+    assert_eq!(cell(1, "failed_type"), "GP");
+    assert_eq!(cell(2, "payload_hex"), "01020304");
+    assert_eq!(cell(3, "type"), "PK");
+    // S1 from the protocol document: accel z 0.99609 g, counter 10485, BIT 0x0002.
+    let az: f64 = cell(4, "accel_z_m_s2").parse().unwrap();
+    assert!((az - 0.99609 * 9.80665).abs() < 1e-3);
+    assert_eq!(cell(4, "counter"), "10485");
+    assert_eq!(cell(4, "bit"), "0x0002");
+    let t: f64 = cell(4, "board_temp_degc").parse().unwrap();
+    assert!((t - 31.22).abs() < 0.01);
+    // Only NAK frames.
+    assert_eq!(ok(&["decode", p(&f), "--type", "nak"]).lines().count(), 2);
+    // No yaw packet: estimate refuses with exit 4.
+    let (code, err) = fails(&["estimate", p(&f)]);
+    assert_eq!(code, 4);
+    assert!(err.contains("none carries yaw"), "{err}");
+    let _ = std::fs::remove_dir_all(&d);
+}
