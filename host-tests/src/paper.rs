@@ -9,7 +9,7 @@
 
 use crate::error::{Error, Result};
 use crate::replay::{self, EstimateOptions, Noise, Row, Sample};
-use estimators::{Ave, AveConfig, DeltaMode, Estimator};
+use estimators::{Ave, AveConfig, DeltaMode, SampleAdapter};
 
 /// Noise variances of the paper's Tables 1 and 3, deg^2.
 pub const NOISE_VARS: [f64; 2] = [0.01, 0.5];
@@ -34,29 +34,25 @@ pub const REFERENCE_AVE: AveConfig = AveConfig {
     delta: DeltaMode::Paper,
 };
 
-/// Applies an AVE (`cfg`) to the measured rate of `samples`, stepped like the bank: reset to
-/// the first sample, then for each new sample `n = round(dt / h)` steps with `hold`.
-/// Returns one acceleration per sample, deg/s^2.
+/// Applies an AVE (`cfg`) to the measured rate of `samples` behind the same
+/// `estimators::SampleAdapter` the bank uses (same step, hold and maximum gap): reset to the
+/// first sample (output 0), then `n = round(dt / h)` steps per sample. Returns one
+/// acceleration per sample, deg/s^2 (NaN for a sample the adapter refuses).
 pub fn ave_on_rate(
     samples: &[Sample],
     cfg: &AveConfig,
     opts: &EstimateOptions,
 ) -> Result<Vec<f32>> {
-    let mut ave = Ave::<f32>::new(cfg, opts.step_s)
-        .map_err(|e| Error::Usage(format!("bad reference AVE configuration: {e}")))?;
-    let mut out = Vec::with_capacity(samples.len());
-    let Some(first) = samples.first() else {
-        return Ok(out);
-    };
-    ave.reset(first.rate_deg_s);
-    out.push(ave.output());
-    let h_us = f64::from(opts.step_s) * 1e6;
-    for w in samples.windows(2) {
-        let (a, b) = (w[0], w[1]);
-        let n = steps_between(a.t_us, b.t_us, h_us);
-        out.push(ave.advance(a.rate_deg_s, b.rate_deg_s, n, opts.hold));
-    }
-    Ok(out)
+    let bad =
+        |e: estimators::ConfigError| Error::Usage(format!("bad reference AVE configuration: {e}"));
+    let bank = opts.bank_config();
+    let ave = Ave::<f32>::new(cfg, opts.step_s).map_err(bad)?;
+    let mut adapter =
+        SampleAdapter::new(ave, opts.step_s, bank.max_gap_s, opts.hold).map_err(bad)?;
+    Ok(samples
+        .iter()
+        .map(|s| adapter.update(s.t_us, s.rate_deg_s).unwrap_or(f32::NAN))
+        .collect())
 }
 
 /// Number of observer steps between two sample times (us) for step `h_us`.
