@@ -409,6 +409,11 @@ pub fn bench(args: &[String]) -> Result<(), String> {
         REF_CLOCK_HZ / 1e6,
         REF_CLOCK_HZ / 1e6
     );
+    if board.target != "thumbv7em-none-eabihf" {
+        println!(
+            "note: fixed-point bank (estimators::Fx, Q31.32) without FPU; the share columns still use the M4F budget (168 MHz, 100 Hz) as the yardstick"
+        );
+    }
     println!(
         "{:<44} {:>12} {:>14} {:>16} {:>16}",
         "what", "instructions", "cycles (est.)", "CPU share (est.)", "share at CPI 1"

@@ -55,16 +55,17 @@ fn bump(counter: &AtomicU32) {
 #[derive(Clone, Copy)]
 struct Irq(u16);
 
-// SAFETY: `number` returns a fixed, valid interrupt number of the mps2 boards' NVIC.
+// SAFETY: `number` returns the board's UART interrupt number (`hw::RX_IRQ`), a valid
+// interrupt of its NVIC.
 unsafe impl InterruptNumber for Irq {
     fn number(self) -> u16 {
         self.0
     }
 }
 
-/// Moves received bytes from the data register into the queue until the register is empty or
-/// the queue is full (then masks the RX interrupt). Runs in the interrupt or in a critical
-/// section, so it never races itself.
+/// Moves received bytes from the data register into the queue until the register is empty;
+/// on a full queue holds the byte and masks the RX interrupt, or drops and counts it (see the
+/// module doc). Runs in the interrupt or in a critical section, so it never races itself.
 fn service_rx(cs: CriticalSection<'_>) {
     if hw::take_overrun() {
         bump(&OVERRUNS);
@@ -113,7 +114,7 @@ impl Uart0 {
         critical_section::with(|cs| PRODUCER.borrow(cs).replace(Some(producer)));
         hw::init(baud);
         // SAFETY: the handler for this IRQ only touches PRODUCER (behind a critical section),
-        // the atomics above and UART0 registers, so unmasking it cannot break a critical
+        // the atomics above and the UART's registers, so unmasking it cannot break a critical
         // section of the caller.
         unsafe { cortex_m::peripheral::NVIC::unmask(Irq(RX_IRQ)) };
         Some(Self { rx: consumer })
