@@ -22,11 +22,17 @@ const LENGTH_MAGIC: [u8; 4] = *b"N4LP";
 /// NAV440 default baud rate (8N1); QEMU ignores the rate.
 const BAUD: u32 = 38_400;
 
-fn read_exact(uart: &mut Uart0, buf: &mut [u8]) {
-    let mut got = 0;
-    while got < buf.len() {
-        let Ok(n) = uart.read(&mut buf[got..]);
-        got += n;
+/// Reads the length prefix byte by byte through the `embedded_hal_nb::serial::Read` side of
+/// the driver (the capture itself goes through `embedded_io::Read`), polling: 8 bytes, once.
+fn read_prefix(uart: &mut Uart0, buf: &mut [u8]) {
+    for slot in buf.iter_mut() {
+        *slot = loop {
+            match embedded_hal_nb::serial::Read::read(uart) {
+                Ok(b) => break b,
+                Err(nb::Error::WouldBlock) => core::hint::spin_loop(),
+                Err(nb::Error::Other(e)) => match e {},
+            }
+        };
     }
 }
 
@@ -49,7 +55,7 @@ fn main() -> ! {
         }
     };
     let mut prefix = [0u8; 8];
-    read_exact(&mut uart, &mut prefix);
+    read_prefix(&mut uart, &mut prefix);
     let (magic, len) = prefix.split_at(4);
     if magic != LENGTH_MAGIC {
         #[cfg(feature = "board-stm32f405")]
