@@ -798,3 +798,41 @@ pub fn ci_steps() -> Result<(), String> {
     size(&[])?;
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counters_line_is_parsed() {
+        let err = "qemu noise\nfirmware: bytes=10 frames=2 crc_errors=1 skipped=3 uart_overruns=0 stack_peak=7000\n";
+        let c = counters(err);
+        assert_eq!(counter(&c, "bytes"), Some(10));
+        assert_eq!(counter(&c, "crc_errors"), Some(1));
+        assert_eq!(counter(&c, "stack_peak"), Some(7000));
+        assert_eq!(counter(&c, "missing"), None);
+    }
+
+    #[test]
+    fn csv_comparison_is_textual() {
+        let a = "t,yaw\n0.0000,1.5\n0.0100,2\n";
+        assert_eq!(compare_csv(a, a), Ok(3));
+        // 2 and 2.0 are the same number but not the same text: a difference.
+        let b = "t,yaw\n0.0000,1.5\n0.0100,2.0\n";
+        assert!(compare_csv(a, b).is_err_and(|e| e.starts_with("line 3")));
+        assert!(compare_csv(a, "t,yaw\n0.0000,1.5\n").is_err());
+        let d = max_abs_diff(a, b).unwrap_or_default();
+        assert_eq!(d, vec![("t".to_owned(), 0.0), ("yaw".to_owned(), 0.0)]);
+    }
+
+    #[test]
+    fn vsqrt_cycles_enter_the_estimate() {
+        let m = Measure {
+            label: "x".into(),
+            instr: 1000.0,
+            unit: "sample".into(),
+            sqrt: 100.0,
+        };
+        assert_eq!(m.cycles(), 900.0 * ASSUMED_CPI + 100.0 * VSQRT_CYCLES);
+    }
+}

@@ -308,3 +308,24 @@ pub fn uart_timeout(bytes: usize) -> Duration {
 pub fn input_path(dir: &Path, tag: &str) -> PathBuf {
     dir.join(format!("uart-input-{tag}-{}.bin", std::process::id()))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn framed_input_has_magic_and_le_length() {
+        let v = framed_input(&[0x55, 0x55, 0x41]).unwrap_or_default();
+        assert_eq!(v, [b'N', b'4', b'L', b'P', 3, 0, 0, 0, 0x55, 0x55, 0x41]);
+    }
+
+    #[test]
+    fn boards_are_found_by_name() {
+        assert_eq!(board("an386").map(|b| b.machine), Ok("mps2-an386"));
+        assert_eq!(
+            board("an385-v6m").map(|b| b.target),
+            Ok("thumbv6m-none-eabi")
+        );
+        assert!(board("stm32").is_err());
+    }
+}
