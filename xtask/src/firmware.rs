@@ -782,6 +782,15 @@ pub fn ci_steps() -> Result<(), String> {
         Err(e) => return Err(format!("unexpected failure of the no-prefix check: {e}")),
         Ok(_) => return Err("input without the length prefix was accepted".into()),
     }
+    // A panic ends the run with exit status 1 and its message.
+    let panic_elf = build(m4f_board.target, &[], "panic_check")?;
+    match qemu::run_plain(&m4f_board, &panic_elf, &[], Duration::from_secs(60)) {
+        Err(e) if e.contains("firmware: panic") => {
+            eprintln!("xtask: OK: a panic ends the firmware with exit status 1")
+        }
+        Err(e) => return Err(format!("unexpected failure of the panic check: {e}")),
+        Ok(_) => return Err("the panic check firmware exited with status 0".into()),
+    }
     // A hard-float image on the FPU-less board must fault and exit non-zero, not hang.
     let m4f = &elfs[0].1;
     let an385 = qemu::board("an385")?;
