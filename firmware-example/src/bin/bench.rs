@@ -145,22 +145,39 @@ fn bank_per_sample<S: estimators::SqrtFn<Num>>(
         fail("YawBank")
     };
     let mut total = 0;
+    let mut csv_total = 0;
     for k in 0..(WARMUP + SAMPLES) {
         let y = yaw(k);
         let wrapped = if y > 180.0 { y - 360.0 } else { y };
+        let t_us = u64::from(k) * DT_US;
         let (n, r) = c.measure(|| {
-            black_box(
-                black_box(&mut bank).update(black_box(u64::from(k) * DT_US), black_box(wrapped)),
-            )
+            black_box(black_box(&mut bank).update(black_box(t_us), black_box(wrapped)))
         });
-        if r.is_err() {
-            fail("a bank run without rejected samples");
+        let Ok(out) = r else {
+            fail("a bank run without rejected samples")
+        };
+        // The output stage of the firmware: one CSV row (17 numbers) per sample.
+        let mut row = firmware_example::pipeline::Row::new();
+        let (m, res) = c.measure(|| {
+            estimators::csv::write_row(black_box(&mut row), t_us, black_box(y), black_box(&out))
+        });
+        if res.is_err() {
+            fail("a CSV row");
         }
         if k >= WARMUP {
             total += n.saturating_sub(overhead);
+            csv_total += m.saturating_sub(overhead);
         }
     }
     line("instr", label, total as f32 / SAMPLES as f32, "sample");
+    if label == "whole bank" {
+        line(
+            "instr",
+            "CSV row formatting (output stage)",
+            csv_total as f32 / SAMPLES as f32,
+            "sample",
+        );
+    }
 }
 
 fn fail(what: &str) -> ! {
