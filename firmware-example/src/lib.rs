@@ -1,7 +1,8 @@
 //! Board support and the NAV440 pipeline shared by the firmware binaries.
 //!
-//! * [`uart`]: CMSDK APB UART0 of the QEMU `mps2-an38x` boards, interrupt-driven receive into a
-//!   `heapless` SPSC queue, exposed as `embedded_io::Read` and `embedded_hal_nb::serial::Read`.
+//! * [`uart`]: interrupt-driven receive into a `heapless` SPSC queue, exposed as
+//!   `embedded_io::Read` and `embedded_hal_nb::serial::Read`; registers of the CMSDK APB UART0
+//!   of the QEMU `mps2-an385/386` boards, or of STM32F4 USART1 (`board-stm32f405`).
 //! * [`host`]: semihosting output, exit codes, the panic handler and the HardFault handler
 //!   (every failure ends the run with a non-zero exit status instead of hanging).
 //! * [`cycles`]: instruction counting with SysTick under `qemu -icount` (see the bench binary).
@@ -9,8 +10,8 @@
 //! * [`stack`]: stack high-water mark (painted stack).
 //! * `sqrt`: the ED's square root as the `VSQRT.F32` instruction (FPU builds).
 //!
-//! This is the only crate of the workspace with `unsafe` (register access); every `unsafe`
-//! block carries a `// SAFETY:` comment.
+//! This is the only crate of the workspace with `unsafe` (register access, stack painting, the
+//! `VSQRT` instruction, NVIC unmasking); every `unsafe` block carries a `// SAFETY:` comment.
 #![no_std]
 
 pub mod cycles;
