@@ -70,12 +70,18 @@ fn main() -> ! {
     }
     let mut remaining = u32::from_le_bytes([len[0], len[1], len[2], len[3]]) as usize;
     host::stdout(pipeline::CSV_HEADER.as_bytes());
+    host::stdout(b"\n");
     let mut buf = [0u8; 64];
     while remaining > 0 {
         let want = remaining.min(buf.len());
         let Ok(n) = uart.read(&mut buf[..want]);
-        pipe.feed(&buf[..n], |row| host::stdout(row.as_bytes()));
+        if let Err(e) = pipe.feed(&buf[..n], |row| host::stdout(row.as_bytes())) {
+            bank_failed(&e);
+        }
         remaining -= n;
+    }
+    if let Err(e) = pipe.finish(|row| host::stdout(row.as_bytes())) {
+        bank_failed(&e);
     }
     let mut line: heapless::String<400> = heapless::String::new();
     let _ = pipe.summary(&mut line, uart.overruns(), uart.stalls());
@@ -86,15 +92,29 @@ fn main() -> ! {
     host::exit(true)
 }
 
+/// The bank cannot run at the measured packet period: report and exit with status 1 (as
+/// `nav440 estimate` fails on the same capture).
+fn bank_failed(e: &pipeline::ConfigError) -> ! {
+    host::stderr(format_args!(
+        "firmware: bank configuration rejected for this capture's packet period: {e:?}\n"
+    ));
+    host::exit(false)
+}
+
 /// Real board: a live NAV440 stream (no length prefix) is processed until reset; `first` are
 /// the bytes already read while looking for a prefix.
 #[cfg(feature = "board-stm32f405")]
 fn live(uart: &mut Uart0, pipe: &mut pipeline::Pipeline, first: &[u8]) -> ! {
     host::stdout(pipeline::CSV_HEADER.as_bytes());
-    pipe.feed(first, |row| host::stdout(row.as_bytes()));
+    host::stdout(b"\n");
+    if let Err(e) = pipe.feed(first, |row| host::stdout(row.as_bytes())) {
+        bank_failed(&e);
+    }
     let mut buf = [0u8; 64];
     loop {
         let Ok(n) = uart.read(&mut buf);
-        pipe.feed(&buf[..n], |row| host::stdout(row.as_bytes()));
+        if let Err(e) = pipe.feed(&buf[..n], |row| host::stdout(row.as_bytes())) {
+            bank_failed(&e);
+        }
     }
 }

@@ -1,8 +1,17 @@
 //! The firmware's pipeline, the embedded twin of `host-tests`' replay (`nav440 estimate`):
 //! bytes -> `nav440_proto::Parser` -> `Packet::decode` -> `Packet::yaw_sample` ->
-//! `ItowClock` (time in us since the first sample) -> `estimators::YawBank` ([`crate::Bank`], the paper's
-//! presets, `BankConfig::default()`: h = 1e-4 s, linear hold) -> one CSV row per sample,
-//! formatted by `estimators::csv` exactly as the host does.
+//! `ItowClock` (time in us since the first sample) -> `estimators::YawBank` ([`crate::Bank`],
+//! the paper's presets, `BankConfig::default()`: h = 1e-4 s, linear hold) -> one CSV row per
+//! sample, formatted by `estimators::csv` exactly as the host does.
+//!
+//! Nominal sample period: the bank precomputes its closed-form maps and Kalman gains for the
+//! packet rate (`BankConfig::sample_period_s`). `nav440 estimate` sets it to the median packet
+//! interval of the whole capture; a streaming firmware cannot look ahead, so it holds back the
+//! first [`WARMUP_SAMPLES`] samples, takes the median of their intervals (same rule: upper
+//! median, `us as f32 * 1e-6`), builds the bank and then runs those samples and all later ones
+//! through it. For a capture with a steady packet rate both medians are the nominal period and
+//! the outputs are identical; rows are only delayed by the warm-up. A capture shorter than the
+//! warm-up is decided at its end ([`Pipeline::finish`]).
 //!
 //! A sample the bank rejects (time not increasing, non-finite yaw) yields no row and is
 //! counted, as on the host.
@@ -18,8 +27,11 @@ pub const ROW_CAPACITY: usize = 512;
 /// One formatted CSV row (with its trailing newline).
 pub type Row = heapless::String<ROW_CAPACITY>;
 
-/// The CSV header, identical to `nav440 estimate`'s.
-pub const CSV_HEADER: &str = "t,yaw,yaw_rate,ave_v,ilo1_v,ilo2_v,ilo3_v,ad_v,ed_v,kf_v,ave_a,ilo1_a,ilo2_a,ilo3_a,ad_a,ed_a,kf_a\n";
+/// The CSV header line (`estimators::csv::HEADER`, as `nav440 estimate` prints it).
+pub const CSV_HEADER: &str = estimators::csv::HEADER;
+
+/// Samples held back to measure the packet period before the bank is built (0.16 s at 100 Hz).
+pub const WARMUP_SAMPLES: usize = 16;
 
 /// Counters reported at the end of a run.
 #[derive(Clone, Copy, Debug, Default)]
@@ -36,36 +48,119 @@ pub struct Counters {
     pub format_errors: u64,
 }
 
+/// The bank could not be built (from the defaults, or for the measured packet period).
+#[derive(Debug)]
+pub struct ConfigError(pub estimators::ConfigError);
+
+/// A timed yaw sample waiting for the bank.
+#[derive(Clone, Copy, Debug)]
+struct Sample {
+    t_us: u64,
+    yaw_deg: f32,
+    rate_deg_s: f32,
+}
+
+/// The bank and what it needs to run, before and after the warm-up.
+#[allow(
+    clippy::large_enum_variant,
+    reason = "no heap to box into; the warm-up buffer and the bank share the same RAM"
+)]
+enum Stage {
+    /// Collecting the first samples.
+    Warmup(heapless::Vec<Sample, WARMUP_SAMPLES>),
+    /// Running.
+    Running(Bank),
+    /// The bank could not be built for the measured period.
+    Failed(estimators::ConfigError),
+}
+
 /// Parser + clock + bank.
 pub struct Pipeline {
     parser: Parser,
     clock: ItowClock,
-    bank: Bank,
+    cfg: BankConfig,
+    stage: Stage,
     counters: Counters,
 }
 
-/// The bank could not be built from the default configuration.
-#[derive(Debug)]
-pub struct ConfigError(pub estimators::ConfigError);
+/// Upper median of the intervals between `samples`, s, as `nav440 estimate` computes it.
+fn nominal_period_s(samples: &[Sample]) -> Option<f32> {
+    let mut d: heapless::Vec<u64, WARMUP_SAMPLES> = heapless::Vec::new();
+    for w in samples.windows(2) {
+        if let [a, b] = w {
+            // At most WARMUP_SAMPLES - 1 intervals: always fits.
+            let _ = d.push(b.t_us.saturating_sub(a.t_us));
+        }
+    }
+    d.sort_unstable();
+    d.get(d.len() / 2).map(|&x| x as f32 * 1e-6)
+}
+
+/// Runs one sample through the bank and emits its row.
+fn run_sample(bank: &mut Bank, counters: &mut Counters, s: Sample, emit: &mut impl FnMut(&str)) {
+    let Ok(out) = bank.update(s.t_us, s.yaw_deg) else {
+        counters.rejected += 1;
+        return;
+    };
+    let mut row = Row::new();
+    let ok = estimators::csv::write_row(&mut row, s.t_us, s.rate_deg_s, &out).is_ok()
+        && (row.ends_with('\n') || row.push('\n').is_ok());
+    if ok {
+        counters.rows += 1;
+        emit(row.as_str());
+    } else {
+        counters.format_errors += 1;
+    }
+}
+
+/// Ends the warm-up: builds the bank for the measured period and runs the held samples.
+fn start(
+    cfg: &BankConfig,
+    stage: &mut Stage,
+    counters: &mut Counters,
+    emit: &mut impl FnMut(&str),
+) {
+    let Stage::Warmup(held) = stage else {
+        return;
+    };
+    let mut cfg = *cfg;
+    cfg.sample_period_s = nominal_period_s(held).unwrap_or(cfg.sample_period_s);
+    let next = match Bank::new(&cfg) {
+        Ok(mut bank) => {
+            for s in held.iter() {
+                run_sample(&mut bank, counters, *s, emit);
+            }
+            Stage::Running(bank)
+        }
+        Err(e) => Stage::Failed(e),
+    };
+    *stage = next;
+}
 
 impl Pipeline {
-    /// A pipeline with the bank presets of `nav440 estimate` (`BankConfig::default()`).
+    /// A pipeline with the bank presets of `nav440 estimate` (`BankConfig::default()`),
+    /// checked here once so that a bad configuration fails at start.
     pub fn new() -> Result<Self, ConfigError> {
         let cfg = BankConfig::default();
+        Bank::new(&cfg).map_err(ConfigError)?;
         Ok(Self {
             parser: Parser::new(),
             clock: ItowClock::new(),
-            bank: Bank::new(&cfg).map_err(ConfigError)?,
+            cfg,
+            stage: Stage::Warmup(heapless::Vec::new()),
             counters: Counters::default(),
         })
     }
 
     /// Feeds received bytes; `emit` gets every CSV row (newline-terminated) in order.
-    pub fn feed(&mut self, bytes: &[u8], mut emit: impl FnMut(&str)) {
+    /// Fails if the bank cannot be built for the measured packet period (then `nav440
+    /// estimate` fails too); later calls fail the same way.
+    pub fn feed(&mut self, bytes: &[u8], mut emit: impl FnMut(&str)) -> Result<(), ConfigError> {
         let Self {
             parser,
             clock,
-            bank,
+            cfg,
+            stage,
             counters,
         } = self;
         parser.feed(bytes, |frame| {
@@ -83,21 +178,40 @@ impl Pipeline {
                 return;
             };
             counters.samples += 1;
-            let Ok(out) = bank.update(t_us, sample.yaw_deg) else {
-                counters.rejected += 1;
-                return;
+            let s = Sample {
+                t_us,
+                yaw_deg: sample.yaw_deg,
+                rate_deg_s: sample.yaw_rate_deg_s,
             };
-            let mut row = Row::new();
-            let ok = estimators::csv::write_row(&mut row, t_us, sample.yaw_rate_deg_s, &out)
-                .is_ok()
-                && (row.ends_with('\n') || row.push('\n').is_ok());
-            if ok {
-                counters.rows += 1;
-                emit(row.as_str());
-            } else {
-                counters.format_errors += 1;
+            let warmup_done = match stage {
+                Stage::Running(bank) => {
+                    run_sample(bank, counters, s, &mut emit);
+                    false
+                }
+                Stage::Warmup(held) => {
+                    // Cannot fail: the warm-up ends as soon as the buffer is full.
+                    let _ = held.push(s);
+                    held.is_full()
+                }
+                Stage::Failed(_) => false,
+            };
+            if warmup_done {
+                start(cfg, stage, counters, &mut emit);
             }
         });
+        match &self.stage {
+            Stage::Failed(e) => Err(ConfigError(*e)),
+            _ => Ok(()),
+        }
+    }
+
+    /// End of a finite input: runs a capture shorter than the warm-up.
+    pub fn finish(&mut self, mut emit: impl FnMut(&str)) -> Result<(), ConfigError> {
+        start(&self.cfg, &mut self.stage, &mut self.counters, &mut emit);
+        match &self.stage {
+            Stage::Failed(e) => Err(ConfigError(*e)),
+            _ => Ok(()),
+        }
     }
 
     /// Parser statistics (bytes, frames, CRC errors, skipped bytes).

@@ -104,9 +104,8 @@ fn parse_opts(args: &[String]) -> Result<Opts, String> {
     })
 }
 
-/// The bundled Fig. 5-like capture: `host-tests/data/*fig5*.bin` (else any `.bin` there);
-/// if the data directory has none, one is synthesised with `nav440 synth --profile fig5`.
-fn bundled_capture() -> Result<PathBuf, String> {
+/// The `.bin` captures of `host-tests/data`, sorted.
+fn data_captures() -> Vec<PathBuf> {
     let data = root().join("host-tests").join("data");
     let mut bins: Vec<PathBuf> = std::fs::read_dir(&data)
         .map(|rd| {
@@ -116,6 +115,14 @@ fn bundled_capture() -> Result<PathBuf, String> {
         })
         .unwrap_or_default();
     bins.sort();
+    bins
+}
+
+/// The bundled Fig. 5-like capture: `host-tests/data/*fig5*.bin` (else any `.bin` there);
+/// if the data directory has none, one is synthesised with `nav440 synth --profile fig5`.
+fn bundled_capture() -> Result<PathBuf, String> {
+    let data = root().join("host-tests").join("data");
+    let bins = data_captures();
     if let Some(p) = bins
         .iter()
         .find(|p| {
@@ -752,13 +759,22 @@ pub fn ci_steps() -> Result<(), String> {
         "-o",
         &corrupted_s,
     ])?;
+    // A capture shorter than the firmware's warm-up (10 packets < 16): the bank starts at the
+    // end of the input.
+    let short = work_dir()?.join("ci-short.bin");
+    let bytes = read_file(&bundled)?;
+    std::fs::write(&short, bytes.get(..400).unwrap_or(&bytes))
+        .map_err(|e| format!("cannot write {}: {e}", short.display()))?;
+    // Every bundled capture (all packet types and rates, the week wrap) plus those two.
+    let mut captures = data_captures();
+    captures.extend([corrupted, short]);
     for (board, elf) in &elfs {
         let host_extra: &[&str] = if board.target == "thumbv7em-none-eabihf" {
             &[]
         } else {
             &["--fixed"]
         };
-        for capture in [&bundled, &corrupted] {
+        for capture in &captures {
             equivalence(board, elf, capture, host_extra)?;
         }
     }
