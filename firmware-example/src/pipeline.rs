@@ -114,6 +114,8 @@ fn run_sample(bank: &mut Bank, counters: &mut Counters, s: Sample, emit: &mut im
 }
 
 /// Ends the warm-up: builds the bank for the measured period and runs the held samples.
+/// (The bank is written straight into `stage` to keep few copies of it on the stack.)
+#[inline(never)]
 fn start(
     cfg: &BankConfig,
     stage: &mut Stage,
@@ -123,18 +125,18 @@ fn start(
     let Stage::Warmup(held) = stage else {
         return;
     };
+    let held = held.clone();
     let mut cfg = *cfg;
-    cfg.sample_period_s = nominal_period_s(held).unwrap_or(cfg.sample_period_s);
-    let next = match Bank::new(&cfg) {
-        Ok(mut bank) => {
-            for s in held.iter() {
-                run_sample(&mut bank, counters, *s, emit);
-            }
-            Stage::Running(bank)
-        }
+    cfg.sample_period_s = nominal_period_s(&held).unwrap_or(cfg.sample_period_s);
+    *stage = match Bank::new(&cfg) {
+        Ok(bank) => Stage::Running(bank),
         Err(e) => Stage::Failed(e),
     };
-    *stage = next;
+    if let Stage::Running(bank) = stage {
+        for s in &held {
+            run_sample(bank, counters, *s, emit);
+        }
+    }
 }
 
 impl Pipeline {
