@@ -97,7 +97,8 @@ fn nominal_period_s(samples: &[Sample]) -> Option<f32> {
 }
 
 /// Runs one sample through the bank and emits its row.
-fn run_sample(bank: &mut Bank, counters: &mut Counters, s: Sample, emit: &mut impl FnMut(&str)) {
+#[inline(never)]
+fn run_sample(bank: &mut Bank, counters: &mut Counters, s: Sample, emit: &mut dyn FnMut(&str)) {
     let Ok(out) = bank.update(s.t_us, s.yaw_deg) else {
         counters.rejected += 1;
         return;
@@ -111,6 +112,12 @@ fn run_sample(bank: &mut Bank, counters: &mut Counters, s: Sample, emit: &mut im
     } else {
         counters.format_errors += 1;
     }
+}
+
+/// Builds a bank (one out-of-line copy of the constructor for both callers: it is large).
+#[inline(never)]
+fn build_bank(cfg: &BankConfig) -> Result<Bank, estimators::ConfigError> {
+    Bank::new(cfg)
 }
 
 /// Ends the warm-up: builds the bank for the measured period and runs the held samples.
@@ -128,7 +135,7 @@ fn start(
     let held = held.clone();
     let mut cfg = *cfg;
     cfg.sample_period_s = nominal_period_s(&held).unwrap_or(cfg.sample_period_s);
-    *stage = match Bank::new(&cfg) {
+    *stage = match build_bank(&cfg) {
         Ok(bank) => Stage::Running(bank),
         Err(e) => Stage::Failed(e),
     };
@@ -144,7 +151,7 @@ impl Pipeline {
     /// checked here once so that a bad configuration fails at start.
     pub fn new() -> Result<Self, ConfigError> {
         let cfg = BankConfig::default();
-        Bank::new(&cfg).map_err(ConfigError)?;
+        build_bank(&cfg).map_err(ConfigError)?;
         Ok(Self {
             parser: Parser::new(),
             clock: ItowClock::new(),
