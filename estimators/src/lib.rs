@@ -19,7 +19,9 @@
 //!   in unit/s^2, times in s (`h`, `T`, `tau`) or integer microseconds (sample timestamps).
 //! * [`presets`]: every parameter set of the paper; [`ram`]: `size_of` of every estimator
 //!   (checked at compile time); [`gilo`]: the general ILO and Theorem 3.1; [`csv`]: the CSV row
-//!   shared by the host CLI and the firmware.
+//!   shared by the host CLI and the firmware; [`period`]: the nominal sample period of a
+//!   stream ([`BankConfig::sample_period_s`]) from its first [`period::WARMUP_SAMPLES`]
+//!   samples, the one causal rule of the host CLI and the firmware.
 //! * Fixed point: [`Fx`] (Q31.32, saturating) matches `f32` on a paper-like experiment (yaw
 //!   within +-90 deg, rate +-300 deg/s, 100 Hz) within 1 % in every MSE (ED 5 %, ED-ED 20 %) and
 //!   0.05 deg/s / 1 deg/s^2 sample by sample (see `tests/bank.rs`); its update path is integer
@@ -67,6 +69,7 @@ pub mod gilo;
 mod ilo;
 pub mod kalman;
 pub mod linear;
+pub mod period;
 pub mod presets;
 pub mod ram;
 mod real;

@@ -5,17 +5,20 @@
 //! sample, formatted by `estimators::csv` exactly as the host does.
 //!
 //! Nominal sample period: the bank precomputes its closed-form maps and Kalman gains for the
-//! packet rate (`BankConfig::sample_period_s`). `nav440 estimate` sets it to the median packet
-//! interval of the whole capture; a streaming firmware cannot look ahead, so it holds back the
-//! first [`WARMUP_SAMPLES`] samples, takes the median of their intervals (same rule: upper
-//! median, `us as f32 * 1e-6`), builds the bank and then runs those samples and all later ones
-//! through it. For a capture with a steady packet rate both medians are the nominal period and
-//! the outputs are identical; rows are only delayed by the warm-up. A capture shorter than the
-//! warm-up is decided at its end ([`Pipeline::finish`]).
+//! packet rate (`BankConfig::sample_period_s`). It is set by `estimators::period`, the one
+//! causal rule shared with `nav440 estimate`: the upper median of the intervals between the
+//! first [`WARMUP_SAMPLES`] samples (`us as f32 * 1e-6`). A streaming firmware cannot build the
+//! bank before it knows that period, so it holds back those first samples, then builds the bank
+//! and runs them and all later ones through it; rows are only delayed by the warm-up (0.16 s
+//! at 100 Hz). `nav440 estimate` reads the same first samples of the capture, so both build
+//! the same bank for every capture, also one whose rate changes after the warm-up. A capture
+//! shorter than the warm-up is decided at its end ([`Pipeline::finish`]) from the intervals it
+//! has (none: the default 0.01 s).
 //!
 //! A sample the bank rejects (time not increasing, non-finite yaw) yields no row and is
 //! counted, as on the host.
 
+use estimators::period::PeriodEstimator;
 use estimators::BankConfig;
 use nav440_proto::{ItowClock, Packet, Parser};
 
@@ -30,8 +33,9 @@ pub type Row = heapless::String<ROW_CAPACITY>;
 /// The CSV header line (`estimators::csv::HEADER`, as `nav440 estimate` prints it).
 pub const CSV_HEADER: &str = estimators::csv::HEADER;
 
-/// Samples held back to measure the packet period before the bank is built (0.16 s at 100 Hz).
-pub const WARMUP_SAMPLES: usize = 16;
+/// Samples held back to measure the packet period before the bank is built (0.16 s at 100 Hz):
+/// `estimators::period::WARMUP_SAMPLES`, the samples the period rule reads.
+pub const WARMUP_SAMPLES: usize = estimators::period::WARMUP_SAMPLES;
 
 /// Counters reported at the end of a run.
 #[derive(Clone, Copy, Debug, Default)]
@@ -83,19 +87,6 @@ pub struct Pipeline {
     counters: Counters,
 }
 
-/// Upper median of the intervals between `samples`, s, as `nav440 estimate` computes it.
-fn nominal_period_s(samples: &[Sample]) -> Option<f32> {
-    let mut d: heapless::Vec<u64, WARMUP_SAMPLES> = heapless::Vec::new();
-    for w in samples.windows(2) {
-        if let [a, b] = w {
-            // At most WARMUP_SAMPLES - 1 intervals: always fits.
-            let _ = d.push(b.t_us.saturating_sub(a.t_us));
-        }
-    }
-    d.sort_unstable();
-    d.get(d.len() / 2).map(|&x| x as f32 * 1e-6)
-}
-
 /// Runs one sample through the bank and emits its row.
 #[inline(never)]
 fn run_sample(bank: &mut Bank, counters: &mut Counters, s: Sample, emit: &mut dyn FnMut(&str)) {
@@ -133,8 +124,7 @@ fn start(
         return;
     };
     let held = held.clone();
-    let mut cfg = *cfg;
-    cfg.sample_period_s = nominal_period_s(&held).unwrap_or(cfg.sample_period_s);
+    let cfg = PeriodEstimator::from_times(held.iter().map(|s| s.t_us)).apply(*cfg);
     *stage = match build_bank(&cfg) {
         Ok(bank) => Stage::Running(bank),
         Err(e) => Stage::Failed(e),

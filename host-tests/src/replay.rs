@@ -4,6 +4,8 @@
 //! the paper protocol, the tuner, the plots and the integration tests all call.
 
 use crate::error::{Error, Result};
+use estimators::period::PeriodEstimator;
+pub use estimators::period::WARMUP_SAMPLES;
 use estimators::{BankConfig, BankOutput, Fx, Hold, YawBank};
 use nav440_proto::{ItowClock, Packet, Parser};
 use rand::rngs::Xoshiro256PlusPlus;
@@ -128,16 +130,6 @@ pub fn samples(bytes: &[u8]) -> Result<Vec<Sample>> {
     Ok(out)
 }
 
-/// Median interval between samples, s (`None` for fewer than 2 samples).
-pub fn nominal_period_s(samples: &[Sample]) -> Option<f32> {
-    let mut d: Vec<u64> = samples
-        .windows(2)
-        .map(|w| w[1].t_us.saturating_sub(w[0].t_us))
-        .collect();
-    d.sort_unstable();
-    d.get(d.len() / 2).map(|&x| x as f32 * 1e-6)
-}
-
 /// Gaussian noise added to yaw before estimation (the paper's protocol).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Noise {
@@ -217,13 +209,14 @@ impl EstimateOptions {
         cfg
     }
 
-    /// [`EstimateOptions::bank_config`] with the nominal sample period set to the capture's
-    /// median packet interval (0.01 s for a 100 Hz capture, i.e. `BankConfig::PAPER`'s value):
-    /// the closed-form maps and the Kalman gains are computed for it.
+    /// [`EstimateOptions::bank_config`] with the nominal sample period set from the capture by
+    /// `estimators::period`, the causal rule the firmware uses too: the upper median of the
+    /// intervals between the first [`WARMUP_SAMPLES`] samples (0.01 s for a 100 Hz capture, i.e.
+    /// `BankConfig::PAPER`'s value), whatever the rate does later; a capture shorter than the
+    /// warm-up uses the intervals it has, a single sample keeps the configured period. The
+    /// closed-form maps and the Kalman gains are computed for it.
     pub fn bank_config_for(&self, samples: &[Sample]) -> BankConfig {
-        let mut cfg = self.bank_config();
-        cfg.sample_period_s = nominal_period_s(samples).unwrap_or(cfg.sample_period_s);
-        cfg
+        PeriodEstimator::from_times(samples.iter().map(|s| s.t_us)).apply(self.bank_config())
     }
 }
 

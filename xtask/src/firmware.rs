@@ -684,6 +684,45 @@ fn equivalence(
     }
 }
 
+/// Synthesises (with `nav440 synth`) a capture of 20 packets at 100 Hz (0 to 190 ms) followed
+/// by 50 packets at 50 Hz (210 to 1190 ms), and returns its path.
+fn rate_change_capture() -> Result<PathBuf, String> {
+    let dir = work_dir()?;
+    let mut bytes = Vec::new();
+    // (file, rate Hz, duration s, timeITOW of the first packet ms)
+    for (name, rate, duration, itow) in [
+        ("ci-rate-100hz.bin", "100", "0.19", "100000"),
+        ("ci-rate-50hz.bin", "50", "0.98", "100210"),
+    ] {
+        let part = dir.join(name);
+        let part_s = part.display().to_string();
+        cargo(&[
+            "run",
+            "-q",
+            "-p",
+            "host-tests",
+            "--bin",
+            "nav440",
+            "--",
+            "synth",
+            "--profile",
+            "sin5",
+            "--rate",
+            rate,
+            "--duration",
+            duration,
+            "--start-itow",
+            itow,
+            "-o",
+            &part_s,
+        ])?;
+        bytes.extend(read_file(&part)?);
+    }
+    let out = dir.join("ci-rate-change.bin");
+    std::fs::write(&out, &bytes).map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+    Ok(out)
+}
+
 /// The firmware part of `cargo xtask ci`.
 pub fn ci_steps() -> Result<(), String> {
     // In CI (CI=true) QEMU must be there or installable; on a developer machine without it the
@@ -765,9 +804,13 @@ pub fn ci_steps() -> Result<(), String> {
     let bytes = read_file(&bundled)?;
     std::fs::write(&short, bytes.get(..400).unwrap_or(&bytes))
         .map_err(|e| format!("cannot write {}: {e}", short.display()))?;
-    // Every bundled capture (all packet types and rates, the week wrap) plus those two.
+    // A capture whose packet rate changes after the warm-up: 20 packets at 100 Hz, then 50 at
+    // 50 Hz. Host and firmware both take the bank's period from the first 16 samples
+    // (`estimators::period`), so they must still agree byte for byte.
+    let rate_change = rate_change_capture()?;
+    // Every bundled capture (all packet types and rates, the week wrap) plus those three.
     let mut captures = data_captures();
-    captures.extend([corrupted, short]);
+    captures.extend([corrupted, short, rate_change]);
     for (board, elf) in &elfs {
         let host_extra: &[&str] = if board.target == "thumbv7em-none-eabihf" {
             &[]
