@@ -75,35 +75,6 @@ fn build(target: &str, features: &[&str], bin: &str) -> Result<PathBuf, String> 
     Ok(copy)
 }
 
-/// Parses `--board B` and other `--key value` options plus positional arguments.
-struct Opts {
-    board: Board,
-    capture: Option<PathBuf>,
-    positional: Vec<String>,
-}
-
-fn parse_opts(args: &[String]) -> Result<Opts, String> {
-    let mut board = qemu::BOARDS[0];
-    let mut capture = None;
-    let mut positional = Vec::new();
-    let mut it = args.iter();
-    while let Some(a) = it.next() {
-        match a.as_str() {
-            "--board" => board = qemu::board(it.next().ok_or("--board needs a value")?)?,
-            "--capture" => {
-                capture = Some(PathBuf::from(it.next().ok_or("--capture needs a file")?))
-            }
-            s if s.starts_with("--") => return Err(format!("unknown option `{s}`")),
-            s => positional.push(s.to_owned()),
-        }
-    }
-    Ok(Opts {
-        board,
-        capture,
-        positional,
-    })
-}
-
 /// The `.bin` captures of `host-tests/data`, sorted.
 fn data_captures() -> Vec<PathBuf> {
     let data = root().join("host-tests").join("data");
@@ -203,15 +174,10 @@ fn counter(c: &[(String, u64)], key: &str) -> Option<u64> {
 }
 
 /// `cargo xtask demo`.
-pub fn demo(args: &[String]) -> Result<(), String> {
-    let opts = parse_opts(args)?;
-    if !opts.positional.is_empty() {
-        return Err("demo takes no positional argument (use --capture FILE)".into());
-    }
+pub fn demo(board: Board, capture: Option<PathBuf>) -> Result<(), String> {
     qemu::ensure_qemu()?;
-    let board = opts.board;
     let elf = build(board.target, &[], FW_BIN)?;
-    let capture_path = match opts.capture {
+    let capture_path = match capture {
         Some(p) => p,
         None => bundled_capture()?,
     };
@@ -319,15 +285,11 @@ fn print_estimates(csv: &str) -> Result<(), String> {
 }
 
 /// `cargo xtask qemu FILE [--board B]`.
-pub fn qemu(args: &[String]) -> Result<(), String> {
-    let opts = parse_opts(args)?;
-    let [file] = opts.positional.as_slice() else {
-        return Err("usage: cargo xtask qemu FILE [--board an386|an385|an385-v6m]".into());
-    };
+pub fn qemu(board: Board, file: &Path) -> Result<(), String> {
     qemu::ensure_qemu()?;
-    let elf = build(opts.board.target, &[], FW_BIN)?;
-    let capture = read_file(Path::new(file))?;
-    let r = run_capture(&opts.board, &elf, &capture, Output::Inherit)?;
+    let elf = build(board.target, &[], FW_BIN)?;
+    let capture = read_file(file)?;
+    let r = run_capture(&board, &elf, &capture, Output::Inherit)?;
     eprint!("{}", r.stderr);
     Ok(())
 }
@@ -402,10 +364,8 @@ fn run_bench(board: &Board) -> Result<BenchOutput, String> {
 }
 
 /// `cargo xtask bench`.
-pub fn bench(args: &[String]) -> Result<(), String> {
-    let opts = parse_opts(args)?;
+pub fn bench(board: Board) -> Result<(), String> {
     qemu::ensure_qemu()?;
-    let board = opts.board;
     let (m, _) = run_bench(&board)?;
     println!(
         "== instructions on QEMU {} ({}), counted with -icount shift=6 + SysTick ==",
@@ -509,7 +469,7 @@ fn sizes(tool: &Path, elf: &Path) -> Result<(u64, u64, u64), String> {
 }
 
 /// `cargo xtask size`.
-pub fn size(_args: &[String]) -> Result<(), String> {
+pub fn size() -> Result<(), String> {
     let tool = llvm_size()?;
     println!("== firmware size (llvm-size, release, {FW_BIN}) ==");
     println!(
@@ -862,8 +822,8 @@ pub fn ci_steps() -> Result<(), String> {
         Err(e) => return Err(format!("unexpected failure of the fault check: {e}")),
         Ok(_) => return Err("hard-float image ran on the FPU-less board without a fault".into()),
     }
-    bench(&[])?;
-    size(&[])?;
+    bench(qemu::BOARDS[0])?;
+    size()?;
     Ok(())
 }
 

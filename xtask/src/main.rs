@@ -10,6 +10,9 @@
 mod firmware;
 mod qemu;
 
+use clap::{Parser, Subcommand};
+use qemu::Board;
+use std::path::PathBuf;
 use std::process::{Command, ExitCode};
 
 /// The no_std library crates that must cross-compile for every thumb target.
@@ -21,35 +24,56 @@ const THUMB_TARGETS: &[&str] = &[
     "thumbv6m-none-eabi",
 ];
 
-const USAGE: &str = "usage: cargo xtask <command>
-  ci                          everything CI checks
-  ci-firmware                 only the firmware part of ci (QEMU runs, equivalence, cross builds)
-  demo [--board B] [--capture FILE]
-                              firmware in QEMU fed the bundled capture over UART0: estimates + summary
-  qemu FILE [--board B]       FILE through the firmware in QEMU; CSV on stdout, counters on stderr
-  bench                       instructions per estimator update / bank update / parsed byte (QEMU -icount)
-  size                        flash/RAM of the firmware (llvm-size) and RAM per estimator
-boards: an386 (default, Cortex-M4F, f32), an385 (Cortex-M3, thumbv7m, fixed point),
-        an385-v6m (thumbv6m image on the Cortex-M3 board, fixed point)";
+/// The project's automation: CI checks, the firmware under QEMU, benches and sizes.
+#[derive(Parser)]
+#[command(name = "cargo xtask", bin_name = "cargo xtask")]
+struct Cli {
+    #[command(subcommand)]
+    command: Cmd,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// Everything CI checks (the README's test command; `.ci/run` calls it).
+    Ci,
+    /// Only the firmware part of `ci` (cross builds, QEMU runs, equivalence with the host).
+    CiFirmware,
+    /// The firmware in QEMU fed the bundled capture over UART0: estimates and a summary.
+    Demo {
+        /// Emulated board: an386 (Cortex-M4F, f32), an385 (Cortex-M3, fixed point),
+        /// an385-v6m (thumbv6m image on the Cortex-M3 board, fixed point).
+        #[arg(long, default_value = "an386", value_parser = qemu::board)]
+        board: Board,
+        /// Capture to feed instead of the bundled `host-tests/data/fig5_a2_100hz.bin`.
+        #[arg(long, value_name = "FILE")]
+        capture: Option<PathBuf>,
+    },
+    /// FILE through the firmware in QEMU: CSV on stdout, counters on stderr.
+    Qemu {
+        /// NAV440 capture (raw serial bytes).
+        file: PathBuf,
+        /// Emulated board (see `demo --help`).
+        #[arg(long, default_value = "an386", value_parser = qemu::board)]
+        board: Board,
+    },
+    /// Instructions per estimator update, bank update and parsed byte (QEMU -icount + SysTick).
+    Bench {
+        /// Emulated board (see `demo --help`).
+        #[arg(long, default_value = "an386", value_parser = qemu::board)]
+        board: Board,
+    },
+    /// Flash/RAM of the firmware (llvm-size) and RAM per estimator.
+    Size,
+}
 
 fn main() -> ExitCode {
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let rest = args.get(1..).unwrap_or_default();
-    let result = match args.first().map(String::as_str) {
-        Some("ci") => ci(),
-        Some("ci-firmware") => firmware::ci_steps(),
-        Some("demo") => firmware::demo(rest),
-        Some("qemu") => firmware::qemu(rest),
-        Some("bench") => firmware::bench(rest),
-        Some("size") => firmware::size(rest),
-        Some("-h" | "--help" | "help") => {
-            println!("{USAGE}");
-            return ExitCode::SUCCESS;
-        }
-        _ => {
-            eprintln!("{USAGE}");
-            return ExitCode::from(2);
-        }
+    let result = match Cli::parse().command {
+        Cmd::Ci => ci(),
+        Cmd::CiFirmware => firmware::ci_steps(),
+        Cmd::Demo { board, capture } => firmware::demo(board, capture),
+        Cmd::Qemu { file, board } => firmware::qemu(board, &file),
+        Cmd::Bench { board } => firmware::bench(board),
+        Cmd::Size => firmware::size(),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
