@@ -104,8 +104,14 @@ fn run(program: &str, args: &[&str]) -> Result<(), String> {
     run_env(program, args, &[])
 }
 
+/// The cargo that runs this xtask (`cargo run` sets `CARGO`), so nested builds use the
+/// toolchain pinned by `rust-toolchain.toml`.
+pub fn cargo_bin() -> String {
+    std::env::var("CARGO").unwrap_or_else(|_| "cargo".to_owned())
+}
+
 fn cargo(args: &[&str]) -> Result<(), String> {
-    run(env!("CARGO"), args)
+    run(&cargo_bin(), args)
 }
 
 fn ci() -> Result<(), String> {
