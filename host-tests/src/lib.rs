@@ -14,3 +14,8 @@ pub mod plots;
 pub mod replay;
 pub mod synth;
 pub mod tune;
+
+/// The Rust examples of the top-level README, compiled and run as doc tests.
+#[cfg(doctest)]
+#[doc = include_str!("../../README.md")]
+pub struct ReadmeDoctests;
