@@ -109,8 +109,14 @@ fn bundled_capture() -> Result<PathBuf, String> {
         "xtask: no capture in {}, synthesising one with `nav440 synth`",
         data.display()
     );
+    nav440_synth(&out, &["--profile", "fig5"])?;
+    Ok(out)
+}
+
+/// `nav440 synth ARGS -o OUT` (the host CLI's capture generator).
+fn nav440_synth(out: &Path, args: &[&str]) -> Result<(), String> {
     let out_s = out.display().to_string();
-    cargo(&[
+    let mut all = vec![
         "run",
         "-q",
         "-p",
@@ -119,12 +125,10 @@ fn bundled_capture() -> Result<PathBuf, String> {
         "nav440",
         "--",
         "synth",
-        "--profile",
-        "fig5",
-        "-o",
-        &out_s,
-    ])?;
-    Ok(out)
+    ];
+    all.extend_from_slice(args);
+    all.extend(["-o", &out_s]);
+    cargo(&all)
 }
 
 fn read_file(p: &Path) -> Result<Vec<u8>, String> {
@@ -655,27 +659,19 @@ fn rate_change_capture() -> Result<PathBuf, String> {
         ("ci-rate-50hz.bin", "50", "0.98", "100210"),
     ] {
         let part = dir.join(name);
-        let part_s = part.display().to_string();
-        cargo(&[
-            "run",
-            "-q",
-            "-p",
-            "host-tests",
-            "--bin",
-            "nav440",
-            "--",
-            "synth",
-            "--profile",
-            "sin5",
-            "--rate",
-            rate,
-            "--duration",
-            duration,
-            "--start-itow",
-            itow,
-            "-o",
-            &part_s,
-        ])?;
+        nav440_synth(
+            &part,
+            &[
+                "--profile",
+                "sin5",
+                "--rate",
+                rate,
+                "--duration",
+                duration,
+                "--start-itow",
+                itow,
+            ],
+        )?;
         bytes.extend(read_file(&part)?);
     }
     let out = dir.join("ci-rate-change.bin");
@@ -738,31 +734,23 @@ pub fn ci_steps() -> Result<(), String> {
     // dropped packets) synthesised by the CLI.
     let bundled = bundled_capture()?;
     let corrupted = work_dir()?.join("ci-corrupted.bin");
-    let corrupted_s = corrupted.display().to_string();
-    cargo(&[
-        "run",
-        "-q",
-        "-p",
-        "host-tests",
-        "--bin",
-        "nav440",
-        "--",
-        "synth",
-        "--profile",
-        "spin",
-        "--duration",
-        "5",
-        "--flip-bits",
-        "20",
-        "--garbage",
-        "10",
-        "--drop-packets",
-        "5",
-        "--seed",
-        "7",
-        "-o",
-        &corrupted_s,
-    ])?;
+    nav440_synth(
+        &corrupted,
+        &[
+            "--profile",
+            "spin",
+            "--duration",
+            "5",
+            "--flip-bits",
+            "20",
+            "--garbage",
+            "10",
+            "--drop-packets",
+            "5",
+            "--seed",
+            "7",
+        ],
+    )?;
     // A capture shorter than the firmware's warm-up (10 packets < 16): the bank starts at the
     // end of the input.
     let short = work_dir()?.join("ci-short.bin");
