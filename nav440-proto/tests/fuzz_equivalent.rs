@@ -4,6 +4,10 @@
 
 use nav440_proto::*;
 
+#[path = "common/fuzz_check.rs"]
+mod fuzz_check;
+use fuzz_check::check;
+
 struct Rng(u64);
 impl Rng {
     fn next(&mut self) -> u64 {
@@ -15,31 +19,6 @@ impl Rng {
     fn below(&mut self, n: u64) -> u64 {
         self.next() % n
     }
-}
-
-/// The same checks as fuzz/fuzz_targets/parser.rs.
-fn check(stream: &[u8], chunk: usize) {
-    let mut parser = Parser::new();
-    let mut frames = 0u64;
-    for c in stream.chunks(chunk.max(1)) {
-        parser.feed(c, |f| {
-            frames += 1;
-            let mut buf = [0u8; MAX_FRAME];
-            let n = encode_frame(f.packet_type, f.payload, &mut buf).expect("payload <= 255");
-            assert_eq!(n, f.wire_len());
-            let _ = Packet::decode(f).map(|p| (p.yaw_sample(), p.bit(), p.time()));
-            let _ = Request::decode(f);
-        });
-    }
-    let s = parser.stats();
-    assert_eq!(s.bytes, stream.len() as u64);
-    assert_eq!(s.frames, frames);
-    assert_eq!(
-        s.frame_bytes + s.skipped_bytes + parser.pending() as u64,
-        s.bytes
-    );
-    assert!(parser.pending() < MAX_FRAME);
-    assert_eq!(s.per_type.iter().sum::<u64>() + s.other_types, frames);
 }
 
 #[test]
