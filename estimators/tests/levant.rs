@@ -9,10 +9,7 @@ fn signal(t: f64) -> (f64, f64) {
     (50.0 * (2.0 * t).sin(), 100.0 * (2.0 * t).cos())
 }
 
-/// Runs the paper ED at step `h` (its position state started `z0_offset` deg off) with
-/// per-step noise `noise(i)` for `t_end` s; returns
-/// (time after which |u - y'| stays below `band`, max |u - y'| over the second half, RMS over
-/// the second half).
+/// Runs the paper ED (explicit Euler, the default scheme) at step `h`; see [`run_scheme`].
 fn run(
     h: f64,
     t_end: f64,
@@ -20,12 +17,33 @@ fn run(
     z0_offset: f64,
     noise: impl Fn(usize) -> f64,
 ) -> (f64, f64, f64) {
-    let mut ed = Ed::<f64>::new(&ED_PAPER, h as f32).unwrap();
+    run_scheme(
+        estimators::EdScheme::Euler,
+        h,
+        t_end,
+        band,
+        z0_offset,
+        noise,
+    )
+}
+
+/// Runs an ED with the paper's gains and the given scheme at step `h` (its position state
+/// started `z0_offset` deg off) on `y = 50 sin 2t` with per-step noise `noise(i)` for `t_end`
+/// s; returns (time after which |u - y'| stays below `band`, max |u - y'| over the second
+/// half, RMS over the second half).
+fn run_scheme(
+    scheme: estimators::EdScheme,
+    h: f64,
+    t_end: f64,
+    band: f64,
+    z0_offset: f64,
+    noise: impl Fn(usize) -> f64,
+) -> (f64, f64, f64) {
+    let mut ed = Ed::<f64>::with_scheme(&ED_PAPER, h as f32, scheme).unwrap();
     ed.reset(signal(0.0).0 + z0_offset);
-    let n = (t_end / h) as usize;
     let mut last_out = 0.0;
     let (mut max2, mut ss, mut cnt) = (0.0f64, 0.0, 0.0);
-    for i in 0..n {
+    for i in 0..(t_end / h) as usize {
         let t = i as f64 * h;
         let (y, dy) = signal(t);
         let u = ed.step(y + noise(i));
@@ -206,36 +224,6 @@ fn pluggable_sqrt_gives_identical_results() {
     }
 }
 
-/// Runs an ED with the given scheme (state started `z0_offset` off) on `y = 50 sin 2t` plus
-/// per-step noise; returns (time after which the error stays within `band`, max error and RMS
-/// over the second half).
-fn run_scheme(
-    scheme: estimators::EdScheme,
-    h: f64,
-    band: f64,
-    z0_offset: f64,
-    noise: impl Fn(usize) -> f64,
-) -> (f64, f64, f64) {
-    let mut ed = Ed::<f64>::with_scheme(&ED_PAPER, h as f32, scheme).unwrap();
-    ed.reset(signal(0.0).0 + z0_offset);
-    let (t_end, mut last_out) = (2.0, 0.0);
-    let (mut max2, mut ss, mut cnt) = (0.0f64, 0.0, 0.0);
-    for i in 0..(t_end / h) as usize {
-        let t = i as f64 * h;
-        let (y, dy) = signal(t);
-        let err = (ed.step(y + noise(i)) - dy).abs();
-        if err > band {
-            last_out = t;
-        }
-        if t > t_end / 2.0 {
-            max2 = max2.max(err);
-            ss += err * err;
-            cnt += 1.0;
-        }
-    }
-    (last_out, max2, (ss / cnt).sqrt())
-}
-
 /// The implicit scheme removes the numerical chattering: noise-free, after a finite time
 /// (0.12 s from a 10 deg offset, asserted < 0.3 s) the error stays below 0.05 deg/s - the finite difference's
 /// `h |y''| / 2 = 0.01` plus margin - instead of Euler's ~25 deg/s; with noise it keeps the
@@ -243,16 +231,30 @@ fn run_scheme(
 #[test]
 fn implicit_scheme_is_chattering_free() {
     use estimators::EdScheme;
-    let (tc, max_i, _) = run_scheme(EdScheme::Implicit, 1e-4, 0.05, 10.0, |_| 0.0);
-    let (_, max_e, _) = run_scheme(EdScheme::Euler, 1e-4, f64::INFINITY, 10.0, |_| 0.0);
+    let (tc, max_i, _) = run_scheme(EdScheme::Implicit, 1e-4, 2.0, 0.05, 10.0, |_| 0.0);
+    let (_, max_e, _) = run_scheme(EdScheme::Euler, 1e-4, 2.0, f64::INFINITY, 10.0, |_| 0.0);
     println!(
         "ED noise-free: implicit max err {max_i:.4} (in band after {tc:.4} s), Euler {max_e:.3}"
     );
     assert!(tc < 0.3, "{tc}");
     assert!(max_i < 0.05 && max_e > 10.0);
-    let (_, _, rms_s) = run_scheme(EdScheme::Implicit, 1e-4, f64::INFINITY, 0.0, uniform(0.01));
-    let (_, _, rms_l) = run_scheme(EdScheme::Implicit, 1e-4, f64::INFINITY, 0.0, uniform(1.0));
-    let (_, _, rms_le) = run_scheme(EdScheme::Euler, 1e-4, f64::INFINITY, 0.0, uniform(1.0));
+    let (_, _, rms_s) = run_scheme(
+        EdScheme::Implicit,
+        1e-4,
+        2.0,
+        f64::INFINITY,
+        0.0,
+        uniform(0.01),
+    );
+    let (_, _, rms_l) = run_scheme(
+        EdScheme::Implicit,
+        1e-4,
+        2.0,
+        f64::INFINITY,
+        0.0,
+        uniform(1.0),
+    );
+    let (_, _, rms_le) = run_scheme(EdScheme::Euler, 1e-4, 2.0, f64::INFINITY, 0.0, uniform(1.0));
     println!("ED implicit noise 1e-2: rms {rms_s:.3}; noise 1: rms {rms_l:.3} (Euler {rms_le:.3})");
     assert!((5.0..20.0).contains(&(rms_l / rms_s)), "{}", rms_l / rms_s);
     assert!(rms_l <= rms_le * 1.05);
