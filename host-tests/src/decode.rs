@@ -7,38 +7,23 @@
 //! a stream of several types the header is the union of their columns (in order of first
 //! appearance) and cells a type does not have are empty. Frames whose type is unknown or
 //! whose payload does not match their type get a `payload_hex` column.
+//!
+//! The fixed-layout packets' fields come from [`Packet::for_each_field`]; a table by unit
+//! converts each to SI and names its column `<field>_<unit>` (`roll_rad`, `accel_x_m_s2`,
+//! `time_itow_s`); magnetic and true yaw are both `yaw_rad`.
 
 use crate::error::{Error, Result};
-use nav440_proto::{Packet, Parser};
+use nav440_proto::{Field, Packet, Parser, SiValue};
 
 /// Standard gravity, m/s^2 per g.
 pub const G0: f64 = 9.80665;
 /// Tesla per gauss.
 pub const TESLA_PER_GAUSS: f64 = 1e-4;
 
-type Cols = Vec<(&'static str, String)>;
+type Cols = Vec<(String, String)>;
 
 fn num(v: f64) -> String {
     format!("{v}")
-}
-
-macro_rules! cols {
-    ($( $name:literal => $e:expr ),* $(,)?) => {
-        vec![ $( ($name, $e) ),* ]
-    };
-}
-
-fn fl(v: f32) -> String {
-    format!("{v}")
-}
-fn g(v: f32) -> String {
-    format!("{}", (f64::from(v) * G0) as f32)
-}
-fn tesla(v: f32) -> String {
-    format!("{}", (f64::from(v) * TESLA_PER_GAUSS) as f32)
-}
-fn ms(v: u32) -> String {
-    num(f64::from(v) / 1000.0)
 }
 fn hex(v: u16) -> String {
     format!("0x{v:04X}")
@@ -47,172 +32,74 @@ fn hex_bytes(b: &[u8]) -> String {
     b.iter().map(|x| format!("{x:02x}")).collect()
 }
 
+/// How a value in a unit of `nav440_proto` becomes a cell.
+#[derive(Clone, Copy)]
+enum Conv {
+    /// Already SI.
+    Same,
+    /// Multiply by the factor (in `f64`, rounded back to the accessor's precision).
+    Mul(f64),
+    /// Divide by the divisor (in `f64`).
+    Div(f64),
+}
+
+/// `nav440_proto` unit -> (column suffix, conversion to the CSV's SI unit).
+const UNITS: &[(&str, &str, Conv)] = &[
+    ("rad", "rad", Conv::Same),
+    ("rad/s", "rad_s", Conv::Same),
+    ("g", "m_s2", Conv::Mul(G0)),
+    ("gauss", "t", Conv::Mul(TESLA_PER_GAUSS)),
+    ("degC", "degc", Conv::Same),
+    ("m/s", "m_s", Conv::Same),
+    ("m", "m", Conv::Same),
+    ("ms", "s", Conv::Div(1000.0)),
+];
+
+/// Field names whose column is named differently: A0/A1 magnetic yaw and A2/N0/N1 true yaw
+/// share the `yaw_rad` column with B1's yaw.
+const RENAMED: &[(&str, &str)] = &[("yaw_mag", "yaw"), ("yaw_true", "yaw")];
+
+/// The (column, value) of one field: `<name>_<SI unit>` in SI units, status words as hex,
+/// other integers in decimal.
+fn field_column(f: &Field) -> (String, String) {
+    let name = RENAMED
+        .iter()
+        .find(|(from, _)| *from == f.name)
+        .map_or(f.name, |(_, to)| to);
+    let Some(q) = f.si else {
+        let cell = if f.flags {
+            // Status words are u16; wider ones (none today) keep all their digits.
+            u16::try_from(f.raw).map_or_else(|_| format!("0x{:04X}", f.raw), hex)
+        } else {
+            f.raw.to_string()
+        };
+        return (name.to_string(), cell);
+    };
+    let (suffix, conv) = UNITS
+        .iter()
+        .find(|(u, _, _)| *u == q.unit)
+        .map_or((q.unit, Conv::Same), |&(_, s, c)| (s, c));
+    let apply = |v: f64| match conv {
+        Conv::Same => v,
+        Conv::Mul(k) => v * k,
+        Conv::Div(k) => v / k,
+    };
+    let cell = match q.value {
+        SiValue::F32(v) => format!("{}", apply(f64::from(v)) as f32),
+        SiValue::F64(v) => num(apply(v)),
+    };
+    let suffix = suffix.replace('/', "_").to_ascii_lowercase();
+    (format!("{name}_{suffix}"), cell)
+}
+
 /// The (column, value) pairs of one decoded packet.
 pub fn packet_columns(p: &Packet<'_>) -> Cols {
+    let text = |name: &str, value: String| vec![(name.to_string(), value)];
     match p {
-        Packet::S0(p) => cols!(
-            "accel_x_m_s2" => g(p.accel_x_g()),
-            "accel_y_m_s2" => g(p.accel_y_g()),
-            "accel_z_m_s2" => g(p.accel_z_g()),
-            "rate_x_rad_s" => fl(p.rate_x_rad_s()),
-            "rate_y_rad_s" => fl(p.rate_y_rad_s()),
-            "rate_z_rad_s" => fl(p.rate_z_rad_s()),
-            "mag_x_t" => tesla(p.mag_x_gauss()),
-            "mag_y_t" => tesla(p.mag_y_gauss()),
-            "mag_z_t" => tesla(p.mag_z_gauss()),
-            "rate_temp_x_degc" => fl(p.rate_temp_x_degc()),
-            "rate_temp_y_degc" => fl(p.rate_temp_y_degc()),
-            "rate_temp_z_degc" => fl(p.rate_temp_z_degc()),
-            "board_temp_degc" => fl(p.board_temp_degc()),
-            "gps_itow_s" => ms(u32::from(p.gps_itow())),
-            "bit" => hex(p.bit()),
-        ),
-        Packet::S1(p) => cols!(
-            "accel_x_m_s2" => g(p.accel_x_g()),
-            "accel_y_m_s2" => g(p.accel_y_g()),
-            "accel_z_m_s2" => g(p.accel_z_g()),
-            "rate_x_rad_s" => fl(p.rate_x_rad_s()),
-            "rate_y_rad_s" => fl(p.rate_y_rad_s()),
-            "rate_z_rad_s" => fl(p.rate_z_rad_s()),
-            "rate_temp_x_degc" => fl(p.rate_temp_x_degc()),
-            "rate_temp_y_degc" => fl(p.rate_temp_y_degc()),
-            "rate_temp_z_degc" => fl(p.rate_temp_z_degc()),
-            "board_temp_degc" => fl(p.board_temp_degc()),
-            "counter" => p.counter().to_string(),
-            "bit" => hex(p.bit()),
-        ),
-        Packet::S2(p) => cols!(
-            "delta_vel_x_m_s" => fl(p.delta_vel_x_m_s()),
-            "delta_vel_y_m_s" => fl(p.delta_vel_y_m_s()),
-            "delta_vel_z_m_s" => fl(p.delta_vel_z_m_s()),
-            "delta_angle_x_rad" => fl(p.delta_angle_x_rad()),
-            "delta_angle_y_rad" => fl(p.delta_angle_y_rad()),
-            "delta_angle_z_rad" => fl(p.delta_angle_z_rad()),
-            "counter" => p.counter().to_string(),
-            "bit" => hex(p.bit()),
-        ),
-        Packet::A0(p) => cols!(
-            "roll_rad" => fl(p.roll_rad()),
-            "pitch_rad" => fl(p.pitch_rad()),
-            "yaw_rad" => fl(p.yaw_mag_rad()),
-            "rate_x_rad_s" => fl(p.rate_x_rad_s()),
-            "rate_y_rad_s" => fl(p.rate_y_rad_s()),
-            "rate_z_rad_s" => fl(p.rate_z_rad_s()),
-            "accel_x_m_s2" => g(p.accel_x_g()),
-            "accel_y_m_s2" => g(p.accel_y_g()),
-            "accel_z_m_s2" => g(p.accel_z_g()),
-            "mag_x_t" => tesla(p.mag_x_gauss()),
-            "mag_y_t" => tesla(p.mag_y_gauss()),
-            "mag_z_t" => tesla(p.mag_z_gauss()),
-            "x_rate_temp_degc" => fl(p.x_rate_temp_degc()),
-            "gps_itow_s" => ms(u32::from(p.gps_itow())),
-            "bit" => hex(p.bit()),
-        ),
-        Packet::A1(p) => cols!(
-            "roll_rad" => fl(p.roll_rad()),
-            "pitch_rad" => fl(p.pitch_rad()),
-            "yaw_rad" => fl(p.yaw_mag_rad()),
-            "rate_x_rad_s" => fl(p.rate_x_rad_s()),
-            "rate_y_rad_s" => fl(p.rate_y_rad_s()),
-            "rate_z_rad_s" => fl(p.rate_z_rad_s()),
-            "accel_x_m_s2" => g(p.accel_x_g()),
-            "accel_y_m_s2" => g(p.accel_y_g()),
-            "accel_z_m_s2" => g(p.accel_z_g()),
-            "mag_x_t" => tesla(p.mag_x_gauss()),
-            "mag_y_t" => tesla(p.mag_y_gauss()),
-            "mag_z_t" => tesla(p.mag_z_gauss()),
-            "x_rate_temp_degc" => fl(p.x_rate_temp_degc()),
-            "time_itow_s" => ms(p.time_itow()),
-            "bit" => hex(p.bit()),
-        ),
-        Packet::A2(p) => cols!(
-            "roll_rad" => fl(p.roll_rad()),
-            "pitch_rad" => fl(p.pitch_rad()),
-            "yaw_rad" => fl(p.yaw_true_rad()),
-            "rate_x_rad_s" => fl(p.rate_x_rad_s()),
-            "rate_y_rad_s" => fl(p.rate_y_rad_s()),
-            "rate_z_rad_s" => fl(p.rate_z_rad_s()),
-            "accel_x_m_s2" => g(p.accel_x_g()),
-            "accel_y_m_s2" => g(p.accel_y_g()),
-            "accel_z_m_s2" => g(p.accel_z_g()),
-            "rate_temp_x_degc" => fl(p.rate_temp_x_degc()),
-            "rate_temp_y_degc" => fl(p.rate_temp_y_degc()),
-            "rate_temp_z_degc" => fl(p.rate_temp_z_degc()),
-            "time_itow_s" => ms(p.time_itow()),
-            "bit" => hex(p.bit()),
-        ),
-        Packet::N0(p) => cols!(
-            "roll_rad" => fl(p.roll_rad()),
-            "pitch_rad" => fl(p.pitch_rad()),
-            "yaw_rad" => fl(p.yaw_true_rad()),
-            "rate_x_rad_s" => fl(p.rate_x_rad_s()),
-            "rate_y_rad_s" => fl(p.rate_y_rad_s()),
-            "rate_z_rad_s" => fl(p.rate_z_rad_s()),
-            "vel_n_m_s" => fl(p.vel_n_m_s()),
-            "vel_e_m_s" => fl(p.vel_e_m_s()),
-            "vel_d_m_s" => fl(p.vel_d_m_s()),
-            "longitude_rad" => num(p.longitude_rad()),
-            "latitude_rad" => num(p.latitude_rad()),
-            "altitude_m" => fl(p.altitude_m()),
-            "gps_itow_s" => ms(u32::from(p.gps_itow())),
-            "bit" => hex(p.bit()),
-        ),
-        Packet::N1(p) => cols!(
-            "roll_rad" => fl(p.roll_rad()),
-            "pitch_rad" => fl(p.pitch_rad()),
-            "yaw_rad" => fl(p.yaw_true_rad()),
-            "rate_x_rad_s" => fl(p.rate_x_rad_s()),
-            "rate_y_rad_s" => fl(p.rate_y_rad_s()),
-            "rate_z_rad_s" => fl(p.rate_z_rad_s()),
-            "accel_x_m_s2" => g(p.accel_x_g()),
-            "accel_y_m_s2" => g(p.accel_y_g()),
-            "accel_z_m_s2" => g(p.accel_z_g()),
-            "vel_n_m_s" => fl(p.vel_n_m_s()),
-            "vel_e_m_s" => fl(p.vel_e_m_s()),
-            "vel_d_m_s" => fl(p.vel_d_m_s()),
-            "longitude_rad" => num(p.longitude_rad()),
-            "latitude_rad" => num(p.latitude_rad()),
-            "altitude_m" => fl(p.altitude_m()),
-            "x_rate_temp_degc" => fl(p.x_rate_temp_degc()),
-            "time_itow_s" => ms(p.time_itow()),
-            "bit" => hex(p.bit()),
-        ),
-        Packet::B1(p) => cols!(
-            "roll_rad" => fl(p.roll_rad()),
-            "pitch_rad" => fl(p.pitch_rad()),
-            "yaw_rad" => fl(p.yaw_rad()),
-            "rate_z_rad_s" => fl(p.rate_z_rad_s()),
-            "accel_x_m_s2" => g(p.accel_x_g()),
-            "accel_y_m_s2" => g(p.accel_y_g()),
-            "time_itow_s" => ms(p.time_itow()),
-            "bit" => hex(p.bit()),
-        ),
-        Packet::T0(p) => {
-            let f = p.fields();
-            vec![
-                ("bit", hex(f.bit)),
-                ("hardware_bit", hex(f.hardware_bit)),
-                ("hardware_power_bit", hex(f.hardware_power_bit)),
-                (
-                    "hardware_environmental_bit",
-                    hex(f.hardware_environmental_bit),
-                ),
-                ("com_bit", hex(f.com_bit)),
-                ("com_serial_a_bit", hex(f.com_serial_a_bit)),
-                ("com_serial_b_bit", hex(f.com_serial_b_bit)),
-                ("software_bit", hex(f.software_bit)),
-                ("software_algorithm_bit", hex(f.software_algorithm_bit)),
-                ("software_data_bit", hex(f.software_data_bit)),
-                ("hardware_status", hex(f.hardware_status)),
-                ("com_status", hex(f.com_status)),
-                ("software_status", hex(f.software_status)),
-                ("sensor_status", hex(f.sensor_status)),
-            ]
-        }
         Packet::Id(p) => vec![
-            ("serial", p.serial().to_string()),
+            ("serial".to_string(), p.serial().to_string()),
             (
-                "model",
+                "model".to_string(),
                 p.model_str()
                     .unwrap_or("")
                     .replace([',', '"', '\n', '\r'], " "),
@@ -220,35 +107,38 @@ pub fn packet_columns(p: &Packet<'_>) -> Cols {
         ],
         Packet::Vr(p) => {
             let f = p.fields();
-            vec![(
+            text(
                 "version",
                 format!(
                     "{}.{}.{}-{}+{}",
                     f.major, f.minor, f.patch, f.stage, f.build
                 ),
-            )]
+            )
         }
-        Packet::Nak(p) => vec![("failed_type", p.failed_type().name().to_string())],
-        Packet::GetPacket(t) => vec![("requested_type", t.name().to_string())],
-        Packet::Echo(b) => vec![("payload_hex", hex_bytes(b))],
-        Packet::SetFields(ids) | Packet::WriteFields(ids) => {
-            vec![(
-                "field_ids",
-                ids.iter()
-                    .map(|id| format!("0x{:04X}", id.0))
-                    .collect::<Vec<_>>()
-                    .join(" "),
-            )]
-        }
-        Packet::GetFields(v) | Packet::ReadFields(v) => vec![(
+        Packet::Nak(p) => text("failed_type", p.failed_type().name().to_string()),
+        Packet::GetPacket(t) => text("requested_type", t.name().to_string()),
+        Packet::Echo(b) => text("payload_hex", hex_bytes(b)),
+        Packet::SetFields(ids) | Packet::WriteFields(ids) => text(
+            "field_ids",
+            ids.iter()
+                .map(|id| format!("0x{:04X}", id.0))
+                .collect::<Vec<_>>()
+                .join(" "),
+        ),
+        Packet::GetFields(v) | Packet::ReadFields(v) => text(
             "field_values",
             v.iter()
                 .map(|(id, x)| format!("0x{:04X}=0x{x:04X}", id.0))
                 .collect::<Vec<_>>()
                 .join(" "),
-        )],
-        Packet::Unknown(f) => vec![("payload_hex", hex_bytes(f.payload))],
-        _ => Vec::new(),
+        ),
+        Packet::Unknown(f) => text("payload_hex", hex_bytes(f.payload)),
+        // The fixed-layout output packets (S0..T0): every field from the protocol crate.
+        _ => {
+            let mut cols = Vec::new();
+            p.for_each_field(|f| cols.push(field_column(&f)));
+            cols
+        }
     }
 }
 
@@ -271,7 +161,7 @@ pub fn decode_csv(bytes: &[u8], only: Option<&str>) -> Result<String> {
         }
         let cols = match Packet::decode(f) {
             Ok(p) => packet_columns(&p),
-            Err(_) => vec![("payload_hex", hex_bytes(f.payload))],
+            Err(_) => vec![("payload_hex".to_string(), hex_bytes(f.payload))],
         };
         rows.push((i, name, cols));
     });
@@ -280,10 +170,10 @@ pub fn decode_csv(bytes: &[u8], only: Option<&str>) -> Result<String> {
             "no NAV440 frame found (not a NAV440 capture?)".into(),
         ));
     }
-    let mut header: Vec<&'static str> = Vec::new();
+    let mut header: Vec<&str> = Vec::new();
     for (_, _, cols) in &rows {
         for (n, _) in cols {
-            if !header.contains(n) {
+            if !header.contains(&n.as_str()) {
                 header.push(n);
             }
         }
@@ -294,8 +184,8 @@ pub fn decode_csv(bytes: &[u8], only: Option<&str>) -> Result<String> {
         out.push_str(h);
     }
     out.push('\n');
-    for (i, name, cols) in rows {
-        out.push_str(&format!("{i},{}", csv_cell(&name)));
+    for (i, name, cols) in &rows {
+        out.push_str(&format!("{i},{}", csv_cell(name)));
         for h in &header {
             out.push(',');
             if let Some((_, v)) = cols.iter().find(|(n, _)| n == h) {

@@ -153,13 +153,100 @@ impl Bit {
     }
 }
 
+/// One field of a fixed-layout packet, as yielded by the views' `for_each_field` and
+/// [`Packet::for_each_field`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Field {
+    /// The field's name, as in the view's raw accessor and the `*Fields` struct (e.g. `"roll"`,
+    /// `"yaw_true"`, `"time_itow"`, `"bit"`).
+    pub name: &'static str,
+    /// The wire integer, sign- or zero-extended (e.g. `0x071C` = 1820 for a roll of 10 deg).
+    pub raw: i64,
+    /// The physical value and its unit, when the field has one: the view's first scaled
+    /// accessor (`roll_rad`: 0.1745 `"rad"`), or the raw integer itself for a field whose
+    /// LSB is a unit (timeITOW / GPSITOW: `"ms"`). `None` for counters, codes and status
+    /// words.
+    pub si: Option<Quantity>,
+    /// True for bit-field status words (BIT and the T0 words), best shown in hex.
+    pub flags: bool,
+}
+
+/// A physical value and its unit.
+///
+/// Units, per quantity: angles `"rad"`, angular rates `"rad/s"`, accelerations `"g"`
+/// (standard gravity, 9.80665 m/s^2), magnetic field `"gauss"` (1e-4 T), temperatures
+/// `"degC"`, velocities and delta velocities `"m/s"`, altitude `"m"`, time of week `"ms"`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Quantity {
+    /// The value, in the precision of the view's accessor.
+    pub value: SiValue,
+    /// The unit of `value` (see [`Quantity`]).
+    pub unit: &'static str,
+}
+
+/// A physical value in the precision its accessor returns: `f32`, or `f64` for latitude,
+/// longitude and time of week.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SiValue {
+    /// An `f32` accessor's value.
+    F32(f32),
+    /// An `f64` value (latitude, longitude, time of week).
+    F64(f64),
+}
+
+impl SiValue {
+    /// The value as `f64` (exact for both variants).
+    pub fn to_f64(self) -> f64 {
+        match self {
+            SiValue::F32(v) => f64::from(v),
+            SiValue::F64(v) => v,
+        }
+    }
+}
+
+impl From<f32> for SiValue {
+    fn from(v: f32) -> Self {
+        SiValue::F32(v)
+    }
+}
+
+impl From<f64> for SiValue {
+    fn from(v: f64) -> Self {
+        SiValue::F64(v)
+    }
+}
+
+/// Table of a fixed-layout packet; each field line is
+/// `name: type ["raw unit"]? = offset (as flags)? (=> si_accessor -> type ["unit"] scale
+/// (=> other_accessor -> type ["unit"] scale)?)? ;` where the first accessor is the one
+/// `for_each_field` reports.
 macro_rules! fixed_packet {
+    (@quantity $s:ident, $f:ident, [], [$si:ident $unit:literal]) => {
+        Some(Quantity { value: SiValue::from($s.$si()), unit: $unit })
+    };
+    (@quantity $s:ident, $f:ident, [$runit:literal], []) => {
+        Some(Quantity { value: SiValue::F64(f64::from($s.$f())), unit: $runit })
+    };
+    (@quantity $s:ident, $f:ident, [], []) => {
+        None
+    };
+    (@flags) => {
+        false
+    };
+    (@flags flags) => {
+        true
+    };
     (
         $(#[$vm:meta])*
         $view:ident, $fields:ident, $ptype:ident, $len:literal {
             $(
                 $(#[$fm:meta])*
-                $f:ident : $t:ty = $off:literal $( => $si:ident -> $rt:ty [$unit:literal] $scale:expr )* ;
+                $f:ident : $t:ty $([$runit:literal])? = $off:literal $(as $kind:ident)?
+                $( => $si:ident -> $rt:ty [$unit:literal] $scale:expr
+                   $( => $si2:ident -> $rt2:ty [$unit2:literal] $scale2:expr )? )? ;
             )*
         }
     ) => {
@@ -210,8 +297,29 @@ macro_rules! fixed_packet {
                     pub fn $si(&self) -> $rt {
                         self.$f() as $rt * $scale
                     }
-                )*
+                    $(
+                        #[doc = concat!("`", stringify!($f), "` in ", $unit2, ".")]
+                        #[inline]
+                        pub fn $si2(&self) -> $rt2 {
+                            self.$f() as $rt2 * $scale2
+                        }
+                    )?
+                )?
             )*
+
+            /// Calls `f` with every field in payload order: its name, its raw wire integer,
+            /// its physical value and unit where it has one (see [`Field`] and [`Quantity`]
+            /// for the units) and whether it is a status word. No allocation, no panic.
+            pub fn for_each_field(&self, mut f: impl FnMut(Field)) {
+                $(
+                    f(Field {
+                        name: stringify!($f),
+                        raw: i64::from(self.$f()),
+                        si: fixed_packet!(@quantity self, $f, [$($runit)?], [$($si $unit)?]),
+                        flags: fixed_packet!(@flags $($kind)?),
+                    });
+                )*
+            }
         }
 
         #[doc = concat!("Raw fields of a `", stringify!($ptype), "` packet (wire integers; see [`", stringify!($view), "`] for units).")]
@@ -289,9 +397,9 @@ fixed_packet! {
         /// Board temperature, raw (200/2^16 degC per LSB).
         board_temp: i16 = 24 => board_temp_degc -> f32 ["degC"] scale::TEMP_DEGC;
         /// GPSITOW: low 16 bits of the GPS time of week, ms (wraps every 65.536 s).
-        gps_itow: u16 = 26;
+        gps_itow: u16 ["ms"] = 26;
         /// BIT status word (see [`Bit`]).
-        bit: u16 = 28;
+        bit: u16 = 28 as flags;
     }
 }
 
@@ -321,7 +429,7 @@ fixed_packet! {
         /// Sample counter (wraps at 2^16).
         counter: u16 = 20;
         /// BIT status word (see [`Bit`]).
-        bit: u16 = 22;
+        bit: u16 = 22 as flags;
     }
 }
 
@@ -343,7 +451,7 @@ fixed_packet! {
         /// Sample counter (wraps at 2^16).
         counter: u16 = 24;
         /// BIT status word (see [`Bit`]).
-        bit: u16 = 26;
+        bit: u16 = 26 as flags;
     }
 }
 
@@ -377,9 +485,9 @@ fixed_packet! {
         /// X rate-sensor temperature, raw (200/2^16 degC per LSB).
         x_rate_temp: i16 = 24 => x_rate_temp_degc -> f32 ["degC"] scale::TEMP_DEGC;
         /// GPSITOW: low 16 bits of the GPS time of week, ms (wraps every 65.536 s).
-        gps_itow: u16 = 26;
+        gps_itow: u16 ["ms"] = 26;
         /// BIT status word (see [`Bit`]).
-        bit: u16 = 28;
+        bit: u16 = 28 as flags;
     }
 }
 
@@ -413,9 +521,9 @@ fixed_packet! {
         /// X rate-sensor temperature, raw (200/2^16 degC per LSB).
         x_rate_temp: i16 = 24 => x_rate_temp_degc -> f32 ["degC"] scale::TEMP_DEGC;
         /// timeITOW: GPS time of week, ms (wraps at 604 800 000 ms).
-        time_itow: u32 = 26;
+        time_itow: u32 ["ms"] = 26;
         /// BIT status word (see [`Bit`]).
-        bit: u16 = 30;
+        bit: u16 = 30 as flags;
     }
 }
 
@@ -447,9 +555,9 @@ fixed_packet! {
         /// Z rate-sensor temperature, raw (200/2^16 degC per LSB).
         rate_temp_z: i16 = 22 => rate_temp_z_degc -> f32 ["degC"] scale::TEMP_DEGC;
         /// timeITOW: GPS time of week, ms (wraps at 604 800 000 ms).
-        time_itow: u32 = 24;
+        time_itow: u32 ["ms"] = 24;
         /// BIT status word (see [`Bit`]).
-        bit: u16 = 28;
+        bit: u16 = 28 as flags;
     }
 }
 
@@ -481,9 +589,9 @@ fixed_packet! {
         /// Altitude, raw (0.25 m per LSB, read as plain i16).
         altitude: i16 = 26 => altitude_m -> f32 ["m"] scale::ALT_M;
         /// GPSITOW: low 16 bits of the GPS time of week, ms (wraps every 65.536 s).
-        gps_itow: u16 = 28;
+        gps_itow: u16 ["ms"] = 28;
         /// BIT status word (see [`Bit`]).
-        bit: u16 = 30;
+        bit: u16 = 30 as flags;
     }
 }
 
@@ -523,9 +631,9 @@ fixed_packet! {
         /// X rate-sensor temperature, raw (200/2^16 degC per LSB).
         x_rate_temp: i16 = 34 => x_rate_temp_degc -> f32 ["degC"] scale::TEMP_DEGC;
         /// timeITOW: GPS time of week, ms (wraps at 604 800 000 ms).
-        time_itow: u32 = 36;
+        time_itow: u32 ["ms"] = 36;
         /// BIT status word (see [`Bit`]).
-        bit: u16 = 40;
+        bit: u16 = 40 as flags;
     }
 }
 
@@ -545,9 +653,9 @@ fixed_packet! {
         /// Y acceleration, raw (20/2^16 g per LSB).
         accel_y: i16 = 10 => accel_y_g -> f32 ["g"] scale::ACCEL_G;
         /// timeITOW: GPS time of week, ms (wraps at 604 800 000 ms).
-        time_itow: u32 = 12;
+        time_itow: u32 ["ms"] = 12;
         /// BIT status word (see [`Bit`]).
-        bit: u16 = 16;
+        bit: u16 = 16 as flags;
     }
 }
 
@@ -555,33 +663,33 @@ fixed_packet! {
     /// T0: built-in-test detail, 14 status words (28-byte payload).
     T0, T0Fields, T0, 28 {
         /// BITstatus (same layout as [`Bit`]).
-        bit: u16 = 0;
+        bit: u16 = 0 as flags;
         /// hardwareBIT.
-        hardware_bit: u16 = 2;
+        hardware_bit: u16 = 2 as flags;
         /// hardwarePowerBIT.
-        hardware_power_bit: u16 = 4;
+        hardware_power_bit: u16 = 4 as flags;
         /// hardwareEnvironmentalBIT.
-        hardware_environmental_bit: u16 = 6;
+        hardware_environmental_bit: u16 = 6 as flags;
         /// comBIT.
-        com_bit: u16 = 8;
+        com_bit: u16 = 8 as flags;
         /// comSerialABIT.
-        com_serial_a_bit: u16 = 10;
+        com_serial_a_bit: u16 = 10 as flags;
         /// comSerialBBIT.
-        com_serial_b_bit: u16 = 12;
+        com_serial_b_bit: u16 = 12 as flags;
         /// softwareBIT.
-        software_bit: u16 = 14;
+        software_bit: u16 = 14 as flags;
         /// softwareAlgorithmBIT.
-        software_algorithm_bit: u16 = 16;
+        software_algorithm_bit: u16 = 16 as flags;
         /// softwareDataBIT.
-        software_data_bit: u16 = 18;
+        software_data_bit: u16 = 18 as flags;
         /// hardwareStatus.
-        hardware_status: u16 = 20;
+        hardware_status: u16 = 20 as flags;
         /// comStatus.
-        com_status: u16 = 22;
+        com_status: u16 = 22 as flags;
         /// softwareStatus.
-        software_status: u16 = 24;
+        software_status: u16 = 24 as flags;
         /// sensorStatus.
-        sensor_status: u16 = 26;
+        sensor_status: u16 = 26 as flags;
     }
 }
 
@@ -996,6 +1104,55 @@ impl<'a> Packet<'a> {
             Packet::T0(p) => p.bit_flags(),
             _ => return None,
         })
+    }
+
+    /// Calls `f` with every field of a fixed-layout packet (S0, S1, S2, A0, A1, A2, N0, N1,
+    /// B1, T0, VR, NAK) in payload order: name, raw wire integer, physical value and unit
+    /// (rad, rad/s, g, gauss, degC, m/s, m, ms; see [`Quantity`]) and whether it is a status
+    /// word. Packets without a fixed layout (ID, PK, CH, GP, AR, SR, SF, WF, GF, RF and
+    /// unknown types) have no such fields: `f` is not called. No allocation, no panic.
+    ///
+    /// ```
+    /// use nav440_proto::{A2Fields, Frame, Packet, PacketType, SiValue};
+    ///
+    /// let payload = A2Fields { roll: 0x071C, time_itow: 123_456, ..Default::default() }.payload();
+    /// let p = Packet::decode(Frame { packet_type: PacketType::A2, payload: &payload }).unwrap();
+    /// let mut roll = None;
+    /// p.for_each_field(|f| {
+    ///     if f.name == "roll" {
+    ///         roll = f.si.map(|q| (f.raw, q.value.to_f64(), q.unit));
+    ///     }
+    /// });
+    /// let (raw, rad, unit) = roll.unwrap();
+    /// assert_eq!((raw, unit), (0x071C, "rad"));
+    /// assert!((rad - 10f64.to_radians()).abs() < 1e-4);
+    /// ```
+    pub fn for_each_field(&self, f: impl FnMut(Field)) {
+        match self {
+            Packet::S0(p) => p.for_each_field(f),
+            Packet::S1(p) => p.for_each_field(f),
+            Packet::S2(p) => p.for_each_field(f),
+            Packet::A0(p) => p.for_each_field(f),
+            Packet::A1(p) => p.for_each_field(f),
+            Packet::A2(p) => p.for_each_field(f),
+            Packet::N0(p) => p.for_each_field(f),
+            Packet::N1(p) => p.for_each_field(f),
+            Packet::B1(p) => p.for_each_field(f),
+            Packet::T0(p) => p.for_each_field(f),
+            Packet::Vr(p) => p.for_each_field(f),
+            Packet::Nak(p) => p.for_each_field(f),
+            Packet::Id(_)
+            | Packet::Ping
+            | Packet::Echo(_)
+            | Packet::GetPacket(_)
+            | Packet::AlgorithmReset
+            | Packet::SoftwareReset
+            | Packet::SetFields(_)
+            | Packet::WriteFields(_)
+            | Packet::GetFields(_)
+            | Packet::ReadFields(_)
+            | Packet::Unknown(_) => {}
+        }
     }
 
     /// Time, yaw and body z rate of packets that carry yaw (A0, A1, A2, N0, N1, B1).

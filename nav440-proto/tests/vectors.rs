@@ -337,3 +337,189 @@ fn unknown_lowercase_type_passes_through_raw() {
     assert_eq!(pr.stats().count(PacketType::A2), 1);
     assert_eq!(pr.stats().frames, 2);
 }
+
+/// One visited field: (name, raw, (SI value, unit), flags).
+type Visited = (&'static str, i64, Option<(f64, &'static str)>, bool);
+/// One expected field: (name, raw, (SI value, tolerance, unit), flags).
+type Expected<'a> = (&'a str, i64, Option<(f64, f64, &'a str)>, bool);
+
+/// Every field the visitor yields for one packet.
+fn visit(p: &Packet<'_>) -> Vec<Visited> {
+    let mut out = Vec::new();
+    p.for_each_field(|f| {
+        out.push((
+            f.name,
+            f.raw,
+            f.si.map(|q| (q.value.to_f64(), q.unit)),
+            f.flags,
+        ))
+    });
+    out
+}
+
+fn decode_one(v: &[u8]) -> (PacketType, Vec<u8>) {
+    let f = frames(v);
+    assert_eq!(f.len(), 1);
+    f.into_iter().next().unwrap()
+}
+
+/// Checks the visited fields against the expected ones, each SI value within its tolerance.
+fn check_fields(got: &[Visited], want: &[Expected<'_>]) {
+    assert_eq!(got.len(), want.len(), "{got:?}");
+    for (g, w) in got.iter().zip(want) {
+        assert_eq!((g.0, g.1, g.3), (w.0, w.1, w.3), "{g:?} vs {w:?}");
+        match (g.2, w.2) {
+            (None, None) => {}
+            (Some((v, u)), Some((want_v, tol, want_u))) => {
+                assert_eq!(u, want_u, "{}", g.0);
+                assert!((v - want_v).abs() <= tol, "{}: {v} vs {want_v}", g.0);
+            }
+            _ => panic!("{g:?} vs {w:?}"),
+        }
+    }
+}
+
+#[test]
+fn field_visitor_yields_the_synthetic_a2_values() {
+    let (t, payload) = decode_one(&hex(SYNTH_A2));
+    let p = Packet::decode(Frame {
+        packet_type: t,
+        payload: &payload,
+    })
+    .unwrap();
+    // One LSB of each quantity: the document's values are rounded to the nearest LSB.
+    let rad = 2.0 * core::f64::consts::PI / 65536.0;
+    let rad_s = 7.0 * core::f64::consts::PI / 65536.0;
+    let g = 20.0 / 65536.0;
+    let degc = 200.0 / 65536.0;
+    let d = f64::to_radians;
+    check_fields(
+        &visit(&p),
+        &[
+            ("roll", 0x071C, Some((d(10.0), rad, "rad")), false),
+            ("pitch", -0x038E, Some((d(-5.0), rad, "rad")), false),
+            ("yaw_true", 0x4000, Some((d(90.0), rad, "rad")), false),
+            ("rate_x", 0x34, Some((d(1.0), rad_s, "rad/s")), false),
+            ("rate_y", 0x68, Some((d(2.0), rad_s, "rad/s")), false),
+            ("rate_z", 0x9C, Some((d(3.0), rad_s, "rad/s")), false),
+            ("accel_x", 0, Some((0.0, g, "g")), false),
+            ("accel_y", 0, Some((0.0, g, "g")), false),
+            ("accel_z", 0x0CCD, Some((1.0, g, "g")), false),
+            ("rate_temp_x", 0x2000, Some((25.0, degc, "degC")), false),
+            ("rate_temp_y", 0x2000, Some((25.0, degc, "degC")), false),
+            ("rate_temp_z", 0x2000, Some((25.0, degc, "degC")), false),
+            ("time_itow", 123_456, Some((123_456.0, 0.0, "ms")), false),
+            ("bit", 0, None, true),
+        ],
+    );
+    // The SI values are exactly the view's accessors.
+    let Packet::A2(a) = p else { panic!("{p:?}") };
+    let mut yaw = None;
+    a.for_each_field(|f| {
+        if f.name == "yaw_true" {
+            yaw = f.si;
+        }
+    });
+    assert_eq!(
+        yaw,
+        Some(Quantity {
+            value: SiValue::F32(a.yaw_true_rad()),
+            unit: "rad"
+        })
+    );
+}
+
+#[test]
+fn field_visitor_yields_the_real_s1_values() {
+    let v = hex("55 55 53 31 18 ff e0 00 16 0c c0 ff fe ff f9 ff ff 27 eb 27 eb 27 eb 27 f7 28 f5 00 02 23 bc");
+    let (t, payload) = decode_one(&v);
+    let p = Packet::decode(Frame {
+        packet_type: t,
+        payload: &payload,
+    })
+    .unwrap();
+    // The document's values, to its printed precision (rates printed in deg/s).
+    let dps = |x: f64| x.to_radians();
+    check_fields(
+        &visit(&p),
+        &[
+            ("accel_x", -32, Some((-0.00977, 0.5e-5, "g")), false),
+            ("accel_y", 22, Some((0.00671, 0.5e-5, "g")), false),
+            ("accel_z", 3264, Some((0.99609, 0.5e-5, "g")), false),
+            (
+                "rate_x",
+                -2,
+                Some((dps(-0.0385), dps(0.5e-4), "rad/s")),
+                false,
+            ),
+            (
+                "rate_y",
+                -7,
+                Some((dps(-0.1346), dps(0.5e-4), "rad/s")),
+                false,
+            ),
+            (
+                "rate_z",
+                -1,
+                Some((dps(-0.0192), dps(0.5e-4), "rad/s")),
+                false,
+            ),
+            ("rate_temp_x", 0x27EB, Some((31.19, 0.005, "degC")), false),
+            ("rate_temp_y", 0x27EB, Some((31.19, 0.005, "degC")), false),
+            ("rate_temp_z", 0x27EB, Some((31.19, 0.005, "degC")), false),
+            ("board_temp", 0x27F7, Some((31.22, 0.005, "degC")), false),
+            ("counter", 10485, None, false),
+            ("bit", 0x0002, None, true),
+        ],
+    );
+}
+
+#[test]
+fn field_visitor_covers_fixed_packets_only() {
+    // T0: fourteen status words; NAK: the failed type code; ID and commands: nothing.
+    let t0 = T0Fields {
+        com_status: 0x0400,
+        ..Default::default()
+    }
+    .payload();
+    let p = Packet::decode(Frame {
+        packet_type: PacketType::T0,
+        payload: &t0,
+    })
+    .unwrap();
+    let fields = visit(&p);
+    assert_eq!(fields.len(), 14);
+    assert!(fields.iter().all(|f| f.2.is_none() && f.3));
+    assert_eq!(fields[11], ("com_status", 0x0400, None, true));
+    let nak = NakFields::for_request(PacketType::SF).payload();
+    let p = Packet::decode(Frame {
+        packet_type: PacketType::NAK,
+        payload: &nak,
+    })
+    .unwrap();
+    assert_eq!(
+        visit(&p),
+        [("failed_code", i64::from(PacketType::SF.code()), None, false)]
+    );
+    // N1 latitude / longitude are f64.
+    let n1 = N1Fields {
+        latitude: 1 << 28,
+        ..Default::default()
+    }
+    .payload();
+    let p = Packet::decode(Frame {
+        packet_type: PacketType::N1,
+        payload: &n1,
+    })
+    .unwrap();
+    let Packet::N1(n) = p else { panic!("{p:?}") };
+    let mut lat = None;
+    p.for_each_field(|f| {
+        if f.name == "latitude" {
+            lat = f.si;
+        }
+    });
+    assert_eq!(lat.map(|q| q.value), Some(SiValue::F64(n.latitude_rad())));
+    assert!(visit(&Packet::Ping).is_empty());
+    assert!(visit(&Packet::Echo(&[1, 2, 3])).is_empty());
+}
