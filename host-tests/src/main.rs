@@ -104,7 +104,7 @@ enum Cmd {
         /// Seed of the noise.
         #[arg(long, default_value_t = 1)]
         seed: u64,
-        /// Run the fixed-point bank (YawBank<Fx>, as the no-FPU firmware) instead of f32.
+        /// Run the fixed-point (Q31.32) bank, as the no-FPU firmware does, instead of f32.
         #[arg(long)]
         fixed: bool,
         /// Write the CSV here instead of stdout.

@@ -138,6 +138,12 @@ fn ci() -> Result<(), String> {
     }
     cargo(&["test", "--all-targets"])?;
     cargo(&["test", "--doc"])?;
+    // Rustdoc of the host crates: broken intra-doc links and bad HTML fail the build.
+    run_env(
+        &cargo_bin(),
+        &["doc", "--no-deps"],
+        &[("RUSTDOCFLAGS", "-D warnings")],
+    )?;
     firmware::ci_steps()?;
     eprintln!(
         "xtask ci: all checks passed in {:.0} s",
