@@ -4,7 +4,7 @@
 //! argument); 3 input file missing, unreadable or empty; 4 input holds no NAV440 frame (or no
 //! packet carrying yaw); 5 output could not be written. Every error is one line on stderr.
 
-use clap::{Parser, Subcommand, ValueEnum};
+use clap::{Args, Parser, Subcommand, ValueEnum};
 use host_tests::error::{Error, Result};
 use host_tests::{
     corrupt::Corruption, gains, motion::ProfileKind, paper, plots, replay, synth, tune,
@@ -43,7 +43,7 @@ impl From<HoldArg> for estimators::Hold {
 }
 
 /// Options shared by every command that runs the estimator bank.
-#[derive(clap::Args, Debug, Clone)]
+#[derive(Args, Debug, Clone)]
 struct BankArgs {
     /// Sample adapter: linear interpolation or zero-order hold.
     #[arg(long, value_enum, default_value = "linear")]
@@ -58,6 +58,17 @@ struct BankArgs {
     /// yaw interpolated to the step grid (step; our reading of the paper's simulation).
     #[arg(long, value_enum, default_value = "sample")]
     noise_at: NoiseAtArg,
+}
+
+/// Measurement noise added to yaw before estimation (the paper's protocol).
+#[derive(Args, Debug)]
+struct NoiseArgs {
+    /// Add N(0, V) deg^2 noise to yaw before estimation.
+    #[arg(long, value_name = "V")]
+    noise_var: Option<f64>,
+    /// Seed of the noise.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -98,12 +109,8 @@ enum Cmd {
         file: PathBuf,
         #[command(flatten)]
         bank: BankArgs,
-        /// Add N(0, V) deg^2 noise to yaw before estimation.
-        #[arg(long, value_name = "V")]
-        noise_var: Option<f64>,
-        /// Seed of the noise.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
+        #[command(flatten)]
+        noise: NoiseArgs,
         /// Run the fixed-point (Q31.32) bank, as the no-FPU firmware does, instead of f32.
         #[arg(long)]
         fixed: bool,
@@ -162,12 +169,8 @@ enum Cmd {
         output: PathBuf,
         #[command(flatten)]
         bank: BankArgs,
-        /// Add N(0, V) deg^2 noise to yaw before estimation.
-        #[arg(long, value_name = "V")]
-        noise_var: Option<f64>,
-        /// Seed of the noise.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
+        #[command(flatten)]
+        noise: NoiseArgs,
         /// Plot from this time, s.
         #[arg(long)]
         from: Option<f64>,
@@ -360,13 +363,12 @@ fn run(cli: Cli) -> Result<()> {
         Cmd::Estimate {
             file,
             bank,
-            noise_var,
-            seed,
+            noise: n,
             fixed,
             output,
         } => {
             let mut opts = bank_options(&bank)?;
-            opts.noise = noise(noise_var, seed)?;
+            opts.noise = noise(n.noise_var, n.seed)?;
             opts.fixed = fixed;
             let samples = load_samples(&file)?;
             let (rows, rejected) = replay::estimate(&samples, &opts)?;
@@ -425,13 +427,12 @@ fn run(cli: Cli) -> Result<()> {
             file,
             output,
             bank,
-            noise_var,
-            seed,
+            noise: n,
             from,
             to,
         } => {
             let mut opts = bank_options(&bank)?;
-            opts.noise = noise(noise_var, seed)?;
+            opts.noise = noise(n.noise_var, n.seed)?;
             let samples = load_samples(&file)?;
             plots::plot_capture(
                 &samples,
