@@ -239,6 +239,11 @@ impl<T: Real, S: SqrtFn<T>> YawBank<T, S> {
         self.kf_a.reset(y);
     }
 
+    /// Largest accepted `|yaw_deg|`, deg (2778 turns). The bank expects wrapped yaw (+-180 deg)
+    /// but also takes an already unwrapped angle; beyond this bound f32 resolves the angle to
+    /// no better than 0.06 deg, and values near `f32::MAX` would overflow the states.
+    pub const MAX_ABS_YAW_DEG: f32 = 1.0e6;
+
     /// Feeds one sample. `t_us`: sample time in µs (monotonic, e.g. from `ItowClock`);
     /// `yaw_deg`: wrapped yaw in deg (within +-180).
     ///
@@ -247,10 +252,14 @@ impl<T: Real, S: SqrtFn<T>> YawBank<T, S> {
     /// `n = round(dt / h)` steps (see [`crate::SampleAdapter`]).
     ///
     /// Errors (state unchanged): [`SampleError::NotFinite`] for NaN/infinite yaw,
+    /// [`SampleError::OutOfRange`] for `|yaw_deg|` above [`Self::MAX_ABS_YAW_DEG`],
     /// [`SampleError::NonIncreasingTime`] for `t_us` not later than the previous sample.
     pub fn update(&mut self, t_us: u64, yaw_deg: f32) -> Result<BankOutput, SampleError> {
         if !yaw_deg.is_finite() {
             return Err(SampleError::NotFinite);
+        }
+        if !(-Self::MAX_ABS_YAW_DEG..=Self::MAX_ABS_YAW_DEG).contains(&yaw_deg) {
+            return Err(SampleError::OutOfRange);
         }
         let tick = self.clock.tick(t_us)?;
         // The laws run in a local frame whose origin is the unwrapper's current multiple of

@@ -34,6 +34,10 @@ pub enum SampleError {
     NotFinite,
     /// The timestamp is not later than the previous accepted one.
     NonIncreasingTime,
+    /// `|yaw| >` [`crate::YawBank::MAX_ABS_YAW_DEG`] (only the bank checks this): far beyond
+    /// any yaw, wrapped or already unwrapped, that f32 laws still resolve, and a value near
+    /// `f32::MAX` would overflow the f32 states to NaN for good.
+    OutOfRange,
 }
 
 impl core::fmt::Display for ConfigError {
@@ -58,6 +62,7 @@ impl core::fmt::Display for SampleError {
         match self {
             Self::NotFinite => f.write_str("sample is NaN or infinite"),
             Self::NonIncreasingTime => f.write_str("timestamp not later than the previous one"),
+            Self::OutOfRange => f.write_str("|yaw| above YawBank::MAX_ABS_YAW_DEG (1e6 deg)"),
         }
     }
 }

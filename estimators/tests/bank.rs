@@ -206,6 +206,12 @@ fn bad_samples<T: Real>() {
     for y in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
         assert_eq!(bank.update(last_t + 10_000, y), Err(SampleError::NotFinite));
     }
+    for y in [1.0e6 + 64.0, -2.0e6, 3.4e38, -f32::MAX] {
+        assert_eq!(
+            bank.update(last_t + 10_000, y),
+            Err(SampleError::OutOfRange)
+        );
+    }
     assert_eq!(
         bank.update(last_t, 1.0),
         Err(SampleError::NonIncreasingTime)
