@@ -14,23 +14,22 @@ use std::time::{Duration, Instant};
 
 use crc::Table;
 use nav440_proto::{A2Fields, Crc16Table, N1Fields, Parser, S1Fields, MAX_FRAME};
+use rand::rngs::Xoshiro256PlusPlus;
+use rand::{RngExt, SeedableRng};
 
-struct Rng(u64);
+/// Seeded generator (rand's xoshiro256++) with the draws the stream builder needs.
+struct Rng(Xoshiro256PlusPlus);
 impl Rng {
     fn next(&mut self) -> u64 {
-        // xorshift64*
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+        self.0.random()
     }
     fn i16(&mut self) -> i16 {
-        self.next() as i16
+        self.0.random()
     }
 }
 
 fn stream(target: usize, run: u64) -> Vec<u8> {
-    let mut r = Rng(0x9E37_79B9_7F4A_7C15);
+    let mut r = Rng(Xoshiro256PlusPlus::seed_from_u64(0x9E37_79B9_7F4A_7C15));
     let mut out = Vec::with_capacity(target + MAX_FRAME);
     let mut buf = [0u8; MAX_FRAME];
     let mut t = 0u32;
