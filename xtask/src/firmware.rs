@@ -113,19 +113,14 @@ fn bundled_capture() -> Result<PathBuf, String> {
     Ok(out)
 }
 
+/// Cargo arguments that run the host CLI `nav440`; its own arguments follow.
+const NAV440_RUN: &[&str] = &["run", "-q", "-p", "host-tests", "--bin", "nav440", "--"];
+
 /// `nav440 synth ARGS -o OUT` (the host CLI's capture generator).
 fn nav440_synth(out: &Path, args: &[&str]) -> Result<(), String> {
     let out_s = out.display().to_string();
-    let mut all = vec![
-        "run",
-        "-q",
-        "-p",
-        "host-tests",
-        "--bin",
-        "nav440",
-        "--",
-        "synth",
-    ];
+    let mut all = NAV440_RUN.to_vec();
+    all.push("synth");
     all.extend_from_slice(args);
     all.extend(["-o", &out_s]);
     cargo(&all)
@@ -529,17 +524,8 @@ pub fn size() -> Result<(), String> {
 /// `nav440 estimate FILE [extra]` on the host; its CSV.
 fn host_estimate(file: &Path, extra: &[&str]) -> Result<String, String> {
     let f = file.display().to_string();
-    let mut args = vec![
-        "run",
-        "-q",
-        "-p",
-        "host-tests",
-        "--bin",
-        "nav440",
-        "--",
-        "estimate",
-        &f,
-    ];
+    let mut args = NAV440_RUN.to_vec();
+    args.extend(["estimate", &f]);
     args.extend_from_slice(extra);
     eprintln!("+ cargo {}", args.join(" "));
     let o = Command::new(crate::cargo_bin())

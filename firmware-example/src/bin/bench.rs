@@ -56,16 +56,21 @@ fn ram(label: &str, bytes: usize) {
     line("ram", label, bytes as f32, "");
 }
 
-/// Per-sample instructions of `advance` over `SAMPLES` samples of 100 steps each.
-fn per_sample<E: Estimator<Num>>(c: &Counter, overhead: u64, label: &str, mut e: E) {
+/// Per-sample instructions of `advance(estimator, previous sample, new sample)` over
+/// `SAMPLES` samples of 100 steps each, after `WARMUP` samples.
+fn measure_samples<E: Estimator<Num>>(
+    c: &Counter,
+    overhead: u64,
+    label: &str,
+    mut e: E,
+    advance: impl Fn(&mut E, Num, Num) -> Num,
+) {
     let mut total = 0u64;
     let mut prev = Num::from_f32(yaw(0));
     e.reset(prev);
     for k in 1..=(WARMUP + SAMPLES) {
         let y = Num::from_f32(yaw(k));
-        let (n, out) = c.measure(|| {
-            black_box(&mut e).advance(black_box(prev), black_box(y), STEPS, Hold::Linear)
-        });
+        let (n, out) = c.measure(|| advance(black_box(&mut e), black_box(prev), black_box(y)));
         black_box(out);
         if k > WARMUP {
             total += n.saturating_sub(overhead);
@@ -75,30 +80,19 @@ fn per_sample<E: Estimator<Num>>(c: &Counter, overhead: u64, label: &str, mut e:
     line("instr", label, total as f32 / SAMPLES as f32, "sample");
 }
 
+/// Per-sample instructions of `Estimator::advance` (closed form where the law has one).
+fn per_sample<E: Estimator<Num>>(c: &Counter, overhead: u64, label: &str, e: E) {
+    measure_samples(c, overhead, label, e, |e, p, y| {
+        e.advance(p, y, STEPS, Hold::Linear)
+    });
+}
+
 /// Same as [`per_sample`] but always stepping (explicit Euler, the paper's method), even for
 /// laws that have a closed form.
-fn per_sample_stepped<E: Estimator<Num>>(c: &Counter, overhead: u64, label: &str, mut e: E) {
-    let mut total = 0u64;
-    let mut prev = Num::from_f32(yaw(0));
-    e.reset(prev);
-    for k in 1..=(WARMUP + SAMPLES) {
-        let y = Num::from_f32(yaw(k));
-        let (n, out) = c.measure(|| {
-            advance_by_steps(
-                black_box(&mut e),
-                black_box(prev),
-                black_box(y),
-                STEPS,
-                Hold::Linear,
-            )
-        });
-        black_box(out);
-        if k > WARMUP {
-            total += n.saturating_sub(overhead);
-        }
-        prev = y;
-    }
-    line("instr", label, total as f32 / SAMPLES as f32, "sample");
+fn per_sample_stepped<E: Estimator<Num>>(c: &Counter, overhead: u64, label: &str, e: E) {
+    measure_samples(c, overhead, label, e, |e, p, y| {
+        advance_by_steps(e, p, y, STEPS, Hold::Linear)
+    });
 }
 
 /// Square roots executed (counted by [`Counting`]).
