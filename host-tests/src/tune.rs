@@ -89,6 +89,16 @@ impl Problem<'_> {
         total / self.ys.len() as f64
     }
 
+    /// [`Self::eval`] of what `make` builds (velocity half) or, for the acceleration half,
+    /// of two of them in series (both stages with the same gains, as in the bank).
+    fn eval_family<E: Estimator<f32>>(&self, make: impl Fn() -> Option<E>, acc: bool) -> f64 {
+        if acc {
+            self.eval(&|| Some(Series::new(make()?, make()?)), true)
+        } else {
+            self.eval(&make, false)
+        }
+    }
+
     /// Mean over seeds of the MSE of a Kalman tracker (velocity or acceleration output).
     fn eval_kf(&self, cfg: &KalmanConfig, acc: bool) -> f64 {
         let reference = if acc { &self.acc_ref } else { &self.vel_ref };
@@ -183,21 +193,7 @@ fn tune_family(p: &Problem<'_>, start: &FamilyGains, acc: bool) -> FamilyGains {
     let h = p.opts.step_s;
     let mut out = *start;
     if let Some(a) = start.ave {
-        let f = |g: &[f64]| {
-            if acc {
-                p.eval(
-                    &|| {
-                        Some(Series::new(
-                            Ave::<f32>::new(&ave(g), h).ok()?,
-                            Ave::<f32>::new(&ave(g), h).ok()?,
-                        ))
-                    },
-                    true,
-                )
-            } else {
-                p.eval(&|| Ave::<f32>::new(&ave(g), h).ok(), false)
-            }
-        };
+        let f = |g: &[f64]| p.eval_family(|| Ave::<f32>::new(&ave(g), h).ok(), acc);
         let x = coord_search(
             &[f64::from(a.k), f64::from(a.gamma1)],
             &[1e-3, 1e-3],
@@ -213,21 +209,7 @@ fn tune_family(p: &Problem<'_>, start: &FamilyGains, acc: bool) -> FamilyGains {
     let mut tuned = [None; 3];
     for (slot, g0) in tuned.iter_mut().zip(ilos) {
         let Some(g0) = g0 else { continue };
-        let f = |g: &[f64]| {
-            if acc {
-                p.eval(
-                    &|| {
-                        Some(Series::new(
-                            Ilo::<f32, 1>::new(&ilo(g), h).ok()?,
-                            Ilo::<f32, 1>::new(&ilo(g), h).ok()?,
-                        ))
-                    },
-                    true,
-                )
-            } else {
-                p.eval(&|| Ilo::<f32, 1>::new(&ilo(g), h).ok(), false)
-            }
-        };
+        let f = |g: &[f64]| p.eval_family(|| Ilo::<f32, 1>::new(&ilo(g), h).ok(), acc);
         let x = coord_search(
             &[f64::from(g0.k1), f64::from(g0.l), f64::from(g0.k2)],
             &[0.05, 1e-3, 1e-4],
@@ -244,39 +226,13 @@ fn tune_family(p: &Problem<'_>, start: &FamilyGains, acc: bool) -> FamilyGains {
     if let Some(a) = start.ad {
         let f = |g: &[f64]| {
             let t = g[0] as f32;
-            if acc {
-                p.eval(
-                    &|| {
-                        Some(Series::new(
-                            Ad::<f32>::new(t, h).ok()?,
-                            Ad::<f32>::new(t, h).ok()?,
-                        ))
-                    },
-                    true,
-                )
-            } else {
-                p.eval(&|| Ad::<f32>::new(t, h).ok(), false)
-            }
+            p.eval_family(|| Ad::<f32>::new(t, h).ok(), acc)
         };
         let x = coord_search(&[f64::from(a.t)], &[1e-4], &[10.0], &f);
         out.ad = Some(AdGains { t: x[0] as f32 });
     }
     if let Some(e) = start.ed {
-        let f = |g: &[f64]| {
-            if acc {
-                p.eval(
-                    &|| {
-                        Some(Series::new(
-                            Ed::<f32>::new(&ed(g), h).ok()?,
-                            Ed::<f32>::new(&ed(g), h).ok()?,
-                        ))
-                    },
-                    true,
-                )
-            } else {
-                p.eval(&|| Ed::<f32>::new(&ed(g), h).ok(), false)
-            }
-        };
+        let f = |g: &[f64]| p.eval_family(|| Ed::<f32>::new(&ed(g), h).ok(), acc);
         let x = coord_search(
             &[f64::from(e.lambda), f64::from(e.alpha)],
             &[1e-2, 1e-2],
