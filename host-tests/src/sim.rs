@@ -402,15 +402,11 @@ pub fn encode_sample(t: PacketType, s: &RawSample, counter: u16) -> Option<Vec<u
 
 /// Parses a packet type name (`A2`) that the unit can stream.
 pub fn parse_output_type(name: &str) -> Result<PacketType> {
-    let b = name.as_bytes();
-    match b {
-        [a, c] => {
-            let t = PacketType([a.to_ascii_uppercase(), *c]);
-            if t.output_payload_len().is_some() {
-                return Ok(t);
-            }
+    if let [a, c] = name.as_bytes() {
+        let t = PacketType([a.to_ascii_uppercase(), *c]);
+        if t.output_payload_len().is_some() {
+            return Ok(t);
         }
-        _ => {}
     }
     Err(Error::Usage(format!(
         "`{name}` is not a packet type the unit streams (S0, S1, S2, A0, A1, A2, N0, N1, B1, T0)"
