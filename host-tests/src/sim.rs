@@ -94,6 +94,10 @@ pub struct SimArgs {
     /// Give up (exit 1) when the session has not ended after this many seconds (0: never).
     #[arg(long, default_value_t = 0.0, value_name = "S")]
     pub timeout: f64,
+    /// Write the session's summary (JSON: requests, power_up_packets, packets, recorded_bytes,
+    /// completed, resets) here at the end.
+    #[arg(long, value_name = "FILE")]
+    pub summary: Option<PathBuf>,
     /// Log every request and state change on stderr.
     #[arg(long)]
     pub verbose: bool,
@@ -831,6 +835,20 @@ pub fn run(args: &SimArgs) -> Result<Summary> {
             .map_err(|e| Error::Output(format!("cannot write {}: {e}", p.display())))?;
     }
     session.summary.recorded_bytes = session.record.len() as u64;
+    if let Some(p) = &args.summary {
+        let s = &session.summary;
+        let json = serde_json::json!({
+            "requests": s.requests,
+            "power_up_packets": s.power_up_packets,
+            "packets": s.packets,
+            "recorded_bytes": s.recorded_bytes,
+            "completed": s.completed,
+            "resets": s.resets,
+            "error": result.as_ref().err().map(ToString::to_string),
+        });
+        std::fs::write(p, format!("{json}\n"))
+            .map_err(|e| Error::Output(format!("cannot write {}: {e}", p.display())))?;
+    }
     result?;
     Ok(session.summary)
 }

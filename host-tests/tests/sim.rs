@@ -188,10 +188,17 @@ fn count(bytes: &[u8], t: PacketType) -> u64 {
 #[test]
 fn tcp_session_streams_the_capture_after_the_read_back_and_records_exactly_it() {
     let record = tmp("tcp.bin");
+    let summary = tmp("tcp.json");
     let (child, addr) = start_sim(
         "fig5_a2_100hz.bin",
         "tcp:127.0.0.1:0",
-        &["--fast", "--record", record.to_str().unwrap()],
+        &[
+            "--fast",
+            "--record",
+            record.to_str().unwrap(),
+            "--summary",
+            summary.to_str().unwrap(),
+        ],
     );
     let (r, d) = boot_tcp(&addr, Target::DEFAULT);
     let report = r.unwrap();
