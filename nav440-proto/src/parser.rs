@@ -315,15 +315,21 @@ impl<C: Crc16Table> Parser<C> {
         let taken = |input: &[u8]| bytes.len() - input.len();
         // 1. Complete (or reject) the buffered candidate using as few input bytes as needed.
         while self.len > 0 {
-            if input.is_empty() {
-                self.stats.bytes += bytes.len() as u64;
-                return bytes.len();
-            }
-            let need = match self.buf.get(4) {
-                Some(&n) if self.len >= 5 => n as usize + crate::FRAME_OVERHEAD,
+            // A candidate's length is known from its fifth byte. Bytes left behind a stop
+            // (`feed_until`) need not start a candidate: they are scanned at once.
+            let need = match (self.buf.get(..2), self.buf.get(4)) {
+                (Some([PREAMBLE_BYTE, PREAMBLE_BYTE]), Some(&n)) if self.len >= 5 => {
+                    n as usize + crate::FRAME_OVERHEAD
+                }
                 _ => 5,
             };
             let take = need.saturating_sub(self.len).min(input.len());
+            if take == 0 && self.len < need {
+                // No input left for an incomplete candidate. (Complete frames left behind a
+                // stop are scanned even by an empty call.)
+                self.stats.bytes += bytes.len() as u64;
+                return bytes.len();
+            }
             let (head, tail) = input.split_at(take);
             if let Some(dst) = self.buf.get_mut(self.len..self.len + take) {
                 dst.copy_from_slice(head);

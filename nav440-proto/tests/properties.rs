@@ -98,6 +98,56 @@ proptest! {
         prop_assert_eq!(s_whole.bytes, stream.len() as u64);
     }
 
+    /// `feed_until` stopping after every frame, with the untaken input fed again, gives the
+    /// frames and counters of `feed`; at every stop, the pending bytes followed by the untaken
+    /// input give a fresh parser exactly the frames still to come.
+    #[test]
+    fn feed_until_stops_after_each_frame_and_continues_exactly(
+        parts in proptest::collection::vec((garbage(12), any_type(), any_payload()), 1..8),
+        tail in garbage(20),
+        cuts in proptest::collection::vec(1usize..300, 1..20),
+    ) {
+        let mut stream = Vec::new();
+        for (g, t, p) in &parts {
+            stream.extend_from_slice(g);
+            stream.extend(encode(*t, p));
+        }
+        stream.extend_from_slice(&tail);
+        let (whole, s_whole) = parse_chunked(&stream, &[stream.len()]);
+        let mut p = Parser::new();
+        let mut got: Vec<Owned> = Vec::new();
+        let mut offset = 0usize;
+        let mut cut = cuts.iter().cycle();
+        while offset < stream.len() {
+            let end = (offset + *cut.next().unwrap()).min(stream.len());
+            let mut chunk = &stream[offset..end];
+            while !chunk.is_empty() {
+                let mut stopped = false;
+                let n = p.feed_until(chunk, |f| {
+                    got.push((f.packet_type, f.payload.to_vec()));
+                    stopped = true;
+                    core::ops::ControlFlow::Break(())
+                });
+                prop_assert!(n <= chunk.len());
+                chunk = &chunk[n..];
+                if stopped {
+                    // The rest of the stream from here, for a fresh parser.
+                    let mut rest = p.pending_bytes().to_vec();
+                    rest.extend_from_slice(chunk);
+                    rest.extend_from_slice(&stream[end..]);
+                    let (after, _) = parse_chunked(&rest, &[rest.len().max(1)]);
+                    prop_assert_eq!(&after[..], &whole[got.len()..]);
+                }
+            }
+            offset = end;
+        }
+        // Frames left buffered behind the last stop come out of an empty feed.
+        p.feed(&[], |f| got.push((f.packet_type, f.payload.to_vec())));
+        prop_assert_eq!(&got, &whole);
+        prop_assert_eq!(p.stats().frames, s_whole.frames);
+        prop_assert_eq!(p.stats().bytes, s_whole.bytes);
+    }
+
     /// Frames embedded in random garbage are all recovered; anything else emitted is a
     /// genuine CRC collision lying in garbage.
     #[test]
@@ -353,4 +403,34 @@ fn encoder_rejects_oversize_and_short_buffers() {
     let many = [(FieldId(1), 0u16); 64];
     assert!(command::set_fields(&many, &mut buf).is_err());
     assert!(command::set_fields(&many[..63], &mut buf).is_ok());
+}
+
+/// A stop inside the parser's buffer (a corrupted candidate that spanned later frames) leaves
+/// the later frames buffered; they come out in order, even from an empty feed.
+#[test]
+fn frames_buffered_behind_a_stop_come_out_of_an_empty_feed() {
+    let a = encode(PacketType::PK, &[]);
+    let b = encode(PacketType::CH, &[1, 2]);
+    let c = encode(PacketType::AR, &[]);
+    // A candidate claiming 40 payload bytes swallows a, b and c; its CRC fails at byte 47.
+    let mut stream = vec![0x55, 0x55, b'A', b'2', 40];
+    for f in [&a, &b, &c] {
+        stream.extend_from_slice(f);
+    }
+    stream.resize(47, 0);
+    let mut p = Parser::new();
+    let mut got = Vec::new();
+    let mut n_total = 0;
+    for byte in &stream {
+        n_total += p.feed_until(std::slice::from_ref(byte), |f| {
+            got.push(f.packet_type);
+            core::ops::ControlFlow::Break(())
+        });
+    }
+    assert_eq!(n_total, stream.len());
+    // The byte that completed the bad candidate released `a` and stopped there.
+    assert_eq!(got, vec![PacketType::PK]);
+    assert_eq!(p.pending_bytes().len(), 47 - 5 - a.len());
+    p.feed(&[], |f| got.push(f.packet_type));
+    assert_eq!(got, vec![PacketType::PK, PacketType::CH, PacketType::AR]);
 }
