@@ -247,10 +247,11 @@ impl fmt::Display for Bauds {
 pub struct FieldList {
     pairs: [(u16, u16); 3],
     len: u8,
+    ids_only: bool,
 }
 
 impl FieldList {
-    /// The first three pairs of `fields`.
+    /// The first three pairs of `fields` (a SF/WF request).
     pub fn new(fields: &[(FieldId, u16)]) -> Self {
         let mut l = Self::default();
         for (slot, (id, v)) in l.pairs.iter_mut().zip(fields) {
@@ -258,6 +259,24 @@ impl FieldList {
             l.len += 1;
         }
         l
+    }
+
+    /// The first three IDs of `ids` (a GF/RF request: no values).
+    pub fn ids(ids: &[FieldId]) -> Self {
+        let mut l = Self {
+            ids_only: true,
+            ..Self::default()
+        };
+        for (slot, id) in l.pairs.iter_mut().zip(ids) {
+            *slot = (id.0, 0);
+            l.len += 1;
+        }
+        l
+    }
+
+    /// True for the IDs of a GF/RF request (the values are not meaningful).
+    pub fn ids_only(&self) -> bool {
+        self.ids_only
     }
 
     /// The pairs.
@@ -299,11 +318,22 @@ fn write_field(f: &mut fmt::Formatter<'_>, id: FieldId, value: Option<u16>) -> f
 
 impl fmt::Display for FieldList {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.ids_only {
+            f.write_str("fields")?;
+        }
         for (i, (id, v)) in self.iter().enumerate() {
-            if i > 0 {
-                f.write_str(", ")?;
+            f.write_str(if i > 0 {
+                ", "
+            } else if self.ids_only {
+                " "
+            } else {
+                ""
+            })?;
+            if self.ids_only {
+                write!(f, "0x{:04X}", id.0)?;
+            } else {
+                write_field(f, id, Some(v))?;
             }
-            write_field(f, id, Some(v))?;
         }
         Ok(())
     }
@@ -328,7 +358,7 @@ pub enum BootError<E> {
     Nak {
         /// The rejected request's type (SF, WF, GF).
         request: PacketType,
-        /// The fields it carried (SF/WF: with values; GF: values 0).
+        /// The fields it carried (SF/WF: with values; GF: IDs only, see [`FieldList::ids_only`]).
         fields: FieldList,
     },
     /// The unit's SF/WF reply listed only some fields, and no NAK came.
@@ -402,7 +432,7 @@ impl<E: fmt::Debug> fmt::Display for BootError<E> {
 fn convert<E>(
     e: Error<E>,
     request: PacketType,
-    fields: &[(FieldId, u16)],
+    fields: FieldList,
     baud: Baud,
     timeout_ms: u32,
 ) -> BootError<E> {
@@ -410,13 +440,10 @@ fn convert<E>(
         Error::Serial(e) => BootError::Serial(e),
         Error::WriteZero => BootError::WriteZero,
         Error::Encode(e) => BootError::Encode(e),
-        Error::Nak { request } => BootError::Nak {
-            request,
-            fields: FieldList::new(fields),
-        },
+        Error::Nak { request } => BootError::Nak { request, fields },
         Error::NotAccepted { accepted, .. } => BootError::NotAccepted {
             request,
-            fields: FieldList::new(fields),
+            fields,
             accepted,
         },
         Error::NoReply => BootError::NoAnswer {
@@ -463,7 +490,10 @@ where
             match self.driver.ping_wait(self.delay) {
                 Ok(()) => return Ok(true),
                 Err(Error::NoReply) => self.retries = self.retries.saturating_add(1),
-                Err(e) => return Err(convert(e, PacketType::PK, &[], self.baud, 0)),
+                Err(e) => {
+                    let none = FieldList::default();
+                    return Err(convert(e, PacketType::PK, none, self.baud, 0));
+                }
             }
         }
         Ok(false)
@@ -476,8 +506,8 @@ where
             .driver
             .get_fields(PacketType::GF, &READ_FIELDS, self.delay)
             .map_err(|e| {
-                let ids = READ_FIELDS.map(|id| (id, 0));
-                convert(e, PacketType::GF, &ids, self.baud, timeout)
+                let ids = FieldList::ids(&READ_FIELDS);
+                convert(e, PacketType::GF, ids, self.baud, timeout)
             })?;
         Ok([v[0], v[1], v[2]])
     }
@@ -485,9 +515,15 @@ where
     fn set_output(&mut self, target: &Target) -> Result<(), BootError<P::Error>> {
         let fields = target.output_fields();
         let timeout = self.timeout_ms();
-        self.driver
-            .set_fields(&fields, self.delay)
-            .map_err(|e| convert(e, PacketType::SF, &fields, self.baud, timeout))
+        self.driver.set_fields(&fields, self.delay).map_err(|e| {
+            convert(
+                e,
+                PacketType::SF,
+                FieldList::new(&fields),
+                self.baud,
+                timeout,
+            )
+        })
     }
 
     /// SF of the baud, local switch, ping to confirm.
@@ -500,7 +536,10 @@ where
         match r {
             // The reply may be lost while both ends change rate: the ping decides.
             Ok(()) | Err(Error::NoReply) => {}
-            Err(e) => return Err(convert(e, PacketType::SF, &fields, to, timeout)),
+            Err(e) => {
+                let list = FieldList::new(&fields);
+                return Err(convert(e, PacketType::SF, list, to, timeout));
+            }
         }
         if self.ping()? {
             Ok(())
@@ -592,7 +631,7 @@ where
         let baud = s.baud;
         s.driver
             .write_fields(&fields, s.delay)
-            .map_err(|e| convert(e, PacketType::WF, &fields, baud, timeout))?;
+            .map_err(|e| convert(e, PacketType::WF, FieldList::new(&fields), baud, timeout))?;
     }
 
     // 5. Read back.

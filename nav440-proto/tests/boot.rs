@@ -701,3 +701,32 @@ fn budget_figures_match_the_protocol_document() {
 fn generic_caller<P: Port>(d: &mut driver::Driver<P>) -> u32 {
     d.unsolicited()
 }
+
+#[test]
+fn nak_lines_of_baud_switch_and_read_requests() {
+    let baud = BootError::<LineError>::Nak {
+        request: PacketType::SF,
+        fields: boot::FieldList::new(&[(FieldId::BAUD_RATE, 3)]),
+    };
+    assert_eq!(
+        baud.to_string(),
+        "unit rejected (NAK) SF: baud 0x0002=3 (57600 Bd)"
+    );
+    let gf = BootError::<LineError>::Nak {
+        request: PacketType::GF,
+        fields: boot::FieldList::ids(&boot::READ_FIELDS),
+    };
+    assert_eq!(
+        gf.to_string(),
+        "unit rejected (NAK) GF: fields 0x0001, 0x0002, 0x0003"
+    );
+    let missing = BootError::<LineError>::WrongReadBack {
+        field: FieldId::PACKET_TYPE,
+        expected: 0x4132,
+        got: None,
+    };
+    assert_eq!(
+        missing.to_string(),
+        "wrong read-back (GF): expected packet type 0x0003=0x4132 (A2), got packet type 0x0003=(missing)"
+    );
+}
