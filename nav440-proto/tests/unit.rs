@@ -258,3 +258,81 @@ fn quirks_ignore_nak_and_keep_rate() {
     );
     assert_eq!(u.ram().rate_divider, 5);
 }
+
+mod properties {
+    use super::*;
+    use nav440_proto::{encode_frame, Parser, MAX_FRAME};
+    use proptest::prelude::*;
+    use proptest::test_runner::{Config, RngSeed};
+
+    fn request() -> impl Strategy<Value = Vec<u8>> {
+        let types = proptest::sample::select(vec![
+            *b"PK", *b"CH", *b"GP", *b"SF", *b"WF", *b"GF", *b"RF", *b"AR", *b"SR", *b"ZZ",
+        ]);
+        // Field-shaped payloads (count, then ID/value pairs over the interesting IDs and
+        // values) and random ones.
+        let pair = (
+            0u16..9,
+            prop_oneof![0u16..60, Just(0x4132), Just(0x4E31), any::<u16>()],
+        );
+        let fields = proptest::collection::vec(pair, 0..5).prop_map(|v| {
+            let mut p = vec![v.len() as u8];
+            for (id, val) in v {
+                p.extend_from_slice(&id.to_be_bytes());
+                p.extend_from_slice(&val.to_be_bytes());
+            }
+            p
+        });
+        let ids = proptest::collection::vec(0u16..9, 0..5).prop_map(|v| {
+            let mut p = vec![v.len() as u8];
+            for id in v {
+                p.extend_from_slice(&id.to_be_bytes());
+            }
+            p
+        });
+        let payload = prop_oneof![fields, ids, proptest::collection::vec(any::<u8>(), 0..12)];
+        (types, payload).prop_map(|(t, p)| {
+            let mut buf = [0u8; MAX_FRAME];
+            let n = encode_frame(PacketType(t), &p, &mut buf).unwrap();
+            buf[..n].to_vec()
+        })
+    }
+
+    proptest! {
+        #![proptest_config(Config {
+            cases: 128,
+            rng_seed: RngSeed::Fixed(0x5549_4E54),
+            failure_persistence: None,
+            ..Config::default()
+        })]
+
+        /// Any sequence of requests, in any chunking: one response per request, every response
+        /// is whole CRC-valid frames, and the fields in force are always defined and within
+        /// the byte budget at the baud in force.
+        #[test]
+        fn any_requests_keep_the_unit_consistent(
+            reqs in proptest::collection::vec(request(), 1..12),
+            cut in 1usize..40,
+        ) {
+            let stream: Vec<u8> = reqs.concat();
+            let mut u = power_up();
+            let mut responses = 0usize;
+            let mut out = Vec::new();
+            for chunk in stream.chunks(cut) {
+                u.receive(chunk, |r| {
+                    responses += 1;
+                    out.extend_from_slice(r.frames);
+                });
+                let ram = *u.ram();
+                prop_assert!(ram.fits_budget(), "{:?}", ram);
+                prop_assert!(nav440_proto::Baud::from_code(ram.baud).is_some());
+                prop_assert!(u.eeprom().fits_budget());
+            }
+            prop_assert_eq!(responses, reqs.len());
+            let mut p = Parser::new();
+            p.feed(&out, |_| {});
+            prop_assert_eq!(p.stats().skipped_bytes, 0);
+            prop_assert_eq!(p.stats().frame_bytes, out.len() as u64);
+        }
+    }
+}
