@@ -199,8 +199,7 @@ impl<T: Real, S: SqrtFn<T>> YawBank<T, S> {
     /// Kalman gains).
     pub fn new(cfg: &BankConfig) -> Result<Self, ConfigError> {
         let h = cfg.h;
-        let clock = SampleClock::new(h, cfg.max_gap_s())?;
-        let h_us = clock.step_us();
+        let h_us = crate::adapter::step_us(h)?;
         let period = f64::from(cfg.sample_period_s);
         if !period.is_finite() {
             return Err(ConfigError::NotFinite("sample_period_s"));
@@ -209,6 +208,7 @@ impl<T: Real, S: SqrtFn<T>> YawBank<T, S> {
         if !(1.0..=1e6).contains(&n0f) {
             return Err(ConfigError::SamplePeriodTooShort);
         }
+        let clock = SampleClock::new(h, cfg.max_gap_s())?;
         let n0 = if cfg.closed_form { n0f as u32 } else { 0 };
         let hold = cfg.hold;
         let v = &cfg.velocity;

@@ -70,8 +70,8 @@ fn run_bank<T: Real>(hours: usize) -> Run {
     Run { hourly_rms, vel }
 }
 
-/// 24 h at 100 Hz: every velocity estimator's RMS error in the last hour is within 10 % of the
-/// first hour's, in f32 and in Q31.32; f32 and Q31.32 agree within the documented tolerance
+/// 24 h at 100 Hz: no velocity estimator's RMS error in any hour (the last included) exceeds
+/// the first hour's by more than 10 %, in f32 and in Q31.32; f32 and Q31.32 agree within the documented tolerance
 /// over the whole run (per-sample difference RMS <= 1 % of the estimator's own RMS error, ED
 /// 10 %: its Euler chatter turns rounding into different switching).
 #[test]
@@ -83,6 +83,7 @@ fn day_long_spin_does_not_degrade() {
     let fx = std::thread::spawn(move || run_bank::<Fx>(hours));
     let f = run_bank::<f32>(hours);
     let x = fx.join().unwrap();
+    let mut failures = Vec::new();
     for (name, r) in [("f32", &f), ("Q31.32", &x)] {
         for (i, est) in VELOCITY_NAMES.iter().enumerate() {
             let first = r.hourly_rms[0][i];
@@ -91,10 +92,12 @@ fn day_long_spin_does_not_degrade() {
             eprintln!(
                 "{name:6} {est:4}: RMS velocity error first hour {first:.4}, last hour {last:.4}, worst hour {worst:.4} deg/s"
             );
-            assert!(
-                (last - first).abs() <= 0.1 * first,
-                "{name} {est}: last hour {last} vs first {first}"
-            );
+            // No degradation: the last hour (and every hour) at most 10 % worse than the
+            // first. (ILO1, K1 = 1, keeps learning: its error falls by about 20 % after the
+            // first hour; a fall is not a degradation.)
+            if worst > 1.1 * first {
+                failures.push(format!("{name} {est}: worst hour {worst} vs first {first}"));
+            }
         }
     }
     for (i, est) in VELOCITY_NAMES.iter().enumerate() {
@@ -111,11 +114,13 @@ fn day_long_spin_does_not_degrade() {
             "f32 vs Q31.32 {est:4}: RMS difference {rms_d:.5}, max {dmax:.4} deg/s (own RMS error {own:.4})"
         );
         let tol = if *est == "ed" { 0.10 } else { 0.01 };
-        assert!(
-            rms_d <= tol * own,
-            "{est}: f32 vs fixed RMS difference {rms_d} > {tol} x {own}"
-        );
+        if rms_d > tol * own {
+            failures.push(format!(
+                "{est}: f32 vs fixed RMS difference {rms_d} > {tol} x {own}"
+            ));
+        }
     }
+    assert!(failures.is_empty(), "{failures:#?}");
 }
 
 /// The AVE alone over 6 h of the same spin, in the bank's local frame (wrapped input,

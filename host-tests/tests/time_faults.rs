@@ -112,6 +112,10 @@ fn one_impossible_stamp_costs_one_sample() {
     }
 }
 
+fn n_a0(every: u32) -> u32 {
+    2000 / every
+}
+
 /// A0 packets (GPSITOW = low 16 bits of the same ms counter, magnetic yaw) polled between A2
 /// packets: every A2 sample is kept at its own time; the A0s are ignored and counted. Old
 /// code: 1,801 rows from 2,000 A2 + 200 A0; 1 row when they alternate.
@@ -131,9 +135,18 @@ fn polled_a0_between_a2_loses_no_a2_sample() {
             }
         }
         let (samples, faults) = replay::samples_and_faults(&bytes).unwrap();
+        // Every yaw packet is accounted for: released, discarded or a duplicate.
+        let mut reader = replay::SampleReader::new();
+        reader.feed(&bytes, |_| {});
+        reader.finish(|_| {});
+        assert_eq!(reader.yaw_packets(), u64::from(2000 + n_a0(every)));
+        assert_eq!(
+            reader.yaw_packets(),
+            reader.samples() + u64::from(faults.discarded() + faults.duplicates)
+        );
         let a2_samples: Vec<_> = samples.iter().filter(|s| s.rate_deg_s != 0.0).collect();
         assert_eq!(a2_samples.len(), 2000, "every {every}, A0 first {a0_first}");
-        let n_a0 = 2000 / every;
+        let n_a0 = n_a0(every);
         if a0_first {
             // The first A0 starts the stream; the first A2 switches the base to timeITOW.
             assert_eq!(samples.len(), 2001);
