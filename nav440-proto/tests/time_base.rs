@@ -193,3 +193,42 @@ fn polled_gpsitow_samples_never_cost_a_timeitow_sample() {
         }
     }
 }
+
+/// Any stamp sequence (runs of a regular stream with random glitches, jumps, impossible values,
+/// duplicates and GPSITOW stamps): released times strictly increase, and every stamp is
+/// accounted for (released, discarded, duplicate, or the first of a new epoch).
+#[test]
+fn any_stamp_sequence_gives_increasing_times_and_full_accounting() {
+    use rand::rngs::Xoshiro256PlusPlus;
+    use rand::{RngExt, SeedableRng};
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(8);
+    for _ in 0..200 {
+        let mut stamps = Vec::new();
+        let mut t: u32 = rng.random_range(0..WEEK_MS);
+        for _ in 0..500 {
+            t = (t + 10) % WEEK_MS;
+            let s = match rng.random_range(0..40u32) {
+                0 => TimeStamp::Itow(rng.random()),
+                1 => TimeStamp::Itow(rng.random_range(0..WEEK_MS)),
+                2 => {
+                    t = rng.random_range(0..WEEK_MS);
+                    TimeStamp::Itow(t)
+                }
+                3 => TimeStamp::GpsItow(rng.random()),
+                4 => TimeStamp::Itow(t.saturating_sub(10)),
+                _ => TimeStamp::Itow(t),
+            };
+            stamps.push(s);
+        }
+        let (out, tb) = run(&stamps);
+        for w in out.windows(2) {
+            assert!(w[1].1 > w[0].1, "{w:?}");
+            assert!(w[1].0 > w[0].0, "order kept");
+        }
+        let f = tb.faults();
+        assert_eq!(
+            stamps.len(),
+            out.len() + (f.discarded() + f.duplicates) as usize
+        );
+    }
+}
