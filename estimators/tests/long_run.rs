@@ -71,9 +71,10 @@ fn run_bank<T: Real>(hours: usize) -> Run {
 }
 
 /// 24 h at 100 Hz: no velocity estimator's RMS error in any hour (the last included) exceeds
-/// the first hour's by more than 10 %, in f32 and in Q31.32; f32 and Q31.32 agree within the documented tolerance
-/// over the whole run (per-sample difference RMS <= 1 % of the estimator's own RMS error, ED
-/// 10 %: its Euler chatter turns rounding into different switching).
+/// the first hour's by more than 10 %, in f32 and in Q31.32; f32 and Q31.32 agree within the
+/// documented tolerance over the whole run: RMS of the per-sample difference <= 0.05 deg/s and
+/// <= 2 % of the estimator's own RMS error; for the ED (whose explicit-Euler chatter rounding
+/// dephases) the two RMS errors within 10 % of each other.
 #[test]
 fn day_long_spin_does_not_degrade() {
     if skip_in_debug() {
@@ -109,14 +110,21 @@ fn day_long_spin_does_not_degrade() {
             dmax = dmax.max(d.abs());
         }
         let rms_d = (d2 / n).sqrt();
-        let own = f.hourly_rms.iter().map(|h| h[i]).sum::<f64>() / hours as f64;
+        let own = |r: &Run| r.hourly_rms.iter().map(|h| h[i]).sum::<f64>() / hours as f64;
+        let (own_f, own_x) = (own(&f), own(&x));
         eprintln!(
-            "f32 vs Q31.32 {est:4}: RMS difference {rms_d:.5}, max {dmax:.4} deg/s (own RMS error {own:.4})"
+            "f32 vs Q31.32 {est:4}: RMS difference {rms_d:.5}, max {dmax:.4} deg/s; own RMS error {own_f:.4} (f32) {own_x:.4} (Q31.32)"
         );
-        let tol = if *est == "ed" { 0.10 } else { 0.01 };
-        if rms_d > tol * own {
+        if *est == "ed" {
+            // Explicit-Euler chatter: rounding changes its phase, so the two series are
+            // uncorrelated at the chatter (difference about sqrt(2) x the error); their
+            // errors must agree in size.
+            if (own_f - own_x).abs() > 0.1 * own_f {
+                failures.push(format!("ed: RMS error f32 {own_f} vs Q31.32 {own_x}"));
+            }
+        } else if rms_d > 0.05 || rms_d > 0.02 * own_f {
             failures.push(format!(
-                "{est}: f32 vs fixed RMS difference {rms_d} > {tol} x {own}"
+                "{est}: f32 vs fixed RMS difference {rms_d} (own error {own_f})"
             ));
         }
     }
