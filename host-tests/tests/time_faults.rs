@@ -193,3 +193,70 @@ fn two_hertz_capture_gives_estimates() {
         }
     });
 }
+
+/// The committed capture `host-tests/data/time_faults_a2_100hz.bin` (so `cargo xtask
+/// ci-firmware`, which runs every capture there through the firmware, checks the firmware's
+/// time-fault handling against `nav440 estimate` byte for byte): 400 A2 packets of a
+/// 240 deg/s spin at 100 Hz with one A0 polled per ten A2, one 0xFFFFFFFF stamp (packet 50),
+/// one stamp 7 s back (120) and one an hour ahead (200); then a second recording starting
+/// 402 s earlier, turning the other way at 200 deg/s, with a 2 s dropout after 300 packets.
+/// Regenerate with `NAV440_WRITE_CAPTURE=1 cargo test -p host-tests --test time_faults`.
+fn time_fault_capture() -> Vec<u8> {
+    let mut out = Vec::new();
+    for k in 0..400u32 {
+        let itow = match k {
+            50 => 0xFFFF_FFFF,
+            120 => 500_000 + 10 * k - 7_000,
+            200 => 500_000 + 10 * k + 3_600_000,
+            _ => 500_000 + 10 * k,
+        };
+        out.extend(a2(itow, 2.4 * f64::from(k), 240.0));
+        if k % 10 == 3 {
+            out.extend(a0((itow.wrapping_add(3)) as u16, 77.0));
+        }
+    }
+    for k in 0..300u32 {
+        out.extend(a2(100_000 + 10 * k, 137.0 - 2.0 * f64::from(k), -200.0));
+    }
+    for k in 0..300u32 {
+        out.extend(a2(105_000 + 10 * k, -463.0 - 2.0 * f64::from(k), -200.0));
+    }
+    out
+}
+
+#[test]
+fn committed_time_fault_capture() {
+    let bytes = time_fault_capture();
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/time_faults_a2_100hz.bin");
+    if std::env::var_os("NAV440_WRITE_CAPTURE").is_some() {
+        std::fs::write(&path, &bytes).unwrap();
+    }
+    assert_eq!(
+        std::fs::read(&path).unwrap(),
+        bytes,
+        "regenerate: see the doc comment"
+    );
+    let (samples, f) = replay::samples_and_faults(&bytes).unwrap();
+    // 1,000 A2 packets less the three bad stamps; 40 A0 ignored.
+    assert_eq!(samples.len(), 997);
+    assert_eq!(
+        (
+            f.impossible,
+            f.bad_backward,
+            f.bad_forward,
+            f.backward_jumps,
+            f.other_kind
+        ),
+        (1, 1, 1, 1, 40)
+    );
+    for_both(|opts| {
+        let est = replay::estimate_report(&samples, opts).unwrap();
+        assert_eq!((est.rows.len(), est.gaps), (997, 1));
+        for r in &est.rows {
+            for v in r.out.vel {
+                assert!(v.abs() <= 2.0 * 240.0 + 49.0, "{v}");
+            }
+        }
+    });
+}
