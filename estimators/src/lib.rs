@@ -80,7 +80,8 @@ pub use ad::{Ad, AdConfig};
 pub use adapter::{SampleAdapter, SampleClock, Tick};
 pub use ave::{Ave, AveConfig, DeltaMode};
 pub use bank::{
-    BankConfig, BankGains, BankOutput, KalmanNoise, YawBank, KF_DEFAULT, VELOCITY_NAMES,
+    BankConfig, BankGains, BankOutput, KalmanNoise, YawBank, GAP_PERIODS, KF_DEFAULT,
+    VELOCITY_NAMES,
 };
 pub use ed::{Ed, EdConfig, EdScheme};
 pub use error::{ConfigError, SampleError};

@@ -382,12 +382,16 @@ fn run(cli: Cli) -> Result<()> {
             let mut opts = bank_options(&bank)?;
             opts.noise = noise(n.noise_var, n.seed)?;
             opts.fixed = fixed;
-            let samples = load_samples(&file)?;
-            let (rows, rejected) = replay::estimate(&samples, &opts)?;
-            if rejected > 0 {
-                eprintln!("nav440: warning: {rejected} samples rejected by the estimator bank (time not increasing)");
+            let bytes = replay::read_capture(&file)?;
+            let (samples, faults) = with_file(&file, replay::samples_and_faults(&bytes))?;
+            let est = replay::estimate_report(&samples, &opts)?;
+            if est.rejected > 0 {
+                eprintln!("nav440: warning: {} samples rejected by the estimator bank (yaw not finite or beyond +-1e6 deg)", est.rejected);
             }
-            stdout_or_file(output.as_deref(), |w| replay::write_csv(&rows, w))
+            if let Some(w) = replay::fault_warning(&faults, est.gaps) {
+                eprintln!("nav440: warning: {w}");
+            }
+            stdout_or_file(output.as_deref(), |w| replay::write_csv(&est.rows, w))
         }
         Cmd::Paper {
             file,

@@ -45,10 +45,10 @@ pub fn ave_on_rate(
 ) -> Result<Vec<f32>> {
     let bad =
         |e: estimators::ConfigError| Error::Usage(format!("bad reference AVE configuration: {e}"));
-    let bank = opts.bank_config();
+    let bank = opts.bank_config_for(samples);
     let ave = Ave::<f32>::new(cfg, opts.step_s).map_err(bad)?;
     let mut adapter =
-        SampleAdapter::new(ave, opts.step_s, bank.max_gap_s, opts.hold).map_err(bad)?;
+        SampleAdapter::new(ave, opts.step_s, bank.max_gap_s(), opts.hold).map_err(bad)?;
     Ok(samples
         .iter()
         .map(|s| adapter.update(s.t_us, s.rate_deg_s).unwrap_or(f32::NAN))
@@ -153,6 +153,8 @@ pub fn run(
             "--window must be a positive number of seconds, got {window_s}"
         )));
     }
+    let from_file = opts.config.is_some();
+    let opts = &opts.paper_law();
     let acc_ref = ave_on_rate(samples, &REFERENCE_AVE, opts)?;
     let jobs: Vec<(usize, u64)> = (0..NOISE_VARS.len())
         .flat_map(|i| SEEDS.iter().map(move |&s| (i, s)))
@@ -213,7 +215,7 @@ pub fn run(
         hold: opts.hold,
         step_s: opts.step_s,
         window_s,
-        gains: if opts.config.is_some() {
+        gains: if from_file {
             "from --gains file".into()
         } else {
             "paper presets (Tables 2 and 4)".into()

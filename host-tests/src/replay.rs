@@ -7,7 +7,8 @@ use crate::error::{Error, Result};
 use estimators::period::PeriodEstimator;
 pub use estimators::period::WARMUP_SAMPLES;
 use estimators::{BankConfig, BankOutput, Fx, Hold, YawBank};
-use nav440_proto::{ItowClock, Packet, Parser};
+pub use nav440_proto::TimeFaults;
+use nav440_proto::{Packet, Parser, TimeBase};
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -81,12 +82,17 @@ pub fn stream_stats(bytes: &[u8]) -> StreamStats {
 /// One timed yaw sample taken from a packet.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sample {
-    /// Time since the first yaw packet, microseconds (from timeITOW / GPSITOW, wraps handled).
+    /// Time since the first yaw packet, microseconds (from timeITOW / GPSITOW through
+    /// `nav440_proto::TimeBase`: wraps handled, strictly increasing).
     pub t_us: u64,
     /// Yaw as sent (wrapped), degrees.
     pub yaw_deg: f32,
     /// Body z rate as sent (the measured reference), deg/s.
     pub rate_deg_s: f32,
+    /// First sample of a new time epoch (a confirmed backward jump of the time stamps, or the
+    /// switch from GPSITOW to timeITOW): the bank re-initialises from it
+    /// (`YawBank::new_epoch`).
+    pub new_epoch: bool,
 }
 
 impl Sample {
@@ -96,38 +102,121 @@ impl Sample {
     }
 }
 
+/// Streaming sample extraction, the host twin of the firmware's front end: bytes -> parser ->
+/// packets carrying yaw -> `nav440_proto::TimeBase` (time faults handled and counted) ->
+/// [`Sample`]s. Feed it bytes in any chunking; the samples come out in stream order (a
+/// suspicious time stamp is released one sample late, see `TimeBase`). Call
+/// [`SampleReader::finish`] at the end of input.
+#[derive(Debug, Default)]
+pub struct SampleReader {
+    parser: Parser,
+    time: TimeBase<(f32, f32)>,
+    frames: u64,
+    yaw_packets: u64,
+    samples: u64,
+}
+
+impl SampleReader {
+    /// A reader at the start of a stream.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Feeds bytes; `out` gets every sample released.
+    pub fn feed(&mut self, bytes: &[u8], mut out: impl FnMut(Sample)) {
+        let Self {
+            parser,
+            time,
+            frames,
+            yaw_packets,
+            samples,
+        } = self;
+        parser.feed(bytes, |f| {
+            *frames += 1;
+            let Some(y) = Packet::decode(f).ok().and_then(|p| p.yaw_sample()) else {
+                return;
+            };
+            *yaw_packets += 1;
+            for t in time.update(y.time, (y.yaw_deg, y.yaw_rate_deg_s)) {
+                *samples += 1;
+                out(to_sample(t));
+            }
+        });
+    }
+
+    /// End of input: releases a held sample if the time rules allow it.
+    pub fn finish(&mut self, mut out: impl FnMut(Sample)) {
+        if let Some(t) = self.time.finish() {
+            self.samples += 1;
+            out(to_sample(t));
+        }
+    }
+
+    /// Time-stamp faults so far.
+    pub fn faults(&self) -> TimeFaults {
+        *self.time.faults()
+    }
+
+    /// Valid (CRC-checked) frames so far.
+    pub fn frames(&self) -> u64 {
+        self.frames
+    }
+
+    /// Packets carrying yaw so far (before the time rules).
+    pub fn yaw_packets(&self) -> u64 {
+        self.yaw_packets
+    }
+
+    /// Samples released so far.
+    pub fn samples(&self) -> u64 {
+        self.samples
+    }
+
+    /// Parser statistics so far.
+    pub fn parser_stats(&self) -> &nav440_proto::Stats {
+        self.parser.stats()
+    }
+
+    /// The error for a finished stream that gave no sample ([`Error::NotNav440`]), or `Ok`.
+    pub fn check_nonempty(&self) -> Result<()> {
+        if self.frames == 0 {
+            return Err(Error::NotNav440(
+                "no NAV440 frame found (not a NAV440 capture?)".into(),
+            ));
+        }
+        if self.samples == 0 {
+            return Err(Error::NotNav440(format!(
+                "{} NAV440 frames but none carries yaw with a usable time stamp (need A0/A1/A2/N0/N1/B1)",
+                self.frames
+            )));
+        }
+        Ok(())
+    }
+}
+
+fn to_sample(t: nav440_proto::Timed<(f32, f32)>) -> Sample {
+    Sample {
+        t_us: t.t_us,
+        yaw_deg: t.payload.0,
+        rate_deg_s: t.payload.1,
+        new_epoch: t.new_epoch,
+    }
+}
+
 /// Extracts the timed yaw samples of every packet that carries yaw, in stream order.
 /// A stream without any valid frame, or without any yaw packet, is an [`Error::NotNav440`].
 pub fn samples(bytes: &[u8]) -> Result<Vec<Sample>> {
-    let mut parser = Parser::new();
-    let mut clock = ItowClock::new();
+    samples_and_faults(bytes).map(|(s, _)| s)
+}
+
+/// [`samples`] and the time-stamp faults met on the way.
+pub fn samples_and_faults(bytes: &[u8]) -> Result<(Vec<Sample>, TimeFaults)> {
+    let mut reader = SampleReader::new();
     let mut out = Vec::new();
-    let mut frames = 0u64;
-    parser.feed(bytes, |f| {
-        frames += 1;
-        if let Ok(p) = Packet::decode(f) {
-            if let Some(y) = p.yaw_sample() {
-                if let Some(t_us) = clock.update(y.time) {
-                    out.push(Sample {
-                        t_us,
-                        yaw_deg: y.yaw_deg,
-                        rate_deg_s: y.yaw_rate_deg_s,
-                    });
-                }
-            }
-        }
-    });
-    if frames == 0 {
-        return Err(Error::NotNav440(
-            "no NAV440 frame found (not a NAV440 capture?)".into(),
-        ));
-    }
-    if out.is_empty() {
-        return Err(Error::NotNav440(format!(
-            "{frames} NAV440 frames but none carries yaw with a time stamp (need A0/A1/A2/N0/N1/B1)"
-        )));
-    }
-    Ok(out)
+    reader.feed(bytes, |s| out.push(s));
+    reader.finish(|s| out.push(s));
+    reader.check_nonempty()?;
+    Ok((out, reader.faults()))
 }
 
 /// Gaussian noise added to yaw before estimation (the paper's protocol).
@@ -209,6 +298,17 @@ impl EstimateOptions {
         cfg
     }
 
+    /// These options with the paper's laws as the base when no gains file is given
+    /// (`BankConfig::PAPER`: the AVE's `deltahat` only grows), for the paper's experiment
+    /// (`nav440 paper`, `nav440 tune`); `nav440 estimate` and the firmware run
+    /// `BankConfig::default()` (leaky `deltahat`, docs/RELIABILITY.md).
+    pub fn paper_law(&self) -> Self {
+        Self {
+            config: Some(self.config.unwrap_or(BankConfig::PAPER)),
+            ..self.clone()
+        }
+    }
+
     /// [`EstimateOptions::bank_config`] with the nominal sample period set from the capture by
     /// `estimators::period`, the causal rule the firmware uses too: the upper median of the
     /// intervals between the first [`WARMUP_SAMPLES`] samples (0.01 s for a 100 Hz capture, i.e.
@@ -231,34 +331,65 @@ pub struct Row {
     pub out: BankOutput,
 }
 
-/// Runs the estimator bank over `samples`. A sample the bank rejects (e.g. time going
-/// backwards) yields no row; the count of those is returned too.
+/// What a run of the bank gives: rows and the counts of samples it did not turn into rows.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Estimate {
+    /// One row per accepted sample.
+    pub rows: Vec<Row>,
+    /// Samples the bank rejected (non-finite or out-of-range yaw).
+    pub rejected: usize,
+    /// Gaps longer than the gap rule (`BankConfig::max_gap_periods` nominal periods): the bank
+    /// re-initialised there (`YawBank::reinit_count`).
+    pub gaps: u32,
+}
+
+/// Runs the estimator bank over `samples`. A sample the bank rejects (non-finite or
+/// out-of-range yaw) yields no row; the count of those is returned too.
 pub fn estimate(samples: &[Sample], opts: &EstimateOptions) -> Result<(Vec<Row>, usize)> {
+    estimate_report(samples, opts).map(|e| (e.rows, e.rejected))
+}
+
+/// [`estimate`] with the bank's gap count.
+pub fn estimate_report(samples: &[Sample], opts: &EstimateOptions) -> Result<Estimate> {
     if opts.noise_at == NoiseAt::Step {
         return estimate_step_noise(samples, opts);
     }
     let cfg = opts.bank_config_for(samples);
     let yaw = noisy_yaw(samples, opts.noise)?;
+    let bad =
+        |e: estimators::ConfigError| Error::Usage(format!("bad estimator configuration: {e}"));
     if opts.fixed {
-        let mut bank = YawBank::<Fx>::new(&cfg)
-            .map_err(|e| Error::Usage(format!("bad estimator configuration: {e}")))?;
-        Ok(run(samples, &yaw, |t, y| bank.update(t, y).ok()))
+        let mut bank = YawBank::<Fx>::new(&cfg).map_err(bad)?;
+        let mut e = run(samples, &yaw, |s, y| {
+            if s.new_epoch {
+                bank.new_epoch();
+            }
+            bank.update(s.t_us, y).ok()
+        });
+        e.gaps = bank.reinit_count();
+        Ok(e)
     } else {
-        let mut bank = YawBank::<f32>::new(&cfg)
-            .map_err(|e| Error::Usage(format!("bad estimator configuration: {e}")))?;
-        Ok(run(samples, &yaw, |t, y| bank.update(t, y).ok()))
+        let mut bank = YawBank::<f32>::new(&cfg).map_err(bad)?;
+        let mut e = run(samples, &yaw, |s, y| {
+            if s.new_epoch {
+                bank.new_epoch();
+            }
+            bank.update(s.t_us, y).ok()
+        });
+        e.gaps = bank.reinit_count();
+        Ok(e)
     }
 }
 
 fn run(
     samples: &[Sample],
     yaw: &[f32],
-    mut update: impl FnMut(u64, f32) -> Option<BankOutput>,
-) -> (Vec<Row>, usize) {
+    mut update: impl FnMut(&Sample, f32) -> Option<BankOutput>,
+) -> Estimate {
     let mut rows = Vec::with_capacity(samples.len());
     let mut rejected = 0;
     for (s, &y) in samples.iter().zip(yaw) {
-        match update(s.t_us, y) {
+        match update(s, y) {
             Some(out) => rows.push(Row {
                 t_us: s.t_us,
                 yaw_rate: s.rate_deg_s,
@@ -267,7 +398,23 @@ fn run(
             None => rejected += 1,
         }
     }
-    (rows, rejected)
+    Estimate {
+        rows,
+        rejected,
+        gaps: 0,
+    }
+}
+
+/// The one-line `nav440 estimate` warning for time faults and gaps (`None` when there were
+/// none): `time faults: impossible=N bad_backward=N bad_forward=N backward_jumps=N
+/// kind_switches=N other_kind=N duplicates=N gaps=N`.
+pub fn fault_warning(f: &TimeFaults, gaps: u32) -> Option<String> {
+    (f.any() || f.duplicates > 0 || gaps > 0).then(|| {
+        format!(
+            "time faults: impossible={} bad_backward={} bad_forward={} backward_jumps={} kind_switches={} other_kind={} duplicates={} gaps={}",
+            f.impossible, f.bad_backward, f.bad_forward, f.backward_jumps, f.kind_switches, f.other_kind, f.duplicates, gaps
+        )
+    })
 }
 
 /// The CSV header shared with the firmware.
@@ -318,8 +465,10 @@ pub fn unwrap_deg(wrapped: &[f32]) -> Vec<f32> {
 }
 
 /// [`NoiseAt::Step`]: see there.
-fn estimate_step_noise(samples: &[Sample], opts: &EstimateOptions) -> Result<(Vec<Row>, usize)> {
+fn estimate_step_noise(samples: &[Sample], opts: &EstimateOptions) -> Result<Estimate> {
     let mut cfg = opts.bank_config_for(samples);
+    // The packet-level gap rule (the bank itself sees one sample per step).
+    let gap_us = (f64::from(cfg.max_gap_s()) * 1e6).round() as u64;
     // The bank sees one sample per step: closed-form maps and Kalman gains for that period.
     cfg.sample_period_s = opts.step_s;
     let h_us = (f64::from(opts.step_s) * 1e6).round().max(1.0) as u64;
@@ -339,13 +488,17 @@ fn estimate_step_noise(samples: &[Sample], opts: &EstimateOptions) -> Result<(Ve
         |e: estimators::ConfigError| Error::Usage(format!("bad estimator configuration: {e}"));
     let mut rows = Vec::with_capacity(samples.len());
     let mut rejected = 0;
-    let mut feed = |update: &mut dyn FnMut(u64, f32) -> Option<BankOutput>| {
+    let mut feed = |update: &mut dyn FnMut(u64, f32, bool) -> Option<BankOutput>| {
         for (k, (s, &y)) in samples.iter().zip(&yaw).enumerate() {
             let prev = k
                 .checked_sub(1)
                 .and_then(|i| Some((samples.get(i)?, *yaw.get(i)?)));
             let out = match prev {
-                None => update(s.t_us, (f64::from(y) + noise()) as f32),
+                None => update(s.t_us, (f64::from(y) + noise()) as f32, false),
+                // A new epoch, or a gap the bank re-initialises on: no interpolation across it.
+                Some((ps, _)) if s.new_epoch || s.t_us - ps.t_us > gap_us => {
+                    update(s.t_us, (f64::from(y) + noise()) as f32, true)
+                }
                 Some((ps, py)) if s.t_us > ps.t_us => {
                     let n = ((s.t_us - ps.t_us + h_us / 2) / h_us).max(1);
                     let mut last = None;
@@ -353,7 +506,7 @@ fn estimate_step_noise(samples: &[Sample], opts: &EstimateOptions) -> Result<(Ve
                         let t = if j == n { s.t_us } else { ps.t_us + j * h_us };
                         let yi =
                             f64::from(py) + (f64::from(y) - f64::from(py)) * j as f64 / n as f64;
-                        last = update(t, (yi + noise()) as f32);
+                        last = update(t, (yi + noise()) as f32, false);
                     }
                     last
                 }
@@ -369,12 +522,30 @@ fn estimate_step_noise(samples: &[Sample], opts: &EstimateOptions) -> Result<(Ve
             }
         }
     };
+    let mut restarts = 0u32;
     if opts.fixed {
         let mut bank = YawBank::<Fx>::new(&cfg).map_err(bad)?;
-        feed(&mut |t, y| bank.update(t, y).ok());
+        feed(&mut |t, y, restart| {
+            if restart {
+                restarts += 1;
+                bank.new_epoch();
+            }
+            bank.update(t, y).ok()
+        });
     } else {
         let mut bank = YawBank::<f32>::new(&cfg).map_err(bad)?;
-        feed(&mut |t, y| bank.update(t, y).ok());
+        feed(&mut |t, y, restart| {
+            if restart {
+                restarts += 1;
+                bank.new_epoch();
+            }
+            bank.update(t, y).ok()
+        });
     }
-    Ok((rows, rejected))
+    let epochs = samples.iter().filter(|s| s.new_epoch).count() as u32;
+    Ok(Estimate {
+        rows,
+        rejected,
+        gaps: restarts.saturating_sub(epochs),
+    })
 }

@@ -274,6 +274,7 @@ pub fn tune(
     seeds: u64,
     window_s: f64,
 ) -> Result<TuneResult> {
+    let opts = &opts.paper_law();
     let base = opts.bank_config_for(samples);
     let paper = GainsFile::from_bank(&base);
     let ys = (1..=seeds)
@@ -294,7 +295,7 @@ pub fn tune(
         vel_ref: samples.iter().map(|s| s.rate_deg_s).collect(),
         acc_ref: ave_on_rate(samples, &REFERENCE_AVE, opts)?,
         opts,
-        max_gap_s: base.max_gap_s,
+        max_gap_s: base.max_gap_s(),
         sample_period_s: base.sample_period_s,
         window_s,
     };

@@ -67,7 +67,7 @@ pub mod parser;
 pub mod types;
 pub mod unit;
 
-pub use clock::ItowClock;
+pub use clock::{ItowClock, Released, TimeBase, TimeFaults, Timed};
 pub use crc16::{crc16, Crc16Table, DefaultCrcTable};
 pub use encode::{command, encode_frame, encode_raw, EncodeError, Request};
 pub use packets::{
