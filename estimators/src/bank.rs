@@ -166,8 +166,11 @@ impl<T: Real, S: SqrtFn<T>> YawBank<T, S> {
             return Err(ConfigError::NotFinite("sample_period_s"));
         }
         let n0f = libm::round(period * 1e6 / h_us as f64);
-        if !(1.0..=1e6).contains(&n0f) {
+        if n0f < 1.0 {
             return Err(ConfigError::SamplePeriodTooShort);
+        }
+        if n0f > 1e6 {
+            return Err(ConfigError::SamplePeriodTooLong);
         }
         let n0 = if cfg.closed_form { n0f as u32 } else { 0 };
         let hold = cfg.hold;

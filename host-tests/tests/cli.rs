@@ -70,13 +70,13 @@ fn stats_on_committed_captures() {
         let v = json(&ok(&["stats", p(&data(name))]));
         assert_eq!(
             v,
-            serde_json::json!({"bytes": n * flen, "frames": {ty: n}, "crc_errors": 0, "skipped_bytes": 0})
+            serde_json::json!({"bytes": n * flen, "frames": {ty: n}, "crc_errors": 0, "skipped_bytes": 0, "pending_bytes": 0})
         );
     }
-    // Key order as the issue writes it.
+    // Key order as the issue writes it, then `pending_bytes` (issue 8).
     assert_eq!(
         ok(&["stats", p(&data("fig5_a2_100hz.bin"))]),
-        "{\"bytes\":129537,\"frames\":{\"A2\":3501},\"crc_errors\":0,\"skipped_bytes\":0}\n"
+        "{\"bytes\":129537,\"frames\":{\"A2\":3501},\"crc_errors\":0,\"skipped_bytes\":0,\"pending_bytes\":0}\n"
     );
     // Corrupted: 501 packets, 5 dropped, 14 damaged (the synth report; see data/README.md).
     let v = json(&ok(&["stats", p(&data("fig5_a2_100hz_corrupt.bin"))]));
