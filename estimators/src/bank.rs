@@ -71,9 +71,10 @@ pub struct BankConfig {
     pub h: f32,
     /// How samples are presented between sample instants. Default [`Hold::Linear`].
     pub hold: Hold,
-    /// Longest sample interval integrated across, s; a longer gap re-initialises the bank from
-    /// the new sample. Default 0.25 s.
-    pub max_gap_s: f32,
+    /// Gap rule: the longest sample interval integrated across, in nominal sample periods
+    /// ([`BankConfig::sample_period_s`]); a longer gap re-initialises the bank from the new
+    /// sample. Default [`GAP_PERIODS`] (25: 0.25 s at 100 Hz, 12.5 s at 2 Hz).
+    pub max_gap_periods: f32,
     /// Nominal sample period, s (default 0.01 = 100 Hz): the closed-form maps are precomputed
     /// for `round(sample_period_s / h)` steps and the Kalman gains for this period.
     /// [`crate::period`] sets it from a stream's first samples (host CLI and firmware).
@@ -94,7 +95,7 @@ impl BankConfig {
     pub const PAPER: Self = Self {
         h: H_PAPER,
         hold: Hold::Linear,
-        max_gap_s: 0.25,
+        max_gap_periods: GAP_PERIODS,
         sample_period_s: 0.01,
         closed_form: true,
         ed_scheme: EdScheme::Euler,
@@ -102,6 +103,17 @@ impl BankConfig {
         acceleration: BankGains::PAPER_ACCELERATION,
     };
 }
+
+impl BankConfig {
+    /// The gap rule in seconds: `max_gap_periods * sample_period_s` (computed in f64).
+    pub fn max_gap_s(&self) -> f32 {
+        (f64::from(self.max_gap_periods) * f64::from(self.sample_period_s)) as f32
+    }
+}
+
+/// Default gap rule, in nominal sample periods: 25 (the former fixed 0.25 s at 100 Hz). The
+/// bank integrates across up to 24 lost packets at any packet rate.
+pub const GAP_PERIODS: f32 = 25.0;
 
 impl Default for BankConfig {
     fn default() -> Self {
@@ -159,8 +171,9 @@ impl<T: Real, S: SqrtFn<T>> YawBank<T, S> {
     /// Kalman gains).
     pub fn new(cfg: &BankConfig) -> Result<Self, ConfigError> {
         let h = cfg.h;
-        let clock = SampleClock::new(h, cfg.max_gap_s)?;
-        let h_us = clock.step_us();
+        // The period first: the gap rule is a multiple of it, so a bad period would otherwise
+        // be reported as a bad gap rule.
+        let h_us = crate::adapter::step_us(h)?;
         let period = f64::from(cfg.sample_period_s);
         if !period.is_finite() {
             return Err(ConfigError::NotFinite("sample_period_s"));
@@ -172,6 +185,7 @@ impl<T: Real, S: SqrtFn<T>> YawBank<T, S> {
         if n0f > 1e6 {
             return Err(ConfigError::SamplePeriodTooLong);
         }
+        let clock = SampleClock::new(h, cfg.max_gap_s())?;
         let n0 = if cfg.closed_form { n0f as u32 } else { 0 };
         let hold = cfg.hold;
         let v = &cfg.velocity;
@@ -351,6 +365,13 @@ impl<T: Real, S: SqrtFn<T>> YawBank<T, S> {
     /// How many times a gap longer than `max_gap_s` re-initialised the bank.
     pub fn reinit_count(&self) -> u32 {
         self.reinits
+    }
+
+    /// Starts a new epoch (a confirmed time jump, see `nav440_proto::TimeBase`): the next
+    /// sample re-initialises every law from itself and reports 0, whatever its time; the
+    /// unwrapper keeps its turn count. Not counted in [`Self::reinit_count`].
+    pub fn new_epoch(&mut self) {
+        self.clock.clear();
     }
 
     /// Forgets everything: the next sample is treated as the first one.

@@ -54,7 +54,9 @@ impl core::fmt::Display for ConfigError {
                 f.write_str("step h must be a whole number of microseconds in [1e-6, 1] s")
             }
             Self::StepTooLarge(p) => write!(f, "h * `{p}` must be < 1 for the Euler step"),
-            Self::GapTooShort => f.write_str("max_gap_s must be at least one step h"),
+            Self::GapTooShort => f.write_str(
+                "the gap rule (max_gap_periods x sample_period_s) must be at least one step h",
+            ),
             Self::SamplePeriodTooShort => f.write_str("sample period must be at least h"),
             Self::SamplePeriodTooLong => f.write_str("sample period must be at most 1e6 steps h"),
         }

@@ -113,7 +113,7 @@ fn unwrap_across_many_turns() {
     }
 }
 
-/// The first sample reports zeros; a gap longer than `max_gap_s` (0.25 s) re-initialises
+/// The first sample reports zeros; a gap longer than the gap rule (25 periods = 0.25 s at 100 Hz) re-initialises
 /// (zeros, counter), shorter gaps are integrated across without a spike.
 #[test]
 fn gap_handling() {
@@ -155,10 +155,10 @@ fn gap_handling() {
     assert_eq!(bank.reinit_count(), 0);
     // long gap: 0.5 s in which the yaw moved 120 deg (unknown path): re-initialised, and
     // afterwards the estimates rise from 0 to the rate with at most the overshoot of a
-    // second-order loop (< 2 r); a bank that integrated across the gap (max_gap_s = 1) reports a
+    // second-order loop (< 2 r); a bank that integrated across the gap (gap rule 100 periods = 1 s) reports a
     // spike from the 120 deg "ramp" instead.
     let mut integrating = YawBank::<f32>::new(&BankConfig {
-        max_gap_s: 1.0,
+        max_gap_periods: 100.0,
         ..BankConfig::default()
     })
     .unwrap();
@@ -513,7 +513,7 @@ fn invalid_bank_config_is_refused() {
     );
     assert_eq!(
         err(BankConfig {
-            max_gap_s: 0.0,
+            max_gap_periods: 0.0,
             ..d
         }),
         Some(ConfigError::GapTooShort)

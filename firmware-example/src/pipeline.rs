@@ -1,6 +1,7 @@
 //! The firmware's pipeline, the embedded twin of `host-tests`' replay (`nav440 estimate`):
 //! bytes -> `nav440_proto::Parser` -> `Packet::decode` -> `Packet::yaw_sample` ->
-//! `ItowClock` (time in us since the first sample) -> `estimators::YawBank` ([`crate::Bank`],
+//! `nav440_proto::TimeBase` (time in us since the first sample; time faults discarded or
+//! turned into new epochs, and counted) -> `estimators::YawBank` ([`crate::Bank`],
 //! the paper's presets, `BankConfig::default()`: h = 1e-4 s, linear hold) -> one CSV row per
 //! sample, formatted by `estimators::csv` exactly as the host does.
 //!
@@ -15,12 +16,15 @@
 //! shorter than the warm-up is decided at its end ([`Pipeline::finish`]) from the intervals it
 //! has (none: the default 0.01 s).
 //!
-//! A sample the bank rejects (time not increasing, non-finite yaw) yields no row and is
-//! counted, as on the host.
+//! Time faults follow `nav440_proto::TimeBase` (the same code as the host's
+//! `replay::SampleReader`): an impossible or single bad stamp costs its own sample only, a
+//! confirmed backward jump starts a new epoch (`YawBank::new_epoch`), GPSITOW samples in a
+//! timeITOW stream are ignored; each is counted. A sample the bank rejects (non-finite or
+//! out-of-range yaw) yields no row and is counted, as on the host. See docs/RELIABILITY.md.
 
 use estimators::period::PeriodEstimator;
 use estimators::BankConfig;
-use nav440_proto::{ItowClock, Packet, Parser};
+use nav440_proto::{Packet, Parser, TimeBase, TimeFaults, Timed};
 
 use crate::Bank;
 
@@ -37,19 +41,28 @@ pub const CSV_HEADER: &str = estimators::csv::HEADER;
 /// `estimators::period::WARMUP_SAMPLES`, the samples the period rule reads.
 pub const WARMUP_SAMPLES: usize = estimators::period::WARMUP_SAMPLES;
 
-/// Counters reported at the end of a run.
+/// Counters reported at the end of a run. Every counter saturates (the `u64` ones would need
+/// 5e9 years at 100 Hz to wrap; they use saturating adds all the same). Invariants at the end
+/// of a run: `yaw_packets = samples + time faults' discarded + duplicates` (plus one sample
+/// still held by the time base before `finish`), and `samples = rows + rejected +
+/// format_errors` once the bank runs.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Counters {
-    /// Packets that carried a yaw sample with a usable time stamp.
+    /// Samples with a usable time stamp, released by the time base to the bank (held warm-up
+    /// samples included).
     pub samples: u64,
-    /// Rows written.
+    /// Rows written (one per sample the bank accepted).
     pub rows: u64,
-    /// Samples rejected by the bank.
+    /// Samples rejected by the bank (non-finite or out-of-range yaw).
     pub rejected: u64,
-    /// Packets that failed to decode (CRC was fine, content was not).
+    /// CRC-valid frames that failed to decode (a known type with a wrong length).
     pub decode_errors: u64,
     /// Rows that did not fit the row buffer (never expected; counted, not hidden).
     pub format_errors: u64,
+    /// Decoded packets that carry yaw (A0/A1/A2/N0/N1/B1), before the time rules.
+    pub yaw_packets: u64,
+    /// Gaps longer than the gap rule: the bank re-initialised (`YawBank::reinit_count`).
+    pub gaps: u32,
 }
 
 /// The bank could not be built (from the defaults, or for the measured packet period).
@@ -62,6 +75,18 @@ struct Sample {
     t_us: u64,
     yaw_deg: f32,
     rate_deg_s: f32,
+    new_epoch: bool,
+}
+
+impl Sample {
+    fn from_timed(t: Timed<(f32, f32)>) -> Self {
+        Self {
+            t_us: t.t_us,
+            yaw_deg: t.payload.0,
+            rate_deg_s: t.payload.1,
+            new_epoch: t.new_epoch,
+        }
+    }
 }
 
 /// The bank and what it needs to run, before and after the warm-up.
@@ -81,7 +106,7 @@ enum Stage {
 /// Parser + clock + bank.
 pub struct Pipeline {
     parser: Parser,
-    clock: ItowClock,
+    clock: TimeBase<(f32, f32)>,
     cfg: BankConfig,
     stage: Stage,
     counters: Counters,
@@ -90,18 +115,23 @@ pub struct Pipeline {
 /// Runs one sample through the bank and emits its row.
 #[inline(never)]
 fn run_sample(bank: &mut Bank, counters: &mut Counters, s: Sample, emit: &mut dyn FnMut(&str)) {
-    let Ok(out) = bank.update(s.t_us, s.yaw_deg) else {
-        counters.rejected += 1;
+    if s.new_epoch {
+        bank.new_epoch();
+    }
+    let res = bank.update(s.t_us, s.yaw_deg);
+    counters.gaps = bank.reinit_count();
+    let Ok(out) = res else {
+        counters.rejected = counters.rejected.saturating_add(1);
         return;
     };
     let mut row = Row::new();
     let ok = estimators::csv::write_row(&mut row, s.t_us, s.rate_deg_s, &out).is_ok()
         && (row.ends_with('\n') || row.push('\n').is_ok());
     if ok {
-        counters.rows += 1;
+        counters.rows = counters.rows.saturating_add(1);
         emit(row.as_str());
     } else {
-        counters.format_errors += 1;
+        counters.format_errors = counters.format_errors.saturating_add(1);
     }
 }
 
@@ -136,6 +166,32 @@ fn start(
     }
 }
 
+/// One sample released by the time base: into the warm-up buffer or through the bank.
+fn take_sample(
+    cfg: &BankConfig,
+    stage: &mut Stage,
+    counters: &mut Counters,
+    s: Sample,
+    emit: &mut impl FnMut(&str),
+) {
+    counters.samples = counters.samples.saturating_add(1);
+    let warmup_done = match stage {
+        Stage::Running(bank) => {
+            run_sample(bank, counters, s, emit);
+            false
+        }
+        Stage::Warmup(held) => {
+            // Cannot fail: the warm-up ends as soon as the buffer is full.
+            let _ = held.push(s);
+            held.is_full()
+        }
+        Stage::Failed(_) => false,
+    };
+    if warmup_done {
+        start(cfg, stage, counters, emit);
+    }
+}
+
 impl Pipeline {
     /// A pipeline with the bank presets of `nav440 estimate` (`BankConfig::default()`),
     /// checked here once so that a bad configuration fails at start.
@@ -144,7 +200,7 @@ impl Pipeline {
         build_bank(&cfg).map_err(ConfigError)?;
         Ok(Self {
             parser: Parser::new(),
-            clock: ItowClock::new(),
+            clock: TimeBase::new(),
             cfg,
             stage: Stage::Warmup(heapless::Vec::new()),
             counters: Counters::default(),
@@ -166,36 +222,16 @@ impl Pipeline {
             let packet = match Packet::decode(frame) {
                 Ok(p) => p,
                 Err(_) => {
-                    counters.decode_errors += 1;
+                    counters.decode_errors = counters.decode_errors.saturating_add(1);
                     return;
                 }
             };
             let Some(sample) = packet.yaw_sample() else {
                 return;
             };
-            let Some(t_us) = clock.update(sample.time) else {
-                return;
-            };
-            counters.samples += 1;
-            let s = Sample {
-                t_us,
-                yaw_deg: sample.yaw_deg,
-                rate_deg_s: sample.yaw_rate_deg_s,
-            };
-            let warmup_done = match stage {
-                Stage::Running(bank) => {
-                    run_sample(bank, counters, s, &mut emit);
-                    false
-                }
-                Stage::Warmup(held) => {
-                    // Cannot fail: the warm-up ends as soon as the buffer is full.
-                    let _ = held.push(s);
-                    held.is_full()
-                }
-                Stage::Failed(_) => false,
-            };
-            if warmup_done {
-                start(cfg, stage, counters, &mut emit);
+            counters.yaw_packets = counters.yaw_packets.saturating_add(1);
+            for t in clock.update(sample.time, (sample.yaw_deg, sample.yaw_rate_deg_s)) {
+                take_sample(cfg, stage, counters, Sample::from_timed(t), &mut emit);
             }
         });
         match &self.stage {
@@ -206,6 +242,15 @@ impl Pipeline {
 
     /// End of a finite input: runs a capture shorter than the warm-up.
     pub fn finish(&mut self, mut emit: impl FnMut(&str)) -> Result<(), ConfigError> {
+        if let Some(t) = self.clock.finish() {
+            take_sample(
+                &self.cfg,
+                &mut self.stage,
+                &mut self.counters,
+                Sample::from_timed(t),
+                &mut emit,
+            );
+        }
         start(&self.cfg, &mut self.stage, &mut self.counters, &mut emit);
         match &self.stage {
             Stage::Failed(e) => Err(ConfigError(*e)),
@@ -223,6 +268,11 @@ impl Pipeline {
         &self.counters
     }
 
+    /// Time-stamp faults so far (`nav440_proto::TimeBase`).
+    pub fn time_faults(&self) -> &TimeFaults {
+        self.clock.faults()
+    }
+
     /// Writes the one-line summary of all counters (`key=value` pairs) into `w`.
     pub fn summary(
         &self,
@@ -232,10 +282,16 @@ impl Pipeline {
     ) -> core::fmt::Result {
         let s = self.parser.stats();
         let c = &self.counters;
+        let f = self.clock.faults();
         write!(
             w,
             "bytes={} frames={} crc_errors={} skipped={} decode_errors={} samples={} rows={} rejected={} format_errors={} uart_overruns={} uart_stalls={}",
             s.bytes, s.frames, s.crc_errors, s.skipped_bytes, c.decode_errors, c.samples, c.rows, c.rejected, c.format_errors, uart_overruns, uart_stalls
+        )?;
+        write!(
+            w,
+            " yaw_packets={} impossible={} bad_backward={} bad_forward={} backward_jumps={} kind_switches={} other_kind={} duplicates={} gaps={}",
+            c.yaw_packets, f.impossible, f.bad_backward, f.bad_forward, f.backward_jumps, f.kind_switches, f.other_kind, f.duplicates, c.gaps
         )
     }
 }

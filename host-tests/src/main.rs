@@ -369,7 +369,7 @@ fn run(cli: Cli) -> Result<()> {
             opts.fixed = fixed;
             let mut r = replay::open_capture(&file)?;
             let name = r.name().to_string();
-            let rejected = match output {
+            let report = match output {
                 Some(p) => {
                     let mut w = LazyFile::new(p);
                     let res = replay::estimate_stream(&mut r, &opts, &mut w);
@@ -381,9 +381,12 @@ fn run(cli: Cli) -> Result<()> {
                     replay::estimate_stream(&mut r, &opts, &mut w)
                 }
             };
-            let rejected = with_name(&name, rejected)?;
-            if let Some(m) = rejected.warning() {
+            let report = with_name(&name, report)?;
+            if let Some(m) = report.summary.rejected.warning() {
                 eprintln!("nav440: warning: {m}");
+            }
+            if let Some(w) = replay::fault_warning(&report.faults, report.summary.gaps) {
+                eprintln!("nav440: warning: {w}");
             }
             Ok(())
         }

@@ -45,10 +45,10 @@ pub fn ave_on_rate(
 ) -> Result<Vec<f32>> {
     let bad =
         |e: estimators::ConfigError| Error::Usage(format!("bad reference AVE configuration: {e}"));
-    let bank = opts.bank_config();
+    let bank = opts.bank_config_for(samples);
     let ave = Ave::<f32>::new(cfg, opts.step_s).map_err(bad)?;
     let mut adapter =
-        SampleAdapter::new(ave, opts.step_s, bank.max_gap_s, opts.hold).map_err(bad)?;
+        SampleAdapter::new(ave, opts.step_s, bank.max_gap_s(), opts.hold).map_err(bad)?;
     Ok(samples
         .iter()
         .map(|s| adapter.update(s.t_us, s.rate_deg_s).unwrap_or(f32::NAN))

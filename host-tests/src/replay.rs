@@ -7,7 +7,8 @@ use crate::error::{Error, Result};
 use estimators::period::PeriodEstimator;
 pub use estimators::period::WARMUP_SAMPLES;
 use estimators::{BankConfig, BankOutput, Fx, Hold, SampleError, YawBank};
-use nav440_proto::{ItowClock, Packet, Parser};
+pub use nav440_proto::TimeFaults;
+use nav440_proto::{Packet, Parser, TimeBase};
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -229,12 +230,17 @@ pub fn stream_stats(bytes: &[u8]) -> StreamStats {
 /// One timed yaw sample taken from a packet.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sample {
-    /// Time since the first yaw packet, microseconds (from timeITOW / GPSITOW, wraps handled).
+    /// Time since the first yaw packet, microseconds (from timeITOW / GPSITOW through
+    /// `nav440_proto::TimeBase`: wraps handled, strictly increasing).
     pub t_us: u64,
     /// Yaw as sent (wrapped), degrees.
     pub yaw_deg: f32,
     /// Body z rate as sent (the measured reference), deg/s.
     pub rate_deg_s: f32,
+    /// First sample of a new time epoch (a confirmed backward jump of the time stamps, or the
+    /// switch from GPSITOW to timeITOW): the bank re-initialises from it
+    /// (`YawBank::new_epoch`).
+    pub new_epoch: bool,
 }
 
 impl Sample {
@@ -244,46 +250,83 @@ impl Sample {
     }
 }
 
-/// Extracts timed yaw samples from a stream fed in any number of chunks (constant memory):
-/// the parser, the time-stamp clock and frame counts.
-#[derive(Default)]
-pub struct SampleExtractor {
+/// Streaming sample extraction, the host twin of the firmware's front end: bytes -> parser ->
+/// packets carrying yaw -> `nav440_proto::TimeBase` (time faults handled and counted) ->
+/// [`Sample`]s. Feed it bytes in any chunking; the samples come out in stream order (a
+/// suspicious time stamp is released one sample late, see `TimeBase`). Call
+/// [`SampleReader::finish`] at the end of input.
+#[derive(Debug, Default)]
+pub struct SampleReader {
     parser: Parser,
-    clock: ItowClock,
+    time: TimeBase<(f32, f32)>,
     frames: u64,
+    yaw_packets: u64,
     samples: u64,
 }
 
-impl std::fmt::Debug for SampleExtractor {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("SampleExtractor")
-            .field("frames", &self.frames)
-            .field("samples", &self.samples)
-            .finish()
-    }
-}
-
-impl SampleExtractor {
-    /// An extractor that has seen nothing.
+impl SampleReader {
+    /// A reader at the start of a stream.
     pub fn new() -> Self {
         Self::default()
     }
 
-    /// Feeds the next bytes of the stream; `on_sample` gets each new sample in stream order.
-    pub fn push(&mut self, bytes: &[u8], mut on_sample: impl FnMut(Sample)) {
-        let (clock, frames, samples) = (&mut self.clock, &mut self.frames, &mut self.samples);
-        self.parser.feed(bytes, |f| {
+    /// Feeds bytes; `out` gets every sample released.
+    pub fn feed(&mut self, bytes: &[u8], mut out: impl FnMut(Sample)) {
+        let Self {
+            parser,
+            time,
+            frames,
+            yaw_packets,
+            samples,
+        } = self;
+        parser.feed(bytes, |f| {
             *frames += 1;
-            if let Some(s) = sample_of_frame(clock, f) {
+            let Some(y) = Packet::decode(f).ok().and_then(|p| p.yaw_sample()) else {
+                return;
+            };
+            *yaw_packets += 1;
+            for t in time.update(y.time, (y.yaw_deg, y.yaw_rate_deg_s)) {
                 *samples += 1;
-                on_sample(s);
+                out(to_sample(t));
             }
         });
     }
 
-    /// Checks the end of the stream: a stream without any valid frame, or without any yaw
-    /// packet, is an [`Error::NotNav440`].
-    pub fn finish(&self) -> Result<()> {
+    /// End of input: releases a held sample if the time rules allow it.
+    pub fn finish(&mut self, mut out: impl FnMut(Sample)) {
+        if let Some(t) = self.time.finish() {
+            self.samples += 1;
+            out(to_sample(t));
+        }
+    }
+
+    /// Time-stamp faults so far.
+    pub fn faults(&self) -> TimeFaults {
+        *self.time.faults()
+    }
+
+    /// Valid (CRC-checked) frames so far.
+    pub fn frames(&self) -> u64 {
+        self.frames
+    }
+
+    /// Packets carrying yaw so far (before the time rules).
+    pub fn yaw_packets(&self) -> u64 {
+        self.yaw_packets
+    }
+
+    /// Samples released so far.
+    pub fn samples(&self) -> u64 {
+        self.samples
+    }
+
+    /// Parser statistics so far.
+    pub fn parser_stats(&self) -> &nav440_proto::Stats {
+        self.parser.stats()
+    }
+
+    /// The error for a finished stream that gave no sample ([`Error::NotNav440`]), or `Ok`.
+    pub fn check_nonempty(&self) -> Result<()> {
         if self.frames == 0 {
             return Err(Error::NotNav440(
                 "no NAV440 frame found (not a NAV440 capture?)".into(),
@@ -291,7 +334,7 @@ impl SampleExtractor {
         }
         if self.samples == 0 {
             return Err(Error::NotNav440(format!(
-                "{} NAV440 frames but none carries yaw with a time stamp (need A0/A1/A2/N0/N1/B1)",
+                "{} NAV440 frames but none carries yaw with a usable time stamp (need A0/A1/A2/N0/N1/B1)",
                 self.frames
             )));
         }
@@ -299,42 +342,52 @@ impl SampleExtractor {
     }
 }
 
-/// The sample of one frame, if it is a packet carrying yaw with a usable time stamp.
-fn sample_of_frame(clock: &mut ItowClock, f: nav440_proto::Frame<'_>) -> Option<Sample> {
-    let y = Packet::decode(f).ok()?.yaw_sample()?;
-    let t_us = clock.update(y.time)?;
-    Some(Sample {
-        t_us,
-        yaw_deg: y.yaw_deg,
-        rate_deg_s: y.yaw_rate_deg_s,
-    })
+fn to_sample(t: nav440_proto::Timed<(f32, f32)>) -> Sample {
+    Sample {
+        t_us: t.t_us,
+        yaw_deg: t.payload.0,
+        rate_deg_s: t.payload.1,
+        new_epoch: t.new_epoch,
+    }
 }
 
 /// Extracts the timed yaw samples of every packet that carries yaw, in stream order.
 /// A stream without any valid frame, or without any yaw packet, is an [`Error::NotNav440`].
 pub fn samples(bytes: &[u8]) -> Result<Vec<Sample>> {
-    let mut ex = SampleExtractor::new();
+    samples_and_faults(bytes).map(|(s, _)| s)
+}
+
+/// [`samples`] and the time-stamp faults met on the way.
+pub fn samples_and_faults(bytes: &[u8]) -> Result<(Vec<Sample>, TimeFaults)> {
+    let mut reader = SampleReader::new();
     let mut out = Vec::new();
-    ex.push(bytes, |s| out.push(s));
-    ex.finish()?;
-    Ok(out)
+    reader.feed(bytes, |s| out.push(s));
+    reader.finish(|s| out.push(s));
+    reader.check_nonempty()?;
+    Ok((out, reader.faults()))
 }
 
 /// [`samples`] of a capture read in chunks (file, or standard input for `-`): memory is the
-/// samples' (16 bytes each), not the capture's. Errors name the capture.
+/// samples' (24 bytes each), not the capture's. Errors name the capture.
 pub fn read_samples(path: &Path) -> Result<Vec<Sample>> {
+    read_samples_and_faults(path).map(|(s, _)| s)
+}
+
+/// [`read_samples`] and the time-stamp faults met on the way.
+pub fn read_samples_and_faults(path: &Path) -> Result<(Vec<Sample>, TimeFaults)> {
     let mut r = open_capture(path)?;
-    let mut ex = SampleExtractor::new();
+    let mut reader = SampleReader::new();
     let mut out = Vec::new();
     r.for_each_chunk(|c| {
-        ex.push(c, |s| out.push(s));
+        reader.feed(c, |s| out.push(s));
         Ok(true)
     })?;
-    ex.finish().map_err(|e| match e {
+    reader.finish(|s| out.push(s));
+    reader.check_nonempty().map_err(|e| match e {
         Error::NotNav440(m) => Error::NotNav440(format!("{}: {m}", r.name())),
         other => other,
     })?;
-    Ok(out)
+    Ok((out, reader.faults()))
 }
 
 /// Gaussian noise added to yaw before estimation (the paper's protocol).
@@ -438,18 +491,39 @@ pub struct Row {
     pub out: BankOutput,
 }
 
-/// Runs the estimator bank over `samples`. A sample the bank rejects (e.g. time going
-/// backwards) yields no row; the count of those is returned too.
+/// What a run of the bank gives: rows and the counts of samples it did not turn into rows.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Estimate {
+    /// One row per accepted sample.
+    pub rows: Vec<Row>,
+    /// Samples the bank rejected (non-finite or out-of-range yaw).
+    pub rejected: usize,
+    /// Gaps longer than the gap rule (`BankConfig::max_gap_periods` nominal periods): the bank
+    /// re-initialised there (`YawBank::reinit_count`).
+    pub gaps: u32,
+}
+
+/// Runs the estimator bank over `samples`. A sample the bank rejects (non-finite or
+/// out-of-range yaw) yields no row; the count of those is returned too.
 pub fn estimate(samples: &[Sample], opts: &EstimateOptions) -> Result<(Vec<Row>, usize)> {
-    let (rows, rejected) = estimate_rows(samples, opts)?;
-    Ok((
+    estimate_report(samples, opts).map(|e| (e.rows, e.rejected))
+}
+
+/// [`estimate`] with the bank's gap count.
+pub fn estimate_report(samples: &[Sample], opts: &EstimateOptions) -> Result<Estimate> {
+    let (rows, summary) = estimate_rows(samples, opts)?;
+    Ok(Estimate {
         rows,
-        usize::try_from(rejected.total()).unwrap_or(usize::MAX),
-    ))
+        rejected: usize::try_from(summary.rejected.total()).unwrap_or(usize::MAX),
+        gaps: summary.gaps,
+    })
 }
 
 /// [`estimate`] with the rejected samples counted by reason.
-pub fn estimate_rows(samples: &[Sample], opts: &EstimateOptions) -> Result<(Vec<Row>, Rejections)> {
+pub fn estimate_rows(
+    samples: &[Sample],
+    opts: &EstimateOptions,
+) -> Result<(Vec<Row>, EstimationSummary)> {
     let mut rows = Vec::with_capacity(samples.len());
     let mut est = Estimation::new(opts)?;
     let mut keep = |r: Row| {
@@ -459,8 +533,38 @@ pub fn estimate_rows(samples: &[Sample], opts: &EstimateOptions) -> Result<(Vec<
     for &s in samples {
         est.push(s, &mut keep)?;
     }
-    let rejected = est.finish(&mut keep)?;
-    Ok((rows, rejected))
+    let summary = est.finish(&mut keep)?;
+    Ok((rows, summary))
+}
+
+/// The one-line `nav440 estimate` warning for time faults and gaps (`None` when there were
+/// none): `time faults: impossible=N bad_backward=N bad_forward=N backward_jumps=N
+/// kind_switches=N other_kind=N duplicates=N gaps=N`.
+pub fn fault_warning(f: &TimeFaults, gaps: u32) -> Option<String> {
+    (f.any() || f.duplicates > 0 || gaps > 0).then(|| {
+        format!(
+            "time faults: impossible={} bad_backward={} bad_forward={} backward_jumps={} kind_switches={} other_kind={} duplicates={} gaps={}",
+            f.impossible, f.bad_backward, f.bad_forward, f.backward_jumps, f.kind_switches, f.other_kind, f.duplicates, gaps
+        )
+    })
+}
+
+/// The end of an [`Estimation`]: the samples that gave no row, and the gaps.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct EstimationSummary {
+    /// Samples the bank rejected, by reason.
+    pub rejected: Rejections,
+    /// Gaps longer than the gap rule, where the bank re-initialised (new epochs not counted).
+    pub gaps: u32,
+}
+
+/// What [`estimate_stream`] reports besides the CSV.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StreamReport {
+    /// Rejected samples and gaps.
+    pub summary: EstimationSummary,
+    /// Time-stamp faults met by the sample extraction.
+    pub faults: TimeFaults,
 }
 
 /// Samples the bank refused (they give no row), by reason.
@@ -551,6 +655,20 @@ impl Bank {
             Bank::Fx(b) => b.update(t_us, yaw_deg),
         }
     }
+
+    fn new_epoch(&mut self) {
+        match self {
+            Bank::F32(b) => b.new_epoch(),
+            Bank::Fx(b) => b.new_epoch(),
+        }
+    }
+
+    fn reinit_count(&self) -> u32 {
+        match self {
+            Bank::F32(b) => b.reinit_count(),
+            Bank::Fx(b) => b.reinit_count(),
+        }
+    }
 }
 
 /// The added noise: N(0, var) draws from xoshiro256++ seeded with the seed, in order.
@@ -586,9 +704,11 @@ impl NoiseGen {
 struct StepState {
     /// Observer step, us.
     h_us: u64,
-    /// The gap rule of the packet-rate bank ([`NoiseAt::Sample`]), so both modes re-initialise
-    /// on the same gaps: an interval it calls a gap is not interpolated.
-    gap_clock: estimators::SampleClock,
+    /// The gap rule of the packet-rate bank ([`NoiseAt::Sample`]), us: an interval beyond it
+    /// is not interpolated; the bank re-initialises there, as in sample mode.
+    gap_us: u64,
+    /// Restarts at such gaps.
+    gaps: u32,
     /// Unwrapping offset (as [`unwrap_deg`]) and the previous wrapped yaw.
     offset: f64,
     prev_wrapped: Option<f64>,
@@ -654,12 +774,22 @@ impl Estimation {
     }
 
     /// Ends the stream (a stream shorter than the warm-up runs with the intervals it has) and
-    /// returns the rejected samples.
-    pub fn finish(mut self, on_row: &mut dyn FnMut(Row) -> Result<()>) -> Result<Rejections> {
+    /// returns the rejected samples and the gaps.
+    pub fn finish(
+        mut self,
+        on_row: &mut dyn FnMut(Row) -> Result<()>,
+    ) -> Result<EstimationSummary> {
         if self.runner.is_none() {
             self.start(on_row)?;
         }
-        Ok(self.rejected)
+        let gaps = self.runner.as_ref().map_or(0, |r| match &r.step {
+            Some(st) => st.gaps,
+            None => r.bank.reinit_count(),
+        });
+        Ok(EstimationSummary {
+            rejected: self.rejected,
+            gaps,
+        })
     }
 
     /// Builds the bank for the held-back samples' period and runs them.
@@ -667,14 +797,15 @@ impl Estimation {
         let mut cfg = self.opts.bank_config_for(&self.warmup);
         let noise = NoiseGen::new(self.opts.noise)?;
         let step = if self.opts.noise_at == NoiseAt::Step {
-            let gap_clock = estimators::SampleClock::new(cfg.h, cfg.max_gap_s)
-                .map_err(|e| Error::Usage(format!("bad estimator configuration: {e}")))?;
+            // The packet-level gap rule (the bank itself sees one sample per step).
+            let gap_us = (f64::from(cfg.max_gap_s()) * 1e6).round() as u64;
             // The bank sees one sample per step: closed-form maps and Kalman gains for that
             // period.
             cfg.sample_period_s = self.opts.step_s;
             Some(StepState {
                 h_us: (f64::from(self.opts.step_s) * 1e6).round().max(1.0) as u64,
-                gap_clock,
+                gap_us,
+                gaps: 0,
                 offset: 0.0,
                 prev_wrapped: None,
                 prev: None,
@@ -701,6 +832,9 @@ impl Estimation {
         };
         let out = match r.step.as_mut() {
             None => {
+                if s.new_epoch {
+                    r.bank.new_epoch();
+                }
                 let y = r.noise.add(f64::from(s.yaw_deg));
                 r.bank.update(s.t_us, y)
             }
@@ -715,24 +849,26 @@ impl Estimation {
                 let prev = st.prev.replace((s.t_us, y));
                 match prev {
                     None => r.bank.update(s.t_us, r.noise.add(f64::from(y))),
-                    Some((pt, py)) if s.t_us > pt => {
-                        let mut gap = st.gap_clock;
-                        let _ = gap.tick(pt);
-                        if matches!(gap.peek(s.t_us), Ok(estimators::Tick::Gap)) {
-                            // A gap: the bank re-initialises on this sample, as in sample mode.
-                            r.bank.update(s.t_us, r.noise.add(f64::from(y)))
-                        } else {
-                            let h_us = st.h_us;
-                            let n = ((s.t_us - pt + h_us / 2) / h_us).max(1);
-                            let mut last = Err(SampleError::NonIncreasingTime);
-                            for j in 1..=n {
-                                let t = if j == n { s.t_us } else { pt + j * h_us };
-                                let yi = f64::from(py)
-                                    + (f64::from(y) - f64::from(py)) * j as f64 / n as f64;
-                                last = r.bank.update(t, r.noise.add(yi));
-                            }
-                            last
+                    // A new epoch, or a gap the sample-mode bank re-initialises on: no
+                    // interpolation across it; the bank restarts from this sample.
+                    Some((pt, _)) if s.new_epoch || s.t_us.saturating_sub(pt) > st.gap_us => {
+                        if !s.new_epoch {
+                            st.gaps = st.gaps.saturating_add(1);
                         }
+                        r.bank.new_epoch();
+                        r.bank.update(s.t_us, r.noise.add(f64::from(y)))
+                    }
+                    Some((pt, py)) if s.t_us > pt => {
+                        let h_us = st.h_us;
+                        let n = ((s.t_us - pt + h_us / 2) / h_us).max(1);
+                        let mut last = Err(SampleError::NonIncreasingTime);
+                        for j in 1..=n {
+                            let t = if j == n { s.t_us } else { pt + j * h_us };
+                            let yi = f64::from(py)
+                                + (f64::from(y) - f64::from(py)) * j as f64 / n as f64;
+                            last = r.bank.update(t, r.noise.add(yi));
+                        }
+                        last
                     }
                     Some(_) => Err(SampleError::NonIncreasingTime),
                 }
@@ -787,10 +923,10 @@ pub fn write_csv<W: std::io::Write + ?Sized>(rows: &[Row], w: &mut W) -> std::io
 /// bank rejected. This is what the firmware's equivalence test compares its output against.
 pub fn estimate_csv(bytes: &[u8], opts: &EstimateOptions) -> Result<(String, usize)> {
     let mut out = Vec::new();
-    let rejected = estimate_stream(bytes, opts, &mut out)?;
+    let report = estimate_stream(bytes, opts, &mut out)?;
     Ok((
         String::from_utf8_lossy(&out).into_owned(),
-        usize::try_from(rejected.total()).unwrap_or(usize::MAX),
+        usize::try_from(report.summary.rejected.total()).unwrap_or(usize::MAX),
     ))
 }
 
@@ -805,13 +941,13 @@ pub fn estimate_stream<'a, W: std::io::Write + ?Sized>(
     input: impl IntoChunks<'a>,
     opts: &EstimateOptions,
     w: &mut W,
-) -> Result<Rejections> {
-    let mut ex = SampleExtractor::new();
+) -> Result<StreamReport> {
+    let mut reader = SampleReader::new();
     let mut est = Estimation::new(opts)?;
     let mut sink = CsvSink::new(w);
     input.chunks(&mut |chunk| {
         let mut res = Ok(());
-        ex.push(chunk, |s| {
+        reader.feed(chunk, |s| {
             if res.is_ok() {
                 res = est.push(s, &mut |r| sink.row(&r));
             }
@@ -821,12 +957,22 @@ pub fn estimate_stream<'a, W: std::io::Write + ?Sized>(
         Ok(!sink.closed)
     })?;
     if sink.closed {
-        return Ok(Rejections::default());
+        return Ok(StreamReport::default());
     }
-    ex.finish()?;
-    let rejected = est.finish(&mut |r| sink.row(&r))?;
+    let mut res = Ok(());
+    reader.finish(|s| {
+        if res.is_ok() {
+            res = est.push(s, &mut |r| sink.row(&r));
+        }
+    });
+    res?;
+    reader.check_nonempty()?;
+    let summary = est.finish(&mut |r| sink.row(&r))?;
     sink.end()?;
-    Ok(rejected)
+    Ok(StreamReport {
+        summary,
+        faults: reader.faults(),
+    })
 }
 
 /// A byte stream given in chunks: a slice (one chunk) or a [`CaptureReader`].

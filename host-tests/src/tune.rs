@@ -295,7 +295,7 @@ pub fn tune(
         vel_ref: samples.iter().map(|s| s.rate_deg_s).collect(),
         acc_ref: ave_on_rate(samples, &REFERENCE_AVE, opts)?,
         opts,
-        max_gap_s: base.max_gap_s,
+        max_gap_s: base.max_gap_s(),
         sample_period_s: base.sample_period_s,
         window_s,
     };

@@ -63,7 +63,7 @@ pub mod packets;
 pub mod parser;
 pub mod types;
 
-pub use clock::ItowClock;
+pub use clock::{ItowClock, Released, TimeBase, TimeFaults, Timed};
 pub use crc16::{crc16, Crc16Table, DefaultCrcTable};
 pub use encode::{command, encode_frame, encode_raw, EncodeError, Request};
 pub use packets::{
