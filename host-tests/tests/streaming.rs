@@ -17,6 +17,15 @@ const LIMIT_KIB: u64 = 64 * 1024;
 /// How long a test waits for a row before calling the command stuck (a guard, not a timing).
 const STUCK: Duration = Duration::from_secs(120);
 
+/// Multiplies the number of frames of the memory tests (default 1): e.g.
+/// `NAV440_STREAM_SCALE=16` for the multi-GB figures of docs/RELIABILITY.md.
+fn scale() -> u64 {
+    std::env::var("NAV440_STREAM_SCALE")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1)
+}
+
 /// Rotation rate of the generated motion, deg/s.
 const RATE: f64 = 30.0;
 
@@ -114,8 +123,9 @@ fn pipe_through(args: &[&str], frames: u64, pad: usize) -> Outcome {
 
 fn check_memory(what: &str, o: &Outcome) {
     eprintln!(
-        "{what}: {} MiB through standard input, peak RSS {} KiB",
+        "{what}: {} MiB through standard input, {} output lines, peak RSS {} KiB",
         o.bytes_in >> 20,
+        o.lines,
         o.hwm_kib
     );
     assert!(
@@ -135,7 +145,7 @@ fn check_memory(what: &str, o: &Outcome) {
     ignore = "release only: cargo test --release -p host-tests --test streaming"
 )]
 fn stats_streams_in_constant_memory() {
-    let (n, pad) = (200_000u64, 1024usize);
+    let (n, pad) = (200_000 * scale(), 1024usize);
     let o = pipe_through(&["stats", "-"], n, pad);
     check_memory("stats", &o);
     let v: serde_json::Value = serde_json::from_str(&o.first).unwrap();
@@ -151,7 +161,7 @@ fn stats_streams_in_constant_memory() {
     ignore = "release only: cargo test --release -p host-tests --test streaming"
 )]
 fn decode_streams_in_constant_memory() {
-    let (n, pad) = (200_000u64, 1024usize);
+    let (n, pad) = (200_000 * scale(), 1024usize);
     let o = pipe_through(&["decode", "-"], n, pad);
     check_memory("decode", &o);
     assert!(o.stderr.is_empty(), "{}", o.stderr);
@@ -174,7 +184,7 @@ fn decode_streams_in_constant_memory() {
 fn estimate_streams_in_constant_memory() {
     // 10^6 samples: kept in memory (16-byte samples and 72-byte rows) they alone would pass
     // 64 MiB.
-    let (n, pad) = (1_000_000u64, 200usize);
+    let (n, pad) = (1_000_000 * scale(), 200usize);
     let o = pipe_through(&["estimate", "-"], n, pad);
     check_memory("estimate", &o);
     assert!(o.stderr.is_empty(), "{}", o.stderr);
