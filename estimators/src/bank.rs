@@ -49,6 +49,16 @@ impl BankGains {
         ed: ED_PAPER,
         kf: KF_DEFAULT,
     };
+    /// [`Self::PAPER_VELOCITY`] with the product's AVE law ([`AVE_DEFAULT`], leaky deltahat).
+    pub const DEFAULT_VELOCITY: Self = Self {
+        ave: AVE_DEFAULT,
+        ..Self::PAPER_VELOCITY
+    };
+    /// [`Self::PAPER_ACCELERATION`] with the product's AVE law ([`AVE_DEFAULT`]).
+    pub const DEFAULT_ACCELERATION: Self = Self {
+        ave: AVE_DEFAULT,
+        ..Self::PAPER_ACCELERATION
+    };
     /// The paper's acceleration set: AVE-AVE, Table 4 ILO-ILO, AD-AD `T = 0.1`, ED-ED.
     pub const PAPER_ACCELERATION: Self = Self {
         ave: AVE_PAPER,
@@ -91,7 +101,14 @@ pub struct BankConfig {
 }
 
 impl BankConfig {
-    /// The paper's configuration (also [`Default`]).
+    /// The product default ([`Default`]): [`BankConfig::PAPER`] with the leaky AVE law
+    /// ([`AVE_DEFAULT`]) in the AVE and AVE-AVE, which does not degrade over long runs.
+    pub const DEFAULT: Self = Self {
+        velocity: BankGains::DEFAULT_VELOCITY,
+        acceleration: BankGains::DEFAULT_ACCELERATION,
+        ..Self::PAPER
+    };
+    /// The paper's configuration, every law as published (AVE `deltahat` only grows).
     pub const PAPER: Self = Self {
         h: H_PAPER,
         hold: Hold::Linear,
@@ -117,7 +134,7 @@ pub const GAP_PERIODS: f32 = 25.0;
 
 impl Default for BankConfig {
     fn default() -> Self {
-        Self::PAPER
+        Self::DEFAULT
     }
 }
 
@@ -125,14 +142,25 @@ impl Default for BankConfig {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct BankOutput {
-    /// The unwrapped yaw, deg.
+    /// The unwrapped yaw, deg, rounded to f32 (see [`BankOutput::yaw_residual_deg`]).
     pub yaw_unwrapped_deg: f32,
+    /// What f32 rounding took off the unwrapped yaw, deg: the exact unwrapped yaw is
+    /// `yaw_unwrapped_deg as f64 + yaw_residual_deg` (0 while f32 holds it exactly; exact in
+    /// f64 for NAV440 yaw, a multiple of 360/2^16 deg, up to 2^33 turns).
+    pub yaw_residual_deg: f64,
     /// Velocity estimates, deg/s, in the order of [`VELOCITY_NAMES`]: ave, ilo1, ilo2, ilo3,
     /// ad, ed, kf.
     pub vel: [f32; 7],
     /// Acceleration estimates, deg/s^2, same order (series AVE-AVE, ILO-ILO (Table 4),
     /// AD-AD (T = 0.1), ED-ED, Kalman).
     pub acc: [f32; 7],
+}
+
+/// The unwrapped yaw `360 turns + wrapped` (deg) as (f32 rounding, exact residual in f64).
+fn exact_yaw<T: Real>(turns: i64, wrapped: T) -> (f32, f64) {
+    let exact = turns as f64 * 360.0 + wrapped.to_f64();
+    let rounded = exact as f32;
+    (rounded, exact - f64::from(rounded))
 }
 
 type IloCf<T> = ClosedForm<T, Ilo<T, 1>>;
@@ -285,12 +313,14 @@ impl<T: Real, S: SqrtFn<T>> YawBank<T, S> {
         // every law is translated into the new frame (exact: the laws are invariant to input
         // offsets, see `Estimator::translate`).
         let yw = T::from_f32(yaw_deg);
-        let before = self.unwrap.offset();
-        let unwrapped = self.unwrap.unwrap(yw);
-        let shift = self.unwrap.offset() - before;
-        if shift != T::ZERO && tick != Tick::Init && tick != Tick::Gap {
+        let before = self.unwrap.turns();
+        let turns = self.unwrap.update(yw);
+        if turns != before && tick != Tick::Init && tick != Tick::Gap {
+            // One turn per sample at most: the shift is exactly +-360 deg in `T`.
+            let shift = T::from_i32(if turns > before { 360 } else { -360 });
             self.translate_all(-shift);
         }
+        let unwrapped = exact_yaw(turns, yw);
         let y = yw;
         let n = match tick {
             Tick::Init => {
@@ -330,7 +360,8 @@ impl<T: Real, S: SqrtFn<T>> YawBank<T, S> {
         ];
         self.y_prev = y;
         Ok(BankOutput {
-            yaw_unwrapped_deg: unwrapped.to_f32(),
+            yaw_unwrapped_deg: unwrapped.0,
+            yaw_residual_deg: unwrapped.1,
             vel: vel.map(Real::to_f32),
             acc: acc.map(Real::to_f32),
         })
@@ -354,9 +385,10 @@ impl<T: Real, S: SqrtFn<T>> YawBank<T, S> {
         self.kf_a.translate(d);
     }
 
-    fn zero_output(&self, y: T) -> BankOutput {
+    fn zero_output(&self, y: (f32, f64)) -> BankOutput {
         BankOutput {
-            yaw_unwrapped_deg: y.to_f32(),
+            yaw_unwrapped_deg: y.0,
+            yaw_residual_deg: y.1,
             vel: [0.0; 7],
             acc: [0.0; 7],
         }
@@ -372,6 +404,13 @@ impl<T: Real, S: SqrtFn<T>> YawBank<T, S> {
     /// unwrapper keeps its turn count. Not counted in [`Self::reinit_count`].
     pub fn new_epoch(&mut self) {
         self.clock.clear();
+    }
+
+    /// Sets the unwrapper's turn count to `turns` (e.g. to resume an absolute heading after a
+    /// restart, or to test a long spin without running it): only the yaw column moves by
+    /// `360 * delta` deg; the laws run in the local frame and are unaffected, bit for bit.
+    pub fn set_turns(&mut self, turns: i64) {
+        self.unwrap.set_turns(turns);
     }
 
     /// Forgets everything: the next sample is treated as the first one.

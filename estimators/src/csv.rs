@@ -11,7 +11,10 @@ pub const HEADER: &str = "t,yaw,yaw_rate,ave_v,ilo1_v,ilo2_v,ilo3_v,ad_v,ed_v,kf
 ///
 /// * `t`: `t_us` as seconds with 4 decimals (`{:.4}`), computed in integers (`t_us / 1e6`,
 ///   rounded half up to 0.1 ms), so no floating point and no precision loss for long runs;
-/// * `yaw`: `out.yaw_unwrapped_deg`; `yaw_rate`: `yaw_rate_deg_s` (the sensor's rate);
+/// * `yaw`: the exact unwrapped yaw: `out.yaw_unwrapped_deg` (f32 Display) when f32 holds it
+///   exactly (`yaw_residual_deg == 0`), else the exact f64 value
+///   `yaw_unwrapped_deg + yaw_residual_deg` (f64 Display), so the column stays exact for any
+///   number of turns; `yaw_rate`: `yaw_rate_deg_s` (the sensor's rate);
 /// * then `out.vel[0..7]` and `out.acc[0..7]`,
 ///
 /// every `f32` with Rust's `{}` Display (shortest round-trip form), so identical `f32` bits
@@ -24,7 +27,16 @@ pub fn write_row<W: Write>(
 ) -> core::fmt::Result {
     let tenths_ms = t_us / 100 + u64::from(t_us % 100 >= 50);
     write!(w, "{}.{:04}", tenths_ms / 10_000, tenths_ms % 10_000)?;
-    write!(w, ",{},{}", out.yaw_unwrapped_deg, yaw_rate_deg_s)?;
+    if out.yaw_residual_deg == 0.0 {
+        write!(w, ",{}", out.yaw_unwrapped_deg)?;
+    } else {
+        write!(
+            w,
+            ",{}",
+            f64::from(out.yaw_unwrapped_deg) + out.yaw_residual_deg
+        )?;
+    }
+    write!(w, ",{}", yaw_rate_deg_s)?;
     for x in out.vel.iter().chain(out.acc.iter()) {
         write!(w, ",{x}")?;
     }

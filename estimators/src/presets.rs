@@ -14,6 +14,16 @@ pub const AVE_PAPER: AveConfig = AveConfig {
     delta: DeltaMode::Paper,
 };
 
+/// The product's AVE (default of [`crate::BankConfig`]): the paper's gains with a leaky
+/// `deltahat` law, `d deltahat/dt = |e| - 0.1 deltahat` (time constant 10 s: as the paper's law
+/// over a few seconds, bounded over hours). The paper's law (deltahat only grows) degrades a
+/// long run (measured in `estimators/tests/long_run.rs`, see docs/RELIABILITY.md).
+pub const AVE_DEFAULT: AveConfig = AveConfig {
+    k: 500.0,
+    gamma1: 20000.0,
+    delta: DeltaMode::Leaky { sigma: 0.1 },
+};
+
 /// Table 2, ILO1 (velocity): `K1 = 1, L = 4, K2 = 0.2` (Q = 16).
 pub const ILO1_TABLE2: IloConfig = IloConfig {
     k1: 1.0,

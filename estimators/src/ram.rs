@@ -13,7 +13,7 @@
 //! | [`Ad`] | 16 | 32 |
 //! | [`Ed`] | 44 | 88 |
 //! | [`Kalman`] | 24 | 48 |
-//! | [`Unwrapper`] | 12 | 24 |
+//! | [`Unwrapper`] | 16 | 24 |
 //! | [`ClosedForm`]`<T, Ilo<T, 1>>` | 120 | 232 |
 //! | [`ClosedForm`]`<T, Ad<T>>` | 104 | 200 |
 //! | [`ClosedForm`]`<T, Series<Ilo<T, 1>, Ilo<T, 1>>>` | 152 | 296 |
@@ -36,7 +36,7 @@ pub const ED: (usize, usize) = (44, 88);
 /// `(f32, Fx)` of [`Kalman`].
 pub const KALMAN: (usize, usize) = (24, 48);
 /// `(f32, Fx)` of [`Unwrapper`].
-pub const UNWRAPPER: (usize, usize) = (12, 24);
+pub const UNWRAPPER: (usize, usize) = (16, 24);
 /// `(f32, Fx)` of [`ClosedForm`]`<T, Ilo<T, 1>>`.
 pub const CLOSED_ILO: (usize, usize) = (120, 232);
 /// `(f32, Fx)` of [`ClosedForm`]`<T, Ad<T>>`.

@@ -124,6 +124,7 @@ fn gap_handling() {
         first,
         BankOutput {
             yaw_unwrapped_deg: 12.5,
+            yaw_residual_deg: 0.0,
             vel: [0.0; 7],
             acc: [0.0; 7]
         }
@@ -478,6 +479,7 @@ fn csv_row_format() {
     );
     let out = BankOutput {
         yaw_unwrapped_deg: -361.5,
+        yaw_residual_deg: 0.0,
         vel: [1.0, 0.1, -2.5, 1e-7, 3.4028235e38, 0.0, 12.25],
         acc: [-0.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0],
     };

@@ -161,6 +161,8 @@ pub fn run(
     capture: &str,
 ) -> Result<PaperResult> {
     check_window(window_s)?;
+    let from_file = opts.config.is_some();
+    let opts = &opts.paper_law();
     let acc_ref = ave_on_rate(samples, &REFERENCE_AVE, opts)?;
     let jobs: Vec<(usize, u64)> = (0..NOISE_VARS.len())
         .flat_map(|i| SEEDS.iter().map(move |&s| (i, s)))
@@ -221,7 +223,7 @@ pub fn run(
         hold: opts.hold,
         step_s: opts.step_s,
         window_s,
-        gains: if opts.config.is_some() {
+        gains: if from_file {
             "from --gains file".into()
         } else {
             "paper presets (Tables 2 and 4)".into()

@@ -469,6 +469,17 @@ impl EstimateOptions {
         cfg
     }
 
+    /// These options with the paper's laws as the base when no gains file is given
+    /// (`BankConfig::PAPER`: the AVE's `deltahat` only grows), for the paper's experiment
+    /// (`nav440 paper`, `nav440 tune`); `nav440 estimate` and the firmware run
+    /// `BankConfig::default()` (leaky `deltahat`, docs/RELIABILITY.md).
+    pub fn paper_law(&self) -> Self {
+        Self {
+            config: Some(self.config.unwrap_or(BankConfig::PAPER)),
+            ..self.clone()
+        }
+    }
+
     /// [`EstimateOptions::bank_config`] with the nominal sample period set from the capture by
     /// `estimators::period`, the causal rule the firmware uses too: the upper median of the
     /// intervals between the first [`WARMUP_SAMPLES`] samples (0.01 s for a 100 Hz capture, i.e.
