@@ -199,14 +199,19 @@ impl<T: Real, S: SqrtFn<T>> YawBank<T, S> {
     /// Kalman gains).
     pub fn new(cfg: &BankConfig) -> Result<Self, ConfigError> {
         let h = cfg.h;
+        // The period first: the gap rule is a multiple of it, so a bad period would otherwise
+        // be reported as a bad gap rule.
         let h_us = crate::adapter::step_us(h)?;
         let period = f64::from(cfg.sample_period_s);
         if !period.is_finite() {
             return Err(ConfigError::NotFinite("sample_period_s"));
         }
         let n0f = libm::round(period * 1e6 / h_us as f64);
-        if !(1.0..=1e6).contains(&n0f) {
+        if n0f < 1.0 {
             return Err(ConfigError::SamplePeriodTooShort);
+        }
+        if n0f > 1e6 {
+            return Err(ConfigError::SamplePeriodTooLong);
         }
         let clock = SampleClock::new(h, cfg.max_gap_s())?;
         let n0 = if cfg.closed_form { n0f as u32 } else { 0 };

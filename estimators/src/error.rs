@@ -23,6 +23,9 @@ pub enum ConfigError {
     GapTooShort,
     /// The nominal sample period is not at least one step `h`.
     SamplePeriodTooShort,
+    /// The nominal sample period is more than `10^6` steps `h` (the closed-form maps and the
+    /// step count of one interval are limited to that).
+    SamplePeriodTooLong,
 }
 
 /// A sample that [`crate::YawBank::update`] (or [`crate::SampleAdapter`]) refuses. The state is
@@ -55,6 +58,7 @@ impl core::fmt::Display for ConfigError {
                 "the gap rule (max_gap_periods x sample_period_s) must be at least one step h",
             ),
             Self::SamplePeriodTooShort => f.write_str("sample period must be at least h"),
+            Self::SamplePeriodTooLong => f.write_str("sample period must be at most 1e6 steps h"),
         }
     }
 }

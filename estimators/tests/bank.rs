@@ -527,6 +527,14 @@ fn invalid_bank_config_is_refused() {
         }),
         Some(ConfigError::SamplePeriodTooShort)
     );
+    // 200 s at h = 1e-4 s is 2e6 steps: too long, and said so.
+    assert_eq!(
+        err(BankConfig {
+            sample_period_s: 200.0,
+            ..d
+        }),
+        Some(ConfigError::SamplePeriodTooLong)
+    );
     let mut v = d.velocity;
     v.ilo[1].k1 = 1.2;
     assert_eq!(

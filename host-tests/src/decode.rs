@@ -13,7 +13,7 @@
 //! `time_itow_s`); magnetic and true yaw are both `yaw_rad`.
 
 use crate::error::{Error, Result};
-use nav440_proto::{Field, Packet, Parser, SiValue};
+use nav440_proto::{Field, Frame, Packet, Parser, SiValue};
 
 /// Standard gravity, m/s^2 per g.
 pub const G0: f64 = 9.80665;
@@ -142,58 +142,173 @@ pub fn packet_columns(p: &Packet<'_>) -> Cols {
     }
 }
 
-/// Decodes every frame of `bytes` (or only those whose type name equals `only`,
-/// case-insensitively, e.g. "A2", "NAK") into CSV text.
-pub fn decode_csv(bytes: &[u8], only: Option<&str>) -> Result<String> {
-    let mut parser = Parser::new();
-    let mut rows: Vec<(usize, String, Cols)> = Vec::new();
-    let mut index = 0usize;
-    let mut frames = 0usize;
-    parser.feed(bytes, |f| {
-        frames += 1;
-        let name = f.packet_type.name().to_string();
-        let i = index;
-        index += 1;
-        if let Some(o) = only {
-            if !name.eq_ignore_ascii_case(o) {
+/// One decoded frame: its number in the stream, its type name and its (column, value) cells.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DecodedRow {
+    /// Frame number in the stream, from 0 (frames left out by `--type` count too).
+    pub index: u64,
+    /// Type name ("A2", "NAK", "z1", "??").
+    pub name: String,
+    /// The cells.
+    pub cols: Cols,
+}
+
+fn type_matches(f: &Frame<'_>, only: Option<&str>) -> bool {
+    only.is_none_or(|o| f.packet_type.name().eq_ignore_ascii_case(o))
+}
+
+fn frame_cols(f: Frame<'_>) -> Cols {
+    match Packet::decode(f) {
+        Ok(p) => packet_columns(&p),
+        Err(_) => vec![("payload_hex".to_string(), hex_bytes(f.payload))],
+    }
+}
+
+/// Frames -> [`DecodedRow`]s, for a stream fed in any number of chunks (constant memory).
+#[derive(Default)]
+pub struct FrameDecoder {
+    parser: Parser,
+    only: Option<String>,
+    frames: u64,
+}
+
+impl std::fmt::Debug for FrameDecoder {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("FrameDecoder")
+            .field("only", &self.only)
+            .field("frames", &self.frames)
+            .finish()
+    }
+}
+
+impl FrameDecoder {
+    /// A decoder of every frame, or only of those whose type name equals `only`
+    /// (case-insensitively, e.g. "A2", "nak").
+    pub fn new(only: Option<&str>) -> Self {
+        FrameDecoder {
+            only: only.map(str::to_string),
+            ..Self::default()
+        }
+    }
+
+    /// Feeds the next bytes; `on_row` gets each decoded frame that passes the type filter.
+    pub fn push(&mut self, bytes: &[u8], mut on_row: impl FnMut(DecodedRow)) {
+        let (frames, only) = (&mut self.frames, self.only.as_deref());
+        self.parser.feed(bytes, |f| {
+            let index = *frames;
+            *frames += 1;
+            if type_matches(&f, only) {
+                on_row(DecodedRow {
+                    index,
+                    name: f.packet_type.name().to_string(),
+                    cols: frame_cols(f),
+                });
+            }
+        });
+    }
+
+    /// Checks the end of the stream: no valid frame at all is an [`Error::NotNav440`].
+    pub fn finish(&self) -> Result<()> {
+        if self.frames == 0 {
+            return Err(Error::NotNav440(
+                "no NAV440 frame found (not a NAV440 capture?)".into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// The CSV header of `nav440 decode`: `index,type`, then the union of the rows' columns in
+/// order of first appearance.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Header {
+    cols: Vec<String>,
+    /// Frame shapes already looked at: frames of one type, payload length and decode outcome
+    /// have the same columns.
+    seen: Vec<([u8; 2], usize, bool)>,
+}
+
+impl Header {
+    /// An empty column set.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Adds the columns of a row.
+    pub fn add_row(&mut self, row: &DecodedRow) {
+        for (n, _) in &row.cols {
+            if !self.cols.iter().any(|c| c == n) {
+                self.cols.push(n.clone());
+            }
+        }
+    }
+
+    /// Adds the columns of every frame of `bytes` that passes the filter `only`, without
+    /// formatting their values (a frame shape seen before is skipped). Returns the number of
+    /// frames (all types).
+    pub fn scan(&mut self, parser: &mut Parser, bytes: &[u8], only: Option<&str>) -> u64 {
+        let mut frames = 0;
+        parser.feed(bytes, |f| {
+            frames += 1;
+            if !type_matches(&f, only) {
                 return;
             }
-        }
-        let cols = match Packet::decode(f) {
-            Ok(p) => packet_columns(&p),
-            Err(_) => vec![("payload_hex".to_string(), hex_bytes(f.payload))],
-        };
-        rows.push((i, name, cols));
-    });
-    if frames == 0 {
-        return Err(Error::NotNav440(
-            "no NAV440 frame found (not a NAV440 capture?)".into(),
-        ));
-    }
-    let mut header: Vec<&str> = Vec::new();
-    for (_, _, cols) in &rows {
-        for (n, _) in cols {
-            if !header.contains(&n.as_str()) {
-                header.push(n);
+            let key = (f.packet_type.0, f.payload.len(), Packet::decode(f).is_ok());
+            if self.seen.contains(&key) {
+                return;
             }
-        }
+            self.seen.push(key);
+            let row = DecodedRow {
+                index: 0,
+                name: String::new(),
+                cols: frame_cols(f),
+            };
+            self.add_row(&row);
+        });
+        frames
     }
-    let mut out = String::from("index,type");
-    for h in &header {
-        out.push(',');
-        out.push_str(h);
-    }
-    out.push('\n');
-    for (i, name, cols) in &rows {
-        out.push_str(&format!("{i},{}", csv_cell(name)));
-        for h in &header {
+
+    /// The header line (with its newline).
+    pub fn line(&self) -> String {
+        let mut out = String::from("index,type");
+        for h in &self.cols {
             out.push(',');
-            if let Some((_, v)) = cols.iter().find(|(n, _)| n == h) {
+            out.push_str(h);
+        }
+        out.push('\n');
+        out
+    }
+
+    /// Appends the CSV line of `row` (with its newline) to `out`. Returns `false` if the row
+    /// has a column that is not in the header (that cell is left out).
+    pub fn row_line(&self, row: &DecodedRow, out: &mut String) -> bool {
+        out.push_str(&row.index.to_string());
+        out.push(',');
+        out.push_str(&csv_cell(&row.name));
+        for h in &self.cols {
+            out.push(',');
+            if let Some((_, v)) = row.cols.iter().find(|(n, _)| n == h) {
                 out.push_str(v);
             }
         }
         out.push('\n');
+        row.cols
+            .iter()
+            .all(|(n, _)| self.cols.iter().any(|c| c == n))
     }
+}
+
+/// Decodes every frame of `bytes` (or only those whose type name equals `only`,
+/// case-insensitively, e.g. "A2", "NAK") into CSV text.
+pub fn decode_csv(bytes: &[u8], only: Option<&str>) -> Result<String> {
+    let mut header = Header::new();
+    header.scan(&mut Parser::new(), bytes, only);
+    let mut dec = FrameDecoder::new(only);
+    let mut out = header.line();
+    dec.push(bytes, |row| {
+        header.row_line(&row, &mut out);
+    });
+    dec.finish()?;
     Ok(out)
 }
 

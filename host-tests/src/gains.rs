@@ -128,8 +128,16 @@ fn one_line(s: &str) -> String {
 
 /// Reads a gains file and applies it over the paper presets.
 pub fn load(path: &Path) -> Result<estimators::BankConfig> {
-    let text = std::fs::read_to_string(path)
+    let bytes = std::fs::read(path)
         .map_err(|e| Error::Input(format!("cannot read gains file {}: {e}", path.display())))?;
+    // A file that is not text is a bad gains file (usage error, exit 2), like bad TOML.
+    let text = String::from_utf8(bytes).map_err(|e| {
+        Error::Usage(format!(
+            "{}: bad gains file: not UTF-8 text (invalid byte at offset {})",
+            path.display(),
+            e.utf8_error().valid_up_to()
+        ))
+    })?;
     let g = GainsFile::from_toml(&text)
         .map_err(|e| Error::Usage(format!("{}: {e}", path.display())))?;
     Ok(g.apply(BankConfig::default()))

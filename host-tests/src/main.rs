@@ -92,12 +92,12 @@ impl From<NoiseAtArg> for replay::NoiseAt {
 enum Cmd {
     /// Print parser statistics as one JSON object.
     Stats {
-        /// Capture file (raw NAV440 byte stream).
+        /// Capture file (raw NAV440 byte stream); `-` reads standard input.
         file: PathBuf,
     },
     /// Print one CSV row per frame with its fields in SI units.
     Decode {
-        /// Capture file.
+        /// Capture file; `-` reads standard input.
         file: PathBuf,
         /// Only frames of this type (e.g. A2, N1, S1, NAK).
         #[arg(long = "type", value_name = "TYPE")]
@@ -105,7 +105,7 @@ enum Cmd {
     },
     /// Run the estimator bank; CSV (t,yaw,yaw_rate,<7 velocities>,<7 accelerations>) on stdout.
     Estimate {
-        /// Capture file.
+        /// Capture file; `-` reads standard input.
         file: PathBuf,
         #[command(flatten)]
         bank: BankArgs,
@@ -120,7 +120,7 @@ enum Cmd {
     },
     /// Reproduce the paper's Tables 1 and 3 (noise 0.01 and 0.5 deg^2, 3 seeds, MSE over 0-30 s).
     Paper {
-        /// Capture file.
+        /// Capture file; `-` reads standard input.
         file: PathBuf,
         #[command(flatten)]
         bank: BankArgs,
@@ -136,7 +136,7 @@ enum Cmd {
     },
     /// Calibrate each estimator family's gains to a capture and noise level.
     Tune {
-        /// Capture file.
+        /// Capture file; `-` reads standard input.
         file: PathBuf,
         /// Noise variance added to yaw, deg^2.
         #[arg(long, value_name = "V")]
@@ -162,7 +162,7 @@ enum Cmd {
     },
     /// Plot yaw, measured rate, velocity and acceleration estimates (stacked panels, SVG).
     Plot {
-        /// Capture file.
+        /// Capture file; `-` reads standard input.
         file: PathBuf,
         /// Output SVG file.
         #[arg(short, long, value_name = "OUT.svg")]
@@ -189,13 +189,13 @@ enum Cmd {
         /// Packet rate, Hz (100, 50, 25, 20, 10, 5, 4 or 2).
         #[arg(long, default_value_t = 100)]
         rate: u32,
-        /// Duration, s.
+        /// Duration, s (0 to 10000: the capture is built in memory).
         #[arg(long, default_value_t = 35.0)]
         duration: f64,
         /// Seed of the motion shape (fig5).
         #[arg(long, default_value_t = 1)]
         seed: u64,
-        /// timeITOW of the first packet, ms.
+        /// timeITOW of the first packet, ms: a time of week (0 to 604799999).
         #[arg(long, default_value_t = synth::SynthConfig::default().start_itow_ms)]
         start_itow: u64,
         /// BIT word of every packet (e.g. 0x0002).
@@ -279,16 +279,15 @@ fn main() -> ExitCode {
     }
 }
 
-fn with_file<T>(file: &Path, r: Result<T>) -> Result<T> {
+fn with_name<T>(name: &str, r: Result<T>) -> Result<T> {
     r.map_err(|e| match e {
-        Error::NotNav440(m) => Error::NotNav440(format!("{}: {m}", file.display())),
+        Error::NotNav440(m) => Error::NotNav440(format!("{name}: {m}")),
         other => other,
     })
 }
 
 fn load_samples(file: &Path) -> Result<Vec<replay::Sample>> {
-    let bytes = replay::read_capture(file)?;
-    with_file(file, replay::samples(&bytes))
+    replay::read_samples(file)
 }
 
 fn bank_options(b: &BankArgs) -> Result<replay::EstimateOptions> {
@@ -354,24 +353,22 @@ fn run(cli: Cli) -> Result<()> {
         Cmd::Record(a) => host_tests::serial::record(&a),
         Cmd::Live(a) => host_tests::serial::live(&a),
         Cmd::Stats { file } => {
-            let bytes = replay::read_capture(&file)?;
-            let stats = replay::stream_stats(&bytes);
+            let mut r = replay::open_capture(&file)?;
+            let mut counter = replay::StatsCounter::new();
+            r.for_each_chunk(|b| {
+                counter.push(b);
+                Ok(true)
+            })?;
+            let stats = counter.stats();
             if stats.total_frames() == 0 {
                 return Err(Error::NotNav440(format!(
                     "{}: no NAV440 frame found (not a NAV440 capture?)",
-                    file.display()
+                    r.name()
                 )));
             }
             stdout_or_file(None, |w| writeln!(w, "{}", stats.to_json()))
         }
-        Cmd::Decode { file, packet_type } => {
-            let bytes = replay::read_capture(&file)?;
-            let text = with_file(
-                &file,
-                host_tests::decode::decode_csv(&bytes, packet_type.as_deref()),
-            )?;
-            stdout_or_file(None, |w| w.write_all(text.as_bytes()))
-        }
+        Cmd::Decode { file, packet_type } => decode(&file, packet_type.as_deref()),
         Cmd::Estimate {
             file,
             bank,
@@ -382,16 +379,28 @@ fn run(cli: Cli) -> Result<()> {
             let mut opts = bank_options(&bank)?;
             opts.noise = noise(n.noise_var, n.seed)?;
             opts.fixed = fixed;
-            let bytes = replay::read_capture(&file)?;
-            let (samples, faults) = with_file(&file, replay::samples_and_faults(&bytes))?;
-            let est = replay::estimate_report(&samples, &opts)?;
-            if est.rejected > 0 {
-                eprintln!("nav440: warning: {} samples rejected by the estimator bank (yaw not finite or beyond +-1e6 deg)", est.rejected);
+            let mut r = replay::open_capture(&file)?;
+            let name = r.name().to_string();
+            let report = match output {
+                Some(p) => {
+                    let mut w = LazyFile::new(p);
+                    let res = replay::estimate_stream(&mut r, &opts, &mut w);
+                    w.finish(res)
+                }
+                None => {
+                    let out = std::io::stdout();
+                    let mut w = std::io::BufWriter::new(out.lock());
+                    replay::estimate_stream(&mut r, &opts, &mut w)
+                }
+            };
+            let report = with_name(&name, report)?;
+            if let Some(m) = report.summary.rejected.warning() {
+                eprintln!("nav440: warning: {m}");
             }
-            if let Some(w) = replay::fault_warning(&faults, est.gaps) {
+            if let Some(w) = replay::fault_warning(&report.faults, report.summary.gaps) {
                 eprintln!("nav440: warning: {w}");
             }
-            stdout_or_file(output.as_deref(), |w| replay::write_csv(&est.rows, w))
+            Ok(())
         }
         Cmd::Paper {
             file,
@@ -401,8 +410,9 @@ fn run(cli: Cli) -> Result<()> {
             window,
         } => {
             let opts = bank_options(&bank)?;
+            paper::check_window(window)?;
             let samples = load_samples(&file)?;
-            let res = paper::run(&samples, &opts, window, &file.display().to_string())?;
+            let res = paper::run(&samples, &opts, window, &replay::capture_name(&file))?;
             let text = if json {
                 format!("{}\n", res.to_json())
             } else if markdown {
@@ -423,6 +433,7 @@ fn run(cli: Cli) -> Result<()> {
             rust,
         } => {
             noise(Some(noise_var), 0)?;
+            paper::check_window(window)?;
             let samples = load_samples(&file)?;
             let opts = replay::EstimateOptions {
                 hold: hold.into(),
@@ -453,7 +464,7 @@ fn run(cli: Cli) -> Result<()> {
             plots::plot_capture(
                 &samples,
                 &opts,
-                &file.display().to_string(),
+                &replay::capture_name(&file),
                 &output,
                 from,
                 to,
@@ -518,4 +529,188 @@ fn run(cli: Cli) -> Result<()> {
 
 fn write_file(p: &Path, text: &str) -> Result<()> {
     std::fs::write(p, text).map_err(|e| Error::Output(format!("cannot write {}: {e}", p.display())))
+}
+
+/// `-o FILE` of `estimate`: the file is created at the first write, so a command that fails
+/// before its first row leaves no file behind.
+struct LazyFile {
+    path: PathBuf,
+    w: Option<std::io::BufWriter<std::fs::File>>,
+}
+
+impl LazyFile {
+    fn new(path: PathBuf) -> Self {
+        LazyFile { path, w: None }
+    }
+
+    fn open(&mut self) -> std::io::Result<&mut std::io::BufWriter<std::fs::File>> {
+        if self.w.is_none() {
+            let f = std::fs::File::create(&self.path).map_err(|e| {
+                std::io::Error::new(
+                    e.kind(),
+                    format!("cannot create {}: {e}", self.path.display()),
+                )
+            })?;
+            self.w = Some(std::io::BufWriter::new(f));
+        }
+        self.w
+            .as_mut()
+            .ok_or_else(|| std::io::Error::other("output file not open"))
+    }
+
+    /// The result of the command, with a failed creation reported as an output error.
+    fn finish<T>(mut self, res: Result<T>) -> Result<T> {
+        let v = res.map_err(|e| match e {
+            Error::Output(m) if m.contains("cannot create") => {
+                Error::Output(m.trim_start_matches("cannot write output: ").to_string())
+            }
+            other => other,
+        })?;
+        if let Some(w) = self.w.as_mut() {
+            w.flush()
+                .map_err(|e| Error::Output(format!("cannot write {}: {e}", self.path.display())))?;
+        }
+        Ok(v)
+    }
+}
+
+impl Write for LazyFile {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.open()?.write(buf)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        match self.w.as_mut() {
+            Some(w) => w.flush(),
+            None => Ok(()),
+        }
+    }
+}
+
+/// Bytes of standard input (or of a pipe) that `decode` reads before it fixes its header.
+const DECODE_LOOKAHEAD: u64 = 64 * 1024;
+
+/// Writes to stdout; a closed pipe stops the command quietly.
+struct Stdout<'a> {
+    w: std::io::BufWriter<std::io::StdoutLock<'a>>,
+    closed: bool,
+}
+
+impl Stdout<'_> {
+    fn new() -> Self {
+        Stdout {
+            w: std::io::BufWriter::new(std::io::stdout().lock()),
+            closed: false,
+        }
+    }
+
+    fn io(&mut self, r: std::io::Result<()>) -> Result<()> {
+        match r {
+            Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {
+                self.closed = true;
+                Ok(())
+            }
+            Err(e) => Err(Error::Output(format!("cannot write output: {e}"))),
+            Ok(()) => Ok(()),
+        }
+    }
+
+    /// Writes `text` and flushes.
+    fn send(&mut self, text: &str) -> Result<()> {
+        if self.closed {
+            return Ok(());
+        }
+        let r = self
+            .w
+            .write_all(text.as_bytes())
+            .and_then(|_| self.w.flush());
+        self.io(r)
+    }
+}
+
+/// `nav440 decode`, streamed. A regular file is read twice: a first pass collects the header
+/// (the union of the columns, without formatting any value), the second writes the rows as it
+/// reads. Standard input (or any pipe) is read once: the header is the union of the columns
+/// of the frames in its first `DECODE_LOOKAHEAD` bytes (the whole input if shorter); a later
+/// frame with a column outside it loses that cell and is counted in a warning.
+fn decode(file: &Path, only: Option<&str>) -> Result<()> {
+    use host_tests::decode::{FrameDecoder, Header};
+    let mut r = replay::open_capture(file)?;
+    let name = r.name().to_string();
+    let regular = !replay::is_stdin(file) && std::fs::metadata(file).is_ok_and(|m| m.is_file());
+    let mut out = Stdout::new();
+    let mut dec = FrameDecoder::new(only);
+    let mut header = Header::new();
+    let mut line = String::new();
+    if regular {
+        let mut parser = nav440_proto::Parser::new();
+        let mut frames = 0u64;
+        r.for_each_chunk(|b| {
+            frames += header.scan(&mut parser, b, only);
+            Ok(true)
+        })?;
+        if frames == 0 {
+            return with_name(&name, dec.finish());
+        }
+        out.send(&header.line())?;
+        let mut r = replay::open_capture(file)?;
+        r.for_each_chunk(|b| {
+            line.clear();
+            dec.push(b, |row| {
+                header.row_line(&row, &mut line);
+            });
+            out.send(&line)?;
+            Ok(!out.closed)
+        })?;
+        return Ok(());
+    }
+    let mut held: Vec<host_tests::decode::DecodedRow> = Vec::new();
+    let mut started = false;
+    let mut outside = 0u64;
+    let mut outside_types: std::collections::BTreeSet<String> = Default::default();
+    let mut read = 0u64;
+    r.for_each_chunk(|b| {
+        line.clear();
+        read += b.len() as u64;
+        dec.push(b, |row| {
+            if started {
+                if !header.row_line(&row, &mut line) {
+                    outside += 1;
+                    outside_types.insert(row.name.clone());
+                }
+            } else {
+                header.add_row(&row);
+                held.push(row);
+            }
+        });
+        if !started && read >= DECODE_LOOKAHEAD && !held.is_empty() {
+            started = true;
+            line.push_str(&header.line());
+            for row in held.drain(..) {
+                header.row_line(&row, &mut line);
+            }
+        }
+        out.send(&line)?;
+        Ok(!out.closed)
+    })?;
+    if out.closed {
+        return Ok(());
+    }
+    with_name(&name, dec.finish())?;
+    if !started {
+        line.clear();
+        line.push_str(&header.line());
+        for row in held.drain(..) {
+            header.row_line(&row, &mut line);
+        }
+        out.send(&line)?;
+    }
+    if outside > 0 {
+        eprintln!(
+            "nav440: warning: {outside} frames after the first {} KiB of {name} have columns outside the CSV header (types {}); those cells are left out (decode the capture from a file to get every column)",
+            DECODE_LOOKAHEAD / 1024,
+            outside_types.into_iter().collect::<Vec<_>>().join(", ")
+        );
+    }
+    Ok(())
 }

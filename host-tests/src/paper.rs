@@ -141,6 +141,18 @@ pub struct PaperResult {
     pub acc_clean: [f64; 7],
 }
 
+/// Checks an MSE window end (`--window` of `paper` and `tune`): a positive finite number of
+/// seconds, else an [`Error::Usage`].
+pub fn check_window(window_s: f64) -> Result<()> {
+    if window_s.is_finite() && window_s > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::Usage(format!(
+            "--window must be a positive number of seconds, got {window_s}"
+        )))
+    }
+}
+
 /// Runs the protocol. The 6 (variance, seed) runs are spread over 2 threads.
 pub fn run(
     samples: &[Sample],
@@ -148,11 +160,7 @@ pub fn run(
     window_s: f64,
     capture: &str,
 ) -> Result<PaperResult> {
-    if !(window_s.is_finite() && window_s > 0.0) {
-        return Err(Error::Usage(format!(
-            "--window must be a positive number of seconds, got {window_s}"
-        )));
-    }
+    check_window(window_s)?;
     let from_file = opts.config.is_some();
     let opts = &opts.paper_law();
     let acc_ref = ave_on_rate(samples, &REFERENCE_AVE, opts)?;

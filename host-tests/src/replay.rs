@@ -6,7 +6,7 @@
 use crate::error::{Error, Result};
 use estimators::period::PeriodEstimator;
 pub use estimators::period::WARMUP_SAMPLES;
-use estimators::{BankConfig, BankOutput, Fx, Hold, YawBank};
+use estimators::{BankConfig, BankOutput, Fx, Hold, SampleError, YawBank};
 pub use nav440_proto::TimeFaults;
 use nav440_proto::{Packet, Parser, TimeBase};
 use rand::rngs::Xoshiro256PlusPlus;
@@ -15,13 +15,117 @@ use rand_distr::{Distribution, Normal};
 use std::collections::BTreeMap;
 use std::path::Path;
 
-/// Reads a capture file; a missing, unreadable or empty file is an [`Error::Input`].
-pub fn read_capture(path: &Path) -> Result<Vec<u8>> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| Error::Input(format!("cannot read {}: {}", path.display(), io_reason(&e))))?;
-    if bytes.is_empty() {
-        return Err(Error::Input(format!("{} is empty", path.display())));
+/// The capture name that means standard input.
+pub const STDIN_NAME: &str = "-";
+
+/// Size of one read from a capture, bytes: every command reads its input in chunks of this
+/// size, so its memory does not grow with the capture.
+pub const READ_CHUNK: usize = 64 * 1024;
+
+/// `true` if `path` is `-` (standard input).
+pub fn is_stdin(path: &Path) -> bool {
+    path.as_os_str() == STDIN_NAME
+}
+
+/// The name of a capture in messages: its path, or "standard input" for `-`.
+pub fn capture_name(path: &Path) -> String {
+    if is_stdin(path) {
+        "standard input".to_string()
+    } else {
+        path.display().to_string()
     }
+}
+
+/// A capture (file or standard input) read chunk by chunk.
+pub struct CaptureReader {
+    name: String,
+    inner: Box<dyn std::io::Read>,
+    bytes: u64,
+}
+
+impl std::fmt::Debug for CaptureReader {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CaptureReader")
+            .field("name", &self.name)
+            .field("bytes", &self.bytes)
+            .finish()
+    }
+}
+
+/// Opens a capture for reading: a file, or standard input for `-`. A missing or unreadable
+/// file is an [`Error::Input`].
+pub fn open_capture(path: &Path) -> Result<CaptureReader> {
+    let name = capture_name(path);
+    let inner: Box<dyn std::io::Read> = if is_stdin(path) {
+        Box::new(std::io::stdin())
+    } else {
+        let f = std::fs::File::open(path)
+            .map_err(|e| Error::Input(format!("cannot read {name}: {}", io_reason(&e))))?;
+        if f.metadata().is_ok_and(|m| m.is_dir()) {
+            return Err(Error::Input(format!("cannot read {name}: is a directory")));
+        }
+        Box::new(f)
+    };
+    Ok(CaptureReader {
+        name,
+        inner,
+        bytes: 0,
+    })
+}
+
+impl CaptureReader {
+    /// The capture's name in messages.
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Reads the next chunk into `buf`: `Ok(None)` at the end of the input. A read failure is an
+    /// [`Error::Input`], and so is an input that ends before its first byte ("is empty").
+    pub fn next_chunk<'a>(&mut self, buf: &'a mut [u8]) -> Result<Option<&'a [u8]>> {
+        loop {
+            match self.inner.read(buf) {
+                Ok(0) if self.bytes == 0 => {
+                    return Err(Error::Input(format!("{} is empty", self.name)))
+                }
+                Ok(0) => return Ok(None),
+                Ok(n) => {
+                    self.bytes += n as u64;
+                    return Ok(buf.get(..n));
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                Err(e) => {
+                    return Err(Error::Input(format!(
+                        "cannot read {}: {}",
+                        self.name,
+                        io_reason(&e)
+                    )))
+                }
+            }
+        }
+    }
+
+    /// Reads the whole input in chunks of [`READ_CHUNK`] bytes, calling `f` on each, until the
+    /// end or until `f` returns `Ok(false)` (stop) or an error.
+    pub fn for_each_chunk(&mut self, mut f: impl FnMut(&[u8]) -> Result<bool>) -> Result<()> {
+        let mut buf = vec![0u8; READ_CHUNK];
+        while let Some(chunk) = self.next_chunk(&mut buf)? {
+            if !f(chunk)? {
+                break;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Reads a whole capture into memory (file, or standard input for `-`); a missing, unreadable
+/// or empty input is an [`Error::Input`]. The commands stream instead (see [`CaptureReader`]).
+pub fn read_capture(path: &Path) -> Result<Vec<u8>> {
+    let mut r = open_capture(path)?;
+    let mut bytes = Vec::new();
+    r.for_each_chunk(|c| {
+        bytes.extend_from_slice(c);
+        Ok(true)
+    })?;
     Ok(bytes)
 }
 
@@ -42,8 +146,12 @@ pub struct StreamStats {
     pub frames: BTreeMap<String, u64>,
     /// Candidate frames rejected by their CRC.
     pub crc_errors: u64,
-    /// Bytes that were not part of any valid frame.
+    /// Bytes that were not part of any valid frame (not counting `pending_bytes`).
     pub skipped_bytes: u64,
+    /// Bytes at the end of the stream held by the parser as the start of a frame that the
+    /// stream cut off (a truncated final frame, or a lone `55` that might start one): neither
+    /// in a frame nor skipped. `bytes = frame bytes + skipped_bytes + pending_bytes`.
+    pub pending_bytes: u64,
 }
 
 impl StreamStats {
@@ -59,24 +167,64 @@ impl StreamStats {
             "frames": self.frames,
             "crc_errors": self.crc_errors,
             "skipped_bytes": self.skipped_bytes,
+            "pending_bytes": self.pending_bytes,
         })
+    }
+}
+
+/// [`StreamStats`] of a stream fed in any number of chunks (constant memory).
+#[derive(Default)]
+pub struct StatsCounter {
+    parser: Parser,
+    frames: BTreeMap<String, u64>,
+}
+
+impl std::fmt::Debug for StatsCounter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("StatsCounter")
+            .field("frames", &self.frames)
+            .finish()
+    }
+}
+
+impl StatsCounter {
+    /// A counter that has seen nothing.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Feeds the next bytes of the stream.
+    pub fn push(&mut self, bytes: &[u8]) {
+        let frames = &mut self.frames;
+        self.parser.feed(bytes, |f| {
+            let name = f.packet_type.name();
+            match frames.get_mut(name) {
+                Some(n) => *n += 1,
+                None => {
+                    frames.insert(name.to_string(), 1);
+                }
+            }
+        });
+    }
+
+    /// The statistics of everything fed so far.
+    pub fn stats(&self) -> StreamStats {
+        let s = self.parser.stats();
+        StreamStats {
+            bytes: s.bytes,
+            frames: self.frames.clone(),
+            crc_errors: s.crc_errors,
+            skipped_bytes: s.skipped_bytes,
+            pending_bytes: s.pending_bytes(),
+        }
     }
 }
 
 /// Runs the parser over `bytes` and counts frames by type.
 pub fn stream_stats(bytes: &[u8]) -> StreamStats {
-    let mut parser = Parser::new();
-    let mut frames: BTreeMap<String, u64> = BTreeMap::new();
-    parser.feed(bytes, |f| {
-        *frames.entry(f.packet_type.name().to_string()).or_default() += 1
-    });
-    let s = parser.stats();
-    StreamStats {
-        bytes: s.bytes,
-        frames,
-        crc_errors: s.crc_errors,
-        skipped_bytes: s.skipped_bytes,
-    }
+    let mut c = StatsCounter::new();
+    c.push(bytes);
+    c.stats()
 }
 
 /// One timed yaw sample taken from a packet.
@@ -219,6 +367,29 @@ pub fn samples_and_faults(bytes: &[u8]) -> Result<(Vec<Sample>, TimeFaults)> {
     Ok((out, reader.faults()))
 }
 
+/// [`samples`] of a capture read in chunks (file, or standard input for `-`): memory is the
+/// samples' (24 bytes each), not the capture's. Errors name the capture.
+pub fn read_samples(path: &Path) -> Result<Vec<Sample>> {
+    read_samples_and_faults(path).map(|(s, _)| s)
+}
+
+/// [`read_samples`] and the time-stamp faults met on the way.
+pub fn read_samples_and_faults(path: &Path) -> Result<(Vec<Sample>, TimeFaults)> {
+    let mut r = open_capture(path)?;
+    let mut reader = SampleReader::new();
+    let mut out = Vec::new();
+    r.for_each_chunk(|c| {
+        reader.feed(c, |s| out.push(s));
+        Ok(true)
+    })?;
+    reader.finish(|s| out.push(s));
+    reader.check_nonempty().map_err(|e| match e {
+        Error::NotNav440(m) => Error::NotNav440(format!("{}: {m}", r.name())),
+        other => other,
+    })?;
+    Ok((out, reader.faults()))
+}
+
 /// Gaussian noise added to yaw before estimation (the paper's protocol).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Noise {
@@ -351,58 +522,30 @@ pub fn estimate(samples: &[Sample], opts: &EstimateOptions) -> Result<(Vec<Row>,
 
 /// [`estimate`] with the bank's gap count.
 pub fn estimate_report(samples: &[Sample], opts: &EstimateOptions) -> Result<Estimate> {
-    if opts.noise_at == NoiseAt::Step {
-        return estimate_step_noise(samples, opts);
-    }
-    let cfg = opts.bank_config_for(samples);
-    let yaw = noisy_yaw(samples, opts.noise)?;
-    let bad =
-        |e: estimators::ConfigError| Error::Usage(format!("bad estimator configuration: {e}"));
-    if opts.fixed {
-        let mut bank = YawBank::<Fx>::new(&cfg).map_err(bad)?;
-        let mut e = run(samples, &yaw, |s, y| {
-            if s.new_epoch {
-                bank.new_epoch();
-            }
-            bank.update(s.t_us, y).ok()
-        });
-        e.gaps = bank.reinit_count();
-        Ok(e)
-    } else {
-        let mut bank = YawBank::<f32>::new(&cfg).map_err(bad)?;
-        let mut e = run(samples, &yaw, |s, y| {
-            if s.new_epoch {
-                bank.new_epoch();
-            }
-            bank.update(s.t_us, y).ok()
-        });
-        e.gaps = bank.reinit_count();
-        Ok(e)
-    }
+    let (rows, summary) = estimate_rows(samples, opts)?;
+    Ok(Estimate {
+        rows,
+        rejected: usize::try_from(summary.rejected.total()).unwrap_or(usize::MAX),
+        gaps: summary.gaps,
+    })
 }
 
-fn run(
+/// [`estimate`] with the rejected samples counted by reason.
+pub fn estimate_rows(
     samples: &[Sample],
-    yaw: &[f32],
-    mut update: impl FnMut(&Sample, f32) -> Option<BankOutput>,
-) -> Estimate {
+    opts: &EstimateOptions,
+) -> Result<(Vec<Row>, EstimationSummary)> {
     let mut rows = Vec::with_capacity(samples.len());
-    let mut rejected = 0;
-    for (s, &y) in samples.iter().zip(yaw) {
-        match update(s, y) {
-            Some(out) => rows.push(Row {
-                t_us: s.t_us,
-                yaw_rate: s.rate_deg_s,
-                out,
-            }),
-            None => rejected += 1,
-        }
+    let mut est = Estimation::new(opts)?;
+    let mut keep = |r: Row| {
+        rows.push(r);
+        Ok(())
+    };
+    for &s in samples {
+        est.push(s, &mut keep)?;
     }
-    Estimate {
-        rows,
-        rejected,
-        gaps: 0,
-    }
+    let summary = est.finish(&mut keep)?;
+    Ok((rows, summary))
 }
 
 /// The one-line `nav440 estimate` warning for time faults and gaps (`None` when there were
@@ -417,8 +560,363 @@ pub fn fault_warning(f: &TimeFaults, gaps: u32) -> Option<String> {
     })
 }
 
+/// The end of an [`Estimation`]: the samples that gave no row, and the gaps.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct EstimationSummary {
+    /// Samples the bank rejected, by reason.
+    pub rejected: Rejections,
+    /// Gaps longer than the gap rule, where the bank re-initialised (new epochs not counted).
+    pub gaps: u32,
+}
+
+/// What [`estimate_stream`] reports besides the CSV.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StreamReport {
+    /// Rejected samples and gaps.
+    pub summary: EstimationSummary,
+    /// Time-stamp faults met by the sample extraction.
+    pub faults: TimeFaults,
+}
+
+/// Samples the bank refused (they give no row), by reason.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Rejections {
+    /// Time stamp not later than the previous sample's.
+    pub time_not_increasing: u64,
+    /// Yaw (with the added noise) beyond `YawBank::MAX_ABS_YAW_DEG`.
+    pub yaw_out_of_range: u64,
+    /// Yaw (with the added noise) NaN or infinite.
+    pub yaw_not_finite: u64,
+}
+
+impl Rejections {
+    /// All rejected samples.
+    pub fn total(&self) -> u64 {
+        self.time_not_increasing + self.yaw_out_of_range + self.yaw_not_finite
+    }
+
+    fn count(&mut self, e: SampleError) {
+        let c = match e {
+            SampleError::NonIncreasingTime => &mut self.time_not_increasing,
+            SampleError::OutOfRange => &mut self.yaw_out_of_range,
+            SampleError::NotFinite => &mut self.yaw_not_finite,
+        };
+        *c += 1;
+    }
+
+    /// The CLI's one-line warning, `None` if nothing was rejected, e.g. "3 samples rejected
+    /// by the estimator bank: 2 with time not increasing, 1 with |yaw| above 1000000 deg".
+    pub fn warning(&self) -> Option<String> {
+        if self.total() == 0 {
+            return None;
+        }
+        let mut parts = Vec::new();
+        if self.time_not_increasing > 0 {
+            parts.push(format!(
+                "{} with time not increasing",
+                self.time_not_increasing
+            ));
+        }
+        if self.yaw_out_of_range > 0 {
+            parts.push(format!(
+                "{} with |yaw| above {} deg",
+                self.yaw_out_of_range,
+                YawBank::<f32>::MAX_ABS_YAW_DEG
+            ));
+        }
+        if self.yaw_not_finite > 0 {
+            parts.push(format!("{} with yaw NaN or infinite", self.yaw_not_finite));
+        }
+        Some(format!(
+            "{} samples rejected by the estimator bank: {}",
+            self.total(),
+            parts.join(", ")
+        ))
+    }
+}
+
+/// The f32 or the fixed-point bank.
+enum Bank {
+    F32(Box<YawBank<f32>>),
+    Fx(Box<YawBank<Fx>>),
+}
+
+impl Bank {
+    fn new(cfg: &BankConfig, fixed: bool) -> Result<Self> {
+        let bad = |e: estimators::ConfigError| {
+            let mut m = format!("bad estimator configuration: {e}");
+            if e == estimators::ConfigError::SamplePeriodTooLong {
+                m.push_str(&format!(
+                    " (nominal sample period {} s from the capture's first {WARMUP_SAMPLES} samples, h = {} s; use a larger --step)",
+                    cfg.sample_period_s, cfg.h
+                ));
+            }
+            Error::Usage(m)
+        };
+        Ok(if fixed {
+            Bank::Fx(Box::new(YawBank::<Fx>::new(cfg).map_err(bad)?))
+        } else {
+            Bank::F32(Box::new(YawBank::<f32>::new(cfg).map_err(bad)?))
+        })
+    }
+
+    fn update(&mut self, t_us: u64, yaw_deg: f32) -> std::result::Result<BankOutput, SampleError> {
+        match self {
+            Bank::F32(b) => b.update(t_us, yaw_deg),
+            Bank::Fx(b) => b.update(t_us, yaw_deg),
+        }
+    }
+
+    fn new_epoch(&mut self) {
+        match self {
+            Bank::F32(b) => b.new_epoch(),
+            Bank::Fx(b) => b.new_epoch(),
+        }
+    }
+
+    fn reinit_count(&self) -> u32 {
+        match self {
+            Bank::F32(b) => b.reinit_count(),
+            Bank::Fx(b) => b.reinit_count(),
+        }
+    }
+}
+
+/// The added noise: N(0, var) draws from xoshiro256++ seeded with the seed, in order.
+struct NoiseGen {
+    normal: Normal<f64>,
+    rng: Xoshiro256PlusPlus,
+    active: bool,
+}
+
+impl NoiseGen {
+    fn new(noise: Option<Noise>) -> Result<Self> {
+        let (var, seed) = noise.map_or((0.0, 0), |n| (n.var, n.seed));
+        let normal = Normal::new(0.0, var.max(0.0).sqrt())
+            .map_err(|e| Error::Usage(format!("bad noise variance {var}: {e}")))?;
+        Ok(NoiseGen {
+            normal,
+            rng: Xoshiro256PlusPlus::seed_from_u64(seed),
+            active: var > 0.0,
+        })
+    }
+
+    /// `y` plus the next draw (exactly `y` without noise).
+    fn add(&mut self, y: f64) -> f32 {
+        if self.active {
+            (y + self.normal.sample(&mut self.rng)) as f32
+        } else {
+            y as f32
+        }
+    }
+}
+
+/// What the [`NoiseAt::Step`] mode remembers between samples.
+struct StepState {
+    /// Observer step, us.
+    h_us: u64,
+    /// The gap rule of the packet-rate bank ([`NoiseAt::Sample`]), us: an interval beyond it
+    /// is not interpolated; the bank re-initialises there, as in sample mode.
+    gap_us: u64,
+    /// Restarts at such gaps.
+    gaps: u32,
+    /// Unwrapping offset (as [`unwrap_deg`]) and the previous wrapped yaw.
+    offset: f64,
+    prev_wrapped: Option<f64>,
+    /// The previous sample's time (us) and unwrapped yaw (deg).
+    prev: Option<(u64, f32)>,
+}
+
+/// A running estimation: the bank, the noise and the per-mode state.
+struct Runner {
+    bank: Bank,
+    noise: NoiseGen,
+    step: Option<StepState>,
+}
+
+/// `nav440 estimate` on a stream of samples: push samples one by one, get rows as they come.
+/// The nominal period is set from the first [`WARMUP_SAMPLES`] samples
+/// ([`EstimateOptions::bank_config_for`]), so those are held back until it is known (the
+/// firmware's pipeline does the same); every later sample gives its row at once. Memory is
+/// constant. [`estimate`] and [`estimate_csv`] run through this too.
+pub struct Estimation {
+    opts: EstimateOptions,
+    warmup: Vec<Sample>,
+    runner: Option<Runner>,
+    rejected: Rejections,
+}
+
+impl std::fmt::Debug for Estimation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Estimation")
+            .field("opts", &self.opts)
+            .field("held_back", &self.warmup.len())
+            .field("running", &self.runner.is_some())
+            .field("rejected", &self.rejected)
+            .finish()
+    }
+}
+
+impl Estimation {
+    /// An estimation with `opts` (the noise variance is checked here; the bank configuration
+    /// once the period is known).
+    pub fn new(opts: &EstimateOptions) -> Result<Self> {
+        NoiseGen::new(opts.noise)?;
+        Ok(Estimation {
+            opts: opts.clone(),
+            warmup: Vec::with_capacity(WARMUP_SAMPLES),
+            runner: None,
+            rejected: Rejections::default(),
+        })
+    }
+
+    /// Takes the next sample; `on_row` gets every row that is ready (none during the warm-up,
+    /// then the held-back ones and one per accepted sample). An error of `on_row` stops and
+    /// is returned.
+    pub fn push(&mut self, s: Sample, on_row: &mut dyn FnMut(Row) -> Result<()>) -> Result<()> {
+        if self.runner.is_none() {
+            self.warmup.push(s);
+            if self.warmup.len() >= WARMUP_SAMPLES {
+                self.start(on_row)?;
+            }
+            return Ok(());
+        }
+        self.sample(s, on_row)
+    }
+
+    /// Ends the stream (a stream shorter than the warm-up runs with the intervals it has) and
+    /// returns the rejected samples and the gaps.
+    pub fn finish(
+        mut self,
+        on_row: &mut dyn FnMut(Row) -> Result<()>,
+    ) -> Result<EstimationSummary> {
+        if self.runner.is_none() {
+            self.start(on_row)?;
+        }
+        let gaps = self.runner.as_ref().map_or(0, |r| match &r.step {
+            Some(st) => st.gaps,
+            None => r.bank.reinit_count(),
+        });
+        Ok(EstimationSummary {
+            rejected: self.rejected,
+            gaps,
+        })
+    }
+
+    /// Builds the bank for the held-back samples' period and runs them.
+    fn start(&mut self, on_row: &mut dyn FnMut(Row) -> Result<()>) -> Result<()> {
+        let mut cfg = self.opts.bank_config_for(&self.warmup);
+        let noise = NoiseGen::new(self.opts.noise)?;
+        let step = if self.opts.noise_at == NoiseAt::Step {
+            // The packet-level gap rule (the bank itself sees one sample per step).
+            let gap_us = (f64::from(cfg.max_gap_s()) * 1e6).round() as u64;
+            // The bank sees one sample per step: closed-form maps and Kalman gains for that
+            // period.
+            cfg.sample_period_s = self.opts.step_s;
+            Some(StepState {
+                h_us: (f64::from(self.opts.step_s) * 1e6).round().max(1.0) as u64,
+                gap_us,
+                gaps: 0,
+                offset: 0.0,
+                prev_wrapped: None,
+                prev: None,
+            })
+        } else {
+            None
+        };
+        self.runner = Some(Runner {
+            bank: Bank::new(&cfg, self.opts.fixed)?,
+            noise,
+            step,
+        });
+        let held = std::mem::take(&mut self.warmup);
+        for s in held {
+            self.sample(s, on_row)?;
+        }
+        Ok(())
+    }
+
+    /// The per-sample step of both noise modes (the bank is running).
+    fn sample(&mut self, s: Sample, on_row: &mut dyn FnMut(Row) -> Result<()>) -> Result<()> {
+        let Some(r) = self.runner.as_mut() else {
+            return Ok(());
+        };
+        let out = match r.step.as_mut() {
+            None => {
+                if s.new_epoch {
+                    r.bank.new_epoch();
+                }
+                let y = r.noise.add(f64::from(s.yaw_deg));
+                r.bank.update(s.t_us, y)
+            }
+            Some(st) => {
+                // Unwrap as `unwrap_deg` does.
+                let w = f64::from(s.yaw_deg);
+                if let Some(p) = st.prev_wrapped {
+                    st.offset -= 360.0 * ((w - p) / 360.0).round();
+                }
+                st.prev_wrapped = Some(w);
+                let y = (w + st.offset) as f32;
+                let prev = st.prev.replace((s.t_us, y));
+                match prev {
+                    None => r.bank.update(s.t_us, r.noise.add(f64::from(y))),
+                    // A new epoch, or a gap the sample-mode bank re-initialises on: no
+                    // interpolation across it; the bank restarts from this sample.
+                    Some((pt, _)) if s.new_epoch || s.t_us.saturating_sub(pt) > st.gap_us => {
+                        if !s.new_epoch {
+                            st.gaps = st.gaps.saturating_add(1);
+                        }
+                        r.bank.new_epoch();
+                        r.bank.update(s.t_us, r.noise.add(f64::from(y)))
+                    }
+                    Some((pt, py)) if s.t_us > pt => {
+                        let h_us = st.h_us;
+                        let n = ((s.t_us - pt + h_us / 2) / h_us).max(1);
+                        let mut last = Err(SampleError::NonIncreasingTime);
+                        for j in 1..=n {
+                            let t = if j == n { s.t_us } else { pt + j * h_us };
+                            let yi = f64::from(py)
+                                + (f64::from(y) - f64::from(py)) * j as f64 / n as f64;
+                            last = r.bank.update(t, r.noise.add(yi));
+                        }
+                        last
+                    }
+                    Some(_) => Err(SampleError::NonIncreasingTime),
+                }
+            }
+        };
+        match out {
+            Ok(out) => on_row(Row {
+                t_us: s.t_us,
+                yaw_rate: s.rate_deg_s,
+                out,
+            }),
+            Err(e) => {
+                self.rejected.count(e);
+                Ok(())
+            }
+        }
+    }
+}
+
 /// The CSV header shared with the firmware.
 pub const CSV_HEADER: &str = estimators::csv::HEADER;
+
+/// Writes one CSV line of `r`, formatted by `estimators::csv` (`line` is scratch space).
+pub fn write_row<W: std::io::Write + ?Sized>(
+    w: &mut W,
+    r: &Row,
+    line: &mut String,
+) -> std::io::Result<()> {
+    line.clear();
+    estimators::csv::write_row(line, r.t_us, r.yaw_rate, &r.out)
+        .map_err(|_| std::io::Error::other("formatting error"))?;
+    w.write_all(line.as_bytes())?;
+    if !line.ends_with('\n') {
+        w.write_all(b"\n")?;
+    }
+    Ok(())
+}
 
 /// Writes the header and one line per row, formatted by `estimators::csv` (identical text to
 /// the firmware's for identical f32 values).
@@ -426,13 +924,7 @@ pub fn write_csv<W: std::io::Write + ?Sized>(rows: &[Row], w: &mut W) -> std::io
     writeln!(w, "{CSV_HEADER}")?;
     let mut line = String::new();
     for r in rows {
-        line.clear();
-        estimators::csv::write_row(&mut line, r.t_us, r.yaw_rate, &r.out)
-            .map_err(|_| std::io::Error::other("formatting error"))?;
-        w.write_all(line.as_bytes())?;
-        if !line.ends_with('\n') {
-            w.write_all(b"\n")?;
-        }
+        write_row(w, r, &mut line)?;
     }
     Ok(())
 }
@@ -441,11 +933,136 @@ pub fn write_csv<W: std::io::Write + ?Sized>(rows: &[Row], w: &mut W) -> std::io
 /// bank, format the CSV (header included). Returns the CSV text and the number of samples the
 /// bank rejected. This is what the firmware's equivalence test compares its output against.
 pub fn estimate_csv(bytes: &[u8], opts: &EstimateOptions) -> Result<(String, usize)> {
-    let samples = samples(bytes)?;
-    let (rows, rejected) = estimate(&samples, opts)?;
     let mut out = Vec::new();
-    write_csv(&rows, &mut out).map_err(|e| Error::Other(e.to_string()))?;
-    Ok((String::from_utf8_lossy(&out).into_owned(), rejected))
+    let report = estimate_stream(bytes, opts, &mut out)?;
+    Ok((
+        String::from_utf8_lossy(&out).into_owned(),
+        usize::try_from(report.summary.rejected.total()).unwrap_or(usize::MAX),
+    ))
+}
+
+/// Streams `nav440 estimate` from `input` (any number of chunks, e.g. a [`CaptureReader`]'s) to
+/// `w`: the header and each row are written as soon as they are known (after the warm-up of
+/// [`Estimation`]); `w` is flushed after every chunk. Memory is constant.
+///
+/// Errors: [`Error::NotNav440`] (no frame / no yaw packet; nothing is written then),
+/// [`Error::Usage`] (estimator configuration), [`Error::Output`] (writing failed; a closed pipe
+/// is not an error: the stream stops quietly).
+pub fn estimate_stream<'a, W: std::io::Write + ?Sized>(
+    input: impl IntoChunks<'a>,
+    opts: &EstimateOptions,
+    w: &mut W,
+) -> Result<StreamReport> {
+    let mut reader = SampleReader::new();
+    let mut est = Estimation::new(opts)?;
+    let mut sink = CsvSink::new(w);
+    input.chunks(&mut |chunk| {
+        let mut res = Ok(());
+        reader.feed(chunk, |s| {
+            if res.is_ok() {
+                res = est.push(s, &mut |r| sink.row(&r));
+            }
+        });
+        res?;
+        sink.flush()?;
+        Ok(!sink.closed)
+    })?;
+    if sink.closed {
+        return Ok(StreamReport::default());
+    }
+    let mut res = Ok(());
+    reader.finish(|s| {
+        if res.is_ok() {
+            res = est.push(s, &mut |r| sink.row(&r));
+        }
+    });
+    res?;
+    reader.check_nonempty()?;
+    let summary = est.finish(&mut |r| sink.row(&r))?;
+    sink.end()?;
+    Ok(StreamReport {
+        summary,
+        faults: reader.faults(),
+    })
+}
+
+/// A byte stream given in chunks: a slice (one chunk) or a [`CaptureReader`].
+pub trait IntoChunks<'a> {
+    /// Calls `f` on each chunk until the end or until `f` returns `Ok(false)`.
+    fn chunks(self, f: &mut dyn FnMut(&[u8]) -> Result<bool>) -> Result<()>;
+}
+
+impl<'a> IntoChunks<'a> for &'a [u8] {
+    fn chunks(self, f: &mut dyn FnMut(&[u8]) -> Result<bool>) -> Result<()> {
+        f(self).map(|_| ())
+    }
+}
+
+impl<'a> IntoChunks<'a> for &'a mut CaptureReader {
+    fn chunks(self, f: &mut dyn FnMut(&[u8]) -> Result<bool>) -> Result<()> {
+        self.for_each_chunk(f)
+    }
+}
+
+/// Writes the estimate CSV as rows come: the header before the first row (or at the end).
+struct CsvSink<'w, W: std::io::Write + ?Sized> {
+    w: &'w mut W,
+    header: bool,
+    closed: bool,
+    line: String,
+}
+
+impl<'w, W: std::io::Write + ?Sized> CsvSink<'w, W> {
+    fn new(w: &'w mut W) -> Self {
+        CsvSink {
+            w,
+            header: false,
+            closed: false,
+            line: String::new(),
+        }
+    }
+
+    fn io(&mut self, r: std::io::Result<()>) -> Result<()> {
+        match r {
+            Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {
+                self.closed = true;
+                Ok(())
+            }
+            Err(e) => Err(Error::Output(format!("cannot write output: {e}"))),
+            Ok(()) => Ok(()),
+        }
+    }
+
+    fn head(&mut self) -> Result<()> {
+        if !self.header && !self.closed {
+            self.header = true;
+            let r = writeln!(self.w, "{CSV_HEADER}");
+            self.io(r)?;
+        }
+        Ok(())
+    }
+
+    fn row(&mut self, r: &Row) -> Result<()> {
+        self.head()?;
+        if self.closed {
+            return Ok(());
+        }
+        let res = write_row(self.w, r, &mut self.line);
+        self.io(res)
+    }
+
+    fn flush(&mut self) -> Result<()> {
+        if !self.header || self.closed {
+            return Ok(());
+        }
+        let r = self.w.flush();
+        self.io(r)
+    }
+
+    fn end(&mut self) -> Result<()> {
+        self.head()?;
+        self.flush()
+    }
 }
 
 /// Unwraps a wrapped angle sequence (deg) so consecutive values differ by at most 180 deg.
@@ -462,90 +1079,4 @@ pub fn unwrap_deg(wrapped: &[f32]) -> Vec<f32> {
         out.push((w + offset) as f32);
     }
     out
-}
-
-/// [`NoiseAt::Step`]: see there.
-fn estimate_step_noise(samples: &[Sample], opts: &EstimateOptions) -> Result<Estimate> {
-    let mut cfg = opts.bank_config_for(samples);
-    // The packet-level gap rule (the bank itself sees one sample per step).
-    let gap_us = (f64::from(cfg.max_gap_s()) * 1e6).round() as u64;
-    // The bank sees one sample per step: closed-form maps and Kalman gains for that period.
-    cfg.sample_period_s = opts.step_s;
-    let h_us = (f64::from(opts.step_s) * 1e6).round().max(1.0) as u64;
-    let yaw = unwrap_deg(&noisy_yaw(samples, None)?);
-    let (var, seed) = opts.noise.map_or((0.0, 0), |n| (n.var, n.seed));
-    let normal = Normal::new(0.0, var.max(0.0).sqrt())
-        .map_err(|e| Error::Usage(format!("bad noise variance {var}: {e}")))?;
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
-    let mut noise = move || {
-        if var > 0.0 {
-            normal.sample(&mut rng)
-        } else {
-            0.0
-        }
-    };
-    let bad =
-        |e: estimators::ConfigError| Error::Usage(format!("bad estimator configuration: {e}"));
-    let mut rows = Vec::with_capacity(samples.len());
-    let mut rejected = 0;
-    let mut feed = |update: &mut dyn FnMut(u64, f32, bool) -> Option<BankOutput>| {
-        for (k, (s, &y)) in samples.iter().zip(&yaw).enumerate() {
-            let prev = k
-                .checked_sub(1)
-                .and_then(|i| Some((samples.get(i)?, *yaw.get(i)?)));
-            let out = match prev {
-                None => update(s.t_us, (f64::from(y) + noise()) as f32, false),
-                // A new epoch, or a gap the bank re-initialises on: no interpolation across it.
-                Some((ps, _)) if s.new_epoch || s.t_us - ps.t_us > gap_us => {
-                    update(s.t_us, (f64::from(y) + noise()) as f32, true)
-                }
-                Some((ps, py)) if s.t_us > ps.t_us => {
-                    let n = ((s.t_us - ps.t_us + h_us / 2) / h_us).max(1);
-                    let mut last = None;
-                    for j in 1..=n {
-                        let t = if j == n { s.t_us } else { ps.t_us + j * h_us };
-                        let yi =
-                            f64::from(py) + (f64::from(y) - f64::from(py)) * j as f64 / n as f64;
-                        last = update(t, (yi + noise()) as f32, false);
-                    }
-                    last
-                }
-                Some(_) => None,
-            };
-            match out {
-                Some(out) => rows.push(Row {
-                    t_us: s.t_us,
-                    yaw_rate: s.rate_deg_s,
-                    out,
-                }),
-                None => rejected += 1,
-            }
-        }
-    };
-    let mut restarts = 0u32;
-    if opts.fixed {
-        let mut bank = YawBank::<Fx>::new(&cfg).map_err(bad)?;
-        feed(&mut |t, y, restart| {
-            if restart {
-                restarts += 1;
-                bank.new_epoch();
-            }
-            bank.update(t, y).ok()
-        });
-    } else {
-        let mut bank = YawBank::<f32>::new(&cfg).map_err(bad)?;
-        feed(&mut |t, y, restart| {
-            if restart {
-                restarts += 1;
-                bank.new_epoch();
-            }
-            bank.update(t, y).ok()
-        });
-    }
-    let epochs = samples.iter().filter(|s| s.new_epoch).count() as u32;
-    Ok(Estimate {
-        rows,
-        rejected,
-        gaps: restarts.saturating_sub(epochs),
-    })
 }

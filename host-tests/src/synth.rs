@@ -98,7 +98,8 @@ pub struct SynthConfig {
     pub rate_hz: u32,
     /// Packet type.
     pub packet: PacketKind,
-    /// timeITOW of the first packet, ms (taken modulo one week).
+    /// timeITOW of the first packet, ms: a time of week, below [`MS_PER_WEEK`] (later packets
+    /// wrap to 0 at the end of the week).
     pub start_itow_ms: u64,
     /// BIT word put in every packet.
     pub bit: u16,
@@ -144,11 +145,18 @@ pub fn period_ms(rate_hz: u32) -> Result<u64> {
     }
 }
 
+/// Longest capture `synth` generates, s (it builds the whole capture in memory: 10,000 s at
+/// 100 Hz are 1,000,001 packets, 37 MB of A2 frames, about 30 s of work).
+pub const MAX_DURATION_S: f64 = 10_000.0;
+
 /// Number of packets of a capture: t_k = k * period for k = 0.. while t_k <= duration.
+/// A duration outside `[0, MAX_DURATION_S]` is an [`Error::Usage`].
 pub fn packet_count(duration_s: f64, rate_hz: u32) -> Result<usize> {
     let p = period_ms(rate_hz)?;
-    if !(duration_s.is_finite() && duration_s >= 0.0) {
-        return Err(Error::Usage(format!("bad duration {duration_s} s")));
+    if !(duration_s.is_finite() && (0.0..=MAX_DURATION_S).contains(&duration_s)) {
+        return Err(Error::Usage(format!(
+            "--duration must be between 0 and {MAX_DURATION_S} s (the capture is built in memory), got {duration_s}"
+        )));
     }
     Ok(((duration_s * 1000.0 + 1e-6) / p as f64).floor() as usize + 1)
 }
@@ -166,6 +174,12 @@ pub fn sat_i16(value: f64, lsb: f64) -> i16 {
 
 /// Generates the frames (uncorrupted) of `cfg`, one `Vec<u8>` per frame.
 pub fn frames(cfg: &SynthConfig) -> Result<Vec<Vec<u8>>> {
+    if cfg.start_itow_ms >= MS_PER_WEEK {
+        return Err(Error::Usage(format!(
+            "--start-itow must be a time of week in ms, below {MS_PER_WEEK}, got {}",
+            cfg.start_itow_ms
+        )));
+    }
     let period = period_ms(cfg.rate_hz)?;
     let n = packet_count(cfg.duration_s, cfg.rate_hz)?;
     let profile = Profile::new(cfg.profile, cfg.duration_s, cfg.seed);
@@ -322,6 +336,9 @@ mod tests {
         assert_eq!(packet_count(0.0, 2).unwrap(), 1);
         assert!(packet_count(1.0, 3).is_err());
         assert!(packet_count(f64::NAN, 100).is_err());
+        assert_eq!(packet_count(MAX_DURATION_S, 100).unwrap(), 1_000_001);
+        assert!(packet_count(MAX_DURATION_S + 0.01, 100).is_err());
+        assert!(packet_count(1e12, 100).is_err());
         for r in RATES_HZ {
             assert_eq!(1000 % period_ms(r).unwrap(), 0);
         }

@@ -274,6 +274,7 @@ pub fn tune(
     seeds: u64,
     window_s: f64,
 ) -> Result<TuneResult> {
+    crate::paper::check_window(window_s)?;
     let opts = &opts.paper_law();
     let base = opts.bank_config_for(samples);
     let paper = GainsFile::from_bank(&base);

@@ -70,13 +70,13 @@ fn stats_on_committed_captures() {
         let v = json(&ok(&["stats", p(&data(name))]));
         assert_eq!(
             v,
-            serde_json::json!({"bytes": n * flen, "frames": {ty: n}, "crc_errors": 0, "skipped_bytes": 0})
+            serde_json::json!({"bytes": n * flen, "frames": {ty: n}, "crc_errors": 0, "skipped_bytes": 0, "pending_bytes": 0})
         );
     }
-    // Key order as the issue writes it.
+    // Key order as the issue writes it, then `pending_bytes` (issue 8).
     assert_eq!(
         ok(&["stats", p(&data("fig5_a2_100hz.bin"))]),
-        "{\"bytes\":129537,\"frames\":{\"A2\":3501},\"crc_errors\":0,\"skipped_bytes\":0}\n"
+        "{\"bytes\":129537,\"frames\":{\"A2\":3501},\"crc_errors\":0,\"skipped_bytes\":0,\"pending_bytes\":0}\n"
     );
     // Corrupted: 501 packets, 5 dropped, 14 damaged (the synth report; see data/README.md).
     let v = json(&ok(&["stats", p(&data("fig5_a2_100hz_corrupt.bin"))]));
@@ -489,5 +489,118 @@ fn stats_and_decode_name_nak_and_unknown_types() {
     let (code, err) = fails(&["estimate", p(&f)]);
     assert_eq!(code, 4);
     assert!(err.contains("none carries yaw"), "{err}");
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// The CLI contract cases of issue 8 (item 7): each exits with the documented code and an
+/// accurate one-line message.
+#[test]
+fn contract_cases_of_issue_8() {
+    let d = scratch("contract");
+    let out = d.join("x.bin");
+    // A duration the in-memory generator cannot hold: usage error naming the limit (was an
+    // allocation failure, exit 134, or a hang).
+    let (code, err) = fails(&["synth", "--duration", "1e12", "-o", p(&out)]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("--duration must be between 0 and 10000 s"),
+        "{err}"
+    );
+    // timeITOW is a time of week: beyond it (or beyond u32) is a usage error (was wrapped).
+    for itow in ["4294967296", "604800000"] {
+        let (code, err) = fails(&["synth", "--start-itow", itow, "-o", p(&out)]);
+        assert_eq!(code, 2, "{err}");
+        assert!(err.contains("--start-itow must be a time of week"), "{err}");
+    }
+    assert!(!out.exists());
+    // `--window` is checked the same way by paper and tune.
+    let f = data("sin5_a1_50hz.bin");
+    for cmd in [
+        vec!["paper", p(&f), "--window=-1"],
+        vec!["tune", p(&f), "--noise-var", "0.01", "--window=-1"],
+        vec!["tune", p(&f), "--noise-var", "0.01", "--window", "nan"],
+    ] {
+        let (code, err) = fails(&cmd);
+        assert_eq!(code, 2, "{cmd:?}: {err}");
+        assert!(err.contains("--window must be a positive number"), "{err}");
+    }
+    // A gains file that is not text is a bad gains file: exit 2 as the README says (was 3).
+    let bad = d.join("bad.toml");
+    std::fs::write(&bad, b"[velocity.ave]\nk = \xff\xfe\n").unwrap();
+    let (code, err) = fails(&["estimate", p(&f), "--gains", p(&bad)]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("bad gains file: not UTF-8 text"), "{err}");
+    // Noise so large that |yaw| passes 1e6 deg: the warning says so, not "time not
+    // increasing".
+    let o = run(&["estimate", p(&f), "--noise-var", "1e14"]);
+    assert!(o.status.success());
+    let err = String::from_utf8(o.stderr).unwrap();
+    assert!(err.contains("with |yaw| above 1000000 deg"), "{err}");
+    assert!(!err.contains("time not increasing"), "{err}");
+    // A first period longer than 10^6 steps h: said as such (was "must be at least h").
+    let mut slow = Vec::new();
+    for k in 0..20u32 {
+        slow.extend(
+            host_tests::synth::encode_packet(
+                host_tests::synth::PacketKind::A2,
+                f64::from(k),
+                0.0,
+                k * 200_000,
+                0,
+            )
+            .unwrap(),
+        );
+    }
+    let slow_f = d.join("slow.bin");
+    std::fs::write(&slow_f, &slow).unwrap();
+    let (code, err) = fails(&["estimate", p(&slow_f)]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("sample period must be at most 1e6 steps h")
+            && err.contains("nominal sample period 200 s"),
+        "{err}"
+    );
+    // A truncated final frame: its bytes are reported as pending (frames + skipped + pending
+    // = bytes).
+    let full = std::fs::read(data("fig5_a2_100hz.bin")).unwrap();
+    let mut cut = full.clone();
+    cut.extend_from_slice(&full[..20]);
+    let cut_f = d.join("cut.bin");
+    std::fs::write(&cut_f, &cut).unwrap();
+    let v = json(&ok(&["stats", p(&cut_f)]));
+    assert_eq!(v["bytes"], 3501 * 37 + 20);
+    assert_eq!(v["frames"]["A2"], 3501);
+    assert_eq!(v["skipped_bytes"], 0);
+    assert_eq!(v["pending_bytes"], 20);
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// `--noise-at step` re-initialises on the same gaps as the default sample mode instead of
+/// interpolating across them: the first row after a 1 s hole (100 lost packets, beyond the
+/// 25-period gap rule) reports all 14 estimates as 0 in both modes.
+#[test]
+fn step_noise_restarts_on_gaps_like_sample_mode() {
+    let d = scratch("stepgap");
+    let full = std::fs::read(data("fig5_a2_100hz.bin")).unwrap();
+    let frame = 37;
+    let mut holed = full[..1000 * frame].to_vec();
+    holed.extend_from_slice(&full[1100 * frame..]);
+    let f = d.join("holed.bin");
+    std::fs::write(&f, &holed).unwrap();
+    for mode in ["sample", "step"] {
+        let csv = ok(&["estimate", p(&f), "--noise-at", mode]);
+        let rows: Vec<&str> = csv.lines().skip(1).collect();
+        assert_eq!(rows.len(), 3401, "{mode}");
+        let after: Vec<f64> = rows[1000].split(',').map(|c| c.parse().unwrap()).collect();
+        assert!((after[0] - 11.0).abs() < 1e-9, "{mode}: t {}", after[0]);
+        assert!(
+            after[3..].iter().all(|&v| v == 0.0),
+            "{mode}: estimates after the gap {:?}",
+            &after[3..]
+        );
+        // The row before the gap is a running estimate (not a restart).
+        let before: Vec<f64> = rows[999].split(',').map(|c| c.parse().unwrap()).collect();
+        assert!(before[3..10].iter().any(|&v| v != 0.0), "{mode}");
+    }
     let _ = std::fs::remove_dir_all(&d);
 }

@@ -138,6 +138,18 @@ fn ci() -> Result<(), String> {
     }
     cargo(&["test", "--all-targets"])?;
     cargo(&["test", "--doc"])?;
+    cargo(&[
+        "test",
+        "--release",
+        "-p",
+        "nav440-proto",
+        "-p",
+        "host-tests",
+        "--test",
+        "fuzz_equivalent",
+        "--test",
+        "streaming",
+    ])?;
     // Rustdoc of the host crates: broken intra-doc links and bad HTML fail the build.
     run_env(
         &cargo_bin(),
