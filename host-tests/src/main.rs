@@ -393,11 +393,7 @@ fn run(cli: Cli) -> Result<()> {
                     replay::estimate_stream(&mut r, &opts, &mut w)
                 }
             };
-            let report = with_name(&name, report)?;
-            if let Some(m) = report.summary.rejected.warning() {
-                eprintln!("nav440: warning: {m}");
-            }
-            if let Some(w) = replay::fault_warning(&report.faults, report.summary.gaps) {
+            for w in with_name(&name, report)?.warnings() {
                 eprintln!("nav440: warning: {w}");
             }
             Ok(())

@@ -578,6 +578,18 @@ pub struct StreamReport {
     pub faults: TimeFaults,
 }
 
+impl StreamReport {
+    /// The warning lines `nav440 estimate` (and `nav440 live`) print on stderr: rejected
+    /// samples, then time faults and gaps (none when everything was clean).
+    pub fn warnings(&self) -> impl Iterator<Item = String> {
+        self.summary
+            .rejected
+            .warning()
+            .into_iter()
+            .chain(fault_warning(&self.faults, self.summary.gaps))
+    }
+}
+
 /// Samples the bank refused (they give no row), by reason.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Rejections {
@@ -995,6 +1007,19 @@ pub trait IntoChunks<'a> {
 impl<'a> IntoChunks<'a> for &'a [u8] {
     fn chunks(self, f: &mut dyn FnMut(&[u8]) -> Result<bool>) -> Result<()> {
         f(self).map(|_| ())
+    }
+}
+
+/// A byte source that pushes its chunks itself (e.g. a serial port read until it closes):
+/// `FnChunks(|f| { ...; f(chunk)?; ... })`; it should stop when `f` returns `Ok(false)`.
+pub struct FnChunks<F>(pub F);
+
+impl<'a, F> IntoChunks<'a> for FnChunks<F>
+where
+    F: FnOnce(&mut dyn FnMut(&[u8]) -> Result<bool>) -> Result<()>,
+{
+    fn chunks(self, f: &mut dyn FnMut(&[u8]) -> Result<bool>) -> Result<()> {
+        (self.0)(f)
     }
 }
 

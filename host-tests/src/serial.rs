@@ -15,13 +15,12 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use clap::Args;
-use estimators::{Hold, YawBank};
 use nav440_proto::boot::{self, BootError, Options, Report, Target};
 use nav440_proto::driver::{IoDriver, Timing};
-use nav440_proto::{Baud, ItowClock, Packet, Parser};
+use nav440_proto::Baud;
 
 use crate::error::{Error, Result};
-use crate::replay::{EstimateOptions, Sample, WARMUP_SAMPLES};
+use crate::replay::{self, EstimateOptions};
 use crate::sim::{parse_baud, parse_output_type, parse_rate};
 
 /// The serial port and the target configuration, shared by the three commands.
@@ -238,7 +237,7 @@ pub fn config(a: &ConfigArgs) -> Result<()> {
 fn stream_after_boot(
     d: IoDriver<SerialIo>,
     duration: Option<f64>,
-    mut on_bytes: impl FnMut(&[u8]) -> Result<()>,
+    mut on_bytes: impl FnMut(&[u8]) -> Result<bool>,
 ) -> Result<u64> {
     if let Some(s) = duration {
         if !(s.is_finite() && s > 0.0) {
@@ -249,7 +248,9 @@ fn stream_after_boot(
     let SerialIo(mut port) = d.release();
     let end = duration.map(|s| Instant::now() + Duration::from_secs_f64(s));
     let mut total = pending.len() as u64;
-    on_bytes(&pending)?;
+    if !on_bytes(&pending)? {
+        return Ok(total);
+    }
     let mut buf = [0u8; 1024];
     loop {
         if end.is_some_and(|e| Instant::now() >= e) {
@@ -259,7 +260,9 @@ fn stream_after_boot(
             Ok(0) => return Ok(total),
             Ok(n) => {
                 total += n as u64;
-                on_bytes(&buf[..n])?;
+                if !on_bytes(&buf[..n])? {
+                    return Ok(total);
+                }
             }
             Err(e)
                 if matches!(
@@ -285,7 +288,9 @@ pub fn record(a: &RecordArgs) -> Result<()> {
     eprintln!("nav440 record: {}", report_json(&a.port.port, &report, &t));
     let werr =
         |e: std::io::Error| Error::Output(format!("cannot write {}: {e}", a.output.display()));
-    let total = stream_after_boot(d, a.duration, |b| w.write_all(b).map_err(werr))?;
+    let total = stream_after_boot(d, a.duration, |b| {
+        w.write_all(b).map(|()| true).map_err(werr)
+    })?;
     w.flush().map_err(werr)?;
     eprintln!(
         "nav440 record: {total} bytes written to {}",
@@ -294,140 +299,19 @@ pub fn record(a: &RecordArgs) -> Result<()> {
     Ok(())
 }
 
-/// The `nav440 estimate` pipeline, streaming: the first [`WARMUP_SAMPLES`] samples are held
-/// to measure the packet period (the rule `nav440 estimate` applies to the same samples), then
-/// the bank runs on every sample and each row is written as it comes.
-pub struct LiveEstimator {
-    parser: Parser,
-    clock: ItowClock,
-    opts: EstimateOptions,
-    held: Vec<Sample>,
-    bank: Option<YawBank<f32>>,
-    line: String,
-    /// Samples the bank rejected (no row), as `nav440 estimate` counts them.
-    pub rejected: usize,
-}
-
-impl Default for LiveEstimator {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-impl LiveEstimator {
-    /// With `nav440 estimate`'s default options (f32 bank, paper presets, h = 1e-4 s, linear).
-    pub fn new() -> Self {
-        Self {
-            parser: Parser::new(),
-            clock: ItowClock::new(),
-            opts: EstimateOptions {
-                hold: Hold::Linear,
-                ..EstimateOptions::default()
-            },
-            held: Vec::new(),
-            bank: None,
-            line: String::new(),
-            rejected: 0,
-        }
-    }
-
-    /// Feeds received bytes; `out` gets the CSV text (header first) as rows are ready.
-    pub fn feed(&mut self, bytes: &[u8], out: &mut dyn Write) -> Result<()> {
-        let mut samples = Vec::new();
-        let clock = &mut self.clock;
-        self.parser.feed(bytes, |f| {
-            let Ok(p) = Packet::decode(f) else { return };
-            let Some(y) = p.yaw_sample() else { return };
-            if let Some(t_us) = clock.update(y.time) {
-                samples.push(Sample {
-                    t_us,
-                    yaw_deg: y.yaw_deg,
-                    rate_deg_s: y.yaw_rate_deg_s,
-                });
-            }
-        });
-        for s in samples {
-            if self.bank.is_some() {
-                self.run(s, out)?;
-            } else {
-                self.held.push(s);
-                if self.held.len() >= WARMUP_SAMPLES {
-                    self.start(out)?;
-                }
-            }
-        }
-        Ok(())
-    }
-
-    /// End of the stream: a stream shorter than the warm-up runs now.
-    pub fn finish(&mut self, out: &mut dyn Write) -> Result<()> {
-        if self.bank.is_none() && !self.held.is_empty() {
-            self.start(out)?;
-        }
-        Ok(())
-    }
-
-    fn start(&mut self, out: &mut dyn Write) -> Result<()> {
-        let cfg = self.opts.bank_config_for(&self.held);
-        let bank = YawBank::<f32>::new(&cfg)
-            .map_err(|e| Error::Usage(format!("bad estimator configuration: {e}")))?;
-        self.bank = Some(bank);
-        writeln!(out, "{}", crate::replay::CSV_HEADER).map_err(out_err)?;
-        for s in std::mem::take(&mut self.held) {
-            self.run(s, out)?;
-        }
-        Ok(())
-    }
-
-    fn run(&mut self, s: Sample, out: &mut dyn Write) -> Result<()> {
-        let Some(bank) = self.bank.as_mut() else {
-            return Ok(());
-        };
-        match bank.update(s.t_us, s.yaw_deg) {
-            Ok(o) => {
-                self.line.clear();
-                estimators::csv::write_row(&mut self.line, s.t_us, s.rate_deg_s, &o)
-                    .map_err(|_| Error::Other("formatting error".into()))?;
-                if !self.line.ends_with('\n') {
-                    self.line.push('\n');
-                }
-                out.write_all(self.line.as_bytes()).map_err(out_err)
-            }
-            Err(_) => {
-                self.rejected += 1;
-                Ok(())
-            }
-        }
-    }
-}
-
-fn out_err(e: std::io::Error) -> Error {
-    Error::Output(format!("cannot write output: {e}"))
-}
-
 /// `nav440 live`: the boot sequence, then the estimate CSV on stdout while receiving.
 pub fn live(a: &LiveArgs) -> Result<()> {
     let (d, report, t) = open_and_boot(&a.port)?;
     eprintln!("nav440 live: {}", report_json(&a.port.port, &report, &t));
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
-    let mut est = LiveEstimator::new();
-    let r = stream_after_boot(d, a.duration, |b| {
-        est.feed(b, &mut out)?;
-        out.flush().map_err(out_err)
-    })
-    .and_then(|_| est.finish(&mut out))
-    .and_then(|_| out.flush().map_err(out_err));
-    match r {
-        // A closed pipe (`nav440 live ... | head`) ends the run quietly.
-        Err(Error::Output(m)) if m.contains("Broken pipe") => Ok(()),
-        other => other,
-    }?;
-    if est.rejected > 0 {
-        eprintln!(
-            "nav440: warning: {} samples rejected by the estimator bank (time not increasing)",
-            est.rejected
-        );
+    // The same streaming pipeline as `nav440 estimate` (warm-up, bank, CSV, warnings).
+    let source = replay::FnChunks(|f: &mut dyn FnMut(&[u8]) -> Result<bool>| {
+        stream_after_boot(d, a.duration, f).map(|_| ())
+    });
+    let report = replay::estimate_stream(source, &EstimateOptions::default(), &mut out)?;
+    for w in report.warnings() {
+        eprintln!("nav440: warning: {w}");
     }
     Ok(())
 }
