@@ -138,6 +138,8 @@ fn ci() -> Result<(), String> {
     }
     cargo(&["test", "--all-targets"])?;
     cargo(&["test", "--doc"])?;
+    // Release-mode tests: 10^6 random parser streams, constant-memory streaming of 200+ MiB,
+    // and the 24 h run of the whole bank (f32 and fixed point, 8.64 M samples each).
     cargo(&[
         "test",
         "--release",
@@ -145,10 +147,14 @@ fn ci() -> Result<(), String> {
         "nav440-proto",
         "-p",
         "host-tests",
+        "-p",
+        "estimators",
         "--test",
         "fuzz_equivalent",
         "--test",
         "streaming",
+        "--test",
+        "long_run",
     ])?;
     // Rustdoc of the host crates: broken intra-doc links and bad HTML fail the build.
     run_env(
