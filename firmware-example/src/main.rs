@@ -14,7 +14,10 @@
 
 use cortex_m_rt::entry;
 use embedded_io::Read as _;
-use firmware_example::{host, pipeline, stack, uart::Uart0};
+use firmware_example::{
+    host, pipeline, stack,
+    uart::{Board, Uart0},
+};
 
 /// Magic at the start of a finite input.
 const LENGTH_MAGIC: [u8; 4] = *b"N4LP";
@@ -30,7 +33,7 @@ fn read_prefix(uart: &mut Uart0, buf: &mut [u8]) {
             match embedded_hal_nb::serial::Read::read(uart) {
                 Ok(b) => break b,
                 Err(nb::Error::WouldBlock) => core::hint::spin_loop(),
-                Err(nb::Error::Other(e)) => match e {},
+                Err(nb::Error::Other(_)) => host::exit(false),
             }
         };
     }
@@ -40,11 +43,11 @@ fn read_prefix(uart: &mut Uart0, buf: &mut [u8]) {
 fn main() -> ! {
     // UART first: on some UART models (QEMU's STM32 USART) bytes arriving before the
     // receiver is enabled are dropped.
-    let Some(mut uart) = Uart0::take(BAUD) else {
+    stack::paint();
+    let Some(Board { nav: mut uart, .. }) = Board::take(BAUD) else {
         host::stderr(format_args!("firmware: UART0 already taken\n"));
         host::exit(false)
     };
-    stack::paint();
     let mut pipe = match pipeline::Pipeline::new() {
         Ok(p) => p,
         Err(e) => {
@@ -74,7 +77,7 @@ fn main() -> ! {
     let mut buf = [0u8; 64];
     while remaining > 0 {
         let want = remaining.min(buf.len());
-        let Ok(n) = uart.read(&mut buf[..want]);
+        let n = uart.read(&mut buf[..want]).unwrap_or(0);
         if let Err(e) = pipe.feed(&buf[..n], |row| host::stdout(row.as_bytes())) {
             bank_failed(&e);
         }
@@ -112,7 +115,7 @@ fn live(uart: &mut Uart0, pipe: &mut pipeline::Pipeline, first: &[u8]) -> ! {
     }
     let mut buf = [0u8; 64];
     loop {
-        let Ok(n) = uart.read(&mut buf);
+        let n = uart.read(&mut buf).unwrap_or(0);
         if let Err(e) = pipe.feed(&buf[..n], |row| host::stdout(row.as_bytes())) {
             bank_failed(&e);
         }
