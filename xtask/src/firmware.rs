@@ -1,7 +1,8 @@
-//! Firmware subcommands: demo, qemu, bench, size, and the firmware part of `ci`.
+//! Firmware subcommands: demo, unit, qemu, bench, size, and the firmware part of `ci`.
 
 use crate::cargo;
 use crate::qemu::{self, Board, Output};
+use crate::unit;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Duration;
@@ -151,14 +152,14 @@ fn run_capture(
     r
 }
 
-/// The firmware's `key=value` counters line from its stderr.
+/// The `key=value` counters of the firmware's `firmware: ...` stderr lines (the boot line
+/// and the final counters line).
 fn counters(stderr: &str) -> Vec<(String, u64)> {
     stderr
         .lines()
-        .filter_map(|l| l.strip_prefix("firmware: bytes="))
+        .filter_map(|l| l.strip_prefix("firmware: "))
         .flat_map(|rest| {
-            format!("bytes={rest}")
-                .split_whitespace()
+            rest.split_whitespace()
                 .filter_map(|kv| {
                     let (k, v) = kv.split_once('=')?;
                     Some((k.to_owned(), v.parse().ok()?))
@@ -172,26 +173,155 @@ fn counter(c: &[(String, u64)], key: &str) -> Option<u64> {
     c.iter().find(|(k, _)| k == key).map(|(_, v)| *v)
 }
 
-/// `cargo xtask demo`.
+/// The `nav440` binary of the host CLI, built once (debug profile, as `NAV440_RUN`).
+fn nav440_bin() -> Result<PathBuf, String> {
+    cargo(&["build", "-q", "-p", "host-tests", "--bin", "nav440"])?;
+    let p = target_dir().join("debug").join("nav440");
+    if p.is_file() {
+        Ok(p)
+    } else {
+        Err(format!("built nav440 not found at {}", p.display()))
+    }
+}
+
+/// A free TCP port on the loopback interface (bound, then released for the simulator).
+fn free_port() -> Result<u16, String> {
+    let l = std::net::TcpListener::bind("127.0.0.1:0").map_err(|e| format!("no free port: {e}"))?;
+    l.local_addr()
+        .map(|a| a.port())
+        .map_err(|e| format!("no free port: {e}"))
+}
+
+/// A running `nav440 sim`, killed when dropped.
+struct Sim {
+    child: std::process::Child,
+    addr: String,
+}
+
+impl Sim {
+    /// `nav440 sim CAPTURE --listen tcp:127.0.0.1:PORT [--record RECORD] EXTRA...`.
+    fn start(
+        nav440: &Path,
+        capture: &Path,
+        record: Option<&Path>,
+        extra: &[&str],
+    ) -> Result<Self, String> {
+        let port = free_port()?;
+        let addr = format!("127.0.0.1:{port}");
+        let mut args: Vec<String> = vec![
+            "sim".into(),
+            capture.display().to_string(),
+            "--listen".into(),
+            format!("tcp:{addr}"),
+        ];
+        if let Some(r) = record {
+            args.extend(["--record".into(), r.display().to_string()]);
+        }
+        args.extend(extra.iter().map(|s| (*s).to_owned()));
+        eprintln!("+ {} {}", nav440.display(), args.join(" "));
+        let child = Command::new(nav440)
+            .args(&args)
+            .stdin(std::process::Stdio::null())
+            .spawn()
+            .map_err(|e| format!("cannot start {}: {e}", nav440.display()))?;
+        Ok(Self { child, addr })
+    }
+
+    /// Waits for the simulator to exit (it does once the connection closed), killing it
+    /// after `timeout`; its exit status.
+    fn wait(mut self, timeout: Duration) -> Result<std::process::ExitStatus, String> {
+        let start = std::time::Instant::now();
+        loop {
+            match self.child.try_wait() {
+                Ok(Some(s)) => return Ok(s),
+                Ok(None) if start.elapsed() > timeout => {
+                    let _ = self.child.kill();
+                    return Err("nav440 sim did not exit after the run (killed)".into());
+                }
+                Ok(None) => std::thread::sleep(Duration::from_millis(20)),
+                Err(e) => return Err(format!("waiting for nav440 sim: {e}")),
+            }
+        }
+    }
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        if let Ok(None) = self.child.try_wait() {
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+        }
+    }
+}
+
+/// Time limit of a unit run (the boot's worst case is a few seconds of time-outs; the
+/// stream moves at 10-40 KB/s through QEMU's UART).
+fn unit_timeout(capture_bytes: usize) -> Duration {
+    Duration::from_secs(90 + (capture_bytes / 2_000) as u64)
+}
+
+/// Builds the firmware for `board` and runs it against the unit at `addr`.
+fn run_unit(
+    board: &Board,
+    elf: &Path,
+    addr: &str,
+    inherit_stdout: bool,
+    timeout: Duration,
+) -> Result<unit::UnitRun, String> {
+    unit::run(board, elf, addr, &work_dir()?, inherit_stdout, timeout)
+}
+
+/// `cargo xtask unit --connect tcp:HOST:PORT [--board B]`: returns the firmware's exit status.
+pub fn unit(board: Board, addr: &str) -> Result<u8, String> {
+    qemu::ensure_qemu()?;
+    let elf = build(board.target, board.features, FW_BIN)?;
+    let r = run_unit(&board, &elf, addr, true, Duration::from_secs(3600))?;
+    eprint!("{}", r.stderr);
+    match r.code() {
+        Some(c) => Ok(u8::try_from(c).unwrap_or(1)),
+        None => Err(format!("QEMU ended without an exit status ({})", r.status)),
+    }
+}
+
+/// `cargo xtask demo`: the firmware against `nav440 sim` streaming the bundled capture.
 pub fn demo(board: Board, capture: Option<PathBuf>) -> Result<(), String> {
     qemu::ensure_qemu()?;
-    let elf = build(board.target, &[], FW_BIN)?;
+    let elf = build(board.target, board.features, FW_BIN)?;
     let capture_path = match capture {
         Some(p) => p,
         None => bundled_capture()?,
     };
     let capture = read_file(&capture_path)?;
+    let nav440 = nav440_bin()?;
+    let record = work_dir()?.join(format!("demo-{}-streamed.bin", board.name));
+    let sim = Sim::start(&nav440, &capture_path, Some(&record), &[])?;
     eprintln!(
-        "xtask: feeding {} ({} bytes) through UART0 of QEMU {} ({})",
+        "xtask: `nav440 sim` plays a NAV440 at {} with the samples of {} ({} bytes); the firmware on QEMU {} ({}) configures it and estimates",
+        sim.addr,
         capture_path.display(),
         capture.len(),
         board.machine,
         board.about
     );
-    let r = run_capture(&board, &elf, &capture, Output::Capture)?;
+    let r = run_unit(&board, &elf, &sim.addr, false, unit_timeout(capture.len()))?;
+    let sim_status = sim.wait(Duration::from_secs(30));
+    if r.code() != Some(0) {
+        return Err(format!(
+            "the firmware ended with status {:?}; its stderr:\n{}",
+            r.code(),
+            r.stderr
+        ));
+    }
     let csv_path = work_dir()?.join(format!("demo-{}.csv", board.name));
     std::fs::write(&csv_path, &r.stdout)
         .map_err(|e| format!("cannot write {}: {e}", csv_path.display()))?;
+    println!("== boot: the firmware configures the unit ==");
+    for l in r.stderr.lines().filter(|l| {
+        l.starts_with("firmware: unit configured") || l.starts_with("firmware: boot")
+    }) {
+        println!("{l}");
+    }
+    println!();
     print_estimates(&r.stdout)?;
     let c = counters(&r.stderr);
     println!();
@@ -201,11 +331,19 @@ pub fn demo(board: Board, capture: Option<PathBuf>) -> Result<(), String> {
         board.machine, board.about, board.target
     );
     println!(
-        "capture                                  {}",
-        capture_path.display()
+        "unit                                     nav440 sim, samples of {} ({})",
+        capture_path.display(),
+        match sim_status {
+            Ok(s) if s.success() => "exited 0".to_owned(),
+            Ok(s) => format!("exited with {s}"),
+            Err(e) => e,
+        }
     );
     for (k, label) in [
-        ("bytes", "bytes parsed"),
+        ("unit_bytes", "bytes the unit sent (boot + stream)"),
+        ("boot_frames", "frames while configuring (counted only)"),
+        ("boot_ms", "boot time (SysTick, wall time under QEMU)"),
+        ("bytes", "bytes estimated (after the read-back)"),
         ("frames", "frames (CRC ok)"),
         ("crc_errors", "CRC errors"),
         ("skipped", "skipped bytes"),
@@ -225,11 +363,15 @@ pub fn demo(board: Board, capture: Option<PathBuf>) -> Result<(), String> {
     let secs = r.elapsed.as_secs_f64();
     println!(
         "QEMU run                                 {secs:.1} s wall, {:.1} KB/s through the emulated UART",
-        capture.len() as f64 / secs.max(1e-9) / 1e3
+        r.unit_bytes as f64 / secs.max(1e-9) / 1e3
     );
     println!(
         "full CSV                                 {}",
         csv_path.display()
+    );
+    println!(
+        "bytes streamed after configuration       {} (`nav440 estimate` on it prints the same CSV)",
+        record.display()
     );
     Ok(())
 }
