@@ -3,29 +3,76 @@
 //! Both are the one [`Driver`] over a thin [`Port`] adapter ([`IoPort`], [`NbPort`]), so the
 //! protocol logic below exists once; only reading and writing bytes differ.
 //!
-//! Both yield decoded packets through a callback and can configure the unit with SF/WF:
-//! the request is sent, then incoming frames are read until the unit answers:
+//! Both yield decoded packets through a callback ([`Driver::poll`]) and run the unit's commands
+//! that have a reply (PK, SF, WF, GF): the request is sent, then incoming frames are read until
+//! the unit answers or the reply time-out expires:
 //! * a NAK naming the request -> [`Error::Nak`] (also when it comes after a partial reply);
-//! * a reply listing every requested ID -> `Ok(())`;
-//! * a reply missing some IDs -> the driver keeps reading for the NAK that the unit sends
-//!   with it and returns [`Error::Nak`]; if the byte budget runs out or the line goes quiet
-//!   first, [`Error::NotAccepted`].
+//! * a SF/WF reply listing every requested ID -> `Ok(())`;
+//! * a SF/WF reply missing some IDs -> the driver keeps reading for the NAK that the unit sends
+//!   with it and returns [`Error::Nak`]; if the time-out expires first, [`Error::NotAccepted`];
+//! * nothing -> [`Error::NoReply`].
 //!
-//! Frames that arrive while waiting (continuous output) are dropped; they are still counted
-//! in the parser's [`Stats`]. The wait is bounded by a byte budget
-//! ([`DEFAULT_REPLY_BUDGET`] bytes), not by time: the crate has no clock.
+//! # Time-outs
+//! Waits are measured in time, through an [`embedded_hal::delay::DelayNs`] the caller passes
+//! in: the driver reads every byte available now, then sleeps [`Timing::poll_step_us`] and
+//! tries again, until [`Timing::reply_timeout_ms`]. The time counted is the sum of the sleeps
+//! plus the line time of the bytes received (10 bits per byte at [`Driver::line_baud`]), so a
+//! unit that streams without pause cannot keep a wait alive forever, even where a port
+//! delivers bytes faster than a real line would (emulators).
+//!
+//! # Nothing is read past a reply
+//! While waiting, the driver reads one byte at a time and stops parsing right after the reply
+//! frame ([`Parser::feed_until`]): bytes after it stay in the serial port, or, in the one case
+//! where a corrupted candidate had already buffered them, in the parser
+//! ([`Driver::pending_bytes`]). A caller that takes the port back continues the stream exactly
+//! at the byte after the reply by first feeding [`Driver::pending_bytes`] (empty in practice).
+//!
+//! Frames that arrive while waiting (continuous output) are not yielded; they are counted in
+//! [`Driver::unsolicited`] and in the parser's [`Stats`].
+
+use core::ops::ControlFlow;
+
+use embedded_hal::delay::DelayNs;
 
 use crate::encode::{command, EncodeError};
 use crate::packets::{DecodeError, FieldIds, Packet};
 use crate::parser::{Frame, Parser};
-use crate::types::{FieldId, PacketRate, PacketType};
+use crate::types::{Baud, FieldId, PacketRate, PacketType};
 use crate::{Stats, MAX_FRAME};
 
-/// Default number of received bytes to wait for a command's reply (about 0.7 s at 57600 baud).
-pub const DEFAULT_REPLY_BUDGET: usize = 4096;
+/// Default reply time-out, ms (a reply of a few bytes plus one interleaved output frame of up
+/// to 49 bytes takes about 70 ms at 9600 Bd).
+pub const DEFAULT_REPLY_TIMEOUT_MS: u32 = 200;
 
-/// Default number of consecutive `WouldBlock` polls the nb driver waits for a reply byte.
-pub const DEFAULT_IDLE_POLLS: u32 = 1_000_000;
+/// Default sleep between two polls of the port while waiting for a reply, µs.
+pub const DEFAULT_POLL_STEP_US: u32 = 500;
+
+/// Most fields one [`Driver::get_fields`] request reads back.
+pub const MAX_GET_FIELDS: usize = 8;
+
+/// How long the driver waits for a reply and how it polls meanwhile.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Timing {
+    /// Time-out of one request's reply, ms.
+    pub reply_timeout_ms: u32,
+    /// Sleep between two polls of the port when no byte is available, µs (at least 1).
+    pub poll_step_us: u32,
+}
+
+impl Timing {
+    /// [`DEFAULT_REPLY_TIMEOUT_MS`], [`DEFAULT_POLL_STEP_US`].
+    pub const DEFAULT: Self = Self {
+        reply_timeout_ms: DEFAULT_REPLY_TIMEOUT_MS,
+        poll_step_us: DEFAULT_POLL_STEP_US,
+    };
+}
+
+impl Default for Timing {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
 
 /// Driver errors; `E` is the serial port's error.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -49,7 +96,7 @@ pub enum Error<E> {
         /// IDs among them that the reply listed.
         accepted: u8,
     },
-    /// No reply within the byte budget, or the port reported end of data / stayed idle.
+    /// No reply within the reply time-out ([`Timing::reply_timeout_ms`]).
     NoReply,
 }
 
@@ -59,45 +106,70 @@ impl<E> From<EncodeError> for Error<E> {
     }
 }
 
-/// Waits for the reply (and possible NAK) to one SF/WF request.
+/// What a wait is looking for.
+enum Want<'f> {
+    /// PK reply.
+    Ping,
+    /// SF/WF reply with these fields (and a possible NAK).
+    Fields(&'f [(FieldId, u16)]),
+    /// GF/RF reply to these IDs.
+    Values(&'f [FieldId]),
+}
+
+/// The state of one wait for a reply (and possible NAK).
 struct ReplyWait<'f> {
     request: PacketType,
-    fields: &'f [(FieldId, u16)],
+    want: Want<'f>,
     nak: bool,
+    /// SF/WF: IDs accepted so far; PK/GF: 1 once the reply arrived.
     accepted: Option<u8>,
+    /// GF/RF: the values read, in the order of the requested IDs.
+    values: [Option<u16>; MAX_GET_FIELDS],
+    /// Frames that were neither the reply nor its NAK.
+    unsolicited: u32,
 }
 
 impl<'f> ReplyWait<'f> {
-    fn new(request: PacketType, fields: &'f [(FieldId, u16)]) -> Self {
+    fn new(request: PacketType, want: Want<'f>) -> Self {
         Self {
             request,
-            fields,
+            want,
             nak: false,
             accepted: None,
+            values: [None; MAX_GET_FIELDS],
+            unsolicited: 0,
         }
     }
 
-    fn on_frame(&mut self, frame: Frame<'_>) {
-        match Packet::decode(frame) {
-            Ok(Packet::Nak(n)) if n.failed_type() == self.request => self.nak = true,
-            Ok(Packet::SetFields(ids) | Packet::WriteFields(ids))
-                if frame.packet_type == self.request =>
-            {
-                self.accepted = Some(self.count_accepted(ids));
+    /// Takes one frame; `Break` once the outcome is known.
+    fn on_frame(&mut self, frame: Frame<'_>) -> ControlFlow<()> {
+        let mine = frame.packet_type == self.request;
+        match (Packet::decode(frame), &self.want) {
+            (Ok(Packet::Nak(n)), _) if n.failed_type() == self.request => self.nak = true,
+            (Ok(Packet::Ping), Want::Ping) => self.accepted = Some(1),
+            (Ok(Packet::SetFields(ids) | Packet::WriteFields(ids)), Want::Fields(f)) if mine => {
+                self.accepted = Some(count_accepted(f, ids));
             }
-            _ => {}
+            (Ok(Packet::GetFields(v) | Packet::ReadFields(v)), Want::Values(ids)) if mine => {
+                for (slot, id) in self.values.iter_mut().zip(ids.iter()) {
+                    *slot = v.get(*id);
+                }
+                self.accepted = Some(1);
+            }
+            _ => self.unsolicited = self.unsolicited.saturating_add(1),
         }
-    }
-
-    fn count_accepted(&self, ids: FieldIds<'_>) -> u8 {
-        self.fields
-            .iter()
-            .filter(|(id, _)| ids.contains(*id))
-            .count() as u8
+        if self.outcome::<()>().is_some() {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
     }
 
     fn requested(&self) -> u8 {
-        self.fields.len() as u8
+        match self.want {
+            Want::Fields(f) => f.len() as u8,
+            Want::Ping | Want::Values(_) => 1,
+        }
     }
 
     /// `Some` once the outcome is known.
@@ -113,7 +185,7 @@ impl<'f> ReplyWait<'f> {
         }
     }
 
-    /// The outcome when no more bytes will be waited for.
+    /// The outcome when the time-out expired.
     fn give_up<E>(&self) -> Error<E> {
         match self.accepted {
             Some(accepted) => Error::NotAccepted {
@@ -125,6 +197,10 @@ impl<'f> ReplyWait<'f> {
     }
 }
 
+fn count_accepted(fields: &[(FieldId, u16)], ids: FieldIds<'_>) -> u8 {
+    fields.iter().filter(|(id, _)| ids.contains(*id)).count() as u8
+}
+
 mod sealed {
     /// Keeps [`super::Port`] implemented by this module's adapters only.
     pub trait Sealed {}
@@ -133,7 +209,8 @@ mod sealed {
 /// A serial port as the driver sees it: byte reads and whole-frame writes.
 ///
 /// Sealed: implemented by [`IoPort`] and [`NbPort`] only. It is public because it bounds
-/// [`Driver`]; callers use [`IoDriver`] and [`NbDriver`] and need not name it.
+/// [`Driver`]; callers use [`IoDriver`] and [`NbDriver`] and name it only through
+/// `Port::Serial` / `Port::Error`.
 pub trait Port: sealed::Sealed {
     /// The serial port's error.
     type Error;
@@ -144,26 +221,29 @@ pub trait Port: sealed::Sealed {
     /// more may be ready at once (`poll` then reads again).
     fn read_for_poll(&mut self, buf: &mut [u8]) -> Result<(usize, bool), Self::Error>;
 
-    /// Reads reply bytes into `buf`; returns how many, `0` meaning stop waiting
-    /// (end of data, or the port stayed idle).
-    fn read_for_reply(&mut self, buf: &mut [u8]) -> Result<usize, Self::Error>;
+    /// Reads one byte if one is available now; never blocks.
+    fn read_byte_now(&mut self) -> Result<Option<u8>, Self::Error>;
 
-    /// Writes every byte of `bytes`, then flushes.
+    /// Writes every byte of `bytes`, then flushes (the last byte has left the port).
     fn write_all(&mut self, bytes: &[u8]) -> Result<(), Error<Self::Error>>;
+
+    /// The wrapped serial port (e.g. to change its baud rate).
+    fn serial_mut(&mut self) -> &mut Self::Serial;
 
     /// Gives the serial port back.
     fn into_serial(self) -> Self::Serial;
 }
 
-/// [`Port`] adapter for an [`embedded_io::Read`] + [`embedded_io::Write`] serial port
-/// (blocking, chunked reads).
+/// [`Port`] adapter for an [`embedded_io::Read`] + [`embedded_io::ReadReady`] +
+/// [`embedded_io::Write`] serial port (blocking, chunked reads for [`Driver::poll`];
+/// `read_ready` keeps the reply waits from blocking).
 pub struct IoPort<S> {
     serial: S,
 }
 
 impl<S> sealed::Sealed for IoPort<S> {}
 
-impl<S: embedded_io::Read + embedded_io::Write> Port for IoPort<S> {
+impl<S: embedded_io::Read + embedded_io::ReadReady + embedded_io::Write> Port for IoPort<S> {
     type Error = S::Error;
     type Serial = S;
 
@@ -172,9 +252,16 @@ impl<S: embedded_io::Read + embedded_io::Write> Port for IoPort<S> {
         Ok((self.serial.read(buf)?, false))
     }
 
-    /// One blocking `read`; `0` when the port reports end of data.
-    fn read_for_reply(&mut self, buf: &mut [u8]) -> Result<usize, S::Error> {
-        self.serial.read(buf)
+    /// `read_ready`, then a one-byte `read`.
+    fn read_byte_now(&mut self) -> Result<Option<u8>, S::Error> {
+        if !self.serial.read_ready()? {
+            return Ok(None);
+        }
+        let mut b = [0u8; 1];
+        Ok(match self.serial.read(&mut b)? {
+            0 => None,
+            _ => Some(b[0]),
+        })
     }
 
     fn write_all(&mut self, mut bytes: &[u8]) -> Result<(), Error<S::Error>> {
@@ -187,6 +274,10 @@ impl<S: embedded_io::Read + embedded_io::Write> Port for IoPort<S> {
         self.serial.flush().map_err(Error::Serial)
     }
 
+    fn serial_mut(&mut self) -> &mut S {
+        &mut self.serial
+    }
+
     fn into_serial(self) -> S {
         self.serial
     }
@@ -196,7 +287,6 @@ impl<S: embedded_io::Read + embedded_io::Write> Port for IoPort<S> {
 /// (one byte at a time).
 pub struct NbPort<S> {
     serial: S,
-    idle_polls: u32,
 }
 
 impl<S> sealed::Sealed for NbPort<S> {}
@@ -224,27 +314,11 @@ where
         Ok((n, true))
     }
 
-    /// Reads one byte, giving up (`0`) after `idle_polls` consecutive `WouldBlock`s; one byte
-    /// at a time so that bytes after the reply stay in the port for [`Driver::poll`].
-    fn read_for_reply(&mut self, buf: &mut [u8]) -> Result<usize, S::Error> {
-        let Some(slot) = buf.first_mut() else {
-            return Ok(0);
-        };
-        let mut idle = 0u32;
-        loop {
-            match self.serial.read() {
-                Ok(b) => {
-                    *slot = b;
-                    return Ok(1);
-                }
-                Err(nb::Error::WouldBlock) => {
-                    idle = idle.saturating_add(1);
-                    if idle >= self.idle_polls {
-                        return Ok(0);
-                    }
-                }
-                Err(nb::Error::Other(e)) => return Err(e),
-            }
+    fn read_byte_now(&mut self) -> Result<Option<u8>, S::Error> {
+        match self.serial.read() {
+            Ok(b) => Ok(Some(b)),
+            Err(nb::Error::WouldBlock) => Ok(None),
+            Err(nb::Error::Other(e)) => Err(e),
         }
     }
 
@@ -256,24 +330,31 @@ where
         nb::block!(self.serial.flush()).map_err(Error::Serial)
     }
 
+    fn serial_mut(&mut self) -> &mut S {
+        &mut self.serial
+    }
+
     fn into_serial(self) -> S {
         self.serial
     }
 }
 
-/// The driver over a [`Port`]: parser, receive buffer, reply budget and every command.
+/// The driver over a [`Port`]: parser, receive buffer, timing and every command.
 /// Use it as [`IoDriver`] or [`NbDriver`].
 pub struct Driver<P> {
     port: P,
     parser: Parser,
     rx: [u8; RX_CHUNK],
-    reply_budget: usize,
+    timing: Timing,
+    line_baud: u32,
+    unsolicited: u32,
 }
 
 /// Receive buffer size, bytes (largest chunk fed to the parser at once).
 const RX_CHUNK: usize = 64;
 
-/// Blocking driver over an [`embedded_io::Read`] + [`embedded_io::Write`] serial port.
+/// Blocking driver over an [`embedded_io::Read`] + [`embedded_io::ReadReady`] +
+/// [`embedded_io::Write`] serial port.
 pub type IoDriver<S> = Driver<IoPort<S>>;
 
 /// Non-blocking driver over [`embedded_hal_nb::serial::Read`] + `Write` (one byte at a time).
@@ -285,12 +366,14 @@ impl<P> Driver<P> {
             port,
             parser: Parser::new(),
             rx: [0; RX_CHUNK],
-            reply_budget: DEFAULT_REPLY_BUDGET,
+            timing: Timing::DEFAULT,
+            line_baud: Baud::B38400.bits_per_second(),
+            unsolicited: 0,
         }
     }
 }
 
-impl<S: embedded_io::Read + embedded_io::Write> Driver<IoPort<S>> {
+impl<S: embedded_io::Read + embedded_io::ReadReady + embedded_io::Write> Driver<IoPort<S>> {
     /// Wraps a serial port (already at the unit's baud rate).
     pub fn new(serial: S) -> Self {
         Self::with_port(IoPort { serial })
@@ -303,33 +386,70 @@ where
 {
     /// Wraps a serial port (already at the unit's baud rate).
     pub fn new(serial: S) -> Self {
-        Self::with_port(NbPort {
-            serial,
-            idle_polls: DEFAULT_IDLE_POLLS,
-        })
-    }
-
-    /// Sets how many consecutive `WouldBlock` reads end a wait for a reply
-    /// (default [`DEFAULT_IDLE_POLLS`]).
-    pub fn set_idle_polls(&mut self, polls: u32) {
-        self.port.idle_polls = polls;
+        Self::with_port(NbPort { serial })
     }
 }
 
 impl<P: Port> Driver<P> {
-    /// Sets how many received bytes to wait for a reply (default [`DEFAULT_REPLY_BUDGET`]).
-    pub fn set_reply_budget(&mut self, bytes: usize) {
-        self.reply_budget = bytes;
+    /// Sets the reply time-out and poll step (default [`Timing::DEFAULT`]).
+    pub fn set_timing(&mut self, timing: Timing) {
+        self.timing = timing;
     }
 
-    /// Gives the serial port back.
+    /// The reply time-out and poll step.
+    pub fn timing(&self) -> Timing {
+        self.timing
+    }
+
+    /// Sets the line rate used to count received bytes as time in reply waits, bit/s
+    /// (default 38400; [`crate::boot::boot`] keeps it equal to the local UART's rate).
+    pub fn set_line_baud(&mut self, bits_per_second: u32) {
+        self.line_baud = bits_per_second.max(1);
+    }
+
+    /// The line rate used to count received bytes as time, bit/s.
+    pub fn line_baud(&self) -> u32 {
+        self.line_baud
+    }
+
+    /// The wrapped serial port (e.g. to change its baud rate).
+    pub fn serial_mut(&mut self) -> &mut P::Serial {
+        self.port.serial_mut()
+    }
+
+    /// Gives the serial port back. Feed [`Self::pending_bytes`] first (copy them before) to
+    /// continue the stream exactly; see the module docs.
     pub fn release(self) -> P::Serial {
         self.port.into_serial()
+    }
+
+    /// Gives the serial port and the parser back (the parser holds
+    /// [`Self::pending_bytes`] and the counters).
+    pub fn into_parts(self) -> (P::Serial, Parser) {
+        (self.port.into_serial(), self.parser)
+    }
+
+    /// Bytes read from the port but not yet part of a frame, in stream order (empty right
+    /// after a reply unless a corrupted candidate spanned the reply; see the module docs).
+    pub fn pending_bytes(&self) -> &[u8] {
+        self.parser.pending_bytes()
     }
 
     /// The parser's counters.
     pub fn stats(&self) -> &Stats {
         self.parser.stats()
+    }
+
+    /// Frames received while waiting for replies that were not the reply (continuous output,
+    /// other replies), since the driver was made.
+    pub fn unsolicited(&self) -> u32 {
+        self.unsolicited
+    }
+
+    /// Drops a partial frame held by the parser (counted as skipped), e.g. after the local
+    /// baud rate changed.
+    pub fn clear_parser(&mut self) {
+        self.parser.clear();
     }
 
     /// Reads from the port and passes every complete frame, decoded, to `on_packet` (a known
@@ -361,11 +481,18 @@ impl<P: Port> Driver<P> {
         self.port.write_all(frame)
     }
 
-    /// Sends a ping (PK).
+    /// Sends a ping (PK) without waiting (the reply comes through [`Self::poll`]).
     pub fn ping(&mut self) -> Result<(), Error<P::Error>> {
         let mut f = [0u8; 8];
         let n = command::ping(&mut f)?;
         self.send_raw(f.get(..n).unwrap_or(&[]))
+    }
+
+    /// Sends a ping (PK) and waits for the PK reply ([`Error::NoReply`] after the time-out).
+    pub fn ping_wait(&mut self, delay: &mut impl DelayNs) -> Result<(), Error<P::Error>> {
+        self.ping()?;
+        let mut wait = ReplyWait::new(PacketType::PK, Want::Ping);
+        self.wait(&mut wait, delay)
     }
 
     /// Sends a GP request for one packet of type `t`; the packet comes through [`Self::poll`].
@@ -376,13 +503,21 @@ impl<P: Port> Driver<P> {
     }
 
     /// SF: sets fields in RAM and waits for the confirmation (see the module docs).
-    pub fn set_fields(&mut self, fields: &[(FieldId, u16)]) -> Result<(), Error<P::Error>> {
-        self.configure(PacketType::SF, fields)
+    pub fn set_fields(
+        &mut self,
+        fields: &[(FieldId, u16)],
+        delay: &mut impl DelayNs,
+    ) -> Result<(), Error<P::Error>> {
+        self.configure(PacketType::SF, fields, delay, |_| Ok(()))
     }
 
     /// WF: writes fields to EEPROM and waits for the confirmation.
-    pub fn write_fields(&mut self, fields: &[(FieldId, u16)]) -> Result<(), Error<P::Error>> {
-        self.configure(PacketType::WF, fields)
+    pub fn write_fields(
+        &mut self,
+        fields: &[(FieldId, u16)],
+        delay: &mut impl DelayNs,
+    ) -> Result<(), Error<P::Error>> {
+        self.configure(PacketType::WF, fields, delay, |_| Ok(()))
     }
 
     /// Sets the continuous packet type and rate in one SF (fields 0x0003 and 0x0001).
@@ -390,17 +525,67 @@ impl<P: Port> Driver<P> {
         &mut self,
         t: PacketType,
         rate: PacketRate,
+        delay: &mut impl DelayNs,
     ) -> Result<(), Error<P::Error>> {
-        self.set_fields(&[
-            (FieldId::PACKET_TYPE, t.code()),
-            (FieldId::PACKET_RATE_DIVIDER, rate.divider()),
-        ])
+        self.set_fields(
+            &[
+                (FieldId::PACKET_TYPE, t.code()),
+                (FieldId::PACKET_RATE_DIVIDER, rate.divider()),
+            ],
+            delay,
+        )
+    }
+
+    /// SF of the baud field (0x0002), which the unit applies at once: after the request has
+    /// left the port, `switch` changes the local port to `baud` (the reply comes at the new
+    /// rate), the parser drops any partial frame, and the reply is awaited at the new rate.
+    pub fn set_baud(
+        &mut self,
+        baud: Baud,
+        delay: &mut impl DelayNs,
+        switch: impl FnOnce(&mut P::Serial, Baud) -> Result<(), P::Error>,
+    ) -> Result<(), Error<P::Error>> {
+        let fields = [(FieldId::BAUD_RATE, baud.code())];
+        self.configure(PacketType::SF, &fields, delay, |d| {
+            switch(d.port.serial_mut(), baud).map_err(Error::Serial)?;
+            d.parser.clear();
+            d.line_baud = baud.bits_per_second();
+            Ok(())
+        })
+    }
+
+    /// GF (RAM) or RF (EEPROM, `t = PacketType::RF`) of up to [`MAX_GET_FIELDS`] IDs: waits
+    /// for the reply and returns the values in the order of `ids` (`None`: not in the reply).
+    pub fn get_fields(
+        &mut self,
+        t: PacketType,
+        ids: &[FieldId],
+        delay: &mut impl DelayNs,
+    ) -> Result<[Option<u16>; MAX_GET_FIELDS], Error<P::Error>> {
+        let ids = ids.get(..ids.len().min(MAX_GET_FIELDS)).unwrap_or(&[]);
+        let mut f = [0u8; 32];
+        let n = if t == PacketType::RF {
+            command::read_fields(ids, &mut f)?
+        } else {
+            command::get_fields(ids, &mut f)?
+        };
+        self.send_raw(f.get(..n).unwrap_or(&[]))?;
+        let request = if t == PacketType::RF {
+            PacketType::RF
+        } else {
+            PacketType::GF
+        };
+        let mut wait = ReplyWait::new(request, Want::Values(ids));
+        self.wait(&mut wait, delay)?;
+        Ok(wait.values)
     }
 
     fn configure(
         &mut self,
         t: PacketType,
         fields: &[(FieldId, u16)],
+        delay: &mut impl DelayNs,
+        after_send: impl FnOnce(&mut Self) -> Result<(), Error<P::Error>>,
     ) -> Result<(), Error<P::Error>> {
         let mut f = [0u8; MAX_FRAME];
         let n = if t == PacketType::WF {
@@ -409,25 +594,43 @@ impl<P: Port> Driver<P> {
             command::set_fields(fields, &mut f)?
         };
         self.send_raw(f.get(..n).unwrap_or(&[]))?;
-        let mut wait = ReplyWait::new(t, fields);
-        let mut budget = self.reply_budget;
-        loop {
-            let n = self
-                .port
-                .read_for_reply(&mut self.rx)
-                .map_err(Error::Serial)?;
-            if n == 0 {
-                return Err(wait.give_up());
+        after_send(self)?;
+        let mut wait = ReplyWait::new(t, Want::Fields(fields));
+        self.wait(&mut wait, delay)
+    }
+
+    /// Reads byte by byte until `wait` knows the outcome or the time-out expires.
+    fn wait(
+        &mut self,
+        wait: &mut ReplyWait<'_>,
+        delay: &mut impl DelayNs,
+    ) -> Result<(), Error<P::Error>> {
+        let limit_us = u64::from(self.timing.reply_timeout_ms) * 1000;
+        let step_us = self.timing.poll_step_us.max(1);
+        let byte_us = 10_000_000 / u64::from(self.line_baud.max(1));
+        let mut elapsed_us = 0u64;
+        let result = loop {
+            match self.port.read_byte_now() {
+                Err(e) => break Err(Error::Serial(e)),
+                Ok(Some(b)) => {
+                    // Frames still buffered behind a corrupted candidate are scanned before
+                    // this byte (they were sent before the request: counted as unsolicited).
+                    self.parser.feed_until(&[b], |f| wait.on_frame(f));
+                    if let Some(r) = wait.outcome() {
+                        break r;
+                    }
+                    elapsed_us += byte_us;
+                }
+                Ok(None) => {
+                    delay.delay_us(step_us);
+                    elapsed_us += u64::from(step_us);
+                }
             }
-            let bytes = self.rx.get(..n).unwrap_or(&[]);
-            self.parser.feed(bytes, |f| wait.on_frame(f));
-            if let Some(r) = wait.outcome() {
-                return r;
+            if elapsed_us >= limit_us {
+                break Err(wait.give_up());
             }
-            budget = budget.saturating_sub(n);
-            if budget == 0 {
-                return Err(wait.give_up());
-            }
-        }
+        };
+        self.unsolicited = self.unsolicited.saturating_add(wait.unsolicited);
+        result
     }
 }

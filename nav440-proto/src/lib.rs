@@ -7,6 +7,8 @@
 //! * [`Packet`]: zero-copy typed views of every packet with raw and SI accessors.
 //! * `*Fields` structs and [`command`]: encoders for every packet and command.
 //! * [`ItowClock`]: continuous time from the wrapping time-of-week stamps.
+//! * [`boot`]: the whole boot sequence (find the unit, baud switch, packet type and rate, read-back).
+//! * [`unit`]: the unit's side (requests, field state, replies, NAKs) for simulators.
 //! * [`driver`]: an `embedded-io` and an `embedded-hal-nb` driver that yield packets and
 //!   configure the unit (SF with reply and NAK handling).
 //!
@@ -55,6 +57,7 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+pub mod boot;
 pub mod clock;
 pub mod crc16;
 pub mod driver;
@@ -62,6 +65,7 @@ pub mod encode;
 pub mod packets;
 pub mod parser;
 pub mod types;
+pub mod unit;
 
 pub use clock::ItowClock;
 pub use crc16::{crc16, Crc16Table, DefaultCrcTable};

@@ -1173,3 +1173,31 @@ impl<'a> Packet<'a> {
         })
     }
 }
+
+impl PacketType {
+    /// Payload length in bytes of a packet type the unit can stream continuously (S0, S1,
+    /// S2, A0, A1, A2, N0, N1, B1, T0); `None` for any other type (commands, ID, VR, unknown).
+    pub const fn output_payload_len(self) -> Option<usize> {
+        let c = self.code();
+        let table: [(PacketType, usize); 10] = [
+            (PacketType::S0, S0::LEN),
+            (PacketType::S1, S1::LEN),
+            (PacketType::S2, S2::LEN),
+            (PacketType::A0, A0::LEN),
+            (PacketType::A1, A1::LEN),
+            (PacketType::A2, A2::LEN),
+            (PacketType::N0, N0::LEN),
+            (PacketType::N1, N1::LEN),
+            (PacketType::B1, B1::LEN),
+            (PacketType::T0, T0::LEN),
+        ];
+        let mut i = 0;
+        while i < table.len() {
+            if table[i].0.code() == c {
+                return Some(table[i].1);
+            }
+            i += 1;
+        }
+        None
+    }
+}

@@ -1,6 +1,7 @@
 //! Streaming frame parser with one-byte resynchronisation.
 
 use core::marker::PhantomData;
+use core::ops::ControlFlow;
 
 use crate::crc16::{Crc16Table, DefaultCrcTable};
 use crate::types::PacketType;
@@ -170,17 +171,18 @@ fn find_preamble(d: &[u8]) -> Option<usize> {
 }
 
 /// Scans `data`, emits every valid frame, returns the index where an incomplete candidate
-/// begins (`data.len()` when nothing is left). Bytes before that index are counted.
+/// begins (`data.len()` when nothing is left) and whether `on_frame` asked to stop (then the
+/// index is the first byte after that frame). Bytes before that index are counted.
 #[inline(always)]
 fn scan<C: Crc16Table>(
     data: &[u8],
     stats: &mut Stats,
-    on_frame: &mut impl FnMut(Frame<'_>),
-) -> usize {
+    on_frame: &mut impl FnMut(Frame<'_>) -> ControlFlow<()>,
+) -> (usize, bool) {
     let mut i = 0usize;
     loop {
         let Some(rest) = data.get(i..) else {
-            return data.len();
+            return (data.len(), false);
         };
         // Fast path: back-to-back frames start right here.
         let start = match rest {
@@ -189,14 +191,14 @@ fn scan<C: Crc16Table>(
                 Some(k) => k,
                 None => {
                     stats.skipped_bytes += rest.len() as u64;
-                    return data.len();
+                    return (data.len(), false);
                 }
             },
         };
         stats.skipped_bytes += start as u64;
         i += start;
         let Some(cand) = data.get(i..) else {
-            return data.len();
+            return (data.len(), false);
         };
         match cand {
             [_, _, t0, t1, n, ..] => {
@@ -210,18 +212,21 @@ fn scan<C: Crc16Table>(
                 let end = n + 5;
                 let (Some(msg), Some(&[hi, lo])) = (cand.get(2..end), cand.get(end..end + 2))
                 else {
-                    return i; // incomplete
+                    return (i, false); // incomplete
                 };
                 let got = u16::from_be_bytes([hi, lo]);
                 if C::message_crc(msg) == got {
                     let packet_type = PacketType([*t0, *t1]);
                     let payload = msg.get(3..).unwrap_or(&[]);
                     stats.count_frame(packet_type, end + 2);
-                    on_frame(Frame {
+                    let flow = on_frame(Frame {
                         packet_type,
                         payload,
                     });
                     i += end + 2;
+                    if flow.is_break() {
+                        return (i, true);
+                    }
                 } else {
                     stats.crc_errors += 1;
                     stats.skipped_bytes += 1;
@@ -239,7 +244,7 @@ fn scan<C: Crc16Table>(
                 stats.skipped_bytes += 1;
                 i += 1;
             }
-            _ => return i,
+            _ => return (i, false),
         }
     }
 }
@@ -279,15 +284,40 @@ impl<C: Crc16Table> Parser<C> {
         self.len
     }
 
+    /// The raw bytes buffered for an incomplete candidate frame, in stream order: after
+    /// [`feed_until`](Self::feed_until) stopped, every byte fed after the stopping frame that
+    /// the returned count includes (feeding them to a fresh parser continues the stream).
+    pub fn pending_bytes(&self) -> &[u8] {
+        self.buf.get(..self.len).unwrap_or(&[])
+    }
+
     /// Feeds any number of bytes (any chunking); calls `on_frame` for every CRC-checked frame,
     /// in stream order. Frames borrow either `bytes` or the parser's buffer.
+    #[inline]
     pub fn feed(&mut self, bytes: &[u8], mut on_frame: impl FnMut(Frame<'_>)) {
-        self.stats.bytes += bytes.len() as u64;
+        self.feed_until(bytes, |f| {
+            on_frame(f);
+            ControlFlow::Continue(())
+        });
+    }
+
+    /// Like [`feed`](Self::feed), but stops right after the frame for which `on_frame` returns
+    /// `ControlFlow::Break`: no later frame is emitted by this call. Returns how many bytes of
+    /// `bytes` were taken (`bytes.len()` unless it stopped); the bytes taken after the stopping
+    /// frame stay buffered ([`pending_bytes`](Self::pending_bytes)) and are scanned by the next
+    /// call, so feeding the rest of `bytes` next continues the stream exactly.
+    pub fn feed_until(
+        &mut self,
+        bytes: &[u8],
+        mut on_frame: impl FnMut(Frame<'_>) -> ControlFlow<()>,
+    ) -> usize {
         let mut input = bytes;
+        let taken = |input: &[u8]| bytes.len() - input.len();
         // 1. Complete (or reject) the buffered candidate using as few input bytes as needed.
         while self.len > 0 {
             if input.is_empty() {
-                return;
+                self.stats.bytes += bytes.len() as u64;
+                return bytes.len();
             }
             let need = match self.buf.get(4) {
                 Some(&n) if self.len >= 5 => n as usize + crate::FRAME_OVERHEAD,
@@ -308,29 +338,42 @@ impl<C: Crc16Table> Parser<C> {
             input = tail;
             if self.len >= 5 && self.len < need {
                 // Header already checked when the first 5 bytes were in; wait for the rest.
-                return;
+                self.stats.bytes += bytes.len() as u64;
+                return bytes.len();
             }
-            let consumed = scan::<C>(
+            let (consumed, stop) = scan::<C>(
                 self.buf.get(..self.len).unwrap_or(&[]),
                 &mut self.stats,
                 &mut on_frame,
             );
             self.buf.copy_within(consumed.min(self.len)..self.len, 0);
             self.len -= consumed.min(self.len);
+            if stop {
+                let n = taken(input);
+                self.stats.bytes += n as u64;
+                return n;
+            }
         }
         // 2. Zero-copy scan of the rest of the input.
-        let consumed = scan::<C>(input, &mut self.stats, &mut on_frame);
-        let tail = input.get(consumed..).unwrap_or(&[]);
-        match self.buf.get_mut(..tail.len()) {
-            Some(dst) => {
-                dst.copy_from_slice(tail);
-                self.len = tail.len();
+        let (consumed, stop) = scan::<C>(input, &mut self.stats, &mut on_frame);
+        let n = if stop {
+            taken(input) + consumed.min(input.len())
+        } else {
+            let tail = input.get(consumed..).unwrap_or(&[]);
+            match self.buf.get_mut(..tail.len()) {
+                Some(dst) => {
+                    dst.copy_from_slice(tail);
+                    self.len = tail.len();
+                }
+                None => {
+                    // Unreachable: an incomplete candidate is shorter than MAX_FRAME.
+                    self.stats.skipped_bytes += tail.len() as u64;
+                    self.len = 0;
+                }
             }
-            None => {
-                // Unreachable: an incomplete candidate is shorter than MAX_FRAME.
-                self.stats.skipped_bytes += tail.len() as u64;
-                self.len = 0;
-            }
-        }
+            bytes.len()
+        };
+        self.stats.bytes += n as u64;
+        n
     }
 }

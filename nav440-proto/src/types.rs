@@ -234,6 +234,28 @@ impl Baud {
         self as u16
     }
 
+    /// The baud for a code of field 0x0002, `None` if the unit does not define it.
+    pub const fn from_code(code: u16) -> Option<Self> {
+        Some(match code {
+            0 => Self::B9600,
+            1 => Self::B19200,
+            2 => Self::B38400,
+            3 => Self::B57600,
+            _ => return None,
+        })
+    }
+
+    /// The baud for a line rate in bit/s, `None` if the unit does not support it.
+    pub const fn from_bits_per_second(bps: u32) -> Option<Self> {
+        Some(match bps {
+            9600 => Self::B9600,
+            19200 => Self::B19200,
+            38400 => Self::B38400,
+            57600 => Self::B57600,
+            _ => return None,
+        })
+    }
+
     /// Line rate in bit/s.
     pub const fn bits_per_second(self) -> u32 {
         match self {

@@ -2,8 +2,20 @@
 
 use std::collections::VecDeque;
 
-use nav440_proto::driver::{Error, IoDriver, NbDriver};
+use nav440_proto::driver::{Error, IoDriver, NbDriver, Timing};
 use nav440_proto::*;
+
+/// A delay that only adds up the time asked for (no real sleep).
+#[derive(Default)]
+struct FakeDelay {
+    ns: u64,
+}
+
+impl embedded_hal::delay::DelayNs for FakeDelay {
+    fn delay_ns(&mut self, ns: u32) {
+        self.ns += u64::from(ns);
+    }
+}
 
 /// How the mock answers SF/WF requests.
 #[derive(Clone, Copy, PartialEq)]
@@ -153,6 +165,12 @@ impl embedded_io::Read for MockUnit {
     }
 }
 
+impl embedded_io::ReadReady for MockUnit {
+    fn read_ready(&mut self) -> Result<bool, MockError> {
+        Ok(!self.to_host.is_empty())
+    }
+}
+
 impl embedded_io::Write for MockUnit {
     fn write(&mut self, buf: &[u8]) -> Result<usize, MockError> {
         // Accept at most 5 bytes per call to exercise the write loop.
@@ -200,14 +218,15 @@ fn expected_sf() -> Vec<u8> {
 
 fn io_configure(mode: Mode, chunk: usize) -> (Result<(), Error<MockError>>, MockUnit) {
     let mut d = IoDriver::new(MockUnit::new(mode, chunk));
-    let r = d.set_packet_type_and_rate(PacketType::A2, PacketRate::Hz100);
+    let r =
+        d.set_packet_type_and_rate(PacketType::A2, PacketRate::Hz100, &mut FakeDelay::default());
     (r, d.release())
 }
 
 fn nb_configure(mode: Mode) -> (Result<(), Error<MockError>>, MockUnit) {
     let mut d = NbDriver::new(MockUnit::new(mode, 1));
-    d.set_idle_polls(100);
-    let r = d.set_packet_type_and_rate(PacketType::A2, PacketRate::Hz100);
+    let r =
+        d.set_packet_type_and_rate(PacketType::A2, PacketRate::Hz100, &mut FakeDelay::default());
     (r, d.release())
 }
 
@@ -335,8 +354,11 @@ fn nb_driver_yields_packets_without_blocking() {
 #[test]
 fn write_fields_uses_wf() {
     let mut d = IoDriver::new(MockUnit::new(Mode::AcceptAll, 64));
-    d.write_fields(&[(FieldId::PACKET_RATE_DIVIDER, 2)])
-        .unwrap();
+    d.write_fields(
+        &[(FieldId::PACKET_RATE_DIVIDER, 2)],
+        &mut FakeDelay::default(),
+    )
+    .unwrap();
     let unit = d.release();
     let mut buf = [0u8; 16];
     let n = command::write_fields(&[(FieldId::PACKET_RATE_DIVIDER, 2)], &mut buf).unwrap();
@@ -347,4 +369,33 @@ fn write_fields_uses_wf() {
     );
     assert_eq!(unit.written, buf[..n].to_vec());
     assert_eq!(unit.requests, vec![PacketType::WF]);
+}
+
+#[test]
+fn silent_unit_times_out_after_the_reply_timeout_in_delay_time() {
+    // 200 ms in 500 us steps: the wait sleeps 400 steps, then gives up.
+    for timing in [
+        Timing::DEFAULT,
+        Timing {
+            reply_timeout_ms: 30,
+            poll_step_us: 1000,
+        },
+    ] {
+        let mut d = NbDriver::new(MockUnit::new(Mode::Silent, 1));
+        d.set_timing(timing);
+        let mut delay = FakeDelay::default();
+        // The mock queues two A2 frames (74 B) before its (absent) answer.
+        let r = d.set_packet_type_and_rate(PacketType::A2, PacketRate::Hz100, &mut delay);
+        assert_eq!(r, Err(Error::NoReply));
+        // Slept time + line time of the 74 bytes (74 x 260 us at 38400 Bd) reach the time-out.
+        let line_us = 74 * (10_000_000 / 38_400);
+        let slept_us = delay.ns / 1000;
+        let limit = u64::from(timing.reply_timeout_ms) * 1000;
+        assert!(
+            slept_us + line_us >= limit,
+            "{slept_us} + {line_us} < {limit}"
+        );
+        assert!(slept_us + line_us < limit + u64::from(timing.poll_step_us));
+        assert_eq!(d.unsolicited(), 2);
+    }
 }
