@@ -275,7 +275,11 @@ fn run_unit(
 pub fn unit(board: Board, addr: &str) -> Result<u8, String> {
     qemu::ensure_qemu()?;
     let elf = build(board.target, board.features, FW_BIN)?;
-    let r = run_unit(&board, &elf, addr, true, Duration::from_secs(3600))?;
+    let timeout = std::env::var("XTASK_UNIT_TIMEOUT")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .map_or(Duration::from_secs(3600), Duration::from_secs);
+    let r = run_unit(&board, &elf, addr, true, timeout)?;
     eprint!("{}", r.stderr);
     match r.code() {
         Some(c) => Ok(u8::try_from(c).unwrap_or(1)),
@@ -316,9 +320,11 @@ pub fn demo(board: Board, capture: Option<PathBuf>) -> Result<(), String> {
     std::fs::write(&csv_path, &r.stdout)
         .map_err(|e| format!("cannot write {}: {e}", csv_path.display()))?;
     println!("== boot: the firmware configures the unit ==");
-    for l in r.stderr.lines().filter(|l| {
-        l.starts_with("firmware: unit configured") || l.starts_with("firmware: boot")
-    }) {
+    for l in r
+        .stderr
+        .lines()
+        .filter(|l| l.starts_with("firmware: unit configured") || l.starts_with("firmware: boot"))
+    {
         println!("{l}");
     }
     println!();

@@ -73,14 +73,21 @@ impl UnitRun {
 }
 
 /// Connects to a unix socket that QEMU is about to create, retrying for up to `wait`.
-fn connect_unix(path: &Path, wait: Duration, qemu: &mut std::process::Child) -> Result<UnixStream, String> {
+fn connect_unix(
+    path: &Path,
+    wait: Duration,
+    qemu: &mut std::process::Child,
+) -> Result<UnixStream, String> {
     let start = Instant::now();
     loop {
         match UnixStream::connect(path) {
             Ok(s) => return Ok(s),
             Err(e) => {
                 if let Ok(Some(status)) = qemu.try_wait() {
-                    return Err(format!("QEMU exited ({status}) before {} was served", path.display()));
+                    return Err(format!(
+                        "QEMU exited ({status}) before {} was served",
+                        path.display()
+                    ));
                 }
                 if start.elapsed() > wait {
                     return Err(format!("cannot connect to QEMU's {}: {e}", path.display()));
@@ -177,18 +184,16 @@ pub fn run(
     let _ = std::fs::remove_file(&s0);
     let _ = std::fs::remove_file(&s1);
     let mut args = qemu::base_args(board, elf, &[]);
-    args.extend(
-        [
-            "-chardev".to_owned(),
-            format!("socket,id=u0,path={},server=on,wait=on", s0.display()),
-            "-serial".to_owned(),
-            "chardev:u0".to_owned(),
-            "-chardev".to_owned(),
-            format!("socket,id=u1,path={},server=on,wait=on", s1.display()),
-            "-serial".to_owned(),
-            "chardev:u1".to_owned(),
-        ],
-    );
+    args.extend([
+        "-chardev".to_owned(),
+        format!("socket,id=u0,path={},server=on,wait=on", s0.display()),
+        "-serial".to_owned(),
+        "chardev:u0".to_owned(),
+        "-chardev".to_owned(),
+        format!("socket,id=u1,path={},server=on,wait=on", s1.display()),
+        "-serial".to_owned(),
+        "chardev:u1".to_owned(),
+    ]);
     eprintln!("+ qemu-system-arm {}", args.join(" "));
     let start = Instant::now();
     let mut child = Command::new("qemu-system-arm")
@@ -227,7 +232,7 @@ pub fn run(
     })();
     let _ = std::fs::remove_file(&s0);
     let _ = std::fs::remove_file(&s1);
-    let (u0, mut u1, unit) = match setup {
+    let (u0, u1, unit) = match setup {
         Ok(x) => x,
         Err(e) => {
             kill(&mut child);
@@ -269,6 +274,9 @@ pub fn run(
             u0.try_clone().map_err(|e| e.to_string())?,
         );
         let (gate, stop, count) = (Arc::clone(&gate), Arc::clone(&stop), Arc::clone(&count));
+        // A clone: the original stays open until QEMU has exited (QEMU drops the bytes it has
+        // not read yet when the socket hangs up).
+        let mut u1 = u1.try_clone().map_err(|e| e.to_string())?;
         thread::spawn(move || -> Result<bool, String> {
             if !gate.wait(&stop) {
                 return Ok(false);
@@ -292,11 +300,11 @@ pub fn run(
                 return Ok(false);
             }
             let m = end_message(count.load(Ordering::Relaxed))?;
-            match u1.write_all(&m) {
-                Ok(()) => Ok(true),
-                Err(_) if stop.load(Ordering::Relaxed) => Ok(false),
-                Err(e) => Err(format!("control channel: {e}")),
+            if std::env::var_os("XTASK_UNIT_DEBUG").is_some() {
+                eprintln!("xtask: the unit closed the connection; sending {m:02x?} on the control channel");
             }
+            // A failed write means QEMU has already exited (the firmware ended first).
+            Ok(u1.write_all(&m).is_ok())
         })
     };
     let status = loop {
@@ -306,9 +314,11 @@ pub fn run(
                 stop.store(true, Ordering::Relaxed);
                 kill(&mut child);
                 let _ = unit.shutdown(Shutdown::Both);
+                let stderr = err_reader.join().unwrap_or_default();
                 return Err(format!(
-                    "the firmware did not finish within {} s (QEMU killed)",
-                    timeout.as_secs()
+                    "the firmware did not finish within {} s (QEMU killed; the unit sent {} bytes); its stderr:\n{stderr}",
+                    timeout.as_secs(),
+                    count.load(Ordering::Relaxed)
                 ));
             }
             Ok(None) => thread::sleep(Duration::from_millis(10)),
@@ -318,12 +328,19 @@ pub fn run(
     stop.store(true, Ordering::Relaxed);
     let _ = unit.shutdown(Shutdown::Both);
     let _ = u0.shutdown(Shutdown::Both);
+    drop(u1);
     let _ = fw_to_unit.join();
     let ended = unit_to_fw.join().unwrap_or(Ok(false))?;
     let stdout = out_reader
         .map(|h| h.join().unwrap_or_default())
         .unwrap_or_default();
-    let mut stderr = err_reader.join().unwrap_or_default();
+    let mut stderr: String = err_reader
+        .join()
+        .unwrap_or_default()
+        .lines()
+        .filter(|l| !l.contains("QEMU waiting for connection"))
+        .map(|l| format!("{l}\n"))
+        .collect();
     let unit_bytes = count.load(Ordering::Relaxed);
     stderr.push_str(&format!(
         "xtask: the unit sent {unit_bytes} bytes{}; firmware exit status {}\n",
@@ -358,7 +375,10 @@ mod tests {
 
     #[test]
     fn connect_address_is_checked() {
-        assert_eq!(parse_connect("tcp:127.0.0.1:5000"), Ok("127.0.0.1:5000".into()));
+        assert_eq!(
+            parse_connect("tcp:127.0.0.1:5000"),
+            Ok("127.0.0.1:5000".into())
+        );
         assert_eq!(parse_connect("tcp:localhost:1"), Ok("localhost:1".into()));
         assert!(parse_connect("127.0.0.1:5000").is_err());
         assert!(parse_connect("tcp:127.0.0.1").is_err());
