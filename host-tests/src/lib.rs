@@ -12,6 +12,8 @@ pub mod paper;
 pub mod plot;
 pub mod plots;
 pub mod replay;
+pub mod serial;
+pub mod sim;
 pub mod synth;
 pub mod tune;
 

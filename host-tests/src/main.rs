@@ -223,6 +223,14 @@ enum Cmd {
         #[arg(short, long, value_name = "FILE")]
         output: PathBuf,
     },
+    /// Simulated NAV440 on TCP or a pseudo-terminal: answers commands, streams the capture once configured.
+    Sim(host_tests::sim::SimArgs),
+    /// Configure a unit on a serial port (boot sequence: find, baud, packet type and rate, read-back).
+    Config(host_tests::serial::ConfigArgs),
+    /// Configure a unit on a serial port, then record its stream to a file.
+    Record(host_tests::serial::RecordArgs),
+    /// Configure a unit on a serial port, then print the estimate CSV while receiving.
+    Live(host_tests::serial::LiveArgs),
 }
 
 fn parse_u16(s: &str) -> std::result::Result<u16, String> {
@@ -341,6 +349,10 @@ fn stdout_or_file(
 
 fn run(cli: Cli) -> Result<()> {
     match cli.cmd {
+        Cmd::Sim(a) => host_tests::sim::command(&a),
+        Cmd::Config(a) => host_tests::serial::config(&a),
+        Cmd::Record(a) => host_tests::serial::record(&a),
+        Cmd::Live(a) => host_tests::serial::live(&a),
         Cmd::Stats { file } => {
             let bytes = replay::read_capture(&file)?;
             let stats = replay::stream_stats(&bytes);

@@ -8,7 +8,7 @@
 //! * `*Fields` structs and [`command`]: encoders for every packet and command.
 //! * [`ItowClock`]: continuous time from the wrapping time-of-week stamps.
 //! * [`boot`]: the whole boot sequence (find the unit, baud switch, packet type and rate, read-back).
-//! * [`unit`]: the unit's side (requests, field state, replies, NAKs) for simulators.
+//! * [`unit`](mod@unit): the unit's side (requests, field state, replies, NAKs) for simulators.
 //! * [`driver`]: an `embedded-io` and an `embedded-hal-nb` driver that yield packets and
 //!   configure the unit (SF with reply and NAK handling).
 //!

@@ -1,0 +1,433 @@
+//! `nav440 config | record | live`: a unit on a real serial port (the `serialport` crate),
+//! configured by the same boot sequence the firmware runs ([`nav440_proto::boot`]).
+//!
+//! After the boot sequence, `record` writes and `live` estimates exactly the bytes that follow
+//! the read-back reply (the driver's [`pending_bytes`](nav440_proto::driver::Driver::pending_bytes)
+//! first, then the port): the bytes `nav440 sim --record` records, so `nav440 live` prints the
+//! text `nav440 estimate` prints on the recorded file.
+//!
+//! Exit codes (besides clap's 2): 3 the port cannot be opened; 4 no answer from the unit (no
+//! NAV440 on that port at any baud tried); 1 the unit rejected the configuration (NAK), the
+//! read-back differs, or the port failed; 5 the output cannot be written.
+
+use std::io::{Read, Write};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use clap::Args;
+use estimators::{Hold, YawBank};
+use nav440_proto::boot::{self, BootError, Options, Report, Target};
+use nav440_proto::driver::{IoDriver, Timing};
+use nav440_proto::{Baud, ItowClock, Packet, Parser};
+
+use crate::error::{Error, Result};
+use crate::replay::{EstimateOptions, Sample, WARMUP_SAMPLES};
+use crate::sim::{parse_baud, parse_output_type, parse_rate};
+
+/// The serial port and the target configuration, shared by the three commands.
+#[derive(Args, Debug, Clone)]
+pub struct PortArgs {
+    /// Serial port device (e.g. /dev/ttyUSB0, or the pty path `nav440 sim --listen pty` prints).
+    #[arg(long, value_name = "DEV")]
+    pub port: String,
+    /// Target link baud: 9600, 19200, 38400 or 57600.
+    #[arg(long, default_value_t = 57600)]
+    pub baud: u32,
+    /// Target continuous packet type.
+    #[arg(long, default_value = "A2", value_name = "TYPE")]
+    pub packet: String,
+    /// Target packet rate, Hz (2, 4, 5, 10, 20, 25, 50, 100).
+    #[arg(long, default_value_t = 100, value_name = "HZ")]
+    pub rate: u32,
+    /// Also write the configuration to the unit's EEPROM (WF).
+    #[arg(long)]
+    pub persist: bool,
+    /// The unit's current baud, if known (otherwise 57600, 38400, 19200, 9600 are tried).
+    #[arg(long, value_name = "BAUD")]
+    pub unit_baud: Option<u32>,
+    /// Reply time-out of each request, ms.
+    #[arg(long, default_value_t = 200, value_name = "MS")]
+    pub reply_timeout: u32,
+    /// Pings per baud before trying the next.
+    #[arg(long, default_value_t = 3, value_name = "N")]
+    pub pings: u8,
+}
+
+/// Arguments of `nav440 config`.
+#[derive(Args, Debug, Clone)]
+pub struct ConfigArgs {
+    #[command(flatten)]
+    port: PortArgs,
+}
+
+/// Arguments of `nav440 record`.
+#[derive(Args, Debug, Clone)]
+pub struct RecordArgs {
+    #[command(flatten)]
+    port: PortArgs,
+    /// Capture file to write (the bytes after the read-back reply).
+    #[arg(short, long, value_name = "FILE")]
+    output: PathBuf,
+    /// Stop after this many seconds (default: when the port closes).
+    #[arg(long, value_name = "S")]
+    duration: Option<f64>,
+}
+
+/// Arguments of `nav440 live`.
+#[derive(Args, Debug, Clone)]
+pub struct LiveArgs {
+    #[command(flatten)]
+    port: PortArgs,
+    /// Stop after this many seconds (default: when the port closes).
+    #[arg(long, value_name = "S")]
+    duration: Option<f64>,
+}
+
+/// An I/O error of the serial port.
+#[derive(Debug)]
+pub struct SerialError(pub std::io::Error);
+
+impl std::fmt::Display for SerialError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+impl std::error::Error for SerialError {}
+
+impl embedded_io::Error for SerialError {
+    fn kind(&self) -> embedded_io::ErrorKind {
+        match self.0.kind() {
+            std::io::ErrorKind::TimedOut => embedded_io::ErrorKind::TimedOut,
+            std::io::ErrorKind::Interrupted => embedded_io::ErrorKind::Interrupted,
+            _ => embedded_io::ErrorKind::Other,
+        }
+    }
+}
+
+/// A `serialport` port as an `embedded-io` serial port (what the driver takes).
+pub struct SerialIo(pub Box<dyn serialport::SerialPort>);
+
+impl embedded_io::ErrorType for SerialIo {
+    type Error = SerialError;
+}
+
+impl embedded_io::Read for SerialIo {
+    /// Blocks until at least one byte arrived (retrying the port's read time-out).
+    fn read(&mut self, buf: &mut [u8]) -> std::result::Result<usize, SerialError> {
+        loop {
+            match self.0.read(buf) {
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        std::io::ErrorKind::TimedOut | std::io::ErrorKind::Interrupted
+                    ) => {}
+                r => return r.map_err(SerialError),
+            }
+        }
+    }
+}
+
+impl embedded_io::ReadReady for SerialIo {
+    fn read_ready(&mut self) -> std::result::Result<bool, SerialError> {
+        self.0
+            .bytes_to_read()
+            .map(|n| n > 0)
+            .map_err(|e| SerialError(e.into()))
+    }
+}
+
+impl embedded_io::Write for SerialIo {
+    fn write(&mut self, buf: &[u8]) -> std::result::Result<usize, SerialError> {
+        self.0.write(buf).map_err(SerialError)
+    }
+    fn flush(&mut self) -> std::result::Result<(), SerialError> {
+        // Waits until the bytes have left the UART (tcdrain), as a baud switch requires.
+        self.0.flush().map_err(SerialError)
+    }
+}
+
+/// `embedded_hal::delay::DelayNs` on the host: `std::thread::sleep`.
+pub struct StdDelay;
+
+impl embedded_hal::delay::DelayNs for StdDelay {
+    fn delay_ns(&mut self, ns: u32) {
+        std::thread::sleep(Duration::from_nanos(u64::from(ns)));
+    }
+}
+
+fn target(a: &PortArgs) -> Result<Target> {
+    let t = Target {
+        packet: parse_output_type(&a.packet)?,
+        rate: parse_rate(a.rate)?,
+        baud: parse_baud(a.baud)?,
+        persist: a.persist,
+    };
+    if a.rate == 0 {
+        return Err(Error::Usage("--rate 0 (quiet) streams nothing".into()));
+    }
+    if !t.fits_budget() {
+        return Err(Error::Usage(format!(
+            "{} at {} Hz = {} B/s does not fit {} Bd (budget {} B/s): the unit would NAK it",
+            t.packet,
+            a.rate,
+            t.bytes_per_second().unwrap_or(0),
+            a.baud,
+            boot::budget_bytes_per_second(t.baud)
+        )));
+    }
+    Ok(t)
+}
+
+/// Opens the port and runs the boot sequence; returns the driver (at the target baud).
+fn open_and_boot(a: &PortArgs) -> Result<(IoDriver<SerialIo>, Report, Target)> {
+    let t = target(a)?;
+    let start_baud = a.unit_baud.map(parse_baud).transpose()?;
+    let first = start_baud.unwrap_or(Baud::B57600).bits_per_second();
+    let port = serialport::new(&a.port, first)
+        .timeout(Duration::from_millis(100))
+        .open()
+        .map_err(|e| Error::Input(format!("cannot open serial port {}: {e}", a.port)))?;
+    let mut d = IoDriver::new(SerialIo(port));
+    d.set_timing(Timing {
+        reply_timeout_ms: a.reply_timeout.max(1),
+        poll_step_us: 500,
+    });
+    let options = Options {
+        start_baud,
+        ping_attempts: a.pings.max(1),
+    };
+    let r = boot::boot(&mut d, &t, &options, &mut StdDelay, |s, b| {
+        s.0.set_baud_rate(b.bits_per_second())
+            .map_err(|e| SerialError(e.into()))
+    });
+    match r {
+        Ok(report) => Ok((d, report, t)),
+        Err(e @ BootError::NoAnswer { .. }) => Err(Error::NotNav440(format!("{}: {e}", a.port))),
+        Err(e) => Err(Error::Other(format!("{}: {e}", a.port))),
+    }
+}
+
+fn report_json(port: &str, r: &Report, t: &Target) -> serde_json::Value {
+    serde_json::json!({
+        "port": port,
+        "found_at": r.found_at.bits_per_second(),
+        "unit_baud": r.unit_baud.bits_per_second(),
+        "initial_packet": r.initial_packet.to_string(),
+        "initial_rate_divider": r.initial_rate_divider,
+        "switched": r.switched,
+        "baud": r.baud.bits_per_second(),
+        "packet": t.packet.to_string(),
+        "rate_divider": t.rate.divider(),
+        "persist": t.persist,
+        "ping_retries": r.ping_retries,
+        "unsolicited_frames": r.unsolicited_frames,
+        "skipped_bytes": r.skipped_bytes,
+    })
+}
+
+/// `nav440 config`: the boot sequence; the report as one JSON object on stdout.
+pub fn config(a: &ConfigArgs) -> Result<()> {
+    let (_, report, t) = open_and_boot(&a.port)?;
+    println!("{}", report_json(&a.port.port, &report, &t));
+    Ok(())
+}
+
+/// Reads the stream after the boot sequence: `on_bytes` gets the driver's pending bytes, then
+/// everything the port delivers until `duration` or the end of the stream (the port closed).
+fn stream_after_boot(
+    d: IoDriver<SerialIo>,
+    duration: Option<f64>,
+    mut on_bytes: impl FnMut(&[u8]) -> Result<()>,
+) -> Result<u64> {
+    if let Some(s) = duration {
+        if !(s.is_finite() && s > 0.0) {
+            return Err(Error::Usage(format!("--duration must be > 0 s, got {s}")));
+        }
+    }
+    let pending = d.pending_bytes().to_vec();
+    let SerialIo(mut port) = d.release();
+    let end = duration.map(|s| Instant::now() + Duration::from_secs_f64(s));
+    let mut total = pending.len() as u64;
+    on_bytes(&pending)?;
+    let mut buf = [0u8; 1024];
+    loop {
+        if end.is_some_and(|e| Instant::now() >= e) {
+            return Ok(total);
+        }
+        match port.read(&mut buf) {
+            Ok(0) => return Ok(total),
+            Ok(n) => {
+                total += n as u64;
+                on_bytes(&buf[..n])?;
+            }
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::TimedOut | std::io::ErrorKind::Interrupted
+                ) => {}
+            // Hang-up (EIO, or `serialport`'s BrokenPipe on POLLHUP): the other end of a
+            // pseudo-terminal closed, a USB adapter was unplugged.
+            Err(e) if e.raw_os_error() == Some(5) || e.kind() == std::io::ErrorKind::BrokenPipe => {
+                return Ok(total)
+            }
+            Err(e) => return Err(Error::Other(format!("serial port failed: {e}"))),
+        }
+    }
+}
+
+/// `nav440 record`: the boot sequence, then the stream after the read-back into a file.
+pub fn record(a: &RecordArgs) -> Result<()> {
+    let out = std::fs::File::create(&a.output)
+        .map_err(|e| Error::Output(format!("cannot create {}: {e}", a.output.display())))?;
+    let mut w = std::io::BufWriter::new(out);
+    let (d, report, t) = open_and_boot(&a.port)?;
+    eprintln!("nav440 record: {}", report_json(&a.port.port, &report, &t));
+    let werr =
+        |e: std::io::Error| Error::Output(format!("cannot write {}: {e}", a.output.display()));
+    let total = stream_after_boot(d, a.duration, |b| w.write_all(b).map_err(werr))?;
+    w.flush().map_err(werr)?;
+    eprintln!(
+        "nav440 record: {total} bytes written to {}",
+        a.output.display()
+    );
+    Ok(())
+}
+
+/// The `nav440 estimate` pipeline, streaming: the first [`WARMUP_SAMPLES`] samples are held
+/// to measure the packet period (the rule `nav440 estimate` applies to the same samples), then
+/// the bank runs on every sample and each row is written as it comes.
+pub struct LiveEstimator {
+    parser: Parser,
+    clock: ItowClock,
+    opts: EstimateOptions,
+    held: Vec<Sample>,
+    bank: Option<YawBank<f32>>,
+    line: String,
+    /// Samples the bank rejected (no row), as `nav440 estimate` counts them.
+    pub rejected: usize,
+}
+
+impl Default for LiveEstimator {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl LiveEstimator {
+    /// With `nav440 estimate`'s default options (f32 bank, paper presets, h = 1e-4 s, linear).
+    pub fn new() -> Self {
+        Self {
+            parser: Parser::new(),
+            clock: ItowClock::new(),
+            opts: EstimateOptions {
+                hold: Hold::Linear,
+                ..EstimateOptions::default()
+            },
+            held: Vec::new(),
+            bank: None,
+            line: String::new(),
+            rejected: 0,
+        }
+    }
+
+    /// Feeds received bytes; `out` gets the CSV text (header first) as rows are ready.
+    pub fn feed(&mut self, bytes: &[u8], out: &mut dyn Write) -> Result<()> {
+        let mut samples = Vec::new();
+        let clock = &mut self.clock;
+        self.parser.feed(bytes, |f| {
+            let Ok(p) = Packet::decode(f) else { return };
+            let Some(y) = p.yaw_sample() else { return };
+            if let Some(t_us) = clock.update(y.time) {
+                samples.push(Sample {
+                    t_us,
+                    yaw_deg: y.yaw_deg,
+                    rate_deg_s: y.yaw_rate_deg_s,
+                });
+            }
+        });
+        for s in samples {
+            if self.bank.is_some() {
+                self.run(s, out)?;
+            } else {
+                self.held.push(s);
+                if self.held.len() >= WARMUP_SAMPLES {
+                    self.start(out)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// End of the stream: a stream shorter than the warm-up runs now.
+    pub fn finish(&mut self, out: &mut dyn Write) -> Result<()> {
+        if self.bank.is_none() && !self.held.is_empty() {
+            self.start(out)?;
+        }
+        Ok(())
+    }
+
+    fn start(&mut self, out: &mut dyn Write) -> Result<()> {
+        let cfg = self.opts.bank_config_for(&self.held);
+        let bank = YawBank::<f32>::new(&cfg)
+            .map_err(|e| Error::Usage(format!("bad estimator configuration: {e}")))?;
+        self.bank = Some(bank);
+        writeln!(out, "{}", crate::replay::CSV_HEADER).map_err(out_err)?;
+        for s in std::mem::take(&mut self.held) {
+            self.run(s, out)?;
+        }
+        Ok(())
+    }
+
+    fn run(&mut self, s: Sample, out: &mut dyn Write) -> Result<()> {
+        let Some(bank) = self.bank.as_mut() else {
+            return Ok(());
+        };
+        match bank.update(s.t_us, s.yaw_deg) {
+            Ok(o) => {
+                self.line.clear();
+                estimators::csv::write_row(&mut self.line, s.t_us, s.rate_deg_s, &o)
+                    .map_err(|_| Error::Other("formatting error".into()))?;
+                if !self.line.ends_with('\n') {
+                    self.line.push('\n');
+                }
+                out.write_all(self.line.as_bytes()).map_err(out_err)
+            }
+            Err(_) => {
+                self.rejected += 1;
+                Ok(())
+            }
+        }
+    }
+}
+
+fn out_err(e: std::io::Error) -> Error {
+    Error::Output(format!("cannot write output: {e}"))
+}
+
+/// `nav440 live`: the boot sequence, then the estimate CSV on stdout while receiving.
+pub fn live(a: &LiveArgs) -> Result<()> {
+    let (d, report, t) = open_and_boot(&a.port)?;
+    eprintln!("nav440 live: {}", report_json(&a.port.port, &report, &t));
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    let mut est = LiveEstimator::new();
+    let r = stream_after_boot(d, a.duration, |b| {
+        est.feed(b, &mut out)?;
+        out.flush().map_err(out_err)
+    })
+    .and_then(|_| est.finish(&mut out))
+    .and_then(|_| out.flush().map_err(out_err));
+    match r {
+        // A closed pipe (`nav440 live ... | head`) ends the run quietly.
+        Err(Error::Output(m)) if m.contains("Broken pipe") => Ok(()),
+        other => other,
+    }?;
+    if est.rejected > 0 {
+        eprintln!(
+            "nav440: warning: {} samples rejected by the estimator bank (time not increasing)",
+            est.rejected
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,983 @@
+//! `nav440 sim`: a simulated NAV440 on a TCP socket or a pseudo-terminal.
+//!
+//! The command side is [`nav440_proto::unit::Unit`] (PK, CH, GP, SF, WF, GF, RF, AR, SR; NAKs
+//! for unknown requests, invalid fields and over-budget combinations at the baud in force).
+//! This module adds what a unit streams and when:
+//!
+//! * **Power-up**: the EEPROM configuration (default S1 at 20 Hz at 38400 Bd) streams in wall
+//!   time, interleaved with the replies. By default the stream starts with the first byte the
+//!   host sends (so a UART that is enabled late, like QEMU's STM32 USART, loses nothing);
+//!   `--stream-at-connect` starts it when the host connects, like a unit powered up already.
+//! * **Commanded**: from the SF reply that sets the packet type or rate until the read-back,
+//!   the unit streams nothing.
+//! * **Configured**: right after the reply to the first GF that follows, the unit streams the
+//!   capture's samples, re-encoded as the commanded packet type, at the commanded rate (one
+//!   packet per rate period in wall time, or as fast as the host reads with `--fast`), then
+//!   closes the connection. A capture denser than the commanded rate is decimated by its time
+//!   stamps (a sample is sent when at least one period, less 1 ms, has passed since the last
+//!   one sent); time stamps are the capture's.
+//!
+//! `--record FILE` holds exactly the bytes sent in the configured state: everything after the
+//! read-back (GF) reply, up to the close or a reset. A host that starts estimating with the
+//! first byte after its read-back reply therefore sees exactly the recorded bytes.
+
+use std::io::{Read, Write};
+use std::net::{TcpListener, TcpStream};
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use clap::{Args, ValueEnum};
+use nav440_proto::unit::{Quirks, Unit, UnitFields};
+use nav440_proto::{
+    A0Fields, A1Fields, A2Fields, B1Fields, Baud, N0Fields, N1Fields, Packet, PacketRate,
+    PacketType, Parser, S0Fields, S1Fields, S2Fields, T0Fields, TimeStamp, MAX_FRAME,
+};
+
+use crate::error::{Error, Result};
+use crate::replay::read_capture;
+
+/// A deliberate fault of the simulated unit (for CI).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Fault {
+    /// Ignores every request (no reply, no NAK) but streams its power-up packets.
+    NoAnswer,
+    /// Sends nothing at all and ignores every request.
+    Dead,
+    /// NAKs every SF/WF that sets the packet type or rate.
+    NakConfig,
+    /// Accepts the rate in SF but keeps its old one: the read-back differs.
+    WrongReadback,
+    /// Resets mid-stream (after `--reset-after` packets): 100 ms of silence, then power-up
+    /// behaviour again (EEPROM configuration, power-up stream).
+    Reset,
+}
+
+/// Arguments of `nav440 sim`.
+#[derive(Args, Debug, Clone)]
+pub struct SimArgs {
+    /// Capture (raw NAV440 byte stream) whose samples the unit streams once configured.
+    pub capture: PathBuf,
+    /// Where the unit listens: tcp:HOST:PORT (loopback; port 0 picks a free port) or pty
+    /// (a pseudo-terminal pair). The address or the pty's path is printed on stdout.
+    #[arg(long, value_name = "ADDR")]
+    pub listen: String,
+    /// Write exactly the bytes streamed after configuration (after the read-back reply) here.
+    #[arg(long, value_name = "FILE")]
+    pub record: Option<PathBuf>,
+    /// Also write the address / pty path (one line) to this file once listening.
+    #[arg(long, value_name = "FILE")]
+    pub address_file: Option<PathBuf>,
+    /// The unit's baud at power-up (EEPROM): 9600, 19200, 38400 or 57600.
+    #[arg(long, default_value_t = 38400)]
+    pub baud: u32,
+    /// Packet type streamed at power-up (S0, S1, S2, A0, A1, A2, N0, N1, B1, T0).
+    #[arg(long, default_value = "S1", value_name = "TYPE")]
+    pub power_up_packet: String,
+    /// Power-up rate, Hz (0 quiet, 2, 4, 5, 10, 20, 25, 50, 100).
+    #[arg(long, default_value_t = 20, value_name = "HZ")]
+    pub power_up_rate: u32,
+    /// Stream the capture as fast as the host reads, instead of at the commanded rate in wall time.
+    #[arg(long)]
+    pub fast: bool,
+    /// Start the power-up stream when the host connects rather than at its first byte.
+    #[arg(long)]
+    pub stream_at_connect: bool,
+    /// Misbehave on purpose.
+    #[arg(long, value_enum)]
+    pub fault: Option<Fault>,
+    /// With --fault reset: capture packets streamed before the reset.
+    #[arg(long, default_value_t = 50, value_name = "N")]
+    pub reset_after: u64,
+    /// Give up (exit 1) when the session has not ended after this many seconds (0: never).
+    #[arg(long, default_value_t = 0.0, value_name = "S")]
+    pub timeout: f64,
+    /// Write the session's summary (JSON: requests, power_up_packets, packets, recorded_bytes,
+    /// completed, resets) here at the end.
+    #[arg(long, value_name = "FILE")]
+    pub summary: Option<PathBuf>,
+    /// Log every request and state change on stderr.
+    #[arg(long)]
+    pub verbose: bool,
+}
+
+/// Raw fields of one sample, as the packets carry them (the union of every output packet).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RawSample {
+    /// Roll, pitch, yaw (I2 angles).
+    pub angles: [i16; 3],
+    /// Angular rates x, y, z.
+    pub rates: [i16; 3],
+    /// Accelerations x, y, z.
+    pub accels: [i16; 3],
+    /// Magnetic field x, y, z.
+    pub mags: [i16; 3],
+    /// Rate sensor temperatures x, y, z.
+    pub temps: [i16; 3],
+    /// Board temperature.
+    pub board_temp: i16,
+    /// Velocity N, E, D.
+    pub vel: [i16; 3],
+    /// Longitude, latitude (I4).
+    pub lon_lat: [i32; 2],
+    /// Altitude.
+    pub altitude: i16,
+    /// timeITOW, ms (GPSITOW-only packets: unwrapped from the 16-bit value).
+    pub itow: u32,
+    /// BIT word.
+    pub bit: u16,
+}
+
+impl RawSample {
+    /// The protocol document's real S1 frame (a stationary unit, BIT 0x0002).
+    pub const POWER_UP: Self = Self {
+        angles: [0; 3],
+        rates: [-2, -7, -1],
+        accels: [-32, 22, 3264],
+        mags: [0; 3],
+        temps: [0x27eb; 3],
+        board_temp: 0x27f7,
+        vel: [0; 3],
+        lon_lat: [0; 2],
+        altitude: 0,
+        itow: 0,
+        bit: 0x0002,
+    };
+}
+
+/// The samples of every packet of `bytes` that carries yaw and a time stamp, in order.
+pub fn capture_samples(bytes: &[u8]) -> Result<Vec<RawSample>> {
+    let mut parser = Parser::new();
+    let mut out = Vec::new();
+    let mut gps: Option<(u16, u32)> = None;
+    let mut frames = 0u64;
+    parser.feed(bytes, |f| {
+        frames += 1;
+        let Ok(p) = Packet::decode(f) else { return };
+        let mut s = RawSample::default();
+        match p {
+            Packet::A0(v) => {
+                let f = A0Fields::from(v);
+                s.angles = [f.roll, f.pitch, f.yaw_mag];
+                s.rates = [f.rate_x, f.rate_y, f.rate_z];
+                s.accels = [f.accel_x, f.accel_y, f.accel_z];
+                s.mags = [f.mag_x, f.mag_y, f.mag_z];
+                s.temps = [f.x_rate_temp; 3];
+                s.bit = f.bit;
+            }
+            Packet::A1(v) => {
+                let f = A1Fields::from(v);
+                s.angles = [f.roll, f.pitch, f.yaw_mag];
+                s.rates = [f.rate_x, f.rate_y, f.rate_z];
+                s.accels = [f.accel_x, f.accel_y, f.accel_z];
+                s.mags = [f.mag_x, f.mag_y, f.mag_z];
+                s.temps = [f.x_rate_temp; 3];
+                s.bit = f.bit;
+            }
+            Packet::A2(v) => {
+                let f = A2Fields::from(v);
+                s.angles = [f.roll, f.pitch, f.yaw_true];
+                s.rates = [f.rate_x, f.rate_y, f.rate_z];
+                s.accels = [f.accel_x, f.accel_y, f.accel_z];
+                s.temps = [f.rate_temp_x, f.rate_temp_y, f.rate_temp_z];
+                s.bit = f.bit;
+            }
+            Packet::N0(v) => {
+                let f = N0Fields::from(v);
+                s.angles = [f.roll, f.pitch, f.yaw_true];
+                s.rates = [f.rate_x, f.rate_y, f.rate_z];
+                s.vel = [f.vel_n, f.vel_e, f.vel_d];
+                s.lon_lat = [f.longitude, f.latitude];
+                s.altitude = f.altitude;
+                s.bit = f.bit;
+            }
+            Packet::N1(v) => {
+                let f = N1Fields::from(v);
+                s.angles = [f.roll, f.pitch, f.yaw_true];
+                s.rates = [f.rate_x, f.rate_y, f.rate_z];
+                s.accels = [f.accel_x, f.accel_y, f.accel_z];
+                s.vel = [f.vel_n, f.vel_e, f.vel_d];
+                s.lon_lat = [f.longitude, f.latitude];
+                s.altitude = f.altitude;
+                s.temps = [f.x_rate_temp; 3];
+                s.bit = f.bit;
+            }
+            Packet::B1(v) => {
+                let f = B1Fields::from(v);
+                s.angles = [f.roll, f.pitch, f.yaw];
+                s.rates = [0, 0, f.rate_z];
+                s.accels = [f.accel_x, f.accel_y, 0];
+                s.bit = f.bit;
+            }
+            _ => return,
+        }
+        s.itow = match p.time() {
+            TimeStamp::Itow(t) => t,
+            TimeStamp::GpsItow(g) => {
+                let t = match gps {
+                    Some((last, acc)) => acc.wrapping_add(u32::from(g.wrapping_sub(last))),
+                    None => u32::from(g),
+                };
+                gps = Some((g, t));
+                t
+            }
+            TimeStamp::None => return,
+        };
+        out.push(s);
+    });
+    if frames == 0 {
+        return Err(Error::NotNav440(
+            "no NAV440 frame found (not a NAV440 capture?)".into(),
+        ));
+    }
+    if out.is_empty() {
+        return Err(Error::NotNav440(format!(
+            "{frames} NAV440 frames but none carries yaw with a time stamp (need A0/A1/A2/N0/N1/B1)"
+        )));
+    }
+    Ok(out)
+}
+
+/// Encodes `s` as one frame of the continuous output type `t` (`counter` for S1/S2).
+pub fn encode_sample(t: PacketType, s: &RawSample, counter: u16) -> Option<Vec<u8>> {
+    let [roll, pitch, yaw] = s.angles;
+    let [rx, ry, rz] = s.rates;
+    let [ax, ay, az] = s.accels;
+    let [mx, my, mz] = s.mags;
+    let [tx, ty, tz] = s.temps;
+    let [vn, ve, vd] = s.vel;
+    let [lon, lat] = s.lon_lat;
+    let gps = s.itow as u16;
+    let mut buf = [0u8; MAX_FRAME];
+    let n = match t {
+        PacketType::S0 => S0Fields {
+            accel_x: ax,
+            accel_y: ay,
+            accel_z: az,
+            rate_x: rx,
+            rate_y: ry,
+            rate_z: rz,
+            mag_x: mx,
+            mag_y: my,
+            mag_z: mz,
+            rate_temp_x: tx,
+            rate_temp_y: ty,
+            rate_temp_z: tz,
+            board_temp: s.board_temp,
+            gps_itow: gps,
+            bit: s.bit,
+        }
+        .encode(&mut buf),
+        PacketType::S1 => S1Fields {
+            accel_x: ax,
+            accel_y: ay,
+            accel_z: az,
+            rate_x: rx,
+            rate_y: ry,
+            rate_z: rz,
+            rate_temp_x: tx,
+            rate_temp_y: ty,
+            rate_temp_z: tz,
+            board_temp: s.board_temp,
+            counter,
+            bit: s.bit,
+        }
+        .encode(&mut buf),
+        PacketType::S2 => S2Fields {
+            counter,
+            bit: s.bit,
+            ..Default::default()
+        }
+        .encode(&mut buf),
+        PacketType::A0 => A0Fields {
+            roll,
+            pitch,
+            yaw_mag: yaw,
+            rate_x: rx,
+            rate_y: ry,
+            rate_z: rz,
+            accel_x: ax,
+            accel_y: ay,
+            accel_z: az,
+            mag_x: mx,
+            mag_y: my,
+            mag_z: mz,
+            x_rate_temp: tx,
+            gps_itow: gps,
+            bit: s.bit,
+        }
+        .encode(&mut buf),
+        PacketType::A1 => A1Fields {
+            roll,
+            pitch,
+            yaw_mag: yaw,
+            rate_x: rx,
+            rate_y: ry,
+            rate_z: rz,
+            accel_x: ax,
+            accel_y: ay,
+            accel_z: az,
+            mag_x: mx,
+            mag_y: my,
+            mag_z: mz,
+            x_rate_temp: tx,
+            time_itow: s.itow,
+            bit: s.bit,
+        }
+        .encode(&mut buf),
+        PacketType::A2 => A2Fields {
+            roll,
+            pitch,
+            yaw_true: yaw,
+            rate_x: rx,
+            rate_y: ry,
+            rate_z: rz,
+            accel_x: ax,
+            accel_y: ay,
+            accel_z: az,
+            rate_temp_x: tx,
+            rate_temp_y: ty,
+            rate_temp_z: tz,
+            time_itow: s.itow,
+            bit: s.bit,
+        }
+        .encode(&mut buf),
+        PacketType::N0 => N0Fields {
+            roll,
+            pitch,
+            yaw_true: yaw,
+            rate_x: rx,
+            rate_y: ry,
+            rate_z: rz,
+            vel_n: vn,
+            vel_e: ve,
+            vel_d: vd,
+            longitude: lon,
+            latitude: lat,
+            altitude: s.altitude,
+            gps_itow: gps,
+            bit: s.bit,
+        }
+        .encode(&mut buf),
+        PacketType::N1 => N1Fields {
+            roll,
+            pitch,
+            yaw_true: yaw,
+            rate_x: rx,
+            rate_y: ry,
+            rate_z: rz,
+            accel_x: ax,
+            accel_y: ay,
+            accel_z: az,
+            vel_n: vn,
+            vel_e: ve,
+            vel_d: vd,
+            longitude: lon,
+            latitude: lat,
+            altitude: s.altitude,
+            x_rate_temp: tx,
+            time_itow: s.itow,
+            bit: s.bit,
+        }
+        .encode(&mut buf),
+        PacketType::B1 => B1Fields {
+            roll,
+            pitch,
+            yaw,
+            rate_z: rz,
+            accel_x: ax,
+            accel_y: ay,
+            time_itow: s.itow,
+            bit: s.bit,
+        }
+        .encode(&mut buf),
+        PacketType::T0 => T0Fields {
+            bit: s.bit,
+            ..Default::default()
+        }
+        .encode(&mut buf),
+        _ => return None,
+    }
+    .ok()?;
+    buf.get(..n).map(<[u8]>::to_vec)
+}
+
+/// Parses a packet type name (`A2`) that the unit can stream.
+pub fn parse_output_type(name: &str) -> Result<PacketType> {
+    if let [a, c] = name.as_bytes() {
+        let t = PacketType([a.to_ascii_uppercase(), *c]);
+        if t.output_payload_len().is_some() {
+            return Ok(t);
+        }
+    }
+    Err(Error::Usage(format!(
+        "`{name}` is not a packet type the unit streams (S0, S1, S2, A0, A1, A2, N0, N1, B1, T0)"
+    )))
+}
+
+/// The rate for `hz` (0 = quiet).
+pub fn parse_rate(hz: u32) -> Result<PacketRate> {
+    let r = match hz {
+        0 => Some(PacketRate::Quiet),
+        h if h > 0 && 100 % h == 0 => PacketRate::from_divider((100 / h) as u16),
+        _ => None,
+    };
+    r.ok_or_else(|| {
+        Error::Usage(format!(
+            "rate {hz} Hz is not one of 0, 2, 4, 5, 10, 20, 25, 50, 100"
+        ))
+    })
+}
+
+/// The baud for `bps`.
+pub fn parse_baud(bps: u32) -> Result<Baud> {
+    Baud::from_bits_per_second(bps).ok_or_else(|| {
+        Error::Usage(format!(
+            "baud {bps} is not one of 9600, 19200, 38400, 57600"
+        ))
+    })
+}
+
+/// Where the simulator listens.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Listen {
+    /// TCP `host:port`.
+    Tcp(String),
+    /// A new pseudo-terminal pair.
+    Pty,
+}
+
+/// Parses `tcp:HOST:PORT` or `pty`.
+pub fn parse_listen(s: &str) -> Result<Listen> {
+    if s == "pty" {
+        return Ok(Listen::Pty);
+    }
+    match s.strip_prefix("tcp:") {
+        Some(a)
+            if a.rsplit_once(':')
+                .is_some_and(|(_, p)| p.parse::<u16>().is_ok()) =>
+        {
+            Ok(Listen::Tcp(a.to_string()))
+        }
+        _ => Err(Error::Usage(format!(
+            "--listen `{s}`: expected tcp:HOST:PORT (e.g. tcp:127.0.0.1:4440) or pty"
+        ))),
+    }
+}
+
+/// A byte stream to the host: a TCP connection or a pty master.
+trait Conn: Read + Write + Send {
+    /// A second handle for the reader thread.
+    fn reader(&self) -> std::io::Result<Box<dyn Read + Send>>;
+    /// Ends the session (TCP: shutdown; pty: the master is dropped by the caller).
+    fn close(&mut self);
+}
+
+impl Conn for TcpStream {
+    fn reader(&self) -> std::io::Result<Box<dyn Read + Send>> {
+        Ok(Box::new(self.try_clone()?))
+    }
+    fn close(&mut self) {
+        let _ = self.flush();
+        let _ = self.shutdown(std::net::Shutdown::Both);
+    }
+}
+
+impl Conn for serialport::TTYPort {
+    fn reader(&self) -> std::io::Result<Box<dyn Read + Send>> {
+        Ok(Box::new(self.try_clone_native()?))
+    }
+    fn close(&mut self) {
+        let _ = self.flush();
+    }
+}
+
+enum Msg {
+    Bytes(Vec<u8>),
+    Closed,
+}
+
+fn spawn_reader(mut r: Box<dyn Read + Send>, tx: Sender<Msg>, stop: Arc<AtomicBool>) {
+    std::thread::spawn(move || {
+        let mut buf = [0u8; 512];
+        while !stop.load(Ordering::Relaxed) {
+            match r.read(&mut buf) {
+                Ok(0) => break,
+                Ok(n) => {
+                    if tx.send(Msg::Bytes(buf[..n].to_vec())).is_err() {
+                        return;
+                    }
+                }
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        std::io::ErrorKind::TimedOut
+                            | std::io::ErrorKind::WouldBlock
+                            | std::io::ErrorKind::Interrupted
+                    ) => {}
+                Err(_) => break,
+            }
+        }
+        let _ = tx.send(Msg::Closed);
+    });
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Phase {
+    PowerUp,
+    Commanded,
+    Configured,
+    Resetting(Instant),
+}
+
+/// What happened in a session.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Summary {
+    /// Requests answered (or ignored).
+    pub requests: u64,
+    /// Power-up packets streamed.
+    pub power_up_packets: u64,
+    /// Capture packets streamed in the configured state.
+    pub packets: u64,
+    /// Bytes recorded (sent in the configured state).
+    pub recorded_bytes: u64,
+    /// The whole capture was streamed and the connection closed by the unit.
+    pub completed: bool,
+    /// Resets done.
+    pub resets: u64,
+}
+
+struct Session<'a> {
+    args: &'a SimArgs,
+    unit: Unit,
+    samples: Vec<RawSample>,
+    next_sample: usize,
+    last_sent_itow: Option<u32>,
+    phase: Phase,
+    started: bool,
+    next_due: Instant,
+    counter: u16,
+    record: Vec<u8>,
+    summary: Summary,
+    dead: bool,
+}
+
+impl Session<'_> {
+    fn log(&self, msg: std::fmt::Arguments<'_>) {
+        if self.args.verbose {
+            eprintln!("nav440 sim: {msg}");
+        }
+    }
+
+    fn period(&self) -> Option<(PacketType, Duration)> {
+        let (t, r) = self.unit.ram().stream()?;
+        Some((t, Duration::from_millis(10 * u64::from(r.divider()))))
+    }
+
+    fn send(&mut self, conn: &mut dyn Conn, bytes: &[u8]) -> std::io::Result<()> {
+        if self.phase == Phase::Configured {
+            self.record.extend_from_slice(bytes);
+        }
+        conn.write_all(bytes)
+    }
+
+    fn on_bytes(&mut self, conn: &mut dyn Conn, bytes: &[u8]) -> std::io::Result<()> {
+        if !self.started {
+            self.started = true;
+            self.next_due = Instant::now();
+        }
+        let mut responses = Vec::new();
+        self.unit.receive(bytes, |r| {
+            responses.push((
+                r.request,
+                r.frames.to_vec(),
+                r.get_packet,
+                r.reset,
+                r.output_changed,
+            ))
+        });
+        for (request, frames, get_packet, reset, output_changed) in responses {
+            self.summary.requests += 1;
+            if self.dead {
+                continue;
+            }
+            self.log(format_args!(
+                "{request} -> {} bytes ({:?})",
+                frames.len(),
+                self.phase
+            ));
+            if matches!(self.phase, Phase::Resetting(_)) {
+                continue; // rebooting: deaf
+            }
+            self.send(conn, &frames)?;
+            if let Some(t) = get_packet {
+                let s = self.current_sample();
+                if let Some(f) = encode_sample(t, &s, self.counter) {
+                    self.send(conn, &f)?;
+                }
+            }
+            if reset {
+                self.power_up("software reset (SR)");
+            } else if output_changed && self.phase == Phase::PowerUp {
+                self.phase = Phase::Commanded;
+                self.log(format_args!("output commanded: silent until the read-back"));
+            } else if request == PacketType::GF
+                && self.phase == Phase::Commanded
+                && !frames.is_empty()
+            {
+                self.phase = Phase::Configured;
+                self.next_due = Instant::now();
+                let ram = self.unit.ram();
+                self.log(format_args!(
+                    "configured after the read-back: type 0x{:04X} divider {} baud code {}",
+                    ram.packet_type, ram.rate_divider, ram.baud
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn current_sample(&self) -> RawSample {
+        match self.phase {
+            Phase::Configured => self
+                .samples
+                .get(self.next_sample.saturating_sub(1))
+                .copied()
+                .unwrap_or(RawSample::POWER_UP),
+            _ => RawSample::POWER_UP,
+        }
+    }
+
+    fn power_up(&mut self, why: &str) {
+        self.unit.reset();
+        self.phase = Phase::PowerUp;
+        self.next_due = Instant::now();
+        self.log(format_args!("power-up behaviour ({why})"));
+    }
+
+    /// Sends what is due now; `Ok(false)` when the capture is done.
+    fn stream(&mut self, conn: &mut dyn Conn) -> std::io::Result<bool> {
+        let now = Instant::now();
+        match self.phase {
+            Phase::Resetting(until) => {
+                if now >= until {
+                    self.power_up("after the mid-stream reset");
+                }
+            }
+            Phase::Commanded => {}
+            Phase::PowerUp => {
+                if !self.started || self.dead || now < self.next_due {
+                    return Ok(true);
+                }
+                let Some((t, period)) = self.period() else {
+                    return Ok(true);
+                };
+                self.next_due += period;
+                self.counter = self.counter.wrapping_add(1);
+                let mut s = RawSample::POWER_UP;
+                s.itow = self.counter.into();
+                if let Some(f) = encode_sample(t, &s, self.counter) {
+                    self.send(conn, &f)?;
+                    self.summary.power_up_packets += 1;
+                }
+            }
+            Phase::Configured => {
+                if !self.args.fast && now < self.next_due {
+                    return Ok(true);
+                }
+                let Some((t, period)) = self.period() else {
+                    return Ok(true);
+                };
+                let period_ms = period.as_millis() as u32;
+                // Next capture sample at least one period (less 1 ms) after the last one sent.
+                while let (Some(s), Some(last)) =
+                    (self.samples.get(self.next_sample), self.last_sent_itow)
+                {
+                    if s.itow.wrapping_sub(last).saturating_add(1) >= period_ms {
+                        break;
+                    }
+                    self.next_sample += 1;
+                }
+                let Some(s) = self.samples.get(self.next_sample).copied() else {
+                    return Ok(false);
+                };
+                self.next_sample += 1;
+                self.last_sent_itow = Some(s.itow);
+                self.counter = self.counter.wrapping_add(1);
+                self.next_due += period;
+                if let Some(f) = encode_sample(t, &s, self.counter) {
+                    self.send(conn, &f)?;
+                    self.summary.packets += 1;
+                }
+                if self.args.fault == Some(Fault::Reset)
+                    && self.summary.packets == self.args.reset_after
+                    && self.summary.resets == 0
+                {
+                    self.summary.resets += 1;
+                    self.phase = Phase::Resetting(now + Duration::from_millis(100));
+                    self.log(format_args!(
+                        "reset after {} capture packets",
+                        self.summary.packets
+                    ));
+                }
+            }
+        }
+        Ok(true)
+    }
+
+    /// Time until something is due (or a long wait).
+    fn wait_time(&self) -> Duration {
+        let now = Instant::now();
+        let due = match self.phase {
+            Phase::Resetting(until) => until,
+            Phase::Commanded => return Duration::from_millis(200),
+            Phase::PowerUp if !self.started || self.dead || self.period().is_none() => {
+                return Duration::from_millis(200)
+            }
+            Phase::Configured if self.args.fast => return Duration::ZERO,
+            Phase::Configured if self.period().is_none() => return Duration::from_millis(200),
+            _ => self.next_due,
+        };
+        due.saturating_duration_since(now)
+    }
+}
+
+/// Runs one session of `nav440 sim`: listens, serves one host until the capture was streamed
+/// or the host went away, then writes the record.
+pub fn run(args: &SimArgs) -> Result<Summary> {
+    let listen = parse_listen(&args.listen)?;
+    let baud = parse_baud(args.baud)?;
+    let packet = parse_output_type(&args.power_up_packet)?;
+    let rate = parse_rate(args.power_up_rate)?;
+    if !(args.timeout.is_finite() && args.timeout >= 0.0) {
+        return Err(Error::Usage(format!(
+            "--timeout must be >= 0 s, got {}",
+            args.timeout
+        )));
+    }
+    let eeprom = UnitFields {
+        rate_divider: rate.divider(),
+        baud: baud.code(),
+        packet_type: packet.code(),
+        orientation: 0,
+    };
+    if !eeprom.fits_budget() {
+        return Err(Error::Usage(format!(
+            "power-up {packet} at {} Hz does not fit {} Bd (the unit would not stream it)",
+            args.power_up_rate, args.baud
+        )));
+    }
+    let bytes = read_capture(&args.capture)?;
+    let samples = capture_samples(&bytes)
+        .map_err(|e| Error::NotNav440(format!("{}: {e}", args.capture.display())))?;
+    let quirks = Quirks {
+        ignore_requests: matches!(args.fault, Some(Fault::NoAnswer | Fault::Dead)),
+        nak_output_config: args.fault == Some(Fault::NakConfig),
+        keep_rate: args.fault == Some(Fault::WrongReadback),
+    };
+    let deadline =
+        (args.timeout > 0.0).then(|| Instant::now() + Duration::from_secs_f64(args.timeout));
+    let mut session = Session {
+        args,
+        unit: Unit::new(eeprom, quirks),
+        samples,
+        next_sample: 0,
+        last_sent_itow: None,
+        phase: Phase::PowerUp,
+        started: args.stream_at_connect,
+        next_due: Instant::now(),
+        counter: 0,
+        record: Vec::new(),
+        summary: Summary::default(),
+        dead: args.fault == Some(Fault::Dead),
+    };
+
+    // Our handle on the pty's slave end: keeps the pty alive until the host has opened it,
+    // and tells when the host has read everything (see `serve`). The host leaving is not
+    // seen over a pty while it is open: end such sessions with --timeout.
+    let mut _slave: Option<serialport::TTYPort> = None;
+    let mut conn: Box<dyn Conn> = match listen {
+        Listen::Tcp(addr) => {
+            let l = TcpListener::bind(&addr)
+                .map_err(|e| Error::Other(format!("cannot listen on tcp:{addr}: {e}")))?;
+            let local = l
+                .local_addr()
+                .map_err(|e| Error::Other(format!("cannot listen on tcp:{addr}: {e}")))?;
+            announce(args, &format!("tcp:{local}"))?;
+            let (s, _) = accept(&l, deadline)?;
+            let _ = s.set_nodelay(true);
+            Box::new(s)
+        }
+        Listen::Pty => {
+            let (mut master, slave) = serialport::TTYPort::pair()
+                .map_err(|e| Error::Other(format!("cannot open a pseudo-terminal: {e}")))?;
+            let path = serialport::SerialPort::name(&slave).unwrap_or_default();
+            let _ = serialport::SerialPort::set_timeout(&mut master, Duration::from_secs(60));
+            announce(args, &path)?;
+            _slave = Some(slave);
+            Box::new(master)
+        }
+    };
+    let (tx, rx) = mpsc::channel();
+    let stop = Arc::new(AtomicBool::new(false));
+    let reader = conn
+        .reader()
+        .map_err(|e| Error::Other(format!("cannot read from the host: {e}")))?;
+    spawn_reader(reader, tx, stop.clone());
+    let result = serve(&mut session, conn.as_mut(), &rx, deadline, &mut _slave);
+    stop.store(true, Ordering::Relaxed);
+    conn.close();
+    drop(conn);
+    if let Some(p) = &args.record {
+        std::fs::write(p, &session.record)
+            .map_err(|e| Error::Output(format!("cannot write {}: {e}", p.display())))?;
+    }
+    session.summary.recorded_bytes = session.record.len() as u64;
+    if let Some(p) = &args.summary {
+        let s = &session.summary;
+        let json = serde_json::json!({
+            "requests": s.requests,
+            "power_up_packets": s.power_up_packets,
+            "packets": s.packets,
+            "recorded_bytes": s.recorded_bytes,
+            "completed": s.completed,
+            "resets": s.resets,
+            "error": result.as_ref().err().map(ToString::to_string),
+        });
+        std::fs::write(p, format!("{json}\n"))
+            .map_err(|e| Error::Output(format!("cannot write {}: {e}", p.display())))?;
+    }
+    result?;
+    Ok(session.summary)
+}
+
+fn announce(args: &SimArgs, what: &str) -> Result<()> {
+    println!("{what}");
+    let _ = std::io::stdout().flush();
+    if let Some(p) = &args.address_file {
+        let tmp = p.with_extension("tmp");
+        std::fs::write(&tmp, format!("{what}\n"))
+            .and_then(|_| std::fs::rename(&tmp, p))
+            .map_err(|e| Error::Output(format!("cannot write {}: {e}", p.display())))?;
+    }
+    Ok(())
+}
+
+fn accept(l: &TcpListener, deadline: Option<Instant>) -> Result<(TcpStream, std::net::SocketAddr)> {
+    let err = |e: std::io::Error| Error::Other(format!("cannot accept a connection: {e}"));
+    let Some(deadline) = deadline else {
+        return l.accept().map_err(err);
+    };
+    l.set_nonblocking(true).map_err(err)?;
+    loop {
+        match l.accept() {
+            Ok((s, a)) => {
+                s.set_nonblocking(false).map_err(err)?;
+                return Ok((s, a));
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                if Instant::now() >= deadline {
+                    return Err(Error::Other("no host connected before --timeout".into()));
+                }
+                std::thread::sleep(Duration::from_millis(20));
+            }
+            Err(e) => return Err(err(e)),
+        }
+    }
+}
+
+fn serve(
+    s: &mut Session<'_>,
+    conn: &mut dyn Conn,
+    rx: &Receiver<Msg>,
+    deadline: Option<Instant>,
+    slave: &mut Option<serialport::TTYPort>,
+) -> Result<()> {
+    let io = |e: std::io::Error| -> Error {
+        if matches!(
+            e.kind(),
+            std::io::ErrorKind::BrokenPipe | std::io::ErrorKind::ConnectionReset
+        ) {
+            Error::Other("the host closed the connection".into())
+        } else {
+            Error::Other(format!("connection to the host failed: {e}"))
+        }
+    };
+    loop {
+        if deadline.is_some_and(|d| Instant::now() >= d) {
+            return Err(Error::Other(format!(
+                "session not over after --timeout {} s",
+                s.args.timeout
+            )));
+        }
+        match rx.recv_timeout(s.wait_time()) {
+            Ok(Msg::Bytes(b)) => match s.on_bytes(conn, &b) {
+                Ok(()) => {}
+                Err(e) => return peer_gone(s, io(e)),
+            },
+            Ok(Msg::Closed) | Err(RecvTimeoutError::Disconnected) => {
+                s.log(format_args!("the host closed the connection"));
+                return Ok(());
+            }
+            Err(RecvTimeoutError::Timeout) => {}
+        }
+        match s.stream(conn) {
+            Ok(true) => {}
+            Ok(false) => {
+                s.summary.completed = true;
+                if let Some(slave) = slave.as_ref() {
+                    // Closing the master hangs the pty up, which discards what the host has
+                    // not read yet: wait until it has read everything (at most 30 s).
+                    // The kernel moves written bytes to the slave's queue asynchronously, so
+                    // the queue must stay empty for 200 ms in a row.
+                    let until = Instant::now() + Duration::from_secs(30);
+                    let mut empty_since = None;
+                    while Instant::now() < until {
+                        let queued = serialport::SerialPort::bytes_to_read(slave).unwrap_or(0);
+                        match (queued, empty_since) {
+                            (0, None) => empty_since = Some(Instant::now()),
+                            (0, Some(t)) if t.elapsed() >= Duration::from_millis(200) => break,
+                            (0, Some(_)) => {}
+                            _ => empty_since = None,
+                        }
+                        std::thread::sleep(Duration::from_millis(5));
+                    }
+                }
+                s.log(format_args!("capture streamed: closing"));
+                return Ok(());
+            }
+            Err(e) => return peer_gone(s, io(e)),
+        }
+    }
+}
+
+/// A write failed because the host went away: a normal end of session.
+fn peer_gone(s: &Session<'_>, e: Error) -> Result<()> {
+    s.log(format_args!("{e}"));
+    Ok(())
+}
+
+/// `nav440 sim`: [`run`], then one summary line on stderr.
+pub fn command(args: &SimArgs) -> Result<()> {
+    let s = run(args)?;
+    eprintln!(
+        "nav440 sim: {} requests, {} power-up packets, {} capture packets ({} bytes recorded){}{}",
+        s.requests,
+        s.power_up_packets,
+        s.packets,
+        s.recorded_bytes,
+        if s.resets > 0 {
+            ", reset mid-stream"
+        } else {
+            ""
+        },
+        if s.completed {
+            ", capture done: closed"
+        } else {
+            ", host closed the connection"
+        }
+    );
+    Ok(())
+}

@@ -1,0 +1,487 @@
+//! `nav440 sim` end to end: the boot sequence of `nav440_proto::boot` as the host over TCP,
+//! every fault flag, the recorded bytes against the capture; and `nav440 config | record |
+//! live` against the simulator through a pseudo-terminal.
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+use host_tests::replay;
+use host_tests::serial::StdDelay;
+use nav440_proto::boot::{self, BootError, Options, Report, Target};
+use nav440_proto::driver::{IoDriver, Timing};
+use nav440_proto::{Baud, FieldId, PacketRate, PacketType, Parser};
+
+const BIN: &str = env!("CARGO_BIN_EXE_nav440");
+
+fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("data")
+        .join(name)
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("nav440-sim-test-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d.join(name)
+}
+
+/// Starts `nav440 sim CAPTURE --listen L ARGS`; returns the child and the address it printed.
+fn start_sim(capture: &str, listen: &str, args: &[&str]) -> (Child, String) {
+    let mut child = Command::new(BIN)
+        .arg("sim")
+        .arg(data(capture))
+        .args(["--listen", listen])
+        .args(if args.contains(&"--timeout") {
+            &[][..]
+        } else {
+            &["--timeout", "60"][..]
+        })
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut line = String::new();
+    BufReader::new(child.stdout.as_mut().unwrap())
+        .read_line(&mut line)
+        .unwrap();
+    (child, line.trim().to_string())
+}
+
+fn finish(child: Child) -> (i32, String) {
+    let out = child.wait_with_output().unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[derive(Debug)]
+struct TcpError(std::io::Error);
+
+impl std::fmt::Display for TcpError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+impl std::error::Error for TcpError {}
+
+impl embedded_io::Error for TcpError {
+    fn kind(&self) -> embedded_io::ErrorKind {
+        embedded_io::ErrorKind::Other
+    }
+}
+
+/// A TCP connection as an embedded-io serial port (what QEMU's `-serial tcp:` gives the
+/// firmware): a UART that ignores baud.
+struct TcpIo {
+    s: TcpStream,
+    buf: Vec<u8>,
+    eof: bool,
+}
+
+impl TcpIo {
+    fn connect(addr: &str) -> Self {
+        let s = TcpStream::connect(addr.strip_prefix("tcp:").unwrap()).unwrap();
+        s.set_nonblocking(true).unwrap();
+        Self {
+            s,
+            buf: Vec::new(),
+            eof: false,
+        }
+    }
+
+    fn fill(&mut self) -> Result<(), TcpError> {
+        let mut b = [0u8; 4096];
+        match self.s.read(&mut b) {
+            Ok(0) => self.eof = true,
+            Ok(n) => self.buf.extend_from_slice(&b[..n]),
+            Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {}
+            Err(e) => return Err(TcpError(e)),
+        }
+        Ok(())
+    }
+
+    /// Everything until the unit closes the connection.
+    fn read_to_end(mut self) -> Vec<u8> {
+        self.s.set_nonblocking(false).unwrap();
+        let mut rest = std::mem::take(&mut self.buf);
+        self.s.read_to_end(&mut rest).unwrap();
+        rest
+    }
+}
+
+impl embedded_io::ErrorType for TcpIo {
+    type Error = TcpError;
+}
+
+impl embedded_io::Read for TcpIo {
+    fn read(&mut self, out: &mut [u8]) -> Result<usize, TcpError> {
+        while self.buf.is_empty() && !self.eof {
+            self.fill()?;
+            if self.buf.is_empty() {
+                std::thread::sleep(Duration::from_millis(1));
+            }
+        }
+        let n = out.len().min(self.buf.len());
+        out[..n].copy_from_slice(&self.buf[..n]);
+        self.buf.drain(..n);
+        Ok(n)
+    }
+}
+
+impl embedded_io::ReadReady for TcpIo {
+    fn read_ready(&mut self) -> Result<bool, TcpError> {
+        if self.buf.is_empty() {
+            self.fill()?;
+        }
+        Ok(!self.buf.is_empty())
+    }
+}
+
+impl embedded_io::Write for TcpIo {
+    fn write(&mut self, b: &[u8]) -> Result<usize, TcpError> {
+        loop {
+            match self.s.write(b) {
+                Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => {
+                    std::thread::sleep(Duration::from_millis(1))
+                }
+                r => return r.map_err(TcpError),
+            }
+        }
+    }
+    fn flush(&mut self) -> Result<(), TcpError> {
+        Ok(())
+    }
+}
+
+/// Boots the unit at `addr` like the firmware (search every baud, 3 pings, short time-outs).
+fn boot_tcp(addr: &str, target: Target) -> (Result<Report, BootError<TcpError>>, IoDriver<TcpIo>) {
+    let mut d = IoDriver::new(TcpIo::connect(addr));
+    d.set_timing(Timing {
+        reply_timeout_ms: 100,
+        poll_step_us: 500,
+    });
+    let r = boot::boot(&mut d, &target, &Options::DEFAULT, &mut StdDelay, |_, _| {
+        Ok(())
+    });
+    (r, d)
+}
+
+/// The bytes after the read-back reply: the driver's pending bytes, then the connection.
+fn rest_of_stream(d: IoDriver<TcpIo>) -> Vec<u8> {
+    let mut rest = d.pending_bytes().to_vec();
+    rest.extend(d.release().read_to_end());
+    rest
+}
+
+fn count(bytes: &[u8], t: PacketType) -> u64 {
+    let mut p = Parser::new();
+    p.feed(bytes, |_| {});
+    p.stats().count(t)
+}
+
+#[test]
+fn tcp_session_streams_the_capture_after_the_read_back_and_records_exactly_it() {
+    let record = tmp("tcp.bin");
+    let summary = tmp("tcp.json");
+    let (child, addr) = start_sim(
+        "fig5_a2_100hz.bin",
+        "tcp:127.0.0.1:0",
+        &[
+            "--fast",
+            "--record",
+            record.to_str().unwrap(),
+            "--summary",
+            summary.to_str().unwrap(),
+        ],
+    );
+    let (r, d) = boot_tcp(&addr, Target::DEFAULT);
+    let report = r.unwrap();
+    // Emulated link: 57600 answers the first ping; the unit says 38400 (its power-up baud).
+    assert_eq!(report.found_at, Baud::B57600);
+    assert_eq!(report.unit_baud, Baud::B38400);
+    assert_eq!(report.initial_packet, PacketType::S1);
+    assert_eq!(report.initial_rate_divider, 5);
+    assert!(report.switched);
+    let rest = rest_of_stream(d);
+    let (code, err) = finish(child);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("capture done: closed"), "{err}");
+    // --record holds exactly the bytes the host received after its read-back reply.
+    assert_eq!(std::fs::read(&record).unwrap(), rest);
+    // Re-encoded as A2 at 100 Hz, the samples are the capture's (time, yaw, rate).
+    let capture = std::fs::read(data("fig5_a2_100hz.bin")).unwrap();
+    assert_eq!(
+        replay::samples(&rest).unwrap(),
+        replay::samples(&capture).unwrap()
+    );
+    assert_eq!(
+        count(&rest, PacketType::A2),
+        count(&capture, PacketType::A2)
+    );
+}
+
+#[test]
+fn capture_is_re_encoded_as_the_commanded_type_and_decimated_to_the_commanded_rate() {
+    let record = tmp("n1.bin");
+    let (child, addr) = start_sim(
+        "fig5_a2_100hz.bin",
+        "tcp:127.0.0.1:0",
+        &["--fast", "--record", record.to_str().unwrap()],
+    );
+    // N1 at 50 Hz: 49 x 50 = 2450 B/s, fits 57600 Bd.
+    let target = Target {
+        packet: PacketType::N1,
+        rate: PacketRate::Hz50,
+        ..Target::DEFAULT
+    };
+    let (r, d) = boot_tcp(&addr, target);
+    r.unwrap();
+    let rest = rest_of_stream(d);
+    assert_eq!(finish(child).0, 0);
+    let capture = replay::samples(&std::fs::read(data("fig5_a2_100hz.bin")).unwrap()).unwrap();
+    let got = replay::samples(&rest).unwrap();
+    assert_eq!(count(&rest, PacketType::N1) as usize, got.len());
+    // Every other 10 ms sample: 20 ms apart, values of the capture's even samples.
+    let even: Vec<_> = capture.iter().step_by(2).copied().collect();
+    assert_eq!(got, even);
+}
+
+#[test]
+fn unit_already_at_57600_is_not_switched() {
+    let (child, addr) = start_sim(
+        "fig5_a2_100hz.bin",
+        "tcp:127.0.0.1:0",
+        &["--fast", "--baud", "57600"],
+    );
+    let (r, d) = boot_tcp(&addr, Target::DEFAULT);
+    let report = r.unwrap();
+    assert_eq!(report.unit_baud, Baud::B57600);
+    assert!(!report.switched);
+    rest_of_stream(d);
+    assert_eq!(finish(child).0, 0);
+}
+
+#[test]
+fn fault_no_answer_ends_in_no_answer_at_every_baud() {
+    for fault in ["no-answer", "dead"] {
+        let (child, addr) = start_sim("fig5_a2_100hz.bin", "tcp:127.0.0.1:0", &["--fault", fault]);
+        let (r, d) = boot_tcp(&addr, Target::DEFAULT);
+        let e = r.unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "no answer from the unit: PK unanswered at 57600, 38400, 19200, 9600 Bd (3 x 100 ms each)"
+        );
+        drop(d); // the host gives up and closes: the simulator ends too
+        let (code, err) = finish(child);
+        assert_eq!(code, 0, "{err}");
+        assert!(err.contains("host closed the connection"), "{err}");
+    }
+}
+
+#[test]
+fn fault_nak_config_and_wrong_readback() {
+    let (child, addr) = start_sim(
+        "fig5_a2_100hz.bin",
+        "tcp:127.0.0.1:0",
+        &["--fault", "nak-config"],
+    );
+    let (r, d) = boot_tcp(&addr, Target::DEFAULT);
+    assert_eq!(
+        r.unwrap_err().to_string(),
+        "unit rejected (NAK) SF: packet type 0x0003=0x4132 (A2), rate divider 0x0001=1 (100 Hz)"
+    );
+    drop(d);
+    assert_eq!(finish(child).0, 0);
+
+    let (child, addr) = start_sim(
+        "fig5_a2_100hz.bin",
+        "tcp:127.0.0.1:0",
+        &["--fault", "wrong-readback"],
+    );
+    let (r, d) = boot_tcp(&addr, Target::DEFAULT);
+    assert!(matches!(
+        r.unwrap_err(),
+        BootError::WrongReadBack {
+            field: FieldId::PACKET_RATE_DIVIDER,
+            expected: 1,
+            got: Some(5)
+        }
+    ));
+    drop(d);
+    assert_eq!(finish(child).0, 0);
+}
+
+#[test]
+fn fault_reset_stops_the_stream_and_goes_back_to_power_up() {
+    let record = tmp("reset.bin");
+    let (child, addr) = start_sim(
+        "fig5_a2_100hz.bin",
+        "tcp:127.0.0.1:0",
+        &[
+            "--fast",
+            "--fault",
+            "reset",
+            "--reset-after",
+            "40",
+            "--record",
+            record.to_str().unwrap(),
+        ],
+    );
+    let (r, mut d) = boot_tcp(&addr, Target::DEFAULT);
+    r.unwrap();
+    // Read until 3 power-up S1 frames (20 Hz: ~0.25 s) have come after the A2 stream.
+    let mut seen = d.pending_bytes().to_vec();
+    let mut s1 = 0;
+    while s1 < 3 {
+        d.poll(|p| {
+            if p.map(|p| p.packet_type()) == Ok(PacketType::S1) {
+                s1 += 1;
+            }
+        })
+        .unwrap();
+    }
+    let stats = *d.stats();
+    seen.clear();
+    drop(d);
+    let (code, err) = finish(child);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("reset mid-stream"), "{err}");
+    // 40 A2 packets after the read-back, recorded; the S1 frames after the reset are not.
+    assert_eq!(stats.count(PacketType::A2), 40);
+    let rec = std::fs::read(&record).unwrap();
+    assert_eq!(count(&rec, PacketType::A2), 40);
+    assert_eq!(count(&rec, PacketType::S1), 0);
+}
+
+#[test]
+fn usage_and_input_errors_are_one_line_with_their_exit_code() {
+    let out = Command::new(BIN)
+        .args(["sim", "x.bin", "--listen", "udp:1"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("expected tcp:HOST:PORT"), "{err}");
+    let out = Command::new(BIN)
+        .args(["sim", "/nonexistent.bin", "--listen", "tcp:127.0.0.1:0"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(3));
+    let out = Command::new(BIN)
+        .args(["config", "--port", "/nonexistent-tty"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(3));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    // A target over the unit's budget is refused before the port is opened.
+    let out = Command::new(BIN)
+        .args(["config", "--port", "/nonexistent-tty", "--packet", "N1"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("4900 B/s does not fit 57600 Bd"));
+}
+
+// --- host tools on a serial port, against the simulator through a pseudo-terminal ---
+
+fn nav440(args: &[&str]) -> std::process::Output {
+    Command::new(BIN).args(args).output().unwrap()
+}
+
+#[test]
+fn live_over_a_pty_prints_what_estimate_prints_on_the_recorded_bytes() {
+    let record = tmp("pty-live.bin");
+    let (child, path) = start_sim(
+        "sin5_a1_50hz.bin",
+        "pty",
+        &["--fast", "--record", record.to_str().unwrap()],
+    );
+    let out = nav440(&["live", "--port", &path, "--rate", "50"]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(finish(child).0, 0);
+    let est = nav440(&["estimate", record.to_str().unwrap()]);
+    assert_eq!(est.status.code(), Some(0));
+    assert!(!est.stdout.is_empty());
+    assert_eq!(out.stdout, est.stdout);
+    // And the recorded A2 stream carries the A1 capture's samples.
+    let capture = std::fs::read(data("sin5_a1_50hz.bin")).unwrap();
+    assert_eq!(
+        replay::samples(&std::fs::read(&record).unwrap()).unwrap(),
+        replay::samples(&capture).unwrap()
+    );
+}
+
+#[test]
+fn record_over_a_pty_writes_the_bytes_the_simulator_recorded() {
+    let record = tmp("pty-sim.bin");
+    let out_file = tmp("pty-record.bin");
+    let (child, path) = start_sim(
+        "fig5_a2_100hz.bin",
+        "pty",
+        &["--fast", "--record", record.to_str().unwrap()],
+    );
+    let out = nav440(&["record", "--port", &path, "-o", out_file.to_str().unwrap()]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(finish(child).0, 0);
+    let got = std::fs::read(&out_file).unwrap();
+    assert!(!got.is_empty());
+    assert_eq!(got, std::fs::read(&record).unwrap());
+}
+
+#[test]
+fn config_over_a_pty_reports_the_boot_as_json() {
+    let (child, path) = start_sim("fig5_a2_100hz.bin", "pty", &["--timeout", "2"]);
+    let out = nav440(&["config", "--port", &path, "--persist"]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["found_at"], 57600);
+    assert_eq!(v["unit_baud"], 38400);
+    assert_eq!(v["switched"], true);
+    assert_eq!(v["baud"], 57600);
+    assert_eq!(v["packet"], "A2");
+    assert_eq!(v["initial_packet"], "S1");
+    // The host left; over a pty the simulator sees that only at its --timeout (exit 1).
+    let (code, err) = finish(child);
+    assert_eq!(code, 1, "{err}");
+}
+
+#[test]
+fn config_over_a_pty_reports_a_nak_in_one_line() {
+    let (child, path) = start_sim(
+        "fig5_a2_100hz.bin",
+        "pty",
+        &["--timeout", "2", "--fault", "nak-config"],
+    );
+    let out = nav440(&["config", "--port", &path, "--reply-timeout", "100"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("unit rejected (NAK) SF: packet type 0x0003=0x4132 (A2)"),
+        "{err}"
+    );
+    let _ = finish(child);
+}
