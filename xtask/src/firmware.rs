@@ -184,14 +184,6 @@ fn nav440_bin() -> Result<PathBuf, String> {
     }
 }
 
-/// A free TCP port on the loopback interface (bound, then released for the simulator).
-fn free_port() -> Result<u16, String> {
-    let l = std::net::TcpListener::bind("127.0.0.1:0").map_err(|e| format!("no free port: {e}"))?;
-    l.local_addr()
-        .map(|a| a.port())
-        .map_err(|e| format!("no free port: {e}"))
-}
-
 /// A running `nav440 sim`, killed when dropped.
 struct Sim {
     child: std::process::Child,
@@ -199,35 +191,48 @@ struct Sim {
 }
 
 impl Sim {
-    /// `nav440 sim CAPTURE --listen tcp:127.0.0.1:PORT [--record RECORD] EXTRA...`.
+    /// `nav440 sim CAPTURE --listen tcp:127.0.0.1:0 [--record RECORD] EXTRA...`; the address
+    /// is the line the simulator prints on stdout once it listens.
     fn start(
         nav440: &Path,
         capture: &Path,
         record: Option<&Path>,
         extra: &[&str],
     ) -> Result<Self, String> {
-        let port = free_port()?;
-        let addr = format!("127.0.0.1:{port}");
         let mut args: Vec<String> = vec![
             "sim".into(),
             capture.display().to_string(),
             "--listen".into(),
-            format!("tcp:{addr}"),
+            "tcp:127.0.0.1:0".into(),
         ];
         if let Some(r) = record {
             args.extend(["--record".into(), r.display().to_string()]);
         }
         args.extend(extra.iter().map(|s| (*s).to_owned()));
         eprintln!("+ {} {}", nav440.display(), args.join(" "));
-        let child = Command::new(nav440)
+        let mut child = Command::new(nav440)
             .args(&args)
             .stdin(std::process::Stdio::null())
+            .stdout(std::process::Stdio::piped())
             .spawn()
             .map_err(|e| format!("cannot start {}: {e}", nav440.display()))?;
+        let mut line = String::new();
+        if let Some(out) = child.stdout.take() {
+            use std::io::BufRead as _;
+            let _ = std::io::BufReader::new(out).read_line(&mut line);
+        }
+        let Some(addr) = line.trim().strip_prefix("tcp:").map(str::to_owned) else {
+            let _ = child.kill();
+            let _ = child.wait();
+            return Err(format!(
+                "nav440 sim did not report its address (printed `{}`)",
+                line.trim()
+            ));
+        };
         Ok(Self { child, addr })
     }
 
-    /// Waits for the simulator to exit (it does once the connection closed), killing it
+/// Waits for the simulator to exit (it does once the connection closed), killing it
     /// after `timeout`; its exit status.
     fn wait(mut self, timeout: Duration) -> Result<std::process::ExitStatus, String> {
         let start = std::time::Instant::now();
