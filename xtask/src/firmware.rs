@@ -832,6 +832,204 @@ fn rate_change_capture() -> Result<PathBuf, String> {
     Ok(out)
 }
 
+/// What a unit run in CI must end with.
+enum Expect {
+    /// Exit 0, and the CSV equals `nav440 estimate` on the simulator's record; `stderr_has`
+    /// must appear in the firmware's stderr.
+    Csv { stderr_has: &'static str },
+    /// This exit status and diagnostic (emulated mps2 boards: a failure ends the run).
+    Fails { status: i32, diagnostic: &'static str },
+    /// The real-board profile retries forever: within the time limit at least two attempts,
+    /// each with `diagnostic` (the run is then stopped).
+    Retries { diagnostic: &'static str },
+    /// The real-board profile re-configures a unit that reset, then finishes with exit 0.
+    Reconfigures,
+}
+
+/// One firmware run against `nav440 sim` (CI).
+struct UnitCase {
+    name: &'static str,
+    capture: PathBuf,
+    sim_args: &'static [&'static str],
+    expect: Expect,
+}
+
+/// The simulator's session limit in CI (it exits 1 if a session lasts longer).
+const SIM_TIMEOUT: &str = "120";
+
+/// Runs one case on `board`; Ok(description) or Err(what went wrong).
+fn unit_case(
+    board: &Board,
+    elf: &Path,
+    nav440: &Path,
+    case: &UnitCase,
+    host_extra: &[&str],
+) -> Result<String, String> {
+    let record = work_dir()?.join(format!("ci-unit-{}-{}.bin", board.name, case.name));
+    let mut sim_args = case.sim_args.to_vec();
+    sim_args.extend(["--timeout", SIM_TIMEOUT]);
+    let sim = Sim::start(nav440, &case.capture, Some(&record), &sim_args)?;
+    let bytes = std::fs::metadata(&case.capture).map_or(0, |m| m.len() as usize);
+    let limit = match case.expect {
+        // About 4 attempts (12 pings x 1000 ms nominal = 1.1 s of wall time each).
+        Expect::Retries { .. } => Duration::from_secs(6),
+        _ => unit_timeout(bytes),
+    };
+    let run = run_unit(board, elf, &sim.addr, false, limit);
+    let sim_status = sim.wait(Duration::from_secs(30));
+    let what = format!("{} on {}", case.name, board.name);
+    match (&case.expect, run) {
+        (Expect::Retries { diagnostic }, Err(e)) => {
+            let attempts = e
+                .lines()
+                .filter(|l| l.starts_with("firmware: boot attempt") && l.contains(diagnostic))
+                .count();
+            if attempts >= 2 {
+                Ok(format!("{what}: {attempts} boot attempts in {} s, each `{diagnostic}...`, still retrying (stopped)", limit.as_secs()))
+            } else {
+                Err(format!("{what}: expected repeated `{diagnostic}` attempts, got:\n{e}"))
+            }
+        }
+        (_, Err(e)) => Err(format!("{what}: {e}")),
+        (Expect::Retries { .. }, Ok(r)) => Err(format!(
+            "{what}: the real-board profile ended (status {:?}) instead of retrying:\n{}",
+            r.code(),
+            r.stderr
+        )),
+        (Expect::Fails { status, diagnostic }, Ok(r)) => {
+            let line = r
+                .stderr
+                .lines()
+                .find(|l| l.starts_with("firmware: ") && l.contains(diagnostic));
+            match (r.code() == Some(*status), line) {
+                (true, Some(l)) => Ok(format!("{what}: exit status {status}, `{l}`")),
+                _ => Err(format!(
+                    "{what}: expected exit status {status} and `{diagnostic}`, got status {:?}:\n{}",
+                    r.code(),
+                    r.stderr
+                )),
+            }
+        }
+        (Expect::Reconfigures, Ok(r)) => {
+            let configured = r.stderr.matches("firmware: unit configured").count();
+            let resets = r.stderr.matches("firmware: unit reset mid-stream").count();
+            if r.code() == Some(0) && configured == 2 && resets == 1 {
+                Ok(format!("{what}: unit reset detected, configured again, run completed (exit 0)"))
+            } else {
+                Err(format!(
+                    "{what}: expected one reset, two configurations and exit 0, got status {:?}:\n{}",
+                    r.code(),
+                    r.stderr
+                ))
+            }
+        }
+        (Expect::Csv { stderr_has }, Ok(r)) => {
+            if r.code() != Some(0) {
+                return Err(format!(
+                    "{what}: firmware exit status {:?}:\n{}",
+                    r.code(),
+                    r.stderr
+                ));
+            }
+            if !r.stderr.contains(stderr_has) {
+                return Err(format!("{what}: `{stderr_has}` missing from:\n{}", r.stderr));
+            }
+            match sim_status {
+                Ok(s) if s.success() => {}
+                other => return Err(format!("{what}: nav440 sim ended with {other:?}")),
+            }
+            if counter(&counters(&r.stderr), "uart_overruns").unwrap_or(0) != 0 {
+                return Err(format!("{what}: UART overruns reported under QEMU"));
+            }
+            let host = host_estimate(&record, host_extra)?;
+            let lines = compare_csv(&r.stdout, &host).map_err(|d| {
+                format!("{what}: firmware CSV differs from `nav440 estimate` on the record: {d}")
+            })?;
+            Ok(format!(
+                "{what}: IDENTICAL to `nav440 estimate{}` on the {} bytes streamed after configuration ({lines} lines; the unit sent {} bytes in all)",
+                host_extra.iter().map(|a| format!(" {a}")).collect::<String>(),
+                std::fs::metadata(&record).map_or(0, |m| m.len()),
+                r.unit_bytes
+            ))
+        }
+    }
+}
+
+/// The firmware against `nav440 sim` on every emulated board and the STM32 profile: every
+/// bundled capture (CSV identical to `nav440 estimate` on what the unit streamed after
+/// configuration) and the faults, each with its diagnostic and exit status.
+fn unit_ci(captures: &[PathBuf], short: &Path) -> Result<(), String> {
+    let nav440 = nav440_bin()?;
+    let short = short.to_path_buf();
+    let mut boards: Vec<Board> = qemu::BOARDS.to_vec();
+    boards.push(qemu::STM32_BOARD);
+    for board in &boards {
+        let elf = build(board.target, board.features, FW_BIN)?;
+        let stm32 = board.features.contains(&STM32_FEATURE);
+        let host_extra: &[&str] = if board.target == "thumbv7em-none-eabihf" {
+            &[]
+        } else {
+            &["--fixed"]
+        };
+        let mut cases: Vec<UnitCase> = captures
+            .iter()
+            .map(|c| UnitCase {
+                name: "capture",
+                capture: c.clone(),
+                sim_args: &["--fast"],
+                expect: Expect::Csv {
+                    stderr_has: "unit was at 38400 Bd",
+                },
+            })
+            .collect();
+        cases.push(UnitCase {
+            name: "already-57600",
+            capture: short.clone(),
+            sim_args: &["--fast", "--baud", "57600"],
+            expect: Expect::Csv {
+                stderr_has: "found at 57600 Bd, unit was at 57600 Bd",
+            },
+        });
+        let faults: [(&'static str, &'static [&'static str], i32, &'static str); 4] = [
+            ("no-answer", &["--fault", "no-answer"], 2, "no answer from the unit"),
+            ("nak", &["--fault", "nak-config"], 3, "unit rejected (NAK) SF"),
+            ("wrong-readback", &["--fault", "wrong-readback"], 4, "wrong read-back (GF)"),
+            ("reset", &["--fast", "--fault", "reset", "--reset-after", "20"], 5, "unit reset mid-stream"),
+        ];
+        for (name, sim_args, status, diagnostic) in faults {
+            let expect = match (stm32, name) {
+                (true, "reset") => Expect::Reconfigures,
+                (true, _) => Expect::Retries { diagnostic },
+                (false, _) => Expect::Fails { status, diagnostic },
+            };
+            cases.push(UnitCase {
+                name,
+                capture: short.clone(),
+                sim_args,
+                expect,
+            });
+        }
+        for case in &cases {
+            let ok = unit_case(board, &elf, &nav440, case, host_extra)?;
+            eprintln!("xtask: UNIT OK: {ok}");
+        }
+    }
+    Ok(())
+}
+
+/// `cargo xtask ci-unit`: the unit runs of `ci-firmware` (QEMU required).
+pub fn ci_unit() -> Result<(), String> {
+    qemu::ensure_qemu()?;
+    let start = std::time::Instant::now();
+    let short = root().join("host-tests/data/sin5_a2_25hz_weekwrap.bin");
+    unit_ci(&data_captures(), &short)?;
+    eprintln!(
+        "xtask: firmware against nav440 sim: every case passed in {:.0} s",
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
 /// The firmware part of `cargo xtask ci`.
 pub fn ci_steps() -> Result<(), String> {
     // QEMU must be there or installable: the test command runs every test. Only an explicit
@@ -947,6 +1145,8 @@ pub fn ci_steps() -> Result<(), String> {
         Err(e) => return Err(format!("unexpected failure of the no-prefix check: {e}")),
         Ok(_) => return Err("input without the length prefix was accepted".into()),
     }
+    // The firmware against the simulated unit: boot, configure, stream, estimate, faults.
+    ci_unit()?;
     // A panic ends the run with exit status 1 and its message.
     let panic_elf = build(m4f_board.target, &[], "panic_check")?;
     match qemu::run_plain(&m4f_board, &panic_elf, &[], Duration::from_secs(60)) {

@@ -42,6 +42,9 @@ enum Cmd {
     Ci,
     /// Only the firmware part of `ci` (cross builds, QEMU runs, equivalence with the host).
     CiFirmware,
+    /// Only the firmware-against-`nav440 sim` runs of `ci-firmware` (every board, captures
+    /// and faults).
+    CiUnit,
     /// The firmware in QEMU against `nav440 sim` streaming the bundled capture: boot,
     /// configuration, stream, estimates and a summary.
     Demo {
@@ -99,6 +102,7 @@ fn main() -> ExitCode {
         }
         Cmd::Ci => ci(),
         Cmd::CiFirmware => firmware::ci_steps(),
+        Cmd::CiUnit => firmware::ci_unit(),
         Cmd::Demo { board, capture } => firmware::demo(board, capture),
         Cmd::Qemu { file, board } => firmware::qemu(board, &file),
         Cmd::Bench { board } => firmware::bench(board),

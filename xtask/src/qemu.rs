@@ -187,8 +187,6 @@ pub struct RunResult {
     pub stdout: String,
     /// The firmware's semihosting stderr (counters, diagnostics) and QEMU's own messages.
     pub stderr: String,
-    /// Wall time of the run.
-    pub elapsed: Duration,
 }
 
 /// Common QEMU arguments for `board` running `elf`, with `semihosting_args` as the
@@ -318,17 +316,12 @@ fn run(
         .map(|h| h.join().unwrap_or_default())
         .unwrap_or_default();
     let stderr = err_reader.join().unwrap_or_default();
-    let elapsed = start.elapsed();
     if !status.success() {
         return Err(format!(
             "firmware run failed ({status}); its stderr:\n{stderr}"
         ));
     }
-    Ok(RunResult {
-        stdout,
-        stderr,
-        elapsed,
-    })
+    Ok(RunResult { stdout, stderr })
 }
 
 /// Time limit for a UART run of `bytes` bytes (QEMU's UART moves 10-40 KB/s; generous).
