@@ -57,6 +57,10 @@ const REPLY_TIMEOUT_MS: u32 = if cfg!(feature = "board-stm32f405") {
     500
 };
 
+/// Pause between two boot attempts on the real-board profile, ms (nominal; about 95 ms of
+/// wall time under QEMU `netduinoplus2`).
+const RETRY_PAUSE_MS: u32 = 1000;
+
 /// Magic at the start of a finite input (replay mode).
 const LENGTH_MAGIC: [u8; 4] = *b"N4LP";
 /// Magic of the control channel's end message.
@@ -185,6 +189,8 @@ fn configure(uart: Uart0, delay: &mut time::Delay) -> (Uart0, Report, Pending) {
                 if !cfg!(feature = "board-stm32f405") {
                     fail(boot_status(&e))
                 }
+                // Real board: one attempt (and one diagnostic line) per second at most.
+                embedded_hal::delay::DelayNs::delay_ms(delay, RETRY_PAUSE_MS);
             }
         }
     }

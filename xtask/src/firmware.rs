@@ -232,7 +232,7 @@ impl Sim {
         Ok(Self { child, addr })
     }
 
-/// Waits for the simulator to exit (it does once the connection closed), killing it
+    /// Waits for the simulator to exit (it does once the connection closed), killing it
     /// after `timeout`; its exit status.
     fn wait(mut self, timeout: Duration) -> Result<std::process::ExitStatus, String> {
         let start = std::time::Instant::now();
@@ -838,7 +838,10 @@ enum Expect {
     /// must appear in the firmware's stderr.
     Csv { stderr_has: &'static str },
     /// This exit status and diagnostic (emulated mps2 boards: a failure ends the run).
-    Fails { status: i32, diagnostic: &'static str },
+    Fails {
+        status: i32,
+        diagnostic: &'static str,
+    },
     /// The real-board profile retries forever: within the time limit at least two attempts,
     /// each with `diagnostic` (the run is then stopped).
     Retries { diagnostic: &'static str },
@@ -887,7 +890,9 @@ fn unit_case(
             if attempts >= 2 {
                 Ok(format!("{what}: {attempts} boot attempts in {} s, each `{diagnostic}...`, still retrying (stopped)", limit.as_secs()))
             } else {
-                Err(format!("{what}: expected repeated `{diagnostic}` attempts, got:\n{e}"))
+                Err(format!(
+                    "{what}: expected repeated `{diagnostic}` attempts, got:\n{e}"
+                ))
             }
         }
         (_, Err(e)) => Err(format!("{what}: {e}")),
@@ -914,7 +919,9 @@ fn unit_case(
             let configured = r.stderr.matches("firmware: unit configured").count();
             let resets = r.stderr.matches("firmware: unit reset mid-stream").count();
             if r.code() == Some(0) && configured == 2 && resets == 1 {
-                Ok(format!("{what}: unit reset detected, configured again, run completed (exit 0)"))
+                Ok(format!(
+                    "{what}: unit reset detected, configured again, run completed (exit 0)"
+                ))
             } else {
                 Err(format!(
                     "{what}: expected one reset, two configurations and exit 0, got status {:?}:\n{}",
@@ -932,7 +939,10 @@ fn unit_case(
                 ));
             }
             if !r.stderr.contains(stderr_has) {
-                return Err(format!("{what}: `{stderr_has}` missing from:\n{}", r.stderr));
+                return Err(format!(
+                    "{what}: `{stderr_has}` missing from:\n{}",
+                    r.stderr
+                ));
             }
             match sim_status {
                 Ok(s) if s.success() => {}
@@ -991,10 +1001,30 @@ fn unit_ci(captures: &[PathBuf], short: &Path) -> Result<(), String> {
             },
         });
         let faults: [(&'static str, &'static [&'static str], i32, &'static str); 4] = [
-            ("no-answer", &["--fault", "no-answer"], 2, "no answer from the unit"),
-            ("nak", &["--fault", "nak-config"], 3, "unit rejected (NAK) SF"),
-            ("wrong-readback", &["--fault", "wrong-readback"], 4, "wrong read-back (GF)"),
-            ("reset", &["--fast", "--fault", "reset", "--reset-after", "20"], 5, "unit reset mid-stream"),
+            (
+                "no-answer",
+                &["--fault", "no-answer"],
+                2,
+                "no answer from the unit",
+            ),
+            (
+                "nak",
+                &["--fault", "nak-config"],
+                3,
+                "unit rejected (NAK) SF",
+            ),
+            (
+                "wrong-readback",
+                &["--fault", "wrong-readback"],
+                4,
+                "wrong read-back (GF)",
+            ),
+            (
+                "reset",
+                &["--fast", "--fault", "reset", "--reset-after", "20"],
+                5,
+                "unit reset mid-stream",
+            ),
         ];
         for (name, sim_args, status, diagnostic) in faults {
             let expect = match (stm32, name) {
@@ -1010,8 +1040,9 @@ fn unit_ci(captures: &[PathBuf], short: &Path) -> Result<(), String> {
             });
         }
         for case in &cases {
+            let t = std::time::Instant::now();
             let ok = unit_case(board, &elf, &nav440, case, host_extra)?;
-            eprintln!("xtask: UNIT OK: {ok}");
+            eprintln!("xtask: UNIT OK ({:.1} s): {ok}", t.elapsed().as_secs_f64());
         }
     }
     Ok(())

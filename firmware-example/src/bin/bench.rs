@@ -27,10 +27,10 @@ use estimators::{
     KalmanConfig, Real, Series, YawBank,
 };
 use firmware_example::{cycles::Counter, host, uart::Board, Bank, BankSqrt, Num};
+use heapless::String;
 use nav440_proto::boot::{Options, Target};
 use nav440_proto::driver::IoDriver;
 use nav440_proto::unit::{Quirks, Unit, UnitFields};
-use heapless::String;
 use nav440_proto::{encode_frame, ItowClock, PacketType, Parser};
 
 /// Steps per sample: h = 1e-4 s, 100 Hz samples (the paper's step).
@@ -491,9 +491,8 @@ fn main() -> ! {
         fail("the UART")
     };
     let request = [0x55u8; 64];
-    let (n, r) = c.measure(|| {
-        embedded_io::Write::write_all(black_box(&mut board.nav), black_box(&request))
-    });
+    let (n, r) =
+        c.measure(|| embedded_io::Write::write_all(black_box(&mut board.nav), black_box(&request)));
     if r.is_err() {
         fail("transmit");
     }
