@@ -259,10 +259,10 @@ impl Drop for Sim {
     }
 }
 
-/// Time limit of a unit run (the boot's worst case is a few seconds of time-outs; the
-/// stream moves at 10-40 KB/s through QEMU's UART).
+/// Time limit of a unit run (the boot's worst case is a few seconds of time-outs; then as a
+/// replay of the same size).
 fn unit_timeout(capture_bytes: usize) -> Duration {
-    Duration::from_secs(90 + (capture_bytes / 2_000) as u64)
+    qemu::uart_timeout(capture_bytes)
 }
 
 /// Builds the firmware for `board` and runs it against the unit at `addr`.
