@@ -114,7 +114,6 @@ fn main() -> ! {
         host::stderr(format_args!("firmware: UARTs already taken\n"));
         fail(Status::Internal)
     };
-    let mut delay = time::start(core.SYST, board.core_clock_hz);
     let mut pipe = match pipeline::Pipeline::new() {
         Ok(p) => p,
         Err(e) => {
@@ -125,11 +124,15 @@ fn main() -> ! {
         }
     };
     let Board {
-        nav: uart, control, ..
+        nav: uart,
+        control,
+        core_clock_hz,
     } = board;
     if replay_requested() {
         replay(uart, &mut pipe)
     }
+    // The time base of the boot's time-outs (replay mode needs none).
+    let mut delay = time::start(core.SYST, core_clock_hz);
     let mut uart = uart;
     let mut control = control;
     loop {

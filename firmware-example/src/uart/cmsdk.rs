@@ -161,3 +161,13 @@ pub fn take_overrun() -> bool {
 pub fn clear_rx_interrupt() {
     write_reg(INTCLEAR, INT_RX);
 }
+
+/// Masks the RX interrupt in the UART (the byte waits in the data register).
+pub fn pause_rx() {
+    write_reg(CTRL, read_reg(CTRL) & !CTRL_RX_IE);
+}
+
+/// Unmasks the RX interrupt in the UART.
+pub fn resume_rx() {
+    write_reg(CTRL, read_reg(CTRL) | CTRL_RX_IE);
+}

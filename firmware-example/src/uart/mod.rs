@@ -9,12 +9,12 @@
 //!
 //! The RX interrupt moves bytes from the UART's data register into a `heapless` SPSC queue
 //! (the interrupt is the single producer, [`Uart0`] the single consumer). When the queue is
-//! full the interrupt handler leaves the byte in the data register and masks the UART's
-//! interrupt line in the NVIC; the consumer unmasks it once it has made room and takes the
-//! waiting byte itself (back-pressure). QEMU's emulated lines then simply wait (lossless, on
-//! both the CMSDK UART and the STM32 USART model, whose interrupt line stays asserted while a
-//! byte waits: masking it in the NVIC, not in the USART, is what keeps that from livelocking);
-//! on real hardware a following byte sets the UART's overrun flag, which is counted.
+//! full the interrupt handler leaves the byte in the data register and masks the receive
+//! interrupt (`hw::pause_rx`: in the UART on CMSDK, in the NVIC on the STM32, whose USART
+//! model keeps its line asserted while a byte waits, so masking RXNEIE there livelocked); the
+//! consumer unmasks it once it has made room and takes the waiting byte itself
+//! (back-pressure). QEMU's emulated lines then simply wait (lossless); on real hardware a
+//! following byte sets the UART's overrun flag, which is counted.
 //!
 //! Every lost byte is counted in [`Uart0::overruns`]: a loss is never silent.
 
@@ -114,8 +114,9 @@ fn bump(counter: &AtomicU32) {
     );
 }
 
+/// The receive interrupt's NVIC line.
 #[derive(Clone, Copy)]
-struct Irq(u16);
+pub struct Irq(pub u16);
 
 // SAFETY: `number` returns the board's UART interrupt number (`hw::RX_IRQ`), a valid
 // interrupt of its NVIC.
@@ -138,7 +139,7 @@ fn service_rx(cs: CriticalSection<'_>) {
     };
     loop {
         if !producer.ready() && hw::rx_full() {
-            cortex_m::peripheral::NVIC::mask(Irq(RX_IRQ));
+            hw::pause_rx();
             PAUSED.store(true, Ordering::Release);
             bump(&STALLS);
             return;
@@ -259,9 +260,7 @@ impl Uart0 {
         if n > 0 && PAUSED.load(Ordering::Acquire) {
             critical_section::with(|cs| {
                 PAUSED.store(false, Ordering::Release);
-                // SAFETY: as in `Board::take`: the handler only touches PRODUCER (behind a
-                // critical section, which this one is), the atomics and the UART's registers.
-                unsafe { cortex_m::peripheral::NVIC::unmask(Irq(RX_IRQ)) };
+                hw::resume_rx();
                 // The byte left in the data register raised no new interrupt: take it now.
                 service_rx(cs);
             });

@@ -178,3 +178,16 @@ pub fn take_overrun() -> bool {
 
 /// RXNE clears when DR is read: nothing to acknowledge.
 pub fn clear_rx_interrupt() {}
+
+/// Masks the USART1 line in the NVIC (not RXNEIE: QEMU's USART model keeps its line asserted
+/// while RXNE is set, which livelocks an RXNEIE mask).
+pub fn pause_rx() {
+    cortex_m::peripheral::NVIC::mask(super::Irq(RX_IRQ));
+}
+
+/// Unmasks the USART1 line in the NVIC.
+pub fn resume_rx() {
+    // SAFETY: the handler for this IRQ only touches the receive queue's producer (behind a
+    // critical section), atomics and USART1, so unmasking it breaks no critical section.
+    unsafe { cortex_m::peripheral::NVIC::unmask(super::Irq(RX_IRQ)) };
+}
