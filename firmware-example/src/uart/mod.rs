@@ -138,18 +138,26 @@ fn service_rx(cs: CriticalSection<'_>) {
         return;
     };
     loop {
-        if !producer.ready() && hw::rx_full() {
-            hw::pause_rx();
-            PAUSED.store(true, Ordering::Release);
-            bump(&STALLS);
+        if !producer.ready() {
+            // Queue full: never read the data register now (a byte arriving between a check
+            // and the read would have nowhere to go). Hold it and pause if one waits; if none
+            // waits yet, the next one raises the interrupt again and lands here.
+            if hw::rx_full() {
+                hw::pause_rx();
+                PAUSED.store(true, Ordering::Release);
+                bump(&STALLS);
+            }
             return;
         }
         match hw::poll_rx() {
             RxPoll::Empty => return,
             RxPoll::Lost => bump(&OVERRUNS),
             RxPoll::Byte(byte) => {
-                // Cannot fail: the queue had room (checked above) and only this code enqueues.
-                let _ = producer.enqueue(byte);
+                // Cannot fail: the queue had room (checked above) and only this code enqueues;
+                // counted as lost all the same, should it ever.
+                if producer.enqueue(byte).is_err() {
+                    bump(&OVERRUNS);
+                }
             }
         }
     }
