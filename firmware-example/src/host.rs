@@ -24,6 +24,41 @@ pub fn stderr(args: core::fmt::Arguments<'_>) {
     }
 }
 
+/// Ends the program with exit status `code`: semihosting `SYS_EXIT_EXTENDED` (0x20), the call
+/// that lets a 32-bit guest give QEMU a status other than 0/1 (QEMU exits with `code`).
+/// `code` 0 is the same as [`exit`]`(true)`.
+pub fn exit_code(code: u32) -> ! {
+    /// `ADP_Stopped_ApplicationExit`: the reason code of a normal application exit.
+    const APPLICATION_EXIT: usize = 0x2_0026;
+    /// `SYS_EXIT_EXTENDED`.
+    const SYS_EXIT_EXTENDED: usize = 0x20;
+    let block = [APPLICATION_EXIT, code as usize];
+    // SAFETY: a semihosting call with a pointer to a valid two-word parameter block that
+    // outlives the call; the host reads it and ends the program.
+    unsafe { cortex_m_semihosting::syscall(SYS_EXIT_EXTENDED, &block) };
+    // A host without SYS_EXIT_EXTENDED: fall back to the 0/1 exit.
+    exit(code == 0)
+}
+
+/// The program's command line from the host (semihosting `SYS_GET_CMDLINE`) written into
+/// `buf`; empty if the host gives none. Under QEMU it is the `arg=` items of
+/// `-semihosting-config`, separated by spaces.
+pub fn cmdline(buf: &mut [u8]) -> &[u8] {
+    /// `SYS_GET_CMDLINE`.
+    const SYS_GET_CMDLINE: usize = 0x15;
+    let mut block = [buf.as_mut_ptr() as usize, buf.len()];
+    // SAFETY: the parameter block points at `buf` with its length; the host writes at most
+    // that many bytes into it and the new length into the block.
+    let r = unsafe { cortex_m_semihosting::syscall1(SYS_GET_CMDLINE, block.as_mut_ptr() as usize) };
+    if r != 0 {
+        return &[];
+    }
+    let n = block[1].min(buf.len());
+    let s = &buf[..n];
+    // Some hosts count the terminating NUL.
+    s.strip_suffix(&[0]).unwrap_or(s)
+}
+
 /// Ends the program: semihosting exit with status 0 (`success`) or 1.
 pub fn exit(success: bool) -> ! {
     debug::exit(if success {

@@ -1,12 +1,14 @@
 //! Board support and the NAV440 pipeline shared by the firmware binaries.
 //!
-//! * [`uart`]: interrupt-driven receive into a `heapless` SPSC queue, exposed as
-//!   `embedded_io::Read` and `embedded_hal_nb::serial::Read`; registers of the CMSDK APB UART0
-//!   of the QEMU `mps2-an385/386` boards, or of STM32F4 USART1 (`board-stm32f405`).
+//! * [`uart`]: the NAV440 UART: interrupt-driven receive into a `heapless` SPSC queue, polled
+//!   transmit, run-time baud change, as `embedded_io` 0.7 and `embedded_hal_nb` traits; the
+//!   CMSDK APB UART0 of the QEMU `mps2-an385/386` boards, or STM32F4 USART1 through
+//!   `stm32f4xx-hal` (`board-stm32f405`); plus the harness's control channel (UART1/USART2).
+//! * [`time`]: SysTick at 1 kHz, microseconds since start, `embedded_hal::delay::DelayNs`.
 //! * [`host`]: semihosting output, exit codes, the panic handler and the HardFault handler
 //!   (every failure ends the run with a non-zero exit status instead of hanging).
 //! * [`cycles`]: instruction counting with SysTick under `qemu -icount` (see the bench binary).
-//! * [`pipeline`]: parser -> yaw sample -> `ItowClock` -> `YawBank` -> CSV rows.
+//! * [`pipeline`]: parser -> yaw sample -> `TimeBase` -> `YawBank` -> CSV rows.
 //! * [`stack`]: stack high-water mark (painted stack).
 //! * `sqrt`: the ED's square root as the `VSQRT.F32` instruction (FPU builds).
 //!
@@ -20,6 +22,7 @@ pub mod pipeline;
 #[cfg(not(any(feature = "fixed-point", not(target_abi = "eabihf"))))]
 pub mod sqrt;
 pub mod stack;
+pub mod time;
 pub mod uart;
 
 /// Numeric type of the estimator bank: `f32` on an FPU target (`thumbv7em-none-eabihf`), the

@@ -1,92 +1,365 @@
-//! Firmware example: NAV440 bytes on UART0 -> parser -> estimator bank -> CSV rows on the
-//! host's stdout (semihosting), counters on its stderr, then exit status 0.
+//! Firmware example: configures a NAV440 on UART0, then NAV440 bytes -> parser -> estimator
+//! bank -> CSV rows on the host's stdout (semihosting), diagnostics and counters on its stderr.
 //!
-//! End-of-input convention (emulated boards): the byte stream on UART0 starts with the 4 bytes
-//! `N4LP` and the capture's length in bytes as u32 little-endian (`cargo xtask qemu/demo`
-//! prepend them); the firmware processes exactly that many bytes, prints its counters and exits.
-//! QEMU's UART never signals end-of-file, and a length prefix, unlike a trailer or idle
-//! detection, cannot be confused with capture content nor depends on timing. On the emulated
-//! boards a stream without the prefix is refused (exit 1) so that a wrong input never hangs a
-//! run; with the real-board profile (`board-stm32f405`) it is a live NAV440 stream and the
-//! firmware runs until reset.
+//! # Boot and run (unit mode, the default)
+//! 1. The stack is painted (before any interrupt is enabled), then the UARTs and SysTick
+//!    (1 kHz time base) start: the NAV440 UART's receive interrupt is the first interrupt.
+//! 2. `nav440_proto::boot::boot` configures the unit to [`TARGET`] (A2 at 100 Hz at
+//!    57600 Bd, checked against the unit's byte budget at compile time): find it (ping at
+//!    57600, 38400, 19200, 9600 Bd), switch the baud, set type and rate, read them back. The
+//!    firmware has no protocol code: it passes its UART, its SysTick delay and a baud-change
+//!    callback. Frames received while configuring are counted (`boot_frames`), not estimated.
+//! 3. Estimation starts with the first byte after the read-back reply.
+//! 4. End of a run under QEMU: the harness (`cargo xtask unit`) counts the bytes the unit
+//!    sent and, once the unit has closed the connection, sends `N4EN` + that count (u32 LE) on
+//!    the control channel (UART1 / USART2); the firmware stops after exactly that many bytes
+//!    have been read from the NAV440 UART and processed, prints its counters and exits 0.
+//!    The rule depends on byte counts only, never on the host's speed.
+//!
+//! Every failure prints one line `firmware: ...` on stderr and exits with a documented
+//! status ([`Status`]); with the real-board profile (`board-stm32f405`) a failed boot is
+//! retried forever, one diagnostic line per attempt.
+//!
+//! # Replay mode (`cargo xtask qemu FILE`)
+//! With `replay` on the semihosting command line the firmware does not talk to a unit: the
+//! stream on UART0 starts with `N4LP` and the capture's length (u32 LE), and the firmware
+//! processes exactly that many bytes. A stream without the prefix is refused (status 1).
 #![no_std]
 #![no_main]
 
+use core::sync::atomic::{AtomicBool, Ordering};
 use cortex_m_rt::entry;
-use embedded_io::Read as _;
-use firmware_example::{host, pipeline, stack, uart::Uart0};
+use embedded_io::{Read as _, ReadReady as _};
+use firmware_example::uart::{Board, Control, Uart0};
+use firmware_example::{host, pipeline, stack, time};
+use nav440_proto::boot::{self, BootError, Options, Report, Target};
+use nav440_proto::driver::{IoDriver, Timing};
+use nav440_proto::{Baud, PacketType, Parser};
 
-/// Magic at the start of a finite input.
+/// The configuration the firmware gives the unit: A2 at 100 Hz at 57600 Bd.
+pub const TARGET: Target = Target::DEFAULT;
+// 37 B x 100 Hz = 3700 B/s must fit 0.81 x 57600 / 10 = 4665 B/s: checked when compiling.
+const _: () = assert!(
+    TARGET.fits_budget(),
+    "TARGET exceeds the unit's byte budget"
+);
+
+/// Local UART rate before the search (the NAV440's factory default; the search tries all).
+const POWER_UP_BAUD: u32 = 38_400;
+
+/// Reply time-out of each request of the boot sequence, ms. The real-board profile waits
+/// longer: under QEMU `netduinoplus2` its SysTick runs 168/16 times fast (see `time`), so
+/// 1000 ms nominal is about 95 ms of wall time there, still well above the emulated round
+/// trip; on a real board a failed search then takes 12 s per attempt.
+const REPLY_TIMEOUT_MS: u32 = if cfg!(feature = "board-stm32f405") {
+    1000
+} else {
+    500
+};
+
+/// Pause between two boot attempts on the real-board profile, ms (nominal; about 95 ms of
+/// wall time under QEMU `netduinoplus2`).
+const RETRY_PAUSE_MS: u32 = 1000;
+
+/// Magic at the start of a finite input (replay mode).
 const LENGTH_MAGIC: [u8; 4] = *b"N4LP";
+/// Magic of the control channel's end message.
+const END_MAGIC: [u8; 4] = *b"N4EN";
 
-/// NAV440 default baud rate (8N1); QEMU ignores the rate.
-const BAUD: u32 = 38_400;
+/// Exit statuses under QEMU (the firmware's semihosting exit code becomes QEMU's and
+/// `cargo xtask unit`'s).
+#[derive(Clone, Copy)]
+#[repr(u32)]
+pub enum Status {
+    /// Every byte the unit sent was processed.
+    Ok = 0,
+    /// Panic, HardFault, bank configuration rejected, bad replay input, serial port error,
+    /// bad control message.
+    Internal = 1,
+    /// The unit did not answer (no ping reply at any baud, or a request unanswered).
+    NoAnswer = 2,
+    /// The unit rejected a configuration request (NAK, or accepted only some fields).
+    Rejected = 3,
+    /// The read-back (GF) does not show the configuration that was set.
+    WrongReadBack = 4,
+    /// After configuration the unit sent frames of another type: it reset (or was
+    /// reconfigured by someone else) mid-stream.
+    UnitReset = 5,
+}
 
-/// Reads the length prefix byte by byte through the `embedded_hal_nb::serial::Read` side of
-/// the driver (the capture itself goes through `embedded_io::Read`), polling: 8 bytes, once.
-fn read_prefix(uart: &mut Uart0, buf: &mut [u8]) {
-    for slot in buf.iter_mut() {
-        *slot = loop {
-            match embedded_hal_nb::serial::Read::read(uart) {
-                Ok(b) => break b,
-                Err(nb::Error::WouldBlock) => core::hint::spin_loop(),
-                Err(nb::Error::Other(e)) => match e {},
-            }
-        };
+fn fail(status: Status) -> ! {
+    host::exit_code(status as u32)
+}
+
+/// The exit status of a boot failure.
+fn boot_status<E>(e: &BootError<E>) -> Status {
+    match e {
+        BootError::NoAnswer { .. } => Status::NoAnswer,
+        BootError::Nak { .. } | BootError::NotAccepted { .. } => Status::Rejected,
+        BootError::WrongReadBack { .. } => Status::WrongReadBack,
+        BootError::Serial(_) | BootError::WriteZero | BootError::Encode(_) => Status::Internal,
     }
 }
 
 #[entry]
 fn main() -> ! {
-    // UART first: on some UART models (QEMU's STM32 USART) bytes arriving before the
-    // receiver is enabled are dropped.
-    let Some(mut uart) = Uart0::take(BAUD) else {
-        host::stderr(format_args!("firmware: UART0 already taken\n"));
-        host::exit(false)
-    };
+    // First, before any interrupt is enabled: the stack high-water mark then covers the
+    // interrupt handlers too.
     stack::paint();
+    let Some(core) = cortex_m::Peripherals::take() else {
+        host::stderr(format_args!("firmware: core peripherals already taken\n"));
+        fail(Status::Internal)
+    };
+    let Some(board) = Board::take(POWER_UP_BAUD) else {
+        host::stderr(format_args!("firmware: UARTs already taken\n"));
+        fail(Status::Internal)
+    };
     let mut pipe = match pipeline::Pipeline::new() {
         Ok(p) => p,
         Err(e) => {
             host::stderr(format_args!(
                 "firmware: bank configuration rejected: {e:?}\n"
             ));
-            host::exit(false)
+            fail(Status::Internal)
         }
     };
-    let mut prefix = [0u8; 8];
-    read_prefix(&mut uart, &mut prefix);
-    let (magic, len) = prefix.split_at(4);
-    if magic != LENGTH_MAGIC {
-        #[cfg(feature = "board-stm32f405")]
-        live(&mut uart, &mut pipe, &prefix);
-        #[cfg(not(feature = "board-stm32f405"))]
-        {
-            host::stderr(format_args!(
-                "firmware: input does not start with the N4LP length prefix (got {magic:02x?}); use `cargo xtask qemu FILE`\n"
-            ));
-            host::exit(false)
+    let Board {
+        nav: uart,
+        control,
+        core_clock_hz,
+    } = board;
+    if replay_requested() {
+        replay(uart, &mut pipe)
+    }
+    // The time base of the boot's time-outs (replay mode needs none).
+    let mut delay = time::start(core.SYST, core_clock_hz);
+    let mut uart = uart;
+    let mut control = control;
+    loop {
+        let (configured, report, pending) = configure(uart, &mut delay);
+        // Returns only after a unit reset on the real-board profile: configure it again.
+        uart = stream(configured, &mut control, &mut pipe, &report, &pending);
+    }
+}
+
+/// `replay` is on the semihosting command line (`cargo xtask qemu FILE`).
+fn replay_requested() -> bool {
+    // The real-board profile always talks to a unit (and a probe may not serve the call).
+    if cfg!(feature = "board-stm32f405") {
+        return false;
+    }
+    let mut buf = [0u8; 96];
+    host::cmdline(&mut buf)
+        .split(|&b| b == b' ')
+        .any(|w| w == b"replay")
+}
+
+/// Bytes the driver had read past the read-back reply (at most one frame).
+type Pending = heapless::Vec<u8, { nav440_proto::MAX_FRAME }>;
+
+/// Runs the boot sequence until it succeeds (real board) or fails once (QEMU: exits).
+fn configure(uart: Uart0, delay: &mut time::Delay) -> (Uart0, Report, Pending) {
+    let mut driver = IoDriver::new(uart);
+    driver.set_timing(Timing {
+        reply_timeout_ms: REPLY_TIMEOUT_MS,
+        ..Timing::DEFAULT
+    });
+    let mut attempt: u32 = 0;
+    loop {
+        attempt += 1;
+        let r = boot::boot(
+            &mut driver,
+            &TARGET,
+            &Options::DEFAULT,
+            delay,
+            |uart: &mut Uart0, b: Baud| {
+                uart.set_baud(b.bits_per_second())
+                    .map_err(firmware_example::uart::Error::from)
+            },
+        );
+        match r {
+            Ok(report) => {
+                let mut pending = Pending::new();
+                // Cannot fail: the driver holds at most one frame's bytes.
+                let _ = pending.extend_from_slice(driver.pending_bytes());
+                let (uart, _) = driver.into_parts();
+                return (uart, report, pending);
+            }
+            Err(e) => {
+                host::stderr(format_args!(
+                    "firmware: boot attempt {attempt} failed: {e}\n"
+                ));
+                if !cfg!(feature = "board-stm32f405") {
+                    fail(boot_status(&e))
+                }
+                // Real board: one attempt (and one diagnostic line) per second at most.
+                embedded_hal::delay::DelayNs::delay_ms(delay, RETRY_PAUSE_MS);
+            }
         }
     }
-    let mut remaining = u32::from_le_bytes([len[0], len[1], len[2], len[3]]) as usize;
-    host::stdout(pipeline::CSV_HEADER.as_bytes());
-    host::stdout(b"\n");
-    let mut buf = [0u8; 64];
-    while remaining > 0 {
-        let want = remaining.min(buf.len());
-        let Ok(n) = uart.read(&mut buf[..want]);
-        if let Err(e) = pipe.feed(&buf[..n], |row| host::stdout(row.as_bytes())) {
+}
+
+/// The control channel's end message: `N4EN` + u32 LE.
+struct EndMessage {
+    buf: [u8; 8],
+    len: usize,
+}
+
+impl EndMessage {
+    /// Takes the bytes the control channel has; `Some(total)` once the message is complete.
+    fn poll(&mut self, control: &mut Control) -> Option<u64> {
+        while self.len < self.buf.len() {
+            let b = control.try_read()?;
+            self.buf[self.len] = b;
+            self.len += 1;
+        }
+        let (magic, n) = self.buf.split_at(4);
+        if magic != END_MAGIC {
+            host::stderr(format_args!(
+                "firmware: bad control message {:02x?} (expected N4EN + u32 LE byte count)\n",
+                self.buf
+            ));
+            fail(Status::Internal)
+        }
+        Some(u64::from(u32::from_le_bytes([n[0], n[1], n[2], n[3]])))
+    }
+}
+
+/// Frames after the configuration that are not [`TARGET`]'s packet type.
+struct ResetWatch {
+    parser: Parser,
+    foreign: Option<PacketType>,
+}
+
+impl ResetWatch {
+    fn feed(&mut self, bytes: &[u8]) {
+        let foreign = &mut self.foreign;
+        self.parser.feed(bytes, |frame| {
+            if frame.packet_type != TARGET.packet && foreign.is_none() {
+                *foreign = Some(frame.packet_type);
+            }
+        });
+    }
+}
+
+/// Estimation from the first byte after the read-back until the end message's count (then
+/// exits). Returns the UART only when the unit reset mid-stream on the real-board profile
+/// (under QEMU's mps2 boards a reset ends the run with [`Status::UnitReset`]).
+fn stream(
+    mut uart: Uart0,
+    control: &mut Control,
+    pipe: &mut pipeline::Pipeline,
+    report: &Report,
+    pending: &[u8],
+) -> Uart0 {
+    host::stderr(format_args!(
+        "firmware: unit configured: {} at {} Hz at {} Bd (found at {} Bd, unit was at {} Bd streaming {} with rate divider {}, {} ping retries); boot_frames={} boot_skipped={} boot_ms={}\n",
+        TARGET.packet,
+        100 / TARGET.rate.divider().max(1),
+        report.baud.bits_per_second(),
+        report.found_at.bits_per_second(),
+        report.unit_baud.bits_per_second(),
+        report.initial_packet,
+        report.initial_rate_divider,
+        report.ping_retries,
+        report.unsolicited_frames,
+        report.skipped_bytes,
+        time::now_ms(),
+    ));
+    // Only `main`'s thread touches it (a load/store pair: thumbv6m has no atomic swap).
+    if !HEADER_PRINTED.load(Ordering::Relaxed) {
+        HEADER_PRINTED.store(true, Ordering::Relaxed);
+        host::stdout(pipeline::CSV_HEADER.as_bytes());
+        host::stdout(b"\n");
+    }
+    let mut watch = ResetWatch {
+        parser: Parser::new(),
+        foreign: None,
+    };
+    // Feeds the pipeline unless the bytes show a unit reset; `false` on a reset.
+    let mut process = |pipe: &mut pipeline::Pipeline, bytes: &[u8]| -> bool {
+        watch.feed(bytes);
+        if let Some(t) = watch.foreign {
+            host::stderr(format_args!(
+                "firmware: unit reset mid-stream: {t} frame received after configuring {} ({} bytes estimated)\n",
+                TARGET.packet,
+                uart_bytes(pipe)
+            ));
+            if !cfg!(feature = "board-stm32f405") {
+                fail(Status::UnitReset)
+            }
+            return false;
+        }
+        if let Err(e) = pipe.feed(bytes, |row| host::stdout(row.as_bytes())) {
             bank_failed(&e);
         }
-        remaining -= n;
+        true
+    };
+    if !process(pipe, pending) {
+        return uart;
     }
+    let mut end = EndMessage {
+        buf: [0; 8],
+        len: 0,
+    };
+    let mut total: Option<u64> = None;
+    let mut buf = [0u8; 64];
+    loop {
+        let read = uart.bytes_read();
+        if let Some(n) = total {
+            if read >= n {
+                break;
+            }
+        }
+        if uart.read_ready().unwrap_or(false) {
+            let room = total.map_or(buf.len() as u64, |n| n - read);
+            let want = (buf.len() as u64).min(room) as usize;
+            let n = match uart.read(&mut buf[..want]) {
+                Ok(n) => n,
+                Err(e) => {
+                    host::stderr(format_args!("firmware: UART error: {e:?}\n"));
+                    fail(Status::Internal)
+                }
+            };
+            if !process(pipe, &buf[..n]) {
+                return uart;
+            }
+        } else if let Some(n) = total.is_none().then(|| end.poll(control)).flatten() {
+            if n < read {
+                host::stderr(format_args!(
+                    "firmware: control channel says the unit sent {n} bytes, but {read} were received\n"
+                ));
+                fail(Status::Internal)
+            }
+            host::stderr(format_args!(
+                "firmware: control channel: the unit sent {n} bytes ({read} received so far)\n"
+            ));
+            total = Some(n);
+        } else {
+            // Woken by the next received byte or the 1 ms tick.
+            cortex_m::asm::wfi();
+        }
+    }
+    finish(pipe, &uart, total.unwrap_or(0))
+}
+
+/// The CSV header has been printed (once per run, also across re-configurations).
+static HEADER_PRINTED: AtomicBool = AtomicBool::new(false);
+
+/// Bytes the pipeline has parsed (for diagnostics).
+fn uart_bytes(pipe: &pipeline::Pipeline) -> u64 {
+    pipe.parser_stats().bytes
+}
+
+/// Ends a finite input: the held warm-up, the counters line, exit 0.
+fn finish(pipe: &mut pipeline::Pipeline, uart: &Uart0, unit_bytes: u64) -> ! {
     if let Err(e) = pipe.finish(|row| host::stdout(row.as_bytes())) {
         bank_failed(&e);
     }
     let mut line: heapless::String<400> = heapless::String::new();
     let _ = pipe.summary(&mut line, uart.overruns(), uart.stalls());
     host::stderr(format_args!(
-        "firmware: {line} stack_peak={}\n",
+        "firmware: {line} unit_bytes={unit_bytes} stack_peak={}\n",
         stack::peak()
     ));
     host::exit(true)
@@ -98,23 +371,49 @@ fn bank_failed(e: &pipeline::ConfigError) -> ! {
     host::stderr(format_args!(
         "firmware: bank configuration rejected for this capture's packet period: {e:?}\n"
     ));
-    host::exit(false)
+    fail(Status::Internal)
 }
 
-/// Real board: a live NAV440 stream (no length prefix) is processed until reset; `first` are
-/// the bytes already read while looking for a prefix.
-#[cfg(feature = "board-stm32f405")]
-fn live(uart: &mut Uart0, pipe: &mut pipeline::Pipeline, first: &[u8]) -> ! {
+/// Replay mode: `N4LP` + length, then exactly that many capture bytes (see the module doc).
+fn replay(mut uart: Uart0, pipe: &mut pipeline::Pipeline) -> ! {
+    let mut prefix = [0u8; 8];
+    read_prefix(&mut uart, &mut prefix);
+    let (magic, len) = prefix.split_at(4);
+    if magic != LENGTH_MAGIC {
+        host::stderr(format_args!(
+            "firmware: input does not start with the N4LP length prefix (got {magic:02x?}); use `cargo xtask qemu FILE`\n"
+        ));
+        fail(Status::Internal)
+    }
+    let mut remaining = u32::from_le_bytes([len[0], len[1], len[2], len[3]]) as usize;
     host::stdout(pipeline::CSV_HEADER.as_bytes());
     host::stdout(b"\n");
-    if let Err(e) = pipe.feed(first, |row| host::stdout(row.as_bytes())) {
-        bank_failed(&e);
-    }
     let mut buf = [0u8; 64];
-    loop {
-        let Ok(n) = uart.read(&mut buf);
+    while remaining > 0 {
+        let want = remaining.min(buf.len());
+        let n = uart.read(&mut buf[..want]).unwrap_or(0);
         if let Err(e) = pipe.feed(&buf[..n], |row| host::stdout(row.as_bytes())) {
             bank_failed(&e);
         }
+        remaining -= n;
+    }
+    let replayed = uart.bytes_read().saturating_sub(8);
+    finish(pipe, &uart, replayed)
+}
+
+/// Reads the length prefix byte by byte through the `embedded_hal_nb::serial::Read` side of
+/// the driver (the capture itself goes through `embedded_io::Read`), polling: 8 bytes, once.
+fn read_prefix(uart: &mut Uart0, buf: &mut [u8]) {
+    for slot in buf.iter_mut() {
+        *slot = loop {
+            match embedded_hal_nb::serial::Read::read(uart) {
+                Ok(b) => break b,
+                Err(nb::Error::WouldBlock) => cortex_m::asm::wfi(),
+                Err(nb::Error::Other(e)) => {
+                    host::stderr(format_args!("firmware: UART error: {e:?}\n"));
+                    fail(Status::Internal)
+                }
+            }
+        };
     }
 }

@@ -1,7 +1,8 @@
-//! Firmware subcommands: demo, qemu, bench, size, and the firmware part of `ci`.
+//! Firmware subcommands: demo, unit, qemu, bench, size, and the firmware part of `ci`.
 
 use crate::cargo;
 use crate::qemu::{self, Board, Output};
+use crate::unit;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Duration;
@@ -151,14 +152,14 @@ fn run_capture(
     r
 }
 
-/// The firmware's `key=value` counters line from its stderr.
+/// The `key=value` counters of the firmware's `firmware: ...` stderr lines (the boot line
+/// and the final counters line).
 fn counters(stderr: &str) -> Vec<(String, u64)> {
     stderr
         .lines()
-        .filter_map(|l| l.strip_prefix("firmware: bytes="))
+        .filter_map(|l| l.strip_prefix("firmware: "))
         .flat_map(|rest| {
-            format!("bytes={rest}")
-                .split_whitespace()
+            rest.split_whitespace()
                 .filter_map(|kv| {
                     let (k, v) = kv.split_once('=')?;
                     Some((k.to_owned(), v.parse().ok()?))
@@ -172,26 +173,166 @@ fn counter(c: &[(String, u64)], key: &str) -> Option<u64> {
     c.iter().find(|(k, _)| k == key).map(|(_, v)| *v)
 }
 
-/// `cargo xtask demo`.
+/// The `nav440` binary of the host CLI, built once (debug profile, as `NAV440_RUN`).
+fn nav440_bin() -> Result<PathBuf, String> {
+    cargo(&["build", "-q", "-p", "host-tests", "--bin", "nav440"])?;
+    let p = target_dir().join("debug").join("nav440");
+    if p.is_file() {
+        Ok(p)
+    } else {
+        Err(format!("built nav440 not found at {}", p.display()))
+    }
+}
+
+/// A running `nav440 sim`, killed when dropped.
+struct Sim {
+    child: std::process::Child,
+    addr: String,
+}
+
+impl Sim {
+    /// `nav440 sim CAPTURE --listen tcp:127.0.0.1:0 [--record RECORD] EXTRA...`; the address
+    /// is the line the simulator prints on stdout once it listens.
+    fn start(
+        nav440: &Path,
+        capture: &Path,
+        record: Option<&Path>,
+        extra: &[&str],
+    ) -> Result<Self, String> {
+        let mut args: Vec<String> = vec![
+            "sim".into(),
+            capture.display().to_string(),
+            "--listen".into(),
+            "tcp:127.0.0.1:0".into(),
+        ];
+        if let Some(r) = record {
+            args.extend(["--record".into(), r.display().to_string()]);
+        }
+        args.extend(extra.iter().map(|s| (*s).to_owned()));
+        eprintln!("+ {} {}", nav440.display(), args.join(" "));
+        let mut child = Command::new(nav440)
+            .args(&args)
+            .stdin(std::process::Stdio::null())
+            .stdout(std::process::Stdio::piped())
+            .spawn()
+            .map_err(|e| format!("cannot start {}: {e}", nav440.display()))?;
+        let mut line = String::new();
+        if let Some(out) = child.stdout.take() {
+            use std::io::BufRead as _;
+            let _ = std::io::BufReader::new(out).read_line(&mut line);
+        }
+        let Some(addr) = line.trim().strip_prefix("tcp:").map(str::to_owned) else {
+            let _ = child.kill();
+            let _ = child.wait();
+            return Err(format!(
+                "nav440 sim did not report its address (printed `{}`)",
+                line.trim()
+            ));
+        };
+        Ok(Self { child, addr })
+    }
+
+    /// Waits for the simulator to exit (it does once the connection closed), killing it
+    /// after `timeout`; its exit status.
+    fn wait(mut self, timeout: Duration) -> Result<std::process::ExitStatus, String> {
+        let start = std::time::Instant::now();
+        loop {
+            match self.child.try_wait() {
+                Ok(Some(s)) => return Ok(s),
+                Ok(None) if start.elapsed() > timeout => {
+                    let _ = self.child.kill();
+                    return Err("nav440 sim did not exit after the run (killed)".into());
+                }
+                Ok(None) => std::thread::sleep(Duration::from_millis(20)),
+                Err(e) => return Err(format!("waiting for nav440 sim: {e}")),
+            }
+        }
+    }
+}
+
+impl Drop for Sim {
+    fn drop(&mut self) {
+        if let Ok(None) = self.child.try_wait() {
+            let _ = self.child.kill();
+            let _ = self.child.wait();
+        }
+    }
+}
+
+/// Time limit of a unit run (the boot's worst case is a few seconds of time-outs; then as a
+/// replay of the same size).
+fn unit_timeout(capture_bytes: usize) -> Duration {
+    qemu::uart_timeout(capture_bytes)
+}
+
+/// Builds the firmware for `board` and runs it against the unit at `addr`.
+fn run_unit(
+    board: &Board,
+    elf: &Path,
+    addr: &str,
+    inherit_stdout: bool,
+    timeout: Duration,
+) -> Result<unit::UnitRun, String> {
+    unit::run(board, elf, addr, &work_dir()?, inherit_stdout, timeout)
+}
+
+/// `cargo xtask unit --connect tcp:HOST:PORT [--board B]`: returns the firmware's exit status.
+pub fn unit(board: Board, addr: &str) -> Result<u8, String> {
+    qemu::ensure_qemu()?;
+    let elf = build(board.target, board.features, FW_BIN)?;
+    let timeout = std::env::var("XTASK_UNIT_TIMEOUT")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .map_or(Duration::from_secs(3600), Duration::from_secs);
+    let r = run_unit(&board, &elf, addr, true, timeout)?;
+    eprint!("{}", r.stderr);
+    match r.code() {
+        Some(c) => Ok(u8::try_from(c).unwrap_or(1)),
+        None => Err(format!("QEMU ended without an exit status ({})", r.status)),
+    }
+}
+
+/// `cargo xtask demo`: the firmware against `nav440 sim` streaming the bundled capture.
 pub fn demo(board: Board, capture: Option<PathBuf>) -> Result<(), String> {
     qemu::ensure_qemu()?;
-    let elf = build(board.target, &[], FW_BIN)?;
+    let elf = build(board.target, board.features, FW_BIN)?;
     let capture_path = match capture {
         Some(p) => p,
         None => bundled_capture()?,
     };
     let capture = read_file(&capture_path)?;
+    let nav440 = nav440_bin()?;
+    let record = work_dir()?.join(format!("demo-{}-streamed.bin", board.name));
+    let sim = Sim::start(&nav440, &capture_path, Some(&record), &[])?;
     eprintln!(
-        "xtask: feeding {} ({} bytes) through UART0 of QEMU {} ({})",
+        "xtask: `nav440 sim` plays a NAV440 at {} with the samples of {} ({} bytes); the firmware on QEMU {} ({}) configures it and estimates",
+        sim.addr,
         capture_path.display(),
         capture.len(),
         board.machine,
         board.about
     );
-    let r = run_capture(&board, &elf, &capture, Output::Capture)?;
+    let r = run_unit(&board, &elf, &sim.addr, false, unit_timeout(capture.len()))?;
+    let sim_status = sim.wait(Duration::from_secs(30));
+    if r.code() != Some(0) {
+        return Err(format!(
+            "the firmware ended with status {:?}; its stderr:\n{}",
+            r.code(),
+            r.stderr
+        ));
+    }
     let csv_path = work_dir()?.join(format!("demo-{}.csv", board.name));
     std::fs::write(&csv_path, &r.stdout)
         .map_err(|e| format!("cannot write {}: {e}", csv_path.display()))?;
+    println!("== boot: the firmware configures the unit ==");
+    for l in r
+        .stderr
+        .lines()
+        .filter(|l| l.starts_with("firmware: unit configured") || l.starts_with("firmware: boot"))
+    {
+        println!("{l}");
+    }
+    println!();
     print_estimates(&r.stdout)?;
     let c = counters(&r.stderr);
     println!();
@@ -201,11 +342,19 @@ pub fn demo(board: Board, capture: Option<PathBuf>) -> Result<(), String> {
         board.machine, board.about, board.target
     );
     println!(
-        "capture                                  {}",
-        capture_path.display()
+        "unit                                     nav440 sim, samples of {} ({})",
+        capture_path.display(),
+        match sim_status {
+            Ok(s) if s.success() => "exited 0".to_owned(),
+            Ok(s) => format!("exited with {s}"),
+            Err(e) => e,
+        }
     );
     for (k, label) in [
-        ("bytes", "bytes parsed"),
+        ("unit_bytes", "bytes the unit sent (boot + stream)"),
+        ("boot_frames", "frames while configuring (counted only)"),
+        ("boot_ms", "boot time (SysTick, wall time under QEMU)"),
+        ("bytes", "bytes estimated (after the read-back)"),
         ("frames", "frames (CRC ok)"),
         ("crc_errors", "CRC errors"),
         ("skipped", "skipped bytes"),
@@ -225,11 +374,15 @@ pub fn demo(board: Board, capture: Option<PathBuf>) -> Result<(), String> {
     let secs = r.elapsed.as_secs_f64();
     println!(
         "QEMU run                                 {secs:.1} s wall, {:.1} KB/s through the emulated UART",
-        capture.len() as f64 / secs.max(1e-9) / 1e3
+        r.unit_bytes as f64 / secs.max(1e-9) / 1e3
     );
     println!(
         "full CSV                                 {}",
         csv_path.display()
+    );
+    println!(
+        "bytes streamed after configuration       {} (`nav440 estimate` on it prints the same CSV)",
+        record.display()
     );
     Ok(())
 }
@@ -407,6 +560,20 @@ pub fn bench(board: Board) -> Result<(), String> {
             "goal: whole bank < 2 % of a 168 MHz M4F at 100 Hz -> {share:.3} % estimated ({:.3} % at CPI 1): {}",
             pct(b.instr),
             if share < 2.0 { "met" } else { "NOT met (estimate)" }
+        );
+    }
+    if let Some(b) = m.iter().find(|x| x.label.starts_with("boot sequence")) {
+        println!(
+            "boot: {:.0} instructions from power-up configuration to confirmed A2 100 Hz 57600 Bd (ping, GF, SF baud, ping, SF type/rate, GF; replies at once, no waiting): about {:.2} ms of a 168 MHz M4F (estimate), once per start",
+            b.instr,
+            b.cycles() / REF_CLOCK_HZ * 1e3
+        );
+    }
+    if let Some(t) = m.iter().find(|x| x.label.starts_with("transmit")) {
+        println!(
+            "transmit: {:.1} instructions per byte through embedded_io::Write (a 12-byte SF request: {:.0})",
+            t.instr,
+            t.instr * 12.0
         );
     }
     if let Some(p) = m.iter().find(|x| x.label == "parser") {
@@ -665,6 +832,235 @@ fn rate_change_capture() -> Result<PathBuf, String> {
     Ok(out)
 }
 
+/// What a unit run in CI must end with.
+enum Expect {
+    /// Exit 0, and the CSV equals `nav440 estimate` on the simulator's record; `stderr_has`
+    /// must appear in the firmware's stderr.
+    Csv { stderr_has: &'static str },
+    /// This exit status and diagnostic (emulated mps2 boards: a failure ends the run).
+    Fails {
+        status: i32,
+        diagnostic: &'static str,
+    },
+    /// The real-board profile retries forever: within the time limit at least two attempts,
+    /// each with `diagnostic` (the run is then stopped).
+    Retries { diagnostic: &'static str },
+    /// The real-board profile re-configures a unit that reset, then finishes with exit 0.
+    Reconfigures,
+}
+
+/// One firmware run against `nav440 sim` (CI).
+struct UnitCase {
+    name: &'static str,
+    capture: PathBuf,
+    sim_args: &'static [&'static str],
+    expect: Expect,
+}
+
+/// The simulator's session limit in CI (it exits 1 if a session lasts longer).
+const SIM_TIMEOUT: &str = "120";
+
+/// Runs one case on `board`; Ok(description) or Err(what went wrong).
+fn unit_case(
+    board: &Board,
+    elf: &Path,
+    nav440: &Path,
+    case: &UnitCase,
+    host_extra: &[&str],
+) -> Result<String, String> {
+    let record = work_dir()?.join(format!("ci-unit-{}-{}.bin", board.name, case.name));
+    let mut sim_args = case.sim_args.to_vec();
+    sim_args.extend(["--timeout", SIM_TIMEOUT]);
+    let sim = Sim::start(nav440, &case.capture, Some(&record), &sim_args)?;
+    let bytes = std::fs::metadata(&case.capture).map_or(0, |m| m.len() as usize);
+    let limit = match case.expect {
+        // About 4 attempts (12 pings x 1000 ms nominal = 1.1 s of wall time each).
+        Expect::Retries { .. } => Duration::from_secs(6),
+        _ => unit_timeout(bytes),
+    };
+    let run = run_unit(board, elf, &sim.addr, false, limit);
+    let sim_status = sim.wait(Duration::from_secs(30));
+    let what = format!("{} on {}", case.name, board.name);
+    match (&case.expect, run) {
+        (Expect::Retries { diagnostic }, Err(e)) => {
+            let attempts = e
+                .lines()
+                .filter(|l| l.starts_with("firmware: boot attempt") && l.contains(diagnostic))
+                .count();
+            if attempts >= 2 {
+                Ok(format!("{what}: {attempts} boot attempts in {} s, each `{diagnostic}...`, still retrying (stopped)", limit.as_secs()))
+            } else {
+                Err(format!(
+                    "{what}: expected repeated `{diagnostic}` attempts, got:\n{e}"
+                ))
+            }
+        }
+        (_, Err(e)) => Err(format!("{what}: {e}")),
+        (Expect::Retries { .. }, Ok(r)) => Err(format!(
+            "{what}: the real-board profile ended (status {:?}) instead of retrying:\n{}",
+            r.code(),
+            r.stderr
+        )),
+        (Expect::Fails { status, diagnostic }, Ok(r)) => {
+            let line = r
+                .stderr
+                .lines()
+                .find(|l| l.starts_with("firmware: ") && l.contains(diagnostic));
+            match (r.code() == Some(*status), line) {
+                (true, Some(l)) => Ok(format!("{what}: exit status {status}, `{l}`")),
+                _ => Err(format!(
+                    "{what}: expected exit status {status} and `{diagnostic}`, got status {:?}:\n{}",
+                    r.code(),
+                    r.stderr
+                )),
+            }
+        }
+        (Expect::Reconfigures, Ok(r)) => {
+            let configured = r.stderr.matches("firmware: unit configured").count();
+            let resets = r.stderr.matches("firmware: unit reset mid-stream").count();
+            if r.code() == Some(0) && configured == 2 && resets == 1 {
+                Ok(format!(
+                    "{what}: unit reset detected, configured again, run completed (exit 0)"
+                ))
+            } else {
+                Err(format!(
+                    "{what}: expected one reset, two configurations and exit 0, got status {:?}:\n{}",
+                    r.code(),
+                    r.stderr
+                ))
+            }
+        }
+        (Expect::Csv { stderr_has }, Ok(r)) => {
+            if r.code() != Some(0) {
+                return Err(format!(
+                    "{what}: firmware exit status {:?}:\n{}",
+                    r.code(),
+                    r.stderr
+                ));
+            }
+            if !r.stderr.contains(stderr_has) {
+                return Err(format!(
+                    "{what}: `{stderr_has}` missing from:\n{}",
+                    r.stderr
+                ));
+            }
+            match sim_status {
+                Ok(s) if s.success() => {}
+                other => return Err(format!("{what}: nav440 sim ended with {other:?}")),
+            }
+            if counter(&counters(&r.stderr), "uart_overruns").unwrap_or(0) != 0 {
+                return Err(format!("{what}: UART overruns reported under QEMU"));
+            }
+            let host = host_estimate(&record, host_extra)?;
+            let lines = compare_csv(&r.stdout, &host).map_err(|d| {
+                format!("{what}: firmware CSV differs from `nav440 estimate` on the record: {d}")
+            })?;
+            Ok(format!(
+                "{what}: IDENTICAL to `nav440 estimate{}` on the {} bytes streamed after configuration ({lines} lines; the unit sent {} bytes in all)",
+                host_extra.iter().map(|a| format!(" {a}")).collect::<String>(),
+                std::fs::metadata(&record).map_or(0, |m| m.len()),
+                r.unit_bytes
+            ))
+        }
+    }
+}
+
+/// The firmware against `nav440 sim` on every emulated board and the STM32 profile: every
+/// bundled capture (CSV identical to `nav440 estimate` on what the unit streamed after
+/// configuration) and the faults, each with its diagnostic and exit status.
+fn unit_ci(captures: &[PathBuf], short: &Path) -> Result<(), String> {
+    let nav440 = nav440_bin()?;
+    let short = short.to_path_buf();
+    let mut boards: Vec<Board> = qemu::BOARDS.to_vec();
+    boards.push(qemu::STM32_BOARD);
+    for board in &boards {
+        let elf = build(board.target, board.features, FW_BIN)?;
+        let stm32 = board.features.contains(&STM32_FEATURE);
+        let host_extra: &[&str] = if board.target == "thumbv7em-none-eabihf" {
+            &[]
+        } else {
+            &["--fixed"]
+        };
+        let mut cases: Vec<UnitCase> = captures
+            .iter()
+            .map(|c| UnitCase {
+                name: "capture",
+                capture: c.clone(),
+                sim_args: &["--fast"],
+                expect: Expect::Csv {
+                    stderr_has: "unit was at 38400 Bd",
+                },
+            })
+            .collect();
+        cases.push(UnitCase {
+            name: "already-57600",
+            capture: short.clone(),
+            sim_args: &["--fast", "--baud", "57600"],
+            expect: Expect::Csv {
+                stderr_has: "found at 57600 Bd, unit was at 57600 Bd",
+            },
+        });
+        let faults: [(&'static str, &'static [&'static str], i32, &'static str); 4] = [
+            (
+                "no-answer",
+                &["--fault", "no-answer"],
+                2,
+                "no answer from the unit",
+            ),
+            (
+                "nak",
+                &["--fault", "nak-config"],
+                3,
+                "unit rejected (NAK) SF",
+            ),
+            (
+                "wrong-readback",
+                &["--fault", "wrong-readback"],
+                4,
+                "wrong read-back (GF)",
+            ),
+            (
+                "reset",
+                &["--fast", "--fault", "reset", "--reset-after", "20"],
+                5,
+                "unit reset mid-stream",
+            ),
+        ];
+        for (name, sim_args, status, diagnostic) in faults {
+            let expect = match (stm32, name) {
+                (true, "reset") => Expect::Reconfigures,
+                (true, _) => Expect::Retries { diagnostic },
+                (false, _) => Expect::Fails { status, diagnostic },
+            };
+            cases.push(UnitCase {
+                name,
+                capture: short.clone(),
+                sim_args,
+                expect,
+            });
+        }
+        for case in &cases {
+            let t = std::time::Instant::now();
+            let ok = unit_case(board, &elf, &nav440, case, host_extra)?;
+            eprintln!("xtask: UNIT OK ({:.1} s): {ok}", t.elapsed().as_secs_f64());
+        }
+    }
+    Ok(())
+}
+
+/// `cargo xtask ci-unit`: the unit runs of `ci-firmware` (QEMU required).
+pub fn ci_unit() -> Result<(), String> {
+    qemu::ensure_qemu()?;
+    let start = std::time::Instant::now();
+    let short = root().join("host-tests/data/sin5_a2_25hz_weekwrap.bin");
+    unit_ci(&data_captures(), &short)?;
+    eprintln!(
+        "xtask: firmware against nav440 sim: every case passed in {:.0} s",
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
 /// The firmware part of `cargo xtask ci`.
 pub fn ci_steps() -> Result<(), String> {
     // QEMU must be there or installable: the test command runs every test. Only an explicit
@@ -780,6 +1176,8 @@ pub fn ci_steps() -> Result<(), String> {
         Err(e) => return Err(format!("unexpected failure of the no-prefix check: {e}")),
         Ok(_) => return Err("input without the length prefix was accepted".into()),
     }
+    // The firmware against the simulated unit: boot, configure, stream, estimate, faults.
+    ci_unit()?;
     // A panic ends the run with exit status 1 and its message.
     let panic_elf = build(m4f_board.target, &[], "panic_check")?;
     match qemu::run_plain(&m4f_board, &panic_elf, &[], Duration::from_secs(60)) {

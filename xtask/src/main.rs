@@ -1,14 +1,18 @@
 //! `cargo xtask`: the project's automation (cargo-xtask convention).
 //!
 //! * `cargo xtask ci`    - everything CI checks (the README's test command; `.ci/run` calls it).
-//! * `cargo xtask demo`  - builds the firmware, runs it in QEMU fed the bundled capture through
-//!   the emulated UART, prints the estimates and a summary.
-//! * `cargo xtask qemu FILE [--board B]` - any capture through the firmware, CSV on stdout.
+//! * `cargo xtask demo`  - builds the firmware, runs it in QEMU against `nav440 sim` streaming
+//!   the bundled capture: boot -> configure -> stream -> estimate, then a summary.
+//! * `cargo xtask unit --connect tcp:HOST:PORT [--board B]` - the firmware against any unit
+//!   listening on TCP; CSV on stdout, exit status = the firmware's.
+//! * `cargo xtask qemu FILE [--board B]` - any capture replayed through the firmware (no
+//!   unit, N4LP length prefix), CSV on stdout.
 //! * `cargo xtask bench` - instruction counts on the target (QEMU `-icount`, SysTick).
 //! * `cargo xtask size`  - flash/RAM of the firmware (llvm-size) and RAM per estimator.
 
 mod firmware;
 mod qemu;
+mod unit;
 
 use clap::{Parser, Subcommand};
 use qemu::Board;
@@ -38,17 +42,35 @@ enum Cmd {
     Ci,
     /// Only the firmware part of `ci` (cross builds, QEMU runs, equivalence with the host).
     CiFirmware,
-    /// The firmware in QEMU fed the bundled capture over UART0: estimates and a summary.
+    /// Only the firmware-against-`nav440 sim` runs of `ci-firmware` (every board, captures
+    /// and faults).
+    CiUnit,
+    /// The firmware in QEMU against `nav440 sim` streaming the bundled capture: boot,
+    /// configuration, stream, estimates and a summary.
     Demo {
         /// Emulated board: an386 (Cortex-M4F, f32), an385 (Cortex-M3, fixed point),
         /// an385-v6m (thumbv6m image on the Cortex-M3 board, fixed point).
         #[arg(long, default_value = "an386", value_parser = qemu::board)]
         board: Board,
-        /// Capture to feed instead of the bundled `host-tests/data/fig5_a2_100hz.bin`.
+        /// Capture the simulated unit streams instead of the bundled
+        /// `host-tests/data/fig5_a2_100hz.bin`.
         #[arg(long, value_name = "FILE")]
         capture: Option<PathBuf>,
     },
-    /// FILE through the firmware in QEMU: CSV on stdout, counters on stderr.
+    /// The firmware in QEMU with its NAV440 UART connected to a unit listening on TCP (e.g.
+    /// `nav440 sim`): estimate CSV on stdout, diagnostics and counters on stderr; exit status
+    /// = the firmware's (0 once every byte the unit sent before closing was processed).
+    Unit {
+        /// Address of the unit, `tcp:HOST:PORT`.
+        #[arg(long, value_name = "tcp:HOST:PORT", value_parser = unit::parse_connect)]
+        connect: String,
+        /// Emulated board: an386, an385, an385-v6m (see `demo --help`) or netduinoplus2
+        /// (STM32F405, the real-board profile `board-stm32f405`).
+        #[arg(long, default_value = "an386", value_parser = qemu::unit_board)]
+        board: Board,
+    },
+    /// FILE replayed through the firmware in QEMU (no unit; N4LP length prefix): CSV on
+    /// stdout, counters on stderr.
     Qemu {
         /// NAV440 capture (raw serial bytes).
         file: PathBuf,
@@ -56,7 +78,8 @@ enum Cmd {
         #[arg(long, default_value = "an386", value_parser = qemu::board)]
         board: Board,
     },
-    /// Instructions per estimator update, bank update and parsed byte (QEMU -icount + SysTick).
+    /// Instructions per estimator update, bank update, parsed byte, transmitted byte and boot
+    /// sequence (QEMU -icount + SysTick).
     Bench {
         /// Emulated board (see `demo --help`).
         #[arg(long, default_value = "an386", value_parser = qemu::board)]
@@ -68,8 +91,18 @@ enum Cmd {
 
 fn main() -> ExitCode {
     let result = match Cli::parse().command {
+        Cmd::Unit { connect, board } => {
+            return match firmware::unit(board, &connect) {
+                Ok(code) => ExitCode::from(code),
+                Err(e) => {
+                    eprintln!("xtask: {e}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
         Cmd::Ci => ci(),
         Cmd::CiFirmware => firmware::ci_steps(),
+        Cmd::CiUnit => firmware::ci_unit(),
         Cmd::Demo { board, capture } => firmware::demo(board, capture),
         Cmd::Qemu { file, board } => firmware::qemu(board, &file),
         Cmd::Bench { board } => firmware::bench(board),

@@ -5,6 +5,14 @@
 //!   100 steps of h = 1e-4 s for a stepped law), `byte` (parser) or `call`;
 //! * `ram <label> <bytes>` - `core::mem::size_of` of each estimator's state.
 //!
+//! Also the link to the unit: `transmit` (per byte written through the UART's
+//! `embedded_io::Write`, QEMU's UART drains at once with `-serial none`) and `boot sequence`
+//! (per call of `nav440_proto::boot::boot` from a unit at its power-up configuration, S1 at
+//! 20 Hz at 38400 Bd, to A2 at 100 Hz at 57600 Bd: ping, GF, SF baud, ping, SF type/rate, GF).
+//! The boot runs over [`ScriptPort`], which hands back the unit's replies (recorded once from
+//! the `nav440_proto::unit` model, not measured) as soon as each request is flushed: the
+//! figure is the firmware's own work (driver, parser, encoding), without waiting.
+//!
 //! Each region is timed with two SysTick reads ([`Counter`]); the counter overhead (an empty
 //! region) is subtracted. Inputs are a yaw signal of the Fig. 5 kind (sine sweep in degrees)
 //! sampled at 100 Hz, after a warm-up so that steady-state code paths are measured.
@@ -18,8 +26,11 @@ use estimators::{
     advance_by_steps, Ad, Ave, BankConfig, ClosedForm, Ed, Estimator, Hold, Ilo, Kalman,
     KalmanConfig, Real, Series, YawBank,
 };
-use firmware_example::{cycles::Counter, host, Bank, BankSqrt, Num};
+use firmware_example::{cycles::Counter, host, uart::Board, Bank, BankSqrt, Num};
 use heapless::String;
+use nav440_proto::boot::{Options, Target};
+use nav440_proto::driver::IoDriver;
+use nav440_proto::unit::{Quirks, Unit, UnitFields};
 use nav440_proto::{encode_frame, ItowClock, PacketType, Parser};
 
 /// Steps per sample: h = 1e-4 s, 100 Hz samples (the paper's step).
@@ -177,6 +188,107 @@ fn bank_per_sample<S: estimators::SqrtFn<Num>>(
 fn fail(what: &str) -> ! {
     host::stderr(format_args!("bench: cannot build {what}\n"));
     host::exit(false)
+}
+
+/// Most requests of one boot sequence (without time-outs: 6).
+const SCRIPT_REPLIES: usize = 12;
+/// Bytes of one reply (reply + possible NAK).
+const REPLY_BYTES: usize = 2 * nav440_proto::MAX_FRAME;
+
+/// Replies in request order: the `k`-th flush of the port makes the `k`-th reply readable.
+struct Script {
+    replies: heapless::Vec<heapless::Vec<u8, REPLY_BYTES>, SCRIPT_REPLIES>,
+}
+
+/// A serial port for the boot bench: writes are taken whole; `flush` (the end of a request)
+/// queues the next scripted reply; reads return it. With `unit` set, the replies come from
+/// the unit model instead and are recorded into the script.
+struct ScriptPort<'s> {
+    script: &'s mut Script,
+    unit: Option<Unit>,
+    next: usize,
+    rx: heapless::Deque<u8, REPLY_BYTES>,
+    request: heapless::Vec<u8, 300>,
+}
+
+impl embedded_io::ErrorType for ScriptPort<'_> {
+    type Error = core::convert::Infallible;
+}
+
+impl embedded_io::Read for ScriptPort<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Self::Error> {
+        let mut n = 0;
+        for slot in buf.iter_mut() {
+            match self.rx.pop_front() {
+                Some(b) => {
+                    *slot = b;
+                    n += 1;
+                }
+                None => break,
+            }
+        }
+        Ok(n)
+    }
+}
+
+impl embedded_io::ReadReady for ScriptPort<'_> {
+    fn read_ready(&mut self) -> Result<bool, Self::Error> {
+        Ok(!self.rx.is_empty())
+    }
+}
+
+impl embedded_io::Write for ScriptPort<'_> {
+    fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
+        if self.unit.is_some() {
+            let _ = self.request.extend_from_slice(buf);
+        }
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> Result<(), Self::Error> {
+        if let Some(unit) = self.unit.as_mut() {
+            let mut reply = heapless::Vec::<u8, REPLY_BYTES>::new();
+            unit.receive(&self.request, |r| {
+                let _ = reply.extend_from_slice(r.frames);
+            });
+            self.request.clear();
+            let _ = self.script.replies.push(reply);
+        }
+        if let Some(reply) = self.script.replies.get(self.next) {
+            for &b in reply {
+                let _ = self.rx.push_back(b);
+            }
+        }
+        self.next += 1;
+        Ok(())
+    }
+}
+
+/// A delay that returns at once (the scripted replies never make the driver wait).
+struct NoDelay;
+
+impl embedded_hal::delay::DelayNs for NoDelay {
+    fn delay_ns(&mut self, _ns: u32) {}
+}
+
+/// Runs the boot sequence over a [`ScriptPort`]; `Ok` if it configured the unit.
+fn boot_once(script: &mut Script, unit: Option<Unit>) -> bool {
+    let port = ScriptPort {
+        script,
+        unit,
+        next: 0,
+        rx: heapless::Deque::new(),
+        request: heapless::Vec::new(),
+    };
+    let mut driver = IoDriver::new(port);
+    nav440_proto::boot::boot(
+        &mut driver,
+        &Target::DEFAULT,
+        &Options::DEFAULT,
+        &mut NoDelay,
+        |_, _| Ok(()),
+    )
+    .is_ok()
 }
 
 #[entry]
@@ -352,6 +464,42 @@ fn main() -> ! {
         "instr",
         "CRC-16 alone (baseline)",
         n.saturating_sub(overhead) as f32 / len as f32,
+        "byte",
+    );
+
+    // The link to the unit: the boot sequence and transmitting.
+    let mut script = Script {
+        replies: heapless::Vec::new(),
+    };
+    if !boot_once(
+        &mut script,
+        Some(Unit::new(UnitFields::POWER_UP, Quirks::default())),
+    ) {
+        fail("the boot sequence against the unit model");
+    }
+    let (n, ok) = c.measure(|| boot_once(black_box(&mut script), None));
+    if !ok {
+        fail("the scripted boot sequence");
+    }
+    line(
+        "instr",
+        "boot sequence (S1 38400 -> A2 100Hz 57600)",
+        n.saturating_sub(overhead) as f32,
+        "call",
+    );
+    let Some(mut board) = Board::take(38_400) else {
+        fail("the UART")
+    };
+    let request = [0x55u8; 64];
+    let (n, r) =
+        c.measure(|| embedded_io::Write::write_all(black_box(&mut board.nav), black_box(&request)));
+    if r.is_err() {
+        fail("transmit");
+    }
+    line(
+        "instr",
+        "transmit (embedded_io::Write)",
+        n.saturating_sub(overhead) as f32 / request.len() as f32,
         "byte",
     );
 

@@ -1,17 +1,21 @@
-//! Registers of the CMSDK APB UART0 of the QEMU `mps2-an385`/`mps2-an386` boards
-//! (base `0x4000_4000`, RX interrupt = IRQ 0, APB clock 25 MHz).
+//! Registers of the CMSDK APB UARTs of the QEMU `mps2-an385`/`mps2-an386` boards: UART0
+//! (base `0x4000_4000`, RX interrupt = IRQ 0) carries the NAV440 link, UART1 (base
+//! `0x4000_5000`, polled) the harness's control channel; APB clock 25 MHz.
 //!
 //! CMSDK APB UART TRM: DATA +0x0, STATE +0x4 (bit0 TX full, bit1 RX full, bit2 TX overrun,
 //! bit3 RX overrun; write 1 to clear an overrun bit), CTRL +0x8 (bit0 TX enable, bit1 RX
 //! enable, bit3 RX interrupt enable), INTSTATUS/INTCLEAR +0xC (bit1 RX), BAUDDIV +0x10.
 
 const BASE: usize = 0x4000_4000;
+/// UART1: the control channel (see [`Control`]).
+const CONTROL_BASE: usize = 0x4000_5000;
 const DATA: usize = 0x00;
 const STATE: usize = 0x04;
 const CTRL: usize = 0x08;
 const INTCLEAR: usize = 0x0C;
 const BAUDDIV: usize = 0x10;
 
+const STATE_TX_FULL: u32 = 1 << 0;
 const STATE_RX_FULL: u32 = 1 << 1;
 const STATE_RX_OVERRUN: u32 = 1 << 3;
 const CTRL_TX_EN: u32 = 1 << 0;
@@ -19,33 +23,114 @@ const CTRL_RX_EN: u32 = 1 << 1;
 const CTRL_RX_IE: u32 = 1 << 3;
 const INT_RX: u32 = 1 << 1;
 
-/// APB clock of the mps2 boards, Hz.
-const PCLK_HZ: u32 = 25_000_000;
+/// APB clock of the mps2 boards, Hz (also the core clock that SysTick counts).
+pub const PCLK_HZ: u32 = 25_000_000;
 
 /// NVIC number of the UART0 receive interrupt.
 pub const RX_IRQ: u16 = 0;
 
-/// A received byte can wait in the data register with the RX interrupt masked.
-pub const HOLD_WHEN_FULL: bool = true;
+fn read_at(base: usize, offset: usize) -> u32 {
+    // SAFETY: base is UART0 or UART1 and offset one of the registers listed above: a valid,
+    // aligned MMIO word on the mps2 boards; reading has no side effect besides the documented
+    // one (reading DATA pops the received byte), which the callers intend.
+    unsafe { core::ptr::read_volatile((base + offset) as *const u32) }
+}
+
+fn write_at(base: usize, offset: usize, value: u32) {
+    // SAFETY: as in `read_at`; the values written are those the TRM defines for the register.
+    unsafe { core::ptr::write_volatile((base + offset) as *mut u32, value) }
+}
 
 fn read_reg(offset: usize) -> u32 {
-    // SAFETY: BASE + offset is one of the UART0 registers listed above, a valid, aligned MMIO
-    // word on the mps2 boards; reading has no side effect besides the documented one (reading
-    // DATA pops the received byte), which the callers intend.
-    unsafe { core::ptr::read_volatile((BASE + offset) as *const u32) }
+    read_at(BASE, offset)
 }
 
 fn write_reg(offset: usize, value: u32) {
-    // SAFETY: as in `read_reg`; the values written are those the TRM defines for the register.
-    unsafe { core::ptr::write_volatile((BASE + offset) as *mut u32, value) }
+    write_at(BASE, offset, value)
 }
 
-/// Sets the baud divider, clears stale flags, enables TX, RX and the RX interrupt.
-pub fn init(baud: u32) {
-    write_reg(BAUDDIV, (PCLK_HZ / baud.max(1)).max(16));
+/// Baud divider for `baud` (the model ignores it; a real CMSDK UART needs at least 16).
+fn bauddiv(baud: u32) -> u32 {
+    (PCLK_HZ / baud.max(1)).max(16)
+}
+
+/// The board's UARTs after [`init`]: the NAV440 UART's transmit side and the control channel.
+pub struct Parts {
+    /// Transmit side of UART0.
+    pub tx: Tx,
+    /// UART1, polled.
+    pub control: Control,
+    /// Core clock (SysTick's clock source), Hz.
+    pub core_clock_hz: u32,
+}
+
+/// Sets UART0's baud divider, clears stale flags, enables TX, RX and the RX interrupt (in the
+/// UART; the NVIC is the caller's business); enables UART1's receiver for the control channel.
+/// `None` if called twice.
+pub fn init(baud: u32) -> Option<Parts> {
+    static TAKEN: critical_section::Mutex<core::cell::Cell<bool>> =
+        critical_section::Mutex::new(core::cell::Cell::new(false));
+    if critical_section::with(|cs| TAKEN.borrow(cs).replace(true)) {
+        return None;
+    }
+    write_reg(BAUDDIV, bauddiv(baud));
     write_reg(STATE, STATE_RX_OVERRUN);
     write_reg(INTCLEAR, INT_RX);
     write_reg(CTRL, CTRL_TX_EN | CTRL_RX_EN | CTRL_RX_IE);
+    write_at(CONTROL_BASE, BAUDDIV, bauddiv(115_200));
+    write_at(CONTROL_BASE, CTRL, CTRL_RX_EN);
+    Some(Parts {
+        tx: Tx { _private: () },
+        control: Control { _private: () },
+        core_clock_hz: PCLK_HZ,
+    })
+}
+
+/// Transmit side of UART0 (one-byte holding register).
+pub struct Tx {
+    _private: (),
+}
+
+impl Tx {
+    /// Puts `byte` into the transmit register if it is free; `false` if it is still full.
+    pub fn try_write(&mut self, byte: u8) -> bool {
+        if read_reg(STATE) & STATE_TX_FULL != 0 {
+            return false;
+        }
+        write_reg(DATA, u32::from(byte));
+        true
+    }
+
+    /// The transmit register is empty (the CMSDK UART has no separate shift-register flag).
+    pub fn is_idle(&self) -> bool {
+        read_reg(STATE) & STATE_TX_FULL == 0
+    }
+
+    /// Sets the baud divider for `baud` Bd (QEMU's model ignores the rate; the API is the
+    /// STM32 backend's). Never fails here.
+    pub fn set_baud(&mut self, baud: u32) -> Result<(), super::BaudError> {
+        if baud == 0 {
+            return Err(super::BaudError { baud });
+        }
+        write_reg(BAUDDIV, bauddiv(baud));
+        Ok(())
+    }
+}
+
+/// UART1, the control channel from the QEMU harness, read by polling.
+pub struct Control {
+    _private: (),
+}
+
+impl Control {
+    /// One received byte, if any.
+    pub fn try_read(&mut self) -> Option<u8> {
+        if read_at(CONTROL_BASE, STATE) & STATE_RX_FULL != 0 {
+            Some((read_at(CONTROL_BASE, DATA) & 0xFF) as u8)
+        } else {
+            None
+        }
+    }
 }
 
 /// A received byte waits in the data register.
@@ -53,9 +138,13 @@ pub fn rx_full() -> bool {
     read_reg(STATE) & STATE_RX_FULL != 0
 }
 
-/// Pops the received byte.
-pub fn read_data() -> u8 {
-    (read_reg(DATA) & 0xFF) as u8
+/// Pops the received byte, if any (never `Lost`: the overrun flag is read by [`take_overrun`]).
+pub fn poll_rx() -> super::RxPoll {
+    if rx_full() {
+        super::RxPoll::Byte((read_reg(DATA) & 0xFF) as u8)
+    } else {
+        super::RxPoll::Empty
+    }
 }
 
 /// True (once) if the hardware flagged an RX overrun since the last call; clears the flag.
@@ -73,15 +162,12 @@ pub fn clear_rx_interrupt() {
     write_reg(INTCLEAR, INT_RX);
 }
 
-/// Unmasks (`true`) or masks the RX interrupt in the UART.
-pub fn set_rx_interrupt(enabled: bool) {
-    let ctrl = read_reg(CTRL);
-    write_reg(
-        CTRL,
-        if enabled {
-            ctrl | CTRL_RX_IE
-        } else {
-            ctrl & !CTRL_RX_IE
-        },
-    );
+/// Masks the RX interrupt in the UART (the byte waits in the data register).
+pub fn pause_rx() {
+    write_reg(CTRL, read_reg(CTRL) & !CTRL_RX_IE);
+}
+
+/// Unmasks the RX interrupt in the UART.
+pub fn resume_rx() {
+    write_reg(CTRL, read_reg(CTRL) | CTRL_RX_IE);
 }

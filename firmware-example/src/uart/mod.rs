@@ -1,22 +1,24 @@
-//! Interrupt-driven UART receive shared by the boards; the register access lives in
-//! [`hw`] (CMSDK APB UART0 of the QEMU `mps2-an385`/`mps2-an386` boards by default,
-//! STM32F4 USART1 with the `board-stm32f405` feature).
+//! The NAV440 UART shared by the boards: interrupt-driven receive, polled transmit, a
+//! run-time baud change, and the harness's control channel. The hardware access lives in
+//! [`hw`] (CMSDK APB UART0/UART1 of the QEMU `mps2-an385`/`mps2-an386` boards by default,
+//! STM32F4 USART1/USART2 through `stm32f4xx-hal` with the `board-stm32f405` feature).
 //!
-//! The RX interrupt moves bytes from the UART's one-byte data register into a `heapless`
-//! SPSC queue (the interrupt is the single producer, [`Uart0`] the single consumer). When the
-//! queue is full:
-//! * CMSDK UART ([`hw::HOLD_WHEN_FULL`]): the interrupt handler stops taking bytes and masks
-//!   the RX interrupt; the consumer unmasks it once it has made room (back-pressure). The byte
-//!   waits in the data register meanwhile. QEMU's emulated line then simply waits (lossless);
-//!   on real hardware a following byte sets the UART's RX-overrun flag, which is counted.
-//! * STM32 USART: the byte is read and dropped, and counted as an overrun (a real USART would
-//!   overrun anyway; QEMU's model keeps its interrupt line high while RXNE is set even with
-//!   RXNEIE masked, so holding the byte would livelock there).
+//! [`Uart0`] implements `embedded_io::{Read, ReadReady, Write, WriteReady}` (0.7) and
+//! `embedded_hal_nb::serial::{Read, Write}`; [`Uart0::set_baud`] changes the line rate
+//! (the CMSDK model ignores the rate but keeps the API).
+//!
+//! The RX interrupt moves bytes from the UART's data register into a `heapless` SPSC queue
+//! (the interrupt is the single producer, [`Uart0`] the single consumer). When the queue is
+//! full the interrupt handler leaves the byte in the data register and masks the receive
+//! interrupt (`hw::pause_rx`: in the UART on CMSDK, in the NVIC on the STM32, whose USART
+//! model keeps its line asserted while a byte waits, so masking RXNEIE there livelocked); the
+//! consumer unmasks it once it has made room and takes the waiting byte itself
+//! (back-pressure). QEMU's emulated lines then simply wait (lossless); on real hardware a
+//! following byte sets the UART's overrun flag, which is counted.
 //!
 //! Every lost byte is counted in [`Uart0::overruns`]: a loss is never silent.
 
 use core::cell::RefCell;
-use core::convert::Infallible;
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use cortex_m::interrupt::InterruptNumber;
 use critical_section::{CriticalSection, Mutex};
@@ -29,19 +31,79 @@ pub mod hw;
 #[path = "stm32f4.rs"]
 pub mod hw;
 
+pub use hw::Control;
+
 /// NVIC interrupt number of the receive interrupt.
 pub const RX_IRQ: u16 = hw::RX_IRQ;
+
+/// What one poll of the receive data register gave.
+pub enum RxPoll {
+    /// Nothing received.
+    Empty,
+    /// One byte.
+    Byte(u8),
+    /// A byte was lost to a line error (overrun, framing, noise, parity).
+    Lost,
+}
+
+/// The UART cannot run at this rate (with the board's clocks).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BaudError {
+    /// The rejected rate, Bd.
+    pub baud: u32,
+}
+
+/// Error of the [`Uart0`] traits: only a baud change can fail (reads and writes cannot).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Error {
+    /// See [`BaudError`].
+    Baud(BaudError),
+}
+
+impl From<BaudError> for Error {
+    fn from(e: BaudError) -> Self {
+        Error::Baud(e)
+    }
+}
+
+impl core::fmt::Display for Error {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Error::Baud(e) => e.fmt(f),
+        }
+    }
+}
+
+impl core::error::Error for Error {}
+
+impl embedded_io::Error for Error {
+    fn kind(&self) -> embedded_io::ErrorKind {
+        embedded_io::ErrorKind::InvalidInput
+    }
+}
+
+impl embedded_hal_nb::serial::Error for Error {
+    fn kind(&self) -> embedded_hal_nb::serial::ErrorKind {
+        embedded_hal_nb::serial::ErrorKind::Other
+    }
+}
+
+impl core::fmt::Display for BaudError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "the UART cannot run at {} Bd", self.baud)
+    }
+}
 
 /// Capacity of the receive queue in bytes (the queue holds `N - 1` of its `N` slots).
 pub const RX_QUEUE_BYTES: usize = 512 - 1;
 
-/// Producer end of the receive queue, owned by the RX interrupt once [`Uart0::take`] ran.
+/// Producer end of the receive queue, owned by the RX interrupt once [`Board::take`] ran.
 static PRODUCER: Mutex<RefCell<Option<Producer<'static, u8>>>> = Mutex::new(RefCell::new(None));
-/// Bytes lost: hardware RX-overrun events plus bytes dropped on a full queue.
+/// Bytes lost: RX line errors (overrun, framing, noise, parity) flagged by the hardware.
 static OVERRUNS: AtomicU32 = AtomicU32::new(0);
 /// Times the interrupt stopped on a full queue (back-pressure, no loss).
 static STALLS: AtomicU32 = AtomicU32::new(0);
-/// The RX interrupt is masked because the queue was full.
+/// The RX interrupt is masked in the NVIC because the queue was full.
 static PAUSED: AtomicBool = AtomicBool::new(false);
 
 /// Single-core counter increment that also works on `thumbv6m` (no atomic read-modify-write).
@@ -52,8 +114,9 @@ fn bump(counter: &AtomicU32) {
     );
 }
 
+/// The receive interrupt's NVIC line.
 #[derive(Clone, Copy)]
-struct Irq(u16);
+pub struct Irq(pub u16);
 
 // SAFETY: `number` returns the board's UART interrupt number (`hw::RX_IRQ`), a valid
 // interrupt of its NVIC.
@@ -64,7 +127,7 @@ unsafe impl InterruptNumber for Irq {
 }
 
 /// Moves received bytes from the data register into the queue until the register is empty;
-/// on a full queue holds the byte and masks the RX interrupt, or drops and counts it (see the
+/// on a full queue holds the byte and masks the RX interrupt in the NVIC (see the
 /// module doc). Runs in the interrupt or in a critical section, so it never races itself.
 fn service_rx(cs: CriticalSection<'_>) {
     if hw::take_overrun() {
@@ -74,22 +137,29 @@ fn service_rx(cs: CriticalSection<'_>) {
     let Some(producer) = producer.as_mut() else {
         return;
     };
-    while hw::rx_full() {
+    loop {
         if !producer.ready() {
-            if hw::HOLD_WHEN_FULL {
-                hw::set_rx_interrupt(false);
+            // Queue full: never read the data register now (a byte arriving between a check
+            // and the read would have nowhere to go). Hold it and pause if one waits; if none
+            // waits yet, the next one raises the interrupt again and lands here.
+            if hw::rx_full() {
+                hw::pause_rx();
                 PAUSED.store(true, Ordering::Release);
                 bump(&STALLS);
-                return;
             }
-            // This UART cannot hold the byte with its interrupt masked: drop it, counted.
-            let _ = hw::read_data();
-            bump(&OVERRUNS);
-            continue;
+            return;
         }
-        let byte = hw::read_data();
-        // Cannot fail: `ready()` was checked just above and only this code enqueues.
-        let _ = producer.enqueue(byte);
+        match hw::poll_rx() {
+            RxPoll::Empty => return,
+            RxPoll::Lost => bump(&OVERRUNS),
+            RxPoll::Byte(byte) => {
+                // Cannot fail: the queue had room (checked above) and only this code enqueues;
+                // counted as lost all the same, should it ever.
+                if producer.enqueue(byte).is_err() {
+                    bump(&OVERRUNS);
+                }
+            }
+        }
     }
 }
 
@@ -99,29 +169,80 @@ pub fn on_rx_interrupt() {
     critical_section::with(service_rx);
 }
 
-/// The board's NAV440 UART with interrupt-driven receive. Created once by [`Uart0::take`].
-pub struct Uart0 {
-    rx: Consumer<'static, u8>,
+/// The board's UARTs, from [`Board::take`].
+pub struct Board {
+    /// The NAV440 link.
+    pub nav: Uart0,
+    /// The harness's control channel (UART1 on mps2, USART2 on the STM32 profile), polled.
+    pub control: Control,
+    /// Core clock, Hz (from the HAL's frozen clocks on the STM32 profile).
+    pub core_clock_hz: u32,
 }
 
-impl Uart0 {
-    /// Configures the board's UART for `baud` Bd 8N1 (QEMU ignores the rate), enables TX,
-    /// RX and the RX interrupt, and unmasks it in the NVIC. `None` if called a second time.
+impl Board {
+    /// Sets up the board's clocks and UARTs: the NAV440 UART at `baud` Bd 8N1 with TX, RX and
+    /// the RX interrupt enabled and unmasked in the NVIC, and the control channel. This is the
+    /// first interrupt the firmware enables: paint the stack before. `None` if called twice.
     pub fn take(baud: u32) -> Option<Self> {
         let queue: &'static mut Queue<u8, { RX_QUEUE_BYTES + 1 }> =
             cortex_m::singleton!(: Queue<u8, { RX_QUEUE_BYTES + 1 }> = Queue::new())?;
         let (producer, consumer) = queue.split();
         critical_section::with(|cs| PRODUCER.borrow(cs).replace(Some(producer)));
-        hw::init(baud);
+        let parts = hw::init(baud)?;
         // SAFETY: the handler for this IRQ only touches PRODUCER (behind a critical section),
         // the atomics above and the UART's registers, so unmasking it cannot break a critical
         // section of the caller.
         unsafe { cortex_m::peripheral::NVIC::unmask(Irq(RX_IRQ)) };
-        Some(Self { rx: consumer })
+        Some(Self {
+            nav: Uart0 {
+                rx: consumer,
+                tx: parts.tx,
+                received: 0,
+                baud,
+            },
+            control: parts.control,
+            core_clock_hz: parts.core_clock_hz,
+        })
+    }
+}
+
+/// The board's NAV440 UART: interrupt-driven receive, polled transmit. From [`Board::take`].
+pub struct Uart0 {
+    rx: Consumer<'static, u8>,
+    tx: hw::Tx,
+    /// Bytes handed to readers since start.
+    received: u64,
+    /// Line rate in force, Bd.
+    baud: u32,
+}
+
+impl Uart0 {
+    /// Bytes handed to readers (through any read trait) since start.
+    pub fn bytes_read(&self) -> u64 {
+        self.received
     }
 
-    /// Bytes lost since start: RX-overrun events flagged by the UART hardware plus bytes
-    /// dropped on a full queue (STM32 backend). 0 in the QEMU mps2 runs.
+    /// Line rate in force, Bd.
+    pub fn baud(&self) -> u32 {
+        self.baud
+    }
+
+    /// Changes the line rate to `baud` Bd 8N1 after the byte in flight has been sent. Bytes
+    /// already queued are kept. The CMSDK model ignores the rate (the call still succeeds).
+    pub fn set_baud(&mut self, baud: u32) -> Result<(), BaudError> {
+        self.tx.set_baud(baud)?;
+        self.baud = baud;
+        Ok(())
+    }
+
+    /// Writes one byte, spinning while the transmit register is full.
+    fn write_byte(&mut self, byte: u8) {
+        while !self.tx.try_write(byte) {
+            core::hint::spin_loop();
+        }
+    }
+
+    /// Bytes lost since start: RX line errors flagged by the UART hardware. 0 under QEMU.
     pub fn overruns(&self) -> u32 {
         OVERRUNS.load(Ordering::Relaxed)
     }
@@ -143,10 +264,11 @@ impl Uart0 {
                 None => break,
             }
         }
+        self.received += n as u64;
         if n > 0 && PAUSED.load(Ordering::Acquire) {
             critical_section::with(|cs| {
                 PAUSED.store(false, Ordering::Release);
-                hw::set_rx_interrupt(true);
+                hw::resume_rx();
                 // The byte left in the data register raised no new interrupt: take it now.
                 service_rx(cs);
             });
@@ -168,12 +290,12 @@ impl Uart0 {
 }
 
 impl embedded_io::ErrorType for Uart0 {
-    type Error = Infallible;
+    type Error = Error;
 }
 
 impl embedded_io::Read for Uart0 {
     /// Blocks (in `wfi`) until at least one byte is available, then returns what is queued.
-    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Infallible> {
+    fn read(&mut self, buf: &mut [u8]) -> Result<usize, Error> {
         if buf.is_empty() {
             return Ok(0);
         }
@@ -187,13 +309,74 @@ impl embedded_io::Read for Uart0 {
     }
 }
 
+impl embedded_io::ReadReady for Uart0 {
+    /// A byte is queued (a `read` would not block).
+    fn read_ready(&mut self) -> Result<bool, Error> {
+        Ok(self.rx.ready())
+    }
+}
+
+impl embedded_io::Write for Uart0 {
+    /// Blocks until the first byte is in the transmit register, then writes as many more as
+    /// the register takes without waiting. Returns the count (0 only for an empty `buf`).
+    fn write(&mut self, buf: &[u8]) -> Result<usize, Error> {
+        let Some((&first, rest)) = buf.split_first() else {
+            return Ok(0);
+        };
+        self.write_byte(first);
+        let mut n = 1;
+        for &b in rest {
+            if !self.tx.try_write(b) {
+                break;
+            }
+            n += 1;
+        }
+        Ok(n)
+    }
+
+    /// Waits until the transmitter is idle.
+    fn flush(&mut self) -> Result<(), Error> {
+        while !self.tx.is_idle() {
+            core::hint::spin_loop();
+        }
+        Ok(())
+    }
+}
+
+impl embedded_io::WriteReady for Uart0 {
+    /// The transmit register can take a byte.
+    fn write_ready(&mut self) -> Result<bool, Error> {
+        Ok(self.tx.is_idle())
+    }
+}
+
 impl embedded_hal_nb::serial::ErrorType for Uart0 {
-    type Error = Infallible;
+    type Error = Error;
+}
+
+impl embedded_hal_nb::serial::Write<u8> for Uart0 {
+    /// Puts the byte into the transmit register, or `WouldBlock` while it is full.
+    fn write(&mut self, byte: u8) -> nb::Result<(), Error> {
+        if self.tx.try_write(byte) {
+            Ok(())
+        } else {
+            Err(nb::Error::WouldBlock)
+        }
+    }
+
+    /// `WouldBlock` until the transmitter is idle.
+    fn flush(&mut self) -> nb::Result<(), Error> {
+        if self.tx.is_idle() {
+            Ok(())
+        } else {
+            Err(nb::Error::WouldBlock)
+        }
+    }
 }
 
 impl embedded_hal_nb::serial::Read<u8> for Uart0 {
     /// One byte from the queue, or `WouldBlock` when it is empty.
-    fn read(&mut self) -> nb::Result<u8, Infallible> {
+    fn read(&mut self) -> nb::Result<u8, Error> {
         let mut b = [0u8; 1];
         if self.drain(&mut b) == 1 {
             Ok(b[0])

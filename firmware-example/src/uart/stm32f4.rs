@@ -1,95 +1,193 @@
-//! Registers of USART1 of an STM32F405/F407 (`board-stm32f405` profile): RX on PA10, TX on
-//! PA9 (alternate function 7), interrupt = IRQ 37, clocked from APB2.
+//! STM32F405/F407 (`board-stm32f405` profile) on `stm32f4xx-hal`: clocks, pins and USARTs
+//! are set up by the HAL, not by register constants of this crate.
 //!
-//! RM0090: RCC_AHB1ENR (0x4002_3830) bit0 GPIOAEN, RCC_APB2ENR (0x4002_3844) bit4 USART1EN;
-//! GPIOA (0x4002_0000) MODER +0x00 (2 bits/pin, 0b10 = alternate), AFRH +0x24 (4 bits/pin
-//! from pin 8); USART1 (0x4001_1000) SR +0x00 (bit3 ORE, bit5 RXNE), DR +0x04, BRR +0x08,
-//! CR1 +0x0C (bit13 UE, bit5 RXNEIE, bit3 TE, bit2 RE). The clock tree is the reset one
-//! (16 MHz HSI, APB2 = 16 MHz); a board that switches to the PLL (168 MHz, APB2 84 MHz)
-//! changes [`PCLK2_HZ`].
+//! * Clocks: `rcc::Config::hsi()`, the internal 16 MHz RC oscillator, no PLL: `freeze` then
+//!   waits on nothing (QEMU 7.2's `netduinoplus2` leaves RCC unimplemented, so a wait for
+//!   HSERDY/PLLRDY would never end there), and a real board runs it as well (HSI is +-1 %,
+//!   inside a UART's tolerance at 57600 Bd). The USART baud divider and SysTick's rate come
+//!   from the HAL's frozen `Clocks`.
+//! * NAV440 link: USART1, TX PA9, RX PA10 (AF7), interrupt = IRQ 37; receive is interrupt
+//!   driven (the HAL's `Rx` lives in a `critical_section::Mutex` that the ISR reads from).
+//! * Control channel (test harness only): USART2, TX PA2, RX PA3, polled.
+//!
+//! The run-time baud change rebuilds the USART through the HAL (`Serial::release`, then
+//! `Serial::new` with the new rate) inside a critical section.
 
-const RCC_AHB1ENR: usize = 0x4002_3830;
-const RCC_APB2ENR: usize = 0x4002_3844;
-const GPIOA_MODER: usize = 0x4002_0000;
-const GPIOA_AFRH: usize = 0x4002_0024;
-const USART1: usize = 0x4001_1000;
-const SR: usize = USART1;
-const DR: usize = USART1 + 0x04;
-const BRR: usize = USART1 + 0x08;
-const CR1: usize = USART1 + 0x0C;
+use core::cell::RefCell;
+use critical_section::Mutex;
+use stm32f4xx_hal::{
+    pac,
+    prelude::*,
+    rcc::{Config as RccConfig, Rcc},
+    serial::{Config, Rx, RxISR, RxListen, Serial, Tx as HalTx},
+};
 
-const SR_ORE: u32 = 1 << 3;
-const SR_RXNE: u32 = 1 << 5;
-const CR1_UE: u32 = 1 << 13;
-const CR1_RXNEIE: u32 = 1 << 5;
-const CR1_TE: u32 = 1 << 3;
-const CR1_RE: u32 = 1 << 2;
+type Nav = pac::USART1;
 
-/// APB2 clock after reset (HSI), Hz.
-pub const PCLK2_HZ: u32 = 16_000_000;
+/// The HAL's receive half of USART1, read by the RX interrupt.
+static RX: Mutex<RefCell<Option<Rx<Nav>>>> = Mutex::new(RefCell::new(None));
 
 /// NVIC number of the USART1 interrupt.
 pub const RX_IRQ: u16 = 37;
 
-/// QEMU's USART model keeps the interrupt asserted while RXNE is set, even with RXNEIE masked:
-/// the driver drops (and counts) bytes on a full queue instead of holding them.
-pub const HOLD_WHEN_FULL: bool = false;
+/// Baud rate of the control channel (the model ignores it).
+const CONTROL_BAUD: u32 = 115_200;
 
-fn read_reg(addr: usize) -> u32 {
-    // SAFETY: `addr` is one of the RCC/GPIOA/USART1 registers listed above, valid aligned
-    // MMIO words on STM32F405/F407; reading DR pops the received byte, which callers intend.
-    unsafe { core::ptr::read_volatile(addr as *const u32) }
+/// The board's UARTs after [`init`].
+pub struct Parts {
+    /// Transmit side of USART1 (and what a baud change needs).
+    pub tx: Tx,
+    /// USART2, polled.
+    pub control: Control,
+    /// Core clock (HCLK, SysTick's clock source) from the HAL's `Clocks`, Hz.
+    pub core_clock_hz: u32,
 }
 
-fn write_reg(addr: usize, value: u32) {
-    // SAFETY: as in `read_reg`; values follow RM0090 for these registers.
-    unsafe { core::ptr::write_volatile(addr as *mut u32, value) }
+/// Freezes the clocks (HSI, see the module doc), sets up USART1 for `baud` Bd 8N1 with its
+/// RXNE interrupt enabled in the USART (the NVIC is the caller's business) and USART2 for the
+/// control channel. `None` if the peripherals were already taken or a USART rejects its
+/// configuration.
+pub fn init(baud: u32) -> Option<Parts> {
+    let dp = pac::Peripherals::take()?;
+    let mut rcc = dp.RCC.freeze(RccConfig::hsi());
+    let gpioa = dp.GPIOA.split(&mut rcc);
+    let nav: Serial<Nav> = Serial::new(
+        dp.USART1,
+        (gpioa.pa9, gpioa.pa10),
+        Config::default().baudrate(baud.bps()),
+        &mut rcc,
+    )
+    .ok()?;
+    let (tx, mut rx) = nav.split();
+    rx.listen();
+    critical_section::with(|cs| RX.borrow(cs).replace(Some(rx)));
+    let control: Serial<pac::USART2> = Serial::new(
+        dp.USART2,
+        (gpioa.pa2, gpioa.pa3),
+        Config::default().baudrate(CONTROL_BAUD.bps()),
+        &mut rcc,
+    )
+    .ok()?;
+    let core_clock_hz = rcc.clocks.hclk().raw();
+    Some(Parts {
+        tx: Tx { tx: Some(tx), rcc },
+        control: Control { serial: control },
+        core_clock_hz,
+    })
 }
 
-fn modify(addr: usize, clear: u32, set: u32) {
-    write_reg(addr, (read_reg(addr) & !clear) | set);
+/// Transmit side of USART1, plus the HAL's RCC handle for a baud change.
+pub struct Tx {
+    /// `None` only inside [`Tx::set_baud`].
+    tx: Option<HalTx<Nav>>,
+    rcc: Rcc,
 }
 
-/// Clocks GPIOA and USART1, routes PA9/PA10 to USART1, sets `baud` 8N1, enables RX interrupt.
-pub fn init(baud: u32) {
-    modify(RCC_AHB1ENR, 0, 1 << 0);
-    modify(RCC_APB2ENR, 0, 1 << 4);
-    // PA9, PA10: alternate function mode (0b10), AF7.
-    modify(
-        GPIOA_MODER,
-        (0b11 << 18) | (0b11 << 20),
-        (0b10 << 18) | (0b10 << 20),
-    );
-    modify(GPIOA_AFRH, (0xF << 4) | (0xF << 8), (7 << 4) | (7 << 8));
-    // Oversampling by 16: BRR = f_pclk / baud (mantissa.fraction in 12.4).
-    write_reg(BRR, (PCLK2_HZ + baud.max(1) / 2) / baud.max(1));
-    write_reg(CR1, CR1_UE | CR1_TE | CR1_RE | CR1_RXNEIE);
+impl Tx {
+    /// Puts `byte` into the data register if TXE is set; `false` if it is still full.
+    pub fn try_write(&mut self, byte: u8) -> bool {
+        match self.tx.as_mut() {
+            Some(tx) => embedded_hal_nb::serial::Write::write(tx, byte).is_ok(),
+            None => false,
+        }
+    }
+
+    /// The last byte has left the shift register (TC).
+    pub fn is_idle(&self) -> bool {
+        // `flush` of the HAL's Tx only reads SR; it needs `&mut` by the trait's signature.
+        let p = pac::USART1::ptr();
+        // SAFETY: a read of USART1's SR, which has no side effect (TC is cleared only by a
+        // following DR write); the HAL's `Tx` owns the peripheral but reads SR the same way.
+        unsafe { (*p).sr().read().tc().bit_is_set() }
+    }
+
+    /// Switches USART1 to `baud` Bd: waits for the byte in flight, then rebuilds the USART
+    /// through the HAL with interrupts masked. Fails (and leaves the rate unchanged) for a
+    /// rate the APB2 clock cannot produce with 16x oversampling.
+    pub fn set_baud(&mut self, baud: u32) -> Result<(), super::BaudError> {
+        let err = super::BaudError { baud };
+        let pclk2 = self.rcc.clocks.pclk2().raw();
+        if baud == 0 || baud > pclk2 / 16 {
+            return Err(err);
+        }
+        while !self.is_idle() {}
+        critical_section::with(|cs| {
+            let rx = RX.borrow(cs).take().ok_or(err)?;
+            let tx = self.tx.take().ok_or(err)?;
+            let (usart, (tx_pin, rx_pin)) = rx.join(tx).release();
+            let (Some(tx_pin), Some(rx_pin)) = (tx_pin, rx_pin) else {
+                return Err(err);
+            };
+            let serial: Serial<Nav> = Serial::new(
+                usart,
+                (tx_pin, rx_pin),
+                Config::default().baudrate(baud.bps()),
+                &mut self.rcc,
+            )
+            .map_err(|_| err)?;
+            let (tx, mut rx) = serial.split();
+            rx.listen();
+            RX.borrow(cs).replace(Some(rx));
+            self.tx = Some(tx);
+            Ok(())
+        })
+    }
+}
+
+/// USART2, the control channel from the QEMU harness, read by polling.
+pub struct Control {
+    serial: Serial<pac::USART2>,
+}
+
+impl Control {
+    /// One received byte, if any (a line error drops the byte).
+    pub fn try_read(&mut self) -> Option<u8> {
+        embedded_hal_nb::serial::Read::read(&mut self.serial).ok()
+    }
 }
 
 /// A received byte waits in DR.
 pub fn rx_full() -> bool {
-    read_reg(SR) & SR_RXNE != 0
+    critical_section::with(|cs| {
+        RX.borrow_ref(cs)
+            .as_ref()
+            .is_some_and(RxISR::is_rx_not_empty)
+    })
 }
 
-/// Pops the received byte (also clears ORE after an SR read).
-pub fn read_data() -> u8 {
-    (read_reg(DR) & 0xFF) as u8
+/// Pops the received byte through the HAL; a line error (overrun, framing, noise, parity)
+/// has already cost the byte: `Lost`.
+pub fn poll_rx() -> super::RxPoll {
+    critical_section::with(|cs| {
+        let mut rx = RX.borrow_ref_mut(cs);
+        let Some(rx) = rx.as_mut() else {
+            return super::RxPoll::Empty;
+        };
+        match embedded_hal_nb::serial::Read::read(rx) {
+            Ok(b) => super::RxPoll::Byte(b),
+            Err(nb::Error::WouldBlock) => super::RxPoll::Empty,
+            Err(nb::Error::Other(_)) => super::RxPoll::Lost,
+        }
+    })
 }
 
-/// True if the hardware flagged an overrun (ORE). The flag clears with the next DR read
-/// (SR read followed by DR read), which the caller's receive loop performs.
+/// Overruns are reported by [`poll_rx`] on this backend.
 pub fn take_overrun() -> bool {
-    read_reg(SR) & SR_ORE != 0
+    false
 }
 
 /// RXNE clears when DR is read: nothing to acknowledge.
 pub fn clear_rx_interrupt() {}
 
-/// Unmasks (`true`) or masks the RXNE interrupt.
-pub fn set_rx_interrupt(enabled: bool) {
-    if enabled {
-        modify(CR1, 0, CR1_RXNEIE);
-    } else {
-        modify(CR1, CR1_RXNEIE, 0);
-    }
+/// Masks the USART1 line in the NVIC (not RXNEIE: QEMU's USART model keeps its line asserted
+/// while RXNE is set, which livelocks an RXNEIE mask).
+pub fn pause_rx() {
+    cortex_m::peripheral::NVIC::mask(super::Irq(RX_IRQ));
+}
+
+/// Unmasks the USART1 line in the NVIC.
+pub fn resume_rx() {
+    // SAFETY: the handler for this IRQ only touches the receive queue's producer (behind a
+    // critical section), atomics and USART1, so unmasking it breaks no critical section.
+    unsafe { cortex_m::peripheral::NVIC::unmask(super::Irq(RX_IRQ)) };
 }
