@@ -732,9 +732,8 @@ struct StepState {
     gap_us: u64,
     /// Restarts at such gaps.
     gaps: u32,
-    /// Unwrapping offset (as [`unwrap_deg`]) and the previous wrapped yaw.
-    offset: f64,
-    prev_wrapped: Option<f64>,
+    /// Unwrapping (the rule of [`unwrap_deg`]).
+    unwrap: DegUnwrapper,
     /// The previous sample's time (us) and unwrapped yaw (deg).
     prev: Option<(u64, f32)>,
 }
@@ -829,8 +828,7 @@ impl Estimation {
                 h_us: (f64::from(self.opts.step_s) * 1e6).round().max(1.0) as u64,
                 gap_us,
                 gaps: 0,
-                offset: 0.0,
-                prev_wrapped: None,
+                unwrap: DegUnwrapper::default(),
                 prev: None,
             })
         } else {
@@ -862,13 +860,7 @@ impl Estimation {
                 r.bank.update(s.t_us, y)
             }
             Some(st) => {
-                // Unwrap as `unwrap_deg` does.
-                let w = f64::from(s.yaw_deg);
-                if let Some(p) = st.prev_wrapped {
-                    st.offset -= 360.0 * ((w - p) / 360.0).round();
-                }
-                st.prev_wrapped = Some(w);
-                let y = (w + st.offset) as f32;
+                let y = st.unwrap.push(s.yaw_deg);
                 let prev = st.prev.replace((s.t_us, y));
                 match prev {
                     None => r.bank.update(s.t_us, r.noise.add(f64::from(y))),
@@ -1092,16 +1084,25 @@ impl<'w, W: std::io::Write + ?Sized> CsvSink<'w, W> {
 
 /// Unwraps a wrapped angle sequence (deg) so consecutive values differ by at most 180 deg.
 pub fn unwrap_deg(wrapped: &[f32]) -> Vec<f32> {
-    let mut out = Vec::with_capacity(wrapped.len());
-    let mut offset = 0.0f64;
-    let mut prev: Option<f64> = None;
-    for &w in wrapped {
-        let w = f64::from(w);
-        if let Some(p) = prev {
-            offset -= 360.0 * ((w - p) / 360.0).round();
+    let mut u = DegUnwrapper::default();
+    wrapped.iter().map(|&w| u.push(w)).collect()
+}
+
+/// [`unwrap_deg`] one angle at a time (f64 offset in whole turns, deg).
+#[derive(Clone, Copy, Debug, Default)]
+struct DegUnwrapper {
+    offset: f64,
+    prev: Option<f64>,
+}
+
+impl DegUnwrapper {
+    /// The next wrapped angle (deg), unwrapped (deg).
+    fn push(&mut self, wrapped: f32) -> f32 {
+        let w = f64::from(wrapped);
+        if let Some(p) = self.prev {
+            self.offset -= 360.0 * ((w - p) / 360.0).round();
         }
-        prev = Some(w);
-        out.push((w + offset) as f32);
+        self.prev = Some(w);
+        (w + self.offset) as f32
     }
-    out
 }
