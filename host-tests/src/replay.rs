@@ -327,19 +327,24 @@ impl SampleReader {
 
     /// The error for a finished stream that gave no sample ([`Error::NotNav440`]), or `Ok`.
     pub fn check_nonempty(&self) -> Result<()> {
-        if self.frames == 0 {
-            return Err(Error::NotNav440(
-                "no NAV440 frame found (not a NAV440 capture?)".into(),
-            ));
-        }
-        if self.samples == 0 {
-            return Err(Error::NotNav440(format!(
-                "{} NAV440 frames but none carries yaw with a usable time stamp (need A0/A1/A2/N0/N1/B1)",
-                self.frames
-            )));
-        }
-        Ok(())
+        check_yaw_stream(self.frames, self.samples)
     }
+}
+
+/// [`Error::NotNav440`] for a stream of `frames` valid frames of which `samples` gave a timed
+/// yaw sample, when either is 0 (shared by every reader of captures, `nav440 sim` too).
+pub fn check_yaw_stream(frames: u64, samples: u64) -> Result<()> {
+    if frames == 0 {
+        return Err(Error::NotNav440(
+            "no NAV440 frame found (not a NAV440 capture?)".into(),
+        ));
+    }
+    if samples == 0 {
+        return Err(Error::NotNav440(format!(
+            "{frames} NAV440 frames but none carries yaw with a usable time stamp (need A0/A1/A2/N0/N1/B1)"
+        )));
+    }
+    Ok(())
 }
 
 fn to_sample(t: nav440_proto::Timed<(f32, f32)>) -> Sample {

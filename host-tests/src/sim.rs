@@ -227,16 +227,7 @@ pub fn capture_samples(bytes: &[u8]) -> Result<Vec<RawSample>> {
         };
         out.push(s);
     });
-    if frames == 0 {
-        return Err(Error::NotNav440(
-            "no NAV440 frame found (not a NAV440 capture?)".into(),
-        ));
-    }
-    if out.is_empty() {
-        return Err(Error::NotNav440(format!(
-            "{frames} NAV440 frames but none carries yaw with a time stamp (need A0/A1/A2/N0/N1/B1)"
-        )));
-    }
+    crate::replay::check_yaw_stream(frames, out.len() as u64)?;
     Ok(out)
 }
 
