@@ -601,14 +601,7 @@ impl Stdout<'_> {
     }
 
     fn io(&mut self, r: std::io::Result<()>) -> Result<()> {
-        match r {
-            Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {
-                self.closed = true;
-                Ok(())
-            }
-            Err(e) => Err(Error::Output(format!("cannot write output: {e}"))),
-            Ok(()) => Ok(()),
-        }
+        replay::output_result(r, &mut self.closed)
     }
 
     /// Writes `text` and flushes.

@@ -1026,6 +1026,20 @@ impl<'a> IntoChunks<'a> for &'a mut CaptureReader {
     }
 }
 
+/// The result of a write to the command's output: a closed pipe (`nav440 ... | head`) sets
+/// `closed` and is not an error (the command stops quietly); any other failure is an
+/// [`Error::Output`].
+pub fn output_result(r: std::io::Result<()>, closed: &mut bool) -> Result<()> {
+    match r {
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {
+            *closed = true;
+            Ok(())
+        }
+        Err(e) => Err(Error::Output(format!("cannot write output: {e}"))),
+        Ok(()) => Ok(()),
+    }
+}
+
 /// Writes the estimate CSV as rows come: the header before the first row (or at the end).
 struct CsvSink<'w, W: std::io::Write + ?Sized> {
     w: &'w mut W,
@@ -1045,14 +1059,7 @@ impl<'w, W: std::io::Write + ?Sized> CsvSink<'w, W> {
     }
 
     fn io(&mut self, r: std::io::Result<()>) -> Result<()> {
-        match r {
-            Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {
-                self.closed = true;
-                Ok(())
-            }
-            Err(e) => Err(Error::Output(format!("cannot write output: {e}"))),
-            Ok(()) => Ok(()),
-        }
+        output_result(r, &mut self.closed)
     }
 
     fn head(&mut self) -> Result<()> {
