@@ -13,7 +13,7 @@
 //! `time_itow_s`); magnetic and true yaw are both `yaw_rad`.
 
 use crate::error::{Error, Result};
-use nav440_proto::{Field, Frame, Packet, Parser, SiValue};
+use nav440_proto::{Field, Frame, Packet, Parser, SiValue, Unit};
 
 /// Standard gravity, m/s^2 per g.
 pub const G0: f64 = 9.80665;
@@ -43,16 +43,17 @@ enum Conv {
     Div(f64),
 }
 
-/// `nav440_proto` unit -> (column suffix, conversion to the CSV's SI unit).
-const UNITS: &[(&str, &str, Conv)] = &[
-    ("rad", "rad", Conv::Same),
-    ("rad/s", "rad_s", Conv::Same),
-    ("g", "m_s2", Conv::Mul(G0)),
-    ("gauss", "t", Conv::Mul(TESLA_PER_GAUSS)),
-    ("degC", "degc", Conv::Same),
-    ("m/s", "m_s", Conv::Same),
-    ("m", "m", Conv::Same),
-    ("ms", "s", Conv::Div(1000.0)),
+/// [`Unit`] of `nav440_proto` -> (column suffix, conversion to the CSV's SI unit); a unit not
+/// listed keeps its value and its symbol as suffix.
+const UNITS: &[(Unit, &str, Conv)] = &[
+    (Unit::Rad, "rad", Conv::Same),
+    (Unit::RadPerS, "rad_s", Conv::Same),
+    (Unit::G, "m_s2", Conv::Mul(G0)),
+    (Unit::Gauss, "t", Conv::Mul(TESLA_PER_GAUSS)),
+    (Unit::DegC, "degc", Conv::Same),
+    (Unit::MPerS, "m_s", Conv::Same),
+    (Unit::M, "m", Conv::Same),
+    (Unit::Ms, "s", Conv::Div(1000.0)),
 ];
 
 /// Field names whose column is named differently: A0/A1 magnetic yaw and A2/N0/N1 true yaw
@@ -78,7 +79,7 @@ fn field_column(f: &Field) -> (String, String) {
     let (suffix, conv) = UNITS
         .iter()
         .find(|(u, _, _)| *u == q.unit)
-        .map_or((q.unit, Conv::Same), |&(_, s, c)| (s, c));
+        .map_or((q.unit.symbol(), Conv::Same), |&(_, s, c)| (s, c));
     let apply = |v: f64| match conv {
         Conv::Same => v,
         Conv::Mul(k) => v * k,

@@ -71,10 +71,10 @@ pub use clock::{ItowClock, Released, TimeBase, TimeFaults, Timed};
 pub use crc16::{crc16, Crc16Table, DefaultCrcTable};
 pub use encode::{command, encode_frame, encode_raw, EncodeError, Request};
 pub use packets::{
-    scale, A0Fields, A1Fields, A2Fields, B1Fields, Bit, DecodeError, Field, FieldIds, FieldValues,
-    Id, IdFields, N0Fields, N1Fields, Nak, NakFields, Packet, Quantity, S0Fields, S1Fields,
-    S2Fields, SiValue, T0Fields, TimeStamp, Vr, VrFields, YawSample, A0, A1, A2, B1, N0, N1, S0,
-    S1, S2, T0,
+    scale, A0Fields, A1Fields, A2Fields, Attitude, B1Fields, Bit, BodyRates, DecodeError, Field,
+    FieldIds, FieldInfo, FieldValues, Id, IdFields, Kind, N0Fields, N1Fields, Nak, NakFields,
+    Packet, Quantity, Role, S0Fields, S1Fields, S2Fields, SiValue, T0Fields, TimeStamp, Unit, Vr,
+    VrFields, YawSample, A0, A1, A2, B1, N0, N1, S0, S1, S2, T0,
 };
 pub use parser::{Frame, Parser, Stats};
 pub use types::{Baud, FieldId, PacketRate, PacketType};

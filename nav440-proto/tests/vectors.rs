@@ -350,7 +350,7 @@ fn visit(p: &Packet<'_>) -> Vec<Visited> {
         out.push((
             f.name,
             f.raw,
-            f.si.map(|q| (q.value.to_f64(), q.unit)),
+            f.si.map(|q| (q.value.to_f64(), q.unit.symbol())),
             f.flags,
         ))
     });
@@ -424,7 +424,7 @@ fn field_visitor_yields_the_synthetic_a2_values() {
         yaw,
         Some(Quantity {
             value: SiValue::F32(a.yaw_true_rad()),
-            unit: "rad"
+            unit: Unit::Rad
         })
     );
 }
