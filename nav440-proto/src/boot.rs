@@ -423,7 +423,16 @@ impl<E: fmt::Debug> fmt::Display for BootError<E> {
             }
             BootError::Serial(e) => write!(f, "serial port error: {e:?}"),
             BootError::WriteZero => f.write_str("serial port error: it accepted no byte"),
-            BootError::Encode(e) => write!(f, "request could not be encoded: {e:?}"),
+            BootError::Encode(e) => write!(f, "request could not be encoded: {e}"),
+        }
+    }
+}
+
+impl<E: fmt::Debug> core::error::Error for BootError<E> {
+    fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
+        match self {
+            BootError::Encode(e) => Some(e),
+            _ => None,
         }
     }
 }

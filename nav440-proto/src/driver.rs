@@ -106,6 +106,34 @@ impl<E> From<EncodeError> for Error<E> {
     }
 }
 
+impl<E: core::fmt::Debug> core::fmt::Display for Error<E> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Error::Serial(e) => write!(f, "serial port error: {e:?}"),
+            Error::WriteZero => f.write_str("serial port error: it accepted no byte"),
+            Error::Encode(e) => write!(f, "request could not be encoded: {e}"),
+            Error::Nak { request } => write!(f, "unit rejected (NAK) {request}"),
+            Error::NotAccepted {
+                requested,
+                accepted,
+            } => write!(
+                f,
+                "unit accepted only {accepted} of the {requested} fields requested"
+            ),
+            Error::NoReply => f.write_str("no reply within the reply time-out"),
+        }
+    }
+}
+
+impl<E: core::fmt::Debug> core::error::Error for Error<E> {
+    fn source(&self) -> Option<&(dyn core::error::Error + 'static)> {
+        match self {
+            Error::Encode(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
 /// What a wait is looking for.
 enum Want<'f> {
     /// PK reply.

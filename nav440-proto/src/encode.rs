@@ -22,6 +22,22 @@ pub enum EncodeError {
     },
 }
 
+impl core::fmt::Display for EncodeError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            EncodeError::PayloadTooLong { len } => write!(
+                f,
+                "payload of {len} bytes exceeds the maximum of {MAX_PAYLOAD} bytes"
+            ),
+            EncodeError::BufferTooSmall { needed } => {
+                write!(f, "output buffer too small: the frame needs {needed} bytes")
+            }
+        }
+    }
+}
+
+impl core::error::Error for EncodeError {}
+
 /// Writes a frame of type `t` with a `len`-byte payload filled in by `fill` (which gets exactly
 /// `len` bytes, zeroed); returns the frame length in bytes.
 pub fn encode_with(
