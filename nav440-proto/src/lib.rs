@@ -4,13 +4,21 @@
 //! `#![no_std]`, no heap, `#![forbid(unsafe_code)]`, and no panics on any input.
 //!
 //! * [`Parser`]: streaming frame parser (any chunking, one-byte resynchronisation, counters).
-//! * [`Packet`]: zero-copy typed views of every packet with raw and SI accessors.
+//! * [`Packet`]: zero-copy typed views of every packet with raw and SI accessors, all
+//!   generated from one table ([`packets`]: one declaration per packet, one line per field
+//!   naming its [`Kind`]; values carry a [`Unit`]).
+//! * Reading by meaning, whatever the packet type: [`Packet::attitude`] (roll, pitch, yaw),
+//!   [`Packet::body_rates`] (p, q, r), [`Packet::time`], [`Packet::bit`],
+//!   [`Packet::yaw_sample`].
 //! * `*Fields` structs and [`command`]: encoders for every packet and command.
 //! * [`ItowClock`]: continuous time from the wrapping time-of-week stamps.
 //! * [`boot`]: the whole boot sequence (find the unit, baud switch, packet type and rate, read-back).
 //! * [`unit`](mod@unit): the unit's side (requests, field state, replies, NAKs) for simulators.
 //! * [`driver`]: an `embedded-io` and an `embedded-hal-nb` driver that yield packets and
 //!   configure the unit (SF with reply and NAK handling).
+//!
+//! Every error type ([`DecodeError`], [`EncodeError`], [`driver::Error`],
+//! [`boot::BootError`]) implements `Display` (one line) and `core::error::Error`.
 //!
 //! All multi-byte fields are big-endian. Frame: `55 55`, two type bytes, payload length N,
 //! N payload bytes, CRC-16/SPI-FUJITSU (poly 0x1021, init 0x1D0F) of type+length+payload,

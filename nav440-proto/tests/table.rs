@@ -271,3 +271,44 @@ proptest! {
         prop_assert_eq!(n0.time(), TimeStamp::GpsItow(v.gps_itow()));
     }
 }
+
+/// The packet table as docs/PACKETS.md shows it: one markdown table per packet.
+fn markdown_table() -> String {
+    let mut out = String::new();
+    for (t, len, fields) in tables() {
+        let stream = if t.output_payload_len().is_some() {
+            "stream"
+        } else {
+            "reply"
+        };
+        out.push_str(&format!(
+            "#### {t} ({len} bytes, {stream})\n\n| field | kind | offset | size | unit | role |\n|---|---|---:|---:|---|---|\n"
+        ));
+        for f in fields {
+            let unit = f.kind.unit().map_or("-", Unit::symbol);
+            let role = f.role.map_or("-".to_string(), |r| format!("{r:?}"));
+            out.push_str(&format!(
+                "| `{}` | {:?} | {} | {} | {unit} | {role} |\n",
+                f.name, f.kind, f.offset, f.size
+            ));
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// docs/PACKETS.md shows the table the code has (regenerate the section with
+/// `PRINT_PACKET_TABLE=1 cargo test -p nav440-proto --test table -- --nocapture docs`).
+#[test]
+fn docs_show_the_table_of_the_code() {
+    let table = markdown_table();
+    if std::env::var_os("PRINT_PACKET_TABLE").is_some() {
+        println!("{table}");
+    }
+    let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/PACKETS.md"))
+        .expect("docs/PACKETS.md");
+    assert!(
+        doc.contains(table.trim_end()),
+        "docs/PACKETS.md's packet table differs from the code's"
+    );
+}
