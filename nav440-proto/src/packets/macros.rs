@@ -221,9 +221,29 @@ macro_rules! packet_table {
             /// A known type with the wrong payload length is a [`DecodeError`].
             pub fn decode(frame: Frame<'a>) -> Result<Packet<'a>, DecodeError> {
                 let p = frame.payload;
-                Ok(match frame.packet_type {
+                let t = frame.packet_type;
+                Ok(match t {
                     $( PacketType::$ptype => Packet::$view($view::new(p)?), )*
-                    _ => return decode_variable(frame),
+                    PacketType::ID => Packet::Id(Id::new(p)?),
+                    PacketType::PK => {
+                        empty(t, p)?;
+                        Packet::Ping
+                    }
+                    PacketType::CH => Packet::Echo(p),
+                    PacketType::GP => Packet::GetPacket(get_packet(p)?),
+                    PacketType::AR => {
+                        empty(t, p)?;
+                        Packet::AlgorithmReset
+                    }
+                    PacketType::SR => {
+                        empty(t, p)?;
+                        Packet::SoftwareReset
+                    }
+                    PacketType::SF => Packet::SetFields(FieldIds::new(t, p)?),
+                    PacketType::WF => Packet::WriteFields(FieldIds::new(t, p)?),
+                    PacketType::GF => Packet::GetFields(FieldValues::new(t, p)?),
+                    PacketType::RF => Packet::ReadFields(FieldValues::new(t, p)?),
+                    _ => Packet::Unknown(frame),
                 })
             }
 

@@ -40,7 +40,6 @@ pub use table::{
 };
 pub use variable::{FieldIds, FieldValues, Id, IdFields};
 
-use crate::parser::Frame;
 use crate::types::PacketType;
 
 /// Why a CRC-valid frame could not be decoded as its type.
@@ -76,6 +75,7 @@ impl core::fmt::Display for DecodeError {
 
 impl core::error::Error for DecodeError {}
 
+/// An empty payload, or the length error of type `t`.
 fn empty(t: PacketType, p: &[u8]) -> Result<(), DecodeError> {
     if p.is_empty() {
         Ok(())
@@ -88,39 +88,14 @@ fn empty(t: PacketType, p: &[u8]) -> Result<(), DecodeError> {
     }
 }
 
-/// [`Packet::decode`] of the types outside the table: ID, the commands' replies, unknown types.
-fn decode_variable(frame: Frame<'_>) -> Result<Packet<'_>, DecodeError> {
-    let p = frame.payload;
-    let t = frame.packet_type;
-    Ok(match t {
-        PacketType::ID => Packet::Id(Id::new(p)?),
-        PacketType::PK => {
-            empty(t, p)?;
-            Packet::Ping
-        }
-        PacketType::CH => Packet::Echo(p),
-        PacketType::GP => match <[u8; 2]>::try_from(p) {
-            Ok(b) => Packet::GetPacket(PacketType(b)),
-            Err(_) => {
-                return Err(DecodeError::Length {
-                    packet_type: t,
-                    expected: 2,
-                    actual: p.len(),
-                })
-            }
-        },
-        PacketType::AR => {
-            empty(t, p)?;
-            Packet::AlgorithmReset
-        }
-        PacketType::SR => {
-            empty(t, p)?;
-            Packet::SoftwareReset
-        }
-        PacketType::SF => Packet::SetFields(FieldIds::new(t, p)?),
-        PacketType::WF => Packet::WriteFields(FieldIds::new(t, p)?),
-        PacketType::GF => Packet::GetFields(FieldValues::new(t, p)?),
-        PacketType::RF => Packet::ReadFields(FieldValues::new(t, p)?),
-        _ => Packet::Unknown(frame),
-    })
+/// The payload of a GP request: the requested type (two bytes).
+fn get_packet(p: &[u8]) -> Result<PacketType, DecodeError> {
+    match <[u8; 2]>::try_from(p) {
+        Ok(b) => Ok(PacketType(b)),
+        Err(_) => Err(DecodeError::Length {
+            packet_type: PacketType::GP,
+            expected: 2,
+            actual: p.len(),
+        }),
+    }
 }

@@ -13,7 +13,7 @@ use super::fields::{tiles, BeField, Field, FieldInfo, Kind, Quantity, Role, SiVa
 use super::roles::{Attitude, BodyRates, Roles, TimeStamp, YawSample};
 use super::status::Bit;
 use super::variable::{FieldIds, FieldValues, Id};
-use super::{decode_variable, scale, DecodeError};
+use super::{empty, get_packet, scale, DecodeError};
 use crate::encode::{encode_frame, EncodeError};
 use crate::parser::Frame;
 use crate::types::PacketType;
@@ -362,6 +362,33 @@ impl NakFields {
     }
 }
 
+/// Number of streamable types in the table.
+const N_STREAM: usize = {
+    let mut n = 0;
+    let mut i = 0;
+    while i < FIXED.len() {
+        if FIXED[i].2 {
+            n += 1;
+        }
+        i += 1;
+    }
+    n
+};
+
+/// (type, payload length) of the streamable types, in table order (built at compile time).
+const STREAM: [(PacketType, usize); N_STREAM] = {
+    let mut out = [(PacketType([0, 0]), 0); N_STREAM];
+    let (mut i, mut j) = (0, 0);
+    while i < FIXED.len() {
+        if FIXED[i].2 {
+            out[j] = (FIXED[i].0, FIXED[i].1);
+            j += 1;
+        }
+        i += 1;
+    }
+    out
+};
+
 impl PacketType {
     /// Payload length in bytes of a packet type the unit can stream continuously (S0, S1,
     /// S2, A0, A1, A2, N0, N1, B1, T0: the table's `stream` entries); `None` for any other
@@ -369,10 +396,9 @@ impl PacketType {
     pub const fn output_payload_len(self) -> Option<usize> {
         let c = self.code();
         let mut i = 0;
-        while i < FIXED.len() {
-            let (t, len, stream) = FIXED[i];
-            if stream && t.code() == c {
-                return Some(len);
+        while i < STREAM.len() {
+            if STREAM[i].0.code() == c {
+                return Some(STREAM[i].1);
             }
             i += 1;
         }
