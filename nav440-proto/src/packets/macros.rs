@@ -230,7 +230,16 @@ macro_rules! packet_table {
                         Packet::Ping
                     }
                     PacketType::CH => Packet::Echo(p),
-                    PacketType::GP => Packet::GetPacket(get_packet(p)?),
+                    PacketType::GP => match <[u8; 2]>::try_from(p) {
+                        Ok(b) => Packet::GetPacket(PacketType(b)),
+                        Err(_) => {
+                            return Err(DecodeError::Length {
+                                packet_type: t,
+                                expected: 2,
+                                actual: p.len(),
+                            })
+                        }
+                    },
                     PacketType::AR => {
                         empty(t, p)?;
                         Packet::AlgorithmReset

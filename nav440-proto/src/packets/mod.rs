@@ -87,15 +87,3 @@ fn empty(t: PacketType, p: &[u8]) -> Result<(), DecodeError> {
         })
     }
 }
-
-/// The payload of a GP request: the requested type (two bytes).
-fn get_packet(p: &[u8]) -> Result<PacketType, DecodeError> {
-    match <[u8; 2]>::try_from(p) {
-        Ok(b) => Ok(PacketType(b)),
-        Err(_) => Err(DecodeError::Length {
-            packet_type: PacketType::GP,
-            expected: 2,
-            actual: p.len(),
-        }),
-    }
-}

@@ -13,7 +13,7 @@ use super::fields::{tiles, BeField, Field, FieldInfo, Kind, Quantity, Role, SiVa
 use super::roles::{Attitude, BodyRates, Roles, TimeStamp, YawSample};
 use super::status::Bit;
 use super::variable::{FieldIds, FieldValues, Id};
-use super::{empty, get_packet, scale, DecodeError};
+use super::{empty, scale, DecodeError};
 use crate::encode::{encode_frame, EncodeError};
 use crate::parser::Frame;
 use crate::types::PacketType;
