@@ -312,3 +312,32 @@ fn docs_show_the_table_of_the_code() {
         "docs/PACKETS.md's packet table differs from the code's"
     );
 }
+
+#[test]
+fn bit_flags_are_named_as_in_the_document() {
+    // BIT word per the protocol document: bit 0 masterFail, 1 hardwareError, 2 comError,
+    // 3 softwareError, 8 masterStatus, 9 hardwareStatus, 10 comStatus, 11 softwareStatus,
+    // 12 sensorStatus.
+    let doc = [
+        (0, "masterFail"),
+        (1, "hardwareError"),
+        (2, "comError"),
+        (3, "softwareError"),
+        (8, "masterStatus"),
+        (9, "hardwareStatus"),
+        (10, "comStatus"),
+        (11, "softwareStatus"),
+        (12, "sensorStatus"),
+    ];
+    for (bit, name) in doc {
+        let b = Bit(1 << bit);
+        assert_eq!(b.names().collect::<Vec<_>>(), [name]);
+        assert_eq!(b.is_fatal(), bit == 0);
+    }
+    // A healthy unit can show 0x0002 (hardwareError alone).
+    assert_eq!(Bit(0x0002).to_string(), "0x0002 (hardwareError)");
+    assert_eq!(Bit(0x0101).to_string(), "0x0101 (masterFail, masterStatus)");
+    assert_eq!(Bit(0).to_string(), "0x0000");
+    // Reserved bits (4-7, 13-15) have no name but show in the hex.
+    assert_eq!(Bit(0x00F0).to_string(), "0x00F0");
+}

@@ -65,4 +65,40 @@ impl Bit {
     pub const fn is_fatal(self) -> bool {
         self.master_fail()
     }
+
+    /// Every named flag: (mask, the protocol document's name), bit 0 first.
+    pub const NAMES: [(u16, &'static str); 9] = [
+        (Self::MASTER_FAIL, "masterFail"),
+        (Self::HARDWARE_ERROR, "hardwareError"),
+        (Self::COM_ERROR, "comError"),
+        (Self::SOFTWARE_ERROR, "softwareError"),
+        (Self::MASTER_STATUS, "masterStatus"),
+        (Self::HARDWARE_STATUS, "hardwareStatus"),
+        (Self::COM_STATUS, "comStatus"),
+        (Self::SOFTWARE_STATUS, "softwareStatus"),
+        (Self::SENSOR_STATUS, "sensorStatus"),
+    ];
+
+    /// The names of the flags that are set, bit 0 first (reserved bits have no name).
+    pub fn names(self) -> impl Iterator<Item = &'static str> {
+        Self::NAMES
+            .into_iter()
+            .filter(move |(mask, _)| self.0 & mask != 0)
+            .map(|(_, name)| name)
+    }
+}
+
+/// `0x0003 (masterFail, hardwareError)`; `0x0000` when no flag is set.
+impl core::fmt::Display for Bit {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "0x{:04X}", self.0)?;
+        for (i, name) in self.names().enumerate() {
+            f.write_str(if i == 0 { " (" } else { ", " })?;
+            f.write_str(name)?;
+        }
+        if self.names().next().is_some() {
+            f.write_str(")")?;
+        }
+        Ok(())
+    }
 }
