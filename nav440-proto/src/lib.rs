@@ -89,3 +89,8 @@ pub const FRAME_OVERHEAD: usize = 7;
 pub const PREAMBLE_BYTE: u8 = 0x55;
 /// The preamble.
 pub const PREAMBLE: [u8; 2] = [PREAMBLE_BYTE, PREAMBLE_BYTE];
+
+/// The examples of the crate README, compiled and run as doc tests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

@@ -9,8 +9,11 @@
 //!   unit, N4LP length prefix), CSV on stdout.
 //! * `cargo xtask bench` - instruction counts on the target (QEMU `-icount`, SysTick).
 //! * `cargo xtask size`  - flash/RAM of the firmware (llvm-size) and RAM per estimator.
+//! * `cargo xtask msrv`  - the libraries' declared `rust-version` checked with that toolchain.
+//! * `cargo xtask package` - the libraries' examples run and `cargo publish --dry-run`.
 
 mod firmware;
+mod package;
 mod qemu;
 mod unit;
 
@@ -87,6 +90,11 @@ enum Cmd {
     },
     /// Flash/RAM of the firmware (llvm-size) and RAM per estimator.
     Size,
+    /// Checks each library with the toolchain of its declared `rust-version` (installed with
+    /// rustup when missing), and that the workspace's `rust-version` is the pinned toolchain.
+    Msrv,
+    /// Runs the libraries' examples and `cargo publish --dry-run` of each (needs crates.io).
+    Package,
 }
 
 fn main() -> ExitCode {
@@ -107,6 +115,8 @@ fn main() -> ExitCode {
         Cmd::Qemu { file, board } => firmware::qemu(board, &file),
         Cmd::Bench { board } => firmware::bench(board),
         Cmd::Size => firmware::size(),
+        Cmd::Msrv => package::msrv(),
+        Cmd::Package => package::package(),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -195,6 +205,9 @@ fn ci() -> Result<(), String> {
         &["doc", "--no-deps"],
         &[("RUSTDOCFLAGS", "-D warnings")],
     )?;
+    // The libraries as users get them: examples, declared MSRV, publishable packages.
+    package::package()?;
+    package::msrv()?;
     firmware::ci_steps()?;
     eprintln!(
         "xtask ci: all checks passed in {:.0} s",
