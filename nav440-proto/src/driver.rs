@@ -1,7 +1,10 @@
 //! Drivers over `embedded-io` (blocking) and `embedded-hal-nb` (non-blocking) serial ports.
 //!
-//! Both are the one [`Driver`] over a thin [`Port`] adapter ([`IoPort`], [`NbPort`]), so the
-//! protocol logic below exists once; only reading and writing bytes differ.
+//! Both are the one [`Driver`] over a thin [`Port`] adapter ([`IoPort`], [`NbPort`]; with the
+//! `embedded-io-06` feature also `Io06Port` for `embedded-io` 0.6 ports), so the protocol
+//! logic below exists once; only reading and writing bytes differ. Any other serial port can
+//! implement [`Port`] itself (see "Bring your own port" there) and use
+//! [`Driver::from_port`].
 //!
 //! Both yield decoded packets through a callback ([`Driver::poll`]) and run the unit's commands
 //! that have a reply (PK, SF, WF, GF): the request is sent, then incoming frames are read until
@@ -201,17 +204,67 @@ fn count_accepted(fields: &[(FieldId, u16)], ids: FieldIds<'_>) -> u8 {
     fields.iter().filter(|(id, _)| ids.contains(*id)).count() as u8
 }
 
-mod sealed {
-    /// Keeps [`super::Port`] implemented by this module's adapters only.
-    pub trait Sealed {}
-}
-
 /// A serial port as the driver sees it: byte reads and whole-frame writes.
 ///
-/// Sealed: implemented by [`IoPort`] and [`NbPort`] only. It is public because it bounds
-/// [`Driver`]; callers use [`IoDriver`] and [`NbDriver`] and name it only through
-/// `Port::Serial` / `Port::Error`.
-pub trait Port: sealed::Sealed {
+/// Implemented here for [`embedded_io`] 0.7 ports ([`IoPort`]), [`embedded_hal_nb`] ports
+/// ([`NbPort`]) and, with the `embedded-io-06` feature, [`embedded-io` 0.6](embedded_io_06)
+/// ports ([`Io06Port`]).
+///
+/// # Bring your own port
+/// Any other serial port works too: implement this trait for a wrapper around it and build
+/// the driver with [`Driver::from_port`]. The rules the driver relies on:
+/// * [`Port::read_byte_now`] never blocks: `Ok(None)` when no byte is available now (the
+///   driver then sleeps [`Timing::poll_step_us`] through its `DelayNs` and asks again, so
+///   reply time-outs stay in time);
+/// * [`Port::read_for_poll`] may block until at least one byte arrives (blocking drivers) or
+///   return `(0, false)` (non-blocking ones); `true` asks [`Driver::poll`] to read again at once;
+/// * [`Port::write_all`] returns once every byte has left the port (flushed), because a baud
+///   change ([`Driver::set_baud`]) follows the request's last byte.
+///
+/// ```
+/// use nav440_proto::driver::{Driver, Error, Port};
+///
+/// /// A port with nothing connected: every read finds no byte, writes vanish.
+/// struct Unplugged {
+///     baud: u32,
+/// }
+///
+/// impl Port for Unplugged {
+///     type Error = core::convert::Infallible;
+///     /// What `serial_mut` exposes (e.g. to change the baud rate): here the baud itself.
+///     type Serial = u32;
+///     fn read_for_poll(&mut self, _buf: &mut [u8]) -> Result<(usize, bool), Self::Error> {
+///         Ok((0, false))
+///     }
+///     fn read_byte_now(&mut self) -> Result<Option<u8>, Self::Error> {
+///         Ok(None)
+///     }
+///     fn write_all(&mut self, _bytes: &[u8]) -> Result<(), Error<Self::Error>> {
+///         Ok(())
+///     }
+///     fn serial_mut(&mut self) -> &mut u32 {
+///         &mut self.baud
+///     }
+///     fn into_serial(self) -> u32 {
+///         self.baud
+///     }
+/// }
+///
+/// /// Counts the time asked for instead of sleeping.
+/// struct Clock(u64);
+/// impl embedded_hal::delay::DelayNs for Clock {
+///     fn delay_ns(&mut self, ns: u32) {
+///         self.0 += u64::from(ns);
+///     }
+/// }
+///
+/// let mut driver = Driver::from_port(Unplugged { baud: 38400 });
+/// let mut clock = Clock(0);
+/// assert_eq!(driver.ping_wait(&mut clock), Err(Error::NoReply));
+/// // The default reply time-out, 200 ms, measured in time.
+/// assert_eq!(clock.0, 200_000_000);
+/// ```
+pub trait Port {
     /// The serial port's error.
     type Error;
     /// The wrapped serial port.
@@ -240,8 +293,6 @@ pub trait Port: sealed::Sealed {
 pub struct IoPort<S> {
     serial: S,
 }
-
-impl<S> sealed::Sealed for IoPort<S> {}
 
 impl<S: embedded_io::Read + embedded_io::ReadReady + embedded_io::Write> Port for IoPort<S> {
     type Error = S::Error;
@@ -288,8 +339,6 @@ impl<S: embedded_io::Read + embedded_io::ReadReady + embedded_io::Write> Port fo
 pub struct NbPort<S> {
     serial: S,
 }
-
-impl<S> sealed::Sealed for NbPort<S> {}
 
 impl<S> Port for NbPort<S>
 where
@@ -360,8 +409,16 @@ pub type IoDriver<S> = Driver<IoPort<S>>;
 /// Non-blocking driver over [`embedded_hal_nb::serial::Read`] + `Write` (one byte at a time).
 pub type NbDriver<S> = Driver<NbPort<S>>;
 
+#[cfg(feature = "embedded-io-06")]
+mod io06;
+#[cfg(feature = "embedded-io-06")]
+pub use io06::{Io06Driver, Io06Port};
+
 impl<P> Driver<P> {
-    fn with_port(port: P) -> Self {
+    /// A driver over any [`Port`] (see "Bring your own port" there); the port must already
+    /// be at the unit's baud rate. [`IoDriver::new`] and [`NbDriver::new`] wrap
+    /// `embedded-io` and `embedded-hal-nb` ports.
+    pub fn from_port(port: P) -> Self {
         Self {
             port,
             parser: Parser::new(),
@@ -376,7 +433,7 @@ impl<P> Driver<P> {
 impl<S: embedded_io::Read + embedded_io::ReadReady + embedded_io::Write> Driver<IoPort<S>> {
     /// Wraps a serial port (already at the unit's baud rate).
     pub fn new(serial: S) -> Self {
-        Self::with_port(IoPort { serial })
+        Self::from_port(IoPort { serial })
     }
 }
 
@@ -386,7 +443,7 @@ where
 {
     /// Wraps a serial port (already at the unit's baud rate).
     pub fn new(serial: S) -> Self {
-        Self::with_port(NbPort { serial })
+        Self::from_port(NbPort { serial })
     }
 }
 

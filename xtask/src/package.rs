@@ -48,6 +48,29 @@ pub fn package() -> Result<(), String> {
         "--",
         "host-tests/data/fig5_a2_100hz.bin",
     ])?;
+    // The driver over embedded-io 0.6 ports (feature `embedded-io-06`), on the host and,
+    // linted, on the Cortex-M4F target.
+    cargo(&[
+        "test",
+        "-p",
+        "nav440-proto",
+        "--features",
+        "embedded-io-06",
+        "--test",
+        "io06",
+    ])?;
+    cargo(&[
+        "clippy",
+        "-p",
+        "nav440-proto",
+        "--features",
+        "embedded-io-06",
+        "--target",
+        "thumbv7em-none-eabihf",
+        "--",
+        "-D",
+        "warnings",
+    ])?;
     for lib in LIBRARIES {
         cargo(&["publish", "--dry-run", "--allow-dirty", "-p", lib])?;
     }
@@ -80,7 +103,7 @@ fn major_minor(v: &str) -> String {
     v.split('.').take(2).collect::<Vec<_>>().join(".")
 }
 
-/// Checks each library (`--lib`, with and without `--features defmt`) with the toolchain of
+/// Checks each library (`--lib`, with no and with all features) with the toolchain of
 /// its declared `rust-version`, installing it with rustup (minimal profile) when missing, and
 /// checks that the workspace's `rust-version` (inherited by the host crates, xtask and the
 /// firmware, which are built only with the pinned toolchain) equals the pinned toolchain.
@@ -113,7 +136,7 @@ pub fn msrv() -> Result<(), String> {
                 &["toolchain", "install", &version, "--profile", "minimal"],
             )?;
         }
-        for features in [&[][..], &["--features", "defmt"][..]] {
+        for features in [&[][..], &["--all-features"][..]] {
             let mut args = vec!["run", &version, "cargo", "check", "-q", "-p", lib, "--lib"];
             args.extend_from_slice(features);
             run("rustup", &args)?;
