@@ -11,6 +11,7 @@
 //! * `cargo xtask size`  - flash/RAM of the firmware (llvm-size) and RAM per estimator.
 //! * `cargo xtask msrv`  - the libraries' declared `rust-version` checked with that toolchain.
 //! * `cargo xtask package` - the libraries' examples run and `cargo publish --dry-run`.
+//! * `cargo xtask embassy` - the embassy example (async driver) under QEMU against `nav440 sim`.
 
 mod firmware;
 mod package;
@@ -95,6 +96,9 @@ enum Cmd {
     Msrv,
     /// Runs the libraries' examples and `cargo publish --dry-run` of each (needs crates.io).
     Package,
+    /// The embassy example (async driver on embassy-executor) built for thumbv7em and run on
+    /// QEMU `mps2-an386` against `nav440 sim`.
+    Embassy,
 }
 
 fn main() -> ExitCode {
@@ -117,6 +121,7 @@ fn main() -> ExitCode {
         Cmd::Size => firmware::size(),
         Cmd::Msrv => package::msrv(),
         Cmd::Package => package::package(),
+        Cmd::Embassy => firmware::embassy(),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -209,6 +214,7 @@ fn ci() -> Result<(), String> {
     package::package()?;
     package::msrv()?;
     firmware::ci_steps()?;
+    firmware::embassy()?;
     eprintln!(
         "xtask ci: all checks passed in {:.0} s",
         start.elapsed().as_secs_f64()
