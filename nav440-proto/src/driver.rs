@@ -409,7 +409,7 @@ pub type NbDriver<S> = Driver<NbPort<S>>;
 #[cfg(feature = "embedded-io-06")]
 mod io06;
 #[cfg(feature = "embedded-io-06")]
-pub use io06::{Io06Driver, Io06Port};
+pub use io06::{Compat06, Compat06Error, Io06Driver, Io06Port};
 
 mod asynch;
 pub use asynch::AsyncDriver;

@@ -129,3 +129,76 @@ fn silent_unit_times_out_in_time() {
     assert_eq!(err, nav440_proto::driver::Error::NoReply);
     assert_eq!(clock.0, 50_000_000, "50 ms slept in 1 ms steps");
 }
+
+impl embedded_io_async_06::Read for Line {
+    async fn read(&mut self, buf: &mut [u8]) -> Result<usize, LineError> {
+        eio::Read::read(self, buf)
+    }
+}
+
+impl embedded_io_async_06::Write for Line {
+    async fn write(&mut self, buf: &[u8]) -> Result<usize, LineError> {
+        eio::Write::write(self, buf)
+    }
+}
+
+/// Polls `f` to its end (the line and the delay below never suspend).
+fn run<F: std::future::Future>(f: F) -> F::Output {
+    let mut f = std::pin::pin!(f);
+    let mut cx = std::task::Context::from_waker(std::task::Waker::noop());
+    loop {
+        if let std::task::Poll::Ready(v) = f.as_mut().poll(&mut cx) {
+            return v;
+        }
+    }
+}
+
+impl embedded_hal_async::delay::DelayNs for Clock {
+    async fn delay_ns(&mut self, ns: u32) {
+        self.0 += u64::from(ns);
+    }
+}
+
+#[test]
+fn compat06_port_under_the_async_and_the_blocking_driver() {
+    use nav440_proto::driver::{AsyncDriver, Compat06, IoDriver};
+    let set_baud = |l: &mut Compat06<Line>, b: Baud| {
+        l.0.baud = b;
+        Ok(())
+    };
+    let mut driver = AsyncDriver::new(Compat06(line(Quirks::default())));
+    let mut clock = Clock(0);
+    let r = run(boot::boot_async(
+        &mut driver,
+        &Target::DEFAULT,
+        &Options::DEFAULT,
+        &mut clock,
+        set_baud,
+    ));
+    assert_eq!(r.expect("boot_async").baud, Baud::B57600);
+    let async_line = driver.release().0;
+    assert_eq!(
+        async_line.unit.ram().stream(),
+        Some((PacketType::A2, PacketRate::Hz100))
+    );
+
+    let mut driver = IoDriver::new(Compat06(line(Quirks::default())));
+    let r = boot::boot(
+        &mut driver,
+        &Target::DEFAULT,
+        &Options::DEFAULT,
+        &mut clock,
+        set_baud,
+    );
+    assert_eq!(r.expect("boot").baud, Baud::B57600);
+    assert_eq!(driver.release().0.written, async_line.written);
+}
+
+#[test]
+fn compat06_errors_keep_their_kind() {
+    use embedded_io::Error as _;
+    use nav440_proto::driver::Compat06Error;
+    let e = Compat06Error(LineError);
+    assert_eq!(e.kind(), embedded_io::ErrorKind::Other);
+    assert_eq!(e.to_string(), "serial port error: LineError");
+}

@@ -8,9 +8,9 @@
 //! the unit streamed).
 //!
 //! On a real board with `embassy-stm32`, the two adapters below are not needed: its
-//! `BufferedUart` implements `embedded_io_async::Read + Write` and `embedded_io::ReadReady`
-//! (embedded-io 0.6: enable nav440-proto's `embedded-io-06` feature for the blocking driver,
-//! or wrap it) and `embassy_time::Delay` implements `embedded_hal_async::delay::DelayNs`:
+//! `BufferedUart` implements the `embedded-io(-async)` traits (if your version implements
+//! 0.6, wrap it in `nav440_proto::driver::Compat06` with nav440-proto's `embedded-io-06`
+//! feature) and `embassy_time::Delay` implements `embedded_hal_async::delay::DelayNs`:
 //!
 //! ```ignore
 //! let mut driver = AsyncDriver::new(uart);
