@@ -207,8 +207,7 @@ fn count_accepted(fields: &[(FieldId, u16)], ids: FieldIds<'_>) -> u8 {
 /// A serial port as the driver sees it: byte reads and whole-frame writes.
 ///
 /// Implemented here for [`embedded_io`] 0.7 ports ([`IoPort`]), [`embedded_hal_nb`] ports
-/// ([`NbPort`]) and, with the `embedded-io-06` feature, [`embedded-io` 0.6](embedded_io_06)
-/// ports ([`Io06Port`]).
+/// ([`NbPort`]) and, with the `embedded-io-06` feature, `embedded-io` 0.6 ports (`Io06Port`).
 ///
 /// # Bring your own port
 /// Any other serial port works too: implement this trait for a wrapper around it and build

@@ -7,10 +7,12 @@
 //! * [`Packet`]: zero-copy typed views of every packet with raw and SI accessors.
 //! * `*Fields` structs and [`command`]: encoders for every packet and command.
 //! * [`ItowClock`]: continuous time from the wrapping time-of-week stamps.
-//! * [`boot`]: the whole boot sequence (find the unit, baud switch, packet type and rate, read-back).
+//! * [`boot`]: the whole boot sequence (find the unit, baud switch, packet type and rate,
+//!   read-back), blocking ([`boot::boot`]) or async ([`boot::boot_async`]).
 //! * [`unit`](mod@unit): the unit's side (requests, field state, replies, NAKs) for simulators.
-//! * [`driver`]: an `embedded-io` and an `embedded-hal-nb` driver that yield packets and
-//!   configure the unit (SF with reply and NAK handling).
+//! * [`driver`]: an `embedded-io`, an `embedded-hal-nb` and an async (`embedded-io-async`)
+//!   driver that yield packets and configure the unit (SF with reply and NAK handling), with
+//!   time-outs in time through `DelayNs`; any other port through [`driver::Port`].
 //!
 //! All multi-byte fields are big-endian. Frame: `55 55`, two type bytes, payload length N,
 //! N payload bytes, CRC-16/SPI-FUJITSU (poly 0x1021, init 0x1D0F) of type+length+payload,
