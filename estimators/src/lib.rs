@@ -92,3 +92,8 @@ pub use linear::{ClosedForm, LinearLaw};
 pub use real::{ExactSqrt, Fx, Real, SqrtFn};
 pub use series::Series;
 pub use unwrap::Unwrapper;
+
+/// The examples of the crate README, compiled and run as doc tests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

@@ -231,6 +231,13 @@ enum Cmd {
     Record(host_tests::serial::RecordArgs),
     /// Configure a unit on a serial port, then print the estimate CSV while receiving.
     Live(host_tests::serial::LiveArgs),
+    /// Print the shell completion script for SHELL on stdout (e.g. `nav440 completions bash >
+    /// ~/.local/share/bash-completion/completions/nav440`).
+    Completions {
+        /// The shell: bash, zsh, fish, elvish or powershell.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
 }
 
 fn parse_u16(s: &str) -> std::result::Result<u16, String> {
@@ -352,6 +359,14 @@ fn run(cli: Cli) -> Result<()> {
         Cmd::Config(a) => host_tests::serial::config(&a),
         Cmd::Record(a) => host_tests::serial::record(&a),
         Cmd::Live(a) => host_tests::serial::live(&a),
+        Cmd::Completions { shell } => {
+            // Generated into memory first: clap_complete panics on a write error, and a
+            // closed pipe must stay a silent success as for every other command.
+            let mut script = Vec::new();
+            let mut cmd = <Cli as clap::CommandFactory>::command();
+            clap_complete::generate(shell, &mut cmd, "nav440", &mut script);
+            stdout_or_file(None, |w| w.write_all(&script))
+        }
         Cmd::Stats { file } => {
             let mut r = replay::open_capture(&file)?;
             let mut counter = replay::StatsCounter::new();

@@ -45,7 +45,9 @@ use core::fmt;
 
 use embedded_hal::delay::DelayNs;
 
-use crate::driver::{Driver, Error, Port};
+use crate::driver::{
+    block_on, AsyncDriver, AsyncLink, BlockingLink, Driver, Engine, Error, Link, Port,
+};
 use crate::encode::EncodeError;
 use crate::types::{Baud, FieldId, PacketRate, PacketType};
 use crate::FRAME_OVERHEAD;
@@ -465,38 +467,37 @@ fn convert<E>(
 }
 
 /// The sequence's state between steps.
-struct Session<'d, P, D, F> {
-    driver: &'d mut Driver<P>,
-    delay: &'d mut D,
+struct Session<'d, L, F> {
+    driver: &'d mut Engine,
+    link: L,
     set_baud: F,
     attempts: u8,
     retries: u32,
     baud: Baud,
 }
 
-impl<P, D, F> Session<'_, P, D, F>
+impl<L, F> Session<'_, L, F>
 where
-    P: Port,
-    D: DelayNs,
-    F: FnMut(&mut P::Serial, Baud) -> Result<(), P::Error>,
+    L: Link,
+    F: FnMut(&mut L::Serial, Baud) -> Result<(), L::Error>,
 {
     fn timeout_ms(&self) -> u32 {
-        self.driver.timing().reply_timeout_ms
+        self.driver.timing.reply_timeout_ms
     }
 
     /// Switches the local port only.
-    fn local_baud(&mut self, b: Baud) -> Result<(), BootError<P::Error>> {
-        (self.set_baud)(self.driver.serial_mut(), b).map_err(BootError::Serial)?;
-        self.driver.set_line_baud(b.bits_per_second());
-        self.driver.clear_parser();
+    fn local_baud(&mut self, b: Baud) -> Result<(), BootError<L::Error>> {
+        (self.set_baud)(self.link.serial_mut(), b).map_err(BootError::Serial)?;
+        self.driver.line_baud = b.bits_per_second().max(1);
+        self.driver.parser.clear();
         self.baud = b;
         Ok(())
     }
 
     /// Pings up to `attempts` times at the current baud; `Ok(true)` on an answer.
-    fn ping(&mut self) -> Result<bool, BootError<P::Error>> {
+    async fn ping(&mut self) -> Result<bool, BootError<L::Error>> {
         for _ in 0..self.attempts.max(1) {
-            match self.driver.ping_wait(self.delay) {
+            match self.driver.ping_wait(&mut self.link).await {
                 Ok(()) => return Ok(true),
                 Err(Error::NoReply) => self.retries = self.retries.saturating_add(1),
                 Err(e) => {
@@ -509,11 +510,12 @@ where
     }
 
     /// GF of [`READ_FIELDS`]: (rate divider, baud code, packet type), each `None` if missing.
-    fn read(&mut self) -> Result<[Option<u16>; 3], BootError<P::Error>> {
+    async fn read(&mut self) -> Result<[Option<u16>; 3], BootError<L::Error>> {
         let timeout = self.timeout_ms();
         let v = self
             .driver
-            .get_fields(PacketType::GF, &READ_FIELDS, self.delay)
+            .get_fields(&mut self.link, PacketType::GF, &READ_FIELDS)
+            .await
             .map_err(|e| {
                 let ids = FieldList::ids(&READ_FIELDS);
                 convert(e, PacketType::GF, ids, self.baud, timeout)
@@ -521,10 +523,14 @@ where
         Ok([v[0], v[1], v[2]])
     }
 
-    fn set_output(&mut self, target: &Target) -> Result<(), BootError<P::Error>> {
+    async fn set_output(&mut self, target: &Target) -> Result<(), BootError<L::Error>> {
         let fields = target.output_fields();
         let timeout = self.timeout_ms();
-        self.driver.set_fields(&fields, self.delay).map_err(|e| {
+        let r = self
+            .driver
+            .configure(&mut self.link, PacketType::SF, &fields)
+            .await;
+        r.map_err(|e| {
             convert(
                 e,
                 PacketType::SF,
@@ -536,11 +542,14 @@ where
     }
 
     /// SF of the baud, local switch, ping to confirm.
-    fn switch(&mut self, to: Baud) -> Result<(), BootError<P::Error>> {
+    async fn switch(&mut self, to: Baud) -> Result<(), BootError<L::Error>> {
         let fields = [(FieldId::BAUD_RATE, to.code())];
         let timeout = self.timeout_ms();
         let set_baud = &mut self.set_baud;
-        let r = self.driver.set_baud(to, self.delay, |s, b| set_baud(s, b));
+        let r = self
+            .driver
+            .set_baud(&mut self.link, to, |s, b| set_baud(s, b))
+            .await;
         self.baud = to;
         match r {
             // The reply may be lost while both ends change rate: the ping decides.
@@ -550,7 +559,7 @@ where
                 return Err(convert(e, PacketType::SF, list, to, timeout));
             }
         }
-        if self.ping()? {
+        if self.ping().await? {
             Ok(())
         } else {
             Err(BootError::NoAnswer {
@@ -579,12 +588,44 @@ where
     P: Port,
     D: DelayNs,
 {
-    let unsolicited0 = driver.unsolicited();
-    let skipped0 = driver.stats().skipped_bytes;
+    let (port, engine) = driver.parts_mut();
+    let link = BlockingLink { port, delay };
+    block_on(sequence(engine, link, target, options, set_baud))
+}
+
+/// [`boot`] over the async driver: the same sequence (one shared implementation), awaiting
+/// the port and `delay` (e.g. `embassy_time::Delay`) so that other tasks run meanwhile.
+/// `set_baud` changes the local UART's baud rate (e.g. `embassy_stm32`'s `set_baudrate`).
+pub async fn boot_async<S, D>(
+    driver: &mut AsyncDriver<S>,
+    target: &Target,
+    options: &Options,
+    delay: &mut D,
+    set_baud: impl FnMut(&mut S, Baud) -> Result<(), S::Error>,
+) -> Result<Report, BootError<S::Error>>
+where
+    S: embedded_io_async::Read + embedded_io_async::Write + embedded_io::ReadReady,
+    D: embedded_hal_async::delay::DelayNs,
+{
+    let (serial, engine) = driver.parts_mut();
+    let link = AsyncLink { serial, delay };
+    sequence(engine, link, target, options, set_baud).await
+}
+
+/// The boot sequence over any [`Link`] (blocking or async).
+async fn sequence<L: Link>(
+    driver: &mut Engine,
+    link: L,
+    target: &Target,
+    options: &Options,
+    set_baud: impl FnMut(&mut L::Serial, Baud) -> Result<(), L::Error>,
+) -> Result<Report, BootError<L::Error>> {
+    let unsolicited0 = driver.unsolicited;
+    let skipped0 = driver.parser.stats().skipped_bytes;
     let attempts = options.ping_attempts.max(1);
     let mut s = Session {
         driver,
-        delay,
+        link,
         set_baud,
         attempts,
         retries: 0,
@@ -602,7 +643,7 @@ where
     for &b in candidates {
         s.local_baud(b)?;
         tried.insert(b);
-        if s.ping()? {
+        if s.ping().await? {
             found = Some(b);
             break;
         }
@@ -617,7 +658,7 @@ where
     };
 
     // 2. Read its configuration; its baud field is the truth.
-    let [rate0, baud0, type0] = s.read()?;
+    let [rate0, baud0, type0] = s.read().await?;
     let unit_baud = baud0.and_then(Baud::from_code).unwrap_or(found_at);
     if unit_baud != found_at {
         s.local_baud(unit_baud)?;
@@ -626,25 +667,26 @@ where
     // 3./4. Baud and output, in the order that keeps the budget.
     let switched = unit_baud != target.baud;
     if switched && target.baud.bits_per_second() > unit_baud.bits_per_second() {
-        s.switch(target.baud)?;
-        s.set_output(target)?;
+        s.switch(target.baud).await?;
+        s.set_output(target).await?;
     } else if switched {
-        s.set_output(target)?;
-        s.switch(target.baud)?;
+        s.set_output(target).await?;
+        s.switch(target.baud).await?;
     } else {
-        s.set_output(target)?;
+        s.set_output(target).await?;
     }
     if target.persist {
         let fields = target.persist_fields();
         let timeout = s.timeout_ms();
         let baud = s.baud;
         s.driver
-            .write_fields(&fields, s.delay)
+            .configure(&mut s.link, PacketType::WF, &fields)
+            .await
             .map_err(|e| convert(e, PacketType::WF, FieldList::new(&fields), baud, timeout))?;
     }
 
     // 5. Read back.
-    let got = s.read()?;
+    let got = s.read().await?;
     for (id, got) in READ_FIELDS.iter().zip(got) {
         let expected = target.expected(*id);
         if got != Some(expected) {
@@ -664,7 +706,12 @@ where
         switched,
         baud: s.baud,
         ping_retries: s.retries,
-        unsolicited_frames: s.driver.unsolicited().saturating_sub(unsolicited0),
-        skipped_bytes: s.driver.stats().skipped_bytes.saturating_sub(skipped0),
+        unsolicited_frames: s.driver.unsolicited.saturating_sub(unsolicited0),
+        skipped_bytes: s
+            .driver
+            .parser
+            .stats()
+            .skipped_bytes
+            .saturating_sub(skipped0),
     })
 }

@@ -1,7 +1,10 @@
 //! Drivers over `embedded-io` (blocking) and `embedded-hal-nb` (non-blocking) serial ports.
 //!
-//! Both are the one [`Driver`] over a thin [`Port`] adapter ([`IoPort`], [`NbPort`]), so the
-//! protocol logic below exists once; only reading and writing bytes differ.
+//! Both are the one [`Driver`] over a thin [`Port`] adapter ([`IoPort`], [`NbPort`]; with the
+//! `embedded-io-06` feature also `Io06Port` for `embedded-io` 0.6 ports), so the protocol
+//! logic below exists once; only reading and writing bytes differ. Any other serial port can
+//! implement [`Port`] itself (see "Bring your own port" there) and use
+//! [`Driver::from_port`].
 //!
 //! Both yield decoded packets through a callback ([`Driver::poll`]) and run the unit's commands
 //! that have a reply (PK, SF, WF, GF): the request is sent, then incoming frames are read until
@@ -229,17 +232,66 @@ fn count_accepted(fields: &[(FieldId, u16)], ids: FieldIds<'_>) -> u8 {
     fields.iter().filter(|(id, _)| ids.contains(*id)).count() as u8
 }
 
-mod sealed {
-    /// Keeps [`super::Port`] implemented by this module's adapters only.
-    pub trait Sealed {}
-}
-
 /// A serial port as the driver sees it: byte reads and whole-frame writes.
 ///
-/// Sealed: implemented by [`IoPort`] and [`NbPort`] only. It is public because it bounds
-/// [`Driver`]; callers use [`IoDriver`] and [`NbDriver`] and name it only through
-/// `Port::Serial` / `Port::Error`.
-pub trait Port: sealed::Sealed {
+/// Implemented here for [`embedded_io`] 0.7 ports ([`IoPort`]), [`embedded_hal_nb`] ports
+/// ([`NbPort`]) and, with the `embedded-io-06` feature, `embedded-io` 0.6 ports (`Io06Port`).
+///
+/// # Bring your own port
+/// Any other serial port works too: implement this trait for a wrapper around it and build
+/// the driver with [`Driver::from_port`]. The rules the driver relies on:
+/// * [`Port::read_byte_now`] never blocks: `Ok(None)` when no byte is available now (the
+///   driver then sleeps [`Timing::poll_step_us`] through its `DelayNs` and asks again, so
+///   reply time-outs stay in time);
+/// * [`Port::read_for_poll`] may block until at least one byte arrives (blocking drivers) or
+///   return `(0, false)` (non-blocking ones); `true` asks [`Driver::poll`] to read again at once;
+/// * [`Port::write_all`] returns once every byte has left the port (flushed), because a baud
+///   change ([`Driver::set_baud`]) follows the request's last byte.
+///
+/// ```
+/// use nav440_proto::driver::{Driver, Error, Port};
+///
+/// /// A port with nothing connected: every read finds no byte, writes vanish.
+/// struct Unplugged {
+///     baud: u32,
+/// }
+///
+/// impl Port for Unplugged {
+///     type Error = core::convert::Infallible;
+///     /// What `serial_mut` exposes (e.g. to change the baud rate): here the baud itself.
+///     type Serial = u32;
+///     fn read_for_poll(&mut self, _buf: &mut [u8]) -> Result<(usize, bool), Self::Error> {
+///         Ok((0, false))
+///     }
+///     fn read_byte_now(&mut self) -> Result<Option<u8>, Self::Error> {
+///         Ok(None)
+///     }
+///     fn write_all(&mut self, _bytes: &[u8]) -> Result<(), Error<Self::Error>> {
+///         Ok(())
+///     }
+///     fn serial_mut(&mut self) -> &mut u32 {
+///         &mut self.baud
+///     }
+///     fn into_serial(self) -> u32 {
+///         self.baud
+///     }
+/// }
+///
+/// /// Counts the time asked for instead of sleeping.
+/// struct Clock(u64);
+/// impl embedded_hal::delay::DelayNs for Clock {
+///     fn delay_ns(&mut self, ns: u32) {
+///         self.0 += u64::from(ns);
+///     }
+/// }
+///
+/// let mut driver = Driver::from_port(Unplugged { baud: 38400 });
+/// let mut clock = Clock(0);
+/// assert_eq!(driver.ping_wait(&mut clock), Err(Error::NoReply));
+/// // The default reply time-out, 200 ms, measured in time.
+/// assert_eq!(clock.0, 200_000_000);
+/// ```
+pub trait Port {
     /// The serial port's error.
     type Error;
     /// The wrapped serial port.
@@ -268,8 +320,6 @@ pub trait Port: sealed::Sealed {
 pub struct IoPort<S> {
     serial: S,
 }
-
-impl<S> sealed::Sealed for IoPort<S> {}
 
 impl<S: embedded_io::Read + embedded_io::ReadReady + embedded_io::Write> Port for IoPort<S> {
     type Error = S::Error;
@@ -316,8 +366,6 @@ impl<S: embedded_io::Read + embedded_io::ReadReady + embedded_io::Write> Port fo
 pub struct NbPort<S> {
     serial: S,
 }
-
-impl<S> sealed::Sealed for NbPort<S> {}
 
 impl<S> Port for NbPort<S>
 where
@@ -368,14 +416,11 @@ where
 }
 
 /// The driver over a [`Port`]: parser, receive buffer, timing and every command.
-/// Use it as [`IoDriver`] or [`NbDriver`].
+/// Use it as [`IoDriver`] or [`NbDriver`], or over your own [`Port`] ([`Driver::from_port`]).
 pub struct Driver<P> {
     port: P,
-    parser: Parser,
+    engine: Engine,
     rx: [u8; RX_CHUNK],
-    timing: Timing,
-    line_baud: u32,
-    unsolicited: u32,
 }
 
 /// Receive buffer size, bytes (largest chunk fed to the parser at once).
@@ -388,23 +433,227 @@ pub type IoDriver<S> = Driver<IoPort<S>>;
 /// Non-blocking driver over [`embedded_hal_nb::serial::Read`] + `Write` (one byte at a time).
 pub type NbDriver<S> = Driver<NbPort<S>>;
 
-impl<P> Driver<P> {
-    fn with_port(port: P) -> Self {
+#[cfg(feature = "embedded-io-06")]
+mod io06;
+#[cfg(feature = "embedded-io-06")]
+pub use io06::{Compat06, Compat06Error, Io06Driver, Io06Port};
+
+mod asynch;
+pub use asynch::AsyncDriver;
+pub(crate) use asynch::AsyncLink;
+
+/// The I/O of one driver call that waits: the port and the delay. The protocol logic
+/// ([`Engine`]) is written once as `async` code over this trait; the blocking drivers run it
+/// through [`BlockingLink`] (whose operations never suspend) with [`block_on`], the async
+/// driver awaits it with [`AsyncLink`].
+pub(crate) trait Link {
+    /// The serial port's error.
+    type Error;
+    /// The wrapped serial port.
+    type Serial;
+    /// One byte if one is available now; never waits for one.
+    async fn read_byte_now(&mut self) -> Result<Option<u8>, Self::Error>;
+    /// Every byte of `bytes`, then a flush.
+    async fn write_all(&mut self, bytes: &[u8]) -> Result<(), Error<Self::Error>>;
+    /// Sleeps `us` microseconds.
+    async fn delay_us(&mut self, us: u32);
+    /// The serial port (e.g. to change its baud rate).
+    fn serial_mut(&mut self) -> &mut Self::Serial;
+}
+
+/// [`Link`] of the blocking drivers: a [`Port`] and an [`embedded_hal::delay::DelayNs`].
+pub(crate) struct BlockingLink<'a, P, D> {
+    pub(crate) port: &'a mut P,
+    pub(crate) delay: &'a mut D,
+}
+
+impl<P: Port, D: DelayNs> Link for BlockingLink<'_, P, D> {
+    type Error = P::Error;
+    type Serial = P::Serial;
+
+    async fn read_byte_now(&mut self) -> Result<Option<u8>, P::Error> {
+        self.port.read_byte_now()
+    }
+
+    async fn write_all(&mut self, bytes: &[u8]) -> Result<(), Error<P::Error>> {
+        self.port.write_all(bytes)
+    }
+
+    async fn delay_us(&mut self, us: u32) {
+        self.delay.delay_us(us);
+    }
+
+    fn serial_mut(&mut self) -> &mut P::Serial {
+        self.port.serial_mut()
+    }
+}
+
+/// Runs a future whose every step completes at once (the [`Engine`] over a
+/// [`BlockingLink`]) to its end on the calling thread.
+pub(crate) fn block_on<F: core::future::Future>(f: F) -> F::Output {
+    let mut f = core::pin::pin!(f);
+    let mut cx = core::task::Context::from_waker(core::task::Waker::noop());
+    loop {
+        // A blocking link never suspends, so the first poll is the last.
+        if let core::task::Poll::Ready(out) = f.as_mut().poll(&mut cx) {
+            return out;
+        }
+    }
+}
+
+/// The protocol state and logic every driver shares (blocking, non-blocking and async):
+/// requests, reply matching ([`ReplyWait`]), time-outs, the parser and its counters. Its
+/// I/O goes through a [`Link`].
+pub(crate) struct Engine {
+    pub(crate) parser: Parser,
+    pub(crate) timing: Timing,
+    pub(crate) line_baud: u32,
+    pub(crate) unsolicited: u32,
+}
+
+impl Engine {
+    pub(crate) const fn new() -> Self {
         Self {
-            port,
             parser: Parser::new(),
-            rx: [0; RX_CHUNK],
             timing: Timing::DEFAULT,
             line_baud: Baud::B38400.bits_per_second(),
             unsolicited: 0,
         }
+    }
+
+    /// PK, then its reply.
+    pub(crate) async fn ping_wait<L: Link>(&mut self, link: &mut L) -> Result<(), Error<L::Error>> {
+        let mut f = [0u8; 8];
+        let n = command::ping(&mut f)?;
+        link.write_all(f.get(..n).unwrap_or(&[])).await?;
+        let mut wait = ReplyWait::new(PacketType::PK, Want::Ping);
+        self.wait(link, &mut wait).await
+    }
+
+    /// SF (RAM) or WF (EEPROM, `t = PacketType::WF`) of `fields`, then the confirmation.
+    pub(crate) async fn configure<L: Link>(
+        &mut self,
+        link: &mut L,
+        t: PacketType,
+        fields: &[(FieldId, u16)],
+    ) -> Result<(), Error<L::Error>> {
+        let mut f = [0u8; MAX_FRAME];
+        let n = if t == PacketType::WF {
+            command::write_fields(fields, &mut f)?
+        } else {
+            command::set_fields(fields, &mut f)?
+        };
+        link.write_all(f.get(..n).unwrap_or(&[])).await?;
+        let mut wait = ReplyWait::new(t, Want::Fields(fields));
+        self.wait(link, &mut wait).await
+    }
+
+    /// SF of the baud field; after the request has left, `switch` changes the local port and
+    /// the reply is awaited at the new rate (see [`Driver::set_baud`]).
+    pub(crate) async fn set_baud<L: Link>(
+        &mut self,
+        link: &mut L,
+        baud: Baud,
+        switch: impl FnOnce(&mut L::Serial, Baud) -> Result<(), L::Error>,
+    ) -> Result<(), Error<L::Error>> {
+        let fields = [(FieldId::BAUD_RATE, baud.code())];
+        let mut f = [0u8; 16];
+        let n = command::set_fields(&fields, &mut f)?;
+        link.write_all(f.get(..n).unwrap_or(&[])).await?;
+        switch(link.serial_mut(), baud).map_err(Error::Serial)?;
+        self.parser.clear();
+        self.line_baud = baud.bits_per_second();
+        let mut wait = ReplyWait::new(PacketType::SF, Want::Fields(&fields));
+        self.wait(link, &mut wait).await
+    }
+
+    /// GF or RF (`t = PacketType::RF`) of up to [`MAX_GET_FIELDS`] IDs, then the values.
+    pub(crate) async fn get_fields<L: Link>(
+        &mut self,
+        link: &mut L,
+        t: PacketType,
+        ids: &[FieldId],
+    ) -> Result<[Option<u16>; MAX_GET_FIELDS], Error<L::Error>> {
+        let ids = ids.get(..ids.len().min(MAX_GET_FIELDS)).unwrap_or(&[]);
+        let mut f = [0u8; 32];
+        let (n, request) = if t == PacketType::RF {
+            (command::read_fields(ids, &mut f)?, PacketType::RF)
+        } else {
+            (command::get_fields(ids, &mut f)?, PacketType::GF)
+        };
+        link.write_all(f.get(..n).unwrap_or(&[])).await?;
+        let mut wait = ReplyWait::new(request, Want::Values(ids));
+        self.wait(link, &mut wait).await?;
+        Ok(wait.values)
+    }
+
+    /// Feeds bytes read by `poll` and passes every frame, decoded, to `on_packet`.
+    pub(crate) fn feed(
+        &mut self,
+        bytes: &[u8],
+        mut on_packet: impl FnMut(Result<Packet<'_>, DecodeError>),
+    ) {
+        self.parser.feed(bytes, |f| on_packet(Packet::decode(f)));
+    }
+
+    /// Reads byte by byte until `wait` knows the outcome or the time-out expires.
+    async fn wait<L: Link>(
+        &mut self,
+        link: &mut L,
+        wait: &mut ReplyWait<'_>,
+    ) -> Result<(), Error<L::Error>> {
+        let limit_us = u64::from(self.timing.reply_timeout_ms) * 1000;
+        let step_us = self.timing.poll_step_us.max(1);
+        let byte_us = 10_000_000 / u64::from(self.line_baud.max(1));
+        let mut elapsed_us = 0u64;
+        let result = loop {
+            match link.read_byte_now().await {
+                Err(e) => break Err(Error::Serial(e)),
+                Ok(Some(b)) => {
+                    // Frames still buffered behind a corrupted candidate are scanned before
+                    // this byte (they were sent before the request: counted as unsolicited).
+                    self.parser.feed_until(&[b], |f| wait.on_frame(f));
+                    if let Some(r) = wait.outcome() {
+                        break r;
+                    }
+                    elapsed_us += byte_us;
+                }
+                Ok(None) => {
+                    link.delay_us(step_us).await;
+                    elapsed_us += u64::from(step_us);
+                }
+            }
+            if elapsed_us >= limit_us {
+                break Err(wait.give_up());
+            }
+        };
+        self.unsolicited = self.unsolicited.saturating_add(wait.unsolicited);
+        result
+    }
+}
+
+impl<P> Driver<P> {
+    /// A driver over any [`Port`] (see "Bring your own port" there); the port must already
+    /// be at the unit's baud rate. [`IoDriver::new`] and [`NbDriver::new`] wrap
+    /// `embedded-io` and `embedded-hal-nb` ports.
+    pub fn from_port(port: P) -> Self {
+        Self {
+            port,
+            engine: Engine::new(),
+            rx: [0; RX_CHUNK],
+        }
+    }
+
+    /// The port and the protocol state, for [`crate::boot`].
+    pub(crate) fn parts_mut(&mut self) -> (&mut P, &mut Engine) {
+        (&mut self.port, &mut self.engine)
     }
 }
 
 impl<S: embedded_io::Read + embedded_io::ReadReady + embedded_io::Write> Driver<IoPort<S>> {
     /// Wraps a serial port (already at the unit's baud rate).
     pub fn new(serial: S) -> Self {
-        Self::with_port(IoPort { serial })
+        Self::from_port(IoPort { serial })
     }
 }
 
@@ -414,30 +663,30 @@ where
 {
     /// Wraps a serial port (already at the unit's baud rate).
     pub fn new(serial: S) -> Self {
-        Self::with_port(NbPort { serial })
+        Self::from_port(NbPort { serial })
     }
 }
 
 impl<P: Port> Driver<P> {
     /// Sets the reply time-out and poll step (default [`Timing::DEFAULT`]).
     pub fn set_timing(&mut self, timing: Timing) {
-        self.timing = timing;
+        self.engine.timing = timing;
     }
 
     /// The reply time-out and poll step.
     pub fn timing(&self) -> Timing {
-        self.timing
+        self.engine.timing
     }
 
     /// Sets the line rate used to count received bytes as time in reply waits, bit/s
     /// (default 38400; [`crate::boot::boot`] keeps it equal to the local UART's rate).
     pub fn set_line_baud(&mut self, bits_per_second: u32) {
-        self.line_baud = bits_per_second.max(1);
+        self.engine.line_baud = bits_per_second.max(1);
     }
 
     /// The line rate used to count received bytes as time, bit/s.
     pub fn line_baud(&self) -> u32 {
-        self.line_baud
+        self.engine.line_baud
     }
 
     /// The wrapped serial port (e.g. to change its baud rate).
@@ -454,30 +703,30 @@ impl<P: Port> Driver<P> {
     /// Gives the serial port and the parser back (the parser holds
     /// [`Self::pending_bytes`] and the counters).
     pub fn into_parts(self) -> (P::Serial, Parser) {
-        (self.port.into_serial(), self.parser)
+        (self.port.into_serial(), self.engine.parser)
     }
 
     /// Bytes read from the port but not yet part of a frame, in stream order (empty right
     /// after a reply unless a corrupted candidate spanned the reply; see the module docs).
     pub fn pending_bytes(&self) -> &[u8] {
-        self.parser.pending_bytes()
+        self.engine.parser.pending_bytes()
     }
 
     /// The parser's counters.
     pub fn stats(&self) -> &Stats {
-        self.parser.stats()
+        self.engine.parser.stats()
     }
 
     /// Frames received while waiting for replies that were not the reply (continuous output,
     /// other replies), since the driver was made.
     pub fn unsolicited(&self) -> u32 {
-        self.unsolicited
+        self.engine.unsolicited
     }
 
     /// Drops a partial frame held by the parser (counted as skipped), e.g. after the local
     /// baud rate changed.
     pub fn clear_parser(&mut self) {
-        self.parser.clear();
+        self.engine.parser.clear();
     }
 
     /// Reads from the port and passes every complete frame, decoded, to `on_packet` (a known
@@ -497,11 +746,52 @@ impl<P: Port> Driver<P> {
                 .map_err(Error::Serial)?;
             total = total.saturating_add(n);
             let bytes = self.rx.get(..n).unwrap_or(&[]);
-            self.parser.feed(bytes, |f| on_packet(Packet::decode(f)));
+            self.engine.feed(bytes, &mut on_packet);
             if !more {
                 return Ok(total);
             }
         }
+    }
+
+    /// Reads every byte that arrives within `timeout_us` microseconds, sleeping
+    /// [`Timing::poll_step_us`] through `delay` while none is available, and passes every
+    /// complete frame, decoded, to `on_packet`; never waits longer than the time-out (the
+    /// line time of the bytes received counts, as in reply waits). Returns the number of
+    /// bytes read (0: nothing arrived in time).
+    pub fn poll_timeout(
+        &mut self,
+        timeout_us: u32,
+        delay: &mut impl DelayNs,
+        mut on_packet: impl FnMut(Result<Packet<'_>, DecodeError>),
+    ) -> Result<usize, Error<P::Error>> {
+        let step_us = self.engine.timing.poll_step_us.max(1);
+        let byte_us = 10_000_000 / u64::from(self.engine.line_baud.max(1));
+        let (mut elapsed_us, mut total, mut n) = (0u64, 0usize, 0usize);
+        while elapsed_us < u64::from(timeout_us) {
+            match self.port.read_byte_now().map_err(Error::Serial)? {
+                Some(b) => {
+                    if let Some(slot) = self.rx.get_mut(n) {
+                        *slot = b;
+                        n += 1;
+                    }
+                    total = total.saturating_add(1);
+                    elapsed_us += byte_us;
+                    if n < RX_CHUNK {
+                        continue;
+                    }
+                }
+                None => {
+                    delay.delay_us(step_us);
+                    elapsed_us += u64::from(step_us);
+                }
+            }
+            self.engine
+                .feed(self.rx.get(..n).unwrap_or(&[]), &mut on_packet);
+            n = 0;
+        }
+        self.engine
+            .feed(self.rx.get(..n).unwrap_or(&[]), &mut on_packet);
+        Ok(total)
     }
 
     /// Writes a whole pre-encoded frame and flushes ([`NbDriver`]: spinning on `WouldBlock`).
@@ -516,11 +806,17 @@ impl<P: Port> Driver<P> {
         self.send_raw(f.get(..n).unwrap_or(&[]))
     }
 
+    /// The blocking link of one call.
+    fn link<'a, D: DelayNs>(port: &'a mut P, delay: &'a mut D) -> BlockingLink<'a, P, D> {
+        BlockingLink { port, delay }
+    }
+
     /// Sends a ping (PK) and waits for the PK reply ([`Error::NoReply`] after the time-out).
     pub fn ping_wait(&mut self, delay: &mut impl DelayNs) -> Result<(), Error<P::Error>> {
-        self.ping()?;
-        let mut wait = ReplyWait::new(PacketType::PK, Want::Ping);
-        self.wait(&mut wait, delay)
+        block_on(
+            self.engine
+                .ping_wait(&mut Self::link(&mut self.port, delay)),
+        )
     }
 
     /// Sends a GP request for one packet of type `t`; the packet comes through [`Self::poll`].
@@ -536,7 +832,8 @@ impl<P: Port> Driver<P> {
         fields: &[(FieldId, u16)],
         delay: &mut impl DelayNs,
     ) -> Result<(), Error<P::Error>> {
-        self.configure(PacketType::SF, fields, delay, |_| Ok(()))
+        let mut link = Self::link(&mut self.port, delay);
+        block_on(self.engine.configure(&mut link, PacketType::SF, fields))
     }
 
     /// WF: writes fields to EEPROM and waits for the confirmation.
@@ -545,7 +842,8 @@ impl<P: Port> Driver<P> {
         fields: &[(FieldId, u16)],
         delay: &mut impl DelayNs,
     ) -> Result<(), Error<P::Error>> {
-        self.configure(PacketType::WF, fields, delay, |_| Ok(()))
+        let mut link = Self::link(&mut self.port, delay);
+        block_on(self.engine.configure(&mut link, PacketType::WF, fields))
     }
 
     /// Sets the continuous packet type and rate in one SF (fields 0x0003 and 0x0001).
@@ -573,13 +871,8 @@ impl<P: Port> Driver<P> {
         delay: &mut impl DelayNs,
         switch: impl FnOnce(&mut P::Serial, Baud) -> Result<(), P::Error>,
     ) -> Result<(), Error<P::Error>> {
-        let fields = [(FieldId::BAUD_RATE, baud.code())];
-        self.configure(PacketType::SF, &fields, delay, |d| {
-            switch(d.port.serial_mut(), baud).map_err(Error::Serial)?;
-            d.parser.clear();
-            d.line_baud = baud.bits_per_second();
-            Ok(())
-        })
+        let mut link = Self::link(&mut self.port, delay);
+        block_on(self.engine.set_baud(&mut link, baud, switch))
     }
 
     /// GF (RAM) or RF (EEPROM, `t = PacketType::RF`) of up to [`MAX_GET_FIELDS`] IDs: waits
@@ -590,75 +883,7 @@ impl<P: Port> Driver<P> {
         ids: &[FieldId],
         delay: &mut impl DelayNs,
     ) -> Result<[Option<u16>; MAX_GET_FIELDS], Error<P::Error>> {
-        let ids = ids.get(..ids.len().min(MAX_GET_FIELDS)).unwrap_or(&[]);
-        let mut f = [0u8; 32];
-        let n = if t == PacketType::RF {
-            command::read_fields(ids, &mut f)?
-        } else {
-            command::get_fields(ids, &mut f)?
-        };
-        self.send_raw(f.get(..n).unwrap_or(&[]))?;
-        let request = if t == PacketType::RF {
-            PacketType::RF
-        } else {
-            PacketType::GF
-        };
-        let mut wait = ReplyWait::new(request, Want::Values(ids));
-        self.wait(&mut wait, delay)?;
-        Ok(wait.values)
-    }
-
-    fn configure(
-        &mut self,
-        t: PacketType,
-        fields: &[(FieldId, u16)],
-        delay: &mut impl DelayNs,
-        after_send: impl FnOnce(&mut Self) -> Result<(), Error<P::Error>>,
-    ) -> Result<(), Error<P::Error>> {
-        let mut f = [0u8; MAX_FRAME];
-        let n = if t == PacketType::WF {
-            command::write_fields(fields, &mut f)?
-        } else {
-            command::set_fields(fields, &mut f)?
-        };
-        self.send_raw(f.get(..n).unwrap_or(&[]))?;
-        after_send(self)?;
-        let mut wait = ReplyWait::new(t, Want::Fields(fields));
-        self.wait(&mut wait, delay)
-    }
-
-    /// Reads byte by byte until `wait` knows the outcome or the time-out expires.
-    fn wait(
-        &mut self,
-        wait: &mut ReplyWait<'_>,
-        delay: &mut impl DelayNs,
-    ) -> Result<(), Error<P::Error>> {
-        let limit_us = u64::from(self.timing.reply_timeout_ms) * 1000;
-        let step_us = self.timing.poll_step_us.max(1);
-        let byte_us = 10_000_000 / u64::from(self.line_baud.max(1));
-        let mut elapsed_us = 0u64;
-        let result = loop {
-            match self.port.read_byte_now() {
-                Err(e) => break Err(Error::Serial(e)),
-                Ok(Some(b)) => {
-                    // Frames still buffered behind a corrupted candidate are scanned before
-                    // this byte (they were sent before the request: counted as unsolicited).
-                    self.parser.feed_until(&[b], |f| wait.on_frame(f));
-                    if let Some(r) = wait.outcome() {
-                        break r;
-                    }
-                    elapsed_us += byte_us;
-                }
-                Ok(None) => {
-                    delay.delay_us(step_us);
-                    elapsed_us += u64::from(step_us);
-                }
-            }
-            if elapsed_us >= limit_us {
-                break Err(wait.give_up());
-            }
-        };
-        self.unsolicited = self.unsolicited.saturating_add(wait.unsolicited);
-        result
+        let mut link = Self::link(&mut self.port, delay);
+        block_on(self.engine.get_fields(&mut link, t, ids))
     }
 }

@@ -12,10 +12,12 @@
 //!   [`Packet::yaw_sample`].
 //! * `*Fields` structs and [`command`]: encoders for every packet and command.
 //! * [`ItowClock`]: continuous time from the wrapping time-of-week stamps.
-//! * [`boot`]: the whole boot sequence (find the unit, baud switch, packet type and rate, read-back).
+//! * [`boot`]: the whole boot sequence (find the unit, baud switch, packet type and rate,
+//!   read-back), blocking ([`boot::boot`]) or async ([`boot::boot_async`]).
 //! * [`unit`](mod@unit): the unit's side (requests, field state, replies, NAKs) for simulators.
-//! * [`driver`]: an `embedded-io` and an `embedded-hal-nb` driver that yield packets and
-//!   configure the unit (SF with reply and NAK handling).
+//! * [`driver`]: an `embedded-io`, an `embedded-hal-nb` and an async (`embedded-io-async`)
+//!   driver that yield packets and configure the unit (SF with reply and NAK handling), with
+//!   time-outs in time through `DelayNs`; any other port through [`driver::Port`].
 //!
 //! Every error type ([`DecodeError`], [`EncodeError`], [`driver::Error`],
 //! [`boot::BootError`]) implements `Display` (one line) and `core::error::Error`.
@@ -97,3 +99,8 @@ pub const FRAME_OVERHEAD: usize = 7;
 pub const PREAMBLE_BYTE: u8 = 0x55;
 /// The preamble.
 pub const PREAMBLE: [u8; 2] = [PREAMBLE_BYTE, PREAMBLE_BYTE];
+
+/// The examples of the crate README, compiled and run as doc tests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

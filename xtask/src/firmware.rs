@@ -1048,6 +1048,76 @@ fn unit_ci(captures: &[PathBuf], short: &Path) -> Result<(), String> {
     Ok(())
 }
 
+/// `cargo xtask embassy`: the embassy example (`firmware-example/src/bin/embassy.rs`, an
+/// embassy-executor task with nav440-proto's async driver) linted, built for thumbv7em and run
+/// on QEMU `mps2-an386` against `nav440 sim`: every bundled capture (CSV identical to `nav440
+/// estimate` on what the unit streamed after configuration) and a unit that never answers.
+pub fn embassy() -> Result<(), String> {
+    let start = std::time::Instant::now();
+    let board = qemu::BOARDS
+        .iter()
+        .find(|b| b.name == "an386")
+        .ok_or("board an386 missing")?;
+    cargo(&[
+        "clippy",
+        "-p",
+        FW,
+        "--target",
+        board.target,
+        "--features",
+        "embassy",
+        "--bin",
+        "embassy",
+        "--",
+        "-D",
+        "warnings",
+    ])?;
+    let elf = build(board.target, &["embassy"], "embassy")?;
+    // As in `ci-firmware`: without QEMU, XTASK_SKIP_QEMU=1 skips the runs, loudly.
+    match qemu::ensure_qemu() {
+        Ok(()) => {}
+        Err(e) if std::env::var("XTASK_SKIP_QEMU").is_ok_and(|v| v == "1") => {
+            eprintln!("xtask: XTASK_SKIP_QEMU=1: SKIPPING the embassy example's QEMU runs: {e}");
+            return Ok(());
+        }
+        Err(e) => return Err(e),
+    }
+    let nav440 = nav440_bin()?;
+    let mut cases: Vec<UnitCase> = data_captures()
+        .into_iter()
+        .map(|capture| UnitCase {
+            name: "embassy",
+            capture,
+            sim_args: &["--fast"],
+            expect: Expect::Csv {
+                stderr_has: "unit configured (embassy, async driver): A2 at 57600 Bd (unit was at 38400 Bd)",
+            },
+        })
+        .collect();
+    cases.push(UnitCase {
+        name: "embassy-no-answer",
+        capture: root().join("host-tests/data/sin5_a2_25hz_weekwrap.bin"),
+        sim_args: &["--fault", "no-answer"],
+        expect: Expect::Fails {
+            status: 2,
+            diagnostic: "boot failed: no answer from the unit",
+        },
+    });
+    for case in &cases {
+        let t = std::time::Instant::now();
+        let ok = unit_case(board, &elf, &nav440, case, &[])?;
+        eprintln!(
+            "xtask: EMBASSY OK ({:.1} s): {ok}",
+            t.elapsed().as_secs_f64()
+        );
+    }
+    eprintln!(
+        "xtask: embassy example against nav440 sim: every case passed in {:.0} s",
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
 /// `cargo xtask ci-unit`: the unit runs of `ci-firmware` (QEMU required).
 pub fn ci_unit() -> Result<(), String> {
     qemu::ensure_qemu()?;

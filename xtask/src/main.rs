@@ -9,8 +9,12 @@
 //!   unit, N4LP length prefix), CSV on stdout.
 //! * `cargo xtask bench` - instruction counts on the target (QEMU `-icount`, SysTick).
 //! * `cargo xtask size`  - flash/RAM of the firmware (llvm-size) and RAM per estimator.
+//! * `cargo xtask msrv`  - the libraries' declared `rust-version` checked with that toolchain.
+//! * `cargo xtask package` - the libraries' examples run and `cargo publish --dry-run`.
+//! * `cargo xtask embassy` - the embassy example (async driver) under QEMU against `nav440 sim`.
 
 mod firmware;
+mod package;
 mod qemu;
 mod unit;
 
@@ -87,6 +91,14 @@ enum Cmd {
     },
     /// Flash/RAM of the firmware (llvm-size) and RAM per estimator.
     Size,
+    /// Checks each library with the toolchain of its declared `rust-version` (installed with
+    /// rustup when missing), and that the workspace's `rust-version` is the pinned toolchain.
+    Msrv,
+    /// Runs the libraries' examples and `cargo publish --dry-run` of each (needs crates.io).
+    Package,
+    /// The embassy example (async driver on embassy-executor) built for thumbv7em and run on
+    /// QEMU `mps2-an386` against `nav440 sim`.
+    Embassy,
 }
 
 fn main() -> ExitCode {
@@ -107,6 +119,9 @@ fn main() -> ExitCode {
         Cmd::Qemu { file, board } => firmware::qemu(board, &file),
         Cmd::Bench { board } => firmware::bench(board),
         Cmd::Size => firmware::size(),
+        Cmd::Msrv => package::msrv(),
+        Cmd::Package => package::package(),
+        Cmd::Embassy => firmware::embassy(),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -195,7 +210,11 @@ fn ci() -> Result<(), String> {
         &["doc", "--no-deps"],
         &[("RUSTDOCFLAGS", "-D warnings")],
     )?;
+    // The libraries as users get them: examples, declared MSRV, publishable packages.
+    package::package()?;
+    package::msrv()?;
     firmware::ci_steps()?;
+    firmware::embassy()?;
     eprintln!(
         "xtask ci: all checks passed in {:.0} s",
         start.elapsed().as_secs_f64()

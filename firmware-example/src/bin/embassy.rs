@@ -1,0 +1,245 @@
+//! The embassy example: an `embassy-executor` task configures the NAV440 with the async
+//! driver (`nav440_proto::boot::boot_async`), then estimates from its stream, printing the same
+//! CSV rows as the blocking firmware (`src/main.rs`).
+//!
+//! Build: `cargo build -p firmware-example --release --target thumbv7em-none-eabihf
+//! --features embassy --bin embassy`. Run against the simulated unit on QEMU `mps2-an386`:
+//! `cargo xtask embassy` (what CI runs: its CSV must equal `nav440 estimate` on the bytes
+//! the unit streamed).
+//!
+//! On a real board with `embassy-stm32`, the two adapters below are not needed: its
+//! `BufferedUart` implements the `embedded-io(-async)` traits (if your version implements
+//! 0.6, wrap it in `nav440_proto::driver::Compat06` with nav440-proto's `embedded-io-06`
+//! feature) and `embassy_time::Delay` implements `embedded_hal_async::delay::DelayNs`:
+//!
+//! ```ignore
+//! let mut driver = AsyncDriver::new(uart);
+//! let report = boot::boot_async(&mut driver, &TARGET, &Options::DEFAULT, &mut Delay, |u, b| {
+//!     u.set_baudrate(b.bits_per_second()) // the local UART follows the unit
+//! })
+//! .await?;
+//! ```
+//!
+//! Here the board is the emulated one of the blocking firmware (CMSDK UART0 with its
+//! interrupt-fed receive queue, SysTick at 1 kHz), adapted to the async traits by polling:
+//! a read with no byte ready and an unfinished delay wake their task at once, so the
+//! executor polls again (a real HAL wakes it from the interrupt instead).
+#![no_std]
+#![no_main]
+
+use core::future::poll_fn;
+use core::task::Poll;
+
+use embassy_executor::Spawner;
+use firmware_example::uart::{Board, Control, Uart0};
+use firmware_example::{host, pipeline, stack, time};
+use nav440_proto::boot::{self, Options, Target};
+use nav440_proto::driver::{AsyncDriver, Timing};
+use nav440_proto::Baud;
+
+/// A2 at 100 Hz at 57600 Bd, checked against the unit's byte budget at compile time.
+const TARGET: Target = Target::DEFAULT;
+const _: () = assert!(TARGET.fits_budget());
+
+/// The UART as `embedded_io_async` sees it.
+struct AsyncUart(Uart0);
+
+impl embedded_io::ErrorType for AsyncUart {
+    type Error = firmware_example::uart::Error;
+}
+
+impl embedded_io::ReadReady for AsyncUart {
+    fn read_ready(&mut self) -> Result<bool, Self::Error> {
+        embedded_io::ReadReady::read_ready(&mut self.0)
+    }
+}
+
+impl embedded_io_async::Read for AsyncUart {
+    /// Waits (yielding to the executor) until a byte is ready, then reads what is there.
+    async fn read(&mut self, buf: &mut [u8]) -> Result<usize, Self::Error> {
+        poll_fn(|cx| match embedded_io::ReadReady::read_ready(&mut self.0) {
+            Ok(true) => Poll::Ready(Ok(())),
+            Ok(false) => {
+                cx.waker().wake_by_ref();
+                Poll::Pending
+            }
+            Err(e) => Poll::Ready(Err(e)),
+        })
+        .await?;
+        embedded_io::Read::read(&mut self.0, buf)
+    }
+}
+
+impl embedded_io_async::Write for AsyncUart {
+    /// The emulated UART takes bytes at once: the blocking write never waits.
+    async fn write(&mut self, buf: &[u8]) -> Result<usize, Self::Error> {
+        embedded_io::Write::write(&mut self.0, buf)
+    }
+
+    async fn flush(&mut self) -> Result<(), Self::Error> {
+        embedded_io::Write::flush(&mut self.0)
+    }
+}
+
+/// `embedded_hal_async::delay::DelayNs` on the SysTick time base (resolution 1 ms, so a
+/// delay lasts until the microsecond clock has passed its end).
+struct TickDelay;
+
+impl embedded_hal_async::delay::DelayNs for TickDelay {
+    async fn delay_ns(&mut self, ns: u32) {
+        let until = time::now_us() + u64::from(ns.div_ceil(1000));
+        poll_fn(|cx| {
+            if time::now_us() >= until {
+                Poll::Ready(())
+            } else {
+                cx.waker().wake_by_ref();
+                Poll::Pending
+            }
+        })
+        .await;
+    }
+}
+
+fn fail(status: u32, what: core::fmt::Arguments<'_>) -> ! {
+    host::stderr(format_args!("firmware: {what}\n"));
+    host::exit_code(status)
+}
+
+/// The harness's end message on the control channel, `N4EN` + u32 LE: the number of bytes
+/// the unit sent (see `src/main.rs`), taken byte by byte as it arrives.
+struct EndMessage {
+    buf: [u8; 8],
+    len: usize,
+}
+
+impl EndMessage {
+    /// `Some(count)` once the whole message has arrived.
+    fn poll(&mut self, control: &mut Control) -> Option<u64> {
+        while self.len < self.buf.len() {
+            self.buf[self.len] = control.try_read()?;
+            self.len += 1;
+        }
+        let m = self.buf;
+        if &m[..4] != b"N4EN" {
+            fail(1, format_args!("bad control message {m:02x?}"))
+        }
+        Some(u64::from(u32::from_le_bytes([m[4], m[5], m[6], m[7]])))
+    }
+}
+
+/// Lets the executor run other tasks once.
+async fn yield_now() {
+    let mut yielded = false;
+    poll_fn(|cx| {
+        if yielded {
+            Poll::Ready(())
+        } else {
+            yielded = true;
+            cx.waker().wake_by_ref();
+            Poll::Pending
+        }
+    })
+    .await;
+}
+
+#[embassy_executor::main]
+async fn main(_spawner: Spawner) {
+    stack::paint();
+    let Some(core) = cortex_m::Peripherals::take() else {
+        fail(1, format_args!("core peripherals already taken"))
+    };
+    let Some(board) = Board::take(38_400) else {
+        fail(1, format_args!("UARTs already taken"))
+    };
+    let Board {
+        nav,
+        mut control,
+        core_clock_hz,
+    } = board;
+    let _blocking_delay = time::start(core.SYST, core_clock_hz);
+    let mut pipe = match pipeline::Pipeline::new() {
+        Ok(p) => p,
+        Err(e) => fail(1, format_args!("bank configuration rejected: {e:?}")),
+    };
+
+    // 1. Configure the unit: the async driver, the same sequence as the blocking firmware.
+    let mut driver = AsyncDriver::new(AsyncUart(nav));
+    driver.set_timing(Timing {
+        reply_timeout_ms: 500,
+        ..Timing::DEFAULT
+    });
+    let set_baud = |u: &mut AsyncUart, b: Baud| {
+        u.0.set_baud(b.bits_per_second())
+            .map_err(firmware_example::uart::Error::from)
+    };
+    let report = match boot::boot_async(
+        &mut driver,
+        &TARGET,
+        &Options::DEFAULT,
+        &mut TickDelay,
+        set_baud,
+    )
+    .await
+    {
+        Ok(r) => r,
+        Err(e) => fail(2, format_args!("boot failed: {e}")),
+    };
+    host::stderr(format_args!(
+        "firmware: unit configured (embassy, async driver): {} at {} Bd (unit was at {} Bd); boot_frames={} boot_ms={}\n",
+        TARGET.packet,
+        report.baud.bits_per_second(),
+        report.unit_baud.bits_per_second(),
+        report.unsolicited_frames,
+        time::now_ms(),
+    ));
+
+    // 2. Estimate from the first byte after the read-back until the harness's byte count.
+    host::stdout(pipeline::CSV_HEADER.as_bytes());
+    host::stdout(b"\n");
+    let mut emit = |row: &str| host::stdout(row.as_bytes());
+    if let Err(e) = pipe.feed(driver.pending_bytes(), &mut emit) {
+        fail(1, format_args!("bank: {e:?}"))
+    }
+    let mut uart = driver.release();
+    let mut end = EndMessage {
+        buf: [0; 8],
+        len: 0,
+    };
+    let mut total: Option<u64> = None;
+    let mut buf = [0u8; 64];
+    loop {
+        let read = uart.0.bytes_read();
+        if total.is_some_and(|n| read >= n) {
+            break;
+        }
+        if embedded_io::ReadReady::read_ready(&mut uart).unwrap_or(false) {
+            let room = total.map_or(buf.len() as u64, |n| n - read);
+            let want = (buf.len() as u64).min(room) as usize;
+            let n = match embedded_io_async::Read::read(&mut uart, &mut buf[..want]).await {
+                Ok(n) => n,
+                Err(e) => fail(1, format_args!("UART error: {e:?}")),
+            };
+            if let Err(e) = pipe.feed(&buf[..n], &mut emit) {
+                fail(1, format_args!("bank: {e:?}"))
+            }
+        } else if let Some(n) = total.is_none().then(|| end.poll(&mut control)).flatten() {
+            total = Some(n);
+        } else {
+            yield_now().await;
+        }
+    }
+    finish(&mut pipe, &uart.0, total.unwrap_or(0))
+}
+
+fn finish(pipe: &mut pipeline::Pipeline, uart: &Uart0, unit_bytes: u64) -> ! {
+    if let Err(e) = pipe.finish(|row| host::stdout(row.as_bytes())) {
+        fail(1, format_args!("bank: {e:?}"))
+    }
+    let mut line: heapless::String<400> = heapless::String::new();
+    let _ = pipe.summary(&mut line, uart.overruns(), uart.stalls());
+    host::stderr(format_args!(
+        "firmware: {line} unit_bytes={unit_bytes} stack_peak={}\n",
+        stack::peak()
+    ));
+    host::exit(true)
+}

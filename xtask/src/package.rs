@@ -1,0 +1,164 @@
+//! The libraries as users get them: their examples run, their declared minimum supported Rust
+//! version checked with that very toolchain, and `cargo publish --dry-run` of each.
+
+use crate::{cargo, run};
+use std::path::Path;
+use std::process::Command;
+
+/// Runs from the workspace root (relative paths below), wherever `cargo xtask` was called.
+fn to_root() -> Result<(), String> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .ok_or("xtask lives in the workspace")?;
+    std::env::set_current_dir(root).map_err(|e| format!("cannot enter {}: {e}", root.display()))
+}
+
+/// The publishable libraries (their `Cargo.toml` lies at `<name>/Cargo.toml`).
+pub const LIBRARIES: &[&str] = &["nav440-proto", "estimators"];
+
+/// Runs every example of the libraries (each checks its own result and exits non-zero on a
+/// failure), then `cargo publish --dry-run` of each library (`--allow-dirty`: CI's checkout may
+/// hold build products; the dry run packages, verifies that the package builds on its own
+/// with its crates.io dependencies, and uploads nothing).
+pub fn package() -> Result<(), String> {
+    to_root()?;
+    cargo(&[
+        "run",
+        "-q",
+        "-p",
+        "estimators",
+        "--example",
+        "sampled_signal",
+    ])?;
+    cargo(&[
+        "run",
+        "-q",
+        "-p",
+        "nav440-proto",
+        "--example",
+        "configure_unit",
+    ])?;
+    cargo(&[
+        "run",
+        "-q",
+        "-p",
+        "nav440-proto",
+        "--example",
+        "parse_capture",
+        "--",
+        "host-tests/data/fig5_a2_100hz.bin",
+    ])?;
+    // The driver over embedded-io 0.6 ports (feature `embedded-io-06`), on the host and,
+    // linted, on the Cortex-M4F target.
+    cargo(&[
+        "test",
+        "-p",
+        "nav440-proto",
+        "--features",
+        "embedded-io-06",
+        "--test",
+        "io06",
+    ])?;
+    cargo(&[
+        "clippy",
+        "-p",
+        "nav440-proto",
+        "--features",
+        "embedded-io-06",
+        "--target",
+        "thumbv7em-none-eabihf",
+        "--",
+        "-D",
+        "warnings",
+    ])?;
+    for lib in LIBRARIES {
+        cargo(&["publish", "--dry-run", "--allow-dirty", "-p", lib])?;
+    }
+    Ok(())
+}
+
+/// The `rust-version` of `[package]` (or `[workspace.package]`) in a manifest's text, if set
+/// as a plain string.
+pub fn rust_version(manifest: &str) -> Option<String> {
+    manifest.lines().find_map(|line| {
+        let (key, value) = line.split_once('=')?;
+        (key.trim() == "rust-version").then(|| value.trim().trim_matches('"').to_owned())
+    })
+}
+
+/// The toolchain channel pinned in `rust-toolchain.toml`.
+fn pinned_channel() -> Result<String, String> {
+    let text = std::fs::read_to_string("rust-toolchain.toml")
+        .map_err(|e| format!("cannot read rust-toolchain.toml: {e}"))?;
+    text.lines()
+        .find_map(|line| {
+            let (key, value) = line.split_once('=')?;
+            (key.trim() == "channel").then(|| value.trim().trim_matches('"').to_owned())
+        })
+        .ok_or_else(|| "rust-toolchain.toml names no channel".to_owned())
+}
+
+/// `major.minor` of a version or channel (`1.95.0` -> `1.95`).
+fn major_minor(v: &str) -> String {
+    v.split('.').take(2).collect::<Vec<_>>().join(".")
+}
+
+/// Checks each library (`--lib`, with no and with all features) with the toolchain of
+/// its declared `rust-version`, installing it with rustup (minimal profile) when missing, and
+/// checks that the workspace's `rust-version` (inherited by the host crates, xtask and the
+/// firmware, which are built only with the pinned toolchain) equals the pinned toolchain.
+pub fn msrv() -> Result<(), String> {
+    to_root()?;
+    let pinned = pinned_channel()?;
+    let root = std::fs::read_to_string("Cargo.toml")
+        .map_err(|e| format!("cannot read Cargo.toml: {e}"))?;
+    let workspace = rust_version(&root).ok_or("Cargo.toml declares no rust-version")?;
+    if major_minor(&workspace) != major_minor(&pinned) {
+        return Err(format!(
+            "the workspace's rust-version {workspace} is not the pinned toolchain {pinned} \
+             (rust-toolchain.toml), the only one its crates are checked with"
+        ));
+    }
+    eprintln!("xtask msrv: workspace rust-version {workspace} = pinned toolchain {pinned}");
+    for lib in LIBRARIES {
+        let manifest = std::fs::read_to_string(format!("{lib}/Cargo.toml"))
+            .map_err(|e| format!("cannot read {lib}/Cargo.toml: {e}"))?;
+        let version = rust_version(&manifest)
+            .ok_or_else(|| format!("{lib}/Cargo.toml declares no rust-version of its own"))?;
+        let installed = Command::new("rustup")
+            .args(["run", &version, "rustc", "--version"])
+            .output()
+            .map(|o| o.status.success())
+            .unwrap_or(false);
+        if !installed {
+            run(
+                "rustup",
+                &["toolchain", "install", &version, "--profile", "minimal"],
+            )?;
+        }
+        for features in [&[][..], &["--all-features"][..]] {
+            let mut args = vec!["run", &version, "cargo", "check", "-q", "-p", lib, "--lib"];
+            args.extend_from_slice(features);
+            run("rustup", &args)?;
+        }
+        eprintln!("xtask msrv: {lib} builds with its rust-version {version}");
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_rust_version_and_channel() {
+        let m = "[package]\nname = \"x\"\n# note\nrust-version = \"1.85\"\nlicense = \"MIT\"\n";
+        assert_eq!(rust_version(m).as_deref(), Some("1.85"));
+        assert_eq!(
+            rust_version("[package]\nrust-version.workspace = true\n"),
+            None
+        );
+        assert_eq!(major_minor("1.95.0"), "1.95");
+        assert_eq!(major_minor("1.95"), "1.95");
+    }
+}
