@@ -59,6 +59,8 @@
 
 mod ad;
 pub mod adapter;
+pub mod law;
+mod pair;
 mod ave;
 mod bank;
 pub mod csv;
@@ -76,19 +78,23 @@ mod real;
 mod series;
 mod unwrap;
 
-pub use ad::{Ad, AdConfig};
+pub use ad::{Ad, AdConfig, AdParams, AdState};
 pub use adapter::{SampleAdapter, SampleClock, Tick};
-pub use ave::{Ave, AveConfig, DeltaMode};
+pub use ave::{Ave, AveConfig, AveParams, AveState, DeltaLaw, DeltaMode};
 pub use bank::{
-    BankConfig, BankGains, BankOutput, KalmanNoise, YawBank, GAP_PERIODS, KF_DEFAULT,
+    Accepted, BankConfig, BankGains, BankInput, BankOutput, Channel, Feed, KalmanNoise,
+    PaperBank, PaperOutput, PaperParams, PaperState, ProductBank, ProductChannel,
+    ProductOutput, ProductParams, ProductState, Wrap, YawBank, GAP_PERIODS, KF_DEFAULT,
     VELOCITY_NAMES,
 };
-pub use ed::{Ed, EdConfig, EdScheme};
+pub use ed::{Ed, EdConfig, EdParams, EdScheme, EdState};
 pub use error::{ConfigError, SampleError};
 pub use estimator::{advance_by_steps, Estimator, Hold};
-pub use ilo::{Ilo, IloConfig};
-pub use kalman::{Kalman, KalmanConfig};
+pub use ilo::{Ilo, IloConfig, IloParams, IloState};
+pub use kalman::{Kalman, KalmanConfig, KalmanOutput, KalmanParams, KalmanState};
+pub use law::{Law, Stateful};
 pub use linear::{ClosedForm, LinearLaw};
+pub use pair::{VelAcc, VelAccState};
 pub use real::{ExactSqrt, Fx, Real, SqrtFn};
-pub use series::Series;
+pub use series::{Series, SeriesState};
 pub use unwrap::Unwrapper;

@@ -19,7 +19,7 @@ use crate::paper::{ave_on_rate, mse, row_mse, steps_between, REFERENCE_AVE};
 use crate::replay::{self, EstimateOptions, Noise, Sample};
 use estimators::{
     Ad, Ave, AveConfig, BankConfig, DeltaMode, Ed, EdConfig, Estimator, Ilo, IloConfig, Kalman,
-    KalmanConfig, SampleAdapter, Series,
+    KalmanConfig, Law, SampleAdapter, Series, Stateful,
 };
 
 /// Column names in bank order.
@@ -91,9 +91,13 @@ impl Problem<'_> {
 
     /// [`Self::eval`] of what `make` builds (velocity half) or, for the acceleration half,
     /// of two of them in series (both stages with the same gains, as in the bank).
-    fn eval_family<E: Estimator<f32>>(&self, make: impl Fn() -> Option<E>, acc: bool) -> f64 {
+    fn eval_family<L: Law<Num = f32>>(
+        &self,
+        make: impl Fn() -> Option<Stateful<L>>,
+        acc: bool,
+    ) -> f64 {
         if acc {
-            self.eval(&|| Some(Series::new(make()?, make()?)), true)
+            self.eval(&|| Some(Series::of(&make()?, &make()?)), true)
         } else {
             self.eval(&make, false)
         }
