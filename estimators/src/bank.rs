@@ -174,6 +174,13 @@ fn exact_angle<T: Real>(turns: i64, wrapped: T) -> (f32, f64) {
             return (r, 0.0);
         }
     }
+    exact_angle_f64(turns, wrapped)
+}
+
+/// [`exact_angle`] in f64 (soft-float on Cortex-M: out of line, taken only after a turn).
+#[cold]
+#[inline(never)]
+fn exact_angle_f64<T: Real>(turns: i64, wrapped: T) -> (f32, f64) {
     let exact = turns as f64 * 360.0 + wrapped.to_f64();
     let rounded = exact as f32;
     (rounded, exact - f64::from(rounded))
@@ -260,7 +267,7 @@ impl<T: Real> BankInput<T> {
     }
 
     /// Checks and classifies one sample (`t_us` µs, `angle_deg` deg); see [`PaperBank::update`].
-    #[inline]
+    #[inline(always)]
     pub fn accept(&mut self, t_us: u64, angle_deg: f32) -> Result<Accepted<T>, SampleError> {
         if !angle_deg.is_finite() {
             return Err(SampleError::NotFinite);
@@ -705,7 +712,7 @@ estimator_bank! {
         /// ED and ED-ED.
         ed: VelAcc<EdParams<T, S>> = ed_pair(cfg) => [EdV = velocity, EdA = acceleration];
         /// Kalman tracker with the velocity noise.
-        kf_v: KalmanParams<T> = kalman(cfg, &cfg.velocity, KalmanOutput::Velocity) => [KfV = output];
+        kf_v: KalmanParams<T> = kalman(cfg, &cfg.velocity, KalmanOutput::Velocity) => [KfV = velocity];
         /// ILO1-ILO1, Table 4 gains.
         ilo1_a: ClosedForm<Series<IloParams<T, 1>, IloParams<T, 1>>> = ilo_a(cfg, 0, n0) => [Ilo1A = output];
         /// ILO2-ILO2, Table 4 gains.
@@ -715,7 +722,7 @@ estimator_bank! {
         /// AD-AD.
         ad_a: ClosedForm<Series<AdParams<T>, AdParams<T>>> = ad_a(cfg, n0) => [AdA = output];
         /// Kalman tracker with the acceleration noise.
-        kf_a: KalmanParams<T> = kalman(cfg, &cfg.acceleration, KalmanOutput::Acceleration) => [KfA = output];
+        kf_a: KalmanParams<T> = kalman(cfg, &cfg.acceleration, KalmanOutput::Acceleration) => [KfA = acceleration];
     }
 }
 
@@ -748,24 +755,24 @@ impl Channel {
 }
 
 estimator_bank! {
-    /// The product preset: one velocity and one acceleration estimator per axis, both linear
-    /// laws through their exact closed-form map (a few dozen multiply-adds per sample):
-    /// ILO1 (Table 2 gains of `cfg.velocity.ilo[0]`) for velocity and AD-AD (`cfg.acceleration
-    /// .ad_t`) for acceleration. Same input stage, API and output conventions as [`PaperBank`];
-    /// a firmware that wants other estimators writes its own table with
-    /// [`crate::estimator_bank!`].
+    /// The product preset: one velocity and one acceleration estimator per axis, the two
+    /// cheapest good ones of the paper bank: ILO1 (Table 2 gains of `cfg.velocity.ilo[0]`,
+    /// through its exact closed-form map; the best ILO without noise) for velocity and the
+    /// Kalman tracker (`cfg.acceleration.kf`) for acceleration, each a few dozen operations per
+    /// sample. Same input stage, API and output conventions as [`PaperBank`]; a firmware that
+    /// wants other estimators writes its own table with [`crate::estimator_bank!`].
     bank ProductBank, params ProductParams, state ProductState, output ProductOutput, channel ProductChannel;
     build(cfg, n0);
     channels {
         /// ILO1 velocity, deg/s.
         Ilo1V = "ilo1_v",
-        /// AD-AD acceleration, deg/s^2.
-        AdA = "ad_a",
+        /// Kalman tracker acceleration, deg/s^2.
+        KfA = "kf_a",
     }
     rows {
         /// ILO1, Table 2 gains.
         ilo1_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 0, n0) => [Ilo1V = output];
-        /// AD-AD.
-        ad_a: ClosedForm<Series<AdParams<T>, AdParams<T>>> = ad_a(cfg, n0) => [AdA = output];
+        /// Kalman tracker with the acceleration noise.
+        kf_a: KalmanParams<T> = kalman(cfg, &cfg.acceleration, KalmanOutput::Acceleration) => [KfA = acceleration];
     }
 }

@@ -126,6 +126,10 @@ pub enum KalmanOutput {
 pub struct KalmanParams<T: Real> {
     k: [T; 3],
     h: T,
+    /// `n0` and `n0 h` (the interval of a nominal sample period, precomputed: the same
+    /// product the update would compute).
+    n0: u32,
+    dt0: T,
     output: KalmanOutput,
 }
 
@@ -147,11 +151,35 @@ impl<T: Real> KalmanParams<T> {
     pub fn new(cfg: &KalmanConfig, h: f32, output: KalmanOutput) -> Result<Self, ConfigError> {
         let h_us = crate::adapter::step_us(h)?;
         let kf = Kalman::<T>::new(cfg)?;
+        let h = T::from_f64(h_us as f64 * 1e-6);
+        // Steps per nominal period (as the sample clock counts them); 0 if out of range.
+        let n0 = libm::round(f64::from(cfg.dt) * 1e6 / h_us as f64);
+        let n0 = if (1.0..=1e6).contains(&n0) { n0 as u32 } else { 0 };
         Ok(Self {
             k: kf.k,
-            h: T::from_f64(h_us as f64 * 1e-6),
+            h,
+            n0,
+            dt0: Self::dt(h, n0),
             output,
         })
+    }
+
+    /// The velocity estimate of `s` (unit/s), whatever the configured output.
+    #[inline]
+    pub fn velocity(&self, s: &KalmanState<T>) -> T {
+        s.v
+    }
+
+    /// The acceleration estimate of `s` (unit/s^2), whatever the configured output.
+    #[inline]
+    pub fn acceleration(&self, s: &KalmanState<T>) -> T {
+        s.a
+    }
+
+    /// `n h` as [`Law::advance`] computes it.
+    #[inline(always)]
+    fn dt(h: T, n: u32) -> T {
+        h * T::from_i32(i32::try_from(n).unwrap_or(i32::MAX))
     }
 
     #[inline(always)]
@@ -200,7 +228,7 @@ impl<T: Real> Law for KalmanParams<T> {
     #[inline]
     fn advance(&self, s: &mut KalmanState<T>, _y_prev: T, y_new: T, n: u32, _hold: Hold) -> T {
         if n > 0 {
-            let dt = self.h * T::from_i32(i32::try_from(n).unwrap_or(i32::MAX));
+            let dt = if n == self.n0 { self.dt0 } else { Self::dt(self.h, n) };
             self.update(s, y_new, dt);
         }
         self.output(s)

@@ -104,6 +104,13 @@ impl<E: LinearLaw> ClosedForm<E> {
         Stateful::from_law(Self::new(*inner.law(), n, hold))
     }
 
+    /// The fallback of [`Law::advance`]: `n` Euler steps (an interval of another length).
+    #[cold]
+    #[inline(never)]
+    fn advance_stepping(&self, st: &mut E::State, y_prev: E::Num, y_new: E::Num, n: u32, hold: Hold) -> E::Num {
+        self.inner.advance(st, y_prev, y_new, n, hold)
+    }
+
     /// The wrapped law.
     pub fn inner(&self) -> &E {
         &self.inner
@@ -140,10 +147,10 @@ impl<E: LinearLaw> Law for ClosedForm<E> {
 
     /// `s' = P y_prev + Phi (s - P y_prev) + g (y_new - y_prev)` when `n` and `hold` match the
     /// precomputed map, else `n` Euler steps.
-    #[inline]
+    #[inline(always)]
     fn advance(&self, st: &mut E::State, y_prev: E::Num, y_new: E::Num, n: u32, hold: Hold) -> E::Num {
         if n != self.n || hold != self.hold || n == 0 {
-            return self.inner.advance(st, y_prev, y_new, n, hold);
+            return self.advance_stepping(st, y_prev, y_new, n, hold);
         }
         let zero = <E::Num as Real>::ZERO;
         let mut s = self.inner.lin_state(st);

@@ -49,6 +49,19 @@ impl<L: Law> VelAcc<L> {
         self.a2.output(&s.a2)
     }
 
+    /// One step of the three laws (`a1` skipped when `SHARED`).
+    #[inline(always)]
+    fn one<const SHARED: bool>(&self, st: &mut VelAccState<L::State>, y: L::Num) {
+        let o = self.v.step(&mut st.v, y);
+        let o1 = if SHARED {
+            o
+        } else {
+            self.a1.step(&mut st.a1, y)
+        };
+        self.a2.step(&mut st.a2, o1);
+    }
+
+    /// `n >= 1` steps on a local copy of the state.
     #[inline(always)]
     fn run<const SHARED: bool>(
         &self,
@@ -59,19 +72,10 @@ impl<L: Law> VelAcc<L> {
         hold: Hold,
     ) {
         let mut st = *s;
-        let mut one = |y: L::Num| {
-            let o = self.v.step(&mut st.v, y);
-            let o1 = if SHARED {
-                o
-            } else {
-                self.a1.step(&mut st.a1, y)
-            };
-            self.a2.step(&mut st.a2, o1);
-        };
         match hold {
             Hold::ZeroOrder => {
                 for _ in 0..n {
-                    one(y_new);
+                    self.one::<SHARED>(&mut st, y_new);
                 }
             }
             Hold::Linear => {
@@ -79,9 +83,9 @@ impl<L: Law> VelAcc<L> {
                 let mut y = y_prev;
                 for _ in 1..n {
                     y = y + inc;
-                    one(y);
+                    self.one::<SHARED>(&mut st, y);
                 }
-                one(y_new);
+                self.one::<SHARED>(&mut st, y_new);
             }
         }
         *s = st;

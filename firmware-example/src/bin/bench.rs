@@ -146,33 +146,30 @@ fn angles(k: u32) -> [f32; 3] {
     [yaw(k + 100), yaw(k + 50) / 3.0, yaw(k)]
 }
 
-/// Per-sample instructions of one update of each of three banks (roll, pitch, yaw) at
-/// 100 Hz; `update(axis, t_us, angle)` runs one bank, `false` if it refused the sample.
-fn three_axes_per_sample(
-    c: &Counter,
-    overhead: u64,
-    label: &str,
-    mut update: impl FnMut(usize, u64, f32) -> bool,
-) {
-    let mut total = 0;
-    for k in 0..(WARMUP + SAMPLES) {
-        let a = angles(k);
-        let t_us = u64::from(k) * DT_US;
-        let (n, ok) = c.measure(|| {
-            let mut ok = true;
-            for (axis, &x) in a.iter().enumerate() {
-                ok &= update(black_box(axis), black_box(t_us), black_box(x));
+/// Per-sample instructions of one `update` of each of three banks (roll, pitch, yaw) at
+/// 100 Hz (`$banks`: an array of three banks of one type).
+macro_rules! three_axes_per_sample {
+    ($c:expr, $overhead:expr, $label:expr, $banks:expr) => {{
+        let [b0, b1, b2] = &mut $banks;
+        let mut total = 0;
+        for k in 0..(WARMUP + SAMPLES) {
+            let [r, p, y] = angles(k);
+            let t_us = u64::from(k) * DT_US;
+            let (n, ok) = $c.measure(|| {
+                let o0 = black_box(b0.update(t_us, r));
+                let o1 = black_box(b1.update(t_us, p));
+                let o2 = black_box(b2.update(t_us, y));
+                o0.is_ok() && o1.is_ok() && o2.is_ok()
+            });
+            if !ok {
+                fail("a three-axis run without rejected samples");
             }
-            ok
-        });
-        if !ok {
-            fail("a three-axis run without rejected samples");
+            if k >= WARMUP {
+                total += n.saturating_sub($overhead);
+            }
         }
-        if k >= WARMUP {
-            total += n.saturating_sub(overhead);
-        }
-    }
-    line("instr", label, total as f32 / SAMPLES as f32, "sample");
+        line("instr", $label, total as f32 / SAMPLES as f32, "sample");
+    }};
 }
 
 /// Per-sample instructions of a whole bank's `update` at 100 Hz.
@@ -444,22 +441,14 @@ fn main() -> ! {
     {
         let make = |c: &BankConfig| Bank::new(c).unwrap_or_else(|_| fail("YawBank"));
         let mut banks = [make(&cfg), make(&pitch_cfg), make(&cfg)];
-        three_axes_per_sample(&c, overhead, "paper bank, 3 axes", |i, t, x| {
-            banks
-                .get_mut(i)
-                .is_some_and(|b| black_box(b.update(t, x)).is_ok())
-        });
+        three_axes_per_sample!(c, overhead, "paper bank, 3 axes", banks);
     }
     {
         let make = |c: &BankConfig| {
             ProductBank::<Num, BankSqrt>::new(c).unwrap_or_else(|_| fail("ProductBank"))
         };
         let mut banks = [make(&cfg), make(&pitch_cfg), make(&cfg)];
-        three_axes_per_sample(&c, overhead, "product bank, 3 axes", |i, t, x| {
-            banks
-                .get_mut(i)
-                .is_some_and(|b| black_box(b.update(t, x)).is_ok())
-        });
+        three_axes_per_sample!(c, overhead, "product bank, 3 axes", banks);
     }
     if core::any::type_name::<BankSqrt>() != core::any::type_name::<estimators::ExactSqrt>() {
         // VSQRT count per sample, for the cycle estimate.
