@@ -726,6 +726,18 @@ estimator_bank! {
     }
 }
 
+impl PaperOutput {
+    /// The seven velocities, deg/s, in [`Channel::VELOCITY`] order.
+    pub fn velocities(&self) -> [f32; 7] {
+        Channel::VELOCITY.map(|c| self[c])
+    }
+
+    /// The seven accelerations, deg/s^2, in [`Channel::ACCELERATION`] order.
+    pub fn accelerations(&self) -> [f32; 7] {
+        Channel::ACCELERATION.map(|c| self[c])
+    }
+}
+
 /// The paper bank under its former name (one axis: unwrapping, `new_epoch`, `set_turns`).
 pub type YawBank<T, S = ExactSqrt> = PaperBank<T, S>;
 /// The paper bank's output under its former name.

@@ -30,7 +30,7 @@
 //!   leave the state unchanged; invalid parameters return [`ConfigError`] at construction.
 //!
 //! ```
-//! use estimators::{csv, BankConfig, Fx, YawBank};
+//! use estimators::{csv, BankConfig, Channel, Fx, YawBank};
 //!
 //! // The paper's bank: AVE, ILO1-3, AD, ED, Kalman; acceleration by series connections.
 //! let mut bank = YawBank::<f32>::new(&BankConfig::default()).unwrap();
@@ -43,9 +43,9 @@
 //!     let out = bank.update(t_us, yaw).unwrap();
 //!     let out_fx = fixed.update(t_us, yaw).unwrap();
 //!     if k == 199 {
-//!         assert!((out.vel[0] - 30.0).abs() < 0.1); // AVE velocity, deg/s
-//!         assert!((out_fx.vel[0] - 30.0).abs() < 0.1);
-//!         assert!(out.acc[0].abs() < 1.0); // AVE-AVE acceleration, deg/s^2
+//!         assert!((out[Channel::AveV] - 30.0).abs() < 0.1); // AVE velocity, deg/s
+//!         assert!((out_fx[Channel::AveV] - 30.0).abs() < 0.1);
+//!         assert!(out[Channel::AveA].abs() < 1.0); // AVE-AVE acceleration, deg/s^2
 //!         csv::write_row(&mut row, t_us, 30.0, &out).unwrap();
 //!     }
 //! }
