@@ -1,8 +1,8 @@
 //! Approximate differentiator, AD: `s / (T s + 1)`.
 
 use crate::error::positive;
-use crate::linear::{LinearLaw, LIN_MAX};
 use crate::law::{Law, Stateful};
+use crate::linear::{LinearLaw, LIN_MAX};
 use crate::{ConfigError, Real};
 
 /// The approximate differentiator `G(s) = s / (T s + 1)` (a derivative behind a first-order
@@ -114,6 +114,8 @@ impl<T: Real> LinearLaw for AdParams<T> {
 /// Parameters of the approximate differentiator.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct AdConfig {
     /// Time constant `T`, s (paper: 0.01 for velocity, 0.1 for each acceleration stage).
     pub t: f32,

@@ -7,6 +7,8 @@ use crate::{ConfigError, Real};
 /// What happens to the switching gain `deltahat`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum DeltaMode {
     /// The paper's law `d deltahat/dt = |e|`: `deltahat` grows without bound while `e != 0`
     /// (default, paper-faithful).
@@ -28,6 +30,8 @@ pub enum DeltaMode {
 /// Parameters of the AVE in physical units.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct AveConfig {
     /// Position feedback gain `k`, 1/s (paper: 500). `h * k < 1`.
     pub k: f32,

@@ -30,6 +30,8 @@ pub struct KalmanNoise {
 /// both stages of a series get the same gains).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct BankGains {
     /// AVE.
     pub ave: AveConfig,
@@ -81,6 +83,8 @@ pub const KF_DEFAULT: KalmanNoise = KalmanNoise { q: 1.0e6, r: 0.01 };
 /// Configuration of a [`YawBank`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct BankConfig {
     /// Step `h` of every law, s; a whole number of microseconds. Default `1e-4` (paper).
     pub h: f32,
@@ -160,7 +164,6 @@ impl Default for BankConfig {
         Self::DEFAULT
     }
 }
-
 
 /// The unwrapped input `360 turns + wrapped` (deg) as (f32 rounding, exact residual in f64).
 #[inline]
@@ -602,7 +605,11 @@ macro_rules! __bank_columns {
 }
 
 /// The Kalman tracker row of a gains half.
-fn kalman<T: Real>(cfg: &BankConfig, g: &BankGains, out: KalmanOutput) -> Result<KalmanParams<T>, ConfigError> {
+fn kalman<T: Real>(
+    cfg: &BankConfig,
+    g: &BankGains,
+    out: KalmanOutput,
+) -> Result<KalmanParams<T>, ConfigError> {
     KalmanParams::new(
         &KalmanConfig {
             dt: cfg.sample_period_s,
@@ -615,7 +622,11 @@ fn kalman<T: Real>(cfg: &BankConfig, g: &BankGains, out: KalmanOutput) -> Result
 }
 
 /// ILO row `i` of the velocity half, closed form.
-fn ilo_v<T: Real>(cfg: &BankConfig, i: usize, n0: u32) -> Result<ClosedForm<IloParams<T, 1>>, ConfigError> {
+fn ilo_v<T: Real>(
+    cfg: &BankConfig,
+    i: usize,
+    n0: u32,
+) -> Result<ClosedForm<IloParams<T, 1>>, ConfigError> {
     let c: &IloConfig = cfg.velocity.ilo.get(i).unwrap_or(&ILO1_TABLE2);
     Ok(ClosedForm::new(IloParams::new(c, cfg.h)?, n0, cfg.hold))
 }
@@ -642,16 +653,28 @@ fn ave_pair<T: Real>(cfg: &BankConfig) -> Result<VelAcc<AveParams<T>>, ConfigErr
 fn ed_pair<T: Real, S: SqrtFn<T>>(cfg: &BankConfig) -> Result<VelAcc<EdParams<T, S>>, ConfigError> {
     let (v, a): (&EdConfig, &EdConfig) = (&cfg.velocity.ed, &cfg.acceleration.ed);
     let pa = EdParams::new(a, cfg.h, cfg.ed_scheme)?;
-    Ok(VelAcc::new(EdParams::new(v, cfg.h, cfg.ed_scheme)?, pa, pa, v == a))
+    Ok(VelAcc::new(
+        EdParams::new(v, cfg.h, cfg.ed_scheme)?,
+        pa,
+        pa,
+        v == a,
+    ))
 }
 
 /// AD velocity, closed form.
 fn ad_v<T: Real>(cfg: &BankConfig, n0: u32) -> Result<ClosedForm<AdParams<T>>, ConfigError> {
-    Ok(ClosedForm::new(AdParams::new(cfg.velocity.ad_t, cfg.h)?, n0, cfg.hold))
+    Ok(ClosedForm::new(
+        AdParams::new(cfg.velocity.ad_t, cfg.h)?,
+        n0,
+        cfg.hold,
+    ))
 }
 
 /// AD-AD acceleration, closed form.
-fn ad_a<T: Real>(cfg: &BankConfig, n0: u32) -> Result<ClosedForm<Series<AdParams<T>, AdParams<T>>>, ConfigError> {
+fn ad_a<T: Real>(
+    cfg: &BankConfig,
+    n0: u32,
+) -> Result<ClosedForm<Series<AdParams<T>, AdParams<T>>>, ConfigError> {
     let p = AdParams::new(cfg.acceleration.ad_t, cfg.h)?;
     Ok(ClosedForm::new(Series::new(p, p), n0, cfg.hold))
 }

@@ -8,6 +8,8 @@ use core::marker::PhantomData;
 /// Parameters of the exact differentiator.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct EdConfig {
     /// Gain `lambda` of the `|e|^(1/2)` term, unit^(1/2)/s (paper: 700, in deg^(1/2)/s).
     pub lambda: f32,
@@ -19,6 +21,8 @@ pub struct EdConfig {
 /// How the ED's discontinuous law is discretised.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum EdScheme {
     /// Explicit Euler (paper-faithful default). Chatters: `z` oscillates around `y` with
     /// `|e| ~ (lambda h)^2` and `u` with an amplitude of order `lambda^2 h` (about 25-50 deg/s

@@ -2,13 +2,15 @@
 //! (paper eq. 13).
 
 use crate::error::positive;
-use crate::linear::{LinearLaw, LIN_MAX};
 use crate::law::{Law, Stateful};
+use crate::linear::{LinearLaw, LIN_MAX};
 use crate::{ConfigError, Real};
 
 /// Parameters of the ILO velocity estimator in physical units.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct IloConfig {
     /// Learning gain `K1`, dimensionless, in `(0, 1]` (1: pure discrete integral update,
     /// < 1: leaky).

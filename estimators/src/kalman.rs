@@ -8,6 +8,8 @@ use crate::{ConfigError, Hold, Real};
 /// Parameters of the tracker in physical units.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct KalmanConfig {
     /// Nominal sample period `dt0`, s (NAV440 at 100 Hz: 0.01). The steady-state gains are for
     /// this period; the prediction uses each sample's actual `dt`.
@@ -154,7 +156,11 @@ impl<T: Real> KalmanParams<T> {
         let h = T::from_f64(h_us as f64 * 1e-6);
         // Steps per nominal period (as the sample clock counts them); 0 if out of range.
         let n0 = libm::round(f64::from(cfg.dt) * 1e6 / h_us as f64);
-        let n0 = if (1.0..=1e6).contains(&n0) { n0 as u32 } else { 0 };
+        let n0 = if (1.0..=1e6).contains(&n0) {
+            n0 as u32
+        } else {
+            0
+        };
         Ok(Self {
             k: kf.k,
             h,
@@ -228,7 +234,11 @@ impl<T: Real> Law for KalmanParams<T> {
     #[inline]
     fn advance(&self, s: &mut KalmanState<T>, _y_prev: T, y_new: T, n: u32, _hold: Hold) -> T {
         if n > 0 {
-            let dt = if n == self.n0 { self.dt0 } else { Self::dt(self.h, n) };
+            let dt = if n == self.n0 {
+                self.dt0
+            } else {
+                Self::dt(self.h, n)
+            };
             self.update(s, y_new, dt);
         }
         self.output(s)

@@ -59,8 +59,6 @@
 
 mod ad;
 pub mod adapter;
-pub mod law;
-mod pair;
 mod ave;
 mod bank;
 pub mod csv;
@@ -70,7 +68,9 @@ mod estimator;
 pub mod gilo;
 mod ilo;
 pub mod kalman;
+pub mod law;
 pub mod linear;
+mod pair;
 pub mod period;
 pub mod presets;
 pub mod ram;
@@ -82,10 +82,9 @@ pub use ad::{Ad, AdConfig, AdParams, AdState};
 pub use adapter::{SampleAdapter, SampleClock, Tick};
 pub use ave::{Ave, AveConfig, AveParams, AveState, DeltaLaw, DeltaMode};
 pub use bank::{
-    Accepted, BankConfig, BankGains, BankInput, BankOutput, Channel, Feed, KalmanNoise,
-    PaperBank, PaperOutput, PaperParams, PaperState, ProductBank, ProductChannel,
-    ProductOutput, ProductParams, ProductState, Wrap, YawBank, GAP_PERIODS, KF_DEFAULT,
-    VELOCITY_NAMES,
+    Accepted, BankConfig, BankGains, BankInput, BankOutput, Channel, Feed, KalmanNoise, PaperBank,
+    PaperOutput, PaperParams, PaperState, ProductBank, ProductChannel, ProductOutput,
+    ProductParams, ProductState, Wrap, YawBank, GAP_PERIODS, KF_DEFAULT, VELOCITY_NAMES,
 };
 pub use ed::{Ed, EdConfig, EdParams, EdScheme, EdState};
 pub use error::{ConfigError, SampleError};

@@ -107,7 +107,14 @@ impl<E: LinearLaw> ClosedForm<E> {
     /// The fallback of [`Law::advance`]: `n` Euler steps (an interval of another length).
     #[cold]
     #[inline(never)]
-    fn advance_stepping(&self, st: &mut E::State, y_prev: E::Num, y_new: E::Num, n: u32, hold: Hold) -> E::Num {
+    fn advance_stepping(
+        &self,
+        st: &mut E::State,
+        y_prev: E::Num,
+        y_new: E::Num,
+        n: u32,
+        hold: Hold,
+    ) -> E::Num {
         self.inner.advance(st, y_prev, y_new, n, hold)
     }
 
@@ -148,7 +155,14 @@ impl<E: LinearLaw> Law for ClosedForm<E> {
     /// `s' = P y_prev + Phi (s - P y_prev) + g (y_new - y_prev)` when `n` and `hold` match the
     /// precomputed map, else `n` Euler steps.
     #[inline(always)]
-    fn advance(&self, st: &mut E::State, y_prev: E::Num, y_new: E::Num, n: u32, hold: Hold) -> E::Num {
+    fn advance(
+        &self,
+        st: &mut E::State,
+        y_prev: E::Num,
+        y_new: E::Num,
+        n: u32,
+        hold: Hold,
+    ) -> E::Num {
         if n != self.n || hold != self.hold || n == 0 {
             return self.advance_stepping(st, y_prev, y_new, n, hold);
         }

@@ -74,7 +74,11 @@ check!(
     ClosedForm<IloParams<f32, 1>>,
     ClosedForm<IloParams<Fx, 1>>
 );
-check!(CLOSED_AD, ClosedForm<AdParams<f32>>, ClosedForm<AdParams<Fx>>);
+check!(
+    CLOSED_AD,
+    ClosedForm<AdParams<f32>>,
+    ClosedForm<AdParams<Fx>>
+);
 check!(
     CLOSED_ILO_ILO,
     ClosedForm<Series<IloParams<f32, 1>, IloParams<f32, 1>>>,

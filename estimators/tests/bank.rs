@@ -92,7 +92,11 @@ fn ramp_check<T: Real>(rate: f64) {
     );
     // Acceleration of a ramp: 0 (ED-ED excluded: chatter of the first stage is its input)
     for i in [0, 1, 2, 3, 4, 6] {
-        assert!(out[estimators::Channel::ACCELERATION[i]].abs() < 1.0, "acc[{i}] = {}", out[estimators::Channel::ACCELERATION[i]]);
+        assert!(
+            out[estimators::Channel::ACCELERATION[i]].abs() < 1.0,
+            "acc[{i}] = {}",
+            out[estimators::Channel::ACCELERATION[i]]
+        );
     }
 }
 
@@ -390,7 +394,11 @@ fn mse(outs: &[BankOutput], acc: bool, i: usize, from_s: f64) -> f64 {
         let t = k as f64 * 0.01;
         if t >= from_s {
             let (_, v, a) = profile(t);
-            let (est, truth) = if acc { (o[estimators::Channel::ACCELERATION[i]], a) } else { (o[estimators::Channel::VELOCITY[i]], v) };
+            let (est, truth) = if acc {
+                (o[estimators::Channel::ACCELERATION[i]], a)
+            } else {
+                (o[estimators::Channel::VELOCITY[i]], v)
+            };
             s += (f64::from(est) - truth).powi(2);
             c += 1.0;
         }
@@ -428,8 +436,13 @@ fn fixed_point_matches_f32_on_paper_experiment() {
     let (mut dv, mut da) = (0.0f32, 0.0f32);
     for (a, b) in f.iter().zip(&x) {
         for i in [0, 1, 2, 3, 4, 6] {
-            dv = dv.max((a[estimators::Channel::VELOCITY[i]] - b[estimators::Channel::VELOCITY[i]]).abs());
-            da = da.max((a[estimators::Channel::ACCELERATION[i]] - b[estimators::Channel::ACCELERATION[i]]).abs());
+            dv = dv.max(
+                (a[estimators::Channel::VELOCITY[i]] - b[estimators::Channel::VELOCITY[i]]).abs(),
+            );
+            da = da.max(
+                (a[estimators::Channel::ACCELERATION[i]] - b[estimators::Channel::ACCELERATION[i]])
+                    .abs(),
+            );
         }
     }
     println!("max |f32 - Q31.32|: vel {dv} deg/s, acc {da} deg/s^2");
@@ -451,18 +464,27 @@ fn bank_closed_form_matches_stepping() {
     );
     for (x, y) in a.iter().zip(&b) {
         for i in [0, 5, 6] {
-            assert_eq!(x[estimators::Channel::VELOCITY[i]], y[estimators::Channel::VELOCITY[i]]);
-            assert_eq!(x[estimators::Channel::ACCELERATION[i]], y[estimators::Channel::ACCELERATION[i]]);
+            assert_eq!(
+                x[estimators::Channel::VELOCITY[i]],
+                y[estimators::Channel::VELOCITY[i]]
+            );
+            assert_eq!(
+                x[estimators::Channel::ACCELERATION[i]],
+                y[estimators::Channel::ACCELERATION[i]]
+            );
         }
         for i in 1..5 {
             assert!(
-                (x[estimators::Channel::VELOCITY[i]] - y[estimators::Channel::VELOCITY[i]]).abs() < 0.05,
+                (x[estimators::Channel::VELOCITY[i]] - y[estimators::Channel::VELOCITY[i]]).abs()
+                    < 0.05,
                 "{} {}",
                 x[estimators::Channel::VELOCITY[i]],
                 y[estimators::Channel::VELOCITY[i]]
             );
             assert!(
-                (x[estimators::Channel::ACCELERATION[i]] - y[estimators::Channel::ACCELERATION[i]]).abs() < 1.0,
+                (x[estimators::Channel::ACCELERATION[i]] - y[estimators::Channel::ACCELERATION[i]])
+                    .abs()
+                    < 1.0,
                 "{} {}",
                 x[estimators::Channel::ACCELERATION[i]],
                 y[estimators::Channel::ACCELERATION[i]]

@@ -102,7 +102,10 @@ pub fn row_mse(
     let mut a = [0.0; 7];
     for i in 0..7 {
         let ev: Vec<f32> = rows.iter().map(|r| r.out[Channel::VELOCITY[i]]).collect();
-        let ea: Vec<f32> = rows.iter().map(|r| r.out[Channel::ACCELERATION[i]]).collect();
+        let ea: Vec<f32> = rows
+            .iter()
+            .map(|r| r.out[Channel::ACCELERATION[i]])
+            .collect();
         v[i] = mse(&t, &ev, &rate, window_s);
         a[i] = mse(&t, &ea, &accr, window_s);
     }

@@ -215,7 +215,9 @@ fn spin_is_unwrapped_through_many_turns() {
             last.out[estimators::Channel::VELOCITY[i]]
         );
     }
-    assert!(rows.iter().all(|r| r.out[estimators::Channel::VELOCITY[5]].abs() < 1000.0));
+    assert!(rows
+        .iter()
+        .all(|r| r.out[estimators::Channel::VELOCITY[5]].abs() < 1000.0));
 }
 
 /// Velocity vs the analytic rate of sin5 (section 3.2: rate = (180/pi) sin 5t deg/s,
@@ -243,7 +245,9 @@ fn sin5_velocity_follows_the_analytic_rate() {
         }
     }
     // And the same run is an honest one: the estimates are not a copy of the reference.
-    assert!(rows.iter().any(|r| r.out[estimators::Channel::VELOCITY[0]] != r.yaw_rate));
+    assert!(rows
+        .iter()
+        .any(|r| r.out[estimators::Channel::VELOCITY[0]] != r.yaw_rate));
 }
 
 #[test]
@@ -266,7 +270,9 @@ fn fixed_point_bank_matches_f32_bank() {
         // ED is left out: its sgn terms switch on rounding-level differences (chattering).
         for i in [0, 1, 2, 3, 4, 6] {
             assert!(
-                (a.out[estimators::Channel::VELOCITY[i]] - b.out[estimators::Channel::VELOCITY[i]]).abs() < 0.05,
+                (a.out[estimators::Channel::VELOCITY[i]] - b.out[estimators::Channel::VELOCITY[i]])
+                    .abs()
+                    < 0.05,
                 "vel {i} at {}",
                 a.t_us
             );
@@ -395,12 +401,17 @@ fn linear_hold_equals_explicit_interpolation_on_the_step_grid() {
         assert_eq!(a.t_us, b.t_us);
         for i in 0..5 {
             assert!(
-                (a.out[estimators::Channel::VELOCITY[i]] - b.out[estimators::Channel::VELOCITY[i]]).abs() < 0.02,
+                (a.out[estimators::Channel::VELOCITY[i]] - b.out[estimators::Channel::VELOCITY[i]])
+                    .abs()
+                    < 0.02,
                 "vel {i} at {}",
                 a.t_us
             );
             assert!(
-                (a.out[estimators::Channel::ACCELERATION[i]] - b.out[estimators::Channel::ACCELERATION[i]]).abs() < 0.5,
+                (a.out[estimators::Channel::ACCELERATION[i]]
+                    - b.out[estimators::Channel::ACCELERATION[i]])
+                    .abs()
+                    < 0.5,
                 "acc {i} at {}",
                 a.t_us
             );
