@@ -372,7 +372,7 @@ impl<T: Real> BankInput<T> {
 ///         /// AD, closed form.
 ///         ad_v: ClosedForm<AdParams<T>> = Ok(ClosedForm::new(AdParams::new(cfg.velocity.ad_t, cfg.h)?, n0, cfg.hold)) => [AdV = output];
 ///         /// AD-AD, closed form.
-///         ad_a: ClosedForm<Series<AdParams<T>, AdParams<T>>> = {
+///         ad_a: AdAdMap<T> = {
 ///             let ad = AdParams::new(cfg.acceleration.ad_t, cfg.h)?;
 ///             Ok(ClosedForm::new(Series::new(ad, ad), n0, cfg.hold))
 ///         } => [AdA = output];
@@ -604,6 +604,12 @@ macro_rules! __bank_columns {
     ($first:literal $(, $rest:literal)*) => { concat!($first $(, ",", $rest)*) };
 }
 
+/// ILO-ILO (both stages `D = 1`) through its closed-form map: the paper bank's ILO
+/// acceleration row.
+pub type IloIloMap<T> = ClosedForm<Series<IloParams<T, 1>, IloParams<T, 1>>>;
+/// AD-AD through its closed-form map: the paper bank's AD acceleration row.
+pub type AdAdMap<T> = ClosedForm<Series<AdParams<T>, AdParams<T>>>;
+
 /// The Kalman tracker row of a gains half.
 fn kalman<T: Real>(
     cfg: &BankConfig,
@@ -632,11 +638,7 @@ fn ilo_v<T: Real>(
 }
 
 /// ILO-ILO row `i` of the acceleration half (both stages the same gains), closed form.
-fn ilo_a<T: Real>(
-    cfg: &BankConfig,
-    i: usize,
-    n0: u32,
-) -> Result<ClosedForm<Series<IloParams<T, 1>, IloParams<T, 1>>>, ConfigError> {
+fn ilo_a<T: Real>(cfg: &BankConfig, i: usize, n0: u32) -> Result<IloIloMap<T>, ConfigError> {
     let c: &IloConfig = cfg.acceleration.ilo.get(i).unwrap_or(&ILO1_TABLE4);
     let p = IloParams::new(c, cfg.h)?;
     Ok(ClosedForm::new(Series::new(p, p), n0, cfg.hold))
@@ -671,10 +673,7 @@ fn ad_v<T: Real>(cfg: &BankConfig, n0: u32) -> Result<ClosedForm<AdParams<T>>, C
 }
 
 /// AD-AD acceleration, closed form.
-fn ad_a<T: Real>(
-    cfg: &BankConfig,
-    n0: u32,
-) -> Result<ClosedForm<Series<AdParams<T>, AdParams<T>>>, ConfigError> {
+fn ad_a<T: Real>(cfg: &BankConfig, n0: u32) -> Result<AdAdMap<T>, ConfigError> {
     let p = AdParams::new(cfg.acceleration.ad_t, cfg.h)?;
     Ok(ClosedForm::new(Series::new(p, p), n0, cfg.hold))
 }
@@ -737,13 +736,13 @@ estimator_bank! {
         /// Kalman tracker with the velocity noise.
         kf_v: KalmanParams<T> = kalman(cfg, &cfg.velocity, KalmanOutput::Velocity) => [KfV = velocity];
         /// ILO1-ILO1, Table 4 gains.
-        ilo1_a: ClosedForm<Series<IloParams<T, 1>, IloParams<T, 1>>> = ilo_a(cfg, 0, n0) => [Ilo1A = output];
+        ilo1_a: IloIloMap<T> = ilo_a(cfg, 0, n0) => [Ilo1A = output];
         /// ILO2-ILO2, Table 4 gains.
-        ilo2_a: ClosedForm<Series<IloParams<T, 1>, IloParams<T, 1>>> = ilo_a(cfg, 1, n0) => [Ilo2A = output];
+        ilo2_a: IloIloMap<T> = ilo_a(cfg, 1, n0) => [Ilo2A = output];
         /// ILO3-ILO3, Table 4 gains.
-        ilo3_a: ClosedForm<Series<IloParams<T, 1>, IloParams<T, 1>>> = ilo_a(cfg, 2, n0) => [Ilo3A = output];
+        ilo3_a: IloIloMap<T> = ilo_a(cfg, 2, n0) => [Ilo3A = output];
         /// AD-AD.
-        ad_a: ClosedForm<Series<AdParams<T>, AdParams<T>>> = ad_a(cfg, n0) => [AdA = output];
+        ad_a: AdAdMap<T> = ad_a(cfg, n0) => [AdA = output];
         /// Kalman tracker with the acceleration noise.
         kf_a: KalmanParams<T> = kalman(cfg, &cfg.acceleration, KalmanOutput::Acceleration) => [KfA = acceleration];
     }

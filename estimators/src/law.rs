@@ -59,7 +59,7 @@ pub trait Law: Copy + core::fmt::Debug {
 /// The stepping implementation of [`Law::advance`] (usable by overriding impls as their
 /// fallback): `n` steps on a local copy of `s`, inputs as [`Hold`] prescribes.
 #[inline(always)]
-pub fn step_n<L: Law + ?Sized>(
+pub fn step_n<L: Law>(
     law: &L,
     s: &mut L::State,
     y_prev: L::Num,

@@ -82,8 +82,8 @@ pub use ad::{Ad, AdConfig, AdParams, AdState};
 pub use adapter::{SampleAdapter, SampleClock, Tick};
 pub use ave::{Ave, AveConfig, AveParams, AveState, DeltaLaw, DeltaMode};
 pub use bank::{
-    Accepted, BankConfig, BankGains, BankInput, BankOutput, Channel, Feed, KalmanNoise, PaperBank,
-    PaperOutput, PaperParams, PaperState, ProductBank, ProductChannel, ProductOutput,
+    Accepted, AdAdMap, BankConfig, BankGains, BankInput, BankOutput, Channel, Feed, KalmanNoise,
+    PaperBank, PaperOutput, PaperParams, PaperState, ProductBank, ProductChannel, ProductOutput,
     ProductParams, ProductState, Wrap, YawBank, GAP_PERIODS, KF_DEFAULT, VELOCITY_NAMES,
 };
 pub use ed::{Ed, EdConfig, EdParams, EdScheme, EdState};

@@ -226,6 +226,7 @@ impl GainsFile {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use estimators::DeltaMode;
 
     #[test]
     fn paper_gains_round_trip_through_toml() {
@@ -249,6 +250,46 @@ mod tests {
                 l: 3.0,
                 k2: 3.333
             })
+        );
+    }
+
+    /// `[*.ave]` without `delta` (every gains file written before the key existed) keeps the
+    /// base configuration's law; with `delta` the file's law is used.
+    #[test]
+    fn ave_delta_is_optional() {
+        let old = GainsFile::from_toml("[velocity.ave]\nk = 300.0\ngamma1 = 9000.0\n").unwrap();
+        let cfg = old.apply(BankConfig::DEFAULT);
+        assert_eq!(cfg.velocity.ave.k, 300.0);
+        assert_eq!(cfg.velocity.ave.delta, DeltaMode::Leaky { sigma: 0.1 });
+        assert_eq!(
+            old.apply(BankConfig::PAPER).velocity.ave.delta,
+            DeltaMode::Paper
+        );
+        let new = GainsFile::from_toml(
+            "[acceleration.ave]\nk = 300.0\ngamma1 = 9000.0\ndelta = { bounded = { max = 50.0 } }\n",
+        )
+        .unwrap();
+        let cfg = new.apply(BankConfig::DEFAULT);
+        assert_eq!(cfg.acceleration.ave.delta, DeltaMode::Bounded { max: 50.0 });
+        assert_eq!(cfg.velocity, BankConfig::DEFAULT.velocity);
+        assert!(
+            GainsFile::from_toml("[velocity.ave]\nk = 1.0\ngamma1 = 2.0\ndelta = \"huge\"\n")
+                .is_err()
+        );
+        // What `tune` writes now names the law and reads back to the same configuration.
+        let g = GainsFile::from_bank(&BankConfig::DEFAULT);
+        let text = g.to_toml();
+        assert!(
+            text.contains("[velocity.ave]") && text.contains("leaky"),
+            "{text}"
+        );
+        assert_eq!(
+            GainsFile::from_toml(&text)
+                .unwrap()
+                .apply(BankConfig::PAPER),
+            BankConfig {
+                ..BankConfig::DEFAULT
+            }
         );
     }
 
