@@ -356,7 +356,7 @@ impl<T: Real> BankInput<T> {
 /// `law.method(&state)`.
 ///
 /// ```
-/// use estimators::{estimator_bank, AdParams, BankConfig, ClosedForm, Law, Series};
+/// use estimators::{estimator_bank, AdAdMap, AdParams, BankConfig, ClosedForm, Law, Series};
 ///
 /// estimator_bank! {
 ///     /// AD velocity and AD-AD acceleration.
