@@ -518,7 +518,7 @@ macro_rules! estimator_bank {
         }
 
         impl<T: $crate::Real, S: $crate::SqrtFn<T>> $Bank<T, S> {
-            /// Largest accepted `|angle_deg|`, deg (see [`$crate::BankInput::MAX_ABS_DEG`]).
+            /// Largest accepted `|angle_deg|`, deg (`BankInput::MAX_ABS_DEG`, 1e6).
             pub const MAX_ABS_YAW_DEG: f32 = $crate::BankInput::<T>::MAX_ABS_DEG;
 
             /// Builds the bank (validates every parameter; computes the closed-form maps and
@@ -535,11 +535,11 @@ macro_rules! estimator_bank {
             ///
             /// The first sample, and the first after a gap longer than the gap rule,
             /// initialise every state from it and report 0 velocities and accelerations.
-            /// Otherwise every law runs `n = round(dt / h)` steps (see [`$crate::SampleAdapter`]).
+            /// Otherwise every law runs `n = round(dt / h)` steps (see `SampleAdapter`).
             ///
-            /// Errors (state unchanged): [`$crate::SampleError::NotFinite`] for NaN/infinite
-            /// input, [`$crate::SampleError::OutOfRange`] for `|angle_deg|` above
-            /// `MAX_ABS_YAW_DEG`, [`$crate::SampleError::NonIncreasingTime`] for `t_us` not
+            /// Errors (state unchanged): `SampleError::NotFinite` for NaN/infinite
+            /// input, `SampleError::OutOfRange` for `|angle_deg|` above
+            /// `MAX_ABS_YAW_DEG`, `SampleError::NonIncreasingTime` for `t_us` not
             /// later than the previous sample.
             #[inline]
             pub fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<$Out, $crate::SampleError> {

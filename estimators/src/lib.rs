@@ -15,6 +15,15 @@
 //! ([`Hold::Linear`], default) or a zero-order hold. Linear laws (ILO, AD and their series)
 //! can use their exact multi-step map ([`ClosedForm`]) instead of `n` steps.
 //!
+//! * [`Law`]: every law keeps its validated coefficients (`AveParams`, `IloParams`, `AdParams`,
+//!   `EdParams`, `KalmanParams`, [`Series`], [`ClosedForm`]) apart from its small state and
+//!   steps with `step(&self, &mut State, y)`; [`Stateful`] (aliases [`Ave`], [`Ilo`], [`Ad`],
+//!   [`Ed`]) binds the two into the classic [`Estimator`] object.
+//! * Banks are generated from one table by [`estimator_bank!`]: [`PaperBank`] (alias
+//!   [`YawBank`]: the paper's 14 estimators, output indexed by [`Channel`]) and
+//!   [`ProductBank`] (one velocity and one acceleration estimator). [`BankConfig::wrap`] picks
+//!   the unwrapping per axis ([`Wrap`]). See docs/BANK.md.
+//! * Feature `serde`: `Serialize`/`Deserialize` on the configuration types (no_std, no alloc).
 //! * Units: inputs in deg (any position-like unit works), velocities in unit/s, accelerations
 //!   in unit/s^2, times in s (`h`, `T`, `tau`) or integer microseconds (sample timestamps).
 //! * [`presets`]: every parameter set of the paper; [`ram`]: `size_of` of every estimator
