@@ -1,27 +1,38 @@
 //! Approximate differentiator, AD: `s / (T s + 1)`.
 
 use crate::error::positive;
+use crate::law::{Law, Stateful};
 use crate::linear::{LinearLaw, LIN_MAX};
-use crate::{ConfigError, Estimator, Real};
+use crate::{ConfigError, Real};
 
 /// The approximate differentiator `G(s) = s / (T s + 1)` (a derivative behind a first-order
 /// low-pass of time constant `T`), realised as `u = (y - z) / T`, `dz/dt = u`.
 ///
 /// Output `u`: deg/s for `y` in deg. Paper: `T = 0.01 s` for velocity, a series of two with
-/// `T = 0.1 s` for acceleration.
-///
-/// RAM: 4 words of `T` (see [`crate::ram`]).
-#[derive(Clone, Copy, Debug)]
-pub struct Ad<T: Real> {
+/// `T = 0.1 s` for acceleration. The validated coefficients ([`crate::Law`]); the state is
+/// [`AdState`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AdParams<T: Real> {
     inv_t: T,
     h: T,
-    z: T,
-    u: T,
 }
 
-impl<T: Real> Ad<T> {
-    /// Builds the differentiator with time constant `t` (s) for step `h` (s). Errors:
-    /// non-positive or non-finite `t`, `h`; `h >= t` (forward Euler needs `h / T < 1`).
+/// State of the AD: the low-passed input `z` and the last output `u`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AdState<T: Real> {
+    /// Low-passed input `z` (unit of `y`).
+    pub z: T,
+    /// Last output `u` (unit/s).
+    pub u: T,
+}
+
+/// The AD as one object (parameters and state, [`crate::Estimator`]).
+/// RAM: 4 words of `T` (see [`crate::ram`]).
+pub type Ad<T> = Stateful<AdParams<T>>;
+
+impl<T: Real> AdParams<T> {
+    /// Validates the time constant `t` (s) for step `h` (s). Errors: non-positive or
+    /// non-finite `t`, `h`; `h >= t` (forward Euler needs `h / T < 1`).
     pub fn new(t: f32, h: f32) -> Result<Self, ConfigError> {
         let t = positive("T", f64::from(t))?;
         let h = positive("h", f64::from(h))?;
@@ -31,16 +42,23 @@ impl<T: Real> Ad<T> {
         Ok(Self {
             inv_t: T::from_f64(1.0 / t),
             h: T::from_f64(h),
-            z: T::ZERO,
-            u: T::ZERO,
         })
     }
 }
 
-impl<T: Real> Estimator<T> for Ad<T> {
-    fn reset(&mut self, y0: T) {
-        self.z = y0;
-        self.u = T::ZERO;
+impl<T: Real> Ad<T> {
+    /// Builds the differentiator (see [`AdParams::new`]).
+    pub fn new(t: f32, h: f32) -> Result<Self, ConfigError> {
+        Ok(Self::from_law(AdParams::new(t, h)?))
+    }
+}
+
+impl<T: Real> Law for AdParams<T> {
+    type Num = T;
+    type State = AdState<T>;
+
+    fn init(&self, y0: T) -> AdState<T> {
+        AdState { z: y0, u: T::ZERO }
     }
 
     /// Explicit Euler step of `dz/dt = (y - z) / T`:
@@ -50,35 +68,39 @@ impl<T: Real> Estimator<T> for Ad<T> {
     /// z_{n+1} = z_n + h u_n
     /// ```
     /// Returns `u_n`.
-    #[inline]
-    fn step(&mut self, y: T) -> T {
-        let u = (y - self.z) * self.inv_t;
-        self.z = self.z + self.h * u;
-        self.u = u;
+    #[inline(always)]
+    fn step(&self, s: &mut AdState<T>, y: T) -> T {
+        let u = (y - s.z) * self.inv_t;
+        s.z = s.z + self.h * u;
+        s.u = u;
         u
     }
 
-    fn output(&self) -> T {
-        self.u
+    #[inline]
+    fn output(&self, s: &AdState<T>) -> T {
+        s.u
     }
 
-    fn translate(&mut self, d: T) {
-        self.z = self.z + d;
+    #[inline]
+    fn translate(&self, s: &mut AdState<T>, d: T) {
+        s.z = s.z + d;
     }
 }
 
-impl<T: Real> LinearLaw<T> for Ad<T> {
+impl<T: Real> LinearLaw for AdParams<T> {
     const DIM: usize = 2;
     const POSITION: [bool; LIN_MAX] = [true, false, false, false];
 
     /// `[z, u]`.
-    fn lin_state(&self) -> [T; LIN_MAX] {
-        [self.z, self.u, T::ZERO, T::ZERO]
+    #[inline]
+    fn lin_state(&self, s: &AdState<T>) -> [T; LIN_MAX] {
+        [s.z, s.u, T::ZERO, T::ZERO]
     }
 
-    fn set_lin_state(&mut self, s: &[T; LIN_MAX]) {
-        self.z = s[0];
-        self.u = s[1];
+    #[inline]
+    fn set_lin_state(&self, st: &mut AdState<T>, s: &[T; LIN_MAX]) {
+        st.z = s[0];
+        st.u = s[1];
     }
 
     fn lin_step_f64(&self, s: &mut [f64; LIN_MAX], y: f64) -> f64 {
@@ -92,6 +114,8 @@ impl<T: Real> LinearLaw<T> for Ad<T> {
 /// Parameters of the approximate differentiator.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct AdConfig {
     /// Time constant `T`, s (paper: 0.01 for velocity, 0.1 for each acceleration stage).
     pub t: f32,

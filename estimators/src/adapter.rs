@@ -26,6 +26,10 @@ pub struct SampleClock {
     h_us: u64,
     max_gap_us: u64,
     last: Option<u64>,
+    /// The last interval that gave `Tick::Steps` and its step count (0: none yet): a stream
+    /// at a steady rate then costs no 64-bit division per sample.
+    last_dt: u64,
+    last_n: u32,
 }
 
 impl SampleClock {
@@ -45,6 +49,8 @@ impl SampleClock {
             h_us,
             max_gap_us: gap_us as u64,
             last: None,
+            last_dt: 0,
+            last_n: 0,
         })
     }
 
@@ -54,13 +60,27 @@ impl SampleClock {
     }
 
     /// Classifies the sample at `t_us` (µs) and, if accepted, records it as the last one.
+    #[inline]
     pub fn tick(&mut self, t_us: u64) -> Result<Tick, SampleError> {
+        if let Some(prev) = self.last {
+            // Same interval as last time (`last_dt` is 0 until a `Steps` interval was seen,
+            // and every interval is > 0): same step count as `peek` would compute.
+            if t_us > prev && t_us - prev == self.last_dt {
+                self.last = Some(t_us);
+                return Ok(Tick::Steps(self.last_n));
+            }
+        }
         let tick = self.peek(t_us)?;
+        if let (Tick::Steps(n), Some(p)) = (tick, self.last) {
+            self.last_dt = t_us - p;
+            self.last_n = n;
+        }
         self.last = Some(t_us);
         Ok(tick)
     }
 
     /// Like [`SampleClock::tick`] without recording the sample.
+    #[inline(never)]
     pub fn peek(&self, t_us: u64) -> Result<Tick, SampleError> {
         match self.last {
             None => Ok(Tick::Init),

@@ -1,11 +1,14 @@
 //! Adaptive velocity estimator, AVE (paper eq. 4).
 
 use crate::error::{non_negative, positive};
-use crate::{ConfigError, Estimator, Real};
+use crate::law::{Law, Stateful};
+use crate::{ConfigError, Real};
 
 /// What happens to the switching gain `deltahat`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum DeltaMode {
     /// The paper's law `d deltahat/dt = |e|`: `deltahat` grows without bound while `e != 0`
     /// (default, paper-faithful).
@@ -27,6 +30,8 @@ pub enum DeltaMode {
 /// Parameters of the AVE in physical units.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct AveConfig {
     /// Position feedback gain `k`, 1/s (paper: 500). `h * k < 1`.
     pub k: f32,
@@ -34,6 +39,23 @@ pub struct AveConfig {
     pub gamma1: f32,
     /// `deltahat` law.
     pub delta: DeltaMode,
+}
+
+/// The `deltahat` law as validated coefficients (see [`DeltaMode`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DeltaLaw<T: Real> {
+    /// `deltahat += h |e|`.
+    Paper,
+    /// `deltahat = min(deltahat + h |e|, max)`.
+    Bounded {
+        /// Upper bound, unit/s.
+        max: T,
+    },
+    /// `deltahat += h |e| - h sigma deltahat`.
+    Leaky {
+        /// `h * sigma`, dimensionless.
+        hsigma: T,
+    },
 }
 
 /// The adaptive velocity estimator of eq. 4 for `dx/dt = theta1(t)`, `e = xhat - y`:
@@ -47,26 +69,32 @@ pub struct AveConfig {
 /// Output: `theta1hat` (deg/s for `y` in deg). Linearised (`deltahat = 0`) the noise-to-error
 /// transfer is `gamma1 s / (s^2 + k s + gamma1)`.
 ///
-/// RAM: 4 state/coefficient words of `T` plus the mode (see [`crate::ram`]).
-#[derive(Clone, Copy, Debug)]
-pub struct Ave<T: Real> {
+/// The validated coefficients of one step `h` ([`crate::Law`]); the state is [`AveState`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AveParams<T: Real> {
     hk: T,
     hg: T,
     h: T,
-    hsigma: T,
-    dmax: T,
-    mode: u8,
-    xhat: T,
-    theta: T,
-    delta: T,
+    delta: DeltaLaw<T>,
 }
 
-const MODE_PAPER: u8 = 0;
-const MODE_BOUNDED: u8 = 1;
-const MODE_LEAKY: u8 = 2;
+/// State of the AVE: `xhat` (unit of `y`), `theta1hat` (unit/s), `deltahat` (unit/s).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AveState<T: Real> {
+    /// Position estimate `xhat`.
+    pub xhat: T,
+    /// Velocity estimate `theta1hat` (the output).
+    pub theta: T,
+    /// Switching gain `deltahat`.
+    pub delta: T,
+}
 
-impl<T: Real> Ave<T> {
-    /// Builds the estimator for step `h` (s). Errors: non-finite or non-positive `k`,
+/// The AVE as one object (parameters and state, [`crate::Estimator`]).
+/// RAM: see [`crate::ram`].
+pub type Ave<T> = Stateful<AveParams<T>>;
+
+impl<T: Real> AveParams<T> {
+    /// Validates `cfg` for step `h` (s). Errors: non-finite or non-positive `k`,
     /// `gamma1`, `h`; `h * k >= 1` or `h^2 * gamma1 >= 1` (forward-Euler stability); negative
     /// bound or leakage; `h * sigma >= 1`.
     pub fn new(cfg: &AveConfig, h: f32) -> Result<Self, ConfigError> {
@@ -79,46 +107,57 @@ impl<T: Real> Ave<T> {
         if h * h * g >= 1.0 {
             return Err(ConfigError::StepTooLarge("gamma1"));
         }
-        let (mode, dmax, sigma) = match cfg.delta {
-            DeltaMode::Paper => (MODE_PAPER, 0.0, 0.0),
-            DeltaMode::Bounded { max } => (MODE_BOUNDED, non_negative("max", f64::from(max))?, 0.0),
+        let delta = match cfg.delta {
+            DeltaMode::Paper => DeltaLaw::Paper,
+            DeltaMode::Bounded { max } => DeltaLaw::Bounded {
+                max: T::from_f64(non_negative("max", f64::from(max))?),
+            },
             DeltaMode::Leaky { sigma } => {
                 let s = non_negative("sigma", f64::from(sigma))?;
                 if h * s >= 1.0 {
                     return Err(ConfigError::StepTooLarge("sigma"));
                 }
-                (MODE_LEAKY, 0.0, s)
+                DeltaLaw::Leaky {
+                    hsigma: T::from_f64(h * s),
+                }
             }
         };
         Ok(Self {
             hk: T::from_f64(h * k),
             hg: T::from_f64(h * g),
             h: T::from_f64(h),
-            hsigma: T::from_f64(h * sigma),
-            dmax: T::from_f64(dmax),
-            mode,
-            xhat: T::ZERO,
-            theta: T::ZERO,
-            delta: T::ZERO,
+            delta,
         })
+    }
+}
+
+impl<T: Real> Ave<T> {
+    /// Builds the estimator for step `h` (s) (see [`AveParams::new`]).
+    pub fn new(cfg: &AveConfig, h: f32) -> Result<Self, ConfigError> {
+        Ok(Self::from_law(AveParams::new(cfg, h)?))
     }
 
     /// Position estimate `xhat` (unit of `y`).
     pub fn xhat(&self) -> T {
-        self.xhat
+        self.state().xhat
     }
 
     /// Switching gain `deltahat` (unit of `y` per second).
     pub fn deltahat(&self) -> T {
-        self.delta
+        self.state().delta
     }
 }
 
-impl<T: Real> Estimator<T> for Ave<T> {
-    fn reset(&mut self, y0: T) {
-        self.xhat = y0;
-        self.theta = T::ZERO;
-        self.delta = T::ZERO;
+impl<T: Real> Law for AveParams<T> {
+    type Num = T;
+    type State = AveState<T>;
+
+    fn init(&self, y0: T) -> AveState<T> {
+        AveState {
+            xhat: y0,
+            theta: T::ZERO,
+            delta: T::ZERO,
+        }
     }
 
     /// Explicit Euler step of eq. 4, with `e_n = xhat_n - y_n`:
@@ -130,32 +169,34 @@ impl<T: Real> Estimator<T> for Ave<T> {
     ///                                              Leaky subtracts h sigma delta_n)
     /// ```
     /// Returns `theta_{n+1}`, which already contains `y_n`.
-    #[inline]
-    fn step(&mut self, y: T) -> T {
-        let e = self.xhat - y;
+    #[inline(always)]
+    fn step(&self, s: &mut AveState<T>, y: T) -> T {
+        let e = s.xhat - y;
         let sw = if e > T::ZERO {
-            self.delta
+            s.delta
         } else if e < T::ZERO {
-            -self.delta
+            -s.delta
         } else {
             T::ZERO
         };
-        self.xhat = self.xhat + (self.h * (self.theta - sw) - self.hk * e);
-        self.theta = self.theta - self.hg * e;
+        s.xhat = s.xhat + (self.h * (s.theta - sw) - self.hk * e);
+        s.theta = s.theta - self.hg * e;
         let inc = self.h * e.abs();
-        self.delta = match self.mode {
-            MODE_PAPER => self.delta + inc,
-            MODE_BOUNDED => (self.delta + inc).min(self.dmax),
-            _ => self.delta + inc - self.hsigma * self.delta,
+        s.delta = match self.delta {
+            DeltaLaw::Paper => s.delta + inc,
+            DeltaLaw::Bounded { max } => (s.delta + inc).min(max),
+            DeltaLaw::Leaky { hsigma } => s.delta + inc - hsigma * s.delta,
         };
-        self.theta
+        s.theta
     }
 
-    fn output(&self) -> T {
-        self.theta
+    #[inline]
+    fn output(&self, s: &AveState<T>) -> T {
+        s.theta
     }
 
-    fn translate(&mut self, d: T) {
-        self.xhat = self.xhat + d;
+    #[inline]
+    fn translate(&self, s: &mut AveState<T>, d: T) {
+        s.xhat = s.xhat + d;
     }
 }

@@ -1,19 +1,24 @@
-//! The yaw estimator bank shared by the firmware and the host CLI.
+//! The estimator banks shared by the firmware and the host CLI, each generated from one table
+//! by [`crate::estimator_bank!`]: [`PaperBank`] (the paper's 14 estimators, alias
+//! [`YawBank`]) and [`ProductBank`] (one velocity and one acceleration estimator).
 
 use crate::adapter::{SampleClock, Tick};
-use crate::kalman::{Kalman, KalmanConfig};
+use crate::kalman::{KalmanConfig, KalmanOutput, KalmanParams};
 use crate::presets::*;
 use crate::{
-    Ad, Ave, AveConfig, ClosedForm, ConfigError, Ed, EdConfig, EdScheme, Estimator, ExactSqrt,
-    Hold, Ilo, IloConfig, Real, SampleError, Series, SqrtFn, Unwrapper,
+    AdParams, AveConfig, AveParams, ClosedForm, ConfigError, EdConfig, EdParams, EdScheme,
+    ExactSqrt, Hold, IloConfig, IloParams, Real, SampleError, Series, SqrtFn, Unwrapper, VelAcc,
 };
 
-/// Names of the seven columns of [`BankOutput::vel`] and [`BankOutput::acc`], in order.
+/// Names of the seven estimator families of the paper bank, in column order (the velocity
+/// channels are these with `_v`, the acceleration channels with `_a`, see [`Channel`]).
 pub const VELOCITY_NAMES: [&str; 7] = ["ave", "ilo1", "ilo2", "ilo3", "ad", "ed", "kf"];
 
-/// Noise model of the Kalman tracker (see [`Kalman`]).
+/// Noise model of the Kalman tracker (see [`crate::Kalman`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct KalmanNoise {
     /// White-jerk power spectral density `q`, deg^2/s^5.
     pub q: f32,
@@ -25,6 +30,8 @@ pub struct KalmanNoise {
 /// both stages of a series get the same gains).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct BankGains {
     /// AVE.
     pub ave: AveConfig,
@@ -76,6 +83,8 @@ pub const KF_DEFAULT: KalmanNoise = KalmanNoise { q: 1.0e6, r: 0.01 };
 /// Configuration of a [`YawBank`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct BankConfig {
     /// Step `h` of every law, s; a whole number of microseconds. Default `1e-4` (paper).
     pub h: f32,
@@ -94,6 +103,9 @@ pub struct BankConfig {
     pub closed_form: bool,
     /// Discretisation of the ED and ED-ED (default [`EdScheme::Euler`], the paper's).
     pub ed_scheme: EdScheme,
+    /// How the input angle is unwrapped (default [`Wrap::Deg180`]: yaw and roll; pitch,
+    /// within +-90 deg, takes [`Wrap::None`]).
+    pub wrap: Wrap,
     /// Velocity estimators' gains.
     pub velocity: BankGains,
     /// Acceleration series' gains.
@@ -116,6 +128,7 @@ impl BankConfig {
         sample_period_s: 0.01,
         closed_form: true,
         ed_scheme: EdScheme::Euler,
+        wrap: Wrap::Deg180,
         velocity: BankGains::PAPER_VELOCITY,
         acceleration: BankGains::PAPER_ACCELERATION,
     };
@@ -132,72 +145,100 @@ impl BankConfig {
 /// bank integrates across up to 24 lost packets at any packet rate.
 pub const GAP_PERIODS: f32 = 25.0;
 
+/// How a bank unwraps its input angle.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+pub enum Wrap {
+    /// The input wraps at +-180 deg (yaw, roll): 360 deg jumps are removed and the laws run
+    /// in a translated frame (see [`crate::Estimator::translate`]).
+    #[default]
+    Deg180,
+    /// The input does not wrap (pitch, +-90 deg; or an already unwrapped angle): used as is.
+    None,
+}
+
 impl Default for BankConfig {
     fn default() -> Self {
         Self::DEFAULT
     }
 }
 
-/// One output row of the bank.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct BankOutput {
-    /// The unwrapped yaw, deg, rounded to f32 (see [`BankOutput::yaw_residual_deg`]).
-    pub yaw_unwrapped_deg: f32,
-    /// What f32 rounding took off the unwrapped yaw, deg: the exact unwrapped yaw is
-    /// `yaw_unwrapped_deg as f64 + yaw_residual_deg` (0 while f32 holds it exactly; exact in
-    /// f64 for NAV440 yaw, a multiple of 360/2^16 deg, up to 2^33 turns).
-    pub yaw_residual_deg: f64,
-    /// Velocity estimates, deg/s, in the order of [`VELOCITY_NAMES`]: ave, ilo1, ilo2, ilo3,
-    /// ad, ed, kf.
-    pub vel: [f32; 7],
-    /// Acceleration estimates, deg/s^2, same order (series AVE-AVE, ILO-ILO (Table 4),
-    /// AD-AD (T = 0.1), ED-ED, Kalman).
-    pub acc: [f32; 7],
+/// The unwrapped input `360 turns + wrapped` (deg) as (f32 rounding, exact residual in f64).
+#[inline]
+fn exact_angle<T: Real>(turns: i64, wrapped: T) -> (f32, f64) {
+    if turns == 0 {
+        // Fast path (no soft-float f64 on an FPU-less or single-precision core): the wrapped
+        // value is exactly an f32 (checked by the round trip), so the residual is 0. `+ 0.0`
+        // maps -0 to +0 as the f64 sum below does.
+        let r = wrapped.to_f32() + 0.0;
+        if T::from_f32(r) == wrapped {
+            return (r, 0.0);
+        }
+    }
+    exact_angle_f64(turns, wrapped)
 }
 
-/// The unwrapped yaw `360 turns + wrapped` (deg) as (f32 rounding, exact residual in f64).
-fn exact_yaw<T: Real>(turns: i64, wrapped: T) -> (f32, f64) {
+/// [`exact_angle`] in f64 (soft-float on Cortex-M: out of line, taken only after a turn).
+#[cold]
+#[inline(never)]
+fn exact_angle_f64<T: Real>(turns: i64, wrapped: T) -> (f32, f64) {
     let exact = turns as f64 * 360.0 + wrapped.to_f64();
     let rounded = exact as f32;
     (rounded, exact - f64::from(rounded))
 }
 
-type IloCf<T> = ClosedForm<T, Ilo<T, 1>>;
-type Ilo2Cf<T> = ClosedForm<T, Series<Ilo<T, 1>, Ilo<T, 1>>>;
-
-/// The whole estimator bank for one yaw axis: unwrap -> sample adapter -> AVE, ILO1-3
-/// (Table 2), AD (T = 0.01), ED (700/770), Kalman for velocity, and AVE-AVE, ILO1-3-ILO1-3
-/// (Table 4), AD-AD (T = 0.1), ED-ED, Kalman for acceleration.
-///
-/// Generic over [`Real`]: `YawBank<f32>` for FPU targets, `YawBank<Fx>` for Cortex-M0/M3 (the
-/// `f32` inputs and outputs are only converted; all arithmetic is integer). No heap; the whole
-/// state is inline (see [`crate::ram`] for its size). `S` is the ED's square root (default
-/// [`ExactSqrt`]; see [`SqrtFn`] for plugging in an FPU instruction with identical results).
+/// What [`BankInput::accept`] decided for one accepted sample.
 #[derive(Clone, Copy, Debug)]
-pub struct YawBank<T: Real, S: SqrtFn<T> = ExactSqrt> {
+pub enum Feed<T: Real> {
+    /// Initialise every law at `y` (first sample, after a gap or a new epoch) and report 0.
+    Reset(T),
+    /// Run every law over `n` steps from `y_prev` to `y` with `hold`.
+    Advance {
+        /// The previous sample (in the current frame).
+        y_prev: T,
+        /// This sample.
+        y: T,
+        /// Steps of `h`.
+        n: u32,
+        /// Input between the samples.
+        hold: Hold,
+    },
+}
+
+/// A sample accepted by [`BankInput::accept`].
+#[derive(Clone, Copy, Debug)]
+pub struct Accepted<T: Real> {
+    /// Translate every law by this (deg) before feeding: the frame moved by one turn.
+    pub shift: Option<T>,
+    /// What to do with the laws.
+    pub feed: Feed<T>,
+    /// The unwrapped angle, deg: (f32 rounding, exact residual), see [`PaperOutput`].
+    pub angle: (f32, f64),
+}
+
+/// The input stage every generated bank shares: input checks, sample clock (gap rule),
+/// unwrapping into a local frame (per [`Wrap`]), the previous sample and the re-init count.
+#[derive(Clone, Copy, Debug)]
+pub struct BankInput<T: Real> {
     clock: SampleClock,
     hold: Hold,
-    h: T,
+    wrap: Wrap,
     unwrap: Unwrapper<T>,
     y_prev: T,
     reinits: u32,
-    ave: Ave<T>,
-    ilo: [IloCf<T>; 3],
-    ad: ClosedForm<T, Ad<T>>,
-    ed: Ed<T, S>,
-    kf_v: Kalman<T>,
-    ave2: Series<Ave<T>, Ave<T>>,
-    ilo2: [Ilo2Cf<T>; 3],
-    ad2: ClosedForm<T, Series<Ad<T>, Ad<T>>>,
-    ed2: Series<Ed<T, S>, Ed<T, S>>,
-    kf_a: Kalman<T>,
 }
 
-impl<T: Real, S: SqrtFn<T>> YawBank<T, S> {
-    /// Builds the bank (validates every parameter; computes the closed-form maps and the
-    /// Kalman gains).
-    pub fn new(cfg: &BankConfig) -> Result<Self, ConfigError> {
+impl<T: Real> BankInput<T> {
+    /// Largest accepted `|angle|`, deg (2778 turns). Beyond it f32 resolves the angle to no
+    /// better than 0.06 deg, and values near `f32::MAX` would overflow the states.
+    pub const MAX_ABS_DEG: f32 = 1.0e6;
+
+    /// Validates the step, period and gap rule of `cfg`; returns the input stage and the
+    /// number of steps per nominal sample period the closed-form maps are built for (0 when
+    /// `cfg.closed_form` is false).
+    pub fn new(cfg: &BankConfig) -> Result<(Self, u32), ConfigError> {
         let h = cfg.h;
         // The period first: the gap rule is a multiple of it, so a bad period would otherwise
         // be reported as a bad gap rule.
@@ -215,208 +256,557 @@ impl<T: Real, S: SqrtFn<T>> YawBank<T, S> {
         }
         let clock = SampleClock::new(h, cfg.max_gap_s())?;
         let n0 = if cfg.closed_form { n0f as u32 } else { 0 };
-        let hold = cfg.hold;
-        let v = &cfg.velocity;
-        let a = &cfg.acceleration;
-        let ilo_cf = |c: &IloConfig| -> Result<IloCf<T>, ConfigError> {
-            Ok(ClosedForm::new(Ilo::new(c, h)?, n0, hold))
-        };
-        let ilo2_cf = |c: &IloConfig| -> Result<Ilo2Cf<T>, ConfigError> {
-            Ok(ClosedForm::new(
-                Series::new(Ilo::new(c, h)?, Ilo::new(c, h)?),
-                n0,
-                hold,
-            ))
-        };
-        let kf = |n: &KalmanNoise| {
-            Kalman::new(&KalmanConfig {
-                dt: cfg.sample_period_s,
-                q: n.q,
-                r: n.r,
-            })
-        };
-        let [v1, v2, v3] = &v.ilo;
-        let [a1, a2, a3] = &a.ilo;
-        let mut bank = Self {
-            clock,
-            hold,
-            h: T::from_f64(h_us as f64 * 1e-6),
-            unwrap: Unwrapper::new(),
-            y_prev: T::ZERO,
-            reinits: 0,
-            ave: Ave::new(&v.ave, h)?,
-            ilo: [ilo_cf(v1)?, ilo_cf(v2)?, ilo_cf(v3)?],
-            ad: ClosedForm::new(Ad::new(v.ad_t, h)?, n0, hold),
-            ed: Ed::with_scheme(&v.ed, h, cfg.ed_scheme)?,
-            kf_v: kf(&v.kf)?,
-            ave2: Series::new(Ave::new(&a.ave, h)?, Ave::new(&a.ave, h)?),
-            ilo2: [ilo2_cf(a1)?, ilo2_cf(a2)?, ilo2_cf(a3)?],
-            ad2: ClosedForm::new(
-                Series::new(Ad::new(a.ad_t, h)?, Ad::new(a.ad_t, h)?),
-                n0,
-                hold,
-            ),
-            ed2: Series::new(
-                Ed::with_scheme(&a.ed, h, cfg.ed_scheme)?,
-                Ed::with_scheme(&a.ed, h, cfg.ed_scheme)?,
-            ),
-            kf_a: kf(&a.kf)?,
-        };
-        bank.reset_all(T::ZERO);
-        Ok(bank)
+        Ok((
+            Self {
+                clock,
+                hold: cfg.hold,
+                wrap: cfg.wrap,
+                unwrap: Unwrapper::new(),
+                y_prev: T::ZERO,
+                reinits: 0,
+            },
+            n0,
+        ))
     }
 
-    fn reset_all(&mut self, y: T) {
-        self.y_prev = y;
-        self.ave.reset(y);
-        for e in &mut self.ilo {
-            e.reset(y);
-        }
-        self.ad.reset(y);
-        self.ed.reset(y);
-        self.kf_v.reset(y);
-        self.ave2.reset(y);
-        for e in &mut self.ilo2 {
-            e.reset(y);
-        }
-        self.ad2.reset(y);
-        self.ed2.reset(y);
-        self.kf_a.reset(y);
-    }
-
-    /// Largest accepted `|yaw_deg|`, deg (2778 turns). The bank expects wrapped yaw (+-180 deg)
-    /// but also takes an already unwrapped angle; beyond this bound f32 resolves the angle to
-    /// no better than 0.06 deg, and values near `f32::MAX` would overflow the states.
-    pub const MAX_ABS_YAW_DEG: f32 = 1.0e6;
-
-    /// Feeds one sample. `t_us`: sample time in µs (monotonic, e.g. from `ItowClock`);
-    /// `yaw_deg`: wrapped yaw in deg (within +-180).
-    ///
-    /// The first sample, and the first after a gap longer than `max_gap_s`, initialise every
-    /// state from it and report 0 velocities and accelerations. Otherwise every law runs
-    /// `n = round(dt / h)` steps (see [`crate::SampleAdapter`]).
-    ///
-    /// Errors (state unchanged): [`SampleError::NotFinite`] for NaN/infinite yaw,
-    /// [`SampleError::OutOfRange`] for `|yaw_deg|` above [`Self::MAX_ABS_YAW_DEG`],
-    /// [`SampleError::NonIncreasingTime`] for `t_us` not later than the previous sample.
-    pub fn update(&mut self, t_us: u64, yaw_deg: f32) -> Result<BankOutput, SampleError> {
-        if !yaw_deg.is_finite() {
+    /// Checks and classifies one sample (`t_us` µs, `angle_deg` deg); see [`PaperBank::update`].
+    #[inline(always)]
+    pub fn accept(&mut self, t_us: u64, angle_deg: f32) -> Result<Accepted<T>, SampleError> {
+        if !angle_deg.is_finite() {
             return Err(SampleError::NotFinite);
         }
-        if !(-Self::MAX_ABS_YAW_DEG..=Self::MAX_ABS_YAW_DEG).contains(&yaw_deg) {
+        if !(-Self::MAX_ABS_DEG..=Self::MAX_ABS_DEG).contains(&angle_deg) {
             return Err(SampleError::OutOfRange);
         }
         let tick = self.clock.tick(t_us)?;
         // The laws run in a local frame whose origin is the unwrapper's current multiple of
-        // 360 deg: they see the wrapped yaw, so f32 states stay within about +-180 deg (full
-        // f32 resolution) however many turns the unwrapped yaw makes. When the offset changes,
-        // every law is translated into the new frame (exact: the laws are invariant to input
-        // offsets, see `Estimator::translate`).
-        let yw = T::from_f32(yaw_deg);
-        let before = self.unwrap.turns();
-        let turns = self.unwrap.update(yw);
-        if turns != before && tick != Tick::Init && tick != Tick::Gap {
-            // One turn per sample at most: the shift is exactly +-360 deg in `T`.
-            let shift = T::from_i32(if turns > before { 360 } else { -360 });
-            self.translate_all(-shift);
-        }
-        let unwrapped = exact_yaw(turns, yw);
-        let y = yw;
-        let n = match tick {
-            Tick::Init => {
-                self.reset_all(y);
-                return Ok(self.zero_output(unwrapped));
+        // 360 deg: they see the wrapped angle, so f32 states stay within about +-180 deg (full
+        // f32 resolution) however many turns the unwrapped angle makes. When the offset
+        // changes, every law is translated into the new frame (exact: the laws are invariant
+        // to input offsets, see `Estimator::translate`).
+        let y = T::from_f32(angle_deg);
+        let mut shift = None;
+        let turns = match self.wrap {
+            Wrap::None => 0,
+            Wrap::Deg180 => {
+                let before = self.unwrap.turns();
+                let turns = self.unwrap.update(y);
+                if turns != before && tick != Tick::Init && tick != Tick::Gap {
+                    // One turn per sample at most: the shift is exactly +-360 deg in `T`.
+                    let d = -T::from_i32(if turns > before { 360 } else { -360 });
+                    self.y_prev = self.y_prev + d;
+                    shift = Some(d);
+                }
+                turns
             }
+        };
+        let angle = exact_angle(turns, y);
+        let feed = match tick {
+            Tick::Init => Feed::Reset(y),
             Tick::Gap => {
                 self.reinits = self.reinits.saturating_add(1);
-                self.reset_all(y);
-                return Ok(self.zero_output(unwrapped));
+                Feed::Reset(y)
             }
-            Tick::Steps(n) => n,
-        };
-        let (yp, hold) = (self.y_prev, self.hold);
-        let vel = [
-            self.ave.advance(yp, y, n, hold),
-            self.ilo[0].advance(yp, y, n, hold),
-            self.ilo[1].advance(yp, y, n, hold),
-            self.ilo[2].advance(yp, y, n, hold),
-            self.ad.advance(yp, y, n, hold),
-            self.ed.advance(yp, y, n, hold),
-            {
-                let dt = self.h * T::from_i32(i32::try_from(n).unwrap_or(i32::MAX));
-                self.kf_v.update(y, dt);
-                self.kf_a.update(y, dt);
-                self.kf_v.velocity()
+            Tick::Steps(n) => Feed::Advance {
+                y_prev: self.y_prev,
+                y,
+                n,
+                hold: self.hold,
             },
-        ];
-        let acc = [
-            self.ave2.advance(yp, y, n, hold),
-            self.ilo2[0].advance(yp, y, n, hold),
-            self.ilo2[1].advance(yp, y, n, hold),
-            self.ilo2[2].advance(yp, y, n, hold),
-            self.ad2.advance(yp, y, n, hold),
-            self.ed2.advance(yp, y, n, hold),
-            self.kf_a.acceleration(),
-        ];
+        };
         self.y_prev = y;
-        Ok(BankOutput {
-            yaw_unwrapped_deg: unwrapped.0,
-            yaw_residual_deg: unwrapped.1,
-            vel: vel.map(Real::to_f32),
-            acc: acc.map(Real::to_f32),
-        })
+        Ok(Accepted { shift, feed, angle })
     }
 
-    fn translate_all(&mut self, d: T) {
-        self.y_prev = self.y_prev + d;
-        self.ave.translate(d);
-        for e in &mut self.ilo {
-            e.translate(d);
-        }
-        self.ad.translate(d);
-        self.ed.translate(d);
-        self.kf_v.translate(d);
-        self.ave2.translate(d);
-        for e in &mut self.ilo2 {
-            e.translate(d);
-        }
-        self.ad2.translate(d);
-        self.ed2.translate(d);
-        self.kf_a.translate(d);
-    }
-
-    fn zero_output(&self, y: (f32, f64)) -> BankOutput {
-        BankOutput {
-            yaw_unwrapped_deg: y.0,
-            yaw_residual_deg: y.1,
-            vel: [0.0; 7],
-            acc: [0.0; 7],
-        }
-    }
-
-    /// How many times a gap longer than `max_gap_s` re-initialised the bank.
+    /// Gaps longer than the gap rule that re-initialised the laws.
     pub fn reinit_count(&self) -> u32 {
         self.reinits
     }
 
-    /// Starts a new epoch (a confirmed time jump, see `nav440_proto::TimeBase`): the next
-    /// sample re-initialises every law from itself and reports 0, whatever its time; the
-    /// unwrapper keeps its turn count. Not counted in [`Self::reinit_count`].
+    /// The next sample re-initialises the laws, whatever its time; turns are kept.
     pub fn new_epoch(&mut self) {
         self.clock.clear();
     }
 
-    /// Sets the unwrapper's turn count to `turns` (e.g. to resume an absolute heading after a
-    /// restart, or to test a long spin without running it): only the yaw column moves by
-    /// `360 * delta` deg; the laws run in the local frame and are unaffected, bit for bit.
+    /// Sets the unwrapper's turn count (only the reported angle moves).
     pub fn set_turns(&mut self, turns: i64) {
         self.unwrap.set_turns(turns);
     }
 
-    /// Forgets everything: the next sample is treated as the first one.
+    /// Forgets everything but the configuration and the re-init count.
     pub fn restart(&mut self) {
         self.clock.clear();
         self.unwrap = Unwrapper::new();
-        self.reset_all(T::ZERO);
+        self.y_prev = T::ZERO;
+    }
+}
+
+/// Generates an estimator bank from one table: one row per estimator (a [`crate::Law`] and
+/// how to build it from a [`BankConfig`]), and the channels (CSV columns) the rows report.
+///
+/// Generated: the bank `$Bank<T, S>` (`new(&BankConfig)`, `update(t_us, angle_deg)`,
+/// `new_epoch`, `set_turns`, `reinit_count`, `restart`, `params`, `state`), its parameters
+/// `$Params<T, S>` (one field per row, validated once, shareable between axes) and state
+/// `$State<T, S>` (one field per row), the channel enum `$Chan` (`ALL`, `COUNT`, `name`,
+/// `CSV_COLUMNS`) and the output `$Out` (indexed by `$Chan`). Adding an estimator is one row
+/// (and its channel). In a row, `cfg` (the `&BankConfig`) and `n0` (steps per
+/// nominal period, for [`ClosedForm`]), named by `build(cfg, n0)`, are in scope of the
+/// builder, which returns
+/// `Result<Law, ConfigError>`; each `Channel = method` takes the row's output from
+/// `law.method(&state)`.
+///
+/// ```
+/// use estimators::{estimator_bank, AdAdMap, AdParams, BankConfig, ClosedForm, Law, Series};
+///
+/// estimator_bank! {
+///     /// AD velocity and AD-AD acceleration.
+///     bank AdBank, params AdBankParams, state AdBankState, output AdOut, channel AdChannel;
+///     build(cfg, n0);
+///     channels {
+///         /// AD velocity.
+///         AdV = "ad_v",
+///         /// AD-AD acceleration.
+///         AdA = "ad_a",
+///     }
+///     rows {
+///         /// AD, closed form.
+///         ad_v: ClosedForm<AdParams<T>> = Ok(ClosedForm::new(AdParams::new(cfg.velocity.ad_t, cfg.h)?, n0, cfg.hold)) => [AdV = output];
+///         /// AD-AD, closed form.
+///         ad_a: AdAdMap<T> = {
+///             let ad = AdParams::new(cfg.acceleration.ad_t, cfg.h)?;
+///             Ok(ClosedForm::new(Series::new(ad, ad), n0, cfg.hold))
+///         } => [AdA = output];
+///     }
+/// }
+///
+/// let mut bank = AdBank::<f32>::new(&BankConfig::default()).unwrap();
+/// for k in 0..100u64 {
+///     let out = bank.update(k * 10_000, 20.0 * k as f32 * 0.01).unwrap();
+///     if k == 99 {
+///         assert!((out[AdChannel::AdV] - 20.0).abs() < 0.01);
+///     }
+/// }
+/// assert_eq!(AdChannel::CSV_COLUMNS, "ad_v,ad_a");
+/// ```
+#[macro_export]
+macro_rules! estimator_bank {
+    (
+        $(#[$bm:meta])*
+        bank $Bank:ident, params $Params:ident, state $State:ident, output $Out:ident, channel $Chan:ident;
+        build($cfg:ident, $n0:ident);
+        channels { $( $(#[$cm:meta])* $ch:ident = $csv:literal ),+ $(,)? }
+        rows { $( $(#[$rm:meta])* $field:ident : $Law:ty = $build:expr => [ $( $rch:ident = $get:ident ),+ ] ; )+ }
+    ) => {
+        /// The channels (output columns) of the bank, in CSV order.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        pub enum $Chan {
+            $( $(#[$cm])* $ch, )+
+        }
+
+        impl $Chan {
+            /// Every channel, in order.
+            pub const ALL: &'static [$Chan] = &[ $( $Chan::$ch ),+ ];
+            /// The number of channels.
+            pub const COUNT: usize = [ $( $csv ),+ ].len();
+            /// The CSV column names, comma-separated, in order.
+            pub const CSV_COLUMNS: &'static str = $crate::__bank_columns!($($csv),+);
+            /// The channel's CSV column name.
+            pub const fn name(self) -> &'static str {
+                match self { $( $Chan::$ch => $csv, )+ }
+            }
+            /// The channel's position in [`Self::ALL`] and in the output.
+            pub const fn index(self) -> usize {
+                self as usize
+            }
+        }
+
+        /// One output of the bank: the unwrapped input angle and one value per channel
+        /// (velocities in deg/s, accelerations in deg/s^2).
+        #[derive(Clone, Copy, Debug, PartialEq)]
+        pub struct $Out {
+            /// The unwrapped angle, deg, rounded to f32 (see `yaw_residual_deg`).
+            pub yaw_unwrapped_deg: f32,
+            /// What f32 rounding took off the unwrapped angle, deg: the exact unwrapped angle
+            /// is `yaw_unwrapped_deg as f64 + yaw_residual_deg` (0 while f32 holds it).
+            pub yaw_residual_deg: f64,
+            /// The channels' values, indexed by the channel (`out[channel]`).
+            pub values: [f32; $Chan::COUNT],
+        }
+
+        impl Default for $Out {
+            fn default() -> Self {
+                Self { yaw_unwrapped_deg: 0.0, yaw_residual_deg: 0.0, values: [0.0; $Chan::COUNT] }
+            }
+        }
+
+        impl core::ops::Index<$Chan> for $Out {
+            type Output = f32;
+            fn index(&self, c: $Chan) -> &f32 {
+                &self.values[c as usize]
+            }
+        }
+
+        impl $Out {
+            /// `(channel, value)` pairs in CSV order.
+            pub fn iter(&self) -> impl Iterator<Item = ($Chan, f32)> + '_ {
+                $Chan::ALL.iter().copied().zip(self.values.iter().copied())
+            }
+        }
+
+        /// The validated parameters of every row (computed once; shareable between axes).
+        #[derive(Clone, Copy, Debug)]
+        pub struct $Params<T: $crate::Real, S: $crate::SqrtFn<T> = $crate::ExactSqrt> {
+            $( $(#[$rm])* pub $field: $Law, )+
+            _sqrt: core::marker::PhantomData<(T, S)>,
+        }
+
+        /// The state of every row.
+        #[derive(Clone, Copy, Debug)]
+        pub struct $State<T: $crate::Real, S: $crate::SqrtFn<T> = $crate::ExactSqrt> {
+            $( $(#[$rm])* pub $field: <$Law as $crate::Law>::State, )+
+            _sqrt: core::marker::PhantomData<(T, S)>,
+        }
+
+        $(#[$bm])*
+        #[derive(Clone, Copy, Debug)]
+        pub struct $Bank<T: $crate::Real, S: $crate::SqrtFn<T> = $crate::ExactSqrt> {
+            input: $crate::BankInput<T>,
+            params: $Params<T, S>,
+            state: $State<T, S>,
+        }
+
+        impl<T: $crate::Real, S: $crate::SqrtFn<T>> $Params<T, S> {
+            /// Validates `cfg` and builds every row's parameters; `n0` = steps per nominal
+            /// sample period for the closed-form maps (0: no map).
+            #[allow(unused_variables)]
+            pub fn new($cfg: &$crate::BankConfig, $n0: u32) -> Result<Self, $crate::ConfigError> {
+                Ok(Self {
+                    $( $field: { let r: Result<$Law, $crate::ConfigError> = $build; r? }, )+
+                    _sqrt: core::marker::PhantomData,
+                })
+            }
+
+            /// Every row's state, initialised at `y0`.
+            pub fn init(&self, y0: T) -> $State<T, S> {
+                use $crate::Law as _;
+                $State { $( $field: self.$field.init(y0), )+ _sqrt: core::marker::PhantomData }
+            }
+
+            /// Translates every row's state by `d` (deg).
+            #[inline]
+            pub fn translate(&self, s: &mut $State<T, S>, d: T) {
+                use $crate::Law as _;
+                $( self.$field.translate(&mut s.$field, d); )+
+            }
+
+            /// Advances every row over one sample interval.
+            #[inline]
+            pub fn advance(&self, s: &mut $State<T, S>, y_prev: T, y: T, n: u32, hold: $crate::Hold) {
+                use $crate::Law as _;
+                $( self.$field.advance(&mut s.$field, y_prev, y, n, hold); )+
+            }
+
+            /// The channels' values of state `s`.
+            #[inline]
+            pub fn values(&self, s: &$State<T, S>) -> [f32; $Chan::COUNT] {
+                #[allow(unused_imports)]
+                use $crate::Law as _;
+                let mut v = [0.0f32; $Chan::COUNT];
+                $( $( v[$Chan::$rch as usize] = $crate::Real::to_f32(self.$field.$get(&s.$field)); )+ )+
+                v
+            }
+        }
+
+        impl<T: $crate::Real, S: $crate::SqrtFn<T>> $Bank<T, S> {
+            /// Largest accepted `|angle_deg|`, deg (`BankInput::MAX_ABS_DEG`, 1e6).
+            pub const MAX_ABS_YAW_DEG: f32 = $crate::BankInput::<T>::MAX_ABS_DEG;
+
+            /// Builds the bank (validates every parameter; computes the closed-form maps and
+            /// the Kalman gains).
+            pub fn new(cfg: &$crate::BankConfig) -> Result<Self, $crate::ConfigError> {
+                let (input, n0) = $crate::BankInput::new(cfg)?;
+                let params = $Params::new(cfg, n0)?;
+                let state = params.init(T::ZERO);
+                Ok(Self { input, params, state })
+            }
+
+            /// Feeds one sample. `t_us`: sample time in µs (monotonic); `angle_deg`: the angle
+            /// in deg (within +-180 when wrapping).
+            ///
+            /// The first sample, and the first after a gap longer than the gap rule,
+            /// initialise every state from it and report 0 velocities and accelerations.
+            /// Otherwise every law runs `n = round(dt / h)` steps (see `SampleAdapter`).
+            ///
+            /// Errors (state unchanged): `SampleError::NotFinite` for NaN/infinite
+            /// input, `SampleError::OutOfRange` for `|angle_deg|` above
+            /// `MAX_ABS_YAW_DEG`, `SampleError::NonIncreasingTime` for `t_us` not
+            /// later than the previous sample.
+            #[inline]
+            pub fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<$Out, $crate::SampleError> {
+                let a = self.input.accept(t_us, angle_deg)?;
+                if let Some(d) = a.shift {
+                    self.params.translate(&mut self.state, d);
+                }
+                let values = match a.feed {
+                    $crate::Feed::Reset(y) => {
+                        self.state = self.params.init(y);
+                        [0.0; $Chan::COUNT]
+                    }
+                    $crate::Feed::Advance { y_prev, y, n, hold } => {
+                        self.params.advance(&mut self.state, y_prev, y, n, hold);
+                        self.params.values(&self.state)
+                    }
+                };
+                Ok($Out { yaw_unwrapped_deg: a.angle.0, yaw_residual_deg: a.angle.1, values })
+            }
+
+            /// How many times a gap longer than the gap rule re-initialised the bank.
+            pub fn reinit_count(&self) -> u32 {
+                self.input.reinit_count()
+            }
+
+            /// Starts a new epoch (a confirmed time jump): the next sample re-initialises every
+            /// law from itself and reports 0, whatever its time; the unwrapper keeps its turn
+            /// count. Not counted in [`Self::reinit_count`].
+            pub fn new_epoch(&mut self) {
+                self.input.new_epoch();
+            }
+
+            /// Sets the unwrapper's turn count to `turns`: only the angle column moves by
+            /// `360 * delta` deg; the laws run in the local frame and are unaffected.
+            pub fn set_turns(&mut self, turns: i64) {
+                self.input.set_turns(turns);
+            }
+
+            /// Forgets everything: the next sample is treated as the first one.
+            pub fn restart(&mut self) {
+                self.input.restart();
+                self.state = self.params.init(T::ZERO);
+            }
+
+            /// The rows' validated parameters.
+            pub fn params(&self) -> &$Params<T, S> {
+                &self.params
+            }
+
+            /// The rows' state.
+            pub fn state(&self) -> &$State<T, S> {
+                &self.state
+            }
+        }
+    };
+}
+
+/// Comma-joins string literals (for [`estimator_bank!`]'s `CSV_COLUMNS`).
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __bank_columns {
+    ($first:literal $(, $rest:literal)*) => { concat!($first $(, ",", $rest)*) };
+}
+
+/// ILO-ILO (both stages `D = 1`) through its closed-form map: the paper bank's ILO
+/// acceleration row.
+pub type IloIloMap<T> = ClosedForm<Series<IloParams<T, 1>, IloParams<T, 1>>>;
+/// AD-AD through its closed-form map: the paper bank's AD acceleration row.
+pub type AdAdMap<T> = ClosedForm<Series<AdParams<T>, AdParams<T>>>;
+
+/// The Kalman tracker row of a gains half.
+fn kalman<T: Real>(
+    cfg: &BankConfig,
+    g: &BankGains,
+    out: KalmanOutput,
+) -> Result<KalmanParams<T>, ConfigError> {
+    KalmanParams::new(
+        &KalmanConfig {
+            dt: cfg.sample_period_s,
+            q: g.kf.q,
+            r: g.kf.r,
+        },
+        cfg.h,
+        out,
+    )
+}
+
+/// ILO row `i` of the velocity half, closed form.
+fn ilo_v<T: Real>(
+    cfg: &BankConfig,
+    i: usize,
+    n0: u32,
+) -> Result<ClosedForm<IloParams<T, 1>>, ConfigError> {
+    let c: &IloConfig = cfg.velocity.ilo.get(i).unwrap_or(&ILO1_TABLE2);
+    Ok(ClosedForm::new(IloParams::new(c, cfg.h)?, n0, cfg.hold))
+}
+
+/// ILO-ILO row `i` of the acceleration half (both stages the same gains), closed form.
+fn ilo_a<T: Real>(cfg: &BankConfig, i: usize, n0: u32) -> Result<IloIloMap<T>, ConfigError> {
+    let c: &IloConfig = cfg.acceleration.ilo.get(i).unwrap_or(&ILO1_TABLE4);
+    let p = IloParams::new(c, cfg.h)?;
+    Ok(ClosedForm::new(Series::new(p, p), n0, cfg.hold))
+}
+
+/// AVE and AVE-AVE (shared first stage when the velocity and acceleration AVE are equal).
+fn ave_pair<T: Real>(cfg: &BankConfig) -> Result<VelAcc<AveParams<T>>, ConfigError> {
+    let (v, a): (&AveConfig, &AveConfig) = (&cfg.velocity.ave, &cfg.acceleration.ave);
+    let pa = AveParams::new(a, cfg.h)?;
+    Ok(VelAcc::new(AveParams::new(v, cfg.h)?, pa, pa, v == a))
+}
+
+/// ED and ED-ED (shared first stage when the velocity and acceleration ED are equal).
+fn ed_pair<T: Real, S: SqrtFn<T>>(cfg: &BankConfig) -> Result<VelAcc<EdParams<T, S>>, ConfigError> {
+    let (v, a): (&EdConfig, &EdConfig) = (&cfg.velocity.ed, &cfg.acceleration.ed);
+    let pa = EdParams::new(a, cfg.h, cfg.ed_scheme)?;
+    Ok(VelAcc::new(
+        EdParams::new(v, cfg.h, cfg.ed_scheme)?,
+        pa,
+        pa,
+        v == a,
+    ))
+}
+
+/// AD velocity, closed form.
+fn ad_v<T: Real>(cfg: &BankConfig, n0: u32) -> Result<ClosedForm<AdParams<T>>, ConfigError> {
+    Ok(ClosedForm::new(
+        AdParams::new(cfg.velocity.ad_t, cfg.h)?,
+        n0,
+        cfg.hold,
+    ))
+}
+
+/// AD-AD acceleration, closed form.
+fn ad_a<T: Real>(cfg: &BankConfig, n0: u32) -> Result<AdAdMap<T>, ConfigError> {
+    let p = AdParams::new(cfg.acceleration.ad_t, cfg.h)?;
+    Ok(ClosedForm::new(Series::new(p, p), n0, cfg.hold))
+}
+
+estimator_bank! {
+    /// The paper's bank for one angle: unwrap -> sample adapter -> AVE, ILO1-3 (Table 2),
+    /// AD (T = 0.01), ED (700/770), Kalman for velocity, and AVE-AVE, ILO1-3-ILO1-3
+    /// (Table 4), AD-AD (T = 0.1), ED-ED, Kalman for acceleration.
+    ///
+    /// Generic over [`Real`]: `PaperBank<f32>` for FPU targets, `PaperBank<Fx>` for
+    /// Cortex-M0/M3 (the `f32` inputs and outputs are only converted; all arithmetic is
+    /// integer). No heap; the whole state is inline (see [`crate::ram`] for its size). `S` is
+    /// the ED's square root (default [`ExactSqrt`]; see [`SqrtFn`] for plugging in an FPU
+    /// instruction with identical results).
+    bank PaperBank, params PaperParams, state PaperState, output PaperOutput, channel Channel;
+    build(cfg, n0);
+    channels {
+        /// AVE velocity, deg/s.
+        AveV = "ave_v",
+        /// ILO1 (Table 2) velocity, deg/s.
+        Ilo1V = "ilo1_v",
+        /// ILO2 (Table 2) velocity, deg/s.
+        Ilo2V = "ilo2_v",
+        /// ILO3 (Table 2) velocity, deg/s.
+        Ilo3V = "ilo3_v",
+        /// AD (T = 0.01 s) velocity, deg/s.
+        AdV = "ad_v",
+        /// Levant ED velocity, deg/s.
+        EdV = "ed_v",
+        /// Kalman tracker velocity, deg/s.
+        KfV = "kf_v",
+        /// AVE-AVE acceleration, deg/s^2.
+        AveA = "ave_a",
+        /// ILO1-ILO1 (Table 4) acceleration, deg/s^2.
+        Ilo1A = "ilo1_a",
+        /// ILO2-ILO2 (Table 4) acceleration, deg/s^2.
+        Ilo2A = "ilo2_a",
+        /// ILO3-ILO3 (Table 4) acceleration, deg/s^2.
+        Ilo3A = "ilo3_a",
+        /// AD-AD (T = 0.1 s) acceleration, deg/s^2.
+        AdA = "ad_a",
+        /// ED-ED acceleration, deg/s^2.
+        EdA = "ed_a",
+        /// Kalman tracker acceleration, deg/s^2.
+        KfA = "kf_a",
+    }
+    rows {
+        /// AVE and AVE-AVE.
+        ave: VelAcc<AveParams<T>> = ave_pair(cfg) => [AveV = velocity, AveA = acceleration];
+        /// ILO1, Table 2 gains.
+        ilo1_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 0, n0) => [Ilo1V = output];
+        /// ILO2, Table 2 gains.
+        ilo2_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 1, n0) => [Ilo2V = output];
+        /// ILO3, Table 2 gains.
+        ilo3_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 2, n0) => [Ilo3V = output];
+        /// AD.
+        ad_v: ClosedForm<AdParams<T>> = ad_v(cfg, n0) => [AdV = output];
+        /// ED and ED-ED.
+        ed: VelAcc<EdParams<T, S>> = ed_pair(cfg) => [EdV = velocity, EdA = acceleration];
+        /// Kalman tracker with the velocity noise.
+        kf_v: KalmanParams<T> = kalman(cfg, &cfg.velocity, KalmanOutput::Velocity) => [KfV = velocity];
+        /// ILO1-ILO1, Table 4 gains.
+        ilo1_a: IloIloMap<T> = ilo_a(cfg, 0, n0) => [Ilo1A = output];
+        /// ILO2-ILO2, Table 4 gains.
+        ilo2_a: IloIloMap<T> = ilo_a(cfg, 1, n0) => [Ilo2A = output];
+        /// ILO3-ILO3, Table 4 gains.
+        ilo3_a: IloIloMap<T> = ilo_a(cfg, 2, n0) => [Ilo3A = output];
+        /// AD-AD.
+        ad_a: AdAdMap<T> = ad_a(cfg, n0) => [AdA = output];
+        /// Kalman tracker with the acceleration noise.
+        kf_a: KalmanParams<T> = kalman(cfg, &cfg.acceleration, KalmanOutput::Acceleration) => [KfA = acceleration];
+    }
+}
+
+impl PaperOutput {
+    /// The seven velocities, deg/s, in [`Channel::VELOCITY`] order.
+    pub fn velocities(&self) -> [f32; 7] {
+        Channel::VELOCITY.map(|c| self[c])
+    }
+
+    /// The seven accelerations, deg/s^2, in [`Channel::ACCELERATION`] order.
+    pub fn accelerations(&self) -> [f32; 7] {
+        Channel::ACCELERATION.map(|c| self[c])
+    }
+}
+
+/// The paper bank under its former name (one axis: unwrapping, `new_epoch`, `set_turns`).
+pub type YawBank<T, S = ExactSqrt> = PaperBank<T, S>;
+/// The paper bank's output under its former name.
+pub type BankOutput = PaperOutput;
+
+impl Channel {
+    /// The seven velocity channels (ave, ilo1, ilo2, ilo3, ad, ed, kf).
+    pub const VELOCITY: [Channel; 7] = [
+        Channel::AveV,
+        Channel::Ilo1V,
+        Channel::Ilo2V,
+        Channel::Ilo3V,
+        Channel::AdV,
+        Channel::EdV,
+        Channel::KfV,
+    ];
+    /// The seven acceleration channels, same order.
+    pub const ACCELERATION: [Channel; 7] = [
+        Channel::AveA,
+        Channel::Ilo1A,
+        Channel::Ilo2A,
+        Channel::Ilo3A,
+        Channel::AdA,
+        Channel::EdA,
+        Channel::KfA,
+    ];
+}
+
+estimator_bank! {
+    /// The product preset: one velocity and one acceleration estimator per axis, the two
+    /// cheapest good ones of the paper bank: ILO1 (Table 2 gains of `cfg.velocity.ilo[0]`,
+    /// through its exact closed-form map; the best ILO without noise) for velocity and the
+    /// Kalman tracker (`cfg.acceleration.kf`) for acceleration, each a few dozen operations per
+    /// sample. Same input stage, API and output conventions as [`PaperBank`]; a firmware that
+    /// wants other estimators writes its own table with [`crate::estimator_bank!`].
+    bank ProductBank, params ProductParams, state ProductState, output ProductOutput, channel ProductChannel;
+    build(cfg, n0);
+    channels {
+        /// ILO1 velocity, deg/s.
+        Ilo1V = "ilo1_v",
+        /// Kalman tracker acceleration, deg/s^2.
+        KfA = "kf_a",
+    }
+    rows {
+        /// ILO1, Table 2 gains.
+        ilo1_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 0, n0) => [Ilo1V = output];
+        /// Kalman tracker with the acceleration noise.
+        kf_a: KalmanParams<T> = kalman(cfg, &cfg.acceleration, KalmanOutput::Acceleration) => [KfA = acceleration];
     }
 }

@@ -15,7 +15,8 @@ pub const HEADER: &str = "t,yaw,yaw_rate,ave_v,ilo1_v,ilo2_v,ilo3_v,ad_v,ed_v,kf
 ///   exactly (`yaw_residual_deg == 0`), else the exact f64 value
 ///   `yaw_unwrapped_deg + yaw_residual_deg` (f64 Display), so the column stays exact for any
 ///   number of turns; `yaw_rate`: `yaw_rate_deg_s` (the sensor's rate);
-/// * then `out.vel[0..7]` and `out.acc[0..7]`,
+/// * then `out.values` in channel order ([`crate::Channel`]: the 7 velocities, then the 7
+///   accelerations),
 ///
 /// every `f32` with Rust's `{}` Display (shortest round-trip form), so identical `f32` bits
 /// give identical text on host and target.
@@ -37,7 +38,7 @@ pub fn write_row<W: Write>(
         )?;
     }
     write!(w, ",{}", yaw_rate_deg_s)?;
-    for x in out.vel.iter().chain(out.acc.iter()) {
+    for x in out.values.iter() {
         write!(w, ",{x}")?;
     }
     Ok(())

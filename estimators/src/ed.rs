@@ -1,12 +1,15 @@
 //! Levant's robust exact differentiator, ED (paper eqs. 5-7; Levant 1998).
 
 use crate::error::positive;
-use crate::{ConfigError, Estimator, ExactSqrt, Real, SqrtFn};
+use crate::law::{step_n, Law, Stateful};
+use crate::{ConfigError, ExactSqrt, Hold, Real, SqrtFn};
 use core::marker::PhantomData;
 
 /// Parameters of the exact differentiator.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct EdConfig {
     /// Gain `lambda` of the `|e|^(1/2)` term, unit^(1/2)/s (paper: 700, in deg^(1/2)/s).
     pub lambda: f32,
@@ -18,6 +21,8 @@ pub struct EdConfig {
 /// How the ED's discontinuous law is discretised.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum EdScheme {
     /// Explicit Euler (paper-faithful default). Chatters: `z` oscillates around `y` with
     /// `|e| ~ (lambda h)^2` and `u` with an amplitude of order `lambda^2 h` (about 25-50 deg/s
@@ -38,17 +43,17 @@ pub enum EdScheme {
 /// du1/dt = -alpha sgn(e)                      (eq. 7)
 /// ```
 ///
-/// Output: `u` (deg/s for `y` in deg); [`Ed::u1`] exposes the integrator state. Exact in finite
-/// time on noise-free inputs with `|y''| <= C < alpha` and `lambda` large enough; with noise of
-/// amplitude `eps` the error is of order `sqrt(eps)`.
+/// Output: `u` (deg/s for `y` in deg); [`EdState::u1`] is the integrator state. Exact in
+/// finite time on noise-free inputs with `|y''| <= C < alpha` and `lambda` large enough; with
+/// noise of amplitude `eps` the error is of order `sqrt(eps)`.
 ///
 /// `|e|^(1/2)` uses the exact square root `S` (default [`ExactSqrt`] = [`Real::sqrt`]; a
 /// firmware may plug in its FPU instruction, see [`SqrtFn`]); `micromath`'s fast approximation
 /// would bias it (measured in the tests, see the crate README).
 ///
-/// RAM: 10 words of `T` and the scheme tag (see [`crate::ram`]).
+/// The validated coefficients ([`crate::Law`]); the state is [`EdState`].
 #[derive(Clone, Copy, Debug)]
-pub struct Ed<T: Real, S: SqrtFn<T> = ExactSqrt> {
+pub struct EdParams<T: Real, S: SqrtFn<T> = ExactSqrt> {
     h: T,
     halpha: T,
     lambda: T,
@@ -56,22 +61,29 @@ pub struct Ed<T: Real, S: SqrtFn<T> = ExactSqrt> {
     inv_h2alpha: T,
     half_hl: T,
     half_hl_sq: T,
-    implicit: bool,
-    z: T,
-    u1: T,
-    u: T,
+    scheme: EdScheme,
     sqrt: PhantomData<S>,
 }
 
-impl<T: Real, S: SqrtFn<T>> Ed<T, S> {
-    /// Builds the differentiator for step `h` (s) with the paper's explicit Euler scheme.
-    /// Errors: non-positive or non-finite `lambda`, `alpha`, `h`.
-    pub fn new(cfg: &EdConfig, h: f32) -> Result<Self, ConfigError> {
-        Self::with_scheme(cfg, h, EdScheme::Euler)
-    }
+/// State of the ED.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EdState<T: Real> {
+    /// Position estimate `z` (unit of `y`).
+    pub z: T,
+    /// Integrator state `u1` of eq. 7 (unit/s).
+    pub u1: T,
+    /// Output `u` of eq. 6 (unit/s).
+    pub u: T,
+}
 
-    /// Builds the differentiator with the given discretisation scheme.
-    pub fn with_scheme(cfg: &EdConfig, h: f32, scheme: EdScheme) -> Result<Self, ConfigError> {
+/// The ED as one object (parameters and state, [`crate::Estimator`]).
+/// RAM: see [`crate::ram`].
+pub type Ed<T, S = ExactSqrt> = Stateful<EdParams<T, S>>;
+
+impl<T: Real, S: SqrtFn<T>> EdParams<T, S> {
+    /// Validates `cfg` for step `h` (s) and the discretisation `scheme`. Errors:
+    /// non-positive or non-finite `lambda`, `alpha`, `h`.
+    pub fn new(cfg: &EdConfig, h: f32, scheme: EdScheme) -> Result<Self, ConfigError> {
         let h = positive("h", f64::from(h))?;
         let lambda = positive("lambda", f64::from(cfg.lambda))?;
         let alpha = positive("alpha", f64::from(cfg.alpha))?;
@@ -83,60 +95,92 @@ impl<T: Real, S: SqrtFn<T>> Ed<T, S> {
             inv_h2alpha: T::from_f64(1.0 / (h * h * alpha)),
             half_hl: T::from_f64(0.5 * h * lambda),
             half_hl_sq: T::from_f64(0.25 * h * h * lambda * lambda),
-            implicit: scheme == EdScheme::Implicit,
-            z: T::ZERO,
-            u1: T::ZERO,
-            u: T::ZERO,
+            scheme,
             sqrt: PhantomData,
         })
     }
 
-    /// The integrator state `u1` of eq. 7 (unit/s).
-    pub fn u1(&self) -> T {
-        self.u1
-    }
-
-    /// The output `u` of eq. 6 (unit/s), same as [`Estimator::output`].
-    pub fn u(&self) -> T {
-        self.u
-    }
-
-    /// The position estimate `z` (unit of `y`).
-    pub fn z(&self) -> T {
-        self.z
-    }
-
-    /// One step of [`EdScheme::Implicit`] (see [`Estimator::step`]). Kept out of line so the
+    /// One step of [`EdScheme::Implicit`] (see [`Law::step`]). Kept out of line so the
     /// default explicit step stays as short as without the option.
     #[inline(never)]
-    fn step_implicit(&mut self, y: T) -> T {
-        let p = (self.z - y) + self.h * self.u1;
+    fn step_implicit(&self, s: &mut EdState<T>, y: T) -> T {
+        let p = (s.z - y) + self.h * s.u1;
         let ap = p.abs();
         let u = if ap <= self.h2alpha {
-            self.u1 = self.u1 - self.halpha * (p * self.inv_h2alpha);
-            self.u1
+            s.u1 = s.u1 - self.halpha * (p * self.inv_h2alpha);
+            s.u1
         } else {
             let r = S::sqrt(self.half_hl_sq + (ap - self.h2alpha)) - self.half_hl;
             let lr = self.lambda * r;
             if p > T::ZERO {
-                self.u1 = self.u1 - self.halpha;
-                self.u1 - lr
+                s.u1 = s.u1 - self.halpha;
+                s.u1 - lr
             } else {
-                self.u1 = self.u1 + self.halpha;
-                self.u1 + lr
+                s.u1 = s.u1 + self.halpha;
+                s.u1 + lr
             }
         };
-        self.z = self.z + self.h * u;
-        self.u = u;
+        s.z = s.z + self.h * u;
+        s.u = u;
+        u
+    }
+
+    /// Explicit Euler step (see [`Law::step`]).
+    #[inline(always)]
+    fn step_euler(&self, s: &mut EdState<T>, y: T) -> T {
+        let e = s.z - y;
+        let (u, du1) = if e > T::ZERO {
+            (s.u1 - self.lambda * S::sqrt(e), -self.halpha)
+        } else if e < T::ZERO {
+            (s.u1 + self.lambda * S::sqrt(-e), self.halpha)
+        } else {
+            (s.u1, T::ZERO)
+        };
+        s.z = s.z + self.h * u;
+        s.u1 = s.u1 + du1;
+        s.u = u;
         u
     }
 }
 
-impl<T: Real, S: SqrtFn<T>> Estimator<T> for Ed<T, S> {
-    fn reset(&mut self, y0: T) {
-        self.z = y0;
-        self.u1 = T::ZERO;
-        self.u = T::ZERO;
+impl<T: Real, S: SqrtFn<T>> Ed<T, S> {
+    /// Builds the differentiator for step `h` (s) with the paper's explicit Euler scheme.
+    /// Errors: non-positive or non-finite `lambda`, `alpha`, `h`.
+    pub fn new(cfg: &EdConfig, h: f32) -> Result<Self, ConfigError> {
+        Self::with_scheme(cfg, h, EdScheme::Euler)
+    }
+
+    /// Builds the differentiator with the given discretisation scheme.
+    pub fn with_scheme(cfg: &EdConfig, h: f32, scheme: EdScheme) -> Result<Self, ConfigError> {
+        Ok(Self::from_law(EdParams::new(cfg, h, scheme)?))
+    }
+
+    /// The integrator state `u1` of eq. 7 (unit/s).
+    pub fn u1(&self) -> T {
+        self.state().u1
+    }
+
+    /// The output `u` of eq. 6 (unit/s), same as [`crate::Estimator::output`].
+    pub fn u(&self) -> T {
+        self.state().u
+    }
+
+    /// The position estimate `z` (unit of `y`).
+    pub fn z(&self) -> T {
+        self.state().z
+    }
+}
+
+impl<T: Real, S: SqrtFn<T>> Law for EdParams<T, S> {
+    type Num = T;
+    type State = EdState<T>;
+
+    fn init(&self, y0: T) -> EdState<T> {
+        EdState {
+            z: y0,
+            u1: T::ZERO,
+            u: T::ZERO,
+        }
     }
 
     /// Explicit Euler step, `e_n = z_n - y_n`, `s_n = sgn(e_n)`:
@@ -158,30 +202,52 @@ impl<T: Real, S: SqrtFn<T>> Estimator<T> for Ed<T, S> {
     /// u1_{n+1} = u1_n - h alpha s,   u_n = u1_{n+1} - lambda r s,   z_{n+1} = z_n + h u_n
     /// ```
     /// (`r = |e_{n+1}|^(1/2)` solves `r^2 + h lambda r = |p| - h^2 alpha`.)
-    #[inline]
-    fn step(&mut self, y: T) -> T {
-        if self.implicit {
-            return self.step_implicit(y);
+    #[inline(always)]
+    fn step(&self, s: &mut EdState<T>, y: T) -> T {
+        match self.scheme {
+            EdScheme::Euler => self.step_euler(s, y),
+            EdScheme::Implicit => self.step_implicit(s, y),
         }
-        let e = self.z - y;
-        let (u, du1) = if e > T::ZERO {
-            (self.u1 - self.lambda * S::sqrt(e), -self.halpha)
-        } else if e < T::ZERO {
-            (self.u1 + self.lambda * S::sqrt(-e), self.halpha)
-        } else {
-            (self.u1, T::ZERO)
-        };
-        self.z = self.z + self.h * u;
-        self.u1 = self.u1 + du1;
-        self.u = u;
-        u
     }
 
-    fn output(&self) -> T {
-        self.u
+    #[inline]
+    fn output(&self, s: &EdState<T>) -> T {
+        s.u
     }
 
-    fn translate(&mut self, d: T) {
-        self.z = self.z + d;
+    #[inline]
+    fn translate(&self, s: &mut EdState<T>, d: T) {
+        s.z = s.z + d;
+    }
+
+    /// `n` steps; the scheme is chosen once per interval, not per step.
+    #[inline]
+    fn advance(&self, s: &mut EdState<T>, y_prev: T, y_new: T, n: u32, hold: Hold) -> T {
+        match self.scheme {
+            EdScheme::Euler => step_n(&Euler(*self), s, y_prev, y_new, n, hold),
+            EdScheme::Implicit => step_n(self, s, y_prev, y_new, n, hold),
+        }
+    }
+}
+
+/// The explicit scheme alone (no per-step scheme test).
+#[derive(Clone, Copy, Debug)]
+struct Euler<T: Real, S: SqrtFn<T>>(EdParams<T, S>);
+
+impl<T: Real, S: SqrtFn<T>> Law for Euler<T, S> {
+    type Num = T;
+    type State = EdState<T>;
+    fn init(&self, y0: T) -> EdState<T> {
+        self.0.init(y0)
+    }
+    #[inline(always)]
+    fn step(&self, s: &mut EdState<T>, y: T) -> T {
+        self.0.step_euler(s, y)
+    }
+    fn output(&self, s: &EdState<T>) -> T {
+        s.u
+    }
+    fn translate(&self, s: &mut EdState<T>, d: T) {
+        self.0.translate(s, d);
     }
 }

@@ -6,6 +6,8 @@ use crate::Real;
 /// `y_k` (at `t_k`) during the `n_k` steps of size `h` run when `y_k` arrives.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum Hold {
     /// Step `j = 1..=n_k` sees `y_{k-1} + (y_k - y_{k-1}) * j / n_k`: the sampled signal
     /// joined by straight lines, what a continuous-time law sees of it. Causal (all steps run

@@ -2,12 +2,15 @@
 //! (paper eq. 13).
 
 use crate::error::positive;
+use crate::law::{Law, Stateful};
 use crate::linear::{LinearLaw, LIN_MAX};
-use crate::{ConfigError, Estimator, Real};
+use crate::{ConfigError, Real};
 
 /// Parameters of the ILO velocity estimator in physical units.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct IloConfig {
     /// Learning gain `K1`, dimensionless, in `(0, 1]` (1: pure discrete integral update,
     /// < 1: leaky).
@@ -39,29 +42,39 @@ impl IloConfig {
 /// v(t)     = K1 v(t - tau) + K2 (y - xhat)
 /// ```
 ///
-/// Output: `v` (deg/s for `y` in deg). `D = 0` does not compile.
-///
-/// RAM: `(D + 6)` words of `T` plus the ring index (see [`crate::ram`]).
-#[derive(Clone, Copy, Debug)]
-pub struct Ilo<T: Real, const D: usize> {
+/// Output: `v` (deg/s for `y` in deg). `D = 0` does not compile. The validated coefficients
+/// ([`crate::Law`]); the state is [`IloState`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IloParams<T: Real, const D: usize> {
     hl: T,
     h: T,
     k1: T,
     k2: T,
-    xhat: T,
-    out: T,
+}
+
+/// State of the ILO: `xhat`, the last output and the delay line of the last `D` outputs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IloState<T: Real, const D: usize> {
+    /// Position estimate `xhat` (unit of `y`).
+    pub xhat: T,
+    /// Last output `v` (unit/s).
+    pub out: T,
     /// `buf[head]` is the oldest value `v_{n-D}`.
     buf: [T; D],
     head: u32,
 }
 
-impl<T: Real, const D: usize> Ilo<T, D> {
+/// The ILO as one object (parameters and state, [`crate::Estimator`]).
+/// RAM: `(D + 6)` words of `T` plus the ring index (see [`crate::ram`]).
+pub type Ilo<T, const D: usize> = Stateful<IloParams<T, D>>;
+
+impl<T: Real, const D: usize> IloParams<T, D> {
     const D_POSITIVE: () = assert!(
         D >= 1 && D <= u32::MAX as usize,
         "the ILO delay D must be at least 1 step"
     );
 
-    /// Builds the estimator for step `h` (s); `tau = D * h`. Errors: `K1` outside `(0, 1]`,
+    /// Validates `cfg` for step `h` (s); `tau = D * h`. Errors: `K1` outside `(0, 1]`,
     /// non-positive or non-finite `L`, `K2`, `h`; `h * L >= 1`.
     pub fn new(cfg: &IloConfig, h: f32) -> Result<Self, ConfigError> {
         #[allow(clippy::let_unit_value)]
@@ -84,28 +97,36 @@ impl<T: Real, const D: usize> Ilo<T, D> {
             h: T::from_f64(h),
             k1: T::from_f64(k1),
             k2: T::from_f64(k2),
-            xhat: T::ZERO,
-            out: T::ZERO,
-            buf: [T::ZERO; D],
-            head: 0,
         })
-    }
-
-    /// Position estimate `xhat` (unit of `y`).
-    pub fn xhat(&self) -> T {
-        self.xhat
     }
 
     /// The learning delay `tau = D * h` in steps.
     pub const DELAY_STEPS: usize = D;
 }
 
-impl<T: Real, const D: usize> Estimator<T> for Ilo<T, D> {
-    fn reset(&mut self, y0: T) {
-        self.xhat = y0;
-        self.out = T::ZERO;
-        self.buf = [T::ZERO; D];
-        self.head = 0;
+impl<T: Real, const D: usize> Ilo<T, D> {
+    /// Builds the estimator for step `h` (s) (see [`IloParams::new`]).
+    pub fn new(cfg: &IloConfig, h: f32) -> Result<Self, ConfigError> {
+        Ok(Self::from_law(IloParams::new(cfg, h)?))
+    }
+
+    /// Position estimate `xhat` (unit of `y`).
+    pub fn xhat(&self) -> T {
+        self.state().xhat
+    }
+}
+
+impl<T: Real, const D: usize> Law for IloParams<T, D> {
+    type Num = T;
+    type State = IloState<T, D>;
+
+    fn init(&self, y0: T) -> IloState<T, D> {
+        IloState {
+            xhat: y0,
+            out: T::ZERO,
+            buf: [T::ZERO; D],
+            head: 0,
+        }
     }
 
     /// Explicit Euler step with `e_n = y_n - xhat_n`:
@@ -115,60 +136,64 @@ impl<T: Real, const D: usize> Estimator<T> for Ilo<T, D> {
     /// xhat_{n+1} = xhat_n + h (L e_n + v_n)
     /// ```
     /// Returns `v_n`.
-    #[inline]
-    fn step(&mut self, y: T) -> T {
-        let e = y - self.xhat;
-        let hd = self.head as usize;
-        let old = self.buf.get(hd).copied().unwrap_or(T::ZERO);
+    #[inline(always)]
+    fn step(&self, s: &mut IloState<T, D>, y: T) -> T {
+        let e = y - s.xhat;
+        let hd = s.head as usize;
+        let old = s.buf.get(hd).copied().unwrap_or(T::ZERO);
         let v = self.k1 * old + self.k2 * e;
-        if let Some(slot) = self.buf.get_mut(hd) {
+        if let Some(slot) = s.buf.get_mut(hd) {
             *slot = v;
         }
-        self.head = if hd + 1 >= D { 0 } else { self.head + 1 };
-        self.xhat = self.xhat + (self.hl * e + self.h * v);
-        self.out = v;
+        s.head = if hd + 1 >= D { 0 } else { s.head + 1 };
+        s.xhat = s.xhat + (self.hl * e + self.h * v);
+        s.out = v;
         v
     }
 
-    fn output(&self) -> T {
-        self.out
+    #[inline]
+    fn output(&self, s: &IloState<T, D>) -> T {
+        s.out
     }
 
-    fn translate(&mut self, d: T) {
-        self.xhat = self.xhat + d;
+    #[inline]
+    fn translate(&self, s: &mut IloState<T, D>, d: T) {
+        s.xhat = s.xhat + d;
     }
 }
 
-impl<T: Real, const D: usize> LinearLaw<T> for Ilo<T, D> {
+impl<T: Real, const D: usize> LinearLaw for IloParams<T, D> {
     const DIM: usize = 1 + D;
     const POSITION: [bool; LIN_MAX] = [true, false, false, false];
 
     /// `[xhat, v_{n-1}, v_{n-2}, .., v_{n-D}]` (newest first).
-    fn lin_state(&self) -> [T; LIN_MAX] {
+    #[inline]
+    fn lin_state(&self, st: &IloState<T, D>) -> [T; LIN_MAX] {
         let mut s = [T::ZERO; LIN_MAX];
         if let Some(x) = s.get_mut(0) {
-            *x = self.xhat;
+            *x = st.xhat;
         }
         for i in 0..D.min(LIN_MAX - 1) {
             // newest is at head - 1, then head - 2, ...
-            let idx = (self.head as usize + D - 1 - i) % D;
-            if let (Some(dst), Some(src)) = (s.get_mut(1 + i), self.buf.get(idx)) {
+            let idx = (st.head as usize + D - 1 - i) % D;
+            if let (Some(dst), Some(src)) = (s.get_mut(1 + i), st.buf.get(idx)) {
                 *dst = *src;
             }
         }
         s
     }
 
-    fn set_lin_state(&mut self, s: &[T; LIN_MAX]) {
-        self.xhat = s[0];
-        self.head = 0;
+    #[inline]
+    fn set_lin_state(&self, st: &mut IloState<T, D>, s: &[T; LIN_MAX]) {
+        st.xhat = s[0];
+        st.head = 0;
         // buf[0] must be the oldest: v_{n-D} = s[D], ..., newest v_{n-1} = s[1] at buf[D-1].
         for j in 0..D.min(LIN_MAX - 1) {
-            if let (Some(dst), Some(src)) = (self.buf.get_mut(j), s.get(D - j)) {
+            if let (Some(dst), Some(src)) = (st.buf.get_mut(j), s.get(D - j)) {
                 *dst = *src;
             }
         }
-        self.out = s[1];
+        st.out = s[1];
     }
 
     fn lin_step_f64(&self, s: &mut [f64; LIN_MAX], y: f64) -> f64 {

@@ -2,11 +2,14 @@
 //! an engineer would otherwise use. Not from the paper.
 
 use crate::error::positive;
-use crate::{ConfigError, Real};
+use crate::law::Law;
+use crate::{ConfigError, Hold, Real};
 
 /// Parameters of the tracker in physical units.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct KalmanConfig {
     /// Nominal sample period `dt0`, s (NAV440 at 100 Hz: 0.01). The steady-state gains are for
     /// this period; the prediction uses each sample's actual `dt`.
@@ -101,6 +104,144 @@ impl<T: Real> Kalman<T> {
     /// Acceleration estimate (unit/s^2).
     pub fn acceleration(&self) -> T {
         self.a
+    }
+}
+
+/// Which estimate a [`KalmanParams`] law reports as its output.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
+pub enum KalmanOutput {
+    /// The velocity estimate `v` (unit/s).
+    #[default]
+    Velocity,
+    /// The acceleration estimate `a` (unit/s^2).
+    Acceleration,
+}
+
+/// The tracker of [`Kalman`] as a [`Law`]: validated steady-state gains, the step `h` and the
+/// reported estimate. One [`Law::advance`] over `n` steps is one predict + update with
+/// `dt = n h` (one measurement per sample, as the tracker is meant to run); one
+/// [`Law::step`] is the same with `dt = h`. State: [`KalmanState`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KalmanParams<T: Real> {
+    k: [T; 3],
+    h: T,
+    /// `n0` and `n0 h` (the interval of a nominal sample period, precomputed: the same
+    /// product the update would compute).
+    n0: u32,
+    dt0: T,
+    output: KalmanOutput,
+}
+
+/// State of the tracker: position, velocity, acceleration.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct KalmanState<T: Real> {
+    /// Position (unit of `y`).
+    pub x: T,
+    /// Velocity (unit/s).
+    pub v: T,
+    /// Acceleration (unit/s^2).
+    pub a: T,
+}
+
+impl<T: Real> KalmanParams<T> {
+    /// Validates `cfg` and computes the steady-state gain for the nominal period `cfg.dt`;
+    /// `h` is the step (s, a whole number of microseconds) that sample intervals are counted
+    /// in; `output` the reported estimate.
+    pub fn new(cfg: &KalmanConfig, h: f32, output: KalmanOutput) -> Result<Self, ConfigError> {
+        let h_us = crate::adapter::step_us(h)?;
+        let kf = Kalman::<T>::new(cfg)?;
+        let h = T::from_f64(h_us as f64 * 1e-6);
+        // Steps per nominal period (as the sample clock counts them); 0 if out of range.
+        let n0 = libm::round(f64::from(cfg.dt) * 1e6 / h_us as f64);
+        let n0 = if (1.0..=1e6).contains(&n0) {
+            n0 as u32
+        } else {
+            0
+        };
+        Ok(Self {
+            k: kf.k,
+            h,
+            n0,
+            dt0: Self::dt(h, n0),
+            output,
+        })
+    }
+
+    /// The velocity estimate of `s` (unit/s), whatever the configured output.
+    #[inline]
+    pub fn velocity(&self, s: &KalmanState<T>) -> T {
+        s.v
+    }
+
+    /// The acceleration estimate of `s` (unit/s^2), whatever the configured output.
+    #[inline]
+    pub fn acceleration(&self, s: &KalmanState<T>) -> T {
+        s.a
+    }
+
+    /// `n h` as [`Law::advance`] computes it.
+    #[inline(always)]
+    fn dt(h: T, n: u32) -> T {
+        h * T::from_i32(i32::try_from(n).unwrap_or(i32::MAX))
+    }
+
+    #[inline(always)]
+    fn update(&self, s: &mut KalmanState<T>, y: T, dt: T) {
+        let xp = s.x + dt * (s.v + (s.a * dt).div_int(2));
+        let vp = s.v + s.a * dt;
+        let r = y - xp;
+        let [k0, k1, k2] = self.k;
+        s.x = xp + k0 * r;
+        s.v = vp + k1 * r;
+        s.a = s.a + k2 * r;
+    }
+}
+
+impl<T: Real> Law for KalmanParams<T> {
+    type Num = T;
+    type State = KalmanState<T>;
+
+    fn init(&self, y0: T) -> KalmanState<T> {
+        KalmanState {
+            x: y0,
+            v: T::ZERO,
+            a: T::ZERO,
+        }
+    }
+
+    fn step(&self, s: &mut KalmanState<T>, y: T) -> T {
+        self.update(s, y, self.h);
+        self.output(s)
+    }
+
+    #[inline]
+    fn output(&self, s: &KalmanState<T>) -> T {
+        match self.output {
+            KalmanOutput::Velocity => s.v,
+            KalmanOutput::Acceleration => s.a,
+        }
+    }
+
+    #[inline]
+    fn translate(&self, s: &mut KalmanState<T>, d: T) {
+        s.x = s.x + d;
+    }
+
+    /// One predict + update with `dt = n h` and the measurement `y_new` (`n = 0`: nothing).
+    #[inline]
+    fn advance(&self, s: &mut KalmanState<T>, _y_prev: T, y_new: T, n: u32, _hold: Hold) -> T {
+        if n > 0 {
+            let dt = if n == self.n0 {
+                self.dt0
+            } else {
+                Self::dt(self.h, n)
+            };
+            self.update(s, y_new, dt);
+        }
+        self.output(s)
     }
 }
 

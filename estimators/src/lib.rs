@@ -15,6 +15,15 @@
 //! ([`Hold::Linear`], default) or a zero-order hold. Linear laws (ILO, AD and their series)
 //! can use their exact multi-step map ([`ClosedForm`]) instead of `n` steps.
 //!
+//! * [`Law`]: every law keeps its validated coefficients (`AveParams`, `IloParams`, `AdParams`,
+//!   `EdParams`, `KalmanParams`, [`Series`], [`ClosedForm`]) apart from its small state and
+//!   steps with `step(&self, &mut State, y)`; [`Stateful`] (aliases [`Ave`], [`Ilo`], [`Ad`],
+//!   [`Ed`]) binds the two into the classic [`Estimator`] object.
+//! * Banks are generated from one table by [`estimator_bank!`]: [`PaperBank`] (alias
+//!   [`YawBank`]: the paper's 14 estimators, output indexed by [`Channel`]) and
+//!   [`ProductBank`] (one velocity and one acceleration estimator). [`BankConfig::wrap`] picks
+//!   the unwrapping per axis ([`Wrap`]). See docs/BANK.md.
+//! * Feature `serde`: `Serialize`/`Deserialize` on the configuration types (no_std, no alloc).
 //! * Units: inputs in deg (any position-like unit works), velocities in unit/s, accelerations
 //!   in unit/s^2, times in s (`h`, `T`, `tau`) or integer microseconds (sample timestamps).
 //! * [`presets`]: every parameter set of the paper; [`ram`]: `size_of` of every estimator
@@ -30,7 +39,7 @@
 //!   leave the state unchanged; invalid parameters return [`ConfigError`] at construction.
 //!
 //! ```
-//! use estimators::{csv, BankConfig, Fx, YawBank};
+//! use estimators::{csv, BankConfig, Channel, Fx, YawBank};
 //!
 //! // The paper's bank: AVE, ILO1-3, AD, ED, Kalman; acceleration by series connections.
 //! let mut bank = YawBank::<f32>::new(&BankConfig::default()).unwrap();
@@ -43,9 +52,9 @@
 //!     let out = bank.update(t_us, yaw).unwrap();
 //!     let out_fx = fixed.update(t_us, yaw).unwrap();
 //!     if k == 199 {
-//!         assert!((out.vel[0] - 30.0).abs() < 0.1); // AVE velocity, deg/s
-//!         assert!((out_fx.vel[0] - 30.0).abs() < 0.1);
-//!         assert!(out.acc[0].abs() < 1.0); // AVE-AVE acceleration, deg/s^2
+//!         assert!((out[Channel::AveV] - 30.0).abs() < 0.1); // AVE velocity, deg/s
+//!         assert!((out_fx[Channel::AveV] - 30.0).abs() < 0.1);
+//!         assert!(out[Channel::AveA].abs() < 1.0); // AVE-AVE acceleration, deg/s^2
 //!         csv::write_row(&mut row, t_us, 30.0, &out).unwrap();
 //!     }
 //! }
@@ -68,7 +77,9 @@ mod estimator;
 pub mod gilo;
 mod ilo;
 pub mod kalman;
+pub mod law;
 pub mod linear;
+mod pair;
 pub mod period;
 pub mod presets;
 pub mod ram;
@@ -76,21 +87,24 @@ mod real;
 mod series;
 mod unwrap;
 
-pub use ad::{Ad, AdConfig};
+pub use ad::{Ad, AdConfig, AdParams, AdState};
 pub use adapter::{SampleAdapter, SampleClock, Tick};
-pub use ave::{Ave, AveConfig, DeltaMode};
+pub use ave::{Ave, AveConfig, AveParams, AveState, DeltaLaw, DeltaMode};
 pub use bank::{
-    BankConfig, BankGains, BankOutput, KalmanNoise, YawBank, GAP_PERIODS, KF_DEFAULT,
-    VELOCITY_NAMES,
+    Accepted, AdAdMap, BankConfig, BankGains, BankInput, BankOutput, Channel, Feed, KalmanNoise,
+    PaperBank, PaperOutput, PaperParams, PaperState, ProductBank, ProductChannel, ProductOutput,
+    ProductParams, ProductState, Wrap, YawBank, GAP_PERIODS, KF_DEFAULT, VELOCITY_NAMES,
 };
-pub use ed::{Ed, EdConfig, EdScheme};
+pub use ed::{Ed, EdConfig, EdParams, EdScheme, EdState};
 pub use error::{ConfigError, SampleError};
 pub use estimator::{advance_by_steps, Estimator, Hold};
-pub use ilo::{Ilo, IloConfig};
-pub use kalman::{Kalman, KalmanConfig};
+pub use ilo::{Ilo, IloConfig, IloParams, IloState};
+pub use kalman::{Kalman, KalmanConfig, KalmanOutput, KalmanParams, KalmanState};
+pub use law::{Law, Stateful};
 pub use linear::{ClosedForm, LinearLaw};
+pub use pair::{VelAcc, VelAccState};
 pub use real::{ExactSqrt, Fx, Real, SqrtFn};
-pub use series::Series;
+pub use series::{Series, SeriesState};
 pub use unwrap::Unwrapper;
 
 /// The examples of the crate README, compiled and run as doc tests.

@@ -15,22 +15,23 @@
 //! law: it is the Euler recursion's own closed form). Working relative to `y_prev` keeps the
 //! numbers small (an error, not an absolute angle) so nothing cancels.
 
-use crate::{Estimator, Hold, Real};
+use crate::law::{Law, Stateful};
+use crate::{Hold, Real};
 
 /// The largest state dimension a closed-form map supports (a series of two ILOs with `D = 1`).
 pub const LIN_MAX: usize = 4;
 
 /// A law whose step is linear in (state, input) and invariant to a constant input offset.
-/// Implemented by [`crate::Ilo`], [`crate::Ad`] and [`crate::Series`] of two of them.
-pub trait LinearLaw<T: Real>: Estimator<T> {
+/// Implemented by [`crate::IloParams`], [`crate::AdParams`] and [`crate::Series`] of two of them.
+pub trait LinearLaw: Law {
     /// State dimension; must be `<= LIN_MAX` for [`ClosedForm`] (checked at compile time).
     const DIM: usize;
     /// `true` at the position states (shifted by a constant input offset).
     const POSITION: [bool; LIN_MAX];
     /// The state as a vector (entries `>= DIM` are 0). The output is a function of it.
-    fn lin_state(&self) -> [T; LIN_MAX];
+    fn lin_state(&self, s: &Self::State) -> [Self::Num; LIN_MAX];
     /// Sets the state from a vector (and the output that goes with it).
-    fn set_lin_state(&mut self, s: &[T; LIN_MAX]);
+    fn set_lin_state(&self, s: &mut Self::State, v: &[Self::Num; LIN_MAX]);
     /// One step of the same Euler law in `f64` (with this law's quantised coefficients), on the
     /// state vector; returns the step's output. Used only to precompute maps.
     fn lin_step_f64(&self, s: &mut [f64; LIN_MAX], y: f64) -> f64;
@@ -38,21 +39,22 @@ pub trait LinearLaw<T: Real>: Estimator<T> {
 
 /// A linear law with its exact `n`-step map precomputed for the usual number of steps per
 /// sample `n` (e.g. 100 for 100 Hz samples at `h = 1e-4`) and one [`Hold`] mode;
-/// [`Estimator::advance`] uses the map when called with that `n` and mode and falls back to
-/// stepping otherwise. `step`, `reset` and `output` are the inner law's.
+/// [`Law::advance`] uses the map when called with that `n` and mode and falls back to
+/// stepping otherwise. `step`, `init` and `output` are the inner law's, and so is the state.
 ///
 /// Cost per sample: `DIM^2 + 3 DIM` multiply-adds instead of `n` steps.
-/// RAM: the inner law plus `(LIN_MAX^2 + LIN_MAX)` words of `T` and the `n`/mode tag.
+/// RAM (parameters): the inner law plus `(LIN_MAX^2 + LIN_MAX)` words of `T` and the
+/// `n`/mode tag.
 #[derive(Clone, Copy, Debug)]
-pub struct ClosedForm<T: Real, E: LinearLaw<T>> {
+pub struct ClosedForm<E: LinearLaw> {
     inner: E,
     n: u32,
     hold: Hold,
-    phi: [[T; LIN_MAX]; LIN_MAX],
-    g: [T; LIN_MAX],
+    phi: [[E::Num; LIN_MAX]; LIN_MAX],
+    g: [E::Num; LIN_MAX],
 }
 
-impl<T: Real, E: LinearLaw<T>> ClosedForm<T, E> {
+impl<E: LinearLaw> ClosedForm<E> {
     const DIM_OK: () = assert!(E::DIM <= LIN_MAX, "state too large for a closed-form map");
 
     /// Precomputes the `n`-step map of `inner` for `hold` (`n >= 1`; `n = 0` gives a map that
@@ -60,7 +62,8 @@ impl<T: Real, E: LinearLaw<T>> ClosedForm<T, E> {
     pub fn new(inner: E, n: u32, hold: Hold) -> Self {
         #[allow(clippy::let_unit_value)]
         let () = Self::DIM_OK;
-        let mut phi = [[T::ZERO; LIN_MAX]; LIN_MAX];
+        let zero = <E::Num as Real>::ZERO;
+        let mut phi = [[zero; LIN_MAX]; LIN_MAX];
         for i in 0..E::DIM {
             let mut s = [0.0f64; LIN_MAX];
             if let Some(x) = s.get_mut(i) {
@@ -71,7 +74,7 @@ impl<T: Real, E: LinearLaw<T>> ClosedForm<T, E> {
             }
             for (r, row) in phi.iter_mut().enumerate() {
                 if let (Some(dst), Some(src)) = (row.get_mut(i), s.get(r)) {
-                    *dst = T::from_f64(*src);
+                    *dst = E::Num::from_f64(*src);
                 }
             }
         }
@@ -83,9 +86,9 @@ impl<T: Real, E: LinearLaw<T>> ClosedForm<T, E> {
             };
             inner.lin_step_f64(&mut s, u);
         }
-        let mut g = [T::ZERO; LIN_MAX];
+        let mut g = [zero; LIN_MAX];
         for (dst, src) in g.iter_mut().zip(s.iter()) {
-            *dst = T::from_f64(*src);
+            *dst = E::Num::from_f64(*src);
         }
         Self {
             inner,
@@ -94,6 +97,25 @@ impl<T: Real, E: LinearLaw<T>> ClosedForm<T, E> {
             phi,
             g,
         }
+    }
+
+    /// The estimator object of `inner`'s parameters with the map (state reset to 0).
+    pub fn of(inner: &Stateful<E>, n: u32, hold: Hold) -> Stateful<Self> {
+        Stateful::from_law(Self::new(*inner.law(), n, hold))
+    }
+
+    /// The fallback of [`Law::advance`]: `n` Euler steps (an interval of another length).
+    #[cold]
+    #[inline(never)]
+    fn advance_stepping(
+        &self,
+        st: &mut E::State,
+        y_prev: E::Num,
+        y_new: E::Num,
+        n: u32,
+        hold: Hold,
+    ) -> E::Num {
+        self.inner.advance(st, y_prev, y_new, n, hold)
     }
 
     /// The wrapped law.
@@ -107,37 +129,52 @@ impl<T: Real, E: LinearLaw<T>> ClosedForm<T, E> {
     }
 }
 
-impl<T: Real, E: LinearLaw<T>> Estimator<T> for ClosedForm<T, E> {
-    fn reset(&mut self, y0: T) {
-        self.inner.reset(y0);
+impl<E: LinearLaw> Law for ClosedForm<E> {
+    type Num = E::Num;
+    type State = E::State;
+
+    fn init(&self, y0: E::Num) -> E::State {
+        self.inner.init(y0)
     }
 
-    fn step(&mut self, y: T) -> T {
-        self.inner.step(y)
+    #[inline(always)]
+    fn step(&self, s: &mut E::State, y: E::Num) -> E::Num {
+        self.inner.step(s, y)
     }
 
-    fn output(&self) -> T {
-        self.inner.output()
+    #[inline]
+    fn output(&self, s: &E::State) -> E::Num {
+        self.inner.output(s)
     }
 
-    fn translate(&mut self, d: T) {
-        self.inner.translate(d);
+    #[inline]
+    fn translate(&self, s: &mut E::State, d: E::Num) {
+        self.inner.translate(s, d);
     }
 
     /// `s' = P y_prev + Phi (s - P y_prev) + g (y_new - y_prev)` when `n` and `hold` match the
     /// precomputed map, else `n` Euler steps.
-    fn advance(&mut self, y_prev: T, y_new: T, n: u32, hold: Hold) -> T {
+    #[inline(always)]
+    fn advance(
+        &self,
+        st: &mut E::State,
+        y_prev: E::Num,
+        y_new: E::Num,
+        n: u32,
+        hold: Hold,
+    ) -> E::Num {
         if n != self.n || hold != self.hold || n == 0 {
-            return crate::estimator::advance_by_steps(&mut self.inner, y_prev, y_new, n, hold);
+            return self.advance_stepping(st, y_prev, y_new, n, hold);
         }
-        let mut s = self.inner.lin_state();
+        let zero = <E::Num as Real>::ZERO;
+        let mut s = self.inner.lin_state(st);
         for (x, p) in s.iter_mut().zip(E::POSITION.iter()) {
             if *p {
                 *x = *x - y_prev;
             }
         }
         let dy = y_new - y_prev;
-        let mut out = [T::ZERO; LIN_MAX];
+        let mut out = [zero; LIN_MAX];
         for ((o, row), g) in out
             .iter_mut()
             .zip(self.phi.iter())
@@ -155,7 +192,7 @@ impl<T: Real, E: LinearLaw<T>> Estimator<T> for ClosedForm<T, E> {
                 *x = *x + y_prev;
             }
         }
-        self.inner.set_lin_state(&out);
-        self.inner.output()
+        self.inner.set_lin_state(st, &out);
+        self.inner.output(st)
     }
 }

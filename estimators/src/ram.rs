@@ -1,32 +1,38 @@
 //! RAM per estimator (`core::mem::size_of`, bytes). No estimator allocates: every state,
-//! coefficient, delay line and closed-form map is inline in the struct, `update`/`step`/
-//! `advance` only read and write it (the crate is `no_std` without `alloc`).
+//! coefficient, delay line and closed-form map is inline, `step`/`advance` only read the
+//! parameters and write the state (the crate is `no_std` without `alloc`).
 //!
 //! The numbers are the same on the host and on every Cortex-M target (no `usize` fields;
 //! `i64`/`u64` are 8-aligned on both); they are checked at compile time for every target
 //! (the constants below feed `const` assertions), so this table cannot go stale.
 //!
+//! Parameters (validated coefficients, [`crate::Law`]) and state are apart: several axes can
+//! share one parameter set, each keeping only its state.
+//!
 //! | type | f32 | Fx (Q31.32) |
 //! |---|---|---|
-//! | [`Ave`] | 36 | 72 |
+//! | [`Ave`] (params + state) | 32 | 64 |
 //! | [`Ilo`]`<T, 1>` | 32 | 64 |
 //! | [`Ad`] | 16 | 32 |
 //! | [`Ed`] | 44 | 88 |
 //! | [`Kalman`] | 24 | 48 |
 //! | [`Unwrapper`] | 16 | 24 |
-//! | [`ClosedForm`]`<T, Ilo<T, 1>>` | 120 | 232 |
-//! | [`ClosedForm`]`<T, Ad<T>>` | 104 | 200 |
-//! | [`ClosedForm`]`<T, Series<Ilo<T, 1>, Ilo<T, 1>>>` | 152 | 296 |
-//! | [`YawBank`] (whole bank, one axis) | 1392 | 2672 |
+//! | [`ClosedForm`]`<IloParams<T, 1>>` (params) | 104 | 200 |
+//! | [`ClosedForm`]`<AdParams<T>>` (params) | 96 | 184 |
+//! | [`ClosedForm`]`<Series<IloParams<T, 1>, IloParams<T, 1>>>` (params) | 120 | 232 |
+//! | [`PaperParams`] (all 12 rows' parameters) | 1092 | 2104 |
+//! | [`PaperState`] (all 12 rows' state, one axis) | 264 | 528 |
+//! | [`YawBank`] = [`PaperBank`] (whole bank, one axis) | 1440 | 2720 |
+//! | [`ProductBank`] (ILO1 + Kalman, one axis) | 240 | 392 |
 //!
 //! A [`Series`] is the sum of its stages; an `Ilo<T, D>` adds `D - 1` words of `T`; a closed
-//! form adds `(LIN_MAX^2 + LIN_MAX) = 20` words of `T` plus 8 bytes to its law.
+//! form adds `(LIN_MAX^2 + LIN_MAX) = 20` words of `T` plus 8 bytes to its law's parameters.
 
 use crate::*;
 use core::mem::size_of;
 
 /// `(f32 size, Fx size)` of [`Ave`].
-pub const AVE: (usize, usize) = (36, 72);
+pub const AVE: (usize, usize) = (32, 64);
 /// `(f32, Fx)` of [`Ilo`]`<T, 1>`.
 pub const ILO_D1: (usize, usize) = (32, 64);
 /// `(f32, Fx)` of [`Ad`].
@@ -37,14 +43,20 @@ pub const ED: (usize, usize) = (44, 88);
 pub const KALMAN: (usize, usize) = (24, 48);
 /// `(f32, Fx)` of [`Unwrapper`].
 pub const UNWRAPPER: (usize, usize) = (16, 24);
-/// `(f32, Fx)` of [`ClosedForm`]`<T, Ilo<T, 1>>`.
-pub const CLOSED_ILO: (usize, usize) = (120, 232);
-/// `(f32, Fx)` of [`ClosedForm`]`<T, Ad<T>>`.
-pub const CLOSED_AD: (usize, usize) = (104, 200);
-/// `(f32, Fx)` of [`ClosedForm`]`<T, Series<Ilo<T, 1>, Ilo<T, 1>>>`.
-pub const CLOSED_ILO_ILO: (usize, usize) = (152, 296);
+/// `(f32, Fx)` of [`ClosedForm`]`<IloParams<T, 1>>`.
+pub const CLOSED_ILO: (usize, usize) = (104, 200);
+/// `(f32, Fx)` of [`ClosedForm`]`<AdParams<T>>`.
+pub const CLOSED_AD: (usize, usize) = (96, 184);
+/// `(f32, Fx)` of [`ClosedForm`]`<Series<IloParams<T, 1>, IloParams<T, 1>>>`.
+pub const CLOSED_ILO_ILO: (usize, usize) = (120, 232);
+/// `(f32, Fx)` of [`PaperParams`].
+pub const PAPER_PARAMS: (usize, usize) = (1092, 2104);
+/// `(f32, Fx)` of [`PaperState`].
+pub const PAPER_STATE: (usize, usize) = (264, 528);
 /// `(f32, Fx)` of the whole [`YawBank`].
-pub const YAW_BANK: (usize, usize) = (1392, 2672);
+pub const YAW_BANK: (usize, usize) = (1440, 2720);
+/// `(f32, Fx)` of the [`ProductBank`].
+pub const PRODUCT_BANK: (usize, usize) = (240, 392);
 
 macro_rules! check {
     ($c:expr, $f:ty, $x:ty) => {
@@ -57,14 +69,25 @@ check!(AD, Ad<f32>, Ad<Fx>);
 check!(ED, Ed<f32>, Ed<Fx>);
 check!(KALMAN, Kalman<f32>, Kalman<Fx>);
 check!(UNWRAPPER, Unwrapper<f32>, Unwrapper<Fx>);
-check!(CLOSED_ILO, ClosedForm<f32, Ilo<f32, 1>>, ClosedForm<Fx, Ilo<Fx, 1>>);
-check!(CLOSED_AD, ClosedForm<f32, Ad<f32>>, ClosedForm<Fx, Ad<Fx>>);
+check!(
+    CLOSED_ILO,
+    ClosedForm<IloParams<f32, 1>>,
+    ClosedForm<IloParams<Fx, 1>>
+);
+check!(
+    CLOSED_AD,
+    ClosedForm<AdParams<f32>>,
+    ClosedForm<AdParams<Fx>>
+);
 check!(
     CLOSED_ILO_ILO,
-    ClosedForm<f32, Series<Ilo<f32, 1>, Ilo<f32, 1>>>,
-    ClosedForm<Fx, Series<Ilo<Fx, 1>, Ilo<Fx, 1>>>
+    ClosedForm<Series<IloParams<f32, 1>, IloParams<f32, 1>>>,
+    ClosedForm<Series<IloParams<Fx, 1>, IloParams<Fx, 1>>>
 );
+check!(PAPER_PARAMS, PaperParams<f32>, PaperParams<Fx>);
+check!(PAPER_STATE, PaperState<f32>, PaperState<Fx>);
 check!(YAW_BANK, YawBank<f32>, YawBank<Fx>);
+check!(PRODUCT_BANK, ProductBank<f32>, ProductBank<Fx>);
 
 #[cfg(test)]
 mod tests {
@@ -81,10 +104,14 @@ mod tests {
         );
         assert_eq!(
             (
-                size_of::<ClosedForm<f32, Ilo<f32, 1>>>(),
-                size_of::<ClosedForm<Fx, Ilo<Fx, 1>>>()
+                size_of::<ClosedForm<IloParams<f32, 1>>>(),
+                size_of::<ClosedForm<IloParams<Fx, 1>>>()
             ),
             CLOSED_ILO
+        );
+        assert_eq!(
+            (size_of::<ProductBank<f32>>(), size_of::<ProductBank<Fx>>()),
+            PRODUCT_BANK
         );
     }
 }

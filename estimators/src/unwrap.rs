@@ -41,6 +41,11 @@ impl<T: Real> Unwrapper<T> {
         if self.started {
             let half = T::from_i32(180);
             let d = yaw - self.prev;
+            if d.abs() <= half {
+                // The common case: no turn (same result as the two tests below).
+                self.prev = yaw;
+                return self.turns;
+            }
             if d > half {
                 self.turns = self.turns.saturating_sub(1);
             } else if d < -half {

@@ -66,7 +66,7 @@ fn ramp_check<T: Real>(rate: f64) {
             out.yaw_unwrapped_deg
         );
     }
-    let v = out.vel.map(f64::from);
+    let v = out.velocities().map(f64::from);
     let expect = [
         rate,
         rate,
@@ -92,7 +92,11 @@ fn ramp_check<T: Real>(rate: f64) {
     );
     // Acceleration of a ramp: 0 (ED-ED excluded: chatter of the first stage is its input)
     for i in [0, 1, 2, 3, 4, 6] {
-        assert!(out.acc[i].abs() < 1.0, "acc[{i}] = {}", out.acc[i]);
+        assert!(
+            out[estimators::Channel::ACCELERATION[i]].abs() < 1.0,
+            "acc[{i}] = {}",
+            out[estimators::Channel::ACCELERATION[i]]
+        );
     }
 }
 
@@ -125,8 +129,7 @@ fn gap_handling() {
         BankOutput {
             yaw_unwrapped_deg: 12.5,
             yaw_residual_deg: 0.0,
-            vel: [0.0; 7],
-            acc: [0.0; 7]
+            values: [0.0; 14]
         }
     );
     bank.restart();
@@ -142,7 +145,7 @@ fn gap_handling() {
     yaw += rate * 0.03;
     for k in 0..50 {
         let out = bank.update(t_us, yaw as f32).unwrap();
-        for (i, v) in out.vel.iter().enumerate() {
+        for (i, v) in out.velocities().iter().enumerate() {
             if i != 5 && !(2..4).contains(&i) {
                 assert!(
                     (f64::from(*v) - rate).abs() < 0.05 * rate,
@@ -174,21 +177,21 @@ fn gap_handling() {
         .update(ti + 500_000, (rate * 2.5 + 120.0) as f32)
         .unwrap();
     assert!(
-        spike.vel[4] > 2.0 * rate as f32,
+        spike[estimators::Channel::VELOCITY[4]] > 2.0 * rate as f32,
         "AD integrating across the gap: {}",
-        spike.vel[4]
+        spike[estimators::Channel::VELOCITY[4]]
     );
     t_us += 490_000;
     yaw += 120.0;
     let out = bank.update(t_us, yaw as f32).unwrap();
-    assert_eq!(out.vel, [0.0; 7]);
-    assert_eq!(out.acc, [0.0; 7]);
+    assert_eq!(out.velocities(), [0.0; 7]);
+    assert_eq!(out.accelerations(), [0.0; 7]);
     assert_eq!(bank.reinit_count(), 1);
     for _ in 0..100 {
         t_us += 10_000;
         yaw += rate * 0.01;
         let out = bank.update(t_us, yaw as f32).unwrap();
-        for (i, v) in out.vel.iter().enumerate() {
+        for (i, v) in out.velocities().iter().enumerate() {
             if i != 5 {
                 assert!(v.abs() < 2.0 * rate as f32, "vel[{i}] = {v}");
             }
@@ -269,7 +272,7 @@ fn zoh_bias_vs_linear() {
                 .update(k * 10_000, (rate * k as f64 * 0.01) as f32)
                 .unwrap();
         }
-        out.vel.map(|v| f64::from(v) / rate)
+        out.velocities().map(|v| f64::from(v) / rate)
     };
     let lin = run(Hold::Linear);
     let zoh = run(Hold::ZeroOrder);
@@ -289,9 +292,12 @@ fn zoh_bias_vs_linear() {
 }
 
 /// Max |closed form - stepping| / max |output| over a noisy paper-like run, for one law.
-fn closed_vs_steps<T: Real, E: estimators::LinearLaw<T> + Clone>(law: E, hold: Hold) -> f64 {
-    let mut stepped = law.clone();
-    let mut closed = ClosedForm::new(law, 100, hold);
+fn closed_vs_steps<T: Real, E: estimators::LinearLaw<Num = T>>(
+    law: estimators::Stateful<E>,
+    hold: Hold,
+) -> f64 {
+    let mut stepped = law;
+    let mut closed = ClosedForm::of(&law, 100, hold);
     let mut g = Gauss(7);
     let y_at = |k: u64, g: &mut Gauss| T::from_f64(profile(k as f64 * 0.01).0 + 0.1 * g.next());
     let mut y_prev = y_at(0, &mut g);
@@ -328,18 +334,18 @@ fn closed_form_equals_stepping() {
                 assert!(d < tol, "ILO {c:?} {hold:?}: {d:e}");
             }
             for c in [ILO1_TABLE4, ILO2_TABLE4, ILO3_TABLE4] {
-                let s = Series::new(
-                    Ilo::<T, 1>::new(&c, h).unwrap(),
-                    Ilo::<T, 1>::new(&c, h).unwrap(),
+                let s = Series::of(
+                    &Ilo::<T, 1>::new(&c, h).unwrap(),
+                    &Ilo::<T, 1>::new(&c, h).unwrap(),
                 );
                 let d = closed_vs_steps::<T, _>(s, hold);
                 assert!(d < tol, "ILO-ILO {c:?} {hold:?}: {d:e}");
             }
             let d = closed_vs_steps::<T, _>(Ad::<T>::new(AD_VELOCITY_T, h).unwrap(), hold);
             assert!(d < tol, "AD {hold:?}: {d:e}");
-            let s = Series::new(
-                Ad::<T>::new(AD_ACCELERATION_T, h).unwrap(),
-                Ad::<T>::new(AD_ACCELERATION_T, h).unwrap(),
+            let s = Series::of(
+                &Ad::<T>::new(AD_ACCELERATION_T, h).unwrap(),
+                &Ad::<T>::new(AD_ACCELERATION_T, h).unwrap(),
             );
             let d = closed_vs_steps::<T, _>(s, hold);
             assert!(d < tol, "AD-AD {hold:?}: {d:e}");
@@ -388,7 +394,11 @@ fn mse(outs: &[BankOutput], acc: bool, i: usize, from_s: f64) -> f64 {
         let t = k as f64 * 0.01;
         if t >= from_s {
             let (_, v, a) = profile(t);
-            let (est, truth) = if acc { (o.acc[i], a) } else { (o.vel[i], v) };
+            let (est, truth) = if acc {
+                (o[estimators::Channel::ACCELERATION[i]], a)
+            } else {
+                (o[estimators::Channel::VELOCITY[i]], v)
+            };
             s += (f64::from(est) - truth).powi(2);
             c += 1.0;
         }
@@ -426,8 +436,13 @@ fn fixed_point_matches_f32_on_paper_experiment() {
     let (mut dv, mut da) = (0.0f32, 0.0f32);
     for (a, b) in f.iter().zip(&x) {
         for i in [0, 1, 2, 3, 4, 6] {
-            dv = dv.max((a.vel[i] - b.vel[i]).abs());
-            da = da.max((a.acc[i] - b.acc[i]).abs());
+            dv = dv.max(
+                (a[estimators::Channel::VELOCITY[i]] - b[estimators::Channel::VELOCITY[i]]).abs(),
+            );
+            da = da.max(
+                (a[estimators::Channel::ACCELERATION[i]] - b[estimators::Channel::ACCELERATION[i]])
+                    .abs(),
+            );
         }
     }
     println!("max |f32 - Q31.32|: vel {dv} deg/s, acc {da} deg/s^2");
@@ -449,21 +464,30 @@ fn bank_closed_form_matches_stepping() {
     );
     for (x, y) in a.iter().zip(&b) {
         for i in [0, 5, 6] {
-            assert_eq!(x.vel[i], y.vel[i]);
-            assert_eq!(x.acc[i], y.acc[i]);
+            assert_eq!(
+                x[estimators::Channel::VELOCITY[i]],
+                y[estimators::Channel::VELOCITY[i]]
+            );
+            assert_eq!(
+                x[estimators::Channel::ACCELERATION[i]],
+                y[estimators::Channel::ACCELERATION[i]]
+            );
         }
         for i in 1..5 {
             assert!(
-                (x.vel[i] - y.vel[i]).abs() < 0.05,
+                (x[estimators::Channel::VELOCITY[i]] - y[estimators::Channel::VELOCITY[i]]).abs()
+                    < 0.05,
                 "{} {}",
-                x.vel[i],
-                y.vel[i]
+                x[estimators::Channel::VELOCITY[i]],
+                y[estimators::Channel::VELOCITY[i]]
             );
             assert!(
-                (x.acc[i] - y.acc[i]).abs() < 1.0,
+                (x[estimators::Channel::ACCELERATION[i]] - y[estimators::Channel::ACCELERATION[i]])
+                    .abs()
+                    < 1.0,
                 "{} {}",
-                x.acc[i],
-                y.acc[i]
+                x[estimators::Channel::ACCELERATION[i]],
+                y[estimators::Channel::ACCELERATION[i]]
             );
         }
     }
@@ -480,8 +504,22 @@ fn csv_row_format() {
     let out = BankOutput {
         yaw_unwrapped_deg: -361.5,
         yaw_residual_deg: 0.0,
-        vel: [1.0, 0.1, -2.5, 1e-7, 3.4028235e38, 0.0, 12.25],
-        acc: [-0.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0],
+        values: [
+            1.0,
+            0.1,
+            -2.5,
+            1e-7,
+            3.4028235e38,
+            0.0,
+            12.25,
+            -0.0,
+            1.5,
+            2.0,
+            3.0,
+            4.0,
+            5.0,
+            6.0,
+        ],
     };
     let mut s = String::new();
     csv::write_row(&mut s, 1_234_567, 99.5, &out).unwrap();

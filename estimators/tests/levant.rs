@@ -215,8 +215,14 @@ fn pluggable_sqrt_gives_identical_results() {
             a.update(k * 10_000, y).unwrap(),
             b.update(k * 10_000, y).unwrap(),
         );
-        assert_eq!(oa.vel[5].to_bits(), ob.vel[5].to_bits());
-        assert_eq!(oa.acc[5].to_bits(), ob.acc[5].to_bits());
+        assert_eq!(
+            oa[estimators::Channel::VELOCITY[5]].to_bits(),
+            ob[estimators::Channel::VELOCITY[5]].to_bits()
+        );
+        assert_eq!(
+            oa[estimators::Channel::ACCELERATION[5]].to_bits(),
+            ob[estimators::Channel::ACCELERATION[5]].to_bits()
+        );
     }
     for i in 0..1_000_000u32 {
         let x = f32::from_bits(0x3000_0000 + i * 997);

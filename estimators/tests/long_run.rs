@@ -59,11 +59,11 @@ fn run_bank<T: Real>(hours: usize) -> Run {
             let out = bank.update(t_us, wrap_q(yaw)).unwrap();
             // The first second after the start is the estimators' convergence, not drift.
             if k >= RATE_HZ as usize {
-                for (s, v) in sum.iter_mut().zip(out.vel) {
+                for (s, v) in sum.iter_mut().zip(out.velocities()) {
                     *s += (f64::from(v) - rate).powi(2);
                 }
             }
-            vel.push(out.vel);
+            vel.push(out.velocities());
         }
         hourly_rms.push(sum.map(|s| (s / HOUR as f64).sqrt()));
     }

@@ -98,9 +98,9 @@ fn series_3_2_2(cfg: estimators::IloConfig, t_end: f64) -> (f64, f64) {
     const D: usize = 10;
     let h = 1e-4f64;
     assert!((D as f64 * h - f64::from(TAU_SIM_3_2_2)).abs() < 1e-8);
-    let mut s = Series::new(
-        Ilo::<f64, D>::new(&cfg, h as f32).unwrap(),
-        Ilo::<f64, D>::new(&cfg, h as f32).unwrap(),
+    let mut s = Series::of(
+        &Ilo::<f64, D>::new(&cfg, h as f32).unwrap(),
+        &Ilo::<f64, D>::new(&cfg, h as f32).unwrap(),
     );
     s.reset(0.0);
     let n = (t_end / h) as usize;

@@ -54,10 +54,10 @@ proptest! {
                 prop_assert_eq!(rx.err(), Some(e));
             } else {
                 let of = rf.unwrap();
-                prop_assert!(of.vel.iter().chain(&of.acc).all(|v| !v.is_nan()), "{:?}", of);
+                prop_assert!(of.values.iter().all(|v| !v.is_nan()), "{:?}", of);
                 let out = rx.unwrap();
                 // Fixed point saturates: every output is a finite number.
-                prop_assert!(out.vel.iter().chain(&out.acc).all(|v| v.is_finite()));
+                prop_assert!(out.velocities().iter().chain(&out.accelerations()).all(|v| v.is_finite()));
                 last_t = Some(t);
             }
         }

@@ -53,12 +53,18 @@ fn bank_at_ten_million_turns<T: Real>() {
         let t_us = k as u64 * 10_000;
         let oa = a.update(t_us, y).unwrap();
         let ob = b.update(t_us, y).unwrap();
-        assert_eq!(oa.vel.map(f32::to_bits), ob.vel.map(f32::to_bits));
-        assert_eq!(oa.acc.map(f32::to_bits), ob.acc.map(f32::to_bits));
+        assert_eq!(
+            oa.velocities().map(f32::to_bits),
+            ob.velocities().map(f32::to_bits)
+        );
+        assert_eq!(
+            oa.accelerations().map(f32::to_bits),
+            ob.accelerations().map(f32::to_bits)
+        );
         if k > 1000 {
             // accurate after 10 s: every velocity estimator within 3 deg/s of 500 (ILO2/3 within their
             // leaky DC gain; ED within its Euler chatter lambda^2 h = 49 deg/s).
-            for (i, v) in ob.vel.iter().enumerate() {
+            for (i, v) in ob.velocities().iter().enumerate() {
                 let tol = match i {
                     2 | 3 => 0.06 * 500.0,
                     5 => 50.0,

@@ -1,100 +1,60 @@
 //! Gains file (TOML): what `nav440 tune` writes and `--gains FILE` reads.
 //!
 //! ```toml
-//! [velocity.ave]            # AveConfig { k, gamma1 }
+//! [velocity.ave]            # estimators::AveConfig { k, gamma1, delta }
 //! k = 500.0
 //! gamma1 = 20000.0
-//! [velocity.ilo1]           # IloConfig { k1, l, k2 } (tau = h)
+//! delta = { leaky = { sigma = 0.1 } }   # or "paper", or { bounded = { max = 1e3 } };
+//!                                       # optional: left out, the base's law is kept
+//! [velocity.ilo1]           # estimators::IloConfig { k1, l, k2 } (tau = h)
 //! k1 = 1.0
 //! l = 4.0
 //! k2 = 0.2
 //! # ... ilo2, ilo3
-//! [velocity.ad]             # s / (T s + 1)
+//! [velocity.ad]             # estimators::AdConfig { t }: s / (T s + 1)
 //! t = 0.01
-//! [velocity.ed]             # EdConfig { lambda, alpha }
+//! [velocity.ed]             # estimators::EdConfig { lambda, alpha }
 //! lambda = 700.0
 //! alpha = 770.0
-//! [velocity.kf]             # KalmanConfig { q, r } (dt = nominal sample period)
+//! [velocity.kf]             # estimators::KalmanNoise { q, r } (dt = nominal sample period)
 //! q = 1e6
 //! r = 0.01
 //! [acceleration.ave]        # the same tables for the series (acceleration) estimators
 //! ...
 //! ```
-//! Every table and key is optional: what is left out keeps the paper preset.
+//! Every table is optional (what is left out keeps the preset); within a table every key but
+//! `delta` is required. The tables deserialize straight into the estimators crate's
+//! configuration types (its `serde` feature).
 
 use crate::error::{Error, Result};
-use estimators::{BankConfig, BankGains};
+use estimators::{AdConfig, AveConfig, BankConfig, BankGains, EdConfig, IloConfig, KalmanNoise};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// AVE gains.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct AveGains {
-    /// `k`, 1/s.
-    pub k: f32,
-    /// `gamma1`, 1/s^2.
-    pub gamma1: f32,
-}
-
-/// ILO gains (`tau = h`).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct IloGains {
-    /// `K1`, in (0, 1].
-    pub k1: f32,
-    /// `L`, 1/s.
-    pub l: f32,
-    /// `K2`.
-    pub k2: f32,
-}
-
-/// Approximate differentiator time constant.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct AdGains {
-    /// `T`, s.
-    pub t: f32,
-}
-
-/// Levant differentiator gains.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct EdGains {
-    /// `lambda`, deg^(1/2)/s.
-    pub lambda: f32,
-    /// `alpha`, deg/s^2.
-    pub alpha: f32,
-}
-
-/// Kalman tracker noise parameters.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct KfGains {
-    /// Jerk PSD `q`, deg^2/s^5.
-    pub q: f32,
-    /// Measurement variance `r`, deg^2.
-    pub r: f32,
-}
-
-/// Gains of one bank half (velocity estimators or acceleration series).
+/// Gains of one bank half (velocity estimators or acceleration series): the estimators
+/// crate's own configuration types (its `serde` feature), one optional TOML table each.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FamilyGains {
-    /// AVE (series: both stages).
-    pub ave: Option<AveGains>,
-    /// ILO preset 1.
-    pub ilo1: Option<IloGains>,
+    /// AVE (series: both stages). A table without `delta` keeps the base's `deltahat` law
+    /// (see [`FamilyGains::ave_delta_from_base`]).
+    pub ave: Option<AveConfig>,
+    /// ILO preset 1 (`tau = h`).
+    pub ilo1: Option<IloConfig>,
     /// ILO preset 2.
-    pub ilo2: Option<IloGains>,
+    pub ilo2: Option<IloConfig>,
     /// ILO preset 3.
-    pub ilo3: Option<IloGains>,
-    /// AD.
-    pub ad: Option<AdGains>,
+    pub ilo3: Option<IloConfig>,
+    /// AD time constant.
+    pub ad: Option<AdConfig>,
     /// ED.
-    pub ed: Option<EdGains>,
-    /// Kalman tracker.
-    pub kf: Option<KfGains>,
+    pub ed: Option<EdConfig>,
+    /// Kalman tracker noise (`dt` = nominal sample period).
+    pub kf: Option<KalmanNoise>,
+    /// The `[*.ave]` table had no `delta` key (files written before it existed): applying
+    /// keeps the base configuration's `deltahat` law.
+    #[serde(skip)]
+    pub ave_delta_from_base: bool,
 }
 
 /// A whole gains file.
@@ -112,8 +72,31 @@ pub struct GainsFile {
 impl GainsFile {
     /// Parses TOML text.
     pub fn from_toml(text: &str) -> Result<Self> {
-        toml::from_str(text)
-            .map_err(|e| Error::Usage(format!("bad gains file: {}", one_line(&e.to_string()))))
+        let bad = |e: &dyn std::fmt::Display| {
+            Error::Usage(format!("bad gains file: {}", one_line(&e.to_string())))
+        };
+        let mut table: toml::Table = toml::from_str(text).map_err(|e| bad(&e))?;
+        // `[*.ave]` without `delta`: a placeholder law, replaced by the base's on apply.
+        let mut from_base = [false; 2];
+        for (half, flag) in ["velocity", "acceleration"]
+            .iter()
+            .zip(from_base.iter_mut())
+        {
+            if let Some(toml::Value::Table(ave)) = table
+                .get_mut(*half)
+                .and_then(|h| h.as_table_mut())
+                .and_then(|h| h.get_mut("ave"))
+            {
+                if !ave.contains_key("delta") {
+                    ave.insert("delta".into(), toml::Value::String("paper".into()));
+                    *flag = true;
+                }
+            }
+        }
+        let mut g: GainsFile = table.try_into().map_err(|e| bad(&e))?;
+        g.velocity.ave_delta_from_base = from_base[0];
+        g.acceleration.ave_delta_from_base = from_base[1];
+        Ok(g)
     }
 
     /// TOML text.
@@ -146,75 +129,58 @@ pub fn load(path: &Path) -> Result<estimators::BankConfig> {
 impl FamilyGains {
     /// The gains of one bank half, all present.
     pub fn from_bank(g: &BankGains) -> Self {
-        let ilo = |c: &estimators::IloConfig| {
-            Some(IloGains {
-                k1: c.k1,
-                l: c.l,
-                k2: c.k2,
-            })
-        };
+        let [ilo1, ilo2, ilo3] = g.ilo.map(Some);
         FamilyGains {
-            ave: Some(AveGains {
-                k: g.ave.k,
-                gamma1: g.ave.gamma1,
-            }),
-            ilo1: ilo(&g.ilo[0]),
-            ilo2: ilo(&g.ilo[1]),
-            ilo3: ilo(&g.ilo[2]),
-            ad: Some(AdGains { t: g.ad_t }),
-            ed: Some(EdGains {
-                lambda: g.ed.lambda,
-                alpha: g.ed.alpha,
-            }),
-            kf: Some(KfGains {
-                q: g.kf.q,
-                r: g.kf.r,
-            }),
+            ave: Some(g.ave),
+            ilo1,
+            ilo2,
+            ilo3,
+            ad: Some(AdConfig { t: g.ad_t }),
+            ed: Some(g.ed),
+            kf: Some(g.kf),
+            ave_delta_from_base: false,
         }
     }
 
     /// `base` with every gain present here replaced.
     pub fn apply(&self, mut base: BankGains) -> BankGains {
         if let Some(a) = self.ave {
-            base.ave.k = a.k;
-            base.ave.gamma1 = a.gamma1;
+            let delta = base.ave.delta;
+            base.ave = a;
+            if self.ave_delta_from_base {
+                base.ave.delta = delta;
+            }
         }
         for (slot, g) in base.ilo.iter_mut().zip([self.ilo1, self.ilo2, self.ilo3]) {
             if let Some(g) = g {
-                *slot = estimators::IloConfig {
-                    k1: g.k1,
-                    l: g.l,
-                    k2: g.k2,
-                };
+                *slot = g;
             }
         }
         if let Some(a) = self.ad {
             base.ad_t = a.t;
         }
         if let Some(e) = self.ed {
-            base.ed = estimators::EdConfig {
-                lambda: e.lambda,
-                alpha: e.alpha,
-            };
+            base.ed = e;
         }
         if let Some(k) = self.kf {
-            base.kf = estimators::KalmanNoise { q: k.q, r: k.r };
+            base.kf = k;
         }
         base
     }
 
     fn rust(&self, base: &BankGains, indent: &str) -> String {
         let g = self.apply(*base);
-        let ilo = |c: &estimators::IloConfig| {
+        let ilo = |c: &IloConfig| {
             format!(
                 "IloConfig {{ k1: {:?}, l: {:?}, k2: {:?} }}",
                 c.k1, c.l, c.k2
             )
         };
         format!(
-            "BankGains {{\n{i}    ave: AveConfig {{ k: {:?}, gamma1: {:?}, delta: DeltaMode::Paper }},\n{i}    ilo: [\n{i}        {},\n{i}        {},\n{i}        {},\n{i}    ],\n{i}    ad_t: {:?},\n{i}    ed: EdConfig {{ lambda: {:?}, alpha: {:?} }},\n{i}    kf: KalmanNoise {{ q: {:?}, r: {:?} }},\n{i}}}",
+            "BankGains {{\n{i}    ave: AveConfig {{ k: {:?}, gamma1: {:?}, delta: DeltaMode::{:?} }},\n{i}    ilo: [\n{i}        {},\n{i}        {},\n{i}        {},\n{i}    ],\n{i}    ad_t: {:?},\n{i}    ed: EdConfig {{ lambda: {:?}, alpha: {:?} }},\n{i}    kf: KalmanNoise {{ q: {:?}, r: {:?} }},\n{i}}}",
             g.ave.k,
             g.ave.gamma1,
+            g.ave.delta,
             ilo(&g.ilo[0]),
             ilo(&g.ilo[1]),
             ilo(&g.ilo[2]),
@@ -260,6 +226,7 @@ impl GainsFile {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use estimators::DeltaMode;
 
     #[test]
     fn paper_gains_round_trip_through_toml() {
@@ -270,7 +237,7 @@ mod tests {
         // Table 2, ILO3 and Table 4, ILO2 as the paper gives them.
         assert_eq!(
             paper.velocity.ilo3,
-            Some(IloGains {
+            Some(IloConfig {
                 k1: 0.7,
                 l: 1.0,
                 k2: 20.0
@@ -278,11 +245,51 @@ mod tests {
         );
         assert_eq!(
             paper.acceleration.ilo2,
-            Some(IloGains {
+            Some(IloConfig {
                 k1: 0.9,
                 l: 3.0,
                 k2: 3.333
             })
+        );
+    }
+
+    /// `[*.ave]` without `delta` (every gains file written before the key existed) keeps the
+    /// base configuration's law; with `delta` the file's law is used.
+    #[test]
+    fn ave_delta_is_optional() {
+        let old = GainsFile::from_toml("[velocity.ave]\nk = 300.0\ngamma1 = 9000.0\n").unwrap();
+        let cfg = old.apply(BankConfig::DEFAULT);
+        assert_eq!(cfg.velocity.ave.k, 300.0);
+        assert_eq!(cfg.velocity.ave.delta, DeltaMode::Leaky { sigma: 0.1 });
+        assert_eq!(
+            old.apply(BankConfig::PAPER).velocity.ave.delta,
+            DeltaMode::Paper
+        );
+        let new = GainsFile::from_toml(
+            "[acceleration.ave]\nk = 300.0\ngamma1 = 9000.0\ndelta = { bounded = { max = 50.0 } }\n",
+        )
+        .unwrap();
+        let cfg = new.apply(BankConfig::DEFAULT);
+        assert_eq!(cfg.acceleration.ave.delta, DeltaMode::Bounded { max: 50.0 });
+        assert_eq!(cfg.velocity, BankConfig::DEFAULT.velocity);
+        assert!(
+            GainsFile::from_toml("[velocity.ave]\nk = 1.0\ngamma1 = 2.0\ndelta = \"huge\"\n")
+                .is_err()
+        );
+        // What `tune` writes now names the law and reads back to the same configuration.
+        let g = GainsFile::from_bank(&BankConfig::DEFAULT);
+        let text = g.to_toml();
+        assert!(
+            text.contains("[velocity.ave]") && text.contains("leaky"),
+            "{text}"
+        );
+        assert_eq!(
+            GainsFile::from_toml(&text)
+                .unwrap()
+                .apply(BankConfig::PAPER),
+            BankConfig {
+                ..BankConfig::DEFAULT
+            }
         );
     }
 

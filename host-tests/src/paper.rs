@@ -9,7 +9,7 @@
 
 use crate::error::{Error, Result};
 use crate::replay::{self, EstimateOptions, Noise, Row, Sample};
-use estimators::{Ave, AveConfig, DeltaMode, SampleAdapter};
+use estimators::{Ave, AveConfig, Channel, DeltaMode, SampleAdapter};
 
 /// Noise variances of the paper's Tables 1 and 3, deg^2.
 pub const NOISE_VARS: [f64; 2] = [0.01, 0.5];
@@ -101,8 +101,11 @@ pub fn row_mse(
     let mut v = [0.0; 7];
     let mut a = [0.0; 7];
     for i in 0..7 {
-        let ev: Vec<f32> = rows.iter().map(|r| r.out.vel[i]).collect();
-        let ea: Vec<f32> = rows.iter().map(|r| r.out.acc[i]).collect();
+        let ev: Vec<f32> = rows.iter().map(|r| r.out[Channel::VELOCITY[i]]).collect();
+        let ea: Vec<f32> = rows
+            .iter()
+            .map(|r| r.out[Channel::ACCELERATION[i]])
+            .collect();
         v[i] = mse(&t, &ev, &rate, window_s);
         a[i] = mse(&t, &ea, &accr, window_s);
     }

@@ -71,7 +71,13 @@ pub fn panels(
                 NAMES[i],
                 ESTIMATOR_COLORS[i],
                 1,
-                &|r: &replay::Row| f64::from(if acc { r.out.acc[i] } else { r.out.vel[i] }),
+                &|r: &replay::Row| {
+                    f64::from(if acc {
+                        r.out[estimators::Channel::ACCELERATION[i]]
+                    } else {
+                        r.out[estimators::Channel::VELOCITY[i]]
+                    })
+                },
             ));
         }
         // The reference last, in black over the estimates, so it stays visible.

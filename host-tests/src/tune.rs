@@ -14,12 +14,12 @@
 //! computes.
 
 use crate::error::{Error, Result};
-use crate::gains::{AdGains, AveGains, EdGains, FamilyGains, GainsFile, IloGains, KfGains};
+use crate::gains::{FamilyGains, GainsFile};
 use crate::paper::{ave_on_rate, mse, row_mse, steps_between, REFERENCE_AVE};
 use crate::replay::{self, EstimateOptions, Noise, Sample};
 use estimators::{
     Ad, Ave, AveConfig, BankConfig, DeltaMode, Ed, EdConfig, Estimator, Ilo, IloConfig, Kalman,
-    KalmanConfig, SampleAdapter, Series,
+    KalmanConfig, Law, SampleAdapter, Series, Stateful,
 };
 
 /// Column names in bank order.
@@ -91,9 +91,13 @@ impl Problem<'_> {
 
     /// [`Self::eval`] of what `make` builds (velocity half) or, for the acceleration half,
     /// of two of them in series (both stages with the same gains, as in the bank).
-    fn eval_family<E: Estimator<f32>>(&self, make: impl Fn() -> Option<E>, acc: bool) -> f64 {
+    fn eval_family<L: Law<Num = f32>>(
+        &self,
+        make: impl Fn() -> Option<Stateful<L>>,
+        acc: bool,
+    ) -> f64 {
         if acc {
-            self.eval(&|| Some(Series::new(make()?, make()?)), true)
+            self.eval(&|| Some(Series::of(&make()?, &make()?)), true)
         } else {
             self.eval(&make, false)
         }
@@ -200,9 +204,10 @@ fn tune_family(p: &Problem<'_>, start: &FamilyGains, acc: bool) -> FamilyGains {
             &[1e9, 1e12],
             &f,
         );
-        out.ave = Some(AveGains {
+        out.ave = Some(AveConfig {
             k: x[0] as f32,
             gamma1: x[1] as f32,
+            delta: a.delta,
         });
     }
     let ilos = [start.ilo1, start.ilo2, start.ilo3];
@@ -216,7 +221,7 @@ fn tune_family(p: &Problem<'_>, start: &FamilyGains, acc: bool) -> FamilyGains {
             &[1.0, 1e6, 1e6],
             &f,
         );
-        *slot = Some(IloGains {
+        *slot = Some(IloConfig {
             k1: x[0] as f32,
             l: x[1] as f32,
             k2: x[2] as f32,
@@ -229,7 +234,7 @@ fn tune_family(p: &Problem<'_>, start: &FamilyGains, acc: bool) -> FamilyGains {
             p.eval_family(|| Ad::<f32>::new(t, h).ok(), acc)
         };
         let x = coord_search(&[f64::from(a.t)], &[1e-4], &[10.0], &f);
-        out.ad = Some(AdGains { t: x[0] as f32 });
+        out.ad = Some(estimators::AdConfig { t: x[0] as f32 });
     }
     if let Some(e) = start.ed {
         let f = |g: &[f64]| p.eval_family(|| Ed::<f32>::new(&ed(g), h).ok(), acc);
@@ -239,7 +244,7 @@ fn tune_family(p: &Problem<'_>, start: &FamilyGains, acc: bool) -> FamilyGains {
             &[1e7, 1e9],
             &f,
         );
-        out.ed = Some(EdGains {
+        out.ed = Some(EdConfig {
             lambda: x[0] as f32,
             alpha: x[1] as f32,
         });
@@ -258,7 +263,7 @@ fn tune_family(p: &Problem<'_>, start: &FamilyGains, acc: bool) -> FamilyGains {
             )
         };
         let x = coord_search(&[f64::from(k.q)], &[1e-6], &[1e18], &f);
-        out.kf = Some(KfGains {
+        out.kf = Some(estimators::KalmanNoise {
             q: x[0] as f32,
             r: k.r,
         });

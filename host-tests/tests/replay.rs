@@ -210,12 +210,14 @@ fn spin_is_unwrapped_through_many_turns() {
     for i in [0, 1, 2, 3, 4, 6] {
         let want = rate * gains[i];
         assert!(
-            (f64::from(last.out.vel[i]) - want).abs() < 5.0,
+            (f64::from(last.out[estimators::Channel::VELOCITY[i]]) - want).abs() < 5.0,
             "estimator {i}: {} vs {want}",
-            last.out.vel[i]
+            last.out[estimators::Channel::VELOCITY[i]]
         );
     }
-    assert!(rows.iter().all(|r| r.out.vel[5].abs() < 1000.0));
+    assert!(rows
+        .iter()
+        .all(|r| r.out[estimators::Channel::VELOCITY[5]].abs() < 1000.0));
 }
 
 /// Velocity vs the analytic rate of sin5 (section 3.2: rate = (180/pi) sin 5t deg/s,
@@ -238,12 +240,14 @@ fn sin5_velocity_follows_the_analytic_rate() {
     for r in rows.iter().filter(|r| r.t_us >= 3_000_000) {
         let rate = motion.at(r.t_us as f64 * 1e-6).rate_deg_s;
         for (i, b) in bounds {
-            let e = (f64::from(r.out.vel[i]) - rate).abs();
+            let e = (f64::from(r.out[estimators::Channel::VELOCITY[i]]) - rate).abs();
             assert!(e < b, "estimator {i} at t={} us: error {e} >= {b}", r.t_us);
         }
     }
     // And the same run is an honest one: the estimates are not a copy of the reference.
-    assert!(rows.iter().any(|r| r.out.vel[0] != r.yaw_rate));
+    assert!(rows
+        .iter()
+        .any(|r| r.out[estimators::Channel::VELOCITY[0]] != r.yaw_rate));
 }
 
 #[test]
@@ -266,7 +270,9 @@ fn fixed_point_bank_matches_f32_bank() {
         // ED is left out: its sgn terms switch on rounding-level differences (chattering).
         for i in [0, 1, 2, 3, 4, 6] {
             assert!(
-                (a.out.vel[i] - b.out.vel[i]).abs() < 0.05,
+                (a.out[estimators::Channel::VELOCITY[i]] - b.out[estimators::Channel::VELOCITY[i]])
+                    .abs()
+                    < 0.05,
                 "vel {i} at {}",
                 a.t_us
             );
@@ -318,7 +324,7 @@ fn corrupted_capture_recovers_exactly_the_intact_frames() {
     let (rows, _) = replay::estimate(&samples, &EstimateOptions::default()).unwrap();
     for r in &rows {
         assert!(
-            (r.out.vel[0] - r.yaw_rate).abs() < 40.0,
+            (r.out[estimators::Channel::VELOCITY[0]] - r.yaw_rate).abs() < 40.0,
             "AVE spike at {} us",
             r.t_us
         );
@@ -395,12 +401,17 @@ fn linear_hold_equals_explicit_interpolation_on_the_step_grid() {
         assert_eq!(a.t_us, b.t_us);
         for i in 0..5 {
             assert!(
-                (a.out.vel[i] - b.out.vel[i]).abs() < 0.02,
+                (a.out[estimators::Channel::VELOCITY[i]] - b.out[estimators::Channel::VELOCITY[i]])
+                    .abs()
+                    < 0.02,
                 "vel {i} at {}",
                 a.t_us
             );
             assert!(
-                (a.out.acc[i] - b.out.acc[i]).abs() < 0.5,
+                (a.out[estimators::Channel::ACCELERATION[i]]
+                    - b.out[estimators::Channel::ACCELERATION[i]])
+                    .abs()
+                    < 0.5,
                 "acc {i} at {}",
                 a.t_us
             );
@@ -412,7 +423,7 @@ fn linear_hold_equals_explicit_interpolation_on_the_step_grid() {
         let r: Vec<f64> = rows
             .iter()
             .filter(|r| r.t_us >= 2_000_000)
-            .map(|r| f64::from(r.out.vel[0] - r.yaw_rate).powi(2))
+            .map(|r| f64::from(r.out[estimators::Channel::VELOCITY[0]] - r.yaw_rate).powi(2))
             .collect();
         r.iter().sum::<f64>() / r.len() as f64
     };

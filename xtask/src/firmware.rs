@@ -562,6 +562,27 @@ pub fn bench(board: Board) -> Result<(), String> {
             if share < 2.0 { "met" } else { "NOT met (estimate)" }
         );
     }
+    // Issue 10 goals: three axes (roll, pitch, yaw), counted in instructions (CPI 1).
+    for (label, goal, what) in [
+        (
+            "paper bank, 3 axes",
+            33_600.0,
+            "full paper bank on three axes <= 2 % of a 168 MHz M4F at CPI 1",
+        ),
+        (
+            "product bank, 3 axes",
+            500.0,
+            "product bank (one velocity + one acceleration estimator per axis), three axes",
+        ),
+    ] {
+        if let Some(b) = m.iter().find(|x| x.label == label) {
+            println!(
+                "goal: {what}: <= {goal:.0} instructions per sample -> {:.0}: {}",
+                b.instr,
+                if b.instr <= goal { "met" } else { "NOT met" }
+            );
+        }
+    }
     if let Some(b) = m.iter().find(|x| x.label.starts_with("boot sequence")) {
         println!(
             "boot: {:.0} instructions from power-up configuration to confirmed A2 100 Hz 57600 Bd (ping, GF, SF baud, ping, SF type/rate, GF; replies at once, no waiting): about {:.2} ms of a 168 MHz M4F (estimate), once per start",

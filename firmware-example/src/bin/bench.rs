@@ -23,8 +23,9 @@ use core::hint::black_box;
 use core::sync::atomic::{AtomicU32, Ordering};
 use cortex_m_rt::entry;
 use estimators::{
-    advance_by_steps, Ad, Ave, BankConfig, ClosedForm, Ed, Estimator, Hold, Ilo, Kalman,
-    KalmanConfig, Real, Series, YawBank,
+    advance_by_steps, Ad, AdParams, Ave, AveParams, BankConfig, ClosedForm, Ed, EdParams,
+    Estimator, Hold, Ilo, IloParams, Kalman, KalmanConfig, ProductBank, Real, Series, Stateful,
+    Wrap, YawBank,
 };
 use firmware_example::{cycles::Counter, host, uart::Board, Bank, BankSqrt, Num};
 use heapless::String;
@@ -137,6 +138,38 @@ fn sqrt_count_stepped<E: Estimator<Num>>(label: &str, mut e: E) {
         SQRTS.load(Ordering::Relaxed) as f32 / SAMPLES as f32,
         "sample",
     );
+}
+
+/// Test angles of the three axes at sample `k`, deg: roll and yaw sweeps of +-90 deg (out of
+/// phase), pitch +-30 deg.
+fn angles(k: u32) -> [f32; 3] {
+    [yaw(k + 100), yaw(k + 50) / 3.0, yaw(k)]
+}
+
+/// Per-sample instructions of one `update` of each of three banks (roll, pitch, yaw) at
+/// 100 Hz (`$banks`: an array of three banks of one type).
+macro_rules! three_axes_per_sample {
+    ($c:expr, $overhead:expr, $label:expr, $banks:expr) => {{
+        let [b0, b1, b2] = &mut $banks;
+        let mut total = 0;
+        for k in 0..(WARMUP + SAMPLES) {
+            let [r, p, y] = angles(k);
+            let t_us = u64::from(k) * DT_US;
+            let (n, ok) = $c.measure(|| {
+                let o0 = black_box(b0.update(t_us, r));
+                let o1 = black_box(b1.update(t_us, p));
+                let o2 = black_box(b2.update(t_us, y));
+                o0.is_ok() && o1.is_ok() && o2.is_ok()
+            });
+            if !ok {
+                fail("a three-axis run without rejected samples");
+            }
+            if k >= WARMUP {
+                total += n.saturating_sub($overhead);
+            }
+        }
+        line("instr", $label, total as f32 / SAMPLES as f32, "sample");
+    }};
 }
 
 /// Per-sample instructions of a whole bank's `update` at 100 Hz.
@@ -320,43 +353,43 @@ fn main() -> ! {
             &c,
             overhead,
             "ED-ED, VSQRT (Euler x100)",
-            Series::new(ed_fw, ed_fw),
+            Series::of(&ed_fw, &ed_fw),
         );
     }
     // Acceleration: series of two, explicit Euler.
-    per_sample_stepped(&c, overhead, "AVE-AVE (Euler x100)", Series::new(ave, ave));
+    per_sample_stepped(&c, overhead, "AVE-AVE (Euler x100)", Series::of(&ave, &ave));
     per_sample_stepped(
         &c,
         overhead,
         "ILO1-ILO1 T4 (Euler x100)",
-        Series::new(ilo(&a.ilo[0]), ilo(&a.ilo[0])),
+        Series::of(&ilo(&a.ilo[0]), &ilo(&a.ilo[0])),
     );
     per_sample_stepped(
         &c,
         overhead,
         "AD-AD T=0.1 (Euler x100)",
-        Series::new(ad(a.ad_t), ad(a.ad_t)),
+        Series::of(&ad(a.ad_t), &ad(a.ad_t)),
     );
-    per_sample_stepped(&c, overhead, "ED-ED (Euler x100)", Series::new(ed, ed));
+    per_sample_stepped(&c, overhead, "ED-ED (Euler x100)", Series::of(&ed, &ed));
     // Linear laws through their exact 100-step map (what the bank uses).
     per_sample(
         &c,
         overhead,
         "ILO1 (closed form)",
-        ClosedForm::new(ilo(&v.ilo[0]), STEPS, Hold::Linear),
+        ClosedForm::of(&ilo(&v.ilo[0]), STEPS, Hold::Linear),
     );
     per_sample(
         &c,
         overhead,
         "AD T=0.01 (closed form)",
-        ClosedForm::new(ad(v.ad_t), STEPS, Hold::Linear),
+        ClosedForm::of(&ad(v.ad_t), STEPS, Hold::Linear),
     );
     per_sample(
         &c,
         overhead,
         "ILO1-ILO1 T4 (closed form)",
-        ClosedForm::new(
-            Series::new(ilo(&a.ilo[0]), ilo(&a.ilo[0])),
+        ClosedForm::of(
+            &Series::of(&ilo(&a.ilo[0]), &ilo(&a.ilo[0])),
             STEPS,
             Hold::Linear,
         ),
@@ -365,7 +398,7 @@ fn main() -> ! {
         &c,
         overhead,
         "AD-AD T=0.1 (closed form)",
-        ClosedForm::new(Series::new(ad(a.ad_t), ad(a.ad_t)), STEPS, Hold::Linear),
+        ClosedForm::of(&Series::of(&ad(a.ad_t), &ad(a.ad_t)), STEPS, Hold::Linear),
     );
     // Kalman tracker: one predict/update per sample.
     {
@@ -400,11 +433,28 @@ fn main() -> ! {
     // The whole bank as the firmware runs it (unwrap, adapter, 14 estimators), and with the
     // portable libm square root if the firmware uses VSQRT.
     bank_per_sample(&c, overhead, "whole bank", Bank::new(&cfg).ok());
+    // Three axes: roll and yaw wrap at +-180 deg, pitch does not.
+    let pitch_cfg = BankConfig {
+        wrap: Wrap::None,
+        ..cfg
+    };
+    {
+        let make = |c: &BankConfig| Bank::new(c).unwrap_or_else(|_| fail("YawBank"));
+        let mut banks = [make(&cfg), make(&pitch_cfg), make(&cfg)];
+        three_axes_per_sample!(c, overhead, "paper bank, 3 axes", banks);
+    }
+    {
+        let make = |c: &BankConfig| {
+            ProductBank::<Num, BankSqrt>::new(c).unwrap_or_else(|_| fail("ProductBank"))
+        };
+        let mut banks = [make(&cfg), make(&pitch_cfg), make(&cfg)];
+        three_axes_per_sample!(c, overhead, "product bank, 3 axes", banks);
+    }
     if core::any::type_name::<BankSqrt>() != core::any::type_name::<estimators::ExactSqrt>() {
         // VSQRT count per sample, for the cycle estimate.
         let ed_c = Ed::<Num, Counting>::new(&v.ed, h).unwrap_or_else(|_| fail("ED"));
         sqrt_count_stepped("ED, VSQRT (Euler x100)", ed_c);
-        sqrt_count_stepped("ED-ED, VSQRT (Euler x100)", Series::new(ed_c, ed_c));
+        sqrt_count_stepped("ED-ED, VSQRT (Euler x100)", Series::of(&ed_c, &ed_c));
         let mut counted = YawBank::<Num, Counting>::new(&cfg).unwrap_or_else(|_| fail("YawBank"));
         SQRTS.store(0, Ordering::Relaxed);
         for k in 0..SAMPLES {
@@ -508,29 +558,36 @@ fn main() -> ! {
     ram("ILO (D=1)", core::mem::size_of::<Ilo<Num, 1>>());
     ram(
         "ILO (D=1) closed form",
-        core::mem::size_of::<ClosedForm<Num, Ilo<Num, 1>>>(),
+        core::mem::size_of::<Stateful<ClosedForm<IloParams<Num, 1>>>>(),
     );
     ram("AD", core::mem::size_of::<Ad<Num>>());
     ram(
         "AD closed form",
-        core::mem::size_of::<ClosedForm<Num, Ad<Num>>>(),
+        core::mem::size_of::<Stateful<ClosedForm<AdParams<Num>>>>(),
     );
     ram("ED", core::mem::size_of::<Ed<Num>>());
     ram("Kalman", core::mem::size_of::<Kalman<Num>>());
     ram(
         "AVE-AVE",
-        core::mem::size_of::<Series<Ave<Num>, Ave<Num>>>(),
+        core::mem::size_of::<Stateful<Series<AveParams<Num>, AveParams<Num>>>>(),
     );
     ram(
         "ILO-ILO closed form",
-        core::mem::size_of::<ClosedForm<Num, Series<Ilo<Num, 1>, Ilo<Num, 1>>>>(),
+        core::mem::size_of::<Stateful<ClosedForm<Series<IloParams<Num, 1>, IloParams<Num, 1>>>>>(),
     );
     ram(
         "AD-AD closed form",
-        core::mem::size_of::<ClosedForm<Num, Series<Ad<Num>, Ad<Num>>>>(),
+        core::mem::size_of::<Stateful<ClosedForm<Series<AdParams<Num>, AdParams<Num>>>>>(),
     );
-    ram("ED-ED", core::mem::size_of::<Series<Ed<Num>, Ed<Num>>>());
+    ram(
+        "ED-ED",
+        core::mem::size_of::<Stateful<Series<EdParams<Num>, EdParams<Num>>>>(),
+    );
     ram("YawBank (whole bank)", core::mem::size_of::<Bank>());
+    ram(
+        "ProductBank (one axis)",
+        core::mem::size_of::<ProductBank<Num, BankSqrt>>(),
+    );
     ram("Parser", core::mem::size_of::<Parser>());
     ram("ItowClock", core::mem::size_of::<ItowClock>());
     ram(

@@ -1,0 +1,142 @@
+//! Configuration and state apart: the [`Law`] trait every estimator implements.
+//!
+//! A law's *parameters* (`AveParams`, `IloParams`, `AdParams`, `EdParams`, `KalmanParams`,
+//! their [`crate::Series`] and [`crate::ClosedForm`]) are the validated coefficients, computed
+//! once from a physical configuration (`AveConfig`, ...) and never changed by an update; they
+//! can be shared (both stages of a series, the closed-form maps, three axes). The *state*
+//! (`Law::State`) is small, `Copy`, and is the only thing `step` writes:
+//!
+//! ```text
+//! params = AveParams::new(&AveConfig, h)?      // validated once
+//! state  = params.init(y0)                      // a few words
+//! v      = params.step(&mut state, y)           // step(&self, &mut State, input)
+//! ```
+//!
+//! [`Stateful`] binds one parameter set to one state and implements [`Estimator`]: the
+//! classic one-object API (`Ave<T>`, `Ilo<T, D>`, `Ad<T>`, `Ed<T, S>` are such aliases).
+
+use crate::{Estimator, Hold, Real};
+
+/// One estimator law: validated coefficients (`self`) stepping a separate [`Law::State`].
+///
+/// Units: a velocity law fed a position in deg returns deg/s; a series (acceleration) law
+/// returns deg/s^2.
+pub trait Law: Copy + core::fmt::Debug {
+    /// The number type the law computes in.
+    type Num: Real;
+    /// The law's state (positions, velocities, learning and delay states).
+    type State: Copy + core::fmt::Debug;
+
+    /// The state as if the input had been constant at `y0` forever: position states `y0`,
+    /// every velocity / learning / delay state 0, output 0.
+    fn init(&self, y0: Self::Num) -> Self::State;
+
+    /// Advances `s` by one step `h` with input `y`; returns the new estimate.
+    fn step(&self, s: &mut Self::State, y: Self::Num) -> Self::Num;
+
+    /// The estimate of the last step (0 after [`Law::init`]).
+    fn output(&self, s: &Self::State) -> Self::Num;
+
+    /// Adds `d` to every position state (see [`Estimator::translate`]).
+    fn translate(&self, s: &mut Self::State, d: Self::Num);
+
+    /// Runs the `n` steps of one sample interval from `y_prev` to `y_new` as [`Hold`]
+    /// prescribes and returns the last output (`n = 0`: nothing, the current output). The
+    /// default steps `n` times on a local copy of the state (kept in registers).
+    #[inline]
+    fn advance(
+        &self,
+        s: &mut Self::State,
+        y_prev: Self::Num,
+        y_new: Self::Num,
+        n: u32,
+        hold: Hold,
+    ) -> Self::Num {
+        step_n(self, s, y_prev, y_new, n, hold)
+    }
+}
+
+/// The stepping implementation of [`Law::advance`] (usable by overriding impls as their
+/// fallback): `n` steps on a local copy of `s`, inputs as [`Hold`] prescribes.
+#[inline(always)]
+pub fn step_n<L: Law>(
+    law: &L,
+    s: &mut L::State,
+    y_prev: L::Num,
+    y_new: L::Num,
+    n: u32,
+    hold: Hold,
+) -> L::Num {
+    if n == 0 {
+        return law.output(s);
+    }
+    let mut st = *s;
+    match hold {
+        Hold::ZeroOrder => {
+            for _ in 0..n {
+                law.step(&mut st, y_new);
+            }
+        }
+        Hold::Linear => {
+            // y_j = y_prev + j * inc; the last step gets y_new exactly (no accumulated rounding).
+            let inc = (y_new - y_prev).div_int(n);
+            let mut y = y_prev;
+            for _ in 1..n {
+                y = y + inc;
+                law.step(&mut st, y);
+            }
+            law.step(&mut st, y_new);
+        }
+    }
+    *s = st;
+    law.output(s)
+}
+
+/// One parameter set bound to one state: the classic estimator object, implementing
+/// [`Estimator`]. RAM: `size_of::<L>() + size_of::<L::State>()` (plus padding).
+#[derive(Clone, Copy, Debug)]
+pub struct Stateful<L: Law> {
+    law: L,
+    state: L::State,
+}
+
+impl<L: Law> Stateful<L> {
+    /// Binds `law` to its initial state (input 0).
+    pub fn from_law(law: L) -> Self {
+        let state = law.init(<L::Num as Real>::ZERO);
+        Self { law, state }
+    }
+
+    /// The parameters.
+    pub fn law(&self) -> &L {
+        &self.law
+    }
+
+    /// The state.
+    pub fn state(&self) -> &L::State {
+        &self.state
+    }
+}
+
+impl<L: Law> Estimator<L::Num> for Stateful<L> {
+    fn reset(&mut self, y0: L::Num) {
+        self.state = self.law.init(y0);
+    }
+
+    #[inline]
+    fn step(&mut self, y: L::Num) -> L::Num {
+        self.law.step(&mut self.state, y)
+    }
+
+    fn output(&self) -> L::Num {
+        self.law.output(&self.state)
+    }
+
+    fn translate(&mut self, d: L::Num) {
+        self.law.translate(&mut self.state, d);
+    }
+
+    fn advance(&mut self, y_prev: L::Num, y_new: L::Num, n: u32, hold: Hold) -> L::Num {
+        self.law.advance(&mut self.state, y_prev, y_new, n, hold)
+    }
+}

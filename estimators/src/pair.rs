@@ -1,0 +1,140 @@
+//! A velocity law and the acceleration series of the same family in one row of a bank.
+
+use crate::law::Law;
+use crate::{Hold, Real};
+
+/// A velocity law `v` and the acceleration series `a1 -> a2` of the same family (AVE and
+/// AVE-AVE, ED and ED-ED) stepped together, one loop over the interval's steps.
+///
+/// When the series' first stage has the same parameters as the velocity law (`shared`, the
+/// paper's and the default configuration: both use the same AVE and ED gains), it sees the same
+/// input from the same initial state, so its trajectory is the velocity law's, bit for bit: it
+/// is not computed twice; the velocity law's output of each step feeds `a2`. Otherwise `a1`
+/// runs on its own. Either way the outputs are exactly those of the separate laws.
+#[derive(Clone, Copy, Debug)]
+pub struct VelAcc<L: Law> {
+    v: L,
+    a1: L,
+    a2: L,
+    shared: bool,
+}
+
+/// State of a [`VelAcc`].
+#[derive(Clone, Copy, Debug)]
+pub struct VelAccState<S> {
+    /// The velocity law.
+    pub v: S,
+    /// The series' first stage (unused when shared).
+    pub a1: S,
+    /// The series' second stage.
+    pub a2: S,
+}
+
+impl<L: Law> VelAcc<L> {
+    /// `v` for velocity, `a1 -> a2` for acceleration; `shared` must be true only when `a1`
+    /// is the same law with the same parameters as `v` (then `a1` is not computed).
+    pub fn new(v: L, a1: L, a2: L, shared: bool) -> Self {
+        Self { v, a1, a2, shared }
+    }
+
+    /// The velocity estimate (unit/s).
+    #[inline]
+    pub fn velocity(&self, s: &VelAccState<L::State>) -> L::Num {
+        self.v.output(&s.v)
+    }
+
+    /// The acceleration estimate (unit/s^2), same as [`Law::output`].
+    #[inline]
+    pub fn acceleration(&self, s: &VelAccState<L::State>) -> L::Num {
+        self.a2.output(&s.a2)
+    }
+
+    /// One step of the three laws (`a1` skipped when `SHARED`).
+    #[inline(always)]
+    fn one<const SHARED: bool>(&self, st: &mut VelAccState<L::State>, y: L::Num) {
+        let o = self.v.step(&mut st.v, y);
+        let o1 = if SHARED {
+            o
+        } else {
+            self.a1.step(&mut st.a1, y)
+        };
+        self.a2.step(&mut st.a2, o1);
+    }
+
+    /// `n >= 1` steps on a local copy of the state.
+    #[inline(always)]
+    fn run<const SHARED: bool>(
+        &self,
+        s: &mut VelAccState<L::State>,
+        y_prev: L::Num,
+        y_new: L::Num,
+        n: u32,
+        hold: Hold,
+    ) {
+        let mut st = *s;
+        match hold {
+            Hold::ZeroOrder => {
+                for _ in 0..n {
+                    self.one::<SHARED>(&mut st, y_new);
+                }
+            }
+            Hold::Linear => {
+                let inc = (y_new - y_prev).div_int(n);
+                let mut y = y_prev;
+                for _ in 1..n {
+                    y = y + inc;
+                    self.one::<SHARED>(&mut st, y);
+                }
+                self.one::<SHARED>(&mut st, y_new);
+            }
+        }
+        *s = st;
+    }
+}
+
+impl<T: Real, L: Law<Num = T>> Law for VelAcc<L> {
+    type Num = T;
+    type State = VelAccState<L::State>;
+
+    fn init(&self, y0: T) -> Self::State {
+        let v = self.v.init(y0);
+        let a1 = self.a1.init(y0);
+        let a2 = self.a2.init(self.a1.output(&a1));
+        VelAccState { v, a1, a2 }
+    }
+
+    /// One step of all three; returns the acceleration.
+    #[inline(always)]
+    fn step(&self, s: &mut Self::State, y: T) -> T {
+        let o = self.v.step(&mut s.v, y);
+        let o1 = if self.shared {
+            o
+        } else {
+            self.a1.step(&mut s.a1, y)
+        };
+        self.a2.step(&mut s.a2, o1)
+    }
+
+    #[inline]
+    fn output(&self, s: &Self::State) -> T {
+        self.a2.output(&s.a2)
+    }
+
+    #[inline]
+    fn translate(&self, s: &mut Self::State, d: T) {
+        self.v.translate(&mut s.v, d);
+        self.a1.translate(&mut s.a1, d);
+    }
+
+    #[inline]
+    fn advance(&self, s: &mut Self::State, y_prev: T, y_new: T, n: u32, hold: Hold) -> T {
+        if n > 0 {
+            if self.shared {
+                self.run::<true>(s, y_prev, y_new, n, hold);
+            } else {
+                self.run::<false>(s, y_prev, y_new, n, hold);
+            }
+        }
+        self.output(s)
+    }
+}
