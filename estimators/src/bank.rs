@@ -180,6 +180,8 @@ pub struct YawBank<T: Real, S: SqrtFn<T> = ExactSqrt> {
     hold: Hold,
     h: T,
     unwrap: Unwrapper<T>,
+    /// `false`: the angle is taken as is (no +-180 deg unwrapping; e.g. pitch).
+    unwrapping: bool,
     y_prev: T,
     reinits: u32,
     ave: Ave<T>,
@@ -242,6 +244,7 @@ impl<T: Real, S: SqrtFn<T>> YawBank<T, S> {
             hold,
             h: T::from_f64(h_us as f64 * 1e-6),
             unwrap: Unwrapper::new(),
+            unwrapping: true,
             y_prev: T::ZERO,
             reinits: 0,
             ave: Ave::new(&v.ave, h)?,
@@ -314,7 +317,11 @@ impl<T: Real, S: SqrtFn<T>> YawBank<T, S> {
         // offsets, see `Estimator::translate`).
         let yw = T::from_f32(yaw_deg);
         let before = self.unwrap.turns();
-        let turns = self.unwrap.update(yw);
+        let turns = if self.unwrapping {
+            self.unwrap.update(yw)
+        } else {
+            before
+        };
         if turns != before && tick != Tick::Init && tick != Tick::Gap {
             // One turn per sample at most: the shift is exactly +-360 deg in `T`.
             let shift = T::from_i32(if turns > before { 360 } else { -360 });
@@ -411,6 +418,13 @@ impl<T: Real, S: SqrtFn<T>> YawBank<T, S> {
     /// `360 * delta` deg; the laws run in the local frame and are unaffected, bit for bit.
     pub fn set_turns(&mut self, turns: i64) {
         self.unwrap.set_turns(turns);
+    }
+
+    /// Switches the +-180 deg unwrapping on (the default: roll, yaw) or off (an angle that
+    /// does not wrap, e.g. pitch in [-90, 90] deg: it is then estimated as given, and the
+    /// output's unwrapped angle is the input). Switch it before the first sample.
+    pub fn set_unwrapping(&mut self, on: bool) {
+        self.unwrapping = on;
     }
 
     /// Forgets everything: the next sample is treated as the first one.

@@ -162,9 +162,12 @@ fn bank_per_sample<S: estimators::SqrtFn<Num>>(
             fail("a bank run without rejected samples")
         };
         // The output stage of the firmware: one CSV row (17 numbers) per sample.
-        let mut row = firmware_example::pipeline::Row::new();
+        let mut row = firmware_example::pipeline::CsvLine::new();
         let (m, res) = c.measure(|| {
-            estimators::csv::write_row(black_box(&mut row), t_us, black_box(y), black_box(&out))
+            let w = black_box(&mut row);
+            nav440_pipeline::csv::write_time(w, t_us).and_then(|()| {
+                nav440_pipeline::csv::write_axis(w, Some(black_box(y)), black_box(&out))
+            })
         });
         if res.is_err() {
             fail("a CSV row");
@@ -531,6 +534,10 @@ fn main() -> ! {
     );
     ram("ED-ED", core::mem::size_of::<Series<Ed<Num>, Ed<Num>>>());
     ram("YawBank (whole bank)", core::mem::size_of::<Bank>());
+    ram(
+        "Pipeline (firmware: parser, clock, banks of pipeline::AXES)",
+        core::mem::size_of::<firmware_example::pipeline::Pipeline>(),
+    );
     ram("Parser", core::mem::size_of::<Parser>());
     ram("ItowClock", core::mem::size_of::<ItowClock>());
     ram(
