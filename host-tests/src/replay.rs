@@ -155,6 +155,8 @@ pub struct StreamStats {
     /// stream cut off (a truncated final frame, or a lone `55` that might start one): neither
     /// in a frame nor skipped. `bytes = frame bytes + skipped_bytes + pending_bytes`.
     pub pending_bytes: u64,
+    /// Attitude packets whose BIT word flags a failure (masterFail; not estimated).
+    pub bit: BitCounts,
 }
 
 impl StreamStats {
@@ -163,15 +165,34 @@ impl StreamStats {
         self.frames.values().sum()
     }
 
-    /// The `nav440 stats` JSON object.
+    /// The `nav440 stats` JSON object; a `bit_failures` object is appended only when some
+    /// attitude packet flags a BIT failure (`{"flag": "masterFail", "packets": N,
+    /// "hardware_error": N, "com_error": N, "software_error": N, "last_word": "0x0009"}`), so
+    /// the output of a healthy capture is unchanged.
     pub fn to_json(&self) -> serde_json::Value {
-        serde_json::json!({
+        let mut v = serde_json::json!({
             "bytes": self.bytes,
             "frames": self.frames,
             "crc_errors": self.crc_errors,
             "skipped_bytes": self.skipped_bytes,
             "pending_bytes": self.pending_bytes,
-        })
+        });
+        if self.bit.failed > 0 {
+            if let Some(o) = v.as_object_mut() {
+                o.insert(
+                    "bit_failures".into(),
+                    serde_json::json!({
+                        "flag": nav440_pipeline::bit::FAILURE_FLAG,
+                        "packets": self.bit.failed,
+                        "hardware_error": self.bit.hardware_error,
+                        "com_error": self.bit.com_error,
+                        "software_error": self.bit.software_error,
+                        "last_word": format!("0x{:04x}", self.bit.last_word),
+                    }),
+                );
+            }
+        }
+        v
     }
 }
 
@@ -180,6 +201,7 @@ impl StreamStats {
 pub struct StatsCounter {
     parser: Parser,
     frames: BTreeMap<String, u64>,
+    bit: BitCounts,
 }
 
 impl std::fmt::Debug for StatsCounter {
@@ -199,7 +221,14 @@ impl StatsCounter {
     /// Feeds the next bytes of the stream.
     pub fn push(&mut self, bytes: &[u8]) {
         let frames = &mut self.frames;
+        let bit = &mut self.bit;
         self.parser.feed(bytes, |f| {
+            if let Some(a) = nav440_proto::Packet::decode(f)
+                .ok()
+                .and_then(|p| nav440_pipeline::attitude(&p))
+            {
+                bit.check(a.bit);
+            }
             let name = f.packet_type.name();
             match frames.get_mut(name) {
                 Some(n) => *n += 1,
@@ -219,6 +248,7 @@ impl StatsCounter {
             crc_errors: s.crc_errors,
             skipped_bytes: s.skipped_bytes,
             pending_bytes: s.pending_bytes(),
+            bit: self.bit,
         }
     }
 }

@@ -189,3 +189,18 @@ fn a_capture_that_only_fails_bit_is_an_error_naming_the_flag() {
         "{msg}"
     );
 }
+
+#[test]
+fn stats_json_names_bit_failures_only_when_present() {
+    let bad = capture(100, |k| if k < 10 { 0x0001 } else { 0x0002 });
+    let v = replay::stream_stats(&bad).to_json();
+    assert_eq!(
+        v["bit_failures"],
+        serde_json::json!({"flag": "masterFail", "packets": 10, "hardware_error": 0, "com_error": 0, "software_error": 0, "last_word": "0x0001"})
+    );
+    let good = capture(100, |_| 0x0002);
+    assert!(replay::stream_stats(&good)
+        .to_json()
+        .get("bit_failures")
+        .is_none());
+}
