@@ -138,6 +138,8 @@ type RunMse = (usize, [f64; 7], [f64; 7]);
 pub struct PaperResult {
     /// Capture name.
     pub capture: String,
+    /// The scored axis (`--axis`).
+    pub axis: Axis,
     /// Samples (packets with yaw) in the capture.
     pub samples: usize,
     /// Capture duration, s.
@@ -239,6 +241,7 @@ pub fn run(
     let duration_s = samples.last().map_or(0.0, |s| s.t_s());
     Ok(PaperResult {
         capture: capture.to_string(),
+        axis: opts.axis(),
         samples: samples.len(),
         duration_s,
         hold: opts.hold,
@@ -255,6 +258,15 @@ pub fn run(
         vel_clean,
         acc_clean,
     })
+}
+
+/// What the velocity MSEs are scored against.
+fn velocity_reference(axis: Axis) -> String {
+    format!(
+        "{} rate from the packet's body rates and angles by the Euler kinematics (the z rate when level; rows with |pitch| >= {} deg left out)",
+        axis.name(),
+        nav440_pipeline::euler::PITCH_LIMIT_DEG
+    )
 }
 
 fn hold_name(h: estimators::Hold) -> &'static str {
@@ -328,7 +340,10 @@ impl PaperResult {
             self.gains,
             noise_at_name(self.noise_at)
         ));
-        s.push_str("velocity reference: packet z rate; acceleration reference: AVE (k=500, gamma1=20000) on the packet z rate, same adapter\n");
+        s.push_str(&format!(
+            "velocity reference: {}; acceleration reference: AVE (k=500, gamma1=20000) on it, same adapter\n",
+            velocity_reference(self.axis)
+        ));
         for (title, ours, paper, clean) in self.tables() {
             s.push_str(&format!("\n{title}\n"));
             s.push_str(&format!("{:<14}", "sigma^2"));
@@ -410,8 +425,9 @@ impl PaperResult {
                 "noise_vars": NOISE_VARS,
                 "gains": self.gains,
                 "noise_at": noise_at_name(self.noise_at),
-                "velocity_reference": "packet z rate",
-                "acceleration_reference": "AVE k=500 gamma1=20000 on the packet z rate, same sample adapter",
+                "axis": self.axis.name(),
+                "velocity_reference": velocity_reference(self.axis),
+                "acceleration_reference": "AVE k=500 gamma1=20000 on the velocity reference, same sample adapter",
             },
             "velocity_mse": table(&self.vel, &PAPER_VEL_MSE, &self.vel_clean),
             "acceleration_mse": table(&self.acc, &PAPER_ACC_MSE, &self.acc_clean),
