@@ -122,18 +122,13 @@ pub struct Counters {
     pub gaps: u32,
 }
 
-/// The banks and what they need, before and after the warm-up.
-#[allow(
-    clippy::large_enum_variant,
-    reason = "no heap to box into; the warm-up buffer and the banks share the same RAM"
-)]
-enum Stage<B, E> {
+/// Where the back end is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Phase {
     /// Collecting the first samples.
-    Warmup(heapless::Vec<Sample, WARMUP_SAMPLES>),
+    Warmup,
     /// Running: one bank per selected axis.
-    Running([Option<B>; 3]),
-    /// A bank could not be built for the measured period.
-    Failed(E),
+    Running,
 }
 
 /// The back end: timed samples -> warm-up/period rule -> one bank per selected axis ->
@@ -144,7 +139,14 @@ pub struct Estimation<B, E, F> {
     axes: Axes,
     cfg: BankConfig,
     build: F,
-    stage: Stage<B, E>,
+    phase: Phase,
+    /// The first samples, held until the period is known.
+    held: heapless::Vec<Sample, WARMUP_SAMPLES>,
+    /// One bank per selected axis once running (built in place: no bank-sized temporaries
+    /// beyond the constructor's own result).
+    banks: [Option<B>; 3],
+    /// A bank could not be built for the measured period.
+    failed: Option<E>,
     counters: Counters,
 }
 
@@ -170,7 +172,10 @@ where
             axes,
             cfg,
             build,
-            stage: Stage::Warmup(heapless::Vec::new()),
+            phase: Phase::Warmup,
+            held: heapless::Vec::new(),
+            banks: [None, None, None],
+            failed: None,
             counters: Counters::default(),
         }
     }
@@ -187,32 +192,30 @@ where
 
     /// The banks, once running (indexed by [`Axis::index`]).
     pub fn banks(&self) -> Option<&[Option<B>; 3]> {
-        match &self.stage {
-            Stage::Running(b) => Some(b),
-            _ => None,
-        }
+        (self.phase == Phase::Running && self.failed.is_none()).then_some(&self.banks)
     }
 
     /// Takes the next sample; `emit` gets every row that is ready (none during the warm-up,
     /// then the held-back ones and one per accepted sample).
     pub fn push(&mut self, s: Sample, emit: &mut dyn FnMut(&Row)) -> Result<(), E> {
-        self.counters.samples = self.counters.samples.saturating_add(1);
-        let warmup_done = match &mut self.stage {
-            Stage::Running(banks) => {
-                run_sample(banks, self.axes, &mut self.counters, &s, emit);
-                false
-            }
-            Stage::Warmup(held) => {
-                // Cannot fail: the warm-up ends as soon as the buffer is full.
-                let _ = held.push(s);
-                held.is_full()
-            }
-            Stage::Failed(e) => return Err(e.clone()),
-        };
-        if warmup_done {
-            self.start(emit)?;
+        if let Some(e) = &self.failed {
+            return Err(e.clone());
         }
-        Ok(())
+        self.counters.samples = self.counters.samples.saturating_add(1);
+        match self.phase {
+            Phase::Running => {
+                run_sample(&mut self.banks, self.axes, &mut self.counters, &s, emit);
+                Ok(())
+            }
+            Phase::Warmup => {
+                // Cannot fail: the warm-up ends as soon as the buffer is full.
+                let _ = self.held.push(s);
+                if self.held.is_full() {
+                    self.start(emit)?;
+                }
+                Ok(())
+            }
+        }
     }
 
     /// End of a finite stream: a stream shorter than the warm-up runs with the intervals it
@@ -225,31 +228,28 @@ where
     /// (nothing if already running).
     #[inline(never)]
     fn start(&mut self, emit: &mut dyn FnMut(&Row)) -> Result<(), E> {
-        let held = match &self.stage {
-            Stage::Warmup(held) => held.clone(),
-            Stage::Running(_) => return Ok(()),
-            Stage::Failed(e) => return Err(e.clone()),
-        };
-        let cfg = PeriodEstimator::from_times(held.iter().map(|s| s.t_us)).apply(self.cfg);
-        self.stage = Stage::Running([None, None, None]);
+        if let Some(e) = &self.failed {
+            return Err(e.clone());
+        }
+        if self.phase == Phase::Running {
+            return Ok(());
+        }
+        let cfg = PeriodEstimator::from_times(self.held.iter().map(|s| s.t_us)).apply(self.cfg);
+        self.phase = Phase::Running;
         for axis in self.axes.iter() {
             match (self.build)(axis, &cfg) {
-                Ok(b) => {
-                    if let Stage::Running(banks) = &mut self.stage {
-                        banks[axis.index()] = Some(b);
-                    }
-                }
+                Ok(b) => self.banks[axis.index()] = Some(b),
                 Err(e) => {
-                    self.stage = Stage::Failed(e.clone());
+                    self.banks = [None, None, None];
+                    self.failed = Some(e.clone());
                     return Err(e);
                 }
             }
         }
-        if let Stage::Running(banks) = &mut self.stage {
-            for s in &held {
-                run_sample(banks, self.axes, &mut self.counters, s, emit);
-            }
+        for s in &self.held {
+            run_sample(&mut self.banks, self.axes, &mut self.counters, s, emit);
         }
+        self.held.clear();
         Ok(())
     }
 }
