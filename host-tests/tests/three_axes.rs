@@ -204,3 +204,62 @@ fn stats_json_names_bit_failures_only_when_present() {
         .get("bit_failures")
         .is_none());
 }
+
+/// Runs the `nav440` binary; (exit code, stdout, stderr).
+fn nav440(args: &[&str]) -> (i32, String, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_nav440"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn cli_axis_option_and_bit_warning() {
+    let dir = std::env::temp_dir().join(format!("nav440-three-axes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("bit.bin");
+    std::fs::write(
+        &file,
+        capture(300, |k| {
+            if (100..110).contains(&k) {
+                0x0001
+            } else {
+                0x0002
+            }
+        }),
+    )
+    .unwrap();
+    let f = file.to_str().unwrap();
+    let (code, out, err) = nav440(&["estimate", f, "--axis", "pitch"]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        out.lines().next().unwrap(),
+        "t,pitch,pitch_rate,ave_v,ilo1_v,ilo2_v,ilo3_v,ad_v,ed_v,kf_v,ave_a,ilo1_a,ilo2_a,ilo3_a,ad_a,ed_a,kf_a"
+    );
+    assert_eq!(out.lines().count(), 1 + 290);
+    assert!(
+        err.contains("nav440: warning: BIT failure: 10 samples not estimated (masterFail;"),
+        "{err}"
+    );
+    let (code, out, _) = nav440(&["estimate", f, "--axis", "all"]);
+    assert_eq!(code, 0);
+    assert!(out.starts_with("t,roll,roll_rate,roll_ave_v,"));
+    for cmd in ["paper", "plot"] {
+        let mut args = vec![cmd, f, "--axis", "all"];
+        if cmd == "plot" {
+            args.extend(["-o", "/dev/null"]);
+        }
+        let (code, _, err) = nav440(&args);
+        assert_eq!(code, 2, "{cmd}: {err}");
+        assert!(err.contains("one axis at a time"), "{err}");
+    }
+    let (code, out, err) = nav440(&["paper", f, "--axis", "roll", "--json", "--window", "2"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("\"axis\":\"roll\""), "{out}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
