@@ -1,5 +1,5 @@
 //! The nominal sample period of the bank (`BankConfig::sample_period_s`) is decided by one
-//! causal rule, `estimators::period`, in `nav440 estimate` and in the firmware: the first
+//! causal rule, `nav440_pipeline::period`, in `nav440 estimate` and in the firmware: the first
 //! `WARMUP_SAMPLES` samples, never the rest of the capture. A capture whose packet rate changes
 //! after its first 16 packets (20 packets at 100 Hz, then 50 at 50 Hz) shows the host replay
 //! builds exactly the bank the firmware builds after its warm-up.

@@ -1156,7 +1156,7 @@ pub fn ci_steps() -> Result<(), String> {
         .map_err(|e| format!("cannot write {}: {e}", short.display()))?;
     // A capture whose packet rate changes after the warm-up: 20 packets at 100 Hz, then 50 at
     // 50 Hz. Host and firmware both take the bank's period from the first 16 samples
-    // (`estimators::period`), so they must still agree byte for byte.
+    // (`nav440_pipeline::period`), so they must still agree byte for byte.
     let rate_change = rate_change_capture()?;
     // Every bundled capture (all packet types and rates, the week wrap) plus those three.
     let mut captures = data_captures();
