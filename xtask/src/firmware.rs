@@ -395,11 +395,15 @@ fn print_estimates(csv: &str) -> Result<(), String> {
     // The yaw block (`t,yaw,yaw_rate,...` or the `yaw,...` columns of a three-axis CSV).
     let base = all_cols.iter().position(|c| *c == "yaw").unwrap_or(1);
     let keep = |i: usize| i == 0 || (base..base + 16).contains(&i);
+    // Shown as in a yaw-only CSV (`ave_v`, not `yaw_ave_v`).
     let cols: Vec<&str> = all_cols
         .iter()
         .enumerate()
         .filter(|(i, _)| keep(*i))
-        .map(|(_, c)| *c)
+        .map(|(_, c)| match c.strip_prefix("yaw_") {
+            Some(rest) if base > 1 && rest != "rate" => rest,
+            _ => *c,
+        })
         .collect();
     let rows: Vec<Vec<f64>> = lines
         .map(|l| {
