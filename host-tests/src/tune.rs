@@ -283,22 +283,32 @@ pub fn tune(
     let opts = &opts.paper_law();
     let base = opts.bank_config_for(samples);
     let paper = GainsFile::from_bank(&base);
+    let axis = opts.axis();
     let ys = (1..=seeds)
         .map(|seed| {
-            let y = replay::noisy_yaw(
+            let y = replay::noisy_angle(
                 samples,
+                axis,
                 Some(Noise {
                     var: noise_var,
                     seed,
                 }),
             )?;
-            Ok(replay::unwrap_deg(&y))
+            Ok(if axis.wraps() {
+                replay::unwrap_deg(&y)
+            } else {
+                y
+            })
         })
         .collect::<Result<Vec<_>>>()?;
     let problem = Problem {
         samples,
         ys,
-        vel_ref: samples.iter().map(|s| s.rate_deg_s).collect(),
+        // The Euler-kinematics rate; NaN (left out of every MSE) near gimbal lock.
+        vel_ref: samples
+            .iter()
+            .map(|s| s.reference(axis).unwrap_or(f32::NAN))
+            .collect(),
         acc_ref: ave_on_rate(samples, &REFERENCE_AVE, opts)?,
         opts,
         max_gap_s: base.max_gap_s(),
@@ -326,7 +336,7 @@ pub fn tune(
                 seed,
             });
             let (rows, _) = replay::estimate(samples, &o)?;
-            let (vv, aa) = row_mse(&rows, samples, &problem.acc_ref, window_s);
+            let (vv, aa) = row_mse(axis, &rows, samples, &problem.acc_ref, window_s);
             for i in 0..7 {
                 v[i] += vv[i] / seeds as f64;
                 a[i] += aa[i] / seeds as f64;
