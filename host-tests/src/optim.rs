@@ -7,7 +7,7 @@
 //! tolerance is then relative). Points outside the range, and non-finite values, count as
 //! infinitely bad, so the search never leaves the valid range.
 
-use argmin::core::{CostFunction, Error as ArgminError, Executor};
+use argmin::core::{CostFunction, Error as ArgminError, Executor, State};
 use argmin::solver::neldermead::NelderMead;
 use std::cell::Cell;
 
@@ -15,7 +15,8 @@ use std::cell::Cell;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Method {
     /// Global search: a coarse log grid (`GRID_COARSE` points per gain) picks the starts,
-    /// then Nelder-Mead from the best `STARTS` of them and from the paper preset.
+    /// then Nelder-Mead (restarted until it stops improving) from the best `STARTS` of them
+    /// and from the paper preset, then once more from the best point with a finer simplex.
     Search,
     /// Exhaustive log grid of `points` per gain (`points^d` evaluations), the reference.
     Exhaustive {
@@ -27,7 +28,9 @@ pub enum Method {
 /// Coarse grid points per gain used to choose the search's starts.
 pub const GRID_COARSE: usize = 4;
 /// Nelder-Mead starts taken from the coarse grid (the paper preset is one more).
-pub const STARTS: usize = 3;
+pub const STARTS: usize = 4;
+/// Nelder-Mead restarts from a run's result, at most.
+pub const RESTARTS: usize = 4;
 /// Nelder-Mead iterations per start, at most.
 pub const MAX_ITERS: u64 = 120;
 /// Simplex tolerance on `ln f` (standard deviation over the vertices): 0.1 % of the MSE.
@@ -141,8 +144,9 @@ fn grid(obj: &Objective<'_>, points: usize) -> Vec<(Vec<f64>, f64)> {
 }
 
 /// Nelder-Mead in log coordinates from `x` (within bounds), initial simplex one step of
-/// `step` (natural-log units) along each axis, towards the inside of the range.
-fn nelder_mead(obj: &Objective<'_>, x: &[f64], step: &[f64]) {
+/// `step` (natural-log units) along each axis, towards the inside of the range. Returns the
+/// best point of the run (gains) and its `ln f`.
+fn nelder_mead(obj: &Objective<'_>, x: &[f64], step: &[f64]) -> Option<(Vec<f64>, f64)> {
     let u0: Vec<f64> = x.iter().map(|v| v.ln()).collect();
     let mut simplex = vec![u0.clone()];
     for (j, &s) in step.iter().enumerate() {
@@ -152,14 +156,38 @@ fn nelder_mead(obj: &Objective<'_>, x: &[f64], step: &[f64]) {
         u[j] = if up <= obj.hi[j].ln() { up } else { u[j] - s };
         simplex.push(u);
     }
-    let Ok(solver) = NelderMead::new(simplex).with_sd_tolerance(SD_TOLERANCE) else {
-        return;
-    };
-    // Errors cannot come from the objective (it never fails); the best point is recorded
-    // by the objective itself, so the executor's result is not needed.
-    let _ = Executor::new(obj, solver)
+    let solver = NelderMead::new(simplex)
+        .with_sd_tolerance(SD_TOLERANCE)
+        .ok()?;
+    // The objective never fails; an error would only end this run (the best point seen is
+    // recorded by the objective itself).
+    let r = Executor::new(obj, solver)
         .configure(|s| s.max_iters(MAX_ITERS))
-        .run();
+        .run()
+        .ok()?;
+    let u = r.state().get_best_param()?.clone();
+    Some((
+        u.iter().map(|v| v.exp()).collect(),
+        r.state().get_best_cost(),
+    ))
+}
+
+/// Nelder-Mead from `x`, restarted from its result with a fresh simplex (the usual remedy
+/// for a simplex that collapsed in a curved valley or on a plateau) until a restart gains
+/// less than [`SD_TOLERANCE`] in `ln f`, at most [`RESTARTS`] times.
+fn nelder_mead_restarted(obj: &Objective<'_>, x: &[f64], step: &[f64]) {
+    let mut x = x.to_vec();
+    let mut last = f64::INFINITY;
+    for _ in 0..=RESTARTS {
+        let Some((nx, c)) = nelder_mead(obj, &x, step) else {
+            return;
+        };
+        if c.is_nan() || c >= last - SD_TOLERANCE {
+            return;
+        }
+        x = nx;
+        last = c;
+    }
 }
 
 /// Minimises `f` over the box `[lo, hi]` (all > 0) from the start `x0` (clamped into it).
@@ -205,13 +233,13 @@ pub fn minimise(
                     .map(|p| p.0),
             );
             for s in &starts {
-                nelder_mead(&obj, s, &step);
+                nelder_mead_restarted(&obj, s, &step);
             }
             // Polish the best point with a smaller simplex.
             let best = obj.best_x.borrow().clone();
             if !best.is_empty() {
                 let fine: Vec<f64> = step.iter().map(|s| s / 8.0).collect();
-                nelder_mead(&obj, &best, &fine);
+                nelder_mead_restarted(&obj, &best, &fine);
             }
         }
     }

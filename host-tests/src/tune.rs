@@ -210,14 +210,16 @@ impl Problem<'_> {
 }
 
 /// Valid search range `(lo, hi)` of each gain of family `i` (bank order: AVE, ILO1-3, AD, ED,
-/// KF) for the step `h_s`, s: AVE (k, gamma1); ILO (K1, L, K2), `K1 <= 1` and `h L < 1` as
-/// the constructor demands; AD (T); ED (lambda, alpha); KF (q, with r kept: only q/r
-/// matters for the steady-state gain). The bounds span the paper's presets by two decades or
-/// more each side (K1 from 0.05).
+/// KF) for the step `h_s`, s: AVE (k, gamma1); ILO (`1 - K1`, L, K2): `K1` is searched as its
+/// leak `1 - K1` on a log scale, from 1e-7 (`K1 = 1` to f32 precision) to 0.95 (`K1 = 0.05`),
+/// because the best `K1` lie within 1e-3 of 1 (a leak of a few 1/s at `tau = h`), and
+/// `h L < 1` as the constructor demands; AD (T); ED (lambda, alpha); KF (q, with r kept: only
+/// q/r matters for the steady-state gain). The bounds span the paper's presets by two
+/// decades or more each side.
 pub fn ranges(i: usize, h_s: f64) -> (Vec<f64>, Vec<f64>) {
     match i {
         0 => (vec![10.0, 10.0], vec![1e5, 1e8]),
-        1..=3 => (vec![0.05, 0.1, 1e-3], vec![1.0, 0.99 / h_s, 1e4]),
+        1..=3 => (vec![1e-7, 0.1, 1e-3], vec![0.95, 0.99 / h_s, 1e4]),
         4 => (vec![1e-4], vec![1.0]),
         5 => (vec![10.0, 10.0], vec![1e5, 1e6]),
         _ => (vec![1.0], vec![1e12]),
@@ -251,9 +253,10 @@ fn ave(g: &[f64]) -> AveConfig {
         delta: DeltaMode::Paper,
     }
 }
+/// ILO gains from the search coordinates `(1 - K1, L, K2)`.
 fn ilo(g: &[f64]) -> IloConfig {
     IloConfig {
-        k1: g[0] as f32,
+        k1: (1.0 - g[0]) as f32,
         l: g[1] as f32,
         k2: g[2] as f32,
     }
@@ -293,7 +296,7 @@ fn tune_family(
     for (j, (slot, g0)) in tuned.iter_mut().zip(ilos).enumerate() {
         let Some(g0) = g0 else { continue };
         let f = |g: &[f64]| p.eval_family(|| Ilo::<f32, 1>::new(&ilo(g), h).ok(), acc);
-        let x0 = [f64::from(g0.k1), f64::from(g0.l), f64::from(g0.k2)];
+        let x0 = [1.0 - f64::from(g0.k1), f64::from(g0.l), f64::from(g0.k2)];
         let r = fit(method, 1 + j, hs, &x0, &f);
         note(1 + j, &r);
         *slot = Some(ilo(&r.x));
@@ -565,10 +568,10 @@ impl TuneResult {
             ));
             for (half, name) in ["velocity", "acceleration"].iter().enumerate() {
                 s.push_str(&format!("    {name:<12} training MSE / evaluations / s:"));
-                for i in 0..7 {
+                for (i, name) in NAMES.iter().enumerate() {
                     s.push_str(&format!(
-                        " {} {:.4}/{}/{:.2}",
-                        NAMES[i], r.cost[half][i], r.evals[half][i], r.secs[half][i]
+                        " {name} {:.4}/{}/{:.2}",
+                        r.cost[half][i], r.evals[half][i], r.secs[half][i]
                     ));
                 }
                 s.push('\n');
@@ -680,7 +683,8 @@ mod tests {
             ];
             for (j, i) in [half.ilo1, half.ilo2, half.ilo3].into_iter().enumerate() {
                 let i = i.unwrap();
-                pts.push((1 + j, vec![i.k1, i.l, i.k2]));
+                // Searched as 1 - K1; K1 = 1 is the range's end (1e-7) to f32 precision.
+                pts.push((1 + j, vec![(1.0 - i.k1).max(1e-7), i.l, i.k2]));
             }
             for (i, x) in pts {
                 let (lo, hi) = ranges(i, 1e-4);
@@ -690,7 +694,14 @@ mod tests {
                 }
             }
         }
-        // The ILO's L bound keeps h L < 1 (the constructor's condition).
-        assert!(ranges(1, 1e-4).1[1] * 1e-4 < 1.0);
+        // The ILO's L bound keeps h L < 1 (the constructor's condition); both ends of the
+        // leak map to valid K1 (K1 = 1 - 1e-7 rounds to 1 - 2^-23 in f32).
+        let (lo, hi) = ranges(1, 1e-4);
+        assert!(hi[1] * 1e-4 < 1.0);
+        for c in [lo[0], hi[0]] {
+            let k1 = (1.0 - c) as f32;
+            assert!(k1 > 0.0 && k1 < 1.0, "{k1}");
+            assert!(estimators::Ilo::<f32, 1>::new(&ilo(&[c, 1.0, 1.0]), 1e-4).is_ok());
+        }
     }
 }
