@@ -27,10 +27,9 @@
 //! * Units: inputs in deg (any position-like unit works), velocities in unit/s, accelerations
 //!   in unit/s^2, times in s (`h`, `T`, `tau`) or integer microseconds (sample timestamps).
 //! * [`presets`]: every parameter set of the paper; [`ram`]: `size_of` of every estimator
-//!   (checked at compile time); [`gilo`]: the general ILO and Theorem 3.1; [`csv`]: the CSV row
-//!   shared by the host CLI and the firmware; [`period`]: the nominal sample period of a
-//!   stream ([`BankConfig::sample_period_s`]) from its first [`period::WARMUP_SAMPLES`]
-//!   samples, the one causal rule of the host CLI and the firmware.
+//!   (checked at compile time); [`gilo`]: the general ILO and Theorem 3.1. (The CSV row and
+//!   the nominal-period rule live in the `nav440-pipeline` crate, with the one pipeline of
+//!   the host CLI and the firmware.)
 //! * Fixed point: [`Fx`] (Q31.32, saturating) matches `f32` on a paper-like experiment (yaw
 //!   within +-90 deg, rate +-300 deg/s, 100 Hz) within 1 % in every MSE (ED 5 %, ED-ED 20 %) and
 //!   0.05 deg/s / 1 deg/s^2 sample by sample (see `tests/bank.rs`); its update path is integer
@@ -39,12 +38,11 @@
 //!   leave the state unchanged; invalid parameters return [`ConfigError`] at construction.
 //!
 //! ```
-//! use estimators::{csv, BankConfig, Channel, Fx, YawBank};
+//! use estimators::{BankConfig, Channel, Fx, YawBank};
 //!
 //! // The paper's bank: AVE, ILO1-3, AD, ED, Kalman; acceleration by series connections.
 //! let mut bank = YawBank::<f32>::new(&BankConfig::default()).unwrap();
 //! let mut fixed = YawBank::<Fx>::new(&BankConfig::default()).unwrap();
-//! let mut row = String::new();
 //! // yaw = 30 deg/s * t, wrapping at +-180, sampled at 100 Hz
 //! for k in 0..200u64 {
 //!     let t_us = k * 10_000;
@@ -55,10 +53,9 @@
 //!         assert!((out[Channel::AveV] - 30.0).abs() < 0.1); // AVE velocity, deg/s
 //!         assert!((out_fx[Channel::AveV] - 30.0).abs() < 0.1);
 //!         assert!(out[Channel::AveA].abs() < 1.0); // AVE-AVE acceleration, deg/s^2
-//!         csv::write_row(&mut row, t_us, 30.0, &out).unwrap();
+//!         assert!((out.yaw_unwrapped_deg - 59.7).abs() < 1e-3); // unwrapped yaw, deg
 //!     }
 //! }
-//! assert!(row.starts_with("1.9900,"));
 //! // Bad input leaves the state unchanged and is reported.
 //! assert!(bank.update(2_000_000, f32::NAN).is_err());
 //! assert!(bank.update(1_000_000, 0.0).is_err());
@@ -70,7 +67,6 @@ mod ad;
 pub mod adapter;
 mod ave;
 mod bank;
-pub mod csv;
 mod ed;
 mod error;
 mod estimator;
@@ -80,7 +76,6 @@ pub mod kalman;
 pub mod law;
 pub mod linear;
 mod pair;
-pub mod period;
 pub mod presets;
 pub mod ram;
 mod real;

@@ -3,7 +3,7 @@
 
 use estimators::presets::*;
 use estimators::{
-    csv, Ad, BankConfig, BankOutput, ClosedForm, Estimator, Fx, Hold, Ilo, IloConfig, Real,
+    Ad, BankConfig, BankOutput, ClosedForm, Estimator, Fx, Hold, Ilo, IloConfig, Real,
     SampleAdapter, SampleError, Series, Unwrapper, YawBank,
 };
 
@@ -491,46 +491,6 @@ fn bank_closed_form_matches_stepping() {
             );
         }
     }
-}
-
-/// The CSV row: header per CONTRACT.md, `t` with 4 decimals from integer microseconds, every
-/// other value Display of its f32.
-#[test]
-fn csv_row_format() {
-    assert_eq!(
-        csv::HEADER,
-        "t,yaw,yaw_rate,ave_v,ilo1_v,ilo2_v,ilo3_v,ad_v,ed_v,kf_v,ave_a,ilo1_a,ilo2_a,ilo3_a,ad_a,ed_a,kf_a"
-    );
-    let out = BankOutput {
-        yaw_unwrapped_deg: -361.5,
-        yaw_residual_deg: 0.0,
-        values: [
-            1.0,
-            0.1,
-            -2.5,
-            1e-7,
-            3.4028235e38,
-            0.0,
-            12.25,
-            -0.0,
-            1.5,
-            2.0,
-            3.0,
-            4.0,
-            5.0,
-            6.0,
-        ],
-    };
-    let mut s = String::new();
-    csv::write_row(&mut s, 1_234_567, 99.5, &out).unwrap();
-    assert_eq!(
-        s,
-        "1.2346,-361.5,99.5,1,0.1,-2.5,0.0000001,340282350000000000000000000000000000000,0,12.25,-0,1.5,2,3,4,5,6"
-    );
-    let mut s = String::new();
-    csv::write_row(&mut s, 35_000_000_049, 0.0, &BankOutput::default()).unwrap();
-    assert!(s.starts_with("35000.0000,0,0,"), "{s}");
-    assert_eq!(s.matches(',').count(), 16);
 }
 
 /// Invalid configurations are refused with a typed error, never accepted and never a panic.

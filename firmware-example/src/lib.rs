@@ -8,7 +8,8 @@
 //! * [`host`]: semihosting output, exit codes, the panic handler and the HardFault handler
 //!   (every failure ends the run with a non-zero exit status instead of hanging).
 //! * [`cycles`]: instruction counting with SysTick under `qemu -icount` (see the bench binary).
-//! * [`pipeline`]: parser -> yaw sample -> `TimeBase` -> `YawBank` -> CSV rows.
+//! * [`pipeline`]: the firmware's `nav440_pipeline::Pipeline` (parser -> attitude -> BIT ->
+//!   `TimeBase` -> one `YawBank` per axis -> CSV rows).
 //! * [`stack`]: stack high-water mark (painted stack).
 //! * `sqrt`: the ED's square root as the `VSQRT.F32` instruction (FPU builds).
 //!

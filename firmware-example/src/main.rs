@@ -114,7 +114,7 @@ fn main() -> ! {
         host::stderr(format_args!("firmware: UARTs already taken\n"));
         fail(Status::Internal)
     };
-    let mut pipe = match pipeline::Pipeline::new() {
+    let mut pipe = match pipeline::new() {
         Ok(p) => p,
         Err(e) => {
             host::stderr(format_args!(
@@ -269,8 +269,7 @@ fn stream(
     // Only `main`'s thread touches it (a load/store pair: thumbv6m has no atomic swap).
     if !HEADER_PRINTED.load(Ordering::Relaxed) {
         HEADER_PRINTED.store(true, Ordering::Relaxed);
-        host::stdout(pipeline::CSV_HEADER.as_bytes());
-        host::stdout(b"\n");
+        print_header();
     }
     let mut watch = ResetWatch {
         parser: Parser::new(),
@@ -290,7 +289,7 @@ fn stream(
             }
             return false;
         }
-        if let Err(e) = pipe.feed(bytes, |row| host::stdout(row.as_bytes())) {
+        if let Err(e) = pipe.feed_csv(bytes, |row| host::stdout(row.as_bytes())) {
             bank_failed(&e);
         }
         true
@@ -343,17 +342,29 @@ fn stream(
     finish(pipe, &uart, total.unwrap_or(0))
 }
 
+/// Prints the CSV header line of the estimated axes (`pipeline::AXES`).
+fn print_header() {
+    let mut line = pipeline::CsvLine::new();
+    if pipeline::write_header(&mut line).is_err() || line.push('\n').is_err() {
+        host::stderr(format_args!(
+            "firmware: CSV header does not fit its buffer\n"
+        ));
+        fail(Status::Internal)
+    }
+    host::stdout(line.as_bytes());
+}
+
 /// The CSV header has been printed (once per run, also across re-configurations).
 static HEADER_PRINTED: AtomicBool = AtomicBool::new(false);
 
 /// Bytes the pipeline has parsed (for diagnostics).
 fn uart_bytes(pipe: &pipeline::Pipeline) -> u64 {
-    pipe.parser_stats().bytes
+    pipe.front().parser_stats().bytes
 }
 
 /// Ends a finite input: the held warm-up, the counters line, exit 0.
 fn finish(pipe: &mut pipeline::Pipeline, uart: &Uart0, unit_bytes: u64) -> ! {
-    if let Err(e) = pipe.finish(|row| host::stdout(row.as_bytes())) {
+    if let Err(e) = pipe.finish_csv(|row| host::stdout(row.as_bytes())) {
         bank_failed(&e);
     }
     let mut line: heapless::String<400> = heapless::String::new();
@@ -386,13 +397,12 @@ fn replay(mut uart: Uart0, pipe: &mut pipeline::Pipeline) -> ! {
         fail(Status::Internal)
     }
     let mut remaining = u32::from_le_bytes([len[0], len[1], len[2], len[3]]) as usize;
-    host::stdout(pipeline::CSV_HEADER.as_bytes());
-    host::stdout(b"\n");
+    print_header();
     let mut buf = [0u8; 64];
     while remaining > 0 {
         let want = remaining.min(buf.len());
         let n = uart.read(&mut buf[..want]).unwrap_or(0);
-        if let Err(e) = pipe.feed(&buf[..n], |row| host::stdout(row.as_bytes())) {
+        if let Err(e) = pipe.feed_csv(&buf[..n], |row| host::stdout(row.as_bytes())) {
             bank_failed(&e);
         }
         remaining -= n;

@@ -58,6 +58,45 @@ struct BankArgs {
     /// yaw interpolated to the step grid (step; our reading of the paper's simulation).
     #[arg(long, value_enum, default_value = "sample")]
     noise_at: NoiseAtArg,
+    /// Estimated axis: roll, pitch, yaw (default), or all three (`estimate` only; CSV columns
+    /// prefixed with the axis name). See docs/PIPELINE.md.
+    #[arg(long, value_enum, default_value = "yaw")]
+    axis: AxisArg,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum AxisArg {
+    /// Roll (wraps at +-180 deg).
+    Roll,
+    /// Pitch (not unwrapped).
+    Pitch,
+    /// Yaw (wraps at +-180 deg).
+    Yaw,
+    /// Roll, pitch and yaw (`nav440 estimate` only).
+    All,
+}
+
+impl From<AxisArg> for replay::Axes {
+    fn from(a: AxisArg) -> Self {
+        use replay::{Axes, Axis};
+        match a {
+            AxisArg::Roll => Axes::only(Axis::Roll),
+            AxisArg::Pitch => Axes::only(Axis::Pitch),
+            AxisArg::Yaw => Axes::only(Axis::Yaw),
+            AxisArg::All => Axes::ALL,
+        }
+    }
+}
+
+/// `paper`, `tune` and `plot` score one axis: `--axis all` is a usage error there.
+fn one_axis(opts: &replay::EstimateOptions, cmd: &str) -> Result<()> {
+    if opts.axes.len() == 1 {
+        Ok(())
+    } else {
+        Err(Error::Usage(format!(
+            "`nav440 {cmd}` scores one axis at a time: use --axis roll, pitch or yaw"
+        )))
+    }
 }
 
 /// Measurement noise added to yaw before estimation (the paper's protocol).
@@ -103,7 +142,8 @@ enum Cmd {
         #[arg(long = "type", value_name = "TYPE")]
         packet_type: Option<String>,
     },
-    /// Run the estimator bank; CSV (t,yaw,yaw_rate,<7 velocities>,<7 accelerations>) on stdout.
+    /// Run the estimator bank; CSV (t,yaw,yaw_rate,<7 velocities>,<7 accelerations>) on stdout
+    /// (`--axis`: roll/pitch columns, or all three axes with prefixed columns).
     Estimate {
         /// Capture file; `-` reads standard input.
         file: PathBuf,
@@ -168,6 +208,9 @@ enum Cmd {
         /// Also write a Rust snippet (BankConfig literal for the firmware) here.
         #[arg(long, value_name = "FILE")]
         rust: Option<PathBuf>,
+        /// Tuned axis: roll, pitch or yaw.
+        #[arg(long, value_enum, default_value = "yaw")]
+        axis: AxisArg,
     },
     /// Plot yaw, measured rate, velocity and acceleration estimates (stacked panels, SVG).
     Plot {
@@ -337,6 +380,7 @@ fn bank_options(b: &BankArgs) -> Result<replay::EstimateOptions> {
         fixed: false,
         config,
         noise_at: b.noise_at.into(),
+        axes: b.axis.into(),
     })
 }
 
@@ -443,6 +487,7 @@ fn run(cli: Cli) -> Result<()> {
             window,
         } => {
             let opts = bank_options(&bank)?;
+            one_axis(&opts, "paper")?;
             paper::check_window(window)?;
             let samples = load_samples(&file)?;
             let res = paper::run(&samples, &opts, window, &replay::capture_name(&file))?;
@@ -467,6 +512,7 @@ fn run(cli: Cli) -> Result<()> {
             step,
             output,
             rust,
+            axis,
         } => {
             noise(Some(noise_var), 0)?;
             paper::check_window(window)?;
@@ -474,8 +520,10 @@ fn run(cli: Cli) -> Result<()> {
             let opts = replay::EstimateOptions {
                 hold: hold.map_or(estimators::Hold::Linear, Into::into),
                 step_s: step,
+                axes: axis.into(),
                 ..Default::default()
             };
+            one_axis(&opts, "tune")?;
             let spec = tune::TuneSpec {
                 noise_var,
                 seeds: seeds.max(1),
@@ -514,6 +562,7 @@ fn run(cli: Cli) -> Result<()> {
             to,
         } => {
             let mut opts = bank_options(&bank)?;
+            one_axis(&opts, "plot")?;
             opts.noise = noise(n.noise_var, n.seed)?;
             let samples = load_samples(&file)?;
             plots::plot_capture(

@@ -8,7 +8,7 @@
 //! sample adapter (hold mode, step) as the estimators.
 
 use crate::error::{Error, Result};
-use crate::replay::{self, EstimateOptions, Noise, Row, Sample};
+use crate::replay::{self, Axis, EstimateOptions, Noise, Row, Sample};
 use estimators::{Ave, AveConfig, Channel, DeltaMode, SampleAdapter};
 
 /// Noise variances of the paper's Tables 1 and 3, deg^2.
@@ -34,7 +34,8 @@ pub const REFERENCE_AVE: AveConfig = AveConfig {
     delta: DeltaMode::Paper,
 };
 
-/// Applies an AVE (`cfg`) to the measured rate of `samples` behind the same
+/// Applies an AVE (`cfg`) to the reference rate of `samples` (of the axis `opts.axis()`: the
+/// Euler-kinematics rate, NaN where there is none) behind the same
 /// `estimators::SampleAdapter` the bank uses (same step, hold and maximum gap): reset to the
 /// first sample (output 0), then `n = round(dt / h)` steps per sample. Returns one
 /// acceleration per sample, deg/s^2 (NaN for a sample the adapter refuses).
@@ -49,9 +50,13 @@ pub fn ave_on_rate(
     let ave = Ave::<f32>::new(cfg, opts.step_s).map_err(bad)?;
     let mut adapter =
         SampleAdapter::new(ave, opts.step_s, bank.max_gap_s(), opts.hold).map_err(bad)?;
+    let axis = opts.axis();
     Ok(samples
         .iter()
-        .map(|s| adapter.update(s.t_us, s.rate_deg_s).unwrap_or(f32::NAN))
+        .map(|s| {
+            let rate = s.reference(axis).unwrap_or(f32::NAN);
+            adapter.update(s.t_us, rate).unwrap_or(f32::NAN)
+        })
         .collect())
 }
 
@@ -61,12 +66,13 @@ pub fn steps_between(t0_us: u64, t1_us: u64, h_us: f64) -> u32 {
     (dt / h_us).round().min(f64::from(u32::MAX)) as u32
 }
 
-/// Mean square error of `est` against `reference` over the rows with `t <= window_s`.
+/// Mean square error of `est` against `reference` over the rows with `t <= window_s`. Rows
+/// without a reference (NaN: near gimbal lock, see `nav440_pipeline::euler`) are left out.
 pub fn mse(t_us: &[u64], est: &[f32], reference: &[f32], window_s: f64) -> f64 {
     let lim = (window_s * 1e6).round() as u64;
     let (mut sum, mut n) = (0.0f64, 0usize);
     for ((&t, &e), &r) in t_us.iter().zip(est).zip(reference) {
-        if t <= lim {
+        if t <= lim && !r.is_nan() {
             let d = f64::from(e) - f64::from(r);
             sum += d * d;
             n += 1;
@@ -79,9 +85,10 @@ pub fn mse(t_us: &[u64], est: &[f32], reference: &[f32], window_s: f64) -> f64 {
     }
 }
 
-/// MSE of every velocity and acceleration column of `rows` (against the measured rate and
-/// `acc_ref`, matched by time).
+/// MSE of every velocity and acceleration column of `rows` for `axis` (against its reference
+/// rate and `acc_ref`, matched by time; rows without a reference left out).
 pub fn row_mse(
+    axis: Axis,
     rows: &[Row],
     samples: &[Sample],
     acc_ref: &[f32],
@@ -97,14 +104,25 @@ pub fn row_mse(
         accr.push(acc_ref.get(j).copied().unwrap_or(f32::NAN));
     }
     let t: Vec<u64> = rows.iter().map(|r| r.t_us).collect();
-    let rate: Vec<f32> = rows.iter().map(|r| r.yaw_rate).collect();
+    let rate: Vec<f32> = rows
+        .iter()
+        .map(|r| {
+            r.axis(axis)
+                .and_then(|a| a.reference_deg_s)
+                .unwrap_or(f32::NAN)
+        })
+        .collect();
+    let out = |r: &Row| r.axis(axis).map(|a| a.out);
     let mut v = [0.0; 7];
     let mut a = [0.0; 7];
     for i in 0..7 {
-        let ev: Vec<f32> = rows.iter().map(|r| r.out[Channel::VELOCITY[i]]).collect();
+        let ev: Vec<f32> = rows
+            .iter()
+            .map(|r| out(r).map_or(f32::NAN, |o| o[Channel::VELOCITY[i]]))
+            .collect();
         let ea: Vec<f32> = rows
             .iter()
-            .map(|r| r.out[Channel::ACCELERATION[i]])
+            .map(|r| out(r).map_or(f32::NAN, |o| o[Channel::ACCELERATION[i]]))
             .collect();
         v[i] = mse(&t, &ev, &rate, window_s);
         a[i] = mse(&t, &ea, &accr, window_s);
@@ -120,6 +138,8 @@ type RunMse = (usize, [f64; 7], [f64; 7]);
 pub struct PaperResult {
     /// Capture name.
     pub capture: String,
+    /// The scored axis (`--axis`).
+    pub axis: Axis,
     /// Samples (packets with yaw) in the capture.
     pub samples: usize,
     /// Capture duration, s.
@@ -189,7 +209,7 @@ pub fn run(
                                 seed,
                             });
                             let (rows, _) = replay::estimate(samples, &o)?;
-                            let (v, a) = row_mse(&rows, samples, acc_ref, window_s);
+                            let (v, a) = row_mse(opts.axis(), &rows, samples, acc_ref, window_s);
                             Ok((i, v, a))
                         })
                         .collect::<Vec<_>>()
@@ -217,10 +237,11 @@ pub fn run(
     let mut o = opts.clone();
     o.noise = None;
     let (rows, _) = replay::estimate(samples, &o)?;
-    let (vel_clean, acc_clean) = row_mse(&rows, samples, &acc_ref, window_s);
+    let (vel_clean, acc_clean) = row_mse(opts.axis(), &rows, samples, &acc_ref, window_s);
     let duration_s = samples.last().map_or(0.0, |s| s.t_s());
     Ok(PaperResult {
         capture: capture.to_string(),
+        axis: opts.axis(),
         samples: samples.len(),
         duration_s,
         hold: opts.hold,
@@ -237,6 +258,15 @@ pub fn run(
         vel_clean,
         acc_clean,
     })
+}
+
+/// What the velocity MSEs are scored against.
+fn velocity_reference(axis: Axis) -> String {
+    format!(
+        "{} rate from the packet's body rates and angles by the Euler kinematics (the z rate when level; rows with |pitch| >= {} deg left out)",
+        axis.name(),
+        nav440_pipeline::euler::PITCH_LIMIT_DEG
+    )
 }
 
 fn hold_name(h: estimators::Hold) -> &'static str {
@@ -310,7 +340,10 @@ impl PaperResult {
             self.gains,
             noise_at_name(self.noise_at)
         ));
-        s.push_str("velocity reference: packet z rate; acceleration reference: AVE (k=500, gamma1=20000) on the packet z rate, same adapter\n");
+        s.push_str(&format!(
+            "velocity reference: {}; acceleration reference: AVE (k=500, gamma1=20000) on it, same adapter\n",
+            velocity_reference(self.axis)
+        ));
         for (title, ours, paper, clean) in self.tables() {
             s.push_str(&format!("\n{title}\n"));
             s.push_str(&format!("{:<14}", "sigma^2"));
@@ -392,8 +425,9 @@ impl PaperResult {
                 "noise_vars": NOISE_VARS,
                 "gains": self.gains,
                 "noise_at": noise_at_name(self.noise_at),
-                "velocity_reference": "packet z rate",
-                "acceleration_reference": "AVE k=500 gamma1=20000 on the packet z rate, same sample adapter",
+                "axis": self.axis.name(),
+                "velocity_reference": velocity_reference(self.axis),
+                "acceleration_reference": "AVE k=500 gamma1=20000 on the velocity reference, same sample adapter",
             },
             "velocity_mse": table(&self.vel, &PAPER_VEL_MSE, &self.vel_clean),
             "acceleration_mse": table(&self.acc, &PAPER_ACC_MSE, &self.acc_clean),

@@ -20,6 +20,8 @@ pub fn panels(
     to: Option<f64>,
 ) -> Result<Vec<Panel>> {
     let (rows, _) = replay::estimate(samples, opts)?;
+    let axis = opts.axis();
+    let name = axis.name();
     let acc_ref = ave_on_rate(samples, &REFERENCE_AVE, opts)?;
     let lo = from.unwrap_or(f64::NEG_INFINITY);
     let hi = to.unwrap_or(f64::INFINITY);
@@ -39,15 +41,24 @@ pub fn panels(
         width,
         points: rows.iter().map(|r| (t_of(r.t_us), f(r))).collect(),
     };
+    let out = |r: &replay::Row| r.axis(axis).map(|a| a.out);
     let yaw = Panel {
-        title: "Yaw angle (unwrapped, with the added noise)".into(),
-        y_label: "yaw (deg)".into(),
-        series: vec![line("yaw", BLACK, 1, &|r| {
-            f64::from(r.out.yaw_unwrapped_deg)
+        title: if axis == replay::Axis::Yaw {
+            "Yaw angle (unwrapped, with the added noise)".into()
+        } else {
+            format!("{name} angle (with the added noise)")
+        },
+        y_label: format!("{name} (deg)"),
+        series: vec![line(name, BLACK, 1, &|r| {
+            out(r).map_or(f64::NAN, |o| f64::from(o.yaw_unwrapped_deg))
         })],
         y_range: None,
     };
-    let rate_ref = |r: &replay::Row| f64::from(r.yaw_rate);
+    let rate_ref = |r: &replay::Row| {
+        r.axis(axis)
+            .and_then(|a| a.reference_deg_s)
+            .map_or(f64::NAN, f64::from)
+    };
     let acc_ref_f =
         |r: &replay::Row| f64::from(accr_by_t.get(&r.t_us).copied().unwrap_or(f32::NAN));
     let range_of = |f: &dyn Fn(&replay::Row) -> f64| {
@@ -72,10 +83,12 @@ pub fn panels(
                 ESTIMATOR_COLORS[i],
                 1,
                 &|r: &replay::Row| {
-                    f64::from(if acc {
-                        r.out[estimators::Channel::ACCELERATION[i]]
-                    } else {
-                        r.out[estimators::Channel::VELOCITY[i]]
+                    out(r).map_or(f64::NAN, |o| {
+                        f64::from(if acc {
+                            o[estimators::Channel::ACCELERATION[i]]
+                        } else {
+                            o[estimators::Channel::VELOCITY[i]]
+                        })
                     })
                 },
             ));

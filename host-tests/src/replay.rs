@@ -1,14 +1,17 @@
-//! Replay of a recorded byte stream: parser -> packets -> timed yaw samples -> estimator bank.
+//! Replay of a recorded byte stream through `nav440_pipeline` (the firmware's pipeline):
+//! parser -> attitude packets -> BIT check -> timed samples -> estimator banks -> CSV.
 //!
-//! This is the host twin of the firmware's pipeline, and what `nav440 stats|decode|estimate`,
-//! the paper protocol, the tuner, the plots and the integration tests all call.
+//! What `nav440 stats|decode|estimate`, the paper protocol, the tuner, the plots and the
+//! integration tests all call.
 
 use crate::error::{Error, Result};
-use estimators::period::PeriodEstimator;
-pub use estimators::period::WARMUP_SAMPLES;
 use estimators::{BankConfig, BankOutput, Fx, Hold, SampleError, YawBank};
+pub use nav440_pipeline::bit::BitCounts;
+use nav440_pipeline::period::PeriodEstimator;
+pub use nav440_pipeline::period::WARMUP_SAMPLES;
+use nav440_pipeline::{axis_bank, AxisBank, Frontend, Pipeline};
+use nav440_proto::Parser;
 pub use nav440_proto::TimeFaults;
-use nav440_proto::{Packet, Parser, TimeBase};
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -152,6 +155,8 @@ pub struct StreamStats {
     /// stream cut off (a truncated final frame, or a lone `55` that might start one): neither
     /// in a frame nor skipped. `bytes = frame bytes + skipped_bytes + pending_bytes`.
     pub pending_bytes: u64,
+    /// Attitude packets whose BIT word flags a failure (masterFail; not estimated).
+    pub bit: BitCounts,
 }
 
 impl StreamStats {
@@ -160,15 +165,34 @@ impl StreamStats {
         self.frames.values().sum()
     }
 
-    /// The `nav440 stats` JSON object.
+    /// The `nav440 stats` JSON object; a `bit_failures` object is appended only when some
+    /// attitude packet flags a BIT failure (`{"flag": "masterFail", "packets": N,
+    /// "hardware_error": N, "com_error": N, "software_error": N, "last_word": "0x0009"}`), so
+    /// the output of a healthy capture is unchanged.
     pub fn to_json(&self) -> serde_json::Value {
-        serde_json::json!({
+        let mut v = serde_json::json!({
             "bytes": self.bytes,
             "frames": self.frames,
             "crc_errors": self.crc_errors,
             "skipped_bytes": self.skipped_bytes,
             "pending_bytes": self.pending_bytes,
-        })
+        });
+        if self.bit.failed > 0 {
+            if let Some(o) = v.as_object_mut() {
+                o.insert(
+                    "bit_failures".into(),
+                    serde_json::json!({
+                        "flag": nav440_pipeline::bit::FAILURE_FLAG,
+                        "packets": self.bit.failed,
+                        "hardware_error": self.bit.hardware_error,
+                        "com_error": self.bit.com_error,
+                        "software_error": self.bit.software_error,
+                        "last_word": format!("0x{:04x}", self.bit.last_word),
+                    }),
+                );
+            }
+        }
+        v
     }
 }
 
@@ -177,6 +201,7 @@ impl StreamStats {
 pub struct StatsCounter {
     parser: Parser,
     frames: BTreeMap<String, u64>,
+    bit: BitCounts,
 }
 
 impl std::fmt::Debug for StatsCounter {
@@ -196,7 +221,14 @@ impl StatsCounter {
     /// Feeds the next bytes of the stream.
     pub fn push(&mut self, bytes: &[u8]) {
         let frames = &mut self.frames;
+        let bit = &mut self.bit;
         self.parser.feed(bytes, |f| {
+            if let Some(a) = nav440_proto::Packet::decode(f)
+                .ok()
+                .and_then(|p| nav440_pipeline::attitude(&p))
+            {
+                bit.check(a.bit);
+            }
             let name = f.packet_type.name();
             match frames.get_mut(name) {
                 Some(n) => *n += 1,
@@ -216,6 +248,7 @@ impl StatsCounter {
             crc_errors: s.crc_errors,
             skipped_bytes: s.skipped_bytes,
             pending_bytes: s.pending_bytes(),
+            bit: self.bit,
         }
     }
 }
@@ -227,41 +260,15 @@ pub fn stream_stats(bytes: &[u8]) -> StreamStats {
     c.stats()
 }
 
-/// One timed yaw sample taken from a packet.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Sample {
-    /// Time since the first yaw packet, microseconds (from timeITOW / GPSITOW through
-    /// `nav440_proto::TimeBase`: wraps handled, strictly increasing).
-    pub t_us: u64,
-    /// Yaw as sent (wrapped), degrees.
-    pub yaw_deg: f32,
-    /// Body z rate as sent (the measured reference), deg/s.
-    pub rate_deg_s: f32,
-    /// First sample of a new time epoch (a confirmed backward jump of the time stamps, or the
-    /// switch from GPSITOW to timeITOW): the bank re-initialises from it
-    /// (`YawBank::new_epoch`).
-    pub new_epoch: bool,
-}
+pub use nav440_pipeline::{Axes, Axis, AxisRow, Rejections, Row, Sample};
 
-impl Sample {
-    /// Time in seconds.
-    pub fn t_s(&self) -> f64 {
-        self.t_us as f64 * 1e-6
-    }
-}
-
-/// Streaming sample extraction, the host twin of the firmware's front end: bytes -> parser ->
-/// packets carrying yaw -> `nav440_proto::TimeBase` (time faults handled and counted) ->
-/// [`Sample`]s. Feed it bytes in any chunking; the samples come out in stream order (a
-/// suspicious time stamp is released one sample late, see `TimeBase`). Call
-/// [`SampleReader::finish`] at the end of input.
+/// Streaming sample extraction: `nav440_pipeline::Frontend` (bytes -> parser -> attitude
+/// packets -> BIT check -> `nav440_proto::TimeBase` -> [`Sample`]s, the firmware's front end),
+/// for the commands that need the samples themselves (`paper`, `tune`, `plot`, tests). Feed it
+/// bytes in any chunking; call [`SampleReader::finish`] at the end of input.
 #[derive(Debug, Default)]
 pub struct SampleReader {
-    parser: Parser,
-    time: TimeBase<(f32, f32)>,
-    frames: u64,
-    yaw_packets: u64,
-    samples: u64,
+    front: Frontend,
 }
 
 impl SampleReader {
@@ -271,64 +278,63 @@ impl SampleReader {
     }
 
     /// Feeds bytes; `out` gets every sample released.
-    pub fn feed(&mut self, bytes: &[u8], mut out: impl FnMut(Sample)) {
-        let Self {
-            parser,
-            time,
-            frames,
-            yaw_packets,
-            samples,
-        } = self;
-        parser.feed(bytes, |f| {
-            *frames += 1;
-            let Some(y) = Packet::decode(f).ok().and_then(|p| p.yaw_sample()) else {
-                return;
-            };
-            *yaw_packets += 1;
-            for t in time.update(y.time, (y.yaw_deg, y.yaw_rate_deg_s)) {
-                *samples += 1;
-                out(to_sample(t));
-            }
-        });
+    pub fn feed(&mut self, bytes: &[u8], out: impl FnMut(Sample)) {
+        self.front.feed(bytes, out);
     }
 
     /// End of input: releases a held sample if the time rules allow it.
-    pub fn finish(&mut self, mut out: impl FnMut(Sample)) {
-        if let Some(t) = self.time.finish() {
-            self.samples += 1;
-            out(to_sample(t));
-        }
+    pub fn finish(&mut self, out: impl FnMut(Sample)) {
+        self.front.finish(out);
     }
 
     /// Time-stamp faults so far.
     pub fn faults(&self) -> TimeFaults {
-        *self.time.faults()
+        *self.front.time_faults()
+    }
+
+    /// Samples dropped for a BIT failure so far.
+    pub fn bit(&self) -> BitCounts {
+        self.front.counters().bit
     }
 
     /// Valid (CRC-checked) frames so far.
     pub fn frames(&self) -> u64 {
-        self.frames
+        self.front.counters().frames
     }
 
-    /// Packets carrying yaw so far (before the time rules).
+    /// Packets carrying the attitude (and yaw) so far, before the BIT and time rules.
     pub fn yaw_packets(&self) -> u64 {
-        self.yaw_packets
+        self.front.counters().attitude_packets
     }
 
     /// Samples released so far.
     pub fn samples(&self) -> u64 {
-        self.samples
+        self.front.counters().samples
     }
 
     /// Parser statistics so far.
     pub fn parser_stats(&self) -> &nav440_proto::Stats {
-        self.parser.stats()
+        self.front.parser_stats()
     }
 
     /// The error for a finished stream that gave no sample ([`Error::NotNav440`]), or `Ok`.
     pub fn check_nonempty(&self) -> Result<()> {
-        check_yaw_stream(self.frames, self.samples)
+        check_front(&self.front)
     }
+}
+
+/// [`check_yaw_stream`] for a front end, naming BIT failures when they took every sample.
+fn check_front(front: &Frontend) -> Result<()> {
+    let c = front.counters();
+    if c.frames > 0 && c.samples == 0 && c.bit.failed > 0 {
+        return Err(Error::NotNav440(format!(
+            "{} NAV440 frames but every one of the {} attitude packets flags a BIT failure ({}); nothing to estimate",
+            c.frames,
+            c.attitude_packets,
+            nav440_pipeline::bit::FAILURE_FLAG
+        )));
+    }
+    check_yaw_stream(c.frames, c.samples)
 }
 
 /// [`Error::NotNav440`] for a stream of `frames` valid frames of which `samples` gave a timed
@@ -347,17 +353,9 @@ pub fn check_yaw_stream(frames: u64, samples: u64) -> Result<()> {
     Ok(())
 }
 
-fn to_sample(t: nav440_proto::Timed<(f32, f32)>) -> Sample {
-    Sample {
-        t_us: t.t_us,
-        yaw_deg: t.payload.0,
-        rate_deg_s: t.payload.1,
-        new_epoch: t.new_epoch,
-    }
-}
-
-/// Extracts the timed yaw samples of every packet that carries yaw, in stream order.
-/// A stream without any valid frame, or without any yaw packet, is an [`Error::NotNav440`].
+/// Extracts the timed samples of every packet that carries the attitude, in stream order
+/// (BIT failures dropped). A stream without any valid frame, or without any such packet, is
+/// an [`Error::NotNav440`].
 pub fn samples(bytes: &[u8]) -> Result<Vec<Sample>> {
     samples_and_faults(bytes).map(|(s, _)| s)
 }
@@ -373,7 +371,7 @@ pub fn samples_and_faults(bytes: &[u8]) -> Result<(Vec<Sample>, TimeFaults)> {
 }
 
 /// [`samples`] of a capture read in chunks (file, or standard input for `-`): memory is the
-/// samples' (24 bytes each), not the capture's. Errors name the capture.
+/// samples', not the capture's. Errors name the capture.
 pub fn read_samples(path: &Path) -> Result<Vec<Sample>> {
     read_samples_and_faults(path).map(|(s, _)| s)
 }
@@ -395,26 +393,44 @@ pub fn read_samples_and_faults(path: &Path) -> Result<(Vec<Sample>, TimeFaults)>
     Ok((out, reader.faults()))
 }
 
-/// Gaussian noise added to yaw before estimation (the paper's protocol).
+/// Gaussian noise added to the angles before estimation (the paper's protocol).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Noise {
     /// Variance, deg^2.
     pub var: f64,
-    /// Seed of the generator (xoshiro256++, one N(0, var) draw per sample in order).
+    /// Seed of the generator (xoshiro256++, one N(0, var) draw per sample in order). Each axis
+    /// has its own generator: yaw seeded with `seed` (so the yaw noise does not depend on the
+    /// other axes), roll and pitch with [`axis_seed`].
     pub seed: u64,
+}
+
+/// The seed of `axis`'s noise generator for the seed `seed`: `seed` for yaw, `seed` XOR a
+/// fixed odd constant per axis for roll and pitch.
+pub fn axis_seed(seed: u64, axis: Axis) -> u64 {
+    match axis {
+        Axis::Yaw => seed,
+        Axis::Roll => seed ^ 0x9E37_79B9_7F4A_7C15,
+        Axis::Pitch => seed ^ 0xD1B5_4A32_D192_ED03,
+    }
 }
 
 /// The yaw of each sample plus noise (if any), degrees.
 pub fn noisy_yaw(samples: &[Sample], noise: Option<Noise>) -> Result<Vec<f32>> {
+    noisy_angle(samples, Axis::Yaw, noise)
+}
+
+/// The angle of `axis` of each sample plus noise (if any; the axis's generator, see
+/// [`Noise::seed`]), degrees.
+pub fn noisy_angle(samples: &[Sample], axis: Axis, noise: Option<Noise>) -> Result<Vec<f32>> {
     match noise {
-        None => Ok(samples.iter().map(|s| s.yaw_deg).collect()),
+        None => Ok(samples.iter().map(|s| s.angle(axis)).collect()),
         Some(n) => {
             let normal = Normal::new(0.0, n.var.max(0.0).sqrt())
                 .map_err(|e| Error::Usage(format!("bad noise variance {}: {e}", n.var)))?;
-            let mut rng = Xoshiro256PlusPlus::seed_from_u64(n.seed);
+            let mut rng = Xoshiro256PlusPlus::seed_from_u64(axis_seed(n.seed, axis));
             Ok(samples
                 .iter()
-                .map(|s| (f64::from(s.yaw_deg) + normal.sample(&mut rng)) as f32)
+                .map(|s| (f64::from(s.angle(axis)) + normal.sample(&mut rng)) as f32)
                 .collect())
         }
     }
@@ -427,7 +443,7 @@ pub struct EstimateOptions {
     pub hold: Hold,
     /// Observer step h, s.
     pub step_s: f32,
-    /// Noise added to yaw.
+    /// Noise added to each estimated angle.
     pub noise: Option<Noise>,
     /// Run the fixed-point bank (`YawBank<Fx>`) instead of f32.
     pub fixed: bool,
@@ -435,15 +451,17 @@ pub struct EstimateOptions {
     pub config: Option<BankConfig>,
     /// Where the noise enters (per packet, or per observer step).
     pub noise_at: NoiseAt,
+    /// The estimated axes (`--axis`; default yaw only).
+    pub axes: Axes,
 }
 
 /// Where the added noise enters the estimators.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum NoiseAt {
-    /// One N(0, V) draw per packet, added to its yaw (the protocol as stated; default).
+    /// One N(0, V) draw per packet, added to its angle (the protocol as stated; default).
     #[default]
     Sample,
-    /// The packets' unwrapped yaw is linearly interpolated onto the observer's step grid
+    /// The packets' unwrapped angle is linearly interpolated onto the observer's step grid
     /// (every `h` s) and an independent N(0, V) draw is added at every step; the bank is fed
     /// every step (`n = 1`) and a row is reported at each packet time. This is what a
     /// simulation that resamples the recording to the 1e-4 s integration step and adds the
@@ -460,6 +478,7 @@ impl Default for EstimateOptions {
             fixed: false,
             config: None,
             noise_at: NoiseAt::Sample,
+            axes: Axes::only(Axis::Yaw),
         }
     }
 }
@@ -474,6 +493,11 @@ impl EstimateOptions {
         cfg
     }
 
+    /// The first estimated axis (the one `paper`, `tune` and `plot` score; yaw if none).
+    pub fn axis(&self) -> Axis {
+        self.axes.iter().next().unwrap_or(Axis::Yaw)
+    }
+
     /// These options with the paper's laws as the base when no gains file is given
     /// (`BankConfig::PAPER`: the AVE's `deltahat` only grows), for the paper's experiment
     /// (`nav440 paper`, `nav440 tune`); `nav440 estimate` and the firmware run
@@ -486,25 +510,15 @@ impl EstimateOptions {
     }
 
     /// [`EstimateOptions::bank_config`] with the nominal sample period set from the capture by
-    /// `estimators::period`, the causal rule the firmware uses too: the upper median of the
-    /// intervals between the first [`WARMUP_SAMPLES`] samples (0.01 s for a 100 Hz capture, i.e.
-    /// `BankConfig::PAPER`'s value), whatever the rate does later; a capture shorter than the
-    /// warm-up uses the intervals it has, a single sample keeps the configured period. The
+    /// `nav440_pipeline::period`, the causal rule the firmware uses too: the upper median of
+    /// the intervals between the first [`WARMUP_SAMPLES`] samples (0.01 s for a 100 Hz capture,
+    /// i.e. `BankConfig::PAPER`'s value), whatever the rate does later; a capture shorter than
+    /// the warm-up uses the intervals it has, a single sample keeps the configured period. The
     /// closed-form maps and the Kalman gains are computed for it.
     pub fn bank_config_for(&self, samples: &[Sample]) -> BankConfig {
-        PeriodEstimator::from_times(samples.iter().map(|s| s.t_us)).apply(self.bank_config())
+        PeriodEstimator::from_times(samples.iter().map(|s| s.t_us).take(WARMUP_SAMPLES))
+            .apply(self.bank_config())
     }
-}
-
-/// One output row: the sample's time and reference, and the bank's output.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Row {
-    /// Sample time, us since the first sample.
-    pub t_us: u64,
-    /// Measured yaw rate (packet z rate), deg/s.
-    pub yaw_rate: f32,
-    /// Unwrapped yaw, velocities and accelerations.
-    pub out: BankOutput,
 }
 
 /// What a run of the bank gives: rows and the counts of samples it did not turn into rows.
@@ -512,7 +526,7 @@ pub struct Row {
 pub struct Estimate {
     /// One row per accepted sample.
     pub rows: Vec<Row>,
-    /// Samples the bank rejected (non-finite or out-of-range yaw).
+    /// Samples the bank rejected (non-finite or out-of-range angle).
     pub rejected: usize,
     /// Gaps longer than the gap rule (`BankConfig::max_gap_periods` nominal periods): the bank
     /// re-initialised there (`YawBank::reinit_count`).
@@ -520,7 +534,7 @@ pub struct Estimate {
 }
 
 /// Runs the estimator bank over `samples`. A sample the bank rejects (non-finite or
-/// out-of-range yaw) yields no row; the count of those is returned too.
+/// out-of-range angle) yields no row; the count of those is returned too.
 pub fn estimate(samples: &[Sample], opts: &EstimateOptions) -> Result<(Vec<Row>, usize)> {
     estimate_report(samples, opts).map(|e| (e.rows, e.rejected))
 }
@@ -565,6 +579,14 @@ pub fn fault_warning(f: &TimeFaults, gaps: u32) -> Option<String> {
     })
 }
 
+/// The one-line warning for samples not estimated because of their BIT word (`None` when
+/// there were none): `BIT failure: N samples not estimated (masterFail; ...)`.
+pub fn bit_warning(b: &BitCounts) -> Option<String> {
+    let mut s = String::new();
+    b.write_warning(&mut s).ok()?;
+    (!s.is_empty()).then_some(s)
+}
+
 /// The end of an [`Estimation`]: the samples that gave no row, and the gaps.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct EstimationSummary {
@@ -581,75 +603,50 @@ pub struct StreamReport {
     pub summary: EstimationSummary,
     /// Time-stamp faults met by the sample extraction.
     pub faults: TimeFaults,
+    /// Samples not estimated because their BIT word flags a failure.
+    pub bit: BitCounts,
 }
 
 impl StreamReport {
-    /// The warning lines `nav440 estimate` (and `nav440 live`) print on stderr: rejected
-    /// samples, then time faults and gaps (none when everything was clean).
+    /// The warning lines `nav440 estimate` (and `nav440 live`) print on stderr: BIT failures,
+    /// rejected samples, then time faults and gaps (none when everything was clean).
     pub fn warnings(&self) -> impl Iterator<Item = String> {
-        self.summary
-            .rejected
-            .warning()
+        bit_warning(&self.bit)
             .into_iter()
+            .chain(rejection_warning(&self.summary.rejected))
             .chain(fault_warning(&self.faults, self.summary.gaps))
     }
 }
 
-/// Samples the bank refused (they give no row), by reason.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Rejections {
-    /// Time stamp not later than the previous sample's.
-    pub time_not_increasing: u64,
-    /// Yaw (with the added noise) beyond `YawBank::MAX_ABS_YAW_DEG`.
-    pub yaw_out_of_range: u64,
-    /// Yaw (with the added noise) NaN or infinite.
-    pub yaw_not_finite: u64,
-}
-
-impl Rejections {
-    /// All rejected samples.
-    pub fn total(&self) -> u64 {
-        self.time_not_increasing + self.yaw_out_of_range + self.yaw_not_finite
+/// The CLI's one-line warning for rejected samples, `None` if nothing was rejected, e.g. "3
+/// samples rejected by the estimator bank: 2 with time not increasing, 1 with |yaw| above
+/// 1000000 deg".
+pub fn rejection_warning(r: &Rejections) -> Option<String> {
+    if r.total() == 0 {
+        return None;
     }
-
-    fn count(&mut self, e: SampleError) {
-        let c = match e {
-            SampleError::NonIncreasingTime => &mut self.time_not_increasing,
-            SampleError::OutOfRange => &mut self.yaw_out_of_range,
-            SampleError::NotFinite => &mut self.yaw_not_finite,
-        };
-        *c += 1;
+    let mut parts = Vec::new();
+    if r.time_not_increasing > 0 {
+        parts.push(format!(
+            "{} with time not increasing",
+            r.time_not_increasing
+        ));
     }
-
-    /// The CLI's one-line warning, `None` if nothing was rejected, e.g. "3 samples rejected
-    /// by the estimator bank: 2 with time not increasing, 1 with |yaw| above 1000000 deg".
-    pub fn warning(&self) -> Option<String> {
-        if self.total() == 0 {
-            return None;
-        }
-        let mut parts = Vec::new();
-        if self.time_not_increasing > 0 {
-            parts.push(format!(
-                "{} with time not increasing",
-                self.time_not_increasing
-            ));
-        }
-        if self.yaw_out_of_range > 0 {
-            parts.push(format!(
-                "{} with |yaw| above {} deg",
-                self.yaw_out_of_range,
-                YawBank::<f32>::MAX_ABS_YAW_DEG
-            ));
-        }
-        if self.yaw_not_finite > 0 {
-            parts.push(format!("{} with yaw NaN or infinite", self.yaw_not_finite));
-        }
-        Some(format!(
-            "{} samples rejected by the estimator bank: {}",
-            self.total(),
-            parts.join(", ")
-        ))
+    if r.angle_out_of_range > 0 {
+        parts.push(format!(
+            "{} with |yaw| above {} deg",
+            r.angle_out_of_range,
+            YawBank::<f32>::MAX_ABS_YAW_DEG
+        ));
     }
+    if r.angle_not_finite > 0 {
+        parts.push(format!("{} with yaw NaN or infinite", r.angle_not_finite));
+    }
+    Some(format!(
+        "{} samples rejected by the estimator bank: {}",
+        r.total(),
+        parts.join(", ")
+    ))
 }
 
 /// The f32 or the fixed-point bank.
@@ -659,7 +656,7 @@ enum Bank {
 }
 
 impl Bank {
-    fn new(cfg: &BankConfig, fixed: bool) -> Result<Self> {
+    fn new(axis: Axis, cfg: &BankConfig, fixed: bool) -> std::result::Result<Self, String> {
         let bad = |e: estimators::ConfigError| {
             let mut m = format!("bad estimator configuration: {e}");
             if e == estimators::ConfigError::SamplePeriodTooLong {
@@ -668,19 +665,19 @@ impl Bank {
                     cfg.sample_period_s, cfg.h
                 ));
             }
-            Error::Usage(m)
+            m
         };
         Ok(if fixed {
-            Bank::Fx(Box::new(YawBank::<Fx>::new(cfg).map_err(bad)?))
+            Bank::Fx(Box::new(axis_bank(axis, cfg).map_err(bad)?))
         } else {
-            Bank::F32(Box::new(YawBank::<f32>::new(cfg).map_err(bad)?))
+            Bank::F32(Box::new(axis_bank(axis, cfg).map_err(bad)?))
         })
     }
 
-    fn update(&mut self, t_us: u64, yaw_deg: f32) -> std::result::Result<BankOutput, SampleError> {
+    fn update(&mut self, t_us: u64, deg: f32) -> std::result::Result<BankOutput, SampleError> {
         match self {
-            Bank::F32(b) => b.update(t_us, yaw_deg),
-            Bank::Fx(b) => b.update(t_us, yaw_deg),
+            Bank::F32(b) => b.update(t_us, deg),
+            Bank::Fx(b) => b.update(t_us, deg),
         }
     }
 
@@ -707,8 +704,8 @@ struct NoiseGen {
 }
 
 impl NoiseGen {
-    fn new(noise: Option<Noise>) -> Result<Self> {
-        let (var, seed) = noise.map_or((0.0, 0), |n| (n.var, n.seed));
+    fn new(noise: Option<Noise>, axis: Axis) -> Result<Self> {
+        let (var, seed) = noise.map_or((0.0, 0), |n| (n.var, axis_seed(n.seed, axis)));
         let normal = Normal::new(0.0, var.max(0.0).sqrt())
             .map_err(|e| Error::Usage(format!("bad noise variance {var}: {e}")))?;
         Ok(NoiseGen {
@@ -737,135 +734,76 @@ struct StepState {
     gap_us: u64,
     /// Restarts at such gaps.
     gaps: u32,
-    /// Unwrapping (the rule of [`unwrap_deg`]).
-    unwrap: DegUnwrapper,
-    /// The previous sample's time (us) and unwrapped yaw (deg).
+    /// Unwrapping (the rule of [`unwrap_deg`]; `None` for pitch, which does not wrap).
+    unwrap: Option<DegUnwrapper>,
+    /// The previous sample's time (us) and unwrapped angle (deg).
     prev: Option<(u64, f32)>,
 }
 
-/// A running estimation: the bank, the noise and the per-mode state.
-struct Runner {
+/// The host's bank of one axis: the f32 or fixed-point bank, the added noise and the
+/// per-mode state; `nav440_pipeline` drives it ([`AxisBank`]).
+pub struct HostBank {
     bank: Bank,
     noise: NoiseGen,
     step: Option<StepState>,
 }
 
-/// `nav440 estimate` on a stream of samples: push samples one by one, get rows as they come.
-/// The nominal period is set from the first [`WARMUP_SAMPLES`] samples
-/// ([`EstimateOptions::bank_config_for`]), so those are held back until it is known (the
-/// firmware's pipeline does the same); every later sample gives its row at once. Memory is
-/// constant. [`estimate`] and [`estimate_csv`] run through this too.
-pub struct Estimation {
-    opts: EstimateOptions,
-    warmup: Vec<Sample>,
-    runner: Option<Runner>,
-    rejected: Rejections,
-}
-
-impl std::fmt::Debug for Estimation {
+impl std::fmt::Debug for HostBank {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Estimation")
-            .field("opts", &self.opts)
-            .field("held_back", &self.warmup.len())
-            .field("running", &self.runner.is_some())
-            .field("rejected", &self.rejected)
-            .finish()
+        f.debug_struct("HostBank").finish_non_exhaustive()
     }
 }
 
-impl Estimation {
-    /// An estimation with `opts` (the noise variance is checked here; the bank configuration
-    /// once the period is known).
-    pub fn new(opts: &EstimateOptions) -> Result<Self> {
-        NoiseGen::new(opts.noise)?;
-        Ok(Estimation {
-            opts: opts.clone(),
-            warmup: Vec::with_capacity(WARMUP_SAMPLES),
-            runner: None,
-            rejected: Rejections::default(),
-        })
-    }
-
-    /// Takes the next sample; `on_row` gets every row that is ready (none during the warm-up,
-    /// then the held-back ones and one per accepted sample). An error of `on_row` stops and
-    /// is returned.
-    pub fn push(&mut self, s: Sample, on_row: &mut dyn FnMut(Row) -> Result<()>) -> Result<()> {
-        if self.runner.is_none() {
-            self.warmup.push(s);
-            if self.warmup.len() >= WARMUP_SAMPLES {
-                self.start(on_row)?;
-            }
-            return Ok(());
-        }
-        self.sample(s, on_row)
-    }
-
-    /// Ends the stream (a stream shorter than the warm-up runs with the intervals it has) and
-    /// returns the rejected samples and the gaps.
-    pub fn finish(
-        mut self,
-        on_row: &mut dyn FnMut(Row) -> Result<()>,
-    ) -> Result<EstimationSummary> {
-        if self.runner.is_none() {
-            self.start(on_row)?;
-        }
-        let gaps = self.runner.as_ref().map_or(0, |r| match &r.step {
-            Some(st) => st.gaps,
-            None => r.bank.reinit_count(),
-        });
-        Ok(EstimationSummary {
-            rejected: self.rejected,
-            gaps,
-        })
-    }
-
-    /// Builds the bank for the held-back samples' period and runs them.
-    fn start(&mut self, on_row: &mut dyn FnMut(Row) -> Result<()>) -> Result<()> {
-        let mut cfg = self.opts.bank_config_for(&self.warmup);
-        let noise = NoiseGen::new(self.opts.noise)?;
-        let step = if self.opts.noise_at == NoiseAt::Step {
+impl HostBank {
+    /// The bank of `axis` for the options `opts` and the warm-up's configuration `cfg`.
+    fn new(
+        axis: Axis,
+        opts: &EstimateOptions,
+        cfg: &BankConfig,
+    ) -> std::result::Result<Self, String> {
+        let mut cfg = *cfg;
+        let noise = NoiseGen::new(opts.noise, axis).map_err(|e| e.to_string())?;
+        let step = if opts.noise_at == NoiseAt::Step {
             // The packet-level gap rule (the bank itself sees one sample per step).
             let gap_us = (f64::from(cfg.max_gap_s()) * 1e6).round() as u64;
             // The bank sees one sample per step: closed-form maps and Kalman gains for that
             // period.
-            cfg.sample_period_s = self.opts.step_s;
+            cfg.sample_period_s = opts.step_s;
             Some(StepState {
-                h_us: (f64::from(self.opts.step_s) * 1e6).round().max(1.0) as u64,
+                h_us: (f64::from(opts.step_s) * 1e6).round().max(1.0) as u64,
                 gap_us,
                 gaps: 0,
-                unwrap: DegUnwrapper::default(),
+                unwrap: axis.wraps().then(DegUnwrapper::default),
                 prev: None,
             })
         } else {
             None
         };
-        self.runner = Some(Runner {
-            bank: Bank::new(&cfg, self.opts.fixed)?,
+        Ok(HostBank {
+            bank: Bank::new(axis, &cfg, opts.fixed)?,
             noise,
             step,
-        });
-        let held = std::mem::take(&mut self.warmup);
-        for s in held {
-            self.sample(s, on_row)?;
-        }
-        Ok(())
+        })
     }
+}
 
-    /// The per-sample step of both noise modes (the bank is running).
-    fn sample(&mut self, s: Sample, on_row: &mut dyn FnMut(Row) -> Result<()>) -> Result<()> {
-        let Some(r) = self.runner.as_mut() else {
-            return Ok(());
-        };
-        let out = match r.step.as_mut() {
+impl AxisBank for HostBank {
+    /// The per-sample step of both noise modes.
+    fn step(&mut self, s: &Sample, angle_deg: f32) -> std::result::Result<BankOutput, SampleError> {
+        let r = self;
+        match r.step.as_mut() {
             None => {
                 if s.new_epoch {
                     r.bank.new_epoch();
                 }
-                let y = r.noise.add(f64::from(s.yaw_deg));
+                let y = r.noise.add(f64::from(angle_deg));
                 r.bank.update(s.t_us, y)
             }
             Some(st) => {
-                let y = st.unwrap.push(s.yaw_deg);
+                let y = match st.unwrap.as_mut() {
+                    Some(u) => u.push(angle_deg),
+                    None => angle_deg,
+                };
                 let prev = st.prev.replace((s.t_us, y));
                 match prev {
                     None => r.bank.update(s.t_us, r.noise.add(f64::from(y))),
@@ -893,54 +831,138 @@ impl Estimation {
                     Some(_) => Err(SampleError::NonIncreasingTime),
                 }
             }
-        };
-        match out {
-            Ok(out) => on_row(Row {
-                t_us: s.t_us,
-                yaw_rate: s.rate_deg_s,
-                out,
-            }),
-            Err(e) => {
-                self.rejected.count(e);
-                Ok(())
-            }
+        }
+    }
+
+    fn gaps(&self) -> u32 {
+        match &self.step {
+            Some(st) => st.gaps,
+            None => self.bank.reinit_count(),
         }
     }
 }
 
-/// The CSV header shared with the firmware.
-pub const CSV_HEADER: &str = estimators::csv::HEADER;
+/// The host's bank constructor (captures the options).
+type BuildFn = Box<dyn FnMut(Axis, &BankConfig) -> std::result::Result<HostBank, String>>;
 
-/// Writes one CSV line of `r`, formatted by `estimators::csv` (`line` is scratch space).
+fn build_fn(opts: &EstimateOptions) -> BuildFn {
+    let opts = opts.clone();
+    Box::new(move |axis, cfg| HostBank::new(axis, &opts, cfg))
+}
+
+/// `nav440 estimate`'s pipeline: `nav440_pipeline::Pipeline` with the host's banks.
+type HostPipeline = Pipeline<HostBank, String, BuildFn>;
+
+/// `nav440 estimate` on a stream of samples (`nav440_pipeline::Estimation`, the firmware's
+/// back end, with the host's banks): push samples one by one, get rows as they come. The
+/// nominal period is set from the first [`WARMUP_SAMPLES`] samples, so those are held back
+/// until it is known; every later sample gives its row at once. Memory is constant.
+pub struct Estimation {
+    inner: nav440_pipeline::Estimation<HostBank, String, BuildFn>,
+}
+
+impl std::fmt::Debug for Estimation {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.inner.fmt(f)
+    }
+}
+
+/// Runs `f` with a row callback for the pipeline that forwards to `on_row` until its first
+/// error, which is returned.
+fn forward_rows<T>(
+    on_row: &mut dyn FnMut(Row) -> Result<()>,
+    f: impl FnOnce(&mut dyn FnMut(&Row)) -> std::result::Result<T, String>,
+) -> Result<T> {
+    let mut first_err = None;
+    let res = f(&mut |r: &Row| {
+        if first_err.is_none() {
+            if let Err(e) = on_row(*r) {
+                first_err = Some(e);
+            }
+        }
+    });
+    if let Some(e) = first_err {
+        return Err(e);
+    }
+    res.map_err(Error::Usage)
+}
+
+impl Estimation {
+    /// An estimation with `opts` (the noise variance is checked here; the bank configuration
+    /// once the period is known).
+    pub fn new(opts: &EstimateOptions) -> Result<Self> {
+        NoiseGen::new(opts.noise, Axis::Yaw)?;
+        Ok(Estimation {
+            inner: nav440_pipeline::Estimation::new(opts.axes, opts.bank_config(), build_fn(opts)),
+        })
+    }
+
+    /// Takes the next sample; `on_row` gets every row that is ready (none during the warm-up,
+    /// then the held-back ones and one per accepted sample). An error of `on_row` stops and
+    /// is returned.
+    pub fn push(&mut self, s: Sample, on_row: &mut dyn FnMut(Row) -> Result<()>) -> Result<()> {
+        forward_rows(on_row, |emit| self.inner.push(s, emit))
+    }
+
+    /// Ends the stream (a stream shorter than the warm-up runs with the intervals it has) and
+    /// returns the rejected samples and the gaps.
+    pub fn finish(
+        mut self,
+        on_row: &mut dyn FnMut(Row) -> Result<()>,
+    ) -> Result<EstimationSummary> {
+        forward_rows(on_row, |emit| self.inner.finish(emit))?;
+        let c = self.inner.counters();
+        Ok(EstimationSummary {
+            rejected: c.rejected,
+            gaps: c.gaps,
+        })
+    }
+}
+
+/// The CSV header of yaw alone (`nav440 estimate`'s default), shared with the firmware.
+pub const CSV_HEADER: &str = nav440_pipeline::csv::HEADER;
+
+/// The CSV header line of `axes` (see `nav440_pipeline::csv`).
+pub fn csv_header(axes: Axes) -> String {
+    let mut s = String::new();
+    // Writing into a String cannot fail.
+    let _ = nav440_pipeline::csv::write_header(&mut s, axes);
+    s
+}
+
+/// Writes one CSV line of `r` for `axes`, formatted by `nav440_pipeline::csv` (`line` is
+/// scratch space).
 pub fn write_row<W: std::io::Write + ?Sized>(
     w: &mut W,
     r: &Row,
+    axes: Axes,
     line: &mut String,
 ) -> std::io::Result<()> {
     line.clear();
-    estimators::csv::write_row(line, r.t_us, r.yaw_rate, &r.out)
+    nav440_pipeline::csv::write_row(line, r, axes)
         .map_err(|_| std::io::Error::other("formatting error"))?;
-    w.write_all(line.as_bytes())?;
-    if !line.ends_with('\n') {
-        w.write_all(b"\n")?;
-    }
-    Ok(())
+    line.push('\n');
+    w.write_all(line.as_bytes())
 }
 
-/// Writes the header and one line per row, formatted by `estimators::csv` (identical text to
-/// the firmware's for identical f32 values).
-pub fn write_csv<W: std::io::Write + ?Sized>(rows: &[Row], w: &mut W) -> std::io::Result<()> {
-    writeln!(w, "{CSV_HEADER}")?;
+/// Writes the header and one line per row, formatted by `nav440_pipeline::csv` (identical
+/// text to the firmware's for identical f32 values).
+pub fn write_csv<W: std::io::Write + ?Sized>(
+    rows: &[Row],
+    axes: Axes,
+    w: &mut W,
+) -> std::io::Result<()> {
+    writeln!(w, "{}", csv_header(axes))?;
     let mut line = String::new();
     for r in rows {
-        write_row(w, r, &mut line)?;
+        write_row(w, r, axes, &mut line)?;
     }
     Ok(())
 }
 
-/// The whole `nav440 estimate` pipeline on a byte stream: parse, extract yaw samples, run the
-/// bank, format the CSV (header included). Returns the CSV text and the number of samples the
-/// bank rejected. This is what the firmware's equivalence test compares its output against.
+/// The whole `nav440 estimate` pipeline on a byte stream: parse, extract samples, run the
+/// banks, format the CSV (header included). Returns the CSV text and the number of samples the
+/// banks rejected. This is what the firmware's equivalence test compares its output against.
 pub fn estimate_csv(bytes: &[u8], opts: &EstimateOptions) -> Result<(String, usize)> {
     let mut out = Vec::new();
     let report = estimate_stream(bytes, opts, &mut out)?;
@@ -951,10 +973,11 @@ pub fn estimate_csv(bytes: &[u8], opts: &EstimateOptions) -> Result<(String, usi
 }
 
 /// Streams `nav440 estimate` from `input` (any number of chunks, e.g. a [`CaptureReader`]'s) to
-/// `w`: the header and each row are written as soon as they are known (after the warm-up of
-/// [`Estimation`]); `w` is flushed after every chunk. Memory is constant.
+/// `w` through `nav440_pipeline::Pipeline` (the firmware's pipeline): the header and each row
+/// are written as soon as they are known (after the warm-up); `w` is flushed after every
+/// chunk. Memory is constant.
 ///
-/// Errors: [`Error::NotNav440`] (no frame / no yaw packet; nothing is written then),
+/// Errors: [`Error::NotNav440`] (no frame / no attitude packet; nothing is written then),
 /// [`Error::Usage`] (estimator configuration), [`Error::Output`] (writing failed; a closed pipe
 /// is not an error: the stream stops quietly).
 pub fn estimate_stream<'a, W: std::io::Write + ?Sized>(
@@ -962,36 +985,32 @@ pub fn estimate_stream<'a, W: std::io::Write + ?Sized>(
     opts: &EstimateOptions,
     w: &mut W,
 ) -> Result<StreamReport> {
-    let mut reader = SampleReader::new();
-    let mut est = Estimation::new(opts)?;
-    let mut sink = CsvSink::new(w);
+    NoiseGen::new(opts.noise, Axis::Yaw)?;
+    let mut pipe: HostPipeline = Pipeline::new(opts.axes, opts.bank_config(), build_fn(opts));
+    let mut sink = CsvSink::new(w, opts.axes);
     input.chunks(&mut |chunk| {
-        let mut res = Ok(());
-        reader.feed(chunk, |s| {
-            if res.is_ok() {
-                res = est.push(s, &mut |r| sink.row(&r));
-            }
-        });
-        res?;
+        let res = pipe.feed(chunk, &mut |r| sink.row(r));
+        sink.take_error()?;
+        res.map_err(Error::Usage)?;
         sink.flush()?;
         Ok(!sink.closed)
     })?;
     if sink.closed {
         return Ok(StreamReport::default());
     }
-    let mut res = Ok(());
-    reader.finish(|s| {
-        if res.is_ok() {
-            res = est.push(s, &mut |r| sink.row(&r));
-        }
-    });
-    res?;
-    reader.check_nonempty()?;
-    let summary = est.finish(&mut |r| sink.row(&r))?;
+    let res = pipe.finish(&mut |r| sink.row(r));
+    sink.take_error()?;
+    check_front(pipe.front())?;
+    res.map_err(Error::Usage)?;
     sink.end()?;
+    let c = pipe.estimation().counters();
     Ok(StreamReport {
-        summary,
-        faults: reader.faults(),
+        summary: EstimationSummary {
+            rejected: c.rejected,
+            gaps: c.gaps,
+        },
+        faults: *pipe.front().time_faults(),
+        bit: pipe.front().counters().bit,
     })
 }
 
@@ -1040,20 +1059,25 @@ pub fn output_result(r: std::io::Result<()>, closed: &mut bool) -> Result<()> {
     }
 }
 
-/// Writes the estimate CSV as rows come: the header before the first row (or at the end).
+/// Writes the estimate CSV as rows come: the header before the first row (or at the end). A
+/// write error is kept (and later rows dropped) until [`CsvSink::take_error`].
 struct CsvSink<'w, W: std::io::Write + ?Sized> {
     w: &'w mut W,
+    axes: Axes,
     header: bool,
     closed: bool,
+    error: Option<Error>,
     line: String,
 }
 
 impl<'w, W: std::io::Write + ?Sized> CsvSink<'w, W> {
-    fn new(w: &'w mut W) -> Self {
+    fn new(w: &'w mut W, axes: Axes) -> Self {
         CsvSink {
             w,
+            axes,
             header: false,
             closed: false,
+            error: None,
             line: String::new(),
         }
     }
@@ -1065,19 +1089,31 @@ impl<'w, W: std::io::Write + ?Sized> CsvSink<'w, W> {
     fn head(&mut self) -> Result<()> {
         if !self.header && !self.closed {
             self.header = true;
-            let r = writeln!(self.w, "{CSV_HEADER}");
+            let r = writeln!(self.w, "{}", csv_header(self.axes));
             self.io(r)?;
         }
         Ok(())
     }
 
-    fn row(&mut self, r: &Row) -> Result<()> {
-        self.head()?;
-        if self.closed {
-            return Ok(());
+    /// Writes a row (nothing after an error or a closed pipe).
+    fn row(&mut self, r: &Row) {
+        if self.error.is_some() || self.closed {
+            return;
         }
-        let res = write_row(self.w, r, &mut self.line);
-        self.io(res)
+        let res = self.head().and_then(|()| {
+            if self.closed {
+                return Ok(());
+            }
+            let res = write_row(self.w, r, self.axes, &mut self.line);
+            self.io(res)
+        });
+        if let Err(e) = res {
+            self.error = Some(e);
+        }
+    }
+
+    fn take_error(&mut self) -> Result<()> {
+        self.error.take().map_or(Ok(()), Err)
     }
 
     fn flush(&mut self) -> Result<()> {

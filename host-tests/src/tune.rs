@@ -394,16 +394,22 @@ pub fn tune_with(
     let seeds = spec.seeds.max(1);
     let noise_var = spec.noise_var;
     let opts = &opts.paper_law();
+    let axis = opts.axis();
     let ys = (1..=seeds)
         .map(|seed| {
-            let y = replay::noisy_yaw(
+            let y = replay::noisy_angle(
                 samples,
+                axis,
                 Some(Noise {
                     var: noise_var,
                     seed,
                 }),
             )?;
-            Ok(replay::unwrap_deg(&y))
+            Ok(if axis.wraps() {
+                replay::unwrap_deg(&y)
+            } else {
+                y
+            })
         })
         .collect::<Result<Vec<_>>>()?;
     let holds = if spec.holds.is_empty() {
@@ -414,7 +420,11 @@ pub fn tune_with(
     let hold_before = opts.hold;
     let base_before = opts.bank_config_for(samples);
     let paper = GainsFile::from_bank(&base_before);
-    let vel_ref: Vec<f32> = samples.iter().map(|s| s.rate_deg_s).collect();
+    // The Euler-kinematics rate; NaN (left out of every MSE) near gimbal lock.
+    let vel_ref: Vec<f32> = samples
+        .iter()
+        .map(|s| s.reference(axis).unwrap_or(f32::NAN))
+        .collect();
     let mut runs = Vec::new();
     // One acceleration reference for every hold: the AVE on the rate with the options' hold
     // (the paper's protocol), so that the holds are compared on the same target.
@@ -486,7 +496,7 @@ pub fn tune_with(
             let (rows, _) = replay::estimate(samples, &o)?;
             let from = (test.0 * 1e6).round() as u64;
             let rows: Vec<_> = rows.into_iter().filter(|r| r.t_us >= from).collect();
-            let (vv, aa) = row_mse(&rows, samples, &acc_ref, test.1);
+            let (vv, aa) = row_mse(axis, &rows, samples, &acc_ref, test.1);
             for i in 0..7 {
                 v[i] += vv[i] / seeds as f64;
                 a[i] += aa[i] / seeds as f64;

@@ -1,12 +1,12 @@
 //! The nominal sample period of the bank (`BankConfig::sample_period_s`) is decided by one
-//! causal rule, `estimators::period`, in `nav440 estimate` and in the firmware: the first
+//! causal rule, `nav440_pipeline::period`, in `nav440 estimate` and in the firmware: the first
 //! `WARMUP_SAMPLES` samples, never the rest of the capture. A capture whose packet rate changes
 //! after its first 16 packets (20 packets at 100 Hz, then 50 at 50 Hz) shows the host replay
 //! builds exactly the bank the firmware builds after its warm-up.
 
-use estimators::period::{PeriodEstimator, WARMUP_SAMPLES};
 use estimators::{BankConfig, YawBank};
-use host_tests::replay::{self, EstimateOptions};
+use host_tests::replay::{self, Axis, EstimateOptions};
+use nav440_pipeline::period::{PeriodEstimator, WARMUP_SAMPLES};
 use nav440_proto::A2Fields;
 
 /// Packet times, ms from the first: 20 at 10 ms, then 50 at 20 ms.
@@ -76,7 +76,10 @@ fn rate_change_after_the_warm_up_keeps_the_warm_up_period() {
     let mut bank = YawBank::<f32>::new(&firmware).unwrap();
     for (row, s) in rows.iter().zip(&samples) {
         assert_eq!(row.t_us, s.t_us);
-        assert_eq!(row.out, bank.update(s.t_us, s.yaw_deg).unwrap());
+        assert_eq!(
+            row.axis(Axis::Yaw).unwrap().out,
+            bank.update(s.t_us, s.angle(Axis::Yaw)).unwrap()
+        );
     }
     // ... which matters: a bank built for the whole capture's 20 ms gives other rows.
     let mut slow = YawBank::<f32>::new(&BankConfig {
@@ -84,10 +87,9 @@ fn rate_change_after_the_warm_up_keeps_the_warm_up_period() {
         ..firmware
     })
     .unwrap();
-    let differs = samples
-        .iter()
-        .zip(&rows)
-        .any(|(s, row)| slow.update(s.t_us, s.yaw_deg).unwrap() != row.out);
+    let differs = samples.iter().zip(&rows).any(|(s, row)| {
+        slow.update(s.t_us, s.angle(Axis::Yaw)).unwrap() != row.axis(Axis::Yaw).unwrap().out
+    });
     assert!(differs);
 
     // The CSV text: header plus one line per packet.

@@ -6,7 +6,7 @@
 
 use host_tests::corrupt::Corruption;
 use host_tests::motion::{Profile, ProfileKind};
-use host_tests::replay::{self, EstimateOptions, Noise};
+use host_tests::replay::{self, Axis, EstimateOptions, Noise};
 use host_tests::synth::{self, PacketKind, SynthConfig};
 use std::path::PathBuf;
 
@@ -156,11 +156,11 @@ fn samples_match_the_motion_within_one_lsb() {
             assert_eq!(s.t_us, k as u64 * period_us, "{name} sample {k}");
             let m = motion.at(k as f64 / f64::from(rate));
             let wrapped = (m.yaw_deg + 180.0).rem_euclid(360.0) - 180.0;
-            let mut d = (f64::from(s.yaw_deg) - wrapped).abs();
+            let mut d = (f64::from(s.angle(Axis::Yaw)) - wrapped).abs();
             d = d.min(360.0 - d);
             assert!(d <= ANGLE_LSB / 2.0 + 1e-4, "{name} yaw at sample {k}: {d}");
             assert!(
-                (f64::from(s.rate_deg_s) - m.rate_deg_s).abs() <= RATE_LSB / 2.0 + 1e-4,
+                (f64::from(s.rates_deg_s[2]) - m.rate_deg_s).abs() <= RATE_LSB / 2.0 + 1e-4,
                 "{name} rate {k}"
             );
         }
@@ -178,7 +178,7 @@ fn spin_is_unwrapped_through_many_turns() {
     for r in &rows {
         let m = motion.at(r.t_us as f64 * 1e-6);
         assert!(
-            (f64::from(r.out.yaw_unwrapped_deg) - m.yaw_deg).abs() < 0.01,
+            (f64::from(r.axis(Axis::Yaw).unwrap().out.yaw_unwrapped_deg) - m.yaw_deg).abs() < 0.01,
             "t={}",
             r.t_us
         );
@@ -210,14 +210,16 @@ fn spin_is_unwrapped_through_many_turns() {
     for i in [0, 1, 2, 3, 4, 6] {
         let want = rate * gains[i];
         assert!(
-            (f64::from(last.out[estimators::Channel::VELOCITY[i]]) - want).abs() < 5.0,
+            (f64::from(last.axis(Axis::Yaw).unwrap().out[estimators::Channel::VELOCITY[i]]) - want)
+                .abs()
+                < 5.0,
             "estimator {i}: {} vs {want}",
-            last.out[estimators::Channel::VELOCITY[i]]
+            last.axis(Axis::Yaw).unwrap().out[estimators::Channel::VELOCITY[i]]
         );
     }
     assert!(rows
         .iter()
-        .all(|r| r.out[estimators::Channel::VELOCITY[5]].abs() < 1000.0));
+        .all(|r| r.axis(Axis::Yaw).unwrap().out[estimators::Channel::VELOCITY[5]].abs() < 1000.0));
 }
 
 /// Velocity vs the analytic rate of sin5 (section 3.2: rate = (180/pi) sin 5t deg/s,
@@ -240,14 +242,17 @@ fn sin5_velocity_follows_the_analytic_rate() {
     for r in rows.iter().filter(|r| r.t_us >= 3_000_000) {
         let rate = motion.at(r.t_us as f64 * 1e-6).rate_deg_s;
         for (i, b) in bounds {
-            let e = (f64::from(r.out[estimators::Channel::VELOCITY[i]]) - rate).abs();
+            let e = (f64::from(r.axis(Axis::Yaw).unwrap().out[estimators::Channel::VELOCITY[i]])
+                - rate)
+                .abs();
             assert!(e < b, "estimator {i} at t={} us: error {e} >= {b}", r.t_us);
         }
     }
     // And the same run is an honest one: the estimates are not a copy of the reference.
-    assert!(rows
-        .iter()
-        .any(|r| r.out[estimators::Channel::VELOCITY[0]] != r.yaw_rate));
+    assert!(rows.iter().any(
+        |r| r.axis(Axis::Yaw).unwrap().out[estimators::Channel::VELOCITY[0]]
+            != r.axis(Axis::Yaw).unwrap().reference_deg_s.unwrap()
+    ));
 }
 
 #[test]
@@ -270,7 +275,8 @@ fn fixed_point_bank_matches_f32_bank() {
         // ED is left out: its sgn terms switch on rounding-level differences (chattering).
         for i in [0, 1, 2, 3, 4, 6] {
             assert!(
-                (a.out[estimators::Channel::VELOCITY[i]] - b.out[estimators::Channel::VELOCITY[i]])
+                (a.axis(Axis::Yaw).unwrap().out[estimators::Channel::VELOCITY[i]]
+                    - b.axis(Axis::Yaw).unwrap().out[estimators::Channel::VELOCITY[i]])
                     .abs()
                     < 0.05,
                 "vel {i} at {}",
@@ -324,7 +330,10 @@ fn corrupted_capture_recovers_exactly_the_intact_frames() {
     let (rows, _) = replay::estimate(&samples, &EstimateOptions::default()).unwrap();
     for r in &rows {
         assert!(
-            (r.out[estimators::Channel::VELOCITY[0]] - r.yaw_rate).abs() < 40.0,
+            (r.axis(Axis::Yaw).unwrap().out[estimators::Channel::VELOCITY[0]]
+                - r.axis(Axis::Yaw).unwrap().reference_deg_s.unwrap())
+            .abs()
+                < 40.0,
             "AVE spike at {} us",
             r.t_us
         );
@@ -401,15 +410,16 @@ fn linear_hold_equals_explicit_interpolation_on_the_step_grid() {
         assert_eq!(a.t_us, b.t_us);
         for i in 0..5 {
             assert!(
-                (a.out[estimators::Channel::VELOCITY[i]] - b.out[estimators::Channel::VELOCITY[i]])
+                (a.axis(Axis::Yaw).unwrap().out[estimators::Channel::VELOCITY[i]]
+                    - b.axis(Axis::Yaw).unwrap().out[estimators::Channel::VELOCITY[i]])
                     .abs()
                     < 0.02,
                 "vel {i} at {}",
                 a.t_us
             );
             assert!(
-                (a.out[estimators::Channel::ACCELERATION[i]]
-                    - b.out[estimators::Channel::ACCELERATION[i]])
+                (a.axis(Axis::Yaw).unwrap().out[estimators::Channel::ACCELERATION[i]]
+                    - b.axis(Axis::Yaw).unwrap().out[estimators::Channel::ACCELERATION[i]])
                     .abs()
                     < 0.5,
                 "acc {i} at {}",
@@ -423,7 +433,13 @@ fn linear_hold_equals_explicit_interpolation_on_the_step_grid() {
         let r: Vec<f64> = rows
             .iter()
             .filter(|r| r.t_us >= 2_000_000)
-            .map(|r| f64::from(r.out[estimators::Channel::VELOCITY[0]] - r.yaw_rate).powi(2))
+            .map(|r| {
+                f64::from(
+                    r.axis(Axis::Yaw).unwrap().out[estimators::Channel::VELOCITY[0]]
+                        - r.axis(Axis::Yaw).unwrap().reference_deg_s.unwrap(),
+                )
+                .powi(2)
+            })
             .collect();
         r.iter().sum::<f64>() / r.len() as f64
     };

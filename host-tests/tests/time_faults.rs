@@ -3,7 +3,7 @@
 //! `nav440 estimate` and, through `nav440_proto::TimeBase`, the firmware. Expected values come
 //! from the stamps written into the capture and the closed-form motion.
 
-use host_tests::replay::{self, EstimateOptions};
+use host_tests::replay::{self, Axis, EstimateOptions};
 use nav440_proto::{A0Fields, A2Fields};
 
 const YAW_LSB: f64 = 360.0 / 65536.0;
@@ -78,12 +78,15 @@ fn stitched_recordings_do_not_spike() {
         assert_eq!(est.rows.len(), 2000);
         let bound = 2.0 * 240.0 + 49.0;
         for r in &est.rows {
-            for v in r.out.velocities() {
+            for v in r.axis(Axis::Yaw).unwrap().out.velocities() {
                 assert!(v.abs() <= bound, "t {} s: {v} deg/s", r.t_us as f64 * 1e-6);
             }
         }
         // The new epoch re-initialised the bank: its first row reports 0.
-        assert_eq!(est.rows[1000].out.velocities(), [0.0; 7]);
+        assert_eq!(
+            est.rows[1000].axis(Axis::Yaw).unwrap().out.velocities(),
+            [0.0; 7]
+        );
     });
     let w = replay::fault_warning(&faults, 0).unwrap();
     assert!(w.contains("backward_jumps=1"), "{w}");
@@ -144,7 +147,7 @@ fn polled_a0_between_a2_loses_no_a2_sample() {
             reader.yaw_packets(),
             reader.samples() + u64::from(faults.discarded() + faults.duplicates)
         );
-        let a2_samples: Vec<_> = samples.iter().filter(|s| s.rate_deg_s != 0.0).collect();
+        let a2_samples: Vec<_> = samples.iter().filter(|s| s.rates_deg_s[2] != 0.0).collect();
         assert_eq!(a2_samples.len(), 2000, "every {every}, A0 first {a0_first}");
         let n_a0 = n_a0(every);
         if a0_first {
@@ -176,7 +179,14 @@ fn two_hertz_capture_gives_estimates() {
     for_both(|opts| {
         let est = replay::estimate_report(&samples, opts).unwrap();
         assert_eq!(est.gaps, 0);
-        let last = est.rows.last().unwrap().out.velocities();
+        let last = est
+            .rows
+            .last()
+            .unwrap()
+            .axis(Axis::Yaw)
+            .unwrap()
+            .out
+            .velocities();
         // AVE, ILO1, AD, KF within 2 %; ILO2/ILO3 within their leaky DC gain (0.95, 0.985)
         // and 2 %; ED within its chatter.
         for (i, v) in last.iter().enumerate() {
@@ -254,7 +264,7 @@ fn committed_time_fault_capture() {
         let est = replay::estimate_report(&samples, opts).unwrap();
         assert_eq!((est.rows.len(), est.gaps), (997, 1));
         for r in &est.rows {
-            for v in r.out.velocities() {
+            for v in r.axis(Axis::Yaw).unwrap().out.velocities() {
                 assert!(v.abs() <= 2.0 * 240.0 + 49.0, "{v}");
             }
         }

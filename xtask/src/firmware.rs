@@ -391,11 +391,26 @@ pub fn demo(board: Board, capture: Option<PathBuf>) -> Result<(), String> {
 fn print_estimates(csv: &str) -> Result<(), String> {
     let mut lines = csv.lines();
     let header = lines.next().ok_or("the firmware printed no CSV header")?;
-    let cols: Vec<&str> = header.split(',').collect();
+    let all_cols: Vec<&str> = header.split(',').collect();
+    // The yaw block (`t,yaw,yaw_rate,...` or the `yaw,...` columns of a three-axis CSV).
+    let base = all_cols.iter().position(|c| *c == "yaw").unwrap_or(1);
+    let keep = |i: usize| i == 0 || (base..base + 16).contains(&i);
+    // Shown as in a yaw-only CSV (`ave_v`, not `yaw_ave_v`).
+    let cols: Vec<&str> = all_cols
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| keep(*i))
+        .map(|(_, c)| match c.strip_prefix("yaw_") {
+            Some(rest) if base > 1 && rest != "rate" => rest,
+            _ => *c,
+        })
+        .collect();
     let rows: Vec<Vec<f64>> = lines
         .map(|l| {
             l.split(',')
-                .map(|v| v.parse().unwrap_or(f64::NAN))
+                .enumerate()
+                .filter(|(i, _)| keep(*i))
+                .map(|(_, v)| v.parse().unwrap_or(f64::NAN))
                 .collect()
         })
         .collect();
@@ -411,11 +426,11 @@ fn print_estimates(csv: &str) -> Result<(), String> {
             next_t = t.floor() + 1.0;
         }
     }
-    // Velocity estimates against the measured body rate (column yaw_rate).
+    // Velocity estimates against the reference rate (column yaw_rate: the Euler yaw rate).
     if rows.len() > 1 && cols.len() >= 10 {
         println!();
         println!(
-            "velocity RMS difference to the gyro rate over {} rows (deg/s):",
+            "velocity RMS difference to the reference yaw rate over {} rows (deg/s):",
             rows.len()
         );
         let mut parts = Vec::new();
@@ -709,6 +724,10 @@ pub fn size() -> Result<(), String> {
     Ok(())
 }
 
+/// The `nav440 estimate --axis` value that prints the firmware's CSV: the firmware estimates
+/// the axes of `firmware_example::pipeline::AXES` (all three; keep the two in step).
+const FIRMWARE_AXIS: &str = "all";
+
 /// `nav440 estimate FILE [extra]` on the host; its CSV.
 fn host_estimate(file: &Path, extra: &[&str]) -> Result<String, String> {
     let f = file.display().to_string();
@@ -784,7 +803,7 @@ fn equivalence(
     elf: &Path,
     capture: &Path,
     host_extra: &[&str],
-) -> Result<(), String> {
+) -> Result<Vec<(String, u64)>, String> {
     let bytes = read_file(capture)?;
     let fw = run_capture(board, elf, &bytes, Output::Capture)?;
     let host = host_estimate(capture, host_extra)?;
@@ -802,7 +821,7 @@ fn equivalence(
             if counter(&c, "uart_overruns").unwrap_or(0) != 0 {
                 return Err("UART overruns reported under QEMU".into());
             }
-            Ok(())
+            Ok(c)
         }
         Err(diff) => {
             let detail = max_abs_diff(&fw.stdout, &host)
@@ -851,6 +870,52 @@ fn rate_change_capture() -> Result<PathBuf, String> {
     let out = dir.join("ci-rate-change.bin");
     std::fs::write(&out, &bytes).map_err(|e| format!("cannot write {}: {e}", out.display()))?;
     Ok(out)
+}
+
+/// Packets (frame indices) of the bundled A2 capture whose BIT word becomes 0x0009
+/// (masterFail + softwareError) in the BIT-failure capture of `ci-firmware`.
+const BIT_FAILED_FRAMES: std::ops::RangeInclusive<usize> = 1000..=1100;
+
+/// Writes `ci-bit-fail.bin`: `bundled` (an A2 capture) with the BIT word of the frames
+/// [`BIT_FAILED_FRAMES`] set to 0x0009, re-encoded (valid CRC). The firmware must drop and
+/// count those samples (`bit_failed=101`) and print the same CSV as `nav440 estimate`.
+fn bit_fail_capture(bundled: &Path) -> Result<PathBuf, String> {
+    use nav440_proto::{encode_frame, PacketType, Parser, A2};
+    let bytes = read_file(bundled)?;
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut parser = Parser::new();
+    let (mut k, mut failed) = (0usize, 0usize);
+    let mut err = None;
+    parser.feed(&bytes, |f| {
+        let mut payload = f.payload.to_vec();
+        if BIT_FAILED_FRAMES.contains(&k) && f.packet_type == PacketType::A2 {
+            if let Ok(view) = A2::new(f.payload) {
+                let mut fields = view.fields();
+                fields.bit = 0x0009;
+                payload = fields.payload().to_vec();
+                failed += 1;
+            }
+        }
+        k += 1;
+        let mut buf = [0u8; 512];
+        match encode_frame(f.packet_type, &payload, &mut buf) {
+            Ok(n) => out.extend_from_slice(buf.get(..n).unwrap_or_default()),
+            Err(e) => err = Some(format!("cannot re-encode frame {k}: {e:?}")),
+        }
+    });
+    if let Some(e) = err {
+        return Err(e);
+    }
+    if failed != BIT_FAILED_FRAMES.clone().count() {
+        return Err(format!(
+            "{} is not an A2 capture of at least {} frames",
+            bundled.display(),
+            BIT_FAILED_FRAMES.end() + 1
+        ));
+    }
+    let path = work_dir()?.join("ci-bit-fail.bin");
+    std::fs::write(&path, &out).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    Ok(path)
 }
 
 /// What a unit run in CI must end with.
@@ -998,9 +1063,9 @@ fn unit_ci(captures: &[PathBuf], short: &Path) -> Result<(), String> {
         let elf = build(board.target, board.features, FW_BIN)?;
         let stm32 = board.features.contains(&STM32_FEATURE);
         let host_extra: &[&str] = if board.target == "thumbv7em-none-eabihf" {
-            &[]
+            &["--axis", FIRMWARE_AXIS]
         } else {
-            &["--fixed"]
+            &["--fixed", "--axis", FIRMWARE_AXIS]
         };
         let mut cases: Vec<UnitCase> = captures
             .iter()
@@ -1232,19 +1297,31 @@ pub fn ci_steps() -> Result<(), String> {
         .map_err(|e| format!("cannot write {}: {e}", short.display()))?;
     // A capture whose packet rate changes after the warm-up: 20 packets at 100 Hz, then 50 at
     // 50 Hz. Host and firmware both take the bank's period from the first 16 samples
-    // (`estimators::period`), so they must still agree byte for byte.
+    // (`nav440_pipeline::period`), so they must still agree byte for byte.
     let rate_change = rate_change_capture()?;
-    // Every bundled capture (all packet types and rates, the week wrap) plus those three.
+    // The bundled capture with 101 packets flagging a BIT failure (masterFail): not estimated,
+    // counted in the firmware's summary (`bit_failed`) and dropped alike by `nav440 estimate`.
+    let bit_fail = bit_fail_capture(&bundled)?;
+    // Every bundled capture (all packet types and rates, the week wrap) plus those four.
     let mut captures = data_captures();
-    captures.extend([corrupted, short, rate_change]);
+    captures.extend([corrupted, short, rate_change, bit_fail.clone()]);
     for (board, elf) in &elfs {
         let host_extra: &[&str] = if board.target == "thumbv7em-none-eabihf" {
-            &[]
+            &["--axis", FIRMWARE_AXIS]
         } else {
-            &["--fixed"]
+            &["--fixed", "--axis", FIRMWARE_AXIS]
         };
         for capture in &captures {
-            equivalence(board, elf, capture, host_extra)?;
+            let c = equivalence(board, elf, capture, host_extra)?;
+            let want = BIT_FAILED_FRAMES.clone().count() as u64;
+            if *capture == bit_fail && counter(&c, "bit_failed") != Some(want) {
+                return Err(format!(
+                    "the firmware on {} reported bit_failed={:?} for {}, expected {want}",
+                    board.name,
+                    counter(&c, "bit_failed"),
+                    capture.display()
+                ));
+            }
         }
     }
     // Input without the length prefix is refused with exit status 1 (never a hang).

@@ -107,6 +107,66 @@ fn per_sample_stepped<E: Estimator<Num>>(c: &Counter, overhead: u64, label: &str
     });
 }
 
+/// A2 frame `k` (100 Hz) into `out`: yaw from [`yaw`], roll and pitch proportional to it (so
+/// every axis moves and the Euler reference is not the level case), fixed body rates, a
+/// healthy BIT word. Returns the frame length.
+fn a2_frame(k: u32, out: &mut [u8]) -> usize {
+    let y = yaw(k);
+    let wrapped = if y > 180.0 { y - 360.0 } else { y };
+    let counts = |deg: f32| (deg * (65536.0 / 360.0)) as i32 as i16;
+    let payload = nav440_proto::A2Fields {
+        roll: counts(wrapped * 0.5),
+        pitch: counts(wrapped * 0.3),
+        yaw_true: counts(wrapped),
+        rate_x: 100,
+        rate_y: -50,
+        rate_z: 200,
+        time_itow: 1000 + 10 * k,
+        bit: 0x0002,
+        ..Default::default()
+    }
+    .payload();
+    encode_frame(PacketType::A2, &payload, out).unwrap_or_else(|_| fail("an A2 frame"))
+}
+
+/// Instructions per A2 frame through the firmware's whole pipeline (`pipeline::new()`:
+/// parser, attitude and BIT, clock, one bank per axis of `pipeline::AXES` with the Euler
+/// reference, CSV row formatting), after the period warm-up and [`WARMUP`] more frames.
+fn pipeline_per_frame(c: &Counter, overhead: u64) {
+    let Ok(mut pipe) = firmware_example::pipeline::new() else {
+        fail("the pipeline")
+    };
+    let warm = nav440_pipeline::period::WARMUP_SAMPLES as u32 + WARMUP;
+    let mut total = 0u64;
+    let mut rows = 0u32;
+    for k in 0..(warm + SAMPLES) {
+        let mut buf = [0u8; 64];
+        let n = a2_frame(k, &mut buf);
+        let frame = buf.get(..n).unwrap_or_default();
+        let (m, res) = c.measure(|| {
+            black_box(&mut pipe).feed_csv(black_box(frame), |row| {
+                black_box(row);
+                rows += 1;
+            })
+        });
+        if res.is_err() {
+            fail("the pipeline run");
+        }
+        if k >= warm {
+            total += m.saturating_sub(overhead);
+        }
+    }
+    if rows < SAMPLES {
+        fail("a row per pipeline frame");
+    }
+    line(
+        "instr",
+        "pipeline, A2 frame: parse+clock+AXES banks+Euler+CSV",
+        total as f32 / SAMPLES as f32,
+        "sample",
+    );
+}
+
 /// Square roots executed (counted by [`Counting`]).
 static SQRTS: AtomicU32 = AtomicU32::new(0);
 
@@ -195,9 +255,12 @@ fn bank_per_sample<S: estimators::SqrtFn<Num>>(
             fail("a bank run without rejected samples")
         };
         // The output stage of the firmware: one CSV row (17 numbers) per sample.
-        let mut row = firmware_example::pipeline::Row::new();
+        let mut row = firmware_example::pipeline::CsvLine::new();
         let (m, res) = c.measure(|| {
-            estimators::csv::write_row(black_box(&mut row), t_us, black_box(y), black_box(&out))
+            let w = black_box(&mut row);
+            nav440_pipeline::csv::write_time(w, t_us).and_then(|()| {
+                nav440_pipeline::csv::write_axis(w, Some(black_box(y)), black_box(&out))
+            })
         });
         if res.is_err() {
             fail("a CSV row");
@@ -476,6 +539,9 @@ fn main() -> ! {
         );
     }
 
+    // The whole pipeline as the firmware runs it (pipeline::AXES: all three axes).
+    pipeline_per_frame(&c, overhead);
+
     // Parser per byte: a stream of A2 frames (the capture's packet type), and the CRC alone.
     let mut stream = [0u8; 37 * 64];
     let mut len = 0;
@@ -587,6 +653,10 @@ fn main() -> ! {
     ram(
         "ProductBank (one axis)",
         core::mem::size_of::<ProductBank<Num, BankSqrt>>(),
+    );
+    ram(
+        "Pipeline (firmware: parser, clock, banks of pipeline::AXES)",
+        core::mem::size_of::<firmware_example::pipeline::Pipeline>(),
     );
     ram("Parser", core::mem::size_of::<Parser>());
     ram("ItowClock", core::mem::size_of::<ItowClock>());

@@ -1,7 +1,7 @@
-//! The nominal sample period rule (`estimators::period`), against intervals sorted by hand.
+//! The nominal sample period rule (`nav440_pipeline::period`), against intervals sorted by hand.
 
-use estimators::period::{PeriodEstimator, WARMUP_SAMPLES};
 use estimators::BankConfig;
+use nav440_pipeline::period::{PeriodEstimator, WARMUP_SAMPLES};
 
 /// The period the rule must give for an upper-median interval of `us` microseconds, s.
 fn secs(us: u32) -> f32 {

@@ -1,6 +1,6 @@
 //! The nominal sample period of a sample stream, decided causally from its first samples.
 //!
-//! A [`YawBank`](crate::YawBank) precomputes its closed-form multi-step maps and its Kalman
+//! An `estimators::YawBank` precomputes its closed-form multi-step maps and its Kalman
 //! gains for one nominal sample period ([`BankConfig::sample_period_s`]). This module is the
 //! one rule that sets it, shared by the host replay (`nav440 estimate`) and the firmware so
 //! that both build the same bank by construction:
@@ -21,7 +21,7 @@
 //! warm-up rate).
 //!
 //! ```
-//! use estimators::period::{PeriodEstimator, WARMUP_SAMPLES};
+//! use nav440_pipeline::period::{PeriodEstimator, WARMUP_SAMPLES};
 //! use estimators::BankConfig;
 //!
 //! // 20 packets at 50 Hz (20 ms), then the rate changes: only the first 16 count.
@@ -36,7 +36,7 @@
 //! assert_eq!(PeriodEstimator::from_times([0]).apply(BankConfig::default()).sample_period_s, 0.01);
 //! ```
 
-use crate::BankConfig;
+use estimators::BankConfig;
 
 /// Number of samples whose time stamps decide the nominal period (0.16 s at 100 Hz, 0.8 s at
 /// 20 Hz).
@@ -48,7 +48,6 @@ const INTERVALS: usize = WARMUP_SAMPLES - 1;
 /// Records the time stamps of the first [`WARMUP_SAMPLES`] samples and gives their nominal
 /// period (see the [module documentation](self)). No heap: 15 intervals of 8 bytes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct PeriodEstimator {
     /// Time of the last recorded sample, us.
     last_us: u64,

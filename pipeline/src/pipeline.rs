@@ -1,0 +1,446 @@
+//! The back end (timed samples -> warm-up/period rule -> one bank per axis -> rows) and the
+//! whole pipeline (front end + back end), as the firmware and `nav440 estimate` run them.
+//!
+//! Nominal sample period: the banks precompute their closed-form maps and Kalman gains for
+//! the packet rate (`BankConfig::sample_period_s`). It is set by [`crate::period`]: the upper
+//! median of the intervals between the first [`WARMUP_SAMPLES`] samples. A streaming device
+//! cannot build the banks before it knows that period, so [`Estimation`] holds back those first
+//! samples, then builds the banks and runs them and all later ones through them; rows are only
+//! delayed by the warm-up (0.16 s at 100 Hz). A stream shorter than the warm-up is decided at
+//! its end ([`Estimation::finish`]) from the intervals it has (none: the configured period).
+//!
+//! Time faults follow `nav440_proto::TimeBase` (see [`crate::Frontend`]): an impossible or
+//! single bad stamp costs its own sample only, a confirmed backward jump starts a new epoch
+//! (the banks re-initialise), GPSITOW samples in a timeITOW stream are ignored; each is
+//! counted. A sample any selected axis's bank rejects (non-finite or out-of-range angle, time
+//! not increasing) yields no row and is counted by reason (the first rejecting axis's).
+
+use crate::period::{PeriodEstimator, WARMUP_SAMPLES};
+use crate::sample::{Frontend, Sample};
+use crate::{Axes, Axis};
+use estimators::{BankConfig, BankOutput, Real, SampleError, SqrtFn, Wrap, YawBank};
+
+/// One axis's estimator bank as the pipeline drives it.
+pub trait AxisBank {
+    /// Runs one sample's angle `angle_deg` (deg; the sample gives the time and the epoch).
+    fn step(&mut self, s: &Sample, angle_deg: f32) -> Result<BankOutput, SampleError>;
+    /// Gaps longer than the gap rule so far, where the bank re-initialised.
+    fn gaps(&self) -> u32;
+}
+
+impl<T: Real, S: SqrtFn<T>> AxisBank for YawBank<T, S> {
+    fn step(&mut self, s: &Sample, angle_deg: f32) -> Result<BankOutput, SampleError> {
+        if s.new_epoch {
+            self.new_epoch();
+        }
+        self.update(s.t_us, angle_deg)
+    }
+
+    fn gaps(&self) -> u32 {
+        self.reinit_count()
+    }
+}
+
+/// The bank of one axis: `YawBank::new(cfg)`, with the +-180 deg unwrapping switched off for
+/// pitch ([`Axis::wraps`]).
+pub fn axis_bank<T: Real, S: SqrtFn<T>>(
+    axis: Axis,
+    cfg: &BankConfig,
+) -> Result<YawBank<T, S>, estimators::ConfigError> {
+    let wrap = if axis.wraps() {
+        Wrap::Deg180
+    } else {
+        Wrap::None
+    };
+    YawBank::new(&BankConfig { wrap, ..*cfg })
+}
+
+/// One axis of a row: the reference rate and the bank's output.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AxisRow {
+    /// The angle's reference rate from the Euler kinematics, deg/s (`None` near gimbal lock,
+    /// see [`crate::euler`]).
+    pub reference_deg_s: Option<f32>,
+    /// Unwrapped angle (deg), velocities (deg/s) and accelerations (deg/s^2).
+    pub out: BankOutput,
+}
+
+/// One output row.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Row {
+    /// Sample time, us since the first sample.
+    pub t_us: u64,
+    /// Roll, pitch, yaw ([`Axis::index`]); `Some` exactly for the selected axes.
+    pub axes: [Option<AxisRow>; 3],
+}
+
+impl Row {
+    /// The row's data for `axis` (`None` if the axis is not estimated).
+    pub fn axis(&self, axis: Axis) -> Option<&AxisRow> {
+        self.axes[axis.index()].as_ref()
+    }
+}
+
+/// Samples the banks refused (they give no row), by reason.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Rejections {
+    /// Time stamp not later than the previous sample's.
+    pub time_not_increasing: u64,
+    /// Angle (with any added noise) beyond `YawBank::MAX_ABS_YAW_DEG`.
+    pub angle_out_of_range: u64,
+    /// Angle (with any added noise) NaN or infinite.
+    pub angle_not_finite: u64,
+}
+
+impl Rejections {
+    /// All rejected samples.
+    pub fn total(&self) -> u64 {
+        self.time_not_increasing
+            .saturating_add(self.angle_out_of_range)
+            .saturating_add(self.angle_not_finite)
+    }
+
+    /// Counts one rejection.
+    pub fn count(&mut self, e: SampleError) {
+        let c = match e {
+            SampleError::NonIncreasingTime => &mut self.time_not_increasing,
+            SampleError::OutOfRange => &mut self.angle_out_of_range,
+            SampleError::NotFinite => &mut self.angle_not_finite,
+        };
+        *c = c.saturating_add(1);
+    }
+}
+
+/// Counters of the back end (saturating). Once the banks run: `samples = rows +
+/// rejected.total()` (plus the firmware's format errors).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counters {
+    /// Samples taken (held warm-up samples included).
+    pub samples: u64,
+    /// Rows emitted.
+    pub rows: u64,
+    /// Samples rejected by a bank.
+    pub rejected: Rejections,
+    /// Gaps longer than the gap rule (the most of any axis's bank).
+    pub gaps: u32,
+}
+
+/// Where the back end is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Phase {
+    /// Collecting the first samples.
+    Warmup,
+    /// Running: one bank per selected axis.
+    Running,
+}
+
+/// The back end: timed samples -> warm-up/period rule -> one bank per selected axis ->
+/// [`Row`]s. `build(axis, cfg)` makes an axis's bank once the period is known (e.g.
+/// [`axis_bank`]); its error is returned by the call that ends the warm-up and by every later
+/// one.
+pub struct Estimation<B, E, F> {
+    axes: Axes,
+    cfg: BankConfig,
+    build: F,
+    phase: Phase,
+    /// The first samples, held until the period is known.
+    held: heapless::Vec<Sample, WARMUP_SAMPLES>,
+    /// One bank per selected axis once running (built in place: no bank-sized temporaries
+    /// beyond the constructor's own result).
+    banks: [Option<B>; 3],
+    /// A bank could not be built for the measured period.
+    failed: Option<E>,
+    counters: Counters,
+}
+
+impl<B, E, F> core::fmt::Debug for Estimation<B, E, F> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Estimation")
+            .field("axes", &self.axes)
+            .field("counters", &self.counters)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<B, E, F> Estimation<B, E, F>
+where
+    B: AxisBank,
+    E: Clone,
+    F: FnMut(Axis, &BankConfig) -> Result<B, E>,
+{
+    /// A back end for `axes` with the configuration `cfg` (its sample period is replaced by the
+    /// measured one) and the bank constructor `build`.
+    pub fn new(axes: Axes, cfg: BankConfig, build: F) -> Self {
+        Self {
+            axes,
+            cfg,
+            build,
+            phase: Phase::Warmup,
+            held: heapless::Vec::new(),
+            banks: [None, None, None],
+            failed: None,
+            counters: Counters::default(),
+        }
+    }
+
+    /// The estimated axes.
+    pub fn axes(&self) -> Axes {
+        self.axes
+    }
+
+    /// Counters so far.
+    pub fn counters(&self) -> &Counters {
+        &self.counters
+    }
+
+    /// The banks, once running (indexed by [`Axis::index`]).
+    pub fn banks(&self) -> Option<&[Option<B>; 3]> {
+        (self.phase == Phase::Running && self.failed.is_none()).then_some(&self.banks)
+    }
+
+    /// Takes the next sample; `emit` gets every row that is ready (none during the warm-up,
+    /// then the held-back ones and one per accepted sample).
+    pub fn push(&mut self, s: Sample, emit: &mut dyn FnMut(&Row)) -> Result<(), E> {
+        if let Some(e) = &self.failed {
+            return Err(e.clone());
+        }
+        self.counters.samples = self.counters.samples.saturating_add(1);
+        match self.phase {
+            Phase::Running => {
+                run_sample(&mut self.banks, self.axes, &mut self.counters, &s, emit);
+                Ok(())
+            }
+            Phase::Warmup => {
+                // Cannot fail: the warm-up ends as soon as the buffer is full.
+                let _ = self.held.push(s);
+                if self.held.is_full() {
+                    self.start(emit)?;
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// End of a finite stream: a stream shorter than the warm-up runs with the intervals it
+    /// has.
+    pub fn finish(&mut self, emit: &mut dyn FnMut(&Row)) -> Result<(), E> {
+        self.start(emit)
+    }
+
+    /// Ends the warm-up: builds the banks for the measured period and runs the held samples
+    /// (nothing if already running).
+    #[inline(never)]
+    fn start(&mut self, emit: &mut dyn FnMut(&Row)) -> Result<(), E> {
+        if let Some(e) = &self.failed {
+            return Err(e.clone());
+        }
+        if self.phase == Phase::Running {
+            return Ok(());
+        }
+        let cfg = PeriodEstimator::from_times(self.held.iter().map(|s| s.t_us)).apply(self.cfg);
+        self.phase = Phase::Running;
+        for axis in self.axes.iter() {
+            match (self.build)(axis, &cfg) {
+                Ok(b) => self.banks[axis.index()] = Some(b),
+                Err(e) => {
+                    self.banks = [None, None, None];
+                    self.failed = Some(e.clone());
+                    return Err(e);
+                }
+            }
+        }
+        for s in &self.held {
+            run_sample(&mut self.banks, self.axes, &mut self.counters, s, emit);
+        }
+        self.held.clear();
+        Ok(())
+    }
+}
+
+/// Runs one sample through every selected axis's bank and emits its row.
+#[inline(never)]
+fn run_sample<B: AxisBank>(
+    banks: &mut [Option<B>; 3],
+    axes: Axes,
+    counters: &mut Counters,
+    s: &Sample,
+    emit: &mut dyn FnMut(&Row),
+) {
+    let refs = s.references();
+    let mut row = Row {
+        t_us: s.t_us,
+        axes: [None; 3],
+    };
+    let mut err = None;
+    let mut gaps = 0;
+    for axis in axes.iter() {
+        let i = axis.index();
+        let Some(bank) = banks[i].as_mut() else {
+            continue;
+        };
+        match bank.step(s, s.angle(axis)) {
+            Ok(out) => {
+                row.axes[i] = Some(AxisRow {
+                    reference_deg_s: refs[i],
+                    out,
+                })
+            }
+            Err(e) => {
+                err.get_or_insert(e);
+            }
+        }
+        gaps = gaps.max(bank.gaps());
+    }
+    counters.gaps = gaps;
+    match err {
+        Some(e) => counters.rejected.count(e),
+        None => {
+            counters.rows = counters.rows.saturating_add(1);
+            emit(&row);
+        }
+    }
+}
+
+/// Longest CSV row of three axes: 49 fields of up to ~30 characters plus separators.
+pub const ROW_CAPACITY: usize = 1600;
+
+/// One formatted CSV row (with its trailing newline).
+pub type CsvLine = heapless::String<ROW_CAPACITY>;
+
+/// The whole pipeline: [`Frontend`] (bytes -> frames -> BIT check -> clock -> samples) and
+/// [`Estimation`] (warm-up/period -> banks -> rows). The firmware runs it as is; `nav440
+/// estimate` runs it with its own bank type (noise, fixed point).
+pub struct Pipeline<B, E, F> {
+    front: Frontend,
+    est: Estimation<B, E, F>,
+    format_errors: u64,
+}
+
+impl<B, E, F> core::fmt::Debug for Pipeline<B, E, F> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Pipeline")
+            .field("front", &self.front)
+            .field("est", &self.est)
+            .finish()
+    }
+}
+
+impl<B, E, F> Pipeline<B, E, F>
+where
+    B: AxisBank,
+    E: Clone,
+    F: FnMut(Axis, &BankConfig) -> Result<B, E>,
+{
+    /// A pipeline estimating `axes` (see [`Estimation::new`]).
+    pub fn new(axes: Axes, cfg: BankConfig, build: F) -> Self {
+        Self {
+            front: Frontend::new(),
+            est: Estimation::new(axes, cfg, build),
+            format_errors: 0,
+        }
+    }
+
+    /// Feeds received bytes; `emit` gets every row in order. Fails (now and on every later
+    /// call) if a bank cannot be built for the measured packet period.
+    pub fn feed(&mut self, bytes: &[u8], emit: &mut dyn FnMut(&Row)) -> Result<(), E> {
+        let Self { front, est, .. } = self;
+        let mut res = Ok(());
+        front.feed(bytes, |s| {
+            if res.is_ok() {
+                res = est.push(s, emit);
+            }
+        });
+        res
+    }
+
+    /// End of a finite input: the sample the clock holds, and a stream shorter than the
+    /// warm-up.
+    pub fn finish(&mut self, emit: &mut dyn FnMut(&Row)) -> Result<(), E> {
+        let Self { front, est, .. } = self;
+        let mut res = Ok(());
+        front.finish(|s| res = est.push(s, emit));
+        res?;
+        est.finish(emit)
+    }
+
+    /// [`Pipeline::feed`] with every row formatted as a CSV line ([`crate::csv::write_row`],
+    /// newline-terminated); a row that does not fit [`CsvLine`] is counted
+    /// ([`Pipeline::format_errors`]), not emitted.
+    pub fn feed_csv(&mut self, bytes: &[u8], mut emit: impl FnMut(&str)) -> Result<(), E> {
+        let axes = self.est.axes();
+        let mut format_errors = 0u64;
+        let res = self.feed(bytes, &mut |row| {
+            format_line(row, axes, &mut format_errors, &mut emit)
+        });
+        self.format_errors = self.format_errors.saturating_add(format_errors);
+        res
+    }
+
+    /// [`Pipeline::finish`] with CSV lines (see [`Pipeline::feed_csv`]).
+    pub fn finish_csv(&mut self, mut emit: impl FnMut(&str)) -> Result<(), E> {
+        let axes = self.est.axes();
+        let mut format_errors = 0u64;
+        let res = self.finish(&mut |row| format_line(row, axes, &mut format_errors, &mut emit));
+        self.format_errors = self.format_errors.saturating_add(format_errors);
+        res
+    }
+
+    /// The front end (parser statistics, front counters, time faults).
+    pub fn front(&self) -> &Frontend {
+        &self.front
+    }
+
+    /// The back end (counters, banks).
+    pub fn estimation(&self) -> &Estimation<B, E, F> {
+        &self.est
+    }
+
+    /// Rows that did not fit [`CsvLine`] (never expected; counted, not hidden).
+    pub fn format_errors(&self) -> u64 {
+        self.format_errors
+    }
+
+    /// Writes the one-line summary of all counters (`key=value` pairs) into `w`.
+    pub fn summary(
+        &self,
+        w: &mut impl core::fmt::Write,
+        uart_overruns: u32,
+        uart_stalls: u32,
+    ) -> core::fmt::Result {
+        let s = self.front.parser_stats();
+        let fc = self.front.counters();
+        let c = self.est.counters();
+        let f = self.front.time_faults();
+        write!(
+            w,
+            "bytes={} frames={} crc_errors={} skipped={} decode_errors={} samples={} rows={} rejected={} format_errors={} uart_overruns={} uart_stalls={}",
+            s.bytes, s.frames, s.crc_errors, s.skipped_bytes, fc.decode_errors, c.samples, c.rows, c.rejected.total(), self.format_errors, uart_overruns, uart_stalls
+        )?;
+        write!(
+            w,
+            " yaw_packets={} impossible={} bad_backward={} bad_forward={} backward_jumps={} kind_switches={} other_kind={} duplicates={} gaps={}",
+            fc.attitude_packets, f.impossible, f.bad_backward, f.bad_forward, f.backward_jumps, f.kind_switches, f.other_kind, f.duplicates, c.gaps
+        )?;
+        write!(
+            w,
+            " bit_failed={} bit_flag={} bit_hardware_error={} bit_com_error={} bit_software_error={} bit_last=0x{:04x}",
+            fc.bit.failed,
+            crate::bit::FAILURE_FLAG,
+            fc.bit.hardware_error,
+            fc.bit.com_error,
+            fc.bit.software_error,
+            fc.bit.last_word
+        )
+    }
+}
+
+/// Formats `row` into a [`CsvLine`] and emits it, or counts a format error.
+fn format_line(row: &Row, axes: Axes, format_errors: &mut u64, emit: &mut impl FnMut(&str)) {
+    let mut line = CsvLine::new();
+    let ok = crate::csv::write_row(&mut line, row, axes).is_ok() && line.push('\n').is_ok();
+    if ok {
+        emit(line.as_str());
+    } else {
+        *format_errors = format_errors.saturating_add(1);
+    }
+}

@@ -1,0 +1,190 @@
+//! The front end: bytes -> frames (`nav440_proto::Parser`) -> attitude packets (A0, A1, A2,
+//! N0, N1, B1) -> BIT check -> clock (`nav440_proto::TimeBase`) -> timed [`Sample`]s.
+
+use crate::bit::BitCounts;
+use crate::euler::euler_rates_deg;
+use crate::Axis;
+use nav440_proto::{Bit, Packet, Parser, TimeBase, TimeFaults, TimeStamp, Timed};
+
+/// What the pipeline takes from a packet that carries the attitude.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Attitude {
+    /// The packet's time stamp.
+    pub time: TimeStamp,
+    /// Roll, pitch, yaw as sent (A0/A1: magnetic yaw; A2/N0/N1: true yaw; B1: yaw), deg.
+    pub angles_deg: [f32; 3],
+    /// Body rates p, q, r (x, y, z; corrected), deg/s (B1 sends r only: p, q are NaN).
+    pub rates_deg_s: [f32; 3],
+    /// The BIT status word.
+    pub bit: Bit,
+}
+
+/// The attitude of a packet that carries one (A0, A1, A2, N0, N1, B1), from the packets'
+/// public accessors; `None` for any other packet.
+pub fn attitude(packet: &Packet<'_>) -> Option<Attitude> {
+    macro_rules! att {
+        ($p:expr, $yaw:ident) => {
+            (
+                [$p.roll_deg(), $p.pitch_deg(), $p.$yaw()],
+                [$p.rate_x_deg_s(), $p.rate_y_deg_s(), $p.rate_z_deg_s()],
+            )
+        };
+    }
+    let (angles_deg, rates_deg_s) = match packet {
+        Packet::A0(p) => att!(p, yaw_mag_deg),
+        Packet::A1(p) => att!(p, yaw_mag_deg),
+        Packet::A2(p) => att!(p, yaw_true_deg),
+        Packet::N0(p) => att!(p, yaw_true_deg),
+        Packet::N1(p) => att!(p, yaw_true_deg),
+        // B1 carries the z rate only: p and q unknown (NaN), so its reference rates are empty.
+        Packet::B1(p) => (
+            [p.roll_deg(), p.pitch_deg(), p.yaw_deg()],
+            [f32::NAN, f32::NAN, p.rate_z_deg_s()],
+        ),
+        _ => return None,
+    };
+    Some(Attitude {
+        time: packet.time(),
+        angles_deg,
+        rates_deg_s,
+        bit: packet.bit().unwrap_or_default(),
+    })
+}
+
+/// One timed attitude sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// Time since the first sample, us (timeITOW / GPSITOW through `nav440_proto::TimeBase`:
+    /// wraps handled, strictly increasing within an epoch).
+    pub t_us: u64,
+    /// Roll, pitch, yaw as sent (wrapped), deg.
+    pub angles_deg: [f32; 3],
+    /// Body rates p, q, r as sent, deg/s.
+    pub rates_deg_s: [f32; 3],
+    /// First sample of a new time epoch (a confirmed backward jump of the time stamps, or the
+    /// switch from GPSITOW to timeITOW): the banks re-initialise from it.
+    pub new_epoch: bool,
+}
+
+impl Sample {
+    /// Time in seconds.
+    pub fn t_s(&self) -> f64 {
+        self.t_us as f64 * 1e-6
+    }
+
+    /// The angle of `axis`, deg.
+    pub fn angle(&self, axis: Axis) -> f32 {
+        self.angles_deg[axis.index()]
+    }
+
+    /// The reference rate of `axis` (the angle's derivative by the Euler kinematics, deg/s;
+    /// `None` near gimbal lock, see [`crate::euler`]).
+    pub fn reference(&self, axis: Axis) -> Option<f32> {
+        self.references()[axis.index()]
+    }
+
+    /// The reference rates of roll, pitch, yaw (deg/s), see [`crate::euler`].
+    pub fn references(&self) -> [Option<f32>; 3] {
+        euler_rates_deg(self.angles_deg[0], self.angles_deg[1], self.rates_deg_s)
+    }
+
+    fn from_timed(t: Timed<Payload>) -> Self {
+        Sample {
+            t_us: t.t_us,
+            angles_deg: t.payload.0,
+            rates_deg_s: t.payload.1,
+            new_epoch: t.new_epoch,
+        }
+    }
+}
+
+/// What rides through the time base with each time stamp.
+type Payload = ([f32; 3], [f32; 3]);
+
+/// Counters of the front end. Every counter saturates. Invariant: `attitude_packets =
+/// bit.failed + samples + time faults' discarded + duplicates` (plus one sample held by the
+/// time base before `finish`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FrontCounters {
+    /// CRC-valid frames.
+    pub frames: u64,
+    /// CRC-valid frames that failed to decode (a known type with a wrong length).
+    pub decode_errors: u64,
+    /// Decoded packets that carry the attitude (A0/A1/A2/N0/N1/B1), before the BIT and time
+    /// rules (`yaw_packets` in the firmware's summary line).
+    pub attitude_packets: u64,
+    /// Packets dropped for their BIT word.
+    pub bit: BitCounts,
+    /// Samples released by the time base.
+    pub samples: u64,
+}
+
+/// bytes -> parser -> attitude packets -> BIT check -> time base -> [`Sample`]s, in any
+/// chunking; samples come out in stream order (a suspicious time stamp is released one
+/// sample late, see `TimeBase`). Call [`Frontend::finish`] at the end of a finite input.
+#[derive(Debug, Default)]
+pub struct Frontend {
+    parser: Parser,
+    clock: TimeBase<Payload>,
+    counters: FrontCounters,
+}
+
+impl Frontend {
+    /// A front end at the start of a stream.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Feeds bytes; `out` gets every sample released.
+    pub fn feed(&mut self, bytes: &[u8], mut out: impl FnMut(Sample)) {
+        let Self {
+            parser,
+            clock,
+            counters,
+        } = self;
+        parser.feed(bytes, |frame| {
+            counters.frames = counters.frames.saturating_add(1);
+            let packet = match Packet::decode(frame) {
+                Ok(p) => p,
+                Err(_) => {
+                    counters.decode_errors = counters.decode_errors.saturating_add(1);
+                    return;
+                }
+            };
+            let Some(a) = attitude(&packet) else {
+                return;
+            };
+            counters.attitude_packets = counters.attitude_packets.saturating_add(1);
+            if counters.bit.check(a.bit) {
+                return;
+            }
+            for t in clock.update(a.time, (a.angles_deg, a.rates_deg_s)) {
+                counters.samples = counters.samples.saturating_add(1);
+                out(Sample::from_timed(t));
+            }
+        });
+    }
+
+    /// End of input: releases a held sample if the time rules allow it.
+    pub fn finish(&mut self, mut out: impl FnMut(Sample)) {
+        if let Some(t) = self.clock.finish() {
+            self.counters.samples = self.counters.samples.saturating_add(1);
+            out(Sample::from_timed(t));
+        }
+    }
+
+    /// Counters so far.
+    pub fn counters(&self) -> &FrontCounters {
+        &self.counters
+    }
+
+    /// Parser statistics (bytes, frames, CRC errors, skipped bytes).
+    pub fn parser_stats(&self) -> &nav440_proto::Stats {
+        self.parser.stats()
+    }
+
+    /// Time-stamp faults so far.
+    pub fn time_faults(&self) -> &TimeFaults {
+        self.clock.faults()
+    }
+}
