@@ -8,6 +8,7 @@ pub mod decode;
 pub mod error;
 pub mod gains;
 pub mod motion;
+pub mod optim;
 pub mod paper;
 pub mod plot;
 pub mod plots;

@@ -7,7 +7,7 @@
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use host_tests::error::{Error, Result};
 use host_tests::{
-    corrupt::Corruption, gains, motion::ProfileKind, paper, plots, replay, synth, tune,
+    corrupt::Corruption, gains, motion::ProfileKind, optim, paper, plots, replay, synth, tune,
 };
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -184,12 +184,21 @@ enum Cmd {
         /// Number of noise seeds averaged per evaluation.
         #[arg(long, default_value_t = 3)]
         seeds: u64,
-        /// MSE window end, s.
-        #[arg(long, default_value_t = 30.0)]
+        /// MSE window end, s (tune and score on 0-WINDOW s).
+        #[arg(long, default_value_t = 30.0, conflicts_with = "train")]
         window: f64,
-        /// Sample adapter.
-        #[arg(long, value_enum, default_value = "linear")]
-        hold: HoldArg,
+        /// Tune on the MSE over this time range, s (e.g. 0-15).
+        #[arg(long, value_name = "T0-T1", value_parser = parse_range)]
+        train: Option<(f64, f64)>,
+        /// Report the MSE before/after over this time range, s (default: the training range).
+        #[arg(long, value_name = "T2-T3", value_parser = parse_range)]
+        test: Option<(f64, f64)>,
+        /// Reference mode: an exhaustive log grid of N points per gain instead of the search.
+        #[arg(long, value_name = "N", num_args = 0..=1, default_missing_value = "12")]
+        exhaustive: Option<usize>,
+        /// Sample adapter; default: tune both and keep the better.
+        #[arg(long, value_enum)]
+        hold: Option<HoldArg>,
         /// Observer step h, s.
         #[arg(long, default_value_t = 1e-4)]
         step: f32,
@@ -334,6 +343,19 @@ fn with_name<T>(name: &str, r: Result<T>) -> Result<T> {
         Error::NotNav440(m) => Error::NotNav440(format!("{name}: {m}")),
         other => other,
     })
+}
+
+/// Parses a time range `T0-T1` (s), e.g. `0-15` or `12.5-30`.
+fn parse_range(s: &str) -> std::result::Result<(f64, f64), String> {
+    let bad = || format!("expected a time range T0-T1 in s (e.g. 0-15), got {s:?}");
+    let (a, b) = s.split_once('-').ok_or_else(bad)?;
+    let a: f64 = a.trim().parse().map_err(|_| bad())?;
+    let b: f64 = b.trim().parse().map_err(|_| bad())?;
+    if a.is_finite() && b.is_finite() && a >= 0.0 && b > a {
+        Ok((a, b))
+    } else {
+        Err(format!("time range {s:?}: needs 0 <= T0 < T1"))
+    }
 }
 
 fn load_samples(file: &Path) -> Result<Vec<replay::Sample>> {
@@ -483,6 +505,9 @@ fn run(cli: Cli) -> Result<()> {
             noise_var,
             seeds,
             window,
+            train,
+            test,
+            exhaustive,
             hold,
             step,
             output,
@@ -493,13 +518,32 @@ fn run(cli: Cli) -> Result<()> {
             paper::check_window(window)?;
             let samples = load_samples(&file)?;
             let opts = replay::EstimateOptions {
-                hold: hold.into(),
+                hold: hold.map_or(estimators::Hold::Linear, Into::into),
                 step_s: step,
                 axes: axis.into(),
                 ..Default::default()
             };
             one_axis(&opts, "tune")?;
-            let res = tune::tune(&samples, &opts, noise_var, seeds.max(1), window)?;
+            let spec = tune::TuneSpec {
+                noise_var,
+                seeds: seeds.max(1),
+                train: train.unwrap_or((0.0, window)),
+                test,
+                method: match exhaustive {
+                    Some(n) if n < 2 => {
+                        return Err(Error::Usage(format!(
+                            "--exhaustive needs at least 2 points per gain, got {n}"
+                        )))
+                    }
+                    Some(points) => optim::Method::Exhaustive { points },
+                    None => optim::Method::Search,
+                },
+                holds: match hold {
+                    Some(h) => vec![h.into()],
+                    None => vec![estimators::Hold::Linear, estimators::Hold::ZeroOrder],
+                },
+            };
+            let res = tune::tune_with(&samples, &opts, &spec)?;
             stdout_or_file(None, |w| w.write_all(res.to_text().as_bytes()))?;
             if let Some(p) = output {
                 write_file(&p, &res.to_toml())?;

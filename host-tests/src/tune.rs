@@ -1,13 +1,15 @@
 //! `nav440 tune`: per-capture, per-noise-level calibration of each estimator family's gains
-//! (the paper: "gains must be re-calibrated to the noise level").
+//! (the paper: "gains must be re-calibrated to the noise level"). docs/CALIBRATION.md.
 //!
 //! Method: for each family (AVE; ILO1, ILO2, ILO3 from their presets; AD; ED; KF) and each half
 //! of the bank (velocity against the measured rate; series acceleration against the AVE on the
-//! measured rate), a multiplicative coordinate search on the MSE over `0..window` averaged over
-//! `seeds` noise seeds, starting from the paper presets: each gain is tried at `x * f` and
-//! `x / f` (f = 4, 2, 1.41, 1.19, 1.09), the best improvement is kept, the factor shrinks when
-//! no coordinate improves. Candidates the constructors reject (e.g. `h * L >= 1`,
-//! `K1 > 1`) or that diverge count as infinite MSE. The single estimators run behind
+//! measured rate), [`crate::optim::minimise`] over every gain of the family within its valid
+//! range ([`ranges`]: K1 included) of the MSE over the training time range averaged over
+//! `seeds` noise seeds: a global search (coarse log grid, then Nelder-Mead of the `argmin`
+//! crate from several starts and from the paper preset) or, with `--exhaustive`, a log grid.
+//! Candidates the constructors reject (e.g. `h * L >= 1`) or that diverge count as infinite
+//! MSE. Every hold asked for (both by default) is tuned; the one with the smaller geometric
+//! mean of the tuned MSEs over the 14 families is kept (the hold is one bank-wide option). The single estimators run behind
 //! `estimators::SampleAdapter` (unwrapped noisy yaw, same hold and step as the bank); the
 //! "before" and "after" MSE printed are then measured through the whole `YawBank` with the
 //! paper presets and with the tuned gains file, i.e. exactly what `nav440 estimate --gains`
@@ -15,15 +17,50 @@
 
 use crate::error::{Error, Result};
 use crate::gains::{FamilyGains, GainsFile};
-use crate::paper::{ave_on_rate, mse, row_mse, steps_between, REFERENCE_AVE};
+use crate::optim::{self, Method};
+use crate::paper::{ave_on_rate, row_mse, steps_between, REFERENCE_AVE};
 use crate::replay::{self, EstimateOptions, Noise, Sample};
 use estimators::{
-    Ad, Ave, AveConfig, BankConfig, DeltaMode, Ed, EdConfig, Estimator, Ilo, IloConfig, Kalman,
-    KalmanConfig, Law, SampleAdapter, Series, Stateful,
+    Ad, Ave, AveConfig, BankConfig, DeltaMode, Ed, EdConfig, Estimator, Hold, Ilo, IloConfig,
+    Kalman, KalmanConfig, Law, SampleAdapter, Series, Stateful,
 };
+use std::time::Instant;
 
 /// Column names in bank order.
 const NAMES: [&str; 7] = ["AVE", "ILO1", "ILO2", "ILO3", "AD", "ED", "KF"];
+
+/// What to tune and how.
+#[derive(Clone, Debug)]
+pub struct TuneSpec {
+    /// Noise variance added to yaw, deg^2.
+    pub noise_var: f64,
+    /// Noise seeds averaged per evaluation (1..=seeds).
+    pub seeds: u64,
+    /// Time range the gains are tuned on (MSE over `from..=to`), s.
+    pub train: (f64, f64),
+    /// Time range the result is scored on (`None`: the training range), s.
+    pub test: Option<(f64, f64)>,
+    /// Global search or exhaustive log grid.
+    pub method: Method,
+    /// Holds tuned (the best is kept); empty: the options' hold only.
+    pub holds: Vec<Hold>,
+}
+
+/// Cost of the tuning of one hold.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HoldRun {
+    /// The hold.
+    pub hold: Hold,
+    /// Geometric mean of the tuned MSEs over the 14 families (training range, seeds'
+    /// mean): the score the hold is chosen by.
+    pub score: f64,
+    /// Tuned (training) MSE per family: velocity then acceleration.
+    pub cost: [[f64; 7]; 2],
+    /// Objective evaluations per family.
+    pub evals: [[usize; 7]; 2],
+    /// Wall time per family, s (the two halves run in parallel).
+    pub secs: [[f64; 7]; 2],
+}
 
 /// What the tuner found.
 #[derive(Clone, Debug)]
@@ -32,8 +69,22 @@ pub struct TuneResult {
     pub noise_var: f64,
     /// Seeds averaged.
     pub seeds: u64,
-    /// MSE window, s.
+    /// MSE window end, s (the training range's end).
     pub window_s: f64,
+    /// Training range, s.
+    pub train: (f64, f64),
+    /// Range the before/after MSEs are measured on, s.
+    pub test: (f64, f64),
+    /// Method used.
+    pub method: Method,
+    /// The hold kept (the hold the "before" column used is the options').
+    pub hold: Hold,
+    /// The hold the "before" column (paper presets) was measured with.
+    pub hold_before: Hold,
+    /// Every hold tuned, with its cost.
+    pub runs: Vec<HoldRun>,
+    /// Total wall time, s.
+    pub elapsed_s: f64,
     /// Tuned gains.
     pub gains: GainsFile,
     /// Paper gains written in the same form (for the "before" column).
@@ -58,7 +109,26 @@ struct Problem<'a> {
     opts: &'a EstimateOptions,
     max_gap_s: f32,
     sample_period_s: f32,
-    window_s: f64,
+    /// MSE range, s.
+    range: (f64, f64),
+}
+
+/// MSE of `est` against `reference` over the samples with `from <= t <= to` (s); NaN if none.
+pub fn mse_range(t_us: &[u64], est: &[f32], reference: &[f32], (from, to): (f64, f64)) -> f64 {
+    let (lo, hi) = ((from * 1e6).round() as u64, (to * 1e6).round() as u64);
+    let (mut sum, mut n) = (0.0f64, 0usize);
+    for ((&t, &e), &r) in t_us.iter().zip(est).zip(reference) {
+        if t >= lo && t <= hi {
+            let d = f64::from(e) - f64::from(r);
+            sum += d * d;
+            n += 1;
+        }
+    }
+    if n == 0 {
+        f64::NAN
+    } else {
+        sum / n as f64
+    }
 }
 
 impl Problem<'_> {
@@ -80,7 +150,7 @@ impl Problem<'_> {
             for (s, &v) in self.samples.iter().zip(y) {
                 out.push(ad.update(s.t_us, v).unwrap_or(f32::NAN));
             }
-            let m = mse(&t, &out, reference, self.window_s);
+            let m = mse_range(&t, &out, reference, self.range);
             if !m.is_finite() {
                 return f64::INFINITY;
             }
@@ -129,7 +199,7 @@ impl Problem<'_> {
                     kf.velocity()
                 });
             }
-            let m = mse(&t, &out, reference, self.window_s);
+            let m = mse_range(&t, &out, reference, self.range);
             if !m.is_finite() {
                 return f64::INFINITY;
             }
@@ -139,36 +209,42 @@ impl Problem<'_> {
     }
 }
 
-/// Multiplicative coordinate search from `x0` (all entries > 0) within `[lo, hi]`.
-fn coord_search(x0: &[f64], lo: &[f64], hi: &[f64], f: &dyn Fn(&[f64]) -> f64) -> Vec<f64> {
-    let mut x = x0.to_vec();
-    let mut best = f(&x);
-    for factor in [4.0, 2.0, std::f64::consts::SQRT_2, 1.19, 1.09] {
-        // Repeat at this factor while some coordinate improves (bounded).
-        for _ in 0..6 {
-            let mut improved = false;
-            for i in 0..x.len() {
-                for cand in [x[i] * factor, x[i] / factor] {
-                    let c = cand.clamp(lo[i], hi[i]);
-                    if c == x[i] {
-                        continue;
-                    }
-                    let mut y = x.clone();
-                    y[i] = c;
-                    let v = f(&y);
-                    if v < best {
-                        best = v;
-                        x = y;
-                        improved = true;
-                    }
-                }
-            }
-            if !improved {
-                break;
-            }
-        }
+/// Valid search range `(lo, hi)` of each gain of family `i` (bank order: AVE, ILO1-3, AD, ED,
+/// KF) for the step `h_s`, s: AVE (k, gamma1); ILO (`1 - K1`, L, K2): `K1` is searched as its
+/// leak `1 - K1` on a log scale, from 1e-7 (`K1 = 1` to f32 precision) to 0.95 (`K1 = 0.05`),
+/// because the best `K1` lie within 1e-3 of 1 (a leak of a few 1/s at `tau = h`), and
+/// `h L < 1` as the constructor demands; AD (T); ED (lambda, alpha); KF (q, with r kept: only
+/// q/r matters for the steady-state gain). The bounds span the paper's presets by two
+/// decades or more each side (AVE k and ED lambda down to 0.1: the tuned values at low noise
+/// reach 10).
+pub fn ranges(i: usize, h_s: f64) -> (Vec<f64>, Vec<f64>) {
+    match i {
+        0 => (vec![0.1, 10.0], vec![1e5, 1e8]),
+        1..=3 => (vec![1e-7, 0.1, 1e-3], vec![0.95, 0.99 / h_s, 1e4]),
+        4 => (vec![1e-4], vec![1.0]),
+        5 => (vec![0.1, 10.0], vec![1e5, 1e6]),
+        _ => (vec![1.0], vec![1e12]),
     }
-    x
+}
+
+/// One family's minimisation: result and its cost.
+struct Fit {
+    x: Vec<f64>,
+    cost: f64,
+    evals: usize,
+    secs: f64,
+}
+
+fn fit(method: Method, i: usize, h_s: f64, x0: &[f64], f: &dyn Fn(&[f64]) -> f64) -> Fit {
+    let t = Instant::now();
+    let (lo, hi) = ranges(i, h_s);
+    let o = optim::minimise(method, x0, &lo, &hi, f);
+    Fit {
+        x: o.x,
+        cost: o.cost,
+        evals: o.evals,
+        secs: t.elapsed().as_secs_f64(),
+    }
 }
 
 fn ave(g: &[f64]) -> AveConfig {
@@ -178,9 +254,10 @@ fn ave(g: &[f64]) -> AveConfig {
         delta: DeltaMode::Paper,
     }
 }
+/// ILO gains from the search coordinates `(1 - K1, L, K2)`.
 fn ilo(g: &[f64]) -> IloConfig {
     IloConfig {
-        k1: g[0] as f32,
+        k1: (1.0 - g[0]) as f32,
         l: g[1] as f32,
         k2: g[2] as f32,
     }
@@ -192,40 +269,38 @@ fn ed(g: &[f64]) -> EdConfig {
     }
 }
 
-/// Tunes one half of the bank (velocity or acceleration) starting from `start`.
-fn tune_family(p: &Problem<'_>, start: &FamilyGains, acc: bool) -> FamilyGains {
+/// Tunes one half of the bank (velocity or acceleration) starting from `start`; returns the
+/// gains and, per family, (tuned MSE, evaluations, seconds).
+fn tune_family(
+    p: &Problem<'_>,
+    start: &FamilyGains,
+    acc: bool,
+    method: Method,
+) -> (FamilyGains, [(f64, usize, f64); 7]) {
     let h = p.opts.step_s;
+    let hs = f64::from(h);
     let mut out = *start;
+    let mut stats = [(f64::INFINITY, 0, 0.0); 7];
+    let mut note = |i: usize, r: &Fit| stats[i] = (r.cost, r.evals, r.secs);
     if let Some(a) = start.ave {
         let f = |g: &[f64]| p.eval_family(|| Ave::<f32>::new(&ave(g), h).ok(), acc);
-        let x = coord_search(
-            &[f64::from(a.k), f64::from(a.gamma1)],
-            &[1e-3, 1e-3],
-            &[1e9, 1e12],
-            &f,
-        );
+        let r = fit(method, 0, hs, &[f64::from(a.k), f64::from(a.gamma1)], &f);
+        note(0, &r);
         out.ave = Some(AveConfig {
-            k: x[0] as f32,
-            gamma1: x[1] as f32,
+            k: r.x[0] as f32,
+            gamma1: r.x[1] as f32,
             delta: a.delta,
         });
     }
     let ilos = [start.ilo1, start.ilo2, start.ilo3];
     let mut tuned = [None; 3];
-    for (slot, g0) in tuned.iter_mut().zip(ilos) {
+    for (j, (slot, g0)) in tuned.iter_mut().zip(ilos).enumerate() {
         let Some(g0) = g0 else { continue };
         let f = |g: &[f64]| p.eval_family(|| Ilo::<f32, 1>::new(&ilo(g), h).ok(), acc);
-        let x = coord_search(
-            &[f64::from(g0.k1), f64::from(g0.l), f64::from(g0.k2)],
-            &[0.05, 1e-3, 1e-4],
-            &[1.0, 1e6, 1e6],
-            &f,
-        );
-        *slot = Some(IloConfig {
-            k1: x[0] as f32,
-            l: x[1] as f32,
-            k2: x[2] as f32,
-        });
+        let x0 = [1.0 - f64::from(g0.k1), f64::from(g0.l), f64::from(g0.k2)];
+        let r = fit(method, 1 + j, hs, &x0, &f);
+        note(1 + j, &r);
+        *slot = Some(ilo(&r.x));
     }
     [out.ilo1, out.ilo2, out.ilo3] = tuned;
     if let Some(a) = start.ad {
@@ -233,21 +308,21 @@ fn tune_family(p: &Problem<'_>, start: &FamilyGains, acc: bool) -> FamilyGains {
             let t = g[0] as f32;
             p.eval_family(|| Ad::<f32>::new(t, h).ok(), acc)
         };
-        let x = coord_search(&[f64::from(a.t)], &[1e-4], &[10.0], &f);
-        out.ad = Some(estimators::AdConfig { t: x[0] as f32 });
+        let r = fit(method, 4, hs, &[f64::from(a.t)], &f);
+        note(4, &r);
+        out.ad = Some(estimators::AdConfig { t: r.x[0] as f32 });
     }
     if let Some(e) = start.ed {
         let f = |g: &[f64]| p.eval_family(|| Ed::<f32>::new(&ed(g), h).ok(), acc);
-        let x = coord_search(
+        let r = fit(
+            method,
+            5,
+            hs,
             &[f64::from(e.lambda), f64::from(e.alpha)],
-            &[1e-2, 1e-2],
-            &[1e7, 1e9],
             &f,
         );
-        out.ed = Some(EdConfig {
-            lambda: x[0] as f32,
-            alpha: x[1] as f32,
-        });
+        note(5, &r);
+        out.ed = Some(ed(&r.x));
     }
     if let Some(k) = start.kf {
         let dt = p.sample_period_s;
@@ -262,16 +337,18 @@ fn tune_family(p: &Problem<'_>, start: &FamilyGains, acc: bool) -> FamilyGains {
                 acc,
             )
         };
-        let x = coord_search(&[f64::from(k.q)], &[1e-6], &[1e18], &f);
+        let r = fit(method, 6, hs, &[f64::from(k.q)], &f);
+        note(6, &r);
         out.kf = Some(estimators::KalmanNoise {
-            q: x[0] as f32,
+            q: r.x[0] as f32,
             r: k.r,
         });
     }
-    out
+    (out, stats)
 }
 
-/// Runs the tuner. The velocity and acceleration halves run on 2 threads.
+/// Runs the tuner with the defaults of `nav440 tune`: global search, both holds, MSE over
+/// `0..=window_s`.
 pub fn tune(
     samples: &[Sample],
     opts: &EstimateOptions,
@@ -279,10 +356,44 @@ pub fn tune(
     seeds: u64,
     window_s: f64,
 ) -> Result<TuneResult> {
-    crate::paper::check_window(window_s)?;
+    tune_with(
+        samples,
+        opts,
+        &TuneSpec {
+            noise_var,
+            seeds,
+            train: (0.0, window_s),
+            test: None,
+            method: Method::Search,
+            holds: vec![Hold::Linear, Hold::ZeroOrder],
+        },
+    )
+}
+
+/// Checks a time range, s: finite, `0 <= from < to`.
+pub fn check_range(what: &str, (from, to): (f64, f64)) -> Result<()> {
+    if from.is_finite() && to.is_finite() && from >= 0.0 && to > from {
+        Ok(())
+    } else {
+        Err(Error::Usage(format!(
+            "{what} must be a time range T0-T1 in s with 0 <= T0 < T1, got {from}-{to}"
+        )))
+    }
+}
+
+/// Runs the tuner. For each hold, the velocity and acceleration halves run on 2 threads.
+pub fn tune_with(
+    samples: &[Sample],
+    opts: &EstimateOptions,
+    spec: &TuneSpec,
+) -> Result<TuneResult> {
+    let started = Instant::now();
+    check_range("--train", spec.train)?;
+    let test = spec.test.unwrap_or(spec.train);
+    check_range("--test", test)?;
+    let seeds = spec.seeds.max(1);
+    let noise_var = spec.noise_var;
     let opts = &opts.paper_law();
-    let base = opts.bank_config_for(samples);
-    let paper = GainsFile::from_bank(&base);
     let axis = opts.axis();
     let ys = (1..=seeds)
         .map(|seed| {
@@ -301,42 +412,91 @@ pub fn tune(
             })
         })
         .collect::<Result<Vec<_>>>()?;
-    let problem = Problem {
-        samples,
-        ys,
-        // The Euler-kinematics rate; NaN (left out of every MSE) near gimbal lock.
-        vel_ref: samples
-            .iter()
-            .map(|s| s.reference(axis).unwrap_or(f32::NAN))
-            .collect(),
-        acc_ref: ave_on_rate(samples, &REFERENCE_AVE, opts)?,
-        opts,
-        max_gap_s: base.max_gap_s(),
-        sample_period_s: base.sample_period_s,
-        window_s,
+    let holds = if spec.holds.is_empty() {
+        vec![opts.hold]
+    } else {
+        spec.holds.clone()
     };
-    let (velocity, acceleration) = std::thread::scope(|s| {
-        let v = s.spawn(|| tune_family(&problem, &paper.velocity, false));
-        let a = tune_family(&problem, &paper.acceleration, true);
-        (v.join(), a)
-    });
-    let velocity = velocity.map_err(|_| Error::Other("tuning thread panicked".into()))?;
-    let gains = GainsFile {
-        velocity,
-        acceleration,
+    let hold_before = opts.hold;
+    let base_before = opts.bank_config_for(samples);
+    let paper = GainsFile::from_bank(&base_before);
+    // The Euler-kinematics rate; NaN (left out of every MSE) near gimbal lock.
+    let vel_ref: Vec<f32> = samples
+        .iter()
+        .map(|s| s.reference(axis).unwrap_or(f32::NAN))
+        .collect();
+    let mut runs = Vec::new();
+    // One acceleration reference for every hold: the AVE on the rate with the options' hold
+    // (the paper's protocol), so that the holds are compared on the same target.
+    let acc_ref = ave_on_rate(samples, &REFERENCE_AVE, opts)?;
+    let mut best: Option<(f64, GainsFile, Hold)> = None;
+    for &hold in &holds {
+        let o = EstimateOptions {
+            hold,
+            ..opts.clone()
+        };
+        let base = o.bank_config_for(samples);
+        let problem = Problem {
+            samples,
+            ys: ys.clone(),
+            vel_ref: vel_ref.clone(),
+            acc_ref: acc_ref.clone(),
+            opts: &o,
+            max_gap_s: base.max_gap_s(),
+            sample_period_s: base.sample_period_s,
+            range: spec.train,
+        };
+        let (velocity, acceleration) = std::thread::scope(|s| {
+            let v = s.spawn(|| tune_family(&problem, &paper.velocity, false, spec.method));
+            let a = tune_family(&problem, &paper.acceleration, true, spec.method);
+            (v.join(), a)
+        });
+        let velocity = velocity.map_err(|_| Error::Other("tuning thread panicked".into()))?;
+        let mut run = HoldRun {
+            hold,
+            score: 0.0,
+            cost: [[0.0; 7]; 2],
+            evals: [[0; 7]; 2],
+            secs: [[0.0; 7]; 2],
+        };
+        let mut log_sum = 0.0;
+        for (half, stats) in [&velocity.1, &acceleration.1].into_iter().enumerate() {
+            for (i, &(c, e, t)) in stats.iter().enumerate() {
+                run.cost[half][i] = c;
+                run.evals[half][i] = e;
+                run.secs[half][i] = t;
+                log_sum += c.ln();
+            }
+        }
+        run.score = (log_sum / 14.0).exp();
+        let gains = GainsFile {
+            velocity: velocity.0,
+            acceleration: acceleration.0,
+        };
+        if best.as_ref().is_none_or(|b| run.score < b.0) {
+            best = Some((run.score, gains, hold));
+        }
+        runs.push(run);
+    }
+    let Some((_, gains, hold)) = best else {
+        return Err(Error::Other("no hold to tune".into()));
     };
+    // Before/after through the whole bank, on the test range, against the same references.
     let bank_mse = |cfg: BankConfig| -> Result<([f64; 7], [f64; 7])> {
         let mut v = [0.0; 7];
         let mut a = [0.0; 7];
         for seed in 1..=seeds {
             let mut o = opts.clone();
+            o.hold = cfg.hold;
             o.config = Some(cfg);
             o.noise = Some(Noise {
                 var: noise_var,
                 seed,
             });
             let (rows, _) = replay::estimate(samples, &o)?;
-            let (vv, aa) = row_mse(axis, &rows, samples, &problem.acc_ref, window_s);
+            let from = (test.0 * 1e6).round() as u64;
+            let rows: Vec<_> = rows.into_iter().filter(|r| r.t_us >= from).collect();
+            let (vv, aa) = row_mse(axis, &rows, samples, &acc_ref, test.1);
             for i in 0..7 {
                 v[i] += vv[i] / seeds as f64;
                 a[i] += aa[i] / seeds as f64;
@@ -344,12 +504,21 @@ pub fn tune(
         }
         Ok((v, a))
     };
-    let (vel_before, acc_before) = bank_mse(base)?;
-    let (vel_after, acc_after) = bank_mse(gains.apply(base))?;
+    let (vel_before, acc_before) = bank_mse(base_before)?;
+    let mut tuned_cfg = gains.apply(base_before);
+    tuned_cfg.hold = hold;
+    let (vel_after, acc_after) = bank_mse(tuned_cfg)?;
     Ok(TuneResult {
         noise_var,
         seeds,
-        window_s,
+        window_s: spec.train.1,
+        train: spec.train,
+        test,
+        method: spec.method,
+        hold,
+        hold_before,
+        runs,
+        elapsed_s: started.elapsed().as_secs_f64(),
         gains,
         paper,
         vel_before,
@@ -357,6 +526,14 @@ pub fn tune(
         acc_before,
         acc_after,
     })
+}
+
+/// The CLI's name of a hold (`--hold`).
+fn hold_name(h: Hold) -> &'static str {
+    match h {
+        Hold::Linear => "linear",
+        Hold::ZeroOrder => "zoh",
+    }
 }
 
 fn fmt_gains(f: &FamilyGains, i: usize) -> String {
@@ -378,9 +555,39 @@ impl TuneResult {
     /// The printed report.
     pub fn to_text(&self) -> String {
         let mut s = format!(
-            "tuned for noise variance {} deg^2, MSE over 0-{} s, mean of {} seeds (MSE measured through YawBank)\n",
-            self.noise_var, self.window_s, self.seeds
+            "tuned for noise variance {} deg^2, trained on {}-{} s, scored on {}-{} s, mean of {} seeds (MSE measured through YawBank)\n",
+            self.noise_var, self.train.0, self.train.1, self.test.0, self.test.1, self.seeds
         );
+        s.push_str(&format!(
+            "method: {}; hold kept: {} (before: {}); {} evaluations in {:.1} s\n",
+            match self.method {
+                Method::Search =>
+                    "global search (coarse log grid + Nelder-Mead, argmin)".to_string(),
+                Method::Exhaustive { points } =>
+                    format!("exhaustive log grid, {points} points per gain"),
+            },
+            hold_name(self.hold),
+            hold_name(self.hold_before),
+            self.evals(),
+            self.elapsed_s
+        ));
+        for r in &self.runs {
+            s.push_str(&format!(
+                "  hold {:<6} score (geometric mean of the 14 tuned training MSEs) {:.4}\n",
+                hold_name(r.hold),
+                r.score
+            ));
+            for (half, name) in ["velocity", "acceleration"].iter().enumerate() {
+                s.push_str(&format!("    {name:<12} training MSE / evaluations / s:"));
+                for (i, name) in NAMES.iter().enumerate() {
+                    s.push_str(&format!(
+                        " {name} {:.4}/{}/{:.2}",
+                        r.cost[half][i], r.evals[half][i], r.secs[half][i]
+                    ));
+                }
+                s.push('\n');
+            }
+        }
         for (title, paper, tuned, before, after) in [
             (
                 "velocity, MSE (deg/s)^2",
@@ -416,21 +623,41 @@ impl TuneResult {
         s
     }
 
+    /// Objective evaluations over every hold and family.
+    pub fn evals(&self) -> usize {
+        self.runs
+            .iter()
+            .map(|r| r.evals.iter().flatten().sum::<usize>())
+            .sum()
+    }
+
     /// The gains file (TOML, read by `--gains`).
     pub fn to_toml(&self) -> String {
         format!(
-            "# nav440 tune: gains for noise variance {} deg^2 (MSE over 0-{} s, {} seeds)\n# use: nav440 estimate FILE --gains THIS_FILE\n{}",
+            "# nav440 tune: gains for noise variance {} deg^2 (MSE over {}-{} s, {} seeds), hold {}\n# use: nav440 estimate FILE --gains THIS_FILE --hold {}\n{}",
             self.noise_var,
-            self.window_s,
+            self.train.0,
+            self.train.1,
             self.seeds,
+            hold_name(self.hold),
+            hold_name(self.hold),
             self.gains.to_toml()
         )
     }
 
-    /// A Rust snippet building the tuned `BankConfig` (paste into the firmware).
+    /// A Rust snippet building the tuned `BankConfig` (paste into the firmware); it sets the
+    /// hold the tuner kept.
     pub fn to_rust(&self) -> String {
-        self.gains
-            .to_rust(&format!("noise variance {} deg^2", self.noise_var))
+        let s = self
+            .gains
+            .to_rust(&format!("noise variance {} deg^2", self.noise_var));
+        match self.hold {
+            Hold::Linear => s,
+            Hold::ZeroOrder => s.replace(
+                "    ..BankConfig::PAPER\n",
+                "    hold: estimators::Hold::ZeroOrder,\n    ..BankConfig::PAPER\n",
+            ),
+        }
     }
 }
 
@@ -439,16 +666,53 @@ mod tests {
     use super::*;
 
     #[test]
-    fn coordinate_search_finds_the_minimum_of_a_log_quadratic() {
-        // Minimum at (50, 0.02); start two decades away.
-        let f = |x: &[f64]| (x[0] / 50.0).ln().powi(2) + (x[1] / 0.02).ln().powi(2);
-        let x = coord_search(&[1.0, 1.0], &[1e-6, 1e-6], &[1e6, 1e6], &f);
-        assert!(
-            (x[0] / 50.0 - 1.0).abs() < 0.05 && (x[1] / 0.02 - 1.0).abs() < 0.05,
-            "{x:?}"
-        );
-        // Bounds are respected.
-        let x = coord_search(&[0.5], &[0.05], &[1.0], &|x: &[f64]| -x[0]);
-        assert_eq!(x, vec![1.0]);
+    fn mse_range_counts_only_the_samples_in_the_range() {
+        let t = [0, 1_000_000, 2_000_000, 3_000_000];
+        let est = [1.0, 2.0, 3.0, 10.0];
+        let r = [0.0; 4];
+        // 1 s and 2 s, both ends included: (4 + 9) / 2.
+        assert_eq!(mse_range(&t, &est, &r, (1.0, 2.0)), 6.5);
+        assert!(mse_range(&t, &est, &r, (3.5, 4.0)).is_nan());
+        assert!(check_range("--train", (2.0, 1.0)).is_err());
+        assert!(check_range("--train", (-1.0, 1.0)).is_err());
+        assert!(check_range("--train", (0.0, f64::NAN)).is_err());
+        assert!(check_range("--train", (0.0, 0.5)).is_ok());
+    }
+
+    #[test]
+    fn every_preset_lies_inside_its_search_range() {
+        let g = GainsFile::from_bank(&BankConfig::PAPER);
+        for half in [g.velocity, g.acceleration] {
+            let ave = half.ave.unwrap();
+            let kf = half.kf.unwrap();
+            let ed = half.ed.unwrap();
+            let mut pts = vec![
+                (0, vec![ave.k, ave.gamma1]),
+                (4, vec![half.ad.unwrap().t]),
+                (5, vec![ed.lambda, ed.alpha]),
+                (6, vec![kf.q]),
+            ];
+            for (j, i) in [half.ilo1, half.ilo2, half.ilo3].into_iter().enumerate() {
+                let i = i.unwrap();
+                // Searched as 1 - K1; K1 = 1 is the range's end (1e-7) to f32 precision.
+                pts.push((1 + j, vec![(1.0 - i.k1).max(1e-7), i.l, i.k2]));
+            }
+            for (i, x) in pts {
+                let (lo, hi) = ranges(i, 1e-4);
+                for ((v, l), h) in x.iter().zip(&lo).zip(&hi) {
+                    let v = f64::from(*v);
+                    assert!(v >= *l && v <= *h, "family {i}: {v} not in [{l}, {h}]");
+                }
+            }
+        }
+        // The ILO's L bound keeps h L < 1 (the constructor's condition); both ends of the
+        // leak map to valid K1 (K1 = 1 - 1e-7 rounds to 1 - 2^-23 in f32).
+        let (lo, hi) = ranges(1, 1e-4);
+        assert!(hi[1] * 1e-4 < 1.0);
+        for c in [lo[0], hi[0]] {
+            let k1 = (1.0 - c) as f32;
+            assert!(k1 > 0.0 && k1 < 1.0, "{k1}");
+            assert!(estimators::Ilo::<f32, 1>::new(&ilo(&[c, 1.0, 1.0]), 1e-4).is_ok());
+        }
     }
 }

@@ -187,7 +187,8 @@ fn ci() -> Result<(), String> {
     cargo(&["test", "--all-targets"])?;
     cargo(&["test", "--doc"])?;
     // Release-mode tests: 10^6 random parser streams, constant-memory streaming of 200+ MiB,
-    // and the 24 h run of the whole bank (f32 and fixed point, 8.64 M samples each).
+    // the 24 h run of the whole bank (f32 and fixed point, 8.64 M samples each), and the tuner's
+    // search against its exhaustive grid on slices of the bundled captures.
     cargo(&[
         "test",
         "--release",
@@ -203,6 +204,8 @@ fn ci() -> Result<(), String> {
         "streaming",
         "--test",
         "long_run",
+        "--test",
+        "tune_search",
     ])?;
     // Rustdoc of the host crates: broken intra-doc links and bad HTML fail the build.
     run_env(
