@@ -24,7 +24,7 @@ use std::path::PathBuf;
 use std::process::{Command, ExitCode};
 
 /// The no_std library crates that must cross-compile for every thumb target.
-const NO_STD_CRATES: &[&str] = &["nav440-proto", "estimators", "nav440-pipeline"];
+const NO_STD_CRATES: &[&str] = &["nav440-proto", "velocity-estimators", "nav440-pipeline"];
 /// Cortex-M targets pinned in `rust-toolchain.toml`.
 const THUMB_TARGETS: &[&str] = &[
     "thumbv7em-none-eabihf",
@@ -197,7 +197,7 @@ fn ci() -> Result<(), String> {
         "-p",
         "host-tests",
         "-p",
-        "estimators",
+        "velocity-estimators",
         "--test",
         "fuzz_equivalent",
         "--test",

@@ -13,8 +13,13 @@ fn to_root() -> Result<(), String> {
     std::env::set_current_dir(root).map_err(|e| format!("cannot enter {}: {e}", root.display()))
 }
 
-/// The publishable libraries (their `Cargo.toml` lies at `<name>/Cargo.toml`).
-pub const LIBRARIES: &[&str] = &["nav440-proto", "estimators"];
+/// The publishable libraries: (directory of the `Cargo.toml`, package name). The estimators'
+/// package is `velocity-estimators` (`estimators` is taken on crates.io); its library keeps
+/// the name `estimators`.
+pub const LIBRARIES: &[(&str, &str)] = &[
+    ("nav440-proto", "nav440-proto"),
+    ("estimators", "velocity-estimators"),
+];
 
 /// Runs every example of the libraries (each checks its own result and exits non-zero on a
 /// failure), then `cargo publish --dry-run` of each library (`--allow-dirty`: CI's checkout may
@@ -26,7 +31,7 @@ pub fn package() -> Result<(), String> {
         "run",
         "-q",
         "-p",
-        "estimators",
+        "velocity-estimators",
         "--example",
         "sampled_signal",
     ])?;
@@ -71,7 +76,7 @@ pub fn package() -> Result<(), String> {
         "-D",
         "warnings",
     ])?;
-    for lib in LIBRARIES {
+    for (_, lib) in LIBRARIES {
         cargo(&["publish", "--dry-run", "--allow-dirty", "-p", lib])?;
     }
     Ok(())
@@ -120,11 +125,11 @@ pub fn msrv() -> Result<(), String> {
         ));
     }
     eprintln!("xtask msrv: workspace rust-version {workspace} = pinned toolchain {pinned}");
-    for lib in LIBRARIES {
-        let manifest = std::fs::read_to_string(format!("{lib}/Cargo.toml"))
-            .map_err(|e| format!("cannot read {lib}/Cargo.toml: {e}"))?;
+    for (dir, lib) in LIBRARIES {
+        let manifest = std::fs::read_to_string(format!("{dir}/Cargo.toml"))
+            .map_err(|e| format!("cannot read {dir}/Cargo.toml: {e}"))?;
         let version = rust_version(&manifest)
-            .ok_or_else(|| format!("{lib}/Cargo.toml declares no rust-version of its own"))?;
+            .ok_or_else(|| format!("{dir}/Cargo.toml declares no rust-version of its own"))?;
         let installed = Command::new("rustup")
             .args(["run", &version, "rustc", "--version"])
             .output()
