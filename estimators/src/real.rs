@@ -113,6 +113,42 @@ fn umul32_split(a: u32, b: u32) -> u64 {
     (u64::from(high) << 32) | u64::from(low)
 }
 
+/// `a * b` of two signed 32-bit numbers as 64 bits. On Cortex-M0 one `MULS` when both fit in
+/// 16 bits (the high words of the bank's values and coefficients: |x| < 32768), else the
+/// library multiply; elsewhere the native product (`SMULL`).
+#[inline(always)]
+fn smul32(a: i32, b: i32) -> i64 {
+    #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
+    {
+        if a as i16 as i32 == a && b as i16 as i32 == b {
+            return i64::from(a * b);
+        }
+    }
+    i64::from(a) * i64::from(b)
+}
+
+/// `a * b` of a signed and an unsigned 32-bit number (`|a b| < 2^63`), from the unsigned
+/// unsigned product (one [`umul32`]).
+#[inline(always)]
+fn smul32u(a: i32, b: u32) -> i64 {
+    #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
+    {
+        // Cortex-M0: the sign handled apart, so that the compiler keeps `umul32_split` (it
+        // turns the two's-complement form below back into a library call).
+        let p = umul32(a.unsigned_abs(), b) as i64;
+        if a < 0 {
+            -p
+        } else {
+            p
+        }
+    }
+    #[cfg(not(all(target_arch = "arm", not(target_has_atomic = "32"))))]
+    {
+        // a b = (a mod 2^32) b - [a < 0] b 2^32, wrapping (the true product fits).
+        (umul32(a as u32, b) as i64).wrapping_sub(if a < 0 { i64::from(b) << 32 } else { 0 })
+    }
+}
+
 /// The Q31.32 saturating product of raw values `a`, `b`: `floor(a b / 2^32)`, saturated to
 /// the `i64` range (exactly `fixed::Saturating<I32F32>`'s multiply).
 ///
@@ -127,11 +163,9 @@ pub fn fx_mul(a: i64, b: i64) -> i64 {
     let (bh, bl) = ((b >> 32) as i32, b as u32);
     let lo = (umul32(al, bl) >> 32) as i64;
     // ah * bl (signed x unsigned) = ah as u32 * bl - (ah < 0) bl 2^32.
-    let m1 =
-        (umul32(ah as u32, bl) as i64).wrapping_sub(if ah < 0 { i64::from(bl) << 32 } else { 0 });
-    let m2 =
-        (umul32(bh as u32, al) as i64).wrapping_sub(if bh < 0 { i64::from(al) << 32 } else { 0 });
-    let hh = i64::from(ah) * i64::from(bh);
+    let m1 = smul32u(ah, bl);
+    let m2 = smul32u(bh, al);
+    let hh = smul32(ah, bh);
     if (-(1i64 << 31)..(1i64 << 31)).contains(&hh) {
         if let Some(r) = (hh << 32)
             .checked_add(m1)
@@ -222,7 +256,7 @@ pub fn fx_sqrt(r: i64) -> i64 {
     let e = r.leading_zeros() & !1; // < 32
     let m = r << e;
     let mut root = u64::from(isqrt64(m));
-    let mut rem = m - root * root; // <= 2 root < 2^33
+    let mut rem = m - umul32(root as u32, root as u32); // <= 2 root < 2^33
     for _ in 0..(32 - e) / 2 {
         rem <<= 2;
         let t = (root << 2) | 1;
