@@ -154,10 +154,14 @@ fn smul32u(a: i32, b: u32) -> i64 {
 ///
 /// With `a = ah 2^32 + al` (`ah` signed, `al` unsigned 32-bit halves) and `b` alike,
 /// `floor(a b / 2^32) = ah bh 2^32 + ah bl + al bh + floor(al bl / 2^32)`: four 32 x 32-bit
-/// products. Summed two ways, both exact for every input and chosen by what the target runs
-/// faster: [`fx_mul_carry`] (Cortex-M3 and others) or [`fx_mul_checked`] (Cortex-M0).
+/// products (two when `0 <= a < 1`, [`fx_mul_frac`]). Summed two ways, both exact for every
+/// input and chosen by what the target runs faster: [`fx_mul_carry`] (Cortex-M3 and others)
+/// or [`fx_mul_checked`] (Cortex-M0).
 #[inline(always)]
 pub fn fx_mul(a: i64, b: i64) -> i64 {
+    if a >> 32 == 0 {
+        return fx_mul_frac(a as u32, b);
+    }
     #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
     {
         fx_mul_checked(a, b)
@@ -166,6 +170,16 @@ pub fn fx_mul(a: i64, b: i64) -> i64 {
     {
         fx_mul_carry(a, b)
     }
+}
+
+/// [`fx_mul`] for `a` in `[0, 1)` (raw `al` below 2^32: the bank's coefficients `h`, `h k`,
+/// `h sigma`, `h alpha`, most map entries, written first in every product): `ah = 0`, so
+/// `floor(a b / 2^32) = bh al + floor(al bl / 2^32)`, two products; the sum cannot overflow
+/// and is never out of range (`|a b| < |b|`).
+#[inline(always)]
+fn fx_mul_frac(al: u32, b: i64) -> i64 {
+    let (bh, bl) = ((b >> 32) as i32, b as u32);
+    smul32u(bh, al) + (umul32(al, bl) >> 32) as i64
 }
 
 /// The four partial products of [`fx_mul`]: `(ah bh, ah bl, al bh, floor(al bl / 2^32))`.
@@ -634,6 +648,9 @@ mod tests {
             let p = reference(a, b);
             assert_eq!(fx_mul_carry(a, b), p, "{a} * {b}");
             assert_eq!(fx_mul_checked(a, b), p, "{a} * {b}");
+            assert_eq!(fx_mul(a, b), p, "{a} * {b}");
+            let f = a & 0xFFFF_FFFF;
+            assert_eq!(fx_mul(f, b), reference(f, b), "{f} * {b}");
         }
     }
 
