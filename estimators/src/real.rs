@@ -154,13 +154,22 @@ fn smul32u(a: i32, b: u32) -> i64 {
 ///
 /// With `a = ah 2^32 + al` (`ah` signed, `al` unsigned 32-bit halves) and `b` alike,
 /// `floor(a b / 2^32) = ah bh 2^32 + ah bl + al bh + floor(al bl / 2^32)`: four 32 x 32-bit
-/// products (two when `0 <= a < 1`, [`fx_mul_frac`]). Summed two ways, both exact for every
+/// products (two when `a` or `b` is in `[0, 1)`, [`fx_mul_frac`], or `a` is an integer on
+/// the M0, [`fx_mul_int`]). Summed two ways, both exact for every
 /// input and chosen by what the target runs faster: [`fx_mul_carry`] (Cortex-M3 and others)
 /// or [`fx_mul_checked`] (Cortex-M0).
 #[inline(always)]
 pub fn fx_mul(a: i64, b: i64) -> i64 {
     if a >> 32 == 0 {
         return fx_mul_frac(a as u32, b);
+    }
+    if b >> 32 == 0 {
+        return fx_mul_frac(b as u32, a);
+    }
+    // Cortex-M0 only: on the M3 the extra test costs more than it saves (measured).
+    #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
+    if a as u32 == 0 {
+        return fx_mul_int((a >> 32) as i32, b);
     }
     #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
     {
@@ -180,6 +189,27 @@ pub fn fx_mul(a: i64, b: i64) -> i64 {
 fn fx_mul_frac(al: u32, b: i64) -> i64 {
     let (bh, bl) = ((b >> 32) as i32, b as u32);
     smul32u(bh, al) + (umul32(al, bl) >> 32) as i64
+}
+
+/// [`fx_mul`] for an integer `a = ah` (raw `al = 0`: the coefficients `h gamma1 = 2`,
+/// `lambda = 700`, `1 / T = 100`): `a b = ah bh 2^32 + ah bl` exactly, two products, saturated
+/// when the high part leaves 32 signed bits.
+#[cfg_attr(
+    not(all(target_arch = "arm", not(target_has_atomic = "32"))),
+    allow(dead_code)
+)]
+#[inline(always)]
+fn fx_mul_int(ah: i32, b: i64) -> i64 {
+    let (bh, bl) = ((b >> 32) as i32, b as u32);
+    let m1 = smul32u(ah, bl);
+    let high = smul32(ah, bh) + (m1 >> 32);
+    if (-(1i64 << 31)..(1i64 << 31)).contains(&high) {
+        (high << 32) | i64::from(m1 as u32)
+    } else if high > 0 {
+        i64::MAX
+    } else {
+        i64::MIN
+    }
 }
 
 /// The four partial products of [`fx_mul`]: `(ah bh, ah bl, al bh, floor(al bl / 2^32))`.
@@ -651,6 +681,14 @@ mod tests {
             assert_eq!(fx_mul(a, b), p, "{a} * {b}");
             let f = a & 0xFFFF_FFFF;
             assert_eq!(fx_mul(f, b), reference(f, b), "{f} * {b}");
+            assert_eq!(fx_mul(b, f), reference(b, f), "{b} * {f}");
+            let n = a & !0xFFFF_FFFF;
+            assert_eq!(fx_mul(n, b), reference(n, b), "{n} * {b}");
+            assert_eq!(
+                fx_mul_int((n >> 32) as i32, b),
+                reference(n, b),
+                "{n} * {b}"
+            );
         }
     }
 
