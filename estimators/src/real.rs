@@ -4,10 +4,12 @@
 use core::fmt::{Debug, Display};
 use core::ops::{Add, Mul, Neg, Sub};
 use fixed::types::I32F32;
-use fixed::Saturating;
 
-/// The fixed-point format of the crate: signed Q31.32 (`I32F32`) in 64 bits, wrapped in
-/// [`fixed::Saturating`] so that every `+ - *` saturates at the range ends instead of wrapping.
+/// The fixed-point format of the crate: signed Q31.32 (`I32F32`) in 64 bits, saturating: every
+/// `+ - *` saturates at the range ends instead of wrapping. The values and results are those of
+/// [`fixed::Saturating`]`<I32F32>` bit for bit (multiplication rounds toward minus infinity,
+/// the square root down); the multiply and the square root are this crate's own integer code,
+/// written for 32-bit cores (see [`fx_mul`] and docs/FIXED-POINT.md).
 ///
 /// * Range: `[-2^31, 2^31)` = about +-2.1e9 in the unit of the quantity (deg, deg/s, deg/s^2).
 /// * Resolution: `2^-32` = 2.3e-10.
@@ -18,8 +20,357 @@ use fixed::Saturating;
 /// `deltahat` would never learn, and the ILO's `h * L * e` position increments would vanish the
 /// same way. With 32 fractional bits the increments are kept down to `|e| ~ 2e-6 deg`, below the
 /// NAV440's 0.005 deg yaw resolution. The 31 integer bits hold any yaw unwrapped over millions of
-/// turns. Every operation is integer-only (no FPU): a multiply is a 64x64->128-bit product.
-pub type Fx = Saturating<I32F32>;
+/// turns. Every operation is integer-only (no FPU).
+#[derive(Clone, Copy, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct Fx(I32F32);
+
+impl Fx {
+    /// The value with raw bits `bits` (`bits / 2^32`).
+    #[inline]
+    pub const fn from_bits(bits: i64) -> Self {
+        Self(I32F32::from_bits(bits))
+    }
+
+    /// The raw bits (`self * 2^32`).
+    #[inline]
+    pub const fn to_bits(self) -> i64 {
+        self.0.to_bits()
+    }
+}
+
+impl Debug for Fx {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        Debug::fmt(&self.0, f)
+    }
+}
+
+impl Display for Fx {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        Display::fmt(&self.0, f)
+    }
+}
+
+impl Add for Fx {
+    type Output = Fx;
+    #[inline(always)]
+    fn add(self, o: Fx) -> Fx {
+        Fx::from_bits(self.to_bits().saturating_add(o.to_bits()))
+    }
+}
+
+impl Sub for Fx {
+    type Output = Fx;
+    #[inline(always)]
+    fn sub(self, o: Fx) -> Fx {
+        Fx::from_bits(self.to_bits().saturating_sub(o.to_bits()))
+    }
+}
+
+impl Neg for Fx {
+    type Output = Fx;
+    #[inline(always)]
+    fn neg(self) -> Fx {
+        Fx::from_bits(self.to_bits().saturating_neg())
+    }
+}
+
+impl Mul for Fx {
+    type Output = Fx;
+    #[inline(always)]
+    fn mul(self, o: Fx) -> Fx {
+        Fx::from_bits(fx_mul(self.to_bits(), o.to_bits()))
+    }
+}
+
+/// `a * b` of two 32-bit numbers as 64 bits. On Cortex-M0 (thumbv6m: no long multiply; the
+/// only 32-bit Arm target without 32-bit atomics) [`umul32_split`] instead of the 64 x 64-bit
+/// library multiply; elsewhere the native product (`UMULL`).
+#[inline(always)]
+fn umul32(a: u32, b: u32) -> u64 {
+    #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
+    {
+        umul32_split(a, b)
+    }
+    #[cfg(not(all(target_arch = "arm", not(target_has_atomic = "32"))))]
+    {
+        u64::from(a) * u64::from(b)
+    }
+}
+
+/// `a * b` from four 16 x 16 -> 32-bit products (`MULS`), carries propagated.
+#[cfg_attr(
+    not(all(target_arch = "arm", not(target_has_atomic = "32"))),
+    allow(dead_code)
+)]
+#[inline(always)]
+fn umul32_split(a: u32, b: u32) -> u64 {
+    let (a0, a1) = (a & 0xFFFF, a >> 16);
+    let (b0, b1) = (b & 0xFFFF, b >> 16);
+    let lo = a0 * b0;
+    let (mid, c) = (a1 * b0).overflowing_add(a0 * b1);
+    let (low, c2) = lo.overflowing_add(mid << 16);
+    let high = a1 * b1 + (mid >> 16) + (u32::from(c) << 16) + u32::from(c2);
+    (u64::from(high) << 32) | u64::from(low)
+}
+
+/// `a * b` of two signed 32-bit numbers as 64 bits. On Cortex-M0 one `MULS` when both fit in
+/// 16 bits (the high words of the bank's values and coefficients: |x| < 32768), else the
+/// library multiply; elsewhere the native product (`SMULL`).
+#[inline(always)]
+fn smul32(a: i32, b: i32) -> i64 {
+    #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
+    {
+        if a as i16 as i32 == a && b as i16 as i32 == b {
+            return i64::from(a * b);
+        }
+    }
+    i64::from(a) * i64::from(b)
+}
+
+/// `a * b` of a signed and an unsigned 32-bit number (`|a b| < 2^63`), from the unsigned
+/// unsigned product (one [`umul32`]).
+#[inline(always)]
+fn smul32u(a: i32, b: u32) -> i64 {
+    #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
+    {
+        // Cortex-M0: the sign handled apart, so that the compiler keeps `umul32_split` (it
+        // turns the two's-complement form below back into a library call).
+        let p = umul32(a.unsigned_abs(), b) as i64;
+        if a < 0 {
+            -p
+        } else {
+            p
+        }
+    }
+    #[cfg(not(all(target_arch = "arm", not(target_has_atomic = "32"))))]
+    {
+        // a b = (a mod 2^32) b - [a < 0] b 2^32, wrapping (the true product fits).
+        (umul32(a as u32, b) as i64).wrapping_sub(if a < 0 { i64::from(b) << 32 } else { 0 })
+    }
+}
+
+/// The Q31.32 saturating product of raw values `a`, `b`: `floor(a b / 2^32)`, saturated to
+/// the `i64` range (exactly `fixed::Saturating<I32F32>`'s multiply).
+///
+/// With `a = ah 2^32 + al` (`ah` signed, `al` unsigned 32-bit halves) and `b` alike,
+/// `floor(a b / 2^32) = ah bh 2^32 + ah bl + al bh + floor(al bl / 2^32)`: four 32 x 32-bit
+/// products (two when `a` or `b` is in `[0, 1)`, [`fx_mul_frac`], or `a` is an integer on
+/// the M0, [`fx_mul_int`]). Summed two ways, both exact for every
+/// input and chosen by what the target runs faster: [`fx_mul_carry`] (Cortex-M3 and others)
+/// or [`fx_mul_checked`] (Cortex-M0).
+#[inline(always)]
+pub fn fx_mul(a: i64, b: i64) -> i64 {
+    if a >> 32 == 0 {
+        return fx_mul_frac(a as u32, b);
+    }
+    if b >> 32 == 0 {
+        return fx_mul_frac(b as u32, a);
+    }
+    // Cortex-M0 only: on the M3 the extra test costs more than it saves (measured).
+    #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
+    if a as u32 == 0 {
+        return fx_mul_int((a >> 32) as i32, b);
+    }
+    #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
+    {
+        fx_mul_checked(a, b)
+    }
+    #[cfg(not(all(target_arch = "arm", not(target_has_atomic = "32"))))]
+    {
+        fx_mul_carry(a, b)
+    }
+}
+
+/// [`fx_mul`] for `a` in `[0, 1)` (raw `al` below 2^32: the bank's coefficients `h`, `h k`,
+/// `h sigma`, `h alpha`, most map entries, written first in every product): `ah = 0`, so
+/// `floor(a b / 2^32) = bh al + floor(al bl / 2^32)`, two products; the sum cannot overflow
+/// and is never out of range (`|a b| < |b|`).
+#[inline(always)]
+fn fx_mul_frac(al: u32, b: i64) -> i64 {
+    let (bh, bl) = ((b >> 32) as i32, b as u32);
+    smul32u(bh, al) + (umul32(al, bl) >> 32) as i64
+}
+
+/// [`fx_mul`] for an integer `a = ah` (raw `al = 0`: the coefficients `h gamma1 = 2`,
+/// `lambda = 700`, `1 / T = 100`): `a b = ah bh 2^32 + ah bl` exactly, two products, saturated
+/// when the high part leaves 32 signed bits.
+#[cfg_attr(
+    not(all(target_arch = "arm", not(target_has_atomic = "32"))),
+    allow(dead_code)
+)]
+#[inline(always)]
+fn fx_mul_int(ah: i32, b: i64) -> i64 {
+    let (bh, bl) = ((b >> 32) as i32, b as u32);
+    let m1 = smul32u(ah, bl);
+    let high = smul32(ah, bh) + (m1 >> 32);
+    if (-(1i64 << 31)..(1i64 << 31)).contains(&high) {
+        (high << 32) | i64::from(m1 as u32)
+    } else if high > 0 {
+        i64::MAX
+    } else {
+        i64::MIN
+    }
+}
+
+/// The four partial products of [`fx_mul`]: `(ah bh, ah bl, al bh, floor(al bl / 2^32))`.
+#[inline(always)]
+fn partial_products(a: i64, b: i64) -> (i64, i64, i64, i64) {
+    let (ah, al) = ((a >> 32) as i32, a as u32);
+    let (bh, bl) = ((b >> 32) as i32, b as u32);
+    let lo = (umul32(al, bl) >> 32) as i64;
+    (smul32(ah, bh), smul32u(ah, bl), smul32u(bh, al), lo)
+}
+
+/// [`fx_mul`] summed as a low word with its carries and a high part that cannot overflow: the
+/// result is in range exactly when the high part fits 32 signed bits, and saturates by its
+/// sign otherwise.
+#[cfg_attr(
+    all(target_arch = "arm", not(target_has_atomic = "32")),
+    allow(dead_code)
+)]
+#[inline(always)]
+fn fx_mul_carry(a: i64, b: i64) -> i64 {
+    let (hh, m1, m2, lo) = partial_products(a, b);
+    // S = hh 2^32 + m1 + m2 + lo = high 2^32 + (low mod 2^32), exactly, with
+    // low = (m1 mod 2^32) + (m2 mod 2^32) + lo < 3 2^32 and
+    // high = hh + floor(m1 / 2^32) + floor(m2 / 2^32) + floor(low / 2^32) (|high| < 2^63).
+    let low = u64::from(m1 as u32) + u64::from(m2 as u32) + lo as u64;
+    let high = hh + (m1 >> 32) + (m2 >> 32) + (low >> 32) as i64;
+    if (-(1i64 << 31)..(1i64 << 31)).contains(&high) {
+        (high << 32) | i64::from(low as u32)
+    } else if high > 0 {
+        i64::MAX
+    } else {
+        i64::MIN
+    }
+}
+
+/// [`fx_mul`] summed with overflow checks; any overflow (a result out of range, or an
+/// intermediate one) takes the exact 128-bit fallback [`fx_mul_wide`].
+#[cfg_attr(
+    not(all(target_arch = "arm", not(target_has_atomic = "32"))),
+    allow(dead_code)
+)]
+#[inline(always)]
+fn fx_mul_checked(a: i64, b: i64) -> i64 {
+    let (hh, m1, m2, lo) = partial_products(a, b);
+    if (-(1i64 << 31)..(1i64 << 31)).contains(&hh) {
+        if let Some(r) = (hh << 32)
+            .checked_add(m1)
+            .and_then(|x| x.checked_add(m2))
+            .and_then(|x| x.checked_add(lo))
+        {
+            return r;
+        }
+    }
+    fx_mul_wide(a, b)
+}
+
+/// The exact 128-bit product of [`fx_mul_checked`], saturated (its rare fallback).
+#[cold]
+#[inline(never)]
+fn fx_mul_wide(a: i64, b: i64) -> i64 {
+    let p = (i128::from(a) * i128::from(b)) >> 32;
+    if p > i128::from(i64::MAX) {
+        i64::MAX
+    } else if p < i128::from(i64::MIN) {
+        i64::MIN
+    } else {
+        p as i64
+    }
+}
+
+/// `1 / sqrt(X)` in Q1.31 at the middle of each eighth of `X` in `[1, 4)` (`X = (i + 0.5) / 8`
+/// for `i = 8 .. 31`): the start of [`isqrt64`]'s Newton iteration (about 5 bits).
+const RSQRT_SEED: [u32; 24] = [
+    2_083_365_155,
+    1_970_666_148,
+    1_874_477_404,
+    1_791_125_178,
+    1_717_986_918,
+    1_653_133_683,
+    1_595_110_809,
+    1_542_797_797,
+    1_495_315_679,
+    1_451_963_954,
+    1_412_176_548,
+    1_375_490_368,
+    1_341_522_400,
+    1_309_952_745,
+    1_280_511_845,
+    1_252_970_736,
+    1_227_133_513,
+    1_202_831_433,
+    1_179_918_260,
+    1_158_266_544,
+    1_137_764_631,
+    1_118_314_230,
+    1_099_828_424,
+    1_082_230_034,
+];
+
+/// `floor(sqrt(n))`, exact, with 32-bit multiplies only: `n` is normalised to
+/// `m = n 4^k` in `[2^62, 2^64)`, `1/sqrt` of its top 32 bits is refined by three Newton steps
+/// `y <- y (3 - X y^2) / 2` from [`RSQRT_SEED`] (about 28 bits), `sqrt(m) ~ X y`, and the
+/// estimate is corrected by whole units until `s^2 <= m < (s + 1)^2` (exact whatever the
+/// estimate; it is off by a few units). The result is `floor(sqrt(m)) / 2^k`.
+#[inline]
+pub fn isqrt64(n: u64) -> u32 {
+    if n == 0 {
+        return 0;
+    }
+    let e = n.leading_zeros() & !1;
+    let m = n << e;
+    let x = (m >> 32) as u32; // X = x / 2^30 in [1, 4)
+    let idx = ((x >> 27) as usize).saturating_sub(8);
+    let mut y = RSQRT_SEED.get(idx).copied().unwrap_or(1 << 30); // Q1.31
+    for _ in 0..3 {
+        let y2 = (umul32(y, y) >> 31) as u32; // y^2, Q1.31
+        let xy2 = (umul32(x, y2) >> 31) as u32; // X y^2 / 2, Q1.31 (about 0.5)
+        let t = (3u32 << 29).wrapping_sub(xy2 >> 1); // (3 - X y^2) / 2, Q2.30
+        y = (umul32(y, t) >> 30) as u32; // Q1.31
+    }
+    // sqrt(m) = sqrt(X) 2^31 = X y 2^31: (x / 2^30) (y / 2^31) 2^31 = x y / 2^30.
+    let mut s = (umul32(x, y) >> 30).min(u64::from(u32::MAX)) as u32;
+    while umul32(s, s) > m {
+        s -= 1;
+    }
+    while s < u32::MAX && umul32(s + 1, s + 1) <= m {
+        s += 1;
+    }
+    s >> (e / 2)
+}
+
+/// The Q31.32 square root of raw `r`: `floor(sqrt(r 2^32))` (0 for `r <= 0`), exact.
+///
+/// `r < 2^32` (values below 1, the ED's usual `|e|`): [`isqrt64`] of `r 2^32`. Larger `r`:
+/// [`isqrt64`] of `r 4^j` (`4^j r < 2^64`) gives the root's leading bits and its remainder;
+/// the remaining `16 - j` bits come from the binary digit-by-digit method on the remainder.
+#[inline]
+pub fn fx_sqrt(r: i64) -> i64 {
+    if r <= 0 {
+        return 0;
+    }
+    let r = r as u64;
+    if r >> 32 == 0 {
+        return i64::from(isqrt64(r << 32));
+    }
+    let e = r.leading_zeros() & !1; // < 32
+    let m = r << e;
+    let mut root = u64::from(isqrt64(m));
+    let mut rem = m - umul32(root as u32, root as u32); // <= 2 root < 2^33
+    for _ in 0..(32 - e) / 2 {
+        rem <<= 2;
+        let t = (root << 2) | 1;
+        if rem >= t {
+            rem -= t;
+            root = (root << 1) | 1;
+        } else {
+            root <<= 1;
+        }
+    }
+    root as i64
+}
 
 /// A real-number type the estimators compute in: `f32` (Cortex-M4F FPU), `f64` (host
 /// reference) or [`Fx`] (fixed point, Cortex-M0/M3 without FPU).
@@ -187,31 +538,31 @@ impl Real for f64 {
 }
 
 impl Real for Fx {
-    const ZERO: Self = Saturating(I32F32::ZERO);
-    const ONE: Self = Saturating(I32F32::ONE);
+    const ZERO: Self = Fx(I32F32::ZERO);
+    const ONE: Self = Fx(I32F32::ONE);
     #[inline]
     fn from_f64(x: f64) -> Self {
         // `checked_from_num` (not `saturating_from_num`, which panics on NaN) keeps the
         // conversion panic-free; out of range saturates by the sign bit, NaN gives 0.
         match I32F32::checked_from_num(x) {
-            Some(v) => Saturating(v),
+            Some(v) => Fx(v),
             None if x.is_nan() => Self::ZERO,
-            None if x.is_sign_negative() => Saturating(I32F32::MIN),
-            None => Saturating(I32F32::MAX),
+            None if x.is_sign_negative() => Fx(I32F32::MIN),
+            None => Fx(I32F32::MAX),
         }
     }
     #[inline]
     fn from_f32(x: f32) -> Self {
         match I32F32::checked_from_num(x) {
-            Some(v) => Saturating(v),
+            Some(v) => Fx(v),
             None if x.is_nan() => Self::ZERO,
-            None if x.is_sign_negative() => Saturating(I32F32::MIN),
-            None => Saturating(I32F32::MAX),
+            None if x.is_sign_negative() => Fx(I32F32::MIN),
+            None => Fx(I32F32::MAX),
         }
     }
     #[inline]
     fn from_i32(x: i32) -> Self {
-        Saturating(I32F32::from_num(x))
+        Fx(I32F32::from_num(x))
     }
     #[inline]
     fn to_f32(self) -> f32 {
@@ -223,24 +574,20 @@ impl Real for Fx {
     }
     #[inline]
     fn abs(self) -> Self {
-        Saturating(self.0.saturating_abs())
+        Fx(self.0.saturating_abs())
     }
+    /// `floor(sqrt(x))` to the last bit (what `fixed`'s `I32F32::sqrt` returns), by
+    /// [`fx_sqrt`].
     #[inline]
     fn sqrt(self) -> Self {
-        // Q31.32: sqrt of at most 2^31 is below 2^16, so `checked_sqrt` of a non-negative value
-        // never overflows; the fallback arm is unreachable but keeps the path panic-free.
-        if self.0 > I32F32::ZERO {
-            Saturating(self.0.checked_sqrt().unwrap_or(I32F32::ZERO))
-        } else {
-            Self::ZERO
-        }
+        Fx::from_bits(fx_sqrt(self.to_bits()))
     }
     #[inline]
     fn div_int(self, n: u32) -> Self {
         if n == 0 {
             self
         } else {
-            Saturating(self.0.saturating_div_int(i64::from(n)))
+            Fx(self.0.saturating_div_int(i64::from(n)))
         }
     }
 }
@@ -265,5 +612,152 @@ impl<T: Real> SqrtFn<T> for ExactSqrt {
     #[inline]
     fn sqrt(x: T) -> T {
         x.sqrt()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use fixed::Saturating;
+
+    /// xorshift64* values with a random number of significant bits (small and large values).
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> u64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+        }
+        fn raw(&mut self) -> i64 {
+            let bits = (self.next() % 64) as u32;
+            let v = (self.next() >> (63 - bits.min(63))) as i64;
+            if self.next() & 1 == 0 {
+                v
+            } else {
+                v.wrapping_neg()
+            }
+        }
+    }
+
+    const EDGES: [i64; 12] = [
+        0,
+        1,
+        -1,
+        i64::MAX,
+        i64::MIN,
+        i64::MIN + 1,
+        1 << 32,
+        -(1 << 32),
+        (1 << 32) - 1,
+        1 << 31,
+        -(1 << 31) - 1,
+        0x7FFF_FFFF_0000_0000,
+    ];
+
+    /// The crate's multiply (both summations) is `fixed::Saturating<I32F32>`'s (the independent reference) on
+    /// edge values and 2 million random pairs of every magnitude.
+    #[test]
+    fn mul_matches_fixed_crate() {
+        let reference = |a: i64, b: i64| {
+            (Saturating(I32F32::from_bits(a)) * Saturating(I32F32::from_bits(b)))
+                .0
+                .to_bits()
+        };
+        for a in EDGES {
+            for b in EDGES {
+                let p = reference(a, b);
+                assert_eq!(fx_mul(a, b), p, "{a} * {b}");
+                assert_eq!(fx_mul_carry(a, b), p, "{a} * {b}");
+                assert_eq!(fx_mul_checked(a, b), p, "{a} * {b}");
+            }
+        }
+        let mut r = Rng(0x1234_5678_9ABC_DEF1);
+        for _ in 0..2_000_000 {
+            let (a, b) = (r.raw(), r.raw());
+            let p = reference(a, b);
+            assert_eq!(fx_mul_carry(a, b), p, "{a} * {b}");
+            assert_eq!(fx_mul_checked(a, b), p, "{a} * {b}");
+            assert_eq!(fx_mul(a, b), p, "{a} * {b}");
+            let f = a & 0xFFFF_FFFF;
+            assert_eq!(fx_mul(f, b), reference(f, b), "{f} * {b}");
+            assert_eq!(fx_mul(b, f), reference(b, f), "{b} * {f}");
+            let n = a & !0xFFFF_FFFF;
+            assert_eq!(fx_mul(n, b), reference(n, b), "{n} * {b}");
+            assert_eq!(
+                fx_mul_int((n >> 32) as i32, b),
+                reference(n, b),
+                "{n} * {b}"
+            );
+        }
+    }
+
+    /// `umul32` and its Cortex-M0 form `umul32_split` are the exact product.
+    #[test]
+    fn umul32_exact() {
+        let mut r = Rng(7);
+        for _ in 0..1_000_000 {
+            let (a, b) = (r.next() as u32, (r.next() >> 7) as u32);
+            assert_eq!(umul32(a, b), u64::from(a) * u64::from(b));
+            assert_eq!(umul32_split(a, b), u64::from(a) * u64::from(b));
+        }
+        let m = u64::from(u32::MAX);
+        assert_eq!(umul32_split(u32::MAX, u32::MAX), m * m);
+    }
+
+    /// The square root is `fixed`'s `I32F32::sqrt` (the independent reference) bit for bit,
+    /// on edge values and 2 million random values of every magnitude; `isqrt64` is the floor
+    /// of the root on random `u64` and at perfect squares and their neighbours.
+    #[test]
+    fn sqrt_matches_fixed_crate() {
+        let reference = |a: i64| {
+            if a > 0 {
+                I32F32::from_bits(a).sqrt().to_bits()
+            } else {
+                0
+            }
+        };
+        for a in EDGES {
+            assert_eq!(fx_sqrt(a), reference(a), "sqrt {a}");
+        }
+        let mut r = Rng(0xDEAD_BEEF);
+        for _ in 0..2_000_000 {
+            let a = r.raw();
+            assert_eq!(fx_sqrt(a), reference(a), "sqrt {a}");
+        }
+        for _ in 0..200_000 {
+            let n = r.next() >> (r.next() % 64);
+            let s = u64::from(isqrt64(n));
+            assert!(
+                s * s <= n && u128::from(s + 1).pow(2) > u128::from(n),
+                "isqrt {n}"
+            );
+            let q = u64::from(r.next() as u32);
+            for n in [q * q, (q * q).wrapping_sub(1), q * q + 1] {
+                let s = u64::from(isqrt64(n));
+                assert!(
+                    s * s <= n && u128::from(s + 1).pow(2) > u128::from(n),
+                    "isqrt {n}"
+                );
+            }
+        }
+        assert_eq!(isqrt64(u64::MAX), u32::MAX);
+    }
+
+    /// Add, subtract and negate saturate as `fixed::Saturating` does.
+    #[test]
+    fn add_sub_neg_match_fixed_crate() {
+        let mut r = Rng(99);
+        for _ in 0..200_000 {
+            let (a, b) = (r.raw(), r.raw());
+            let (x, y) = (
+                Saturating(I32F32::from_bits(a)),
+                Saturating(I32F32::from_bits(b)),
+            );
+            let (p, q) = (Fx::from_bits(a), Fx::from_bits(b));
+            assert_eq!((p + q).to_bits(), (x + y).0.to_bits());
+            assert_eq!((p - q).to_bits(), (x - y).0.to_bits());
+            assert_eq!((-p).to_bits(), (-x).0.to_bits());
+        }
     }
 }

@@ -375,10 +375,20 @@ fn closed_form_equals_stepping() {
     }
 }
 
-/// Runs a bank on the paper-like experiment; returns the outputs per sample.
+/// Runs a bank on the paper-like experiment (noise seed 42); returns the outputs per sample.
 fn experiment<T: Real>(cfg: &BankConfig, noise_var: f64, seconds: f64) -> Vec<BankOutput> {
+    experiment_seed::<T>(cfg, noise_var, seconds, 42)
+}
+
+/// [`experiment`] with the noise generator seeded with `seed`.
+fn experiment_seed<T: Real>(
+    cfg: &BankConfig,
+    noise_var: f64,
+    seconds: f64,
+    seed: u64,
+) -> Vec<BankOutput> {
     let mut bank = YawBank::<T>::new(cfg).unwrap();
-    let mut g = Gauss(42);
+    let mut g = Gauss(seed);
     let n = (seconds * 100.0) as u64;
     (0..=n)
         .map(|k| {
@@ -406,47 +416,95 @@ fn mse(outs: &[BankOutput], acc: bool, i: usize, from_s: f64) -> f64 {
     s / c
 }
 
-/// Fixed point (Q31.32) against f32 on the paper-like experiment: yaw within +-90 deg, rate
-/// within +-300 deg/s, acceleration within +-2000 deg/s^2, 100 Hz samples, noise
-/// sigma^2 = 0.01 deg^2, 10 s. Tolerance: every estimator's MSE against the true rate /
-/// acceleration agrees within 1 % (ED 5 %, ED-ED 20 %: their sign switching turns tiny
-/// differences into different chatter of similar size), and the linear laws' and AVE's
-/// outputs agree sample by sample within 0.05 deg/s and 1 deg/s^2.
+/// The noise seeds of the fixed-point accuracy check (10 independent noise records).
+const ACCURACY_SEEDS: [u64; 10] = [42, 1, 2, 3, 4, 5, 6, 7, 8, 9];
+
+/// Fixed point against f32 (and f64) on the paper-like experiment: yaw within +-90 deg, rate
+/// within +-300 deg/s, acceleration within +-2000 deg/s^2, 100 Hz samples, noise sigma^2 =
+/// 0.01 deg^2, 10 s, over the 10 noise seeds of [`ACCURACY_SEEDS`] (issue 12: seed-robust,
+/// not seed-lucky). The MSE is against the true rate / acceleration of `profile` (an
+/// independent computation), pooled over the 10 runs (a single run's ED / ED-ED MSE depends
+/// on its chatter, which a tiny difference changes: the per-seed ratios are printed, not
+/// asserted).
+///
+/// Tolerance, for every estimator, velocity and acceleration: the fixed-point MSE is within
+/// 2 % of the f64 bank's (the precise reference of the same laws) and at most 2 % above the
+/// f32 bank's; where f32 itself is within 2 % of f64 (every channel but ED-ED), the fixed-point
+/// MSE is also within 2 % of f32's both ways. ED-ED in f32 is about 10 % worse than f64 and
+/// fixed point: its second stage chatters around a ~300 deg/s input, where f32's resolution
+/// (3e-5) is a sizeable part of the `|e| ~ (lambda h)^2 = 5e-3` switching band. The linear
+/// laws' and the Kalman tracker's outputs agree with f32 sample by sample within 0.05 deg/s
+/// and 1 deg/s^2 on every seed, the AVE's within 0.5 deg/s and 10 deg/s^2.
 #[test]
+#[allow(clippy::needless_range_loop)] // `i` indexes the channels and three MSE tables
 fn fixed_point_matches_f32_on_paper_experiment() {
     let cfg = BankConfig::default();
-    let f = experiment::<f32>(&cfg, 0.01, 10.0);
-    let x = experiment::<Fx>(&cfg, 0.01, 10.0);
-    for acc in [false, true] {
-        for i in 0..7 {
-            let (mf, mx) = (mse(&f, acc, i, 1.0), mse(&x, acc, i, 1.0));
-            println!(
-                "{} {}: MSE f32 {mf:.3}, Q31.32 {mx:.3}",
-                if acc { "acc" } else { "vel" },
-                estimators::VELOCITY_NAMES[i]
-            );
-            let tol = match (acc, i) {
-                (false, 5) => 0.05,
-                (true, 5) => 0.2,
-                _ => 0.01,
-            };
-            assert!((mf / mx - 1.0).abs() < tol, "{acc} {i}: {mf} vs {mx}");
-        }
-    }
+    let mut sum = [[[0.0f64; 7]; 2]; 3]; // [f32, Fx, f64][vel, acc][estimator]
     let (mut dv, mut da) = (0.0f32, 0.0f32);
-    for (a, b) in f.iter().zip(&x) {
-        for i in [0, 1, 2, 3, 4, 6] {
-            dv = dv.max(
-                (a[estimators::Channel::VELOCITY[i]] - b[estimators::Channel::VELOCITY[i]]).abs(),
-            );
-            da = da.max(
-                (a[estimators::Channel::ACCELERATION[i]] - b[estimators::Channel::ACCELERATION[i]])
-                    .abs(),
-            );
+    let (mut dv_ave, mut da_ave) = (0.0f32, 0.0f32);
+    for seed in ACCURACY_SEEDS {
+        let f = experiment_seed::<f32>(&cfg, 0.01, 10.0, seed);
+        let x = experiment_seed::<Fx>(&cfg, 0.01, 10.0, seed);
+        let d = experiment_seed::<f64>(&cfg, 0.01, 10.0, seed);
+        let mut line = format!("seed {seed:2}: Fx/f32 MSE");
+        for (h, acc) in [false, true].into_iter().enumerate() {
+            for i in 0..7 {
+                let m = [
+                    mse(&f, acc, i, 1.0),
+                    mse(&x, acc, i, 1.0),
+                    mse(&d, acc, i, 1.0),
+                ];
+                for (k, v) in m.iter().enumerate() {
+                    sum[k][h][i] += v;
+                }
+                line += &format!(" {:.3}", m[1] / m[0]);
+            }
+        }
+        println!("{line}");
+        for (a, b) in f.iter().zip(&x) {
+            for i in [1, 2, 3, 4, 6] {
+                let (cv, ca) = (
+                    estimators::Channel::VELOCITY[i],
+                    estimators::Channel::ACCELERATION[i],
+                );
+                dv = dv.max((a[cv] - b[cv]).abs());
+                da = da.max((a[ca] - b[ca]).abs());
+            }
+            let (cv, ca) = (estimators::Channel::AveV, estimators::Channel::AveA);
+            dv_ave = dv_ave.max((a[cv] - b[cv]).abs());
+            da_ave = da_ave.max((a[ca] - b[ca]).abs());
         }
     }
-    println!("max |f32 - Q31.32|: vel {dv} deg/s, acc {da} deg/s^2");
+    for (h, acc) in [false, true].into_iter().enumerate() {
+        for i in 0..7 {
+            let [mf, mx, md] = [
+                sum[0][h][i] / 10.0,
+                sum[1][h][i] / 10.0,
+                sum[2][h][i] / 10.0,
+            ];
+            let name = estimators::VELOCITY_NAMES[i];
+            let what = if acc { "acc" } else { "vel" };
+            println!(
+                "{what} {name}: MSE over 10 seeds f32 {mf:.3}, fixed point {mx:.3}, f64 {md:.3} (fixed/f32 {:.4}, fixed/f64 {:.4})",
+                mx / mf,
+                mx / md
+            );
+            assert!(
+                (mx / md - 1.0).abs() < 0.02,
+                "{what} {name}: fixed {mx} vs f64 {md}"
+            );
+            assert!(mx / mf < 1.02, "{what} {name}: fixed {mx} vs f32 {mf}");
+            if (mf / md - 1.0).abs() < 0.02 {
+                assert!(
+                    (mx / mf - 1.0).abs() < 0.02,
+                    "{what} {name}: fixed {mx} vs f32 {mf}"
+                );
+            }
+        }
+    }
+    println!("max |f32 - fixed|: linear + Kalman vel {dv} deg/s, acc {da} deg/s^2; AVE vel {dv_ave}, acc {da_ave}");
     assert!(dv < 0.05 && da < 1.0, "{dv} {da}");
+    assert!(dv_ave < 0.5 && da_ave < 10.0, "{dv_ave} {da_ave}");
 }
 
 /// The bank with and without closed-form maps gives the same rows (to f32 rounding) for the
