@@ -2,6 +2,7 @@
 
 /// One attitude angle of the NAV440 (Euler angles, aerospace sequence yaw-pitch-roll).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Axis {
     /// Roll (phi), deg, wraps at +-180 deg; body x rate p.
     Roll,
