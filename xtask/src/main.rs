@@ -13,6 +13,7 @@
 //! * `cargo xtask package` - the libraries' examples run and `cargo publish --dry-run`.
 //! * `cargo xtask embassy` - the embassy example (async driver) under QEMU against `nav440 sim`.
 
+mod defmt_out;
 mod firmware;
 mod package;
 mod qemu;
