@@ -146,39 +146,6 @@ impl<'t> Stream<'t> {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A row message as defmt-decoder displays it gives the CSV line `nav440 estimate` writes
-    /// for the same values (formatted by `csv::write_row`, checked here against hand-written
-    /// text: time 0.0100 s from 10000 us, `{}` of each f32, empty reference field).
-    #[test]
-    fn row_message_becomes_csv_line() {
-        let mut c = Converter::default();
-        let mut t = Text::default();
-        c.message("header 4", &mut t).unwrap();
-        assert_eq!(t.csv, format!("{}\n", csv::HEADER));
-        let vals = "0.5 1e-5 -2.25 3 4 5 6 7 8 9 10 11 12 13";
-        c.message(&format!("row 10000 [1 12.5 0.0 -0.75 {vals}]"), &mut t)
-            .unwrap();
-        c.message(&format!("row 10049 [0 12.5 0.0 0.0 {vals}]"), &mut t)
-            .unwrap();
-        let lines: Vec<&str> = t.csv.lines().collect();
-        assert_eq!(
-            lines[1],
-            "0.0100,12.5,-0.75,0.5,0.00001,-2.25,3,4,5,6,7,8,9,10,11,12,13"
-        );
-        assert_eq!(
-            lines[2],
-            "0.0100,12.5,,0.5,0.00001,-2.25,3,4,5,6,7,8,9,10,11,12,13"
-        );
-        c.message("firmware: bytes=3", &mut t).unwrap();
-        assert_eq!(t.diag, "firmware: bytes=3\n");
-        assert!(c.message("row 1 [1 2]", &mut t).is_err());
-    }
-}
-
 /// Reads the firmware's semihosting stdout on a thread. With a defmt `table` (see [`table`])
 /// the frames are decoded: the CSV goes to this process's stdout when `inherit` (else it is
 /// collected), the diagnostics are collected. Without a table the bytes are text, copied or
@@ -238,4 +205,37 @@ pub fn spawn_reader(
         }
         (stdout, diag)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A row message as defmt-decoder displays it gives the CSV line `nav440 estimate` writes
+    /// for the same values (formatted by `csv::write_row`, checked here against hand-written
+    /// text: time 0.0100 s from 10000 us, `{}` of each f32, empty reference field).
+    #[test]
+    fn row_message_becomes_csv_line() {
+        let mut c = Converter::default();
+        let mut t = Text::default();
+        c.message("header 4", &mut t).unwrap();
+        assert_eq!(t.csv, format!("{}\n", csv::HEADER));
+        let vals = "0.5 1e-5 -2.25 3 4 5 6 7 8 9 10 11 12 13";
+        c.message(&format!("row 10000 [1 12.5 0.0 -0.75 {vals}]"), &mut t)
+            .unwrap();
+        c.message(&format!("row 10049 [0 12.5 0.0 0.0 {vals}]"), &mut t)
+            .unwrap();
+        let lines: Vec<&str> = t.csv.lines().collect();
+        assert_eq!(
+            lines[1],
+            "0.0100,12.5,-0.75,0.5,0.00001,-2.25,3,4,5,6,7,8,9,10,11,12,13"
+        );
+        assert_eq!(
+            lines[2],
+            "0.0100,12.5,,0.5,0.00001,-2.25,3,4,5,6,7,8,9,10,11,12,13"
+        );
+        c.message("firmware: bytes=3", &mut t).unwrap();
+        assert_eq!(t.diag, "firmware: bytes=3\n");
+        assert!(c.message("row 1 [1 2]", &mut t).is_err());
+    }
 }

@@ -496,6 +496,16 @@ fn run_bench(board: &Board) -> Result<BenchOutput, String> {
     let mut ram = Vec::new();
     let mut sqrt: Vec<(String, f64)> = Vec::new();
     for l in r.stdout.lines() {
+        // The bench's text lines share stdout with the binary defmt frames of the row
+        // messages it measures: a line starts at its tag.
+        let Some(start) = ["instr\t", "sqrt\t", "ram\t"]
+            .iter()
+            .filter_map(|tag| l.find(tag))
+            .min()
+        else {
+            continue;
+        };
+        let l = &l[start..];
         let f: Vec<&str> = l.split('\t').collect();
         match f.as_slice() {
             ["instr", label, n, unit] => m.push(Measure {
@@ -619,6 +629,109 @@ pub fn bench(board: Board) -> Result<(), String> {
             if p.instr < 30.0 { "met" } else { "NOT met" }
         );
     }
+    Ok(())
+}
+
+/// The component (crate, or a group) a demangled symbol name belongs to.
+fn component(name: &str) -> String {
+    // `<T as Trait>::f` and `<T>::f` belong to T's crate; `_ZN..` names are already demangled.
+    let n = name.trim_start_matches('<').trim_start_matches('&');
+    let n = n.strip_prefix("mut ").unwrap_or(n);
+    let krate = n
+        .split("::")
+        .next()
+        .unwrap_or(n)
+        .split(['<', ' ', '('])
+        .next()
+        .unwrap_or(n);
+    let group = match krate {
+        "core" | "alloc" => "core (fmt, panics, slices)",
+        "compiler_builtins" => "compiler_builtins (soft float, mem*)",
+        k if k.starts_with("__aeabi") || k.starts_with("__") => {
+            "compiler_builtins (soft float, mem*)"
+        }
+        k if k.starts_with("defmt") || k.starts_with("_defmt") => "defmt + transport",
+        "firmware_example" | "main" | "Reset" | "HardFault" | "DefaultHandler" => {
+            "firmware_example"
+        }
+        "estimators" => "estimators (bank)",
+        "nav440_proto" => "nav440_proto",
+        "nav440_pipeline" => "nav440_pipeline",
+        "libm" | "micromath" => "libm",
+        k if k.starts_with("cortex_m") => "cortex_m, cortex_m_rt",
+        "heapless" => "heapless",
+        k if k.starts_with("stm32f4") || k == "fugit" => "stm32f4xx_hal",
+        k if k.starts_with("embassy") => "embassy",
+        k if k.starts_with("semihosting") => "defmt + transport",
+        _ => "other",
+    };
+    group.to_owned()
+}
+
+/// `cargo xtask size --components`: flash bytes per component of the release firmware of each
+/// target, from `llvm-nm --print-size -C` (code, read-only data and initialised data symbols;
+/// `unattributed` is text + data minus the symbols' sum: alignment, anonymous constants, the
+/// vector table).
+pub fn size_components() -> Result<(), String> {
+    let size_tool = llvm_size()?;
+    let nm = size_tool.with_file_name("llvm-nm");
+    let mut cols: Vec<(String, std::collections::BTreeMap<String, u64>, u64)> = Vec::new();
+    for target in crate::THUMB_TARGETS {
+        let elf = build(target, &[], FW_BIN)?;
+        let (t, d, _) = sizes(&size_tool, &elf)?;
+        let o = Command::new(&nm)
+            .args(["--print-size", "-C", "--size-sort"])
+            .arg(&elf)
+            .output()
+            .map_err(|e| format!("cannot run {}: {e}", nm.display()))?;
+        let mut per: std::collections::BTreeMap<String, u64> = std::collections::BTreeMap::new();
+        let mut sum = 0;
+        for l in String::from_utf8_lossy(&o.stdout).lines() {
+            // `ADDR SIZE TYPE NAME`
+            let mut it = l.splitn(4, ' ');
+            let (Some(_), Some(size), Some(ty), Some(name)) =
+                (it.next(), it.next(), it.next(), it.next())
+            else {
+                continue;
+            };
+            if !matches!(ty, "t" | "T" | "r" | "R" | "d" | "D" | "W" | "w") {
+                continue;
+            }
+            let Ok(size) = u64::from_str_radix(size, 16) else {
+                continue;
+            };
+            *per.entry(component(name)).or_default() += size;
+            sum += size;
+        }
+        per.insert("unattributed".into(), (t + d).saturating_sub(sum));
+        cols.push(((*target).to_owned(), per, t + d));
+    }
+    println!("== flash per component (llvm-nm symbol sizes, release {FW_BIN}), bytes ==");
+    print!("{:<38}", "component");
+    for (t, _, _) in &cols {
+        print!(" {t:>22}");
+    }
+    println!();
+    let mut names: Vec<String> = cols
+        .iter()
+        .flat_map(|(_, p, _)| p.keys().cloned())
+        .collect();
+    names.sort();
+    names.dedup();
+    // Largest first (by the first target).
+    names.sort_by_key(|n| std::cmp::Reverse(cols[0].1.get(n).copied().unwrap_or(0)));
+    for n in &names {
+        print!("{n:<38}");
+        for (_, p, _) in &cols {
+            print!(" {:>22}", p.get(n).copied().unwrap_or(0));
+        }
+        println!();
+    }
+    print!("{:<38}", "total flash (text + data)");
+    for (_, _, total) in &cols {
+        print!(" {total:>22}");
+    }
+    println!();
     Ok(())
 }
 

@@ -60,7 +60,8 @@ pub const STM32_BOARD: Board = Board {
     cpu: "cortex-m4",
     target: "thumbv7em-none-eabihf",
     about: "STM32F405 (real-board profile board-stm32f405 on stm32f4xx-hal), f32 bank",
-    features: &["board-stm32f405"],
+    // `semihosting-log`: defmt over semihosting (QEMU cannot carry the real board's RTT).
+    features: &["board-stm32f405", "semihosting-log"],
 };
 
 /// Looks a board up by name among [`BOARDS`] and [`STM32_BOARD`] (`cargo xtask unit`).
