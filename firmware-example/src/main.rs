@@ -1,5 +1,7 @@
 //! Firmware example: configures a NAV440 on UART0, then NAV440 bytes -> parser -> estimator
-//! bank -> CSV rows on the host's stdout (semihosting), diagnostics and counters on its stderr.
+//! bank -> one defmt `row` message per sample; diagnostics and counters are defmt messages
+//! too (`firmware_example::out`). Transport: semihosting stdout under QEMU, RTT on the real
+//! board; `cargo xtask qemu/demo/unit` decode the frames into the CSV of `nav440 estimate`.
 //!
 //! # Boot and run (unit mode, the default)
 //! 1. The stack is painted (before any interrupt is enabled), then the UARTs and SysTick
@@ -16,7 +18,7 @@
 //!    have been read from the NAV440 UART and processed, prints its counters and exits 0.
 //!    The rule depends on byte counts only, never on the host's speed.
 //!
-//! Every failure prints one line `firmware: ...` on stderr and exits with a documented
+//! Every failure sends one `firmware: ...` message and exits with a documented
 //! status ([`Status`]); with the real-board profile (`board-stm32f405`) a failed boot is
 //! retried forever, one diagnostic line per attempt.
 //!
@@ -184,7 +186,15 @@ fn configure(uart: Uart0, delay: &mut time::Delay) -> (Uart0, Report, Pending) {
                 return (uart, report, pending);
             }
             Err(e) => {
-                defmt::println!("firmware: boot attempt {=u32} failed: {}", attempt, e);
+                // The error's Display text (the documented diagnostic; formatted only on
+                // this failure path).
+                let mut text: heapless::String<256> = heapless::String::new();
+                let _ = core::fmt::Write::write_fmt(&mut text, format_args!("{e}"));
+                defmt::println!(
+                    "firmware: boot attempt {=u32} failed: {=str}",
+                    attempt,
+                    text.as_str()
+                );
                 if !cfg!(feature = "board-stm32f405") {
                     fail(boot_status(&e))
                 }

@@ -783,6 +783,9 @@ fn sizes(tool: &Path, elf: &Path) -> Result<(u64, u64, u64), String> {
     }
 }
 
+/// Feature of the one-axis (yaw) firmware.
+const ONE_AXIS: &str = "one-axis";
+
 /// `cargo xtask size`.
 pub fn size() -> Result<(), String> {
     let tool = llvm_size()?;
@@ -800,18 +803,37 @@ pub fn size() -> Result<(), String> {
             d + b
         );
     }
+    // The smallest configuration: one axis (feature `one-axis`) on the Cortex-M0 ISA.
+    let v6m_one = build("thumbv6m-none-eabi", &[ONE_AXIS], FW_BIN)?;
+    let (t, d, b) = sizes(&tool, &v6m_one)?;
+    println!(
+        "{:<24} {t:>9} {d:>7} {b:>7} {:>13} {:>15}",
+        "thumbv6m + one-axis",
+        t + d,
+        d + b
+    );
     println!(
         "(the bank, parser and buffers live on the stack of `main`: see the stack peak below)"
     );
     if qemu::qemu_available() {
         let capture = root().join("host-tests/data/fig5_a2_100hz_corrupt.bin");
         if let Ok(bytes) = std::fs::read(&capture) {
+            let mut runs: Vec<(qemu::Board, PathBuf, &str)> = Vec::new();
             for board in qemu::BOARDS {
-                let elf = build(board.target, &[], FW_BIN)?;
-                let r = run_capture(board, &elf, &bytes, Output::Capture)?;
-                if let Some(peak) = counter(&counters(&r.stderr), "stack_peak") {
+                runs.push((*board, build(board.target, &[], FW_BIN)?, ""));
+            }
+            if let Some(v6m) = qemu::BOARDS
+                .iter()
+                .find(|b| b.target == "thumbv6m-none-eabi")
+            {
+                runs.push((*v6m, v6m_one, " + one-axis"));
+            }
+            for (board, elf, what) in &runs {
+                let r = run_capture(board, elf, &bytes, Output::Capture)?;
+                let c = counters(&r.stderr);
+                if let Some(peak) = counter(&c, "stack_peak") {
                     println!(
-                        "stack high-water mark on {} ({}): {peak} B (painted stack, run of {})",
+                        "stack high-water mark on {} ({}{what}): {peak} B (painted stack, run of {})",
                         board.name,
                         board.target,
                         capture.display()
