@@ -1326,7 +1326,8 @@ pub fn embassy() -> Result<(), String> {
     });
     for case in &cases {
         let t = std::time::Instant::now();
-        let ok = unit_case(board, &elf, &nav440, case, &[])?;
+        // The embassy example runs the firmware's pipeline (`pipeline::AXES`) and defmt rows.
+        let ok = unit_case(board, &elf, &nav440, case, &["--axis", FIRMWARE_AXIS])?;
         eprintln!(
             "xtask: EMBASSY OK ({:.1} s): {ok}",
             t.elapsed().as_secs_f64()
