@@ -28,4 +28,6 @@ fn main() {
     fs::write(out.join("memory.x"), memory).expect("OUT_DIR writable");
     println!("cargo:rustc-link-search={}", out.display());
     println!("cargo:rustc-link-arg-bins=-Tlink.x");
+    // The defmt table (interned format strings) the host decoder reads from the ELF.
+    println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
 }

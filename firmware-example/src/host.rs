@@ -72,6 +72,8 @@ pub fn exit(success: bool) -> ! {
     }
 }
 
+// The real board with RTT output uses panic-probe's handler instead.
+#[cfg(not(all(feature = "board-stm32f405", not(feature = "semihosting-log"))))]
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo<'_>) -> ! {
     cortex_m::interrupt::disable();

@@ -7,6 +7,7 @@
 //! * [`time`]: SysTick at 1 kHz, microseconds since start, `embedded_hal::delay::DelayNs`.
 //! * [`host`]: semihosting output, exit codes, the panic handler and the HardFault handler
 //!   (every failure ends the run with a non-zero exit status instead of hanging).
+//! * [`out`]: the output as defmt messages (header, one row per sample, counters).
 //! * [`cycles`]: instruction counting with SysTick under `qemu -icount` (see the bench binary).
 //! * [`pipeline`]: the firmware's `nav440_pipeline::Pipeline` (parser -> attitude -> BIT ->
 //!   `TimeBase` -> one `YawBank` per axis -> CSV rows).
@@ -17,8 +18,18 @@
 //! `VSQRT` instruction, NVIC unmasking); every `unsafe` block carries a `// SAFETY:` comment.
 #![no_std]
 
+// The defmt transport (the `#[defmt::global_logger]`): RTT on the real board, read by probe-rs;
+// semihosting on the emulated boards and with `semihosting-log`.
+#[cfg(all(feature = "board-stm32f405", not(feature = "semihosting-log")))]
+use defmt_rtt as _;
+#[cfg(not(all(feature = "board-stm32f405", not(feature = "semihosting-log"))))]
+use defmt_semihosting as _;
+#[cfg(all(feature = "board-stm32f405", not(feature = "semihosting-log")))]
+use panic_probe as _;
+
 pub mod cycles;
 pub mod host;
+pub mod out;
 pub mod pipeline;
 #[cfg(not(any(feature = "fixed-point", not(target_abi = "eabihf"))))]
 pub mod sqrt;

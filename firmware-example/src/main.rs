@@ -1,5 +1,7 @@
 //! Firmware example: configures a NAV440 on UART0, then NAV440 bytes -> parser -> estimator
-//! bank -> CSV rows on the host's stdout (semihosting), diagnostics and counters on its stderr.
+//! bank -> one defmt `row` message per sample; diagnostics and counters are defmt messages
+//! too (`firmware_example::out`). Transport: semihosting stdout under QEMU, RTT on the real
+//! board; `cargo xtask qemu/demo/unit` decode the frames into the CSV of `nav440 estimate`.
 //!
 //! # Boot and run (unit mode, the default)
 //! 1. The stack is painted (before any interrupt is enabled), then the UARTs and SysTick
@@ -16,7 +18,7 @@
 //!    have been read from the NAV440 UART and processed, prints its counters and exits 0.
 //!    The rule depends on byte counts only, never on the host's speed.
 //!
-//! Every failure prints one line `firmware: ...` on stderr and exits with a documented
+//! Every failure sends one `firmware: ...` message and exits with a documented
 //! status ([`Status`]); with the real-board profile (`board-stm32f405`) a failed boot is
 //! retried forever, one diagnostic line per attempt.
 //!
@@ -31,7 +33,7 @@ use core::sync::atomic::{AtomicBool, Ordering};
 use cortex_m_rt::entry;
 use embedded_io::{Read as _, ReadReady as _};
 use firmware_example::uart::{Board, Control, Uart0};
-use firmware_example::{host, pipeline, stack, time};
+use firmware_example::{host, out, pipeline, stack, time};
 use nav440_proto::boot::{self, BootError, Options, Report, Target};
 use nav440_proto::driver::{IoDriver, Timing};
 use nav440_proto::{Baud, PacketType, Parser};
@@ -107,19 +109,17 @@ fn main() -> ! {
     // interrupt handlers too.
     stack::paint();
     let Some(core) = cortex_m::Peripherals::take() else {
-        host::stderr(format_args!("firmware: core peripherals already taken\n"));
+        defmt::println!("firmware: core peripherals already taken");
         fail(Status::Internal)
     };
     let Some(board) = Board::take(POWER_UP_BAUD) else {
-        host::stderr(format_args!("firmware: UARTs already taken\n"));
+        defmt::println!("firmware: UARTs already taken");
         fail(Status::Internal)
     };
     let mut pipe = match pipeline::new() {
         Ok(p) => p,
         Err(e) => {
-            host::stderr(format_args!(
-                "firmware: bank configuration rejected: {e:?}\n"
-            ));
+            defmt::println!("firmware: bank configuration rejected: {}", e);
             fail(Status::Internal)
         }
     };
@@ -186,9 +186,15 @@ fn configure(uart: Uart0, delay: &mut time::Delay) -> (Uart0, Report, Pending) {
                 return (uart, report, pending);
             }
             Err(e) => {
-                host::stderr(format_args!(
-                    "firmware: boot attempt {attempt} failed: {e}\n"
-                ));
+                // The error's Display text (the documented diagnostic; formatted only on
+                // this failure path).
+                let mut text: heapless::String<256> = heapless::String::new();
+                let _ = core::fmt::Write::write_fmt(&mut text, format_args!("{e}"));
+                defmt::println!(
+                    "firmware: boot attempt {=u32} failed: {=str}",
+                    attempt,
+                    text.as_str()
+                );
                 if !cfg!(feature = "board-stm32f405") {
                     fail(boot_status(&e))
                 }
@@ -215,10 +221,10 @@ impl EndMessage {
         }
         let (magic, n) = self.buf.split_at(4);
         if magic != END_MAGIC {
-            host::stderr(format_args!(
-                "firmware: bad control message {:02x?} (expected N4EN + u32 LE byte count)\n",
+            defmt::println!(
+                "firmware: bad control message {=[u8]:02x} (expected N4EN + u32 LE byte count)",
                 self.buf
-            ));
+            );
             fail(Status::Internal)
         }
         Some(u64::from(u32::from_le_bytes([n[0], n[1], n[2], n[3]])))
@@ -252,20 +258,20 @@ fn stream(
     report: &Report,
     pending: &[u8],
 ) -> Uart0 {
-    host::stderr(format_args!(
-        "firmware: unit configured: {} at {} Hz at {} Bd (found at {} Bd, unit was at {} Bd streaming {} with rate divider {}, {} ping retries); boot_frames={} boot_skipped={} boot_ms={}\n",
-        TARGET.packet,
+    defmt::println!(
+        "firmware: unit configured: {=str} at {} Hz at {} Bd (found at {} Bd, unit was at {} Bd streaming {=str} with rate divider {}, {} ping retries); boot_frames={} boot_skipped={} boot_ms={}",
+        TARGET.packet.name(),
         100 / TARGET.rate.divider().max(1),
         report.baud.bits_per_second(),
         report.found_at.bits_per_second(),
         report.unit_baud.bits_per_second(),
-        report.initial_packet,
+        report.initial_packet.name(),
         report.initial_rate_divider,
         report.ping_retries,
         report.unsolicited_frames,
         report.skipped_bytes,
         time::now_ms(),
-    ));
+    );
     // Only `main`'s thread touches it (a load/store pair: thumbv6m has no atomic swap).
     if !HEADER_PRINTED.load(Ordering::Relaxed) {
         HEADER_PRINTED.store(true, Ordering::Relaxed);
@@ -279,17 +285,18 @@ fn stream(
     let mut process = |pipe: &mut pipeline::Pipeline, bytes: &[u8]| -> bool {
         watch.feed(bytes);
         if let Some(t) = watch.foreign {
-            host::stderr(format_args!(
-                "firmware: unit reset mid-stream: {t} frame received after configuring {} ({} bytes estimated)\n",
-                TARGET.packet,
+            defmt::println!(
+                "firmware: unit reset mid-stream: {=str} frame received after configuring {=str} ({=u64} bytes estimated)",
+                t.name(),
+                TARGET.packet.name(),
                 uart_bytes(pipe)
-            ));
+            );
             if !cfg!(feature = "board-stm32f405") {
                 fail(Status::UnitReset)
             }
             return false;
         }
-        if let Err(e) = pipe.feed_csv(bytes, |row| host::stdout(row.as_bytes())) {
+        if let Err(e) = pipe.feed(bytes, &mut out::row) {
             bank_failed(&e);
         }
         true
@@ -316,7 +323,7 @@ fn stream(
             let n = match uart.read(&mut buf[..want]) {
                 Ok(n) => n,
                 Err(e) => {
-                    host::stderr(format_args!("firmware: UART error: {e:?}\n"));
+                    defmt::println!("firmware: UART error: {}", e);
                     fail(Status::Internal)
                 }
             };
@@ -325,14 +332,18 @@ fn stream(
             }
         } else if let Some(n) = total.is_none().then(|| end.poll(control)).flatten() {
             if n < read {
-                host::stderr(format_args!(
-                    "firmware: control channel says the unit sent {n} bytes, but {read} were received\n"
-                ));
+                defmt::println!(
+                    "firmware: control channel says the unit sent {=u64} bytes, but {=u64} were received",
+                    n,
+                    read
+                );
                 fail(Status::Internal)
             }
-            host::stderr(format_args!(
-                "firmware: control channel: the unit sent {n} bytes ({read} received so far)\n"
-            ));
+            defmt::println!(
+                "firmware: control channel: the unit sent {=u64} bytes ({=u64} received so far)",
+                n,
+                read
+            );
             total = Some(n);
         } else {
             // Woken by the next received byte or the 1 ms tick.
@@ -342,16 +353,10 @@ fn stream(
     finish(pipe, &uart, total.unwrap_or(0))
 }
 
-/// Prints the CSV header line of the estimated axes (`pipeline::AXES`).
+/// Sends the header message (the estimated axes, `pipeline::AXES`): the host writes the CSV
+/// header line from it.
 fn print_header() {
-    let mut line = pipeline::CsvLine::new();
-    if pipeline::write_header(&mut line).is_err() || line.push('\n').is_err() {
-        host::stderr(format_args!(
-            "firmware: CSV header does not fit its buffer\n"
-        ));
-        fail(Status::Internal)
-    }
-    host::stdout(line.as_bytes());
+    out::header();
 }
 
 /// The CSV header has been printed (once per run, also across re-configurations).
@@ -364,24 +369,26 @@ fn uart_bytes(pipe: &pipeline::Pipeline) -> u64 {
 
 /// Ends a finite input: the held warm-up, the counters line, exit 0.
 fn finish(pipe: &mut pipeline::Pipeline, uart: &Uart0, unit_bytes: u64) -> ! {
-    if let Err(e) = pipe.finish_csv(|row| host::stdout(row.as_bytes())) {
+    if let Err(e) = pipe.finish(&mut out::row) {
         bank_failed(&e);
     }
-    let mut line: heapless::String<400> = heapless::String::new();
-    let _ = pipe.summary(&mut line, uart.overruns(), uart.stalls());
-    host::stderr(format_args!(
-        "firmware: {line} unit_bytes={unit_bytes} stack_peak={}\n",
-        stack::peak()
-    ));
+    out::summary(
+        pipe,
+        uart.overruns(),
+        uart.stalls(),
+        unit_bytes,
+        stack::peak(),
+    );
     host::exit(true)
 }
 
 /// The bank cannot run at the measured packet period: report and exit with status 1 (as
 /// `nav440 estimate` fails on the same capture).
 fn bank_failed(e: &pipeline::ConfigError) -> ! {
-    host::stderr(format_args!(
-        "firmware: bank configuration rejected for this capture's packet period: {e:?}\n"
-    ));
+    defmt::println!(
+        "firmware: bank configuration rejected for this capture's packet period: {}",
+        e
+    );
     fail(Status::Internal)
 }
 
@@ -391,9 +398,10 @@ fn replay(mut uart: Uart0, pipe: &mut pipeline::Pipeline) -> ! {
     read_prefix(&mut uart, &mut prefix);
     let (magic, len) = prefix.split_at(4);
     if magic != LENGTH_MAGIC {
-        host::stderr(format_args!(
-            "firmware: input does not start with the N4LP length prefix (got {magic:02x?}); use `cargo xtask qemu FILE`\n"
-        ));
+        defmt::println!(
+            "firmware: input does not start with the N4LP length prefix (got {=[u8]:02x}); use `cargo xtask qemu FILE`",
+            magic
+        );
         fail(Status::Internal)
     }
     let mut remaining = u32::from_le_bytes([len[0], len[1], len[2], len[3]]) as usize;
@@ -402,7 +410,7 @@ fn replay(mut uart: Uart0, pipe: &mut pipeline::Pipeline) -> ! {
     while remaining > 0 {
         let want = remaining.min(buf.len());
         let n = uart.read(&mut buf[..want]).unwrap_or(0);
-        if let Err(e) = pipe.feed_csv(&buf[..n], |row| host::stdout(row.as_bytes())) {
+        if let Err(e) = pipe.feed(&buf[..n], &mut out::row) {
             bank_failed(&e);
         }
         remaining -= n;
@@ -420,7 +428,7 @@ fn read_prefix(uart: &mut Uart0, buf: &mut [u8]) {
                 Ok(b) => break b,
                 Err(nb::Error::WouldBlock) => cortex_m::asm::wfi(),
                 Err(nb::Error::Other(e)) => {
-                    host::stderr(format_args!("firmware: UART error: {e:?}\n"));
+                    defmt::println!("firmware: UART error: {}", e);
                     fail(Status::Internal)
                 }
             }

@@ -13,7 +13,12 @@ use crate::Bank;
 
 /// The axes the firmware estimates (all three by default; one bank each). `nav440 estimate
 /// --axis all` prints the same CSV for [`Axes::ALL`]; for one axis use `--axis NAME`.
+#[cfg(not(feature = "one-axis"))]
 pub const AXES: Axes = Axes::ALL;
+/// The axes the firmware estimates: yaw only (feature `one-axis`; `nav440 estimate --axis
+/// yaw` prints the same CSV).
+#[cfg(feature = "one-axis")]
+pub const AXES: Axes = Axes::only(Axis::Yaw);
 
 /// The bank could not be built (from the defaults, or for the measured packet period).
 pub type ConfigError = estimators::ConfigError;

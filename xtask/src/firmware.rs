@@ -496,6 +496,16 @@ fn run_bench(board: &Board) -> Result<BenchOutput, String> {
     let mut ram = Vec::new();
     let mut sqrt: Vec<(String, f64)> = Vec::new();
     for l in r.stdout.lines() {
+        // The bench's text lines share stdout with the binary defmt frames of the row
+        // messages it measures: a line starts at its tag.
+        let Some(start) = ["instr\t", "sqrt\t", "ram\t"]
+            .iter()
+            .filter_map(|tag| l.find(tag))
+            .min()
+        else {
+            continue;
+        };
+        let l = &l[start..];
         let f: Vec<&str> = l.split('\t').collect();
         match f.as_slice() {
             ["instr", label, n, unit] => m.push(Measure {
@@ -638,6 +648,109 @@ pub fn bench(board: Board) -> Result<(), String> {
     Ok(())
 }
 
+/// The component (crate, or a group) a demangled symbol name belongs to.
+fn component(name: &str) -> String {
+    // `<T as Trait>::f` and `<T>::f` belong to T's crate; `_ZN..` names are already demangled.
+    let n = name.trim_start_matches('<').trim_start_matches('&');
+    let n = n.strip_prefix("mut ").unwrap_or(n);
+    let krate = n
+        .split("::")
+        .next()
+        .unwrap_or(n)
+        .split(['<', ' ', '('])
+        .next()
+        .unwrap_or(n);
+    let group = match krate {
+        "core" | "alloc" => "core (fmt, panics, slices)",
+        "compiler_builtins" => "compiler_builtins (soft float, mem*)",
+        k if k.starts_with("__aeabi") || k.starts_with("__") => {
+            "compiler_builtins (soft float, mem*)"
+        }
+        k if k.starts_with("defmt") || k.starts_with("_defmt") => "defmt + transport",
+        "firmware_example" | "main" | "Reset" | "HardFault" | "DefaultHandler" => {
+            "firmware_example"
+        }
+        "estimators" => "estimators (bank)",
+        "nav440_proto" => "nav440_proto",
+        "nav440_pipeline" => "nav440_pipeline",
+        "libm" | "micromath" => "libm",
+        k if k.starts_with("cortex_m") => "cortex_m, cortex_m_rt",
+        "heapless" => "heapless",
+        k if k.starts_with("stm32f4") || k == "fugit" => "stm32f4xx_hal",
+        k if k.starts_with("embassy") => "embassy",
+        k if k.starts_with("semihosting") => "defmt + transport",
+        _ => "other",
+    };
+    group.to_owned()
+}
+
+/// `cargo xtask size --components`: flash bytes per component of the release firmware of each
+/// target, from `llvm-nm --print-size -C` (code, read-only data and initialised data symbols;
+/// `unattributed` is text + data minus the symbols' sum: alignment, anonymous constants, the
+/// vector table).
+pub fn size_components() -> Result<(), String> {
+    let size_tool = llvm_size()?;
+    let nm = size_tool.with_file_name("llvm-nm");
+    let mut cols: Vec<(String, std::collections::BTreeMap<String, u64>, u64)> = Vec::new();
+    for target in crate::THUMB_TARGETS {
+        let elf = build(target, &[], FW_BIN)?;
+        let (t, d, _) = sizes(&size_tool, &elf)?;
+        let o = Command::new(&nm)
+            .args(["--print-size", "-C", "--size-sort"])
+            .arg(&elf)
+            .output()
+            .map_err(|e| format!("cannot run {}: {e}", nm.display()))?;
+        let mut per: std::collections::BTreeMap<String, u64> = std::collections::BTreeMap::new();
+        let mut sum = 0;
+        for l in String::from_utf8_lossy(&o.stdout).lines() {
+            // `ADDR SIZE TYPE NAME`
+            let mut it = l.splitn(4, ' ');
+            let (Some(_), Some(size), Some(ty), Some(name)) =
+                (it.next(), it.next(), it.next(), it.next())
+            else {
+                continue;
+            };
+            if !matches!(ty, "t" | "T" | "r" | "R" | "d" | "D" | "W" | "w") {
+                continue;
+            }
+            let Ok(size) = u64::from_str_radix(size, 16) else {
+                continue;
+            };
+            *per.entry(component(name)).or_default() += size;
+            sum += size;
+        }
+        per.insert("unattributed".into(), (t + d).saturating_sub(sum));
+        cols.push(((*target).to_owned(), per, t + d));
+    }
+    println!("== flash per component (llvm-nm symbol sizes, release {FW_BIN}), bytes ==");
+    print!("{:<38}", "component");
+    for (t, _, _) in &cols {
+        print!(" {t:>22}");
+    }
+    println!();
+    let mut names: Vec<String> = cols
+        .iter()
+        .flat_map(|(_, p, _)| p.keys().cloned())
+        .collect();
+    names.sort();
+    names.dedup();
+    // Largest first (by the first target).
+    names.sort_by_key(|n| std::cmp::Reverse(cols[0].1.get(n).copied().unwrap_or(0)));
+    for n in &names {
+        print!("{n:<38}");
+        for (_, p, _) in &cols {
+            print!(" {:>22}", p.get(n).copied().unwrap_or(0));
+        }
+        println!();
+    }
+    print!("{:<38}", "total flash (text + data)");
+    for (_, _, total) in &cols {
+        print!(" {total:>22}");
+    }
+    println!();
+    Ok(())
+}
+
 fn llvm_size() -> Result<PathBuf, String> {
     let out = |args: &[&str]| -> Result<String, String> {
         let o = Command::new("rustc")
@@ -686,6 +799,9 @@ fn sizes(tool: &Path, elf: &Path) -> Result<(u64, u64, u64), String> {
     }
 }
 
+/// Feature of the one-axis (yaw) firmware.
+const ONE_AXIS: &str = "one-axis";
+
 /// `cargo xtask size`.
 pub fn size() -> Result<(), String> {
     let tool = llvm_size()?;
@@ -703,18 +819,37 @@ pub fn size() -> Result<(), String> {
             d + b
         );
     }
+    // The smallest configuration: one axis (feature `one-axis`) on the Cortex-M0 ISA.
+    let v6m_one = build("thumbv6m-none-eabi", &[ONE_AXIS], FW_BIN)?;
+    let (t, d, b) = sizes(&tool, &v6m_one)?;
+    println!(
+        "{:<24} {t:>9} {d:>7} {b:>7} {:>13} {:>15}",
+        "thumbv6m + one-axis",
+        t + d,
+        d + b
+    );
     println!(
         "(the bank, parser and buffers live on the stack of `main`: see the stack peak below)"
     );
     if qemu::qemu_available() {
         let capture = root().join("host-tests/data/fig5_a2_100hz_corrupt.bin");
         if let Ok(bytes) = std::fs::read(&capture) {
+            let mut runs: Vec<(qemu::Board, PathBuf, &str)> = Vec::new();
             for board in qemu::BOARDS {
-                let elf = build(board.target, &[], FW_BIN)?;
-                let r = run_capture(board, &elf, &bytes, Output::Capture)?;
-                if let Some(peak) = counter(&counters(&r.stderr), "stack_peak") {
+                runs.push((*board, build(board.target, &[], FW_BIN)?, ""));
+            }
+            if let Some(v6m) = qemu::BOARDS
+                .iter()
+                .find(|b| b.target == "thumbv6m-none-eabi")
+            {
+                runs.push((*v6m, v6m_one, " + one-axis"));
+            }
+            for (board, elf, what) in &runs {
+                let r = run_capture(board, elf, &bytes, Output::Capture)?;
+                let c = counters(&r.stderr);
+                if let Some(peak) = counter(&c, "stack_peak") {
                     println!(
-                        "stack high-water mark on {} ({}): {peak} B (painted stack, run of {})",
+                        "stack high-water mark on {} ({}{what}): {peak} B (painted stack, run of {})",
                         board.name,
                         board.target,
                         capture.display()
@@ -1209,7 +1344,8 @@ pub fn embassy() -> Result<(), String> {
     });
     for case in &cases {
         let t = std::time::Instant::now();
-        let ok = unit_case(board, &elf, &nav440, case, &[])?;
+        // The embassy example runs the firmware's pipeline (`pipeline::AXES`) and defmt rows.
+        let ok = unit_case(board, &elf, &nav440, case, &["--axis", FIRMWARE_AXIS])?;
         eprintln!(
             "xtask: EMBASSY OK ({:.1} s): {ok}",
             t.elapsed().as_secs_f64()

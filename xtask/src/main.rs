@@ -13,6 +13,7 @@
 //! * `cargo xtask package` - the libraries' examples run and `cargo publish --dry-run`.
 //! * `cargo xtask embassy` - the embassy example (async driver) under QEMU against `nav440 sim`.
 
+mod defmt_out;
 mod firmware;
 mod package;
 mod qemu;
@@ -90,7 +91,12 @@ enum Cmd {
         board: Board,
     },
     /// Flash/RAM of the firmware (llvm-size) and RAM per estimator.
-    Size,
+    Size {
+        /// Instead: the flash per component (crate) of each target's firmware, from the
+        /// sizes of the ELF's symbols (llvm-nm).
+        #[arg(long)]
+        components: bool,
+    },
     /// Checks each library with the toolchain of its declared `rust-version` (installed with
     /// rustup when missing), and that the workspace's `rust-version` is the pinned toolchain.
     Msrv,
@@ -118,7 +124,8 @@ fn main() -> ExitCode {
         Cmd::Demo { board, capture } => firmware::demo(board, capture),
         Cmd::Qemu { file, board } => firmware::qemu(board, &file),
         Cmd::Bench { board } => firmware::bench(board),
-        Cmd::Size => firmware::size(),
+        Cmd::Size { components: false } => firmware::size(),
+        Cmd::Size { components: true } => firmware::size_components(),
         Cmd::Msrv => package::msrv(),
         Cmd::Package => package::package(),
         Cmd::Embassy => firmware::embassy(),

@@ -60,7 +60,8 @@ pub const STM32_BOARD: Board = Board {
     cpu: "cortex-m4",
     target: "thumbv7em-none-eabihf",
     about: "STM32F405 (real-board profile board-stm32f405 on stm32f4xx-hal), f32 bank",
-    features: &["board-stm32f405"],
+    // `semihosting-log`: defmt over semihosting (QEMU cannot carry the real board's RTT).
+    features: &["board-stm32f405", "semihosting-log"],
 };
 
 /// Looks a board up by name among [`BOARDS`] and [`STM32_BOARD`] (`cargo xtask unit`).
@@ -243,7 +244,8 @@ pub fn run_uart(
         ]
         .map(str::to_owned),
     );
-    run(&args, Stdio::from(stdin), output, timeout)
+    let table = crate::defmt_out::table(elf)?;
+    run(&args, Stdio::from(stdin), output, table, timeout)
 }
 
 /// Runs `elf` on `board` without UART input; `extra` QEMU arguments (e.g. `-icount`).
@@ -256,13 +258,14 @@ pub fn run_plain(
     let mut args = base_args(board, elf, &[]);
     args.extend(["-serial", "none"].map(str::to_owned));
     args.extend(extra.iter().map(|s| (*s).to_owned()));
-    run(&args, Stdio::null(), Output::Capture, timeout)
+    run(&args, Stdio::null(), Output::Capture, None, timeout)
 }
 
 fn run(
     args: &[String],
     stdin: Stdio,
     output: Output,
+    table: Option<defmt_decoder::Table>,
     timeout: Duration,
 ) -> Result<RunResult, String> {
     eprintln!("+ {QEMU} {}", args.join(" "));
@@ -270,20 +273,16 @@ fn run(
     let mut child = Command::new(QEMU)
         .args(args)
         .stdin(stdin)
-        .stdout(match output {
-            Output::Inherit => Stdio::inherit(),
-            Output::Capture => Stdio::piped(),
-        })
+        .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .map_err(|e| format!("cannot start {QEMU}: {e} (run `cargo xtask ci` or install it)"))?;
-    let out_reader = child.stdout.take().map(|mut s| {
-        thread::spawn(move || {
-            let mut buf = String::new();
-            let _ = s.read_to_string(&mut buf);
-            buf
-        })
-    });
+    // The firmware's stdout: defmt frames decoded into CSV + diagnostics (`table`), or text.
+    let inherit = matches!(output, Output::Inherit);
+    let out_reader = child
+        .stdout
+        .take()
+        .map(|s| crate::defmt_out::spawn_reader(s, table, inherit));
     let mut err_pipe = child.stderr.take().expect("piped");
     let err_reader = thread::spawn(move || {
         // Echo stderr lines live as well as keeping them.
@@ -312,10 +311,11 @@ fn run(
             Err(e) => return Err(format!("waiting for QEMU: {e}")),
         }
     };
-    let stdout = out_reader
+    let (stdout, diag) = out_reader
         .map(|h| h.join().unwrap_or_default())
         .unwrap_or_default();
-    let stderr = err_reader.join().unwrap_or_default();
+    // The decoded diagnostics first, then QEMU's own stderr (and text-firmware stderr).
+    let stderr = diag + &err_reader.join().unwrap_or_default();
     if !status.success() {
         return Err(format!(
             "firmware run failed ({status}); its stderr:\n{stderr}"

@@ -199,21 +199,16 @@ pub fn run(
     let mut child = Command::new("qemu-system-arm")
         .args(&args)
         .stdin(Stdio::null())
-        .stdout(if inherit_stdout {
-            Stdio::inherit()
-        } else {
-            Stdio::piped()
-        })
+        .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .map_err(|e| format!("cannot start qemu-system-arm: {e}"))?;
-    let out_reader = child.stdout.take().map(|mut s| {
-        thread::spawn(move || {
-            let mut buf = String::new();
-            let _ = s.read_to_string(&mut buf);
-            buf
-        })
-    });
+    // The firmware's stdout: defmt frames decoded into CSV + diagnostics, or text.
+    let table = crate::defmt_out::table(elf)?;
+    let out_reader = child
+        .stdout
+        .take()
+        .map(|s| crate::defmt_out::spawn_reader(s, table, inherit_stdout));
     let mut err_pipe = child.stderr.take().ok_or("QEMU stderr not piped")?;
     let err_reader = thread::spawn(move || {
         let mut all = Vec::new();
@@ -314,7 +309,10 @@ pub fn run(
                 stop.store(true, Ordering::Relaxed);
                 kill(&mut child);
                 let _ = unit.shutdown(Shutdown::Both);
-                let stderr = err_reader.join().unwrap_or_default();
+                let diag = out_reader
+                    .map(|h| h.join().unwrap_or_default().1)
+                    .unwrap_or_default();
+                let stderr = diag + &err_reader.join().unwrap_or_default();
                 return Err(format!(
                     "the firmware did not finish within {} s (QEMU killed; the unit sent {} bytes); its stderr:\n{stderr}",
                     timeout.as_secs(),
@@ -331,16 +329,17 @@ pub fn run(
     drop(u1);
     let _ = fw_to_unit.join();
     let ended = unit_to_fw.join().unwrap_or(Ok(false))?;
-    let stdout = out_reader
+    let (stdout, diag) = out_reader
         .map(|h| h.join().unwrap_or_default())
         .unwrap_or_default();
-    let mut stderr: String = err_reader
+    let qemu_stderr: String = err_reader
         .join()
         .unwrap_or_default()
         .lines()
         .filter(|l| !l.contains("QEMU waiting for connection"))
         .map(|l| format!("{l}\n"))
         .collect();
+    let mut stderr = diag + &qemu_stderr;
     let unit_bytes = count.load(Ordering::Relaxed);
     stderr.push_str(&format!(
         "xtask: the unit sent {unit_bytes} bytes{}; firmware exit status {}\n",

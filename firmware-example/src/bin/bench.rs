@@ -131,7 +131,7 @@ fn a2_frame(k: u32, out: &mut [u8]) -> usize {
 
 /// Instructions per A2 frame through the firmware's whole pipeline (`pipeline::new()`:
 /// parser, attitude and BIT, clock, one bank per axis of `pipeline::AXES` with the Euler
-/// reference, CSV row formatting), after the period warm-up and [`WARMUP`] more frames.
+/// reference, the defmt row message), after the period warm-up and [`WARMUP`] more frames.
 fn pipeline_per_frame(c: &Counter, overhead: u64) {
     let Ok(mut pipe) = firmware_example::pipeline::new() else {
         fail("the pipeline")
@@ -144,8 +144,8 @@ fn pipeline_per_frame(c: &Counter, overhead: u64) {
         let n = a2_frame(k, &mut buf);
         let frame = buf.get(..n).unwrap_or_default();
         let (m, res) = c.measure(|| {
-            black_box(&mut pipe).feed_csv(black_box(frame), |row| {
-                black_box(row);
+            black_box(&mut pipe).feed(black_box(frame), &mut |row| {
+                firmware_example::out::row(black_box(row));
                 rows += 1;
             })
         });
@@ -161,7 +161,7 @@ fn pipeline_per_frame(c: &Counter, overhead: u64) {
     }
     line(
         "instr",
-        "pipeline, A2 frame: parse+clock+AXES banks+Euler+CSV",
+        "pipeline, A2 frame: parse+clock+AXES banks+Euler+defmt row",
         total as f32 / SAMPLES as f32,
         "sample",
     );
@@ -254,17 +254,21 @@ fn bank_per_sample<S: estimators::SqrtFn<Num>>(
         let Ok(out) = r else {
             fail("a bank run without rejected samples")
         };
-        // The output stage of the firmware: one CSV row (17 numbers) per sample.
-        let mut row = firmware_example::pipeline::CsvLine::new();
-        let (m, res) = c.measure(|| {
-            let w = black_box(&mut row);
-            nav440_pipeline::csv::write_time(w, t_us).and_then(|()| {
-                nav440_pipeline::csv::write_axis(w, Some(black_box(y)), black_box(&out))
-            })
-        });
-        if res.is_err() {
-            fail("a CSV row");
+        // The output stage of the firmware: one defmt row message per sample with the axes
+        // of `pipeline::AXES` (here this bank's output on each), encoded and handed to the
+        // defmt transport (semihosting: the host side of each write is not counted).
+        let axis = nav440_pipeline::AxisRow {
+            reference_deg_s: Some(y),
+            out,
+        };
+        let mut row = nav440_pipeline::Row {
+            t_us,
+            axes: [None; 3],
+        };
+        for a in firmware_example::pipeline::AXES.iter() {
+            row.axes[a.index()] = Some(axis);
         }
+        let (m, ()) = c.measure(|| firmware_example::out::row(black_box(&row)));
         if k >= WARMUP {
             total += n.saturating_sub(overhead);
             csv_total += m.saturating_sub(overhead);
@@ -274,7 +278,7 @@ fn bank_per_sample<S: estimators::SqrtFn<Num>>(
     if label == "whole bank" {
         line(
             "instr",
-            "CSV row formatting (output stage)",
+            "defmt row message (output stage, AXES axes)",
             csv_total as f32 / SAMPLES as f32,
             "sample",
         );

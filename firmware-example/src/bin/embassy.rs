@@ -32,7 +32,7 @@ use core::task::Poll;
 
 use embassy_executor::Spawner;
 use firmware_example::uart::{Board, Control, Uart0};
-use firmware_example::{host, pipeline, stack, time};
+use firmware_example::{host, out, pipeline, stack, time};
 use nav440_proto::boot::{self, Options, Target};
 use nav440_proto::driver::{AsyncDriver, Timing};
 use nav440_proto::Baud;
@@ -157,7 +157,7 @@ async fn main(_spawner: Spawner) {
         core_clock_hz,
     } = board;
     let _blocking_delay = time::start(core.SYST, core_clock_hz);
-    let mut pipe = match pipeline::Pipeline::new() {
+    let mut pipe = match pipeline::new() {
         Ok(p) => p,
         Err(e) => fail(1, format_args!("bank configuration rejected: {e:?}")),
     };
@@ -194,9 +194,9 @@ async fn main(_spawner: Spawner) {
     ));
 
     // 2. Estimate from the first byte after the read-back until the harness's byte count.
-    host::stdout(pipeline::CSV_HEADER.as_bytes());
-    host::stdout(b"\n");
-    let mut emit = |row: &str| host::stdout(row.as_bytes());
+    // The rows as defmt messages, like the blocking firmware (`firmware_example::out`).
+    out::header();
+    let mut emit = out::row;
     if let Err(e) = pipe.feed(driver.pending_bytes(), &mut emit) {
         fail(1, format_args!("bank: {e:?}"))
     }
@@ -232,14 +232,15 @@ async fn main(_spawner: Spawner) {
 }
 
 fn finish(pipe: &mut pipeline::Pipeline, uart: &Uart0, unit_bytes: u64) -> ! {
-    if let Err(e) = pipe.finish(|row| host::stdout(row.as_bytes())) {
+    if let Err(e) = pipe.finish(&mut out::row) {
         fail(1, format_args!("bank: {e:?}"))
     }
-    let mut line: heapless::String<400> = heapless::String::new();
-    let _ = pipe.summary(&mut line, uart.overruns(), uart.stalls());
-    host::stderr(format_args!(
-        "firmware: {line} unit_bytes={unit_bytes} stack_peak={}\n",
-        stack::peak()
-    ));
+    out::summary(
+        pipe,
+        uart.overruns(),
+        uart.stalls(),
+        unit_bytes,
+        stack::peak(),
+    );
     host::exit(true)
 }

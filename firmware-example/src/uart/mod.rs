@@ -47,14 +47,14 @@ pub enum RxPoll {
 }
 
 /// The UART cannot run at this rate (with the board's clocks).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
 pub struct BaudError {
     /// The rejected rate, Bd.
     pub baud: u32,
 }
 
 /// Error of the [`Uart0`] traits: only a baud change can fail (reads and writes cannot).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, defmt::Format)]
 pub enum Error {
     /// See [`BaudError`].
     Baud(BaudError),
