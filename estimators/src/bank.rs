@@ -96,7 +96,7 @@ pub struct BankConfig {
     pub max_gap_periods: f32,
     /// Nominal sample period, s (default 0.01 = 100 Hz): the closed-form maps are precomputed
     /// for `round(sample_period_s / h)` steps and the Kalman gains for this period.
-    /// [`crate::period`] sets it from a stream's first samples (host CLI and firmware).
+    /// `nav440_pipeline::period` (the pipeline crate) sets it from a stream's first samples (host CLI and firmware).
     pub sample_period_s: f32,
     /// Use the exact closed-form multi-step maps for the linear laws (default `true`); `false`
     /// steps every law `n` times (same results to rounding).

@@ -9,7 +9,7 @@ use fixed::types::I32F32;
 /// `+ - *` saturates at the range ends instead of wrapping. The values and results are those of
 /// [`fixed::Saturating`]`<I32F32>` bit for bit (multiplication rounds toward minus infinity,
 /// the square root down); the multiply and the square root are this crate's own integer code,
-/// written for 32-bit cores (see [`fx_mul`] and docs/FIXED-POINT.md).
+/// written for 32-bit cores (`fx_mul`, `fx_sqrt`; see docs/FIXED-POINT.md).
 ///
 /// * Range: `[-2^31, 2^31)` = about +-2.1e9 in the unit of the quantity (deg, deg/s, deg/s^2).
 /// * Resolution: `2^-32` = 2.3e-10.
@@ -577,7 +577,7 @@ impl Real for Fx {
         Fx(self.0.saturating_abs())
     }
     /// `floor(sqrt(x))` to the last bit (what `fixed`'s `I32F32::sqrt` returns), by
-    /// [`fx_sqrt`].
+    /// `fx_sqrt`.
     #[inline]
     fn sqrt(self) -> Self {
         Fx::from_bits(fx_sqrt(self.to_bits()))
