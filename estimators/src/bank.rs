@@ -66,6 +66,77 @@ impl BankGains {
         ave: AVE_DEFAULT,
         ..Self::PAPER_ACCELERATION
     };
+    /// Velocity gains of [`BankConfig::NAV440`] (see there how they were produced: printed by
+    /// `cargo test --release -p host-tests --test preset -- --ignored --nocapture`). The AVE
+    /// keeps the leaky `deltahat` law of [`AVE_DEFAULT`]; ILO1-3 are one family once every
+    /// gain is free and reach the same gains; the tracker's `q/r` is what was tuned.
+    pub const NAV440_VELOCITY: Self = Self {
+        ave: AveConfig {
+            k: 49.68095,
+            gamma1: 2333.3284,
+            ..AVE_DEFAULT
+        },
+        ilo: [
+            IloConfig {
+                k1: 0.99811673,
+                l: 5.278966,
+                k2: 45.166603,
+            },
+            IloConfig {
+                k1: 0.9987548,
+                l: 0.6670562,
+                k2: 0.079569295,
+            },
+            IloConfig {
+                k1: 0.9966446,
+                l: 0.23964658,
+                k2: 0.1924676,
+            },
+        ],
+        ad_t: 0.011006941,
+        ed: EdConfig {
+            lambda: 26.724169,
+            alpha: 875.628,
+        },
+        kf: KalmanNoise {
+            q: 421696.5,
+            r: 0.01,
+        },
+    };
+    /// Acceleration gains of [`BankConfig::NAV440`] (both stages of each series).
+    pub const NAV440_ACCELERATION: Self = Self {
+        ave: AveConfig {
+            k: 329.29242,
+            gamma1: 10667.703,
+            ..AVE_DEFAULT
+        },
+        ilo: [
+            IloConfig {
+                k1: 0.9997536,
+                l: 16.102184,
+                k2: 0.033709116,
+            },
+            IloConfig {
+                k1: 0.94982654,
+                l: 1.2598504,
+                k2: 1.3189589,
+            },
+            IloConfig {
+                k1: 0.9998693,
+                l: 480.38992,
+                k2: 1.2638867,
+            },
+        ],
+        ad_t: 0.1,
+        ed: EdConfig {
+            lambda: 28.095552,
+            alpha: 6855.925,
+        },
+        kf: KalmanNoise {
+            q: 316227.78,
+            r: 0.01,
+        },
+    };
     /// The paper's acceleration set: AVE-AVE, Table 4 ILO-ILO, AD-AD `T = 0.1`, ED-ED.
     pub const PAPER_ACCELERATION: Self = Self {
         ave: AVE_PAPER,
@@ -119,6 +190,17 @@ impl BankConfig {
         velocity: BankGains::DEFAULT_VELOCITY,
         acceleration: BankGains::DEFAULT_ACCELERATION,
         ..Self::PAPER
+    };
+    /// The shipped preset (`nav440 estimate` and the firmware run it; `--preset paper` or
+    /// [`BankConfig::PAPER`] selects the paper's): [`BankConfig::DEFAULT`]'s laws, step, hold
+    /// (linear) and gap rule with every family's gains tuned on a family of synthetic motions
+    /// and noise levels (not the bundled test captures). Produced by
+    /// `cargo test --release -p host-tests --test preset -- --ignored --nocapture`
+    /// (docs/CALIBRATION.md, "Shipped defaults").
+    pub const NAV440: Self = Self {
+        velocity: BankGains::NAV440_VELOCITY,
+        acceleration: BankGains::NAV440_ACCELERATION,
+        ..Self::DEFAULT
     };
     /// The paper's configuration, every law as published (AVE `deltahat` only grows).
     pub const PAPER: Self = Self {
@@ -582,6 +664,19 @@ macro_rules! estimator_bank {
             pub fn restart(&mut self) {
                 self.input.restart();
                 self.state = self.params.init(T::ZERO);
+            }
+
+            /// Replaces every row's parameters by those of `cfg` and keeps every state: the
+            /// laws continue from where they are with the new gains (what a gain schedule does,
+            /// `AdaptiveBank`). Only the gains of `cfg` are meant to differ from the
+            /// configuration the bank was built with: the input stage (step, hold, nominal
+            /// period, gap rule, unwrapping) is kept as built. On error nothing changes.
+            /// Cost: that of building the parameters (closed-form maps, Kalman gains), see
+            /// `cargo xtask bench`.
+            pub fn set_gains(&mut self, cfg: &$crate::BankConfig) -> Result<(), $crate::ConfigError> {
+                let (_, n0) = $crate::BankInput::<T>::new(cfg)?;
+                self.params = $Params::new(cfg, n0)?;
+                Ok(())
             }
 
             /// The rows' validated parameters.

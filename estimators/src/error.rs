@@ -26,6 +26,9 @@ pub enum ConfigError {
     /// The nominal sample period is more than `10^6` steps `h` (the closed-form maps and the
     /// step count of one interval are limited to that).
     SamplePeriodTooLong,
+    /// A gain schedule needs 1 to `MAX_LEVELS` levels with strictly increasing noise
+    /// variances > 0.
+    ScheduleLevels,
 }
 
 /// A sample that [`crate::YawBank::update`] (or [`crate::SampleAdapter`]) refuses. The state is
@@ -59,6 +62,9 @@ impl core::fmt::Display for ConfigError {
             ),
             Self::SamplePeriodTooShort => f.write_str("sample period must be at least h"),
             Self::SamplePeriodTooLong => f.write_str("sample period must be at most 1e6 steps h"),
+            Self::ScheduleLevels => f.write_str(
+                "a gain schedule needs 1 to 8 levels with noise variances > 0, strictly increasing",
+            ),
         }
     }
 }

@@ -65,6 +65,7 @@
 
 mod ad;
 pub mod adapter;
+pub mod adaptive;
 mod ave;
 mod bank;
 mod ed;
@@ -84,6 +85,7 @@ mod unwrap;
 
 pub use ad::{Ad, AdConfig, AdParams, AdState};
 pub use adapter::{SampleAdapter, SampleClock, Tick};
+pub use adaptive::{AdaptiveBank, AdaptiveConfig, GainSchedule, NoiseEstimator, ScheduleLevel};
 pub use ave::{Ave, AveConfig, AveParams, AveState, DeltaLaw, DeltaMode};
 pub use bank::{
     Accepted, AdAdMap, BankConfig, BankGains, BankInput, BankOutput, Channel, Feed, KalmanNoise,

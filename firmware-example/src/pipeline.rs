@@ -2,7 +2,7 @@
 //! runs too) with the firmware's bank type ([`crate::Bank`]) on the axes [`AXES`] selects.
 //!
 //! bytes -> parser -> attitude packets -> BIT check -> `TimeBase` -> warm-up/period rule ->
-//! one bank per axis (`BankConfig::default()`: h = 1e-4 s, linear hold) -> one CSV row per
+//! one bank per axis (`BankConfig::NAV440`: h = 1e-4 s, linear hold, tuned gains) -> one CSV row per
 //! sample, formatted by `nav440_pipeline::csv` exactly as the host does. See
 //! docs/PIPELINE.md and docs/RELIABILITY.md.
 
@@ -35,10 +35,11 @@ pub type BuildFn = fn(Axis, &BankConfig) -> Result<Bank, ConfigError>;
 /// The firmware's pipeline.
 pub type Pipeline = nav440_pipeline::Pipeline<Bank, ConfigError, BuildFn>;
 
-/// A pipeline with the bank presets of `nav440 estimate` (`BankConfig::default()`), checked
-/// here once so that a bad configuration fails at start.
+/// A pipeline with the bank preset of `nav440 estimate` (`BankConfig::NAV440`; the paper's
+/// presets are `BankConfig::PAPER`, `nav440 estimate --preset paper`), checked here once so
+/// that a bad configuration fails at start.
 pub fn new() -> Result<Pipeline, ConfigError> {
-    let cfg = BankConfig::default();
+    let cfg = BankConfig::NAV440;
     build_bank(Axis::Yaw, &cfg)?;
     Ok(Pipeline::new(AXES, cfg, build_bank))
 }

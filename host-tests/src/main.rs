@@ -42,16 +42,40 @@ impl From<HoldArg> for estimators::Hold {
     }
 }
 
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum PresetArg {
+    /// `BankConfig::NAV440`: gains tuned on synthetic motions and noise levels (default of
+    /// `estimate` and `plot`).
+    Nav440,
+    /// `BankConfig::PAPER`: the paper's presets (default of `paper`).
+    Paper,
+}
+
+impl PresetArg {
+    fn config(self) -> estimators::BankConfig {
+        match self {
+            PresetArg::Nav440 => estimators::BankConfig::NAV440,
+            PresetArg::Paper => estimators::BankConfig::PAPER,
+        }
+    }
+}
+
 /// Options shared by every command that runs the estimator bank.
 #[derive(Args, Debug, Clone)]
 struct BankArgs {
-    /// Sample adapter: linear interpolation or zero-order hold.
-    #[arg(long, value_enum, default_value = "linear")]
-    hold: HoldArg,
+    /// Sample adapter: linear interpolation or zero-order hold [default: linear, or a
+    /// schedule file's hold].
+    #[arg(long, value_enum)]
+    hold: Option<HoldArg>,
     /// Observer integration step h, s.
     #[arg(long, default_value_t = 1e-4)]
     step: f32,
-    /// Gains file (TOML written by `nav440 tune`); default: the paper's presets.
+    /// Gain preset: nav440 (tuned, default of `estimate` and `plot`) or paper (default of
+    /// `paper`). A gains file is applied over it.
+    #[arg(long, value_enum)]
+    preset: Option<PresetArg>,
+    /// Gains file (TOML written by `nav440 tune`), applied over the preset; or a schedule
+    /// file (`nav440 tune --schedule`): noise-adaptive gains.
     #[arg(long, value_name = "FILE")]
     gains: Option<PathBuf>,
     /// Where added noise enters: one draw per packet (sample), or one per observer step on the
@@ -179,8 +203,13 @@ enum Cmd {
         /// Capture file; `-` reads standard input.
         file: PathBuf,
         /// Noise variance added to yaw, deg^2.
-        #[arg(long, value_name = "V")]
-        noise_var: f64,
+        #[arg(long, value_name = "V", required_unless_present = "schedule", conflicts_with = "schedule")]
+        noise_var: Option<f64>,
+        /// Tune a gain schedule: one level per noise variance (deg^2, comma-separated,
+        /// increasing, e.g. 0.001,0.01,0.1,0.5,1); `-o` writes the schedule file that
+        /// `--gains` runs as a noise-adaptive bank, `--rust` its `SCHEDULE` array.
+        #[arg(long, value_name = "V1,V2,...", value_delimiter = ',', conflicts_with = "exhaustive")]
+        schedule: Option<Vec<f64>>,
         /// Number of noise seeds averaged per evaluation.
         #[arg(long, default_value_t = 3)]
         seeds: u64,
@@ -362,25 +391,40 @@ fn load_samples(file: &Path) -> Result<Vec<replay::Sample>> {
     replay::read_samples(file)
 }
 
-fn bank_options(b: &BankArgs) -> Result<replay::EstimateOptions> {
+/// The options of `b`; `default_preset` is the command's preset when `--preset` is not given
+/// (the base a gains file is applied over; `None` left in `config` means that preset).
+fn bank_options(b: &BankArgs, default_preset: PresetArg) -> Result<replay::EstimateOptions> {
     if !(b.step.is_finite() && b.step > 0.0) {
         return Err(Error::Usage(format!(
             "--step must be a positive number of seconds, got {}",
             b.step
         )));
     }
-    let config = match &b.gains {
-        Some(p) => Some(gains::load(p)?),
-        None => None,
-    };
+    let base = b.preset.unwrap_or(default_preset).config();
+    let (mut config, mut schedule, mut file_hold) = (b.preset.map(PresetArg::config), None, None);
+    match b.gains.as_deref().map(gains::load_any).transpose()? {
+        None => {}
+        Some(gains::Loaded::Fixed(g)) => config = Some(g.apply(base)),
+        Some(gains::Loaded::Schedule(f)) => {
+            // Validated by `load_any`.
+            schedule = Some(f.schedule(&base)?);
+            file_hold = Some(f.hold()?);
+            config = Some(base);
+        }
+    }
     Ok(replay::EstimateOptions {
-        hold: b.hold.into(),
+        hold: b
+            .hold
+            .map(Into::into)
+            .or(file_hold)
+            .unwrap_or(estimators::Hold::Linear),
         step_s: b.step,
         noise: None,
         fixed: false,
         config,
         noise_at: b.noise_at.into(),
         axes: b.axis.into(),
+        schedule,
     })
 }
 
@@ -457,7 +501,7 @@ fn run(cli: Cli) -> Result<()> {
             fixed,
             output,
         } => {
-            let mut opts = bank_options(&bank)?;
+            let mut opts = bank_options(&bank, PresetArg::Nav440)?;
             opts.noise = noise(n.noise_var, n.seed)?;
             opts.fixed = fixed;
             let mut r = replay::open_capture(&file)?;
@@ -486,7 +530,7 @@ fn run(cli: Cli) -> Result<()> {
             markdown,
             window,
         } => {
-            let opts = bank_options(&bank)?;
+            let opts = bank_options(&bank, PresetArg::Paper)?;
             one_axis(&opts, "paper")?;
             paper::check_window(window)?;
             let samples = load_samples(&file)?;
@@ -503,6 +547,7 @@ fn run(cli: Cli) -> Result<()> {
         Cmd::Tune {
             file,
             noise_var,
+            schedule,
             seeds,
             window,
             train,
@@ -514,7 +559,12 @@ fn run(cli: Cli) -> Result<()> {
             rust,
             axis,
         } => {
-            noise(Some(noise_var), 0)?;
+            if let Some(v) = noise_var {
+                noise(Some(v), 0)?;
+            }
+            for &v in schedule.iter().flatten() {
+                noise(Some(v), 0)?;
+            }
             paper::check_window(window)?;
             let samples = load_samples(&file)?;
             let opts = replay::EstimateOptions {
@@ -525,7 +575,7 @@ fn run(cli: Cli) -> Result<()> {
             };
             one_axis(&opts, "tune")?;
             let spec = tune::TuneSpec {
-                noise_var,
+                noise_var: noise_var.unwrap_or(0.0),
                 seeds: seeds.max(1),
                 train: train.unwrap_or((0.0, window)),
                 test,
@@ -543,6 +593,29 @@ fn run(cli: Cli) -> Result<()> {
                     None => vec![estimators::Hold::Linear, estimators::Hold::ZeroOrder],
                 },
             };
+            if let Some(levels) = schedule {
+                let spec = tune::TuneSpec {
+                    holds: vec![hold.map_or(estimators::Hold::Linear, Into::into)],
+                    ..spec
+                };
+                let (file, text) = tune::tune_schedule(&samples, &opts, &spec, &levels)?;
+                stdout_or_file(None, |w| w.write_all(text.as_bytes()))?;
+                if let Some(p) = output {
+                    write_file(&p, &file.to_toml())?;
+                }
+                if let Some(p) = rust {
+                    let what = format!(
+                        "--schedule {}",
+                        levels
+                            .iter()
+                            .map(|v| v.to_string())
+                            .collect::<Vec<_>>()
+                            .join(",")
+                    );
+                    write_file(&p, &file.to_rust(&what, &estimators::BankConfig::NAV440))?;
+                }
+                return Ok(());
+            }
             let res = tune::tune_with(&samples, &opts, &spec)?;
             stdout_or_file(None, |w| w.write_all(res.to_text().as_bytes()))?;
             if let Some(p) = output {
@@ -561,7 +634,7 @@ fn run(cli: Cli) -> Result<()> {
             from,
             to,
         } => {
-            let mut opts = bank_options(&bank)?;
+            let mut opts = bank_options(&bank, PresetArg::Nav440)?;
             one_axis(&opts, "plot")?;
             opts.noise = noise(n.noise_var, n.seed)?;
             let samples = load_samples(&file)?;

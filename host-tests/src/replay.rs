@@ -5,7 +5,10 @@
 //! integration tests all call.
 
 use crate::error::{Error, Result};
-use estimators::{BankConfig, BankOutput, Fx, Hold, SampleError, YawBank};
+use estimators::{
+    AdaptiveBank, AdaptiveConfig, BankConfig, BankOutput, Fx, GainSchedule, Hold, SampleError,
+    Wrap, YawBank,
+};
 pub use nav440_pipeline::bit::BitCounts;
 use nav440_pipeline::period::PeriodEstimator;
 pub use nav440_pipeline::period::WARMUP_SAMPLES;
@@ -453,6 +456,10 @@ pub struct EstimateOptions {
     pub noise_at: NoiseAt,
     /// The estimated axes (`--axis`; default yaw only).
     pub axes: Axes,
+    /// A gain schedule (`--gains schedule.toml`): run the noise-adaptive bank
+    /// (`estimators::AdaptiveBank`, `AdaptiveConfig::DEFAULT`) with `config`'s step, hold and
+    /// period instead of fixed gains.
+    pub schedule: Option<GainSchedule>,
 }
 
 /// Where the added noise enters the estimators.
@@ -479,15 +486,17 @@ impl Default for EstimateOptions {
             config: None,
             noise_at: NoiseAt::Sample,
             axes: Axes::only(Axis::Yaw),
+            schedule: None,
         }
     }
 }
 
 impl EstimateOptions {
-    /// The bank configuration these options describe (gains from `config` or the paper's
-    /// presets, step and hold from the options), before adapting it to a capture.
+    /// The bank configuration these options describe (gains from `config` or the shipped
+    /// preset `BankConfig::NAV440`, step and hold from the options), before adapting it to a
+    /// capture.
     pub fn bank_config(&self) -> BankConfig {
-        let mut cfg = self.config.unwrap_or_default();
+        let mut cfg = self.config.unwrap_or(BankConfig::NAV440);
         cfg.h = self.step_s;
         cfg.hold = self.hold;
         cfg
@@ -501,7 +510,7 @@ impl EstimateOptions {
     /// These options with the paper's laws as the base when no gains file is given
     /// (`BankConfig::PAPER`: the AVE's `deltahat` only grows), for the paper's experiment
     /// (`nav440 paper`, `nav440 tune`); `nav440 estimate` and the firmware run
-    /// `BankConfig::default()` (leaky `deltahat`, docs/RELIABILITY.md).
+    /// `BankConfig::NAV440` (tuned gains, leaky `deltahat`, docs/CALIBRATION.md).
     pub fn paper_law(&self) -> Self {
         Self {
             config: Some(self.config.unwrap_or(BankConfig::PAPER)),
@@ -649,14 +658,21 @@ pub fn rejection_warning(r: &Rejections) -> Option<String> {
     ))
 }
 
-/// The f32 or the fixed-point bank.
+/// The f32 or the fixed-point bank, with fixed or scheduled gains.
 enum Bank {
     F32(Box<YawBank<f32>>),
     Fx(Box<YawBank<Fx>>),
+    AdaptiveF32(Box<AdaptiveBank<f32>>),
+    AdaptiveFx(Box<AdaptiveBank<Fx>>),
 }
 
 impl Bank {
-    fn new(axis: Axis, cfg: &BankConfig, fixed: bool) -> std::result::Result<Self, String> {
+    fn new(
+        axis: Axis,
+        cfg: &BankConfig,
+        fixed: bool,
+        schedule: Option<&GainSchedule>,
+    ) -> std::result::Result<Self, String> {
         let bad = |e: estimators::ConfigError| {
             let mut m = format!("bad estimator configuration: {e}");
             if e == estimators::ConfigError::SamplePeriodTooLong {
@@ -667,6 +683,24 @@ impl Bank {
             }
             m
         };
+        if let Some(sched) = schedule {
+            let wrap = if axis.wraps() {
+                Wrap::Deg180
+            } else {
+                Wrap::None
+            };
+            let base = BankConfig { wrap, ..*cfg };
+            let ac = AdaptiveConfig::DEFAULT;
+            return Ok(if fixed {
+                Bank::AdaptiveFx(Box::new(
+                    AdaptiveBank::new(&base, sched, &ac).map_err(bad)?,
+                ))
+            } else {
+                Bank::AdaptiveF32(Box::new(
+                    AdaptiveBank::new(&base, sched, &ac).map_err(bad)?,
+                ))
+            });
+        }
         Ok(if fixed {
             Bank::Fx(Box::new(axis_bank(axis, cfg).map_err(bad)?))
         } else {
@@ -678,6 +712,8 @@ impl Bank {
         match self {
             Bank::F32(b) => b.update(t_us, deg),
             Bank::Fx(b) => b.update(t_us, deg),
+            Bank::AdaptiveF32(b) => b.update(t_us, deg),
+            Bank::AdaptiveFx(b) => b.update(t_us, deg),
         }
     }
 
@@ -685,6 +721,8 @@ impl Bank {
         match self {
             Bank::F32(b) => b.new_epoch(),
             Bank::Fx(b) => b.new_epoch(),
+            Bank::AdaptiveF32(b) => b.new_epoch(),
+            Bank::AdaptiveFx(b) => b.new_epoch(),
         }
     }
 
@@ -692,6 +730,8 @@ impl Bank {
         match self {
             Bank::F32(b) => b.reinit_count(),
             Bank::Fx(b) => b.reinit_count(),
+            Bank::AdaptiveF32(b) => b.reinit_count(),
+            Bank::AdaptiveFx(b) => b.reinit_count(),
         }
     }
 }
@@ -780,7 +820,7 @@ impl HostBank {
             None
         };
         Ok(HostBank {
-            bank: Bank::new(axis, &cfg, opts.fixed)?,
+            bank: Bank::new(axis, &cfg, opts.fixed, opts.schedule.as_ref())?,
             noise,
             step,
         })

@@ -131,6 +131,94 @@ pub fn mse_range(t_us: &[u64], est: &[f32], reference: &[f32], (from, to): (f64,
     }
 }
 
+/// What a family's objective is measured on: one [`Problem`] (`nav440 tune`), or a set of
+/// them ([`Problems`], the shipped preset's family of motions and noise levels).
+trait Eval: Sync {
+    /// Observer step h, s.
+    fn step_s(&self) -> f32;
+    /// The objective of the estimator `make` builds (velocity half) or of two of them in
+    /// series (acceleration half); `i`: the family's column (bank order, 0 to 5).
+    fn family<L: Law<Num = f32>>(
+        &self,
+        i: usize,
+        make: impl Fn() -> Option<Stateful<L>>,
+        acc: bool,
+    ) -> f64;
+    /// The objective of a Kalman tracker with noise `q`, `r` (its `dt`: each problem's
+    /// nominal sample period); column 6.
+    fn kf(&self, q: f32, r: f32, acc: bool) -> f64;
+}
+
+impl Eval for Problem<'_> {
+    fn step_s(&self) -> f32 {
+        self.opts.step_s
+    }
+    fn family<L: Law<Num = f32>>(
+        &self,
+        _i: usize,
+        make: impl Fn() -> Option<Stateful<L>>,
+        acc: bool,
+    ) -> f64 {
+        self.eval_family(make, acc)
+    }
+    fn kf(&self, q: f32, r: f32, acc: bool) -> f64 {
+        let dt = self.sample_period_s;
+        self.eval_kf(&KalmanConfig { dt, q, r }, acc)
+    }
+}
+
+/// A set of problems scored together. Without baselines: the geometric mean of their MSEs
+/// (each problem weighs the same whatever its MSE's scale). With baselines (per problem, the
+/// MSE of each column with the preset to beat): the worst ratio MSE / baseline over the
+/// problems, times the geometric mean of the ratios to the power 0.2 (a tie-break that keeps
+/// the search moving where the worst case is flat), so that minimising it lowers the worst
+/// case relative to the preset first. Infinite if any problem is.
+struct Problems<'a> {
+    problems: Vec<Problem<'a>>,
+    baselines: Option<Vec<[[f64; 7]; 2]>>,
+}
+
+impl Problems<'_> {
+    fn combine(&self, i: usize, acc: bool, f: impl Fn(&Problem<'_>) -> f64) -> f64 {
+        let mut s = 0.0;
+        let mut worst = 0.0f64;
+        for (k, p) in self.problems.iter().enumerate() {
+            let mut v = f(p);
+            if let Some(b) = &self.baselines {
+                v /= b[k][usize::from(acc)][i];
+            }
+            if !(v.is_finite() && v > 0.0) {
+                return f64::INFINITY;
+            }
+            worst = worst.max(v);
+            s += v.ln();
+        }
+        let gm = (s / self.problems.len().max(1) as f64).exp();
+        if self.baselines.is_some() {
+            worst * gm.powf(0.2)
+        } else {
+            gm
+        }
+    }
+}
+
+impl Eval for Problems<'_> {
+    fn step_s(&self) -> f32 {
+        self.problems.first().map_or(1e-4, |p| p.opts.step_s)
+    }
+    fn family<L: Law<Num = f32>>(
+        &self,
+        i: usize,
+        make: impl Fn() -> Option<Stateful<L>>,
+        acc: bool,
+    ) -> f64 {
+        self.combine(i, acc, |p| p.eval_family(&make, acc))
+    }
+    fn kf(&self, q: f32, r: f32, acc: bool) -> f64 {
+        self.combine(6, acc, |p| p.kf(q, r, acc))
+    }
+}
+
 impl Problem<'_> {
     /// Mean over seeds of the MSE of an adapter-driven estimator built by `make`.
     fn eval<E: Estimator<f32>>(&self, make: &dyn Fn() -> Option<E>, acc: bool) -> f64 {
@@ -247,11 +335,13 @@ fn fit(method: Method, i: usize, h_s: f64, x0: &[f64], f: &dyn Fn(&[f64]) -> f64
     }
 }
 
-fn ave(g: &[f64]) -> AveConfig {
+/// AVE gains `(k, gamma1)` with the `deltahat` law `delta` (the start's: the paper's for
+/// `nav440 tune`, the leaky one for the shipped preset).
+fn ave(g: &[f64], delta: DeltaMode) -> AveConfig {
     AveConfig {
         k: g[0] as f32,
         gamma1: g[1] as f32,
-        delta: DeltaMode::Paper,
+        delta,
     }
 }
 /// ILO gains from the search coordinates `(1 - K1, L, K2)`.
@@ -272,18 +362,18 @@ fn ed(g: &[f64]) -> EdConfig {
 /// Tunes one half of the bank (velocity or acceleration) starting from `start`; returns the
 /// gains and, per family, (tuned MSE, evaluations, seconds).
 fn tune_family(
-    p: &Problem<'_>,
+    p: &impl Eval,
     start: &FamilyGains,
     acc: bool,
     method: Method,
 ) -> (FamilyGains, [(f64, usize, f64); 7]) {
-    let h = p.opts.step_s;
+    let h = p.step_s();
     let hs = f64::from(h);
     let mut out = *start;
     let mut stats = [(f64::INFINITY, 0, 0.0); 7];
     let mut note = |i: usize, r: &Fit| stats[i] = (r.cost, r.evals, r.secs);
     if let Some(a) = start.ave {
-        let f = |g: &[f64]| p.eval_family(|| Ave::<f32>::new(&ave(g), h).ok(), acc);
+        let f = |g: &[f64]| p.family(0, || Ave::<f32>::new(&ave(g, a.delta), h).ok(), acc);
         let r = fit(method, 0, hs, &[f64::from(a.k), f64::from(a.gamma1)], &f);
         note(0, &r);
         out.ave = Some(AveConfig {
@@ -296,7 +386,7 @@ fn tune_family(
     let mut tuned = [None; 3];
     for (j, (slot, g0)) in tuned.iter_mut().zip(ilos).enumerate() {
         let Some(g0) = g0 else { continue };
-        let f = |g: &[f64]| p.eval_family(|| Ilo::<f32, 1>::new(&ilo(g), h).ok(), acc);
+        let f = |g: &[f64]| p.family(1 + j, || Ilo::<f32, 1>::new(&ilo(g), h).ok(), acc);
         let x0 = [1.0 - f64::from(g0.k1), f64::from(g0.l), f64::from(g0.k2)];
         let r = fit(method, 1 + j, hs, &x0, &f);
         note(1 + j, &r);
@@ -306,14 +396,14 @@ fn tune_family(
     if let Some(a) = start.ad {
         let f = |g: &[f64]| {
             let t = g[0] as f32;
-            p.eval_family(|| Ad::<f32>::new(t, h).ok(), acc)
+            p.family(4, || Ad::<f32>::new(t, h).ok(), acc)
         };
         let r = fit(method, 4, hs, &[f64::from(a.t)], &f);
         note(4, &r);
         out.ad = Some(estimators::AdConfig { t: r.x[0] as f32 });
     }
     if let Some(e) = start.ed {
-        let f = |g: &[f64]| p.eval_family(|| Ed::<f32>::new(&ed(g), h).ok(), acc);
+        let f = |g: &[f64]| p.family(5, || Ed::<f32>::new(&ed(g), h).ok(), acc);
         let r = fit(
             method,
             5,
@@ -325,18 +415,8 @@ fn tune_family(
         out.ed = Some(ed(&r.x));
     }
     if let Some(k) = start.kf {
-        let dt = p.sample_period_s;
         // Only q/r matters for the steady-state gain: r is kept, q is searched.
-        let f = |g: &[f64]| {
-            p.eval_kf(
-                &KalmanConfig {
-                    dt,
-                    q: g[0] as f32,
-                    r: k.r,
-                },
-                acc,
-            )
-        };
+        let f = |g: &[f64]| p.kf(g[0] as f32, k.r, acc);
         let r = fit(method, 6, hs, &[f64::from(k.q)], &f);
         note(6, &r);
         out.kf = Some(estimators::KalmanNoise {
@@ -395,23 +475,7 @@ pub fn tune_with(
     let noise_var = spec.noise_var;
     let opts = &opts.paper_law();
     let axis = opts.axis();
-    let ys = (1..=seeds)
-        .map(|seed| {
-            let y = replay::noisy_angle(
-                samples,
-                axis,
-                Some(Noise {
-                    var: noise_var,
-                    seed,
-                }),
-            )?;
-            Ok(if axis.wraps() {
-                replay::unwrap_deg(&y)
-            } else {
-                y
-            })
-        })
-        .collect::<Result<Vec<_>>>()?;
+    let ys = noisy_inputs(samples, axis, noise_var, 1..=seeds)?;
     let holds = if spec.holds.is_empty() {
         vec![opts.hold]
     } else {
@@ -482,28 +546,7 @@ pub fn tune_with(
         return Err(Error::Other("no hold to tune".into()));
     };
     // Before/after through the whole bank, on the test range, against the same references.
-    let bank_mse = |cfg: BankConfig| -> Result<([f64; 7], [f64; 7])> {
-        let mut v = [0.0; 7];
-        let mut a = [0.0; 7];
-        for seed in 1..=seeds {
-            let mut o = opts.clone();
-            o.hold = cfg.hold;
-            o.config = Some(cfg);
-            o.noise = Some(Noise {
-                var: noise_var,
-                seed,
-            });
-            let (rows, _) = replay::estimate(samples, &o)?;
-            let from = (test.0 * 1e6).round() as u64;
-            let rows: Vec<_> = rows.into_iter().filter(|r| r.t_us >= from).collect();
-            let (vv, aa) = row_mse(axis, &rows, samples, &acc_ref, test.1);
-            for i in 0..7 {
-                v[i] += vv[i] / seeds as f64;
-                a[i] += aa[i] / seeds as f64;
-            }
-        }
-        Ok((v, a))
-    };
+    let bank_mse = |cfg: BankConfig| bank_mse_with(samples, opts, &acc_ref, cfg, noise_var, seeds, test);
     let (vel_before, acc_before) = bank_mse(base_before)?;
     let mut tuned_cfg = gains.apply(base_before);
     tuned_cfg.hold = hold;
@@ -526,6 +569,222 @@ pub fn tune_with(
         acc_before,
         acc_after,
     })
+}
+
+/// The unwrapped noisy angle of `axis` for each noise seed (the tuner's inputs).
+fn noisy_inputs(
+    samples: &[Sample],
+    axis: replay::Axis,
+    noise_var: f64,
+    seeds: impl Iterator<Item = u64>,
+) -> Result<Vec<Vec<f32>>> {
+    seeds
+        .map(|seed| {
+            let y = replay::noisy_angle(
+                samples,
+                axis,
+                Some(Noise {
+                    var: noise_var,
+                    seed,
+                }),
+            )?;
+            Ok(if axis.wraps() {
+                replay::unwrap_deg(&y)
+            } else {
+                y
+            })
+        })
+        .collect()
+}
+
+/// Per-column MSE of the whole bank with `cfg` (its hold included) over `range` (s), mean of
+/// the noise seeds `1..=seeds` at `noise_var` deg^2: velocity against the Euler-kinematics
+/// rate, acceleration against `acc_ref` (see [`ave_on_rate`]). What `nav440 tune` prints as
+/// "before" and "after" (`nav440 estimate --gains` computes the same rows).
+fn bank_mse_with(
+    samples: &[Sample],
+    opts: &EstimateOptions,
+    acc_ref: &[f32],
+    cfg: BankConfig,
+    noise_var: f64,
+    seeds: u64,
+    range: (f64, f64),
+) -> Result<([f64; 7], [f64; 7])> {
+    let axis = opts.axis();
+    let mut v = [0.0; 7];
+    let mut a = [0.0; 7];
+    for seed in 1..=seeds {
+        let mut o = opts.clone();
+        o.hold = cfg.hold;
+        o.config = Some(cfg);
+        o.noise = Some(Noise {
+            var: noise_var,
+            seed,
+        });
+        let (rows, _) = replay::estimate(samples, &o)?;
+        let from = (range.0 * 1e6).round() as u64;
+        let rows: Vec<_> = rows.into_iter().filter(|r| r.t_us >= from).collect();
+        let (vv, aa) = row_mse(axis, &rows, samples, acc_ref, range.1);
+        for i in 0..7 {
+            v[i] += vv[i] / seeds as f64;
+            a[i] += aa[i] / seeds as f64;
+        }
+    }
+    Ok((v, a))
+}
+
+/// The MSE `nav440 tune` reports for a bank configuration ("before"/"after"): per column
+/// (velocity, acceleration), through the whole bank with `cfg` (gains and hold), over `range`
+/// (s), mean of the noise seeds `1..=seeds` at `noise_var` deg^2, on the first axis of `opts`
+/// (yaw by default); the acceleration reference is the AVE (500, 20000) on the rate with the
+/// linear hold, as in `nav440 tune` and `nav440 paper`.
+pub fn bank_mse(
+    samples: &[Sample],
+    cfg: BankConfig,
+    noise_var: f64,
+    seeds: u64,
+    range: (f64, f64),
+) -> Result<([f64; 7], [f64; 7])> {
+    let opts = EstimateOptions::default().paper_law();
+    let acc_ref = ave_on_rate(samples, &REFERENCE_AVE, &opts)?;
+    bank_mse_with(samples, &opts, &acc_ref, cfg, noise_var, seeds.max(1), range)
+}
+
+/// One case of the shipped preset's tuning family: a capture's samples, a noise level and
+/// the MSE range.
+#[derive(Clone, Debug)]
+pub struct PresetCase {
+    /// Name printed in the report.
+    pub name: String,
+    /// The capture's samples.
+    pub samples: Vec<Sample>,
+    /// Noise variance added to yaw, deg^2.
+    pub noise_var: f64,
+    /// Noise seed.
+    pub seed: u64,
+    /// MSE range, s.
+    pub range: (f64, f64),
+}
+
+/// Tunes one set of gains for a whole family of cases (the shipped preset,
+/// `BankConfig::NAV440`): each family's objective is the geometric mean over the cases of
+/// its MSE (the objective of `nav440 tune`, one seed per case), so that no case's scale
+/// dominates. Starts from `base`'s gains (the paper's gains; the AVE keeps `base`'s
+/// `deltahat` law), with `base`'s hold and step. Returns the gains and the tuned objective
+/// per family (velocity, acceleration).
+pub fn tune_preset(
+    cases: &[PresetCase],
+    base: &BankConfig,
+    beat: Option<&BankConfig>,
+    method: Method,
+) -> Result<(GainsFile, [[f64; 7]; 2])> {
+    let opts = EstimateOptions {
+        hold: base.hold,
+        step_s: base.h,
+        config: Some(*base),
+        ..Default::default()
+    };
+    let axis = opts.axis();
+    let mut problems = Vec::new();
+    let mut baselines = Vec::new();
+    for c in cases {
+        if let Some(b) = beat {
+            let acc_ref = ave_on_rate(&c.samples, &REFERENCE_AVE, &opts)?;
+            let (v, a) =
+                bank_mse_with(&c.samples, &opts, &acc_ref, *b, c.noise_var, 1, c.range)?;
+            baselines.push([v, a]);
+        }
+        let ys = noisy_inputs(&c.samples, axis, c.noise_var, std::iter::once(c.seed))?;
+        let cfg = opts.bank_config_for(&c.samples);
+        problems.push(Problem {
+            samples: &c.samples,
+            ys,
+            vel_ref: c
+                .samples
+                .iter()
+                .map(|s| s.reference(axis).unwrap_or(f32::NAN))
+                .collect(),
+            acc_ref: ave_on_rate(&c.samples, &REFERENCE_AVE, &opts)?,
+            opts: &opts,
+            max_gap_s: cfg.max_gap_s(),
+            sample_period_s: cfg.sample_period_s,
+            range: c.range,
+        });
+    }
+    let set = Problems {
+        problems,
+        baselines: beat.map(|_| baselines),
+    };
+    let start = GainsFile::from_bank(base);
+    let (velocity, acceleration) = std::thread::scope(|s| {
+        let v = s.spawn(|| tune_family(&set, &start.velocity, false, method));
+        let a = tune_family(&set, &start.acceleration, true, method);
+        (v.join(), a)
+    });
+    let velocity = velocity.map_err(|_| Error::Other("tuning thread panicked".into()))?;
+    let mut cost = [[0.0; 7]; 2];
+    for (half, stats) in [&velocity.1, &acceleration.1].into_iter().enumerate() {
+        for (i, st) in stats.iter().enumerate() {
+            cost[half][i] = st.0;
+        }
+    }
+    Ok((
+        GainsFile {
+            velocity: velocity.0,
+            acceleration: acceleration.0,
+        },
+        cost,
+    ))
+}
+
+/// `nav440 tune --schedule V1,V2,..`: [`tune_with`] at each noise level (`spec.noise_var`
+/// replaced; one hold: `spec.holds[0]`, linear by default); returns the schedule file and the
+/// printed report (each level's report).
+pub fn tune_schedule(
+    samples: &[Sample],
+    opts: &EstimateOptions,
+    spec: &TuneSpec,
+    levels: &[f64],
+) -> Result<(crate::gains::ScheduleFile, String)> {
+    if levels.is_empty()
+        || levels.len() > estimators::adaptive::MAX_LEVELS
+        || levels.windows(2).any(|w| w[1] <= w[0])
+        || levels.iter().any(|v| !(v.is_finite() && *v > 0.0))
+    {
+        return Err(Error::Usage(format!(
+            "--schedule needs 1 to {} noise variances > 0 in increasing order, got {levels:?}",
+            estimators::adaptive::MAX_LEVELS
+        )));
+    }
+    let hold = spec.holds.first().copied().unwrap_or(Hold::Linear);
+    let mut text = String::new();
+    let mut level = Vec::new();
+    for &v in levels {
+        let res = tune_with(
+            samples,
+            opts,
+            &TuneSpec {
+                noise_var: v,
+                holds: vec![hold],
+                ..spec.clone()
+            },
+        )?;
+        text.push_str(&format!("== schedule level {v} deg^2 ==\n"));
+        text.push_str(&res.to_text());
+        text.push('\n');
+        level.push(crate::gains::ScheduleLevelFile {
+            noise_var: v,
+            velocity: res.gains.velocity,
+            acceleration: res.gains.acceleration,
+        });
+    }
+    Ok((
+        crate::gains::ScheduleFile {
+            hold: hold_name(hold).to_string(),
+            level,
+        },
+        text,
+    ))
 }
 
 /// The CLI's name of a hold (`--hold`).

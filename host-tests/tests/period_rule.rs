@@ -57,9 +57,9 @@ fn rate_change_after_the_warm_up_keeps_the_warm_up_period() {
     assert_eq!(host.sample_period_s, 10_000.0f32 * 1e-6);
 
     // The firmware's: it holds back its first WARMUP_SAMPLES samples and applies the same
-    // rule to their times on top of `BankConfig::default()` (what the host options give).
+    // rule to their times on top of `BankConfig::NAV440` (what the host options give).
     assert_eq!(WARMUP_SAMPLES, 16);
-    assert_eq!(opts.bank_config(), BankConfig::default());
+    assert_eq!(opts.bank_config(), BankConfig::NAV440);
     let mut est = PeriodEstimator::new();
     for s in &samples {
         if !est.push(s.t_us) {
@@ -67,7 +67,7 @@ fn rate_change_after_the_warm_up_keeps_the_warm_up_period() {
         }
     }
     assert!(est.is_complete());
-    let firmware = est.apply(BankConfig::default());
+    let firmware = est.apply(BankConfig::NAV440);
     assert_eq!(host, firmware);
 
     // `nav440 estimate`: one row per packet, from a bank built for 0.01 s.

@@ -285,6 +285,66 @@ fn bank_per_sample<S: estimators::SqrtFn<Num>>(
     }
 }
 
+/// The gain schedule of `nav440 tune host-tests/data/fig5_a2_100hz.bin --schedule
+/// 0.001,0.01,0.1,0.5,1 --rust` (issue 13, docs/CALIBRATION.md).
+mod schedule {
+    include!("../../../host-tests/data/gains/schedule_fig5.rs");
+}
+
+/// The noise-adaptive bank (`estimators::AdaptiveBank`, issue 13): per-sample instructions of
+/// `update` with the gains held (the noise estimate's cost over the whole bank), and per call
+/// of `retune` (interpolating the schedule and rebuilding every law's coefficients), which
+/// the bank does at most once per `AdaptiveConfig::retune_every` samples.
+fn adaptive_bank(c: &Counter, overhead: u64, cfg: &BankConfig) {
+    use estimators::{AdaptiveBank, AdaptiveConfig, GainSchedule};
+    let Ok(sched) = GainSchedule::new(&schedule::SCHEDULE) else {
+        fail("the gain schedule")
+    };
+    let held = AdaptiveConfig {
+        retune_every: u32::MAX,
+        ..AdaptiveConfig::DEFAULT
+    };
+    let Ok(mut bank) = AdaptiveBank::<Num, BankSqrt>::new(cfg, &sched, &held) else {
+        fail("AdaptiveBank")
+    };
+    let mut total = 0u64;
+    for k in 0..(WARMUP + SAMPLES) {
+        let y = yaw(k);
+        let wrapped = if y > 180.0 { y - 360.0 } else { y };
+        let t_us = u64::from(k) * DT_US;
+        let (n, r) = c.measure(|| black_box(black_box(&mut bank).update(t_us, wrapped)));
+        if r.is_err() {
+            fail("an adaptive bank run without rejected samples");
+        }
+        if k >= WARMUP {
+            total += n.saturating_sub(overhead);
+        }
+    }
+    line(
+        "instr",
+        "adaptive bank, gains held (noise estimate)",
+        total as f32 / SAMPLES as f32,
+        "sample",
+    );
+    let mut total = 0u64;
+    for k in 0..SAMPLES {
+        // Alternate between two points between levels: every call interpolates and rebuilds.
+        let v = if k % 2 == 0 { 0.02 } else { 0.3 };
+        let (n, ()) = c.measure(|| black_box(&mut bank).retune(black_box(v)));
+        total += n.saturating_sub(overhead);
+    }
+    line(
+        "instr",
+        "adaptive bank retune (interpolate + rebuild)",
+        total as f32 / SAMPLES as f32,
+        "call",
+    );
+    ram(
+        "AdaptiveBank (bank + schedule + noise estimate)",
+        core::mem::size_of::<AdaptiveBank<Num, BankSqrt>>(),
+    );
+}
+
 fn fail(what: &str) -> ! {
     host::stderr(format_args!("bench: cannot build {what}\n"));
     host::exit(false)
@@ -545,6 +605,7 @@ fn main() -> ! {
 
     // The whole pipeline as the firmware runs it (pipeline::AXES: all three axes).
     pipeline_per_frame(&c, overhead);
+    adaptive_bank(&c, overhead, &BankConfig::NAV440);
 
     // Parser per byte: a stream of A2 frames (the capture's packet type), and the CRC alone.
     let mut stream = [0u8; 37 * 64];

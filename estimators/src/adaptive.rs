@@ -1,0 +1,528 @@
+//! Noise-adaptive gains (docs/CALIBRATION.md, "Noise-adaptive gains"): the bank estimates the
+//! measurement-noise variance of its angle online ([`NoiseEstimator`]) and interpolates its
+//! gains from a [`GainSchedule`] (noise level -> gains, written by
+//! `nav440 tune --schedule ... [-o FILE.toml] [--rust FILE.rs]`); [`AdaptiveBank`] is the
+//! paper bank driven that way.
+//!
+//! Everything here is `no_std`, heap-free and bounded: the noise estimate costs a few f32
+//! operations per sample (in f32 for every [`Real`]: the input angle is an f32 anyway); the
+//! gains are re-interpolated and the laws' coefficients rebuilt at most once every
+//! [`AdaptiveConfig::retune_every`] samples, and only when the estimate moved by more than
+//! the factor [`AdaptiveConfig::retune_ratio`] from the level the current gains were made for.
+
+use crate::bank::{BankConfig, BankGains, KalmanNoise, PaperBank, PaperOutput};
+use crate::{AveConfig, ConfigError, EdConfig, ExactSqrt, IloConfig, Real, SampleError, SqrtFn};
+
+/// Most levels a [`GainSchedule`] holds.
+pub const MAX_LEVELS: usize = 8;
+
+/// One level of a [`GainSchedule`]: the gains tuned for one noise variance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ScheduleLevel {
+    /// Measurement-noise variance of the angle these gains were tuned for, deg^2 (> 0).
+    pub noise_var: f32,
+    /// Velocity estimators' gains.
+    pub velocity: BankGains,
+    /// Acceleration series' gains.
+    pub acceleration: BankGains,
+}
+
+/// A gain schedule: 1 to [`MAX_LEVELS`] levels in increasing noise variance. Between two
+/// levels every gain is interpolated geometrically in the noise variance (linear in
+/// `ln(noise_var)` and `ln(gain)`: gains span decades), the ILO's `K1` through its leak
+/// `1 - K1` (linearly where a leak is 0); below the first level and above the last, the end
+/// level's gains are used. The AVE's `deltahat` law is the lower level's.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GainSchedule {
+    levels: [ScheduleLevel; MAX_LEVELS],
+    len: usize,
+}
+
+/// `a^(1-w) b^w` for positive `a`, `b`; linear otherwise. `w` in `[0, 1]`.
+fn interp(a: f32, b: f32, w: f32) -> f32 {
+    if a == b || w <= 0.0 {
+        a
+    } else if w >= 1.0 {
+        b
+    } else if a > 0.0 && b > 0.0 {
+        a * libm::expf(w * libm::logf(b / a))
+    } else {
+        a + (b - a) * w
+    }
+}
+
+fn interp_gains(a: &BankGains, b: &BankGains, w: f32) -> BankGains {
+    let ilo = |x: &IloConfig, y: &IloConfig| IloConfig {
+        k1: 1.0 - interp(1.0 - x.k1, 1.0 - y.k1, w),
+        l: interp(x.l, y.l, w),
+        k2: interp(x.k2, y.k2, w),
+    };
+    BankGains {
+        ave: AveConfig {
+            k: interp(a.ave.k, b.ave.k, w),
+            gamma1: interp(a.ave.gamma1, b.ave.gamma1, w),
+            delta: a.ave.delta,
+        },
+        ilo: [
+            ilo(&a.ilo[0], &b.ilo[0]),
+            ilo(&a.ilo[1], &b.ilo[1]),
+            ilo(&a.ilo[2], &b.ilo[2]),
+        ],
+        ad_t: interp(a.ad_t, b.ad_t, w),
+        ed: EdConfig {
+            lambda: interp(a.ed.lambda, b.ed.lambda, w),
+            alpha: interp(a.ed.alpha, b.ed.alpha, w),
+        },
+        kf: KalmanNoise {
+            q: interp(a.kf.q, b.kf.q, w),
+            r: interp(a.kf.r, b.kf.r, w),
+        },
+    }
+}
+
+impl GainSchedule {
+    /// A schedule of `levels` (1 to [`MAX_LEVELS`], noise variances finite, > 0 and strictly
+    /// increasing). The gains themselves are validated when a bank is built from them.
+    pub fn new(levels: &[ScheduleLevel]) -> Result<Self, ConfigError> {
+        if levels.is_empty() || levels.len() > MAX_LEVELS {
+            return Err(ConfigError::ScheduleLevels);
+        }
+        let mut prev = 0.0f32;
+        for l in levels {
+            if !l.noise_var.is_finite() {
+                return Err(ConfigError::NotFinite("noise_var"));
+            }
+            if l.noise_var <= prev {
+                return Err(ConfigError::ScheduleLevels);
+            }
+            prev = l.noise_var;
+        }
+        let mut s = GainSchedule {
+            levels: [levels[0]; MAX_LEVELS],
+            len: levels.len(),
+        };
+        s.levels[..levels.len()].copy_from_slice(levels);
+        Ok(s)
+    }
+
+    /// The levels, in increasing noise variance.
+    pub fn levels(&self) -> &[ScheduleLevel] {
+        &self.levels[..self.len]
+    }
+
+    /// `noise_var` (deg^2) clamped to the schedule's range.
+    pub fn clamp(&self, noise_var: f32) -> f32 {
+        let l = self.levels();
+        let (lo, hi) = (l[0].noise_var, l[l.len() - 1].noise_var);
+        if noise_var.is_nan() {
+            lo
+        } else {
+            noise_var.clamp(lo, hi)
+        }
+    }
+
+    /// The interpolated gains (velocity, acceleration) for `noise_var`, deg^2.
+    pub fn gains_at(&self, noise_var: f32) -> (BankGains, BankGains) {
+        let l = self.levels();
+        let v = self.clamp(noise_var);
+        let i = l.iter().rposition(|x| x.noise_var <= v).unwrap_or(0);
+        let Some(b) = l.get(i + 1) else {
+            let a = &l[i];
+            return (a.velocity, a.acceleration);
+        };
+        let a = &l[i];
+        let w = libm::logf(v / a.noise_var) / libm::logf(b.noise_var / a.noise_var);
+        (
+            interp_gains(&a.velocity, &b.velocity, w),
+            interp_gains(&a.acceleration, &b.acceleration, w),
+        )
+    }
+
+    /// `base` with the gains for `noise_var` (deg^2).
+    pub fn config_at(&self, base: &BankConfig, noise_var: f32) -> BankConfig {
+        let (velocity, acceleration) = self.gains_at(noise_var);
+        BankConfig {
+            velocity,
+            acceleration,
+            ..*base
+        }
+    }
+}
+
+/// Online estimate of the measurement-noise variance of an angle sampled at a steady rate.
+///
+/// Method: the third difference of the samples, `d3 = y[k] - 3 y[k-1] + 3 y[k-2] - y[k-3]`
+/// (computed from wrapped first differences, so a +-180 deg wrap does not disturb it), has
+/// variance `20 sigma^2` for white noise of variance `sigma^2`, while a smooth motion only
+/// contributes `(jerk dt^3)^2` (at 100 Hz and a hand's jerk of 1e4 deg/s^3: 1e-4 deg^2, a
+/// hundredth of `20 * 0.01`). The estimate is the exponentially weighted mean of
+/// `d3^2 / 20` with time constant `tau_s` (weight `dt / tau` per sample; the first
+/// `tau / dt` samples are averaged with weight `1/k` so the estimate starts at once), where
+/// each term is clipped to 9 times the current estimate (a robust mean: a motion burst or a
+/// glitch moves it by at most `9 dt / tau` of itself; for Gaussian noise the clip removes
+/// under 1 % of the mean). A sample interval that differs from the previous one by more than
+/// a quarter (a lost packet, a gap, a new epoch) restarts the differences (the estimate is
+/// kept). Limitation: at low packet rates the motion term grows as `dt^6` (20 Hz: 1.6e4
+/// times larger than at 100 Hz), so fast motion then reads as noise.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NoiseEstimator {
+    /// Weight of a new term once started, `dt / tau`.
+    alpha: f32,
+    /// Estimate, deg^2.
+    var: f32,
+    /// Terms averaged so far (saturates).
+    count: u32,
+    /// Previous sample: time (us) and angle (deg).
+    prev: Option<(u64, f32)>,
+    /// Previous interval, us.
+    dt_prev: u64,
+    /// The last first differences (newest first) and how many are valid (0 to 2).
+    d: [f32; 2],
+    nd: u8,
+}
+
+impl NoiseEstimator {
+    /// An estimator with time constant `tau_s` (s) for samples every `sample_period_s` (s).
+    pub fn new(tau_s: f32, sample_period_s: f32) -> Result<Self, ConfigError> {
+        if !(tau_s.is_finite() && sample_period_s.is_finite()) {
+            return Err(ConfigError::NotFinite("tau_s"));
+        }
+        if tau_s <= 0.0 || sample_period_s <= 0.0 {
+            return Err(ConfigError::NotPositive("tau_s"));
+        }
+        Ok(NoiseEstimator {
+            alpha: (sample_period_s / tau_s).min(1.0),
+            var: 0.0,
+            count: 0,
+            prev: None,
+            dt_prev: 0,
+            d: [0.0; 2],
+            nd: 0,
+        })
+    }
+
+    /// The estimate, deg^2 (`None` before the first third difference).
+    pub fn variance(&self) -> Option<f32> {
+        (self.count > 0).then_some(self.var)
+    }
+
+    /// Takes the sample `angle_deg` (deg, wrapped at +-180 or not) at `t_us` (µs, increasing).
+    pub fn update(&mut self, t_us: u64, angle_deg: f32) {
+        let Some((tp, yp)) = self.prev.replace((t_us, angle_deg)) else {
+            return;
+        };
+        let dt = t_us.saturating_sub(tp);
+        let steady = self.dt_prev > 0 && 4 * dt.abs_diff(self.dt_prev) <= self.dt_prev;
+        self.dt_prev = dt;
+        let mut d = angle_deg - yp;
+        if d > 180.0 {
+            d -= 360.0;
+        } else if d < -180.0 {
+            d += 360.0;
+        }
+        if !steady || dt == 0 {
+            self.nd = 0;
+        }
+        if self.nd >= 2 {
+            let d3 = d - 2.0 * self.d[0] + self.d[1];
+            let mut x = d3 * d3 * (1.0 / 20.0);
+            if self.count >= 8 && x > 9.0 * self.var {
+                x = 9.0 * self.var;
+            }
+            self.count = self.count.saturating_add(1);
+            let w = (1.0 / self.count as f32).max(self.alpha);
+            self.var += w * (x - self.var);
+        }
+        self.d = [d, self.d[0]];
+        self.nd = (self.nd + 1).min(2);
+    }
+
+    /// Forgets the samples (not the estimate): the next sample starts new differences.
+    pub fn restart(&mut self) {
+        self.prev = None;
+        self.nd = 0;
+        self.dt_prev = 0;
+    }
+}
+
+/// How an [`AdaptiveBank`] follows the noise.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct AdaptiveConfig {
+    /// Time constant of the noise estimate, s (default 0.5).
+    pub tau_s: f32,
+    /// Noise variance the gains start at, deg^2 (default 0.01, the paper's small noise).
+    pub initial_noise_var: f32,
+    /// The gains are reconsidered every this many samples at most (default 20: 0.2 s at
+    /// 100 Hz).
+    pub retune_every: u32,
+    /// ... and changed only when the estimate (clamped to the schedule) differs from the level
+    /// of the current gains by more than this factor either way (default 1.25).
+    pub retune_ratio: f32,
+}
+
+impl AdaptiveConfig {
+    /// The defaults (see the fields).
+    pub const DEFAULT: Self = Self {
+        tau_s: 0.5,
+        initial_noise_var: 0.01,
+        retune_every: 20,
+        retune_ratio: 1.25,
+    };
+}
+
+impl Default for AdaptiveConfig {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// The paper bank ([`PaperBank`]) with noise-adaptive gains: every sample also updates a
+/// [`NoiseEstimator`]; at most every [`AdaptiveConfig::retune_every`] samples, if the
+/// estimate left the band `[level / ratio, level * ratio]` around the level the current
+/// gains were interpolated for, the gains for the estimate are interpolated from the
+/// schedule and the laws' coefficients rebuilt ([`PaperBank::set_gains`]), their states
+/// kept. Generic over [`Real`] like the bank (`AdaptiveBank<Fx>` for FPU-less cores; the noise
+/// estimate and the interpolation are f32 there too).
+#[derive(Clone, Copy, Debug)]
+pub struct AdaptiveBank<T: Real, S: SqrtFn<T> = ExactSqrt> {
+    bank: PaperBank<T, S>,
+    base: BankConfig,
+    schedule: GainSchedule,
+    noise: NoiseEstimator,
+    cfg: AdaptiveConfig,
+    level: f32,
+    since: u32,
+    retunes: u32,
+}
+
+impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
+    /// A bank with `base`'s step, hold, period, gap rule and unwrapping, and the gains of
+    /// `schedule` at `cfg.initial_noise_var`.
+    pub fn new(
+        base: &BankConfig,
+        schedule: &GainSchedule,
+        cfg: &AdaptiveConfig,
+    ) -> Result<Self, ConfigError> {
+        if !(cfg.retune_ratio.is_finite() && cfg.initial_noise_var.is_finite()) {
+            return Err(ConfigError::NotFinite("retune_ratio"));
+        }
+        if cfg.retune_ratio < 1.0 || cfg.initial_noise_var <= 0.0 {
+            return Err(ConfigError::NotPositive("retune_ratio"));
+        }
+        let level = schedule.clamp(cfg.initial_noise_var);
+        let bank = PaperBank::new(&schedule.config_at(base, level))?;
+        // Every level must build (so that a retune never fails half-way).
+        for l in schedule.levels() {
+            crate::bank::PaperParams::<T, S>::new(&schedule.config_at(base, l.noise_var), 0)?;
+        }
+        Ok(AdaptiveBank {
+            bank,
+            base: *base,
+            schedule: *schedule,
+            noise: NoiseEstimator::new(cfg.tau_s, base.sample_period_s)?,
+            cfg: *cfg,
+            level,
+            since: 0,
+            retunes: 0,
+        })
+    }
+
+    /// Feeds one sample (as [`PaperBank::update`]); the noise estimate is updated with it and
+    /// the gains follow it (see the type).
+    pub fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<PaperOutput, SampleError> {
+        let out = self.bank.update(t_us, angle_deg)?;
+        self.noise.update(t_us, angle_deg);
+        self.since = self.since.saturating_add(1);
+        if self.since >= self.cfg.retune_every {
+            self.since = 0;
+            if let Some(v) = self.noise.variance() {
+                let v = self.schedule.clamp(v);
+                let r = self.cfg.retune_ratio;
+                if v > self.level * r || v * r < self.level {
+                    self.retune(v);
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// Sets the gains for the noise variance `noise_var` (deg^2, clamped to the schedule) now.
+    pub fn retune(&mut self, noise_var: f32) {
+        let v = self.schedule.clamp(noise_var);
+        // Interpolated between levels that all build: cannot fail but for rounding at a
+        // constraint's edge; then the current gains are kept.
+        if self
+            .bank
+            .set_gains(&self.schedule.config_at(&self.base, v))
+            .is_ok()
+        {
+            self.level = v;
+            self.retunes = self.retunes.saturating_add(1);
+        }
+    }
+
+    /// The current noise estimate, deg^2 (`None` before the first one).
+    pub fn noise_var(&self) -> Option<f32> {
+        self.noise.variance()
+    }
+
+    /// The noise variance the current gains were interpolated for, deg^2.
+    pub fn gain_level(&self) -> f32 {
+        self.level
+    }
+
+    /// How many times the gains changed.
+    pub fn retune_count(&self) -> u32 {
+        self.retunes
+    }
+
+    /// See [`PaperBank::new_epoch`] (the noise estimator restarts its differences too).
+    pub fn new_epoch(&mut self) {
+        self.bank.new_epoch();
+        self.noise.restart();
+    }
+
+    /// See [`PaperBank::reinit_count`].
+    pub fn reinit_count(&self) -> u32 {
+        self.bank.reinit_count()
+    }
+
+    /// See [`PaperBank::set_turns`].
+    pub fn set_turns(&mut self, turns: i64) {
+        self.bank.set_turns(turns);
+    }
+
+    /// The bank.
+    pub fn bank(&self) -> &PaperBank<T, S> {
+        &self.bank
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::presets::{ILO1_TABLE2, ILO3_TABLE2};
+
+    /// Independent Gaussian draws (64-bit LCG + Box-Muller), no dependency.
+    struct Gauss(u64);
+    impl Gauss {
+        fn uniform(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+        }
+        fn next(&mut self) -> f64 {
+            let (u, v) = (self.uniform(), self.uniform());
+            (-2.0 * libm::log(u)).sqrt() * libm::cos(core::f64::consts::TAU * v)
+        }
+    }
+
+    /// On a smooth motion at 100 Hz, the estimate is the noise variance within 10 % (time
+    /// constant 5 s: about 1000 independent terms), and it follows a step of the noise.
+    #[test]
+    fn noise_estimate_matches_the_added_variance() {
+        let mut g = Gauss(3);
+        let mut e = NoiseEstimator::new(5.0, 0.01).unwrap();
+        assert_eq!(e.variance(), None);
+        let mut at = |e: &mut NoiseEstimator, k: u64, var: f64| {
+            let t = k as f64 * 0.01;
+            // 90 deg amplitude, 0.5 Hz: jerk 90 * pi^3 = 2.8e3 deg/s^3.
+            let y = 90.0 * libm::sin(core::f64::consts::PI * t) + var.sqrt() * g.next();
+            e.update(k * 10_000, y as f32);
+        };
+        for k in 0..6000 {
+            at(&mut e, k, 0.25);
+        }
+        let v = e.variance().unwrap();
+        assert!((v - 0.25).abs() < 0.025, "{v}");
+        for k in 6000..12000 {
+            at(&mut e, k, 0.01);
+        }
+        let v = e.variance().unwrap();
+        assert!((v - 0.01).abs() < 0.001, "{v}");
+    }
+
+    /// A wrapping spin (500 deg/s, through +-180 deg) without noise reads as (almost) no
+    /// noise: the differences are taken modulo 360.
+    #[test]
+    fn wraps_are_not_noise() {
+        let mut e = NoiseEstimator::new(0.5, 0.01).unwrap();
+        for k in 0..500u64 {
+            let mut y = (k as f64 * 5.0) % 360.0;
+            if y > 180.0 {
+                y -= 360.0;
+            }
+            e.update(k * 10_000, y as f32);
+        }
+        assert!(e.variance().unwrap() < 1e-6, "{:?}", e.variance());
+    }
+
+    fn level(noise_var: f32, k: f32, ilo: IloConfig) -> ScheduleLevel {
+        let mut g = BankConfig::PAPER.velocity;
+        g.ave.k = k;
+        g.ilo = [ilo; 3];
+        ScheduleLevel {
+            noise_var,
+            velocity: g,
+            acceleration: BankConfig::PAPER.acceleration,
+        }
+    }
+
+    #[test]
+    fn gains_are_interpolated_geometrically_in_the_noise() {
+        let s = GainSchedule::new(&[
+            level(0.01, 100.0, ILO1_TABLE2),
+            level(1.0, 10_000.0, ILO3_TABLE2),
+        ])
+        .unwrap();
+        // At the levels and beyond them: the levels' gains.
+        assert_eq!(s.gains_at(0.01).0.ave.k, 100.0);
+        assert_eq!(s.gains_at(1e-4).0.ave.k, 100.0);
+        assert_eq!(s.gains_at(1.0).0.ave.k, 10_000.0);
+        assert_eq!(s.gains_at(50.0).0.ilo[0], ILO3_TABLE2);
+        // Half-way in ln(noise): the geometric mean of the gains, sqrt(100 * 10000) = 1000;
+        // L: sqrt(4 * 1) = 2; the leak 1 - K1 from 0 (ILO1) to 0.3 (ILO3): linear, 0.15.
+        let (v, _) = s.gains_at(0.1);
+        assert!((v.ave.k - 1000.0).abs() < 0.1, "{}", v.ave.k);
+        assert!((v.ilo[0].l - 2.0).abs() < 1e-5);
+        assert!((v.ilo[0].k1 - 0.85).abs() < 1e-6);
+        assert!(GainSchedule::new(&[]).is_err());
+        assert!(
+            GainSchedule::new(&[level(0.1, 1.0, ILO1_TABLE2), level(0.1, 1.0, ILO1_TABLE2)])
+                .is_err()
+        );
+        assert!(GainSchedule::new(&[level(0.0, 1.0, ILO1_TABLE2)]).is_err());
+    }
+
+    /// The adaptive bank moves its gains to the level of the noise it is fed, changing them
+    /// at most once per `retune_every` samples.
+    #[test]
+    fn adaptive_bank_follows_the_noise() {
+        let s = GainSchedule::new(&[
+            level(0.01, 500.0, ILO1_TABLE2),
+            level(0.5, 100.0, ILO3_TABLE2),
+        ])
+        .unwrap();
+        let cfg = AdaptiveConfig::DEFAULT;
+        let mut b = AdaptiveBank::<f32>::new(&BankConfig::PAPER, &s, &cfg).unwrap();
+        assert_eq!(b.gain_level(), 0.01);
+        let mut g = Gauss(9);
+        let n = 1000u64;
+        for k in 0..n {
+            let var = if k < 500 { 0.01 } else { 0.5 };
+            let y = 20.0 + libm::sqrt(var) * g.next();
+            b.update(k * 10_000, y as f32).unwrap();
+            if k == 499 {
+                let l = b.gain_level();
+                assert!(l < 0.0125 * 1.25, "{l}");
+            }
+        }
+        // The estimate reached the upper level (clamped there).
+        assert!(b.gain_level() > 0.5 / 1.25, "{}", b.gain_level());
+        assert!(b.retune_count() >= 1 && u64::from(b.retune_count()) <= n / 20);
+    }
+}
