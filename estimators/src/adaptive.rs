@@ -29,14 +29,16 @@ pub struct ScheduleLevel {
 }
 
 /// A gain schedule: 1 to [`MAX_LEVELS`] levels in increasing noise variance. Between two
-/// levels every gain is interpolated geometrically in the noise variance (linear in
+/// levels a gain is interpolated geometrically in the noise variance (linear in
 /// `ln(noise_var)` and `ln(gain)`: gains span decades), the ILO's `K1` through its leak
-/// `1 - K1` (linearly where a leak is 0); below the first level and above the last, the end
-/// level's gains are used. The AVE's `deltahat` law is the lower level's.
+/// `1 - K1` (linearly where a leak is 0), or taken from the nearer level, per [`Blend`]
+/// (default: geometric for the AD and the tracker, nearer level for the AVE, ILO and ED);
+/// below the first level and above the last, the end level's gains are used.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GainSchedule {
     levels: [ScheduleLevel; MAX_LEVELS],
     len: usize,
+    blend: Blend,
 }
 
 /// `a^(1-w) b^w` for positive `a`, `b`; linear otherwise. `w` in `[0, 1]`.
@@ -52,17 +54,45 @@ fn interp(a: f32, b: f32, w: f32) -> f32 {
     }
 }
 
-fn interp_gains(a: &BankGains, b: &BankGains, w: f32) -> BankGains {
+/// How a [`GainSchedule`] blends two levels' gains between them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Blend {
+    /// Every gain geometrically (linear in `ln(noise_var)` and `ln(gain)`).
+    Geometric,
+    /// The AD's `T` and the tracker's `q`, `r` geometrically; the AVE, ILO and ED take the
+    /// gains of the nearer level (in `ln(noise_var)`). Default: the tuned AVE, ILO and ED
+    /// gains are often lightly damped observers whose ringing is tuned to the sample period
+    /// (an ILO tuned at 0.01 deg^2 on the fig5 capture rings at 1913 rad/s, about 3 periods
+    /// per 10 ms sample, so the samples do not see it); a blend of two such sets is no longer
+    /// in tune and rings in the output (ILO1 velocity MSE 780 (deg/s)^2 instead of 10 on the
+    /// noise-switch test, docs/CALIBRATION.md). The AD and the tracker have one smooth gain.
+    #[default]
+    NearestObservers,
+}
+
+fn interp_gains(a: &BankGains, b: &BankGains, w: f32, blend: Blend) -> BankGains {
+    // Weight of the upper level for the observers (AVE, ILO, ED).
+    let wo = match blend {
+        Blend::Geometric => w,
+        Blend::NearestObservers => {
+            if w < 0.5 {
+                0.0
+            } else {
+                1.0
+            }
+        }
+    };
     let ilo = |x: &IloConfig, y: &IloConfig| IloConfig {
-        k1: 1.0 - interp(1.0 - x.k1, 1.0 - y.k1, w),
-        l: interp(x.l, y.l, w),
-        k2: interp(x.k2, y.k2, w),
+        k1: 1.0 - interp(1.0 - x.k1, 1.0 - y.k1, wo),
+        l: interp(x.l, y.l, wo),
+        k2: interp(x.k2, y.k2, wo),
     };
     BankGains {
         ave: AveConfig {
-            k: interp(a.ave.k, b.ave.k, w),
-            gamma1: interp(a.ave.gamma1, b.ave.gamma1, w),
-            delta: a.ave.delta,
+            k: interp(a.ave.k, b.ave.k, wo),
+            gamma1: interp(a.ave.gamma1, b.ave.gamma1, wo),
+            delta: if wo < 0.5 { a.ave.delta } else { b.ave.delta },
         },
         ilo: [
             ilo(&a.ilo[0], &b.ilo[0]),
@@ -71,8 +101,8 @@ fn interp_gains(a: &BankGains, b: &BankGains, w: f32) -> BankGains {
         ],
         ad_t: interp(a.ad_t, b.ad_t, w),
         ed: EdConfig {
-            lambda: interp(a.ed.lambda, b.ed.lambda, w),
-            alpha: interp(a.ed.alpha, b.ed.alpha, w),
+            lambda: interp(a.ed.lambda, b.ed.lambda, wo),
+            alpha: interp(a.ed.alpha, b.ed.alpha, wo),
         },
         kf: KalmanNoise {
             q: interp(a.kf.q, b.kf.q, w),
@@ -101,9 +131,20 @@ impl GainSchedule {
         let mut s = GainSchedule {
             levels: [levels[0]; MAX_LEVELS],
             len: levels.len(),
+            blend: Blend::default(),
         };
         s.levels[..levels.len()].copy_from_slice(levels);
         Ok(s)
+    }
+
+    /// This schedule with the blend `blend` (default [`Blend::NearestObservers`]).
+    pub fn with_blend(self, blend: Blend) -> Self {
+        Self { blend, ..self }
+    }
+
+    /// How levels are blended.
+    pub fn blend(&self) -> Blend {
+        self.blend
     }
 
     /// The levels, in increasing noise variance.
@@ -134,8 +175,8 @@ impl GainSchedule {
         let a = &l[i];
         let w = libm::logf(v / a.noise_var) / libm::logf(b.noise_var / a.noise_var);
         (
-            interp_gains(&a.velocity, &b.velocity, w),
-            interp_gains(&a.acceleration, &b.acceleration, w),
+            interp_gains(&a.velocity, &b.velocity, w, self.blend),
+            interp_gains(&a.acceleration, &b.acceleration, w, self.blend),
         )
     }
 
@@ -478,7 +519,8 @@ mod tests {
             level(0.01, 100.0, ILO1_TABLE2),
             level(1.0, 10_000.0, ILO3_TABLE2),
         ])
-        .unwrap();
+        .unwrap()
+        .with_blend(Blend::Geometric);
         // At the levels and beyond them: the levels' gains.
         assert_eq!(s.gains_at(0.01).0.ave.k, 100.0);
         assert_eq!(s.gains_at(1e-4).0.ave.k, 100.0);
@@ -490,6 +532,12 @@ mod tests {
         assert!((v.ave.k - 1000.0).abs() < 0.1, "{}", v.ave.k);
         assert!((v.ilo[0].l - 2.0).abs() < 1e-5);
         assert!((v.ilo[0].k1 - 0.85).abs() < 1e-6);
+        // The default blend: the nearer level for the observers, geometric for the AD's T.
+        let d = s.with_blend(Blend::NearestObservers);
+        assert_eq!(d.gains_at(0.09).0.ave.k, 100.0);
+        assert_eq!(d.gains_at(0.11).0.ave.k, 10_000.0);
+        assert_eq!(d.gains_at(0.11).0.ilo[0], ILO3_TABLE2);
+        assert_eq!(s.gains_at(0.1).0.ad_t, 0.01);
         assert!(GainSchedule::new(&[]).is_err());
         assert!(
             GainSchedule::new(&[level(0.1, 1.0, ILO1_TABLE2), level(0.1, 1.0, ILO1_TABLE2)])

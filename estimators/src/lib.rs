@@ -85,7 +85,9 @@ mod unwrap;
 
 pub use ad::{Ad, AdConfig, AdParams, AdState};
 pub use adapter::{SampleAdapter, SampleClock, Tick};
-pub use adaptive::{AdaptiveBank, AdaptiveConfig, GainSchedule, NoiseEstimator, ScheduleLevel};
+pub use adaptive::{
+    AdaptiveBank, AdaptiveConfig, Blend, GainSchedule, NoiseEstimator, ScheduleLevel,
+};
 pub use ave::{Ave, AveConfig, AveParams, AveState, DeltaLaw, DeltaMode};
 pub use bank::{
     Accepted, AdAdMap, BankConfig, BankGains, BankInput, BankOutput, Channel, Feed, KalmanNoise,

@@ -195,7 +195,8 @@ fn ci() -> Result<(), String> {
     cargo(&["test", "--doc"])?;
     // Release-mode tests: 10^6 random parser streams, constant-memory streaming of 200+ MiB,
     // the 24 h run of the whole bank (f32 and fixed point, 8.64 M samples each), and the tuner's
-    // search against its exhaustive grid on slices of the bundled captures.
+    // search against its exhaustive grid on slices of the bundled captures, the NAV440 preset
+    // against the paper's, and the noise-adaptive bank on a noise switch (issue 13).
     cargo(&[
         "test",
         "--release",
@@ -213,6 +214,10 @@ fn ci() -> Result<(), String> {
         "long_run",
         "--test",
         "tune_search",
+        "--test",
+        "preset",
+        "--test",
+        "schedule",
     ])?;
     // Rustdoc of the host crates: broken intra-doc links and bad HTML fail the build.
     run_env(
