@@ -203,12 +203,22 @@ enum Cmd {
         /// Capture file; `-` reads standard input.
         file: PathBuf,
         /// Noise variance added to yaw, deg^2.
-        #[arg(long, value_name = "V", required_unless_present = "schedule", conflicts_with = "schedule")]
+        #[arg(
+            long,
+            value_name = "V",
+            required_unless_present = "schedule",
+            conflicts_with = "schedule"
+        )]
         noise_var: Option<f64>,
         /// Tune a gain schedule: one level per noise variance (deg^2, comma-separated,
         /// increasing, e.g. 0.001,0.01,0.1,0.5,1); `-o` writes the schedule file that
         /// `--gains` runs as a noise-adaptive bank, `--rust` its `SCHEDULE` array.
-        #[arg(long, value_name = "V1,V2,...", value_delimiter = ',', conflicts_with = "exhaustive")]
+        #[arg(
+            long,
+            value_name = "V1,V2,...",
+            value_delimiter = ',',
+            conflicts_with = "exhaustive"
+        )]
         schedule: Option<Vec<f64>>,
         /// Number of noise seeds averaged per evaluation.
         #[arg(long, default_value_t = 3)]

@@ -692,13 +692,9 @@ impl Bank {
             let base = BankConfig { wrap, ..*cfg };
             let ac = AdaptiveConfig::DEFAULT;
             return Ok(if fixed {
-                Bank::AdaptiveFx(Box::new(
-                    AdaptiveBank::new(&base, sched, &ac).map_err(bad)?,
-                ))
+                Bank::AdaptiveFx(Box::new(AdaptiveBank::new(&base, sched, &ac).map_err(bad)?))
             } else {
-                Bank::AdaptiveF32(Box::new(
-                    AdaptiveBank::new(&base, sched, &ac).map_err(bad)?,
-                ))
+                Bank::AdaptiveF32(Box::new(AdaptiveBank::new(&base, sched, &ac).map_err(bad)?))
             });
         }
         Ok(if fixed {

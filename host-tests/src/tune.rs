@@ -546,7 +546,8 @@ pub fn tune_with(
         return Err(Error::Other("no hold to tune".into()));
     };
     // Before/after through the whole bank, on the test range, against the same references.
-    let bank_mse = |cfg: BankConfig| bank_mse_with(samples, opts, &acc_ref, cfg, noise_var, seeds, test);
+    let bank_mse =
+        |cfg: BankConfig| bank_mse_with(samples, opts, &acc_ref, cfg, noise_var, seeds, test);
     let (vel_before, acc_before) = bank_mse(base_before)?;
     let mut tuned_cfg = gains.apply(base_before);
     tuned_cfg.hold = hold;
@@ -647,7 +648,15 @@ pub fn bank_mse(
 ) -> Result<([f64; 7], [f64; 7])> {
     let opts = EstimateOptions::default().paper_law();
     let acc_ref = ave_on_rate(samples, &REFERENCE_AVE, &opts)?;
-    bank_mse_with(samples, &opts, &acc_ref, cfg, noise_var, seeds.max(1), range)
+    bank_mse_with(
+        samples,
+        &opts,
+        &acc_ref,
+        cfg,
+        noise_var,
+        seeds.max(1),
+        range,
+    )
 }
 
 /// One case of the shipped preset's tuning family: a capture's samples, a noise level and
@@ -690,8 +699,7 @@ pub fn tune_preset(
     for c in cases {
         if let Some(b) = beat {
             let acc_ref = ave_on_rate(&c.samples, &REFERENCE_AVE, &opts)?;
-            let (v, a) =
-                bank_mse_with(&c.samples, &opts, &acc_ref, *b, c.noise_var, 1, c.range)?;
+            let (v, a) = bank_mse_with(&c.samples, &opts, &acc_ref, *b, c.noise_var, 1, c.range)?;
             baselines.push([v, a]);
         }
         let ys = noisy_inputs(&c.samples, axis, c.noise_var, std::iter::once(c.seed))?;

@@ -406,15 +406,29 @@ fn tune_improves_and_writes_gains_that_estimate_accepts() {
         .contains("pub const TUNED: BankConfig"));
     let tuned = ok(&["estimate", p(&cap), "--gains", p(&gains)]);
     assert_ne!(tuned, ok(&["estimate", p(&cap)]));
-    // A gains file restating the paper's presets reproduces the default output exactly.
+    // A gains file restating the paper's presets over `--preset paper` reproduces that
+    // preset's output exactly; the default (NAV440) differs from it.
     let paper = d.join("paper.toml");
     std::fs::write(
         &paper,
         "[velocity.ave]\nk = 500.0\ngamma1 = 20000.0\n[acceleration.ad]\nt = 0.1\n",
     )
     .unwrap();
+    let paper_out = ok(&["estimate", p(&cap), "--preset", "paper"]);
     assert_eq!(
-        ok(&["estimate", p(&cap), "--gains", p(&paper)]),
+        ok(&[
+            "estimate",
+            p(&cap),
+            "--preset",
+            "paper",
+            "--gains",
+            p(&paper)
+        ]),
+        paper_out
+    );
+    assert_ne!(ok(&["estimate", p(&cap)]), paper_out);
+    assert_eq!(
+        ok(&["estimate", p(&cap), "--preset", "nav440"]),
         ok(&["estimate", p(&cap)])
     );
     let _ = std::fs::remove_dir_all(&d);
@@ -667,5 +681,57 @@ fn step_noise_restarts_on_gaps_like_sample_mode() {
         let before: Vec<f64> = rows[999].split(',').map(|c| c.parse().unwrap()).collect();
         assert!(before[3..10].iter().any(|&v| v != 0.0), "{mode}");
     }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
+/// `nav440 estimate FILE --gains schedule.toml` runs the noise-adaptive bank: same rows and
+/// columns as the default, other values (its gains follow the estimated noise); a schedule
+/// with one level equals the fixed gains of that level (nothing to interpolate).
+#[test]
+fn estimate_runs_a_schedule_file() {
+    let cap = data("sin5_a1_50hz.bin");
+    let sched = data("gains/schedule_fig5.toml");
+    let default = ok(&["estimate", p(&cap), "--noise-var", "0.5"]);
+    let adaptive = ok(&[
+        "estimate",
+        p(&cap),
+        "--noise-var",
+        "0.5",
+        "--gains",
+        p(&sched),
+    ]);
+    assert_eq!(default.lines().count(), adaptive.lines().count());
+    assert_eq!(default.lines().next(), adaptive.lines().next());
+    assert_ne!(default, adaptive);
+    let d = scratch("schedule");
+    let text = std::fs::read_to_string(&sched).unwrap();
+    let first = text.split("[[level]]").nth(1).unwrap();
+    let one = d.join("one.toml");
+    std::fs::write(&one, format!("hold = \"linear\"\n[[level]]{first}")).unwrap();
+    let fixed = d.join("fixed.toml");
+    let body: String = first
+        .lines()
+        .filter(|l| !l.starts_with("noise_var"))
+        .map(|l| format!("{}\n", l.replace("[level.", "[")))
+        .collect();
+    std::fs::write(&fixed, body).unwrap();
+    assert_eq!(
+        ok(&[
+            "estimate",
+            p(&cap),
+            "--noise-var",
+            "0.5",
+            "--gains",
+            p(&one)
+        ]),
+        ok(&[
+            "estimate",
+            p(&cap),
+            "--noise-var",
+            "0.5",
+            "--gains",
+            p(&fixed)
+        ])
+    );
     let _ = std::fs::remove_dir_all(&d);
 }

@@ -54,7 +54,10 @@ fn family() -> Vec<PresetCase> {
         let samples = replay::samples(&cap.bytes).unwrap();
         for noise_var in [0.01, 0.1, 0.5] {
             cases.push(PresetCase {
-                name: format!("{} seed {seed} {rate_hz} Hz, {noise_var} deg^2", profile.name()),
+                name: format!(
+                    "{} seed {seed} {rate_hz} Hz, {noise_var} deg^2",
+                    profile.name()
+                ),
                 samples: samples.clone(),
                 noise_var,
                 seed: 1,
@@ -121,20 +124,18 @@ const BUNDLED: [(&str, f64); 4] = [
     ("spin_n1_20hz.bin", 20.0),
 ];
 
+/// Capture, noise variance, MSE per column with PAPER, with NAV440.
+type Scores = (String, f64, [[f64; 7]; 2], [[f64; 7]; 2]);
+
 /// Per capture and noise level: the MSE of every column with PAPER and with NAV440.
-pub fn nav440_vs_paper() -> Vec<(String, f64, [[f64; 7]; 2], [[f64; 7]; 2])> {
+fn nav440_vs_paper() -> Vec<Scores> {
     let mut out = Vec::new();
     for (file, window) in BUNDLED {
         let samples = replay::read_samples(&data(file)).unwrap();
         for noise_var in [0.01, 0.5] {
             let p = bank_mse(&samples, BankConfig::PAPER, noise_var, 3, (0.0, window)).unwrap();
             let n = bank_mse(&samples, BankConfig::NAV440, noise_var, 3, (0.0, window)).unwrap();
-            out.push((
-                file.to_string(),
-                noise_var,
-                [p.0, p.1],
-                [n.0, n.1],
-            ));
+            out.push((file.to_string(), noise_var, [p.0, p.1], [n.0, n.1]));
         }
     }
     out
@@ -207,7 +208,9 @@ fn nav440_beats_paper_on_the_bundled_captures_but_for_the_listed_cells() {
         }
     }
     let gm = (log_ratio / f64::from(cells)).exp();
-    println!("NAV440 below PAPER in {wins} of {cells} cells; geometric mean of NAV440/PAPER {gm:.3}");
+    println!(
+        "NAV440 below PAPER in {wins} of {cells} cells; geometric mean of NAV440/PAPER {gm:.3}"
+    );
     assert!(failures.is_empty(), "{failures:#?}");
     assert_eq!(wins, cells - EXCEPTIONS.len() as u32);
 }

@@ -83,15 +83,16 @@ fn mse(samples: &[Sample], opts: &EstimateOptions) -> [[f64; 7]; 3] {
         .map(|r| r.axis(Axis::Yaw).unwrap().reference_deg_s.unwrap())
         .collect();
     let mut out = [[0.0; 7]; 3];
+    let velocities: Vec<[f32; 7]> = rows
+        .iter()
+        .map(|r| r.axis(Axis::Yaw).unwrap().out.velocities())
+        .collect();
     // Halves: [0, 10 s) and [10 s, 20 s] (mse_range includes both ends: 9.99 s ends the first).
     let ranges = [(0.0, SWITCH_S - 0.005), (SWITCH_S, END_S), (0.0, END_S)];
-    for i in 0..7 {
-        let est: Vec<f32> = rows
-            .iter()
-            .map(|r| r.axis(Axis::Yaw).unwrap().out.velocities()[i])
-            .collect();
-        for (k, range) in ranges.iter().enumerate() {
-            out[k][i] = mse_range(&t, &est, &reference, *range);
+    for (k, range) in ranges.iter().enumerate() {
+        for (i, o) in out[k].iter_mut().enumerate() {
+            let est: Vec<f32> = velocities.iter().map(|v| v[i]).collect();
+            *o = mse_range(&t, &est, &reference, *range);
         }
     }
     out
@@ -131,8 +132,7 @@ fn tuned_for(samples: &[Sample], noise_var: f64, range: (f64, f64)) -> BankConfi
 fn scheduled_bank_follows_a_noise_switch() {
     let clean = clean();
     let noisy = switching(&clean);
-    let Loaded::Schedule(file) = gains::load_any(&data("gains/schedule_fig5.toml")).unwrap()
-    else {
+    let Loaded::Schedule(file) = gains::load_any(&data("gains/schedule_fig5.toml")).unwrap() else {
         panic!("not a schedule file");
     };
     let schedule = file.schedule(&BankConfig::NAV440).unwrap();
@@ -188,7 +188,8 @@ fn scheduled_bank_follows_a_noise_switch() {
             // that is 13 % worse than the half's own tuning on this noise draw. Held to
             // 1.15 x the best fixed set; docs/CALIBRATION.md.
             if i == 5 {
-                if !(sched[2][i] <= 1.15 * m[2][i]) {
+                let held = sched[2][i] <= 1.15 * m[2][i];
+                if !held {
                     failures.push(format!(
                         "ED: scheduled {} above 1.15 x {name} {}",
                         sched[2][i], m[2][i]
@@ -196,7 +197,8 @@ fn scheduled_bank_follows_a_noise_switch() {
                 }
                 continue;
             }
-            if !(sched[2][i] < m[2][i]) {
+            let below = sched[2][i] < m[2][i];
+            if !below {
                 failures.push(format!(
                     "{}: scheduled {} not below {name} {}",
                     NAMES[i], sched[2][i], m[2][i]
@@ -217,8 +219,7 @@ mod snippet {
 
 #[test]
 fn rust_snippet_and_toml_hold_the_same_schedule() {
-    let Loaded::Schedule(file) = gains::load_any(&data("gains/schedule_fig5.toml")).unwrap()
-    else {
+    let Loaded::Schedule(file) = gains::load_any(&data("gains/schedule_fig5.toml")).unwrap() else {
         panic!("not a schedule file");
     };
     assert_eq!(file.hold().unwrap(), Hold::Linear);
