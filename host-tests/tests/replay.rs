@@ -200,7 +200,13 @@ fn spin_is_unwrapped_through_many_turns() {
         }
     };
     let ilo = EstimateOptions::default().bank_config().velocity.ilo;
-    let gi = |i: usize| g(f64::from(ilo[i].k1), f64::from(ilo[i].l), f64::from(ilo[i].k2));
+    let gi = |i: usize| {
+        g(
+            f64::from(ilo[i].k1),
+            f64::from(ilo[i].l),
+            f64::from(ilo[i].k2),
+        )
+    };
     let gains = [1.0, gi(0), gi(1), gi(2), 1.0, 1.0, 1.0];
     for i in [0, 1, 2, 3, 4, 6] {
         let want = rate * gains[i];
