@@ -32,8 +32,12 @@ fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
 /// The bank constructor the pipeline calls after the warm-up.
 pub type BuildFn = fn(Axis, &BankConfig) -> Result<Bank, ConfigError>;
 
+/// Bank slots of the firmware's pipeline: one per axis of [`AXES`] (RAM: one bank with
+/// `one-axis` instead of three).
+pub const BANK_SLOTS: usize = AXES.len();
+
 /// The firmware's pipeline.
-pub type Pipeline = nav440_pipeline::Pipeline<Bank, ConfigError, BuildFn>;
+pub type Pipeline = nav440_pipeline::Pipeline<Bank, ConfigError, BuildFn, BANK_SLOTS>;
 
 /// A pipeline with the bank presets of `nav440 estimate` (`BankConfig::default()`), checked
 /// here once so that a bad configuration fails at start.
