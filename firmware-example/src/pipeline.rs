@@ -39,12 +39,18 @@ pub const BANK_SLOTS: usize = AXES.len();
 /// The firmware's pipeline.
 pub type Pipeline = nav440_pipeline::Pipeline<Bank, ConfigError, BuildFn, BANK_SLOTS>;
 
-/// A pipeline with the bank presets of `nav440 estimate` (`BankConfig::default()`), checked
-/// here once so that a bad configuration fails at start.
-pub fn new() -> Result<Pipeline, ConfigError> {
-    let cfg = BankConfig::default();
-    build_bank(Axis::Yaw, &cfg)?;
-    Ok(Pipeline::new(AXES, cfg, build_bank))
+/// Checks once, at start, that the bank presets of `nav440 estimate` (`BankConfig::default()`)
+/// build, so that a bad configuration fails at start.
+pub fn check() -> Result<(), ConfigError> {
+    build_bank(Axis::Yaw, &BankConfig::default()).map(|_| ())
+}
+
+/// A pipeline with the bank presets of `nav440 estimate` (`BankConfig::default()`; see
+/// [`check`]). Infallible, so that the caller's binding is built in place (no second,
+/// pipeline-sized `Result` on the stack).
+#[inline(always)]
+pub fn new() -> Pipeline {
+    Pipeline::with_slots(AXES, BankConfig::default(), build_bank)
 }
 
 /// Writes the CSV header line of [`AXES`] (without line terminator).

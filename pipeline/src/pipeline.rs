@@ -142,7 +142,7 @@ enum Phase {
 /// `N` (default 3) is the number of bank slots: the selected axes take the slots in CSV
 /// order, so a one-axis firmware sets `N = 1` and holds one bank instead of three (RAM on a
 /// small MCU). Axes beyond the first `N` of the selection are not estimated (see
-/// [`Estimation::new`]).
+/// [`Estimation::with_slots`]).
 pub struct Estimation<B, E, F, const N: usize = 3> {
     axes: Axes,
     cfg: BankConfig,
@@ -150,8 +150,8 @@ pub struct Estimation<B, E, F, const N: usize = 3> {
     phase: Phase,
     /// The first samples, held until the period is known.
     held: heapless::Vec<Sample, WARMUP_SAMPLES>,
-    /// One bank per selected axis once running, in the order of `axes` (built in place: no
-    /// bank-sized temporaries beyond the constructor's own result).
+    /// One bank per selected axis once running, in the order of `axes` (empty before; no
+    /// slot is initialised until its bank is built).
     banks: [Option<B>; N],
     /// A bank could not be built for the measured period.
     failed: Option<E>,
@@ -173,10 +173,10 @@ where
     E: Clone,
     F: FnMut(Axis, &BankConfig) -> Result<B, E>,
 {
-    /// A back end for `axes` with the configuration `cfg` (its sample period is replaced by the
-    /// measured one) and the bank constructor `build`. Only the first `N` selected axes (CSV
-    /// order) are kept ([`Estimation::axes`] tells which).
-    pub fn new(axes: Axes, cfg: BankConfig, build: F) -> Self {
+    /// A back end with `N` bank slots for `axes`, the configuration `cfg` (its sample period
+    /// is replaced by the measured one) and the bank constructor `build`. Only the first `N`
+    /// selected axes (CSV order) are kept ([`Estimation::axes`] tells which).
+    pub fn with_slots(axes: Axes, cfg: BankConfig, build: F) -> Self {
         let mut kept = Axes::NONE;
         for a in axes.iter().take(N) {
             kept = kept.with(a);
@@ -272,10 +272,23 @@ where
     }
 }
 
+impl<B, E, F> Estimation<B, E, F>
+where
+    B: AxisBank,
+    E: Clone,
+    F: FnMut(Axis, &BankConfig) -> Result<B, E>,
+{
+    /// A back end for `axes` (any of the three) with the configuration `cfg` (its sample
+    /// period is replaced by the measured one) and the bank constructor `build`.
+    pub fn new(axes: Axes, cfg: BankConfig, build: F) -> Self {
+        Self::with_slots(axes, cfg, build)
+    }
+}
+
 /// Runs one sample through every selected axis's bank and emits its row.
 #[inline(never)]
-fn run_sample<B: AxisBank, const N: usize>(
-    banks: &mut [Option<B>; N],
+fn run_sample<B: AxisBank>(
+    banks: &mut [Option<B>],
     axes: Axes,
     counters: &mut Counters,
     s: &Sample,
@@ -347,11 +360,12 @@ where
     E: Clone,
     F: FnMut(Axis, &BankConfig) -> Result<B, E>,
 {
-    /// A pipeline estimating `axes` (see [`Estimation::new`]).
-    pub fn new(axes: Axes, cfg: BankConfig, build: F) -> Self {
+    /// A pipeline with `N` bank slots estimating the first `N` of `axes` (see
+    /// [`Estimation::with_slots`]).
+    pub fn with_slots(axes: Axes, cfg: BankConfig, build: F) -> Self {
         Self {
             front: Frontend::new(),
-            est: Estimation::new(axes, cfg, build),
+            est: Estimation::with_slots(axes, cfg, build),
             format_errors: 0,
         }
     }
@@ -447,6 +461,18 @@ where
             fc.bit.software_error,
             fc.bit.last_word
         )
+    }
+}
+
+impl<B, E, F> Pipeline<B, E, F>
+where
+    B: AxisBank,
+    E: Clone,
+    F: FnMut(Axis, &BankConfig) -> Result<B, E>,
+{
+    /// A pipeline estimating `axes` (any of the three; see [`Estimation::new`]).
+    pub fn new(axes: Axes, cfg: BankConfig, build: F) -> Self {
+        Self::with_slots(axes, cfg, build)
     }
 }
 
