@@ -728,6 +728,14 @@ const RAM_GOAL: u64 = 8 * 1024;
 
 /// The component (crate, or a group) a demangled symbol name belongs to.
 fn component(name: &str) -> String {
+    // Symbols llvm-nm leaves in the legacy escaped form (`_$LT$T$u20$as$u20$a..b$GT$::f`):
+    // unescape the characters that matter here first.
+    let name = name
+        .replace("_$LT$", "<")
+        .replace("$LT$", "<")
+        .replace("$RF$", "&")
+        .replace("$u20$", " ")
+        .replace("..", "::");
     // `<T as Trait>::f` and `<T>::f` belong to T's crate; `_ZN..` names are already demangled.
     let n = name.trim_start_matches('<').trim_start_matches('&');
     let n = n.strip_prefix("mut ").unwrap_or(n);
