@@ -150,8 +150,7 @@ pub struct Estimation<B, E, F, const N: usize = 3> {
     phase: Phase,
     /// The first samples, held until the period is known.
     held: heapless::Vec<Sample, WARMUP_SAMPLES>,
-    /// One bank per selected axis once running, in the order of `axes` (empty before; no
-    /// slot is initialised until its bank is built).
+    /// One bank per selected axis once running, in the order of `axes` (`None` before).
     banks: [Option<B>; N],
     /// A bank could not be built for the measured period.
     failed: Option<E>,
