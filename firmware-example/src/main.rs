@@ -116,13 +116,11 @@ fn main() -> ! {
         defmt::println!("firmware: UARTs already taken");
         fail(Status::Internal)
     };
-    let mut pipe = match pipeline::new() {
-        Ok(p) => p,
-        Err(e) => {
-            defmt::println!("firmware: bank configuration rejected: {}", e);
-            fail(Status::Internal)
-        }
-    };
+    if let Err(e) = pipeline::check() {
+        defmt::println!("firmware: bank configuration rejected: {}", e);
+        fail(Status::Internal)
+    }
+    let mut pipe = pipeline::new();
     let Board {
         nav: uart,
         control,

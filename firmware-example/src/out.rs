@@ -2,11 +2,13 @@
 //!
 //! * [`header`]: once per run, the estimated axes (`AXES`, as a bit mask roll=1, pitch=2,
 //!   yaw=4); the host writes the CSV header line of `nav440 estimate --axis ...` from it.
-//! * [`row`]: one message per sample, `row {=u64} {=[?]}`: the sample time (us since the
-//!   first sample), then one [`AxisOut`] per estimated axis (roll, pitch, yaw order): a
-//!   flag byte (bit 0: a reference rate is present), the unwrapped angle (deg, f32), its f64
-//!   residual (deg, 0 while f32 holds the angle), the reference rate (deg/s, f32; 0 when
-//!   absent) and the 14 channel values (`estimators::Channel` order, f32).
+//! * [`row`]: one message per sample, `row {=[u8]}`: one packed byte payload (little-endian),
+//!   the sample time (u64, us since the first sample), then per estimated axis (roll, pitch,
+//!   yaw order) [`AXIS_BYTES`] bytes: a flag byte (bit 0: a reference rate is present), the
+//!   unwrapped angle (deg, f32), its f64 residual (deg, 0 while f32 holds the angle), the
+//!   reference rate (deg/s, f32; 0 when absent) and the 14 channel values
+//!   (`estimators::Channel` order, f32). One argument, so the transport gets one write for the
+//!   whole payload (one semihosting call instead of one per value).
 //! * diagnostics and counters: `firmware: ...` messages (see `main.rs`).
 //!
 //! The host (`cargo xtask qemu/demo/unit`, through `defmt-decoder` and the ELF's defmt table)
@@ -24,36 +26,35 @@ use nav440_pipeline::{AxisRow, Row};
 /// Marker of the row message (the host finds it in the ELF's defmt table).
 pub const ROW_TAG: &str = "row";
 
-/// One axis of a [`row`] message (see the module doc for the fields).
-pub struct AxisOut<'a>(pub &'a AxisRow);
+/// Bytes of one axis in a [`row`] payload: flags (1), angle (f32), residual (f64), reference
+/// rate (f32), the channel values (f32 each).
+pub const AXIS_BYTES: usize = 1 + 4 + 8 + 4 + 4 * Channel::COUNT;
 
-impl defmt::Format for AxisOut<'_> {
-    fn format(&self, f: defmt::Formatter<'_>) {
-        let o = &self.0.out;
-        let v = &o.values;
-        const _: () = assert!(Channel::COUNT == 14, "AxisOut sends 14 channel values");
-        defmt::write!(
-            f,
-            "{=u8} {=f32} {=f64} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32} {=f32}",
-            u8::from(self.0.reference_deg_s.is_some()),
-            o.yaw_unwrapped_deg,
-            o.yaw_residual_deg,
-            self.0.reference_deg_s.unwrap_or(0.0),
-            v[0],
-            v[1],
-            v[2],
-            v[3],
-            v[4],
-            v[5],
-            v[6],
-            v[7],
-            v[8],
-            v[9],
-            v[10],
-            v[11],
-            v[12],
-            v[13]
-        );
+/// Bytes of a [`row`] payload with the axes of [`AXES`]: the time (u64) and one
+/// [`AXIS_BYTES`] block per axis.
+pub const ROW_BYTES: usize = 8 + AXIS_BYTES * AXES.len();
+
+const _: () = assert!(
+    Channel::COUNT == 14,
+    "the row payload carries 14 channel values"
+);
+
+/// Copies `v` to `dst[at..]` (constant offsets: no bounds check left after inlining).
+#[inline(always)]
+fn put<const N: usize>(dst: &mut [u8; AXIS_BYTES], at: usize, v: [u8; N]) {
+    dst[at..at + N].copy_from_slice(&v);
+}
+
+/// Packs one axis (see the module doc for the layout).
+#[inline(always)]
+fn put_axis(dst: &mut [u8; AXIS_BYTES], a: &AxisRow) {
+    let o = &a.out;
+    dst[0] = u8::from(a.reference_deg_s.is_some());
+    put(dst, 1, o.yaw_unwrapped_deg.to_le_bytes());
+    put(dst, 5, o.yaw_residual_deg.to_le_bytes());
+    put(dst, 13, a.reference_deg_s.unwrap_or(0.0).to_le_bytes());
+    for (i, v) in o.values.iter().enumerate() {
+        put(dst, 17 + 4 * i, v.to_le_bytes());
     }
 }
 
@@ -66,14 +67,20 @@ pub fn header() {
     defmt::println!("header {=u8}", mask);
 }
 
-/// Sends one sample's row message.
+/// Sends one sample's row message (the axes of `r` that are present, at most those of
+/// [`AXES`]).
 pub fn row(r: &Row) {
-    let mut axes: heapless::Vec<AxisOut<'_>, 3> = heapless::Vec::new();
-    for a in r.axes.iter().flatten() {
-        // Cannot fail: at most three axes.
-        let _ = axes.push(AxisOut(a));
+    let mut buf = [0u8; ROW_BYTES];
+    let (time, rest) = buf.split_at_mut(8);
+    time.copy_from_slice(&r.t_us.to_le_bytes());
+    let (blocks, _) = rest.as_chunks_mut::<AXIS_BYTES>();
+    let mut n = 0;
+    for (dst, a) in blocks.iter_mut().zip(r.axes.iter().flatten()) {
+        put_axis(dst, a);
+        n += 1;
     }
-    defmt::println!("row {=u64} {=[?]}", r.t_us, axes.as_slice());
+    let len = 8 + n * AXIS_BYTES;
+    defmt::println!("row {=[u8]}", buf.get(..len).unwrap_or(&buf));
 }
 
 /// Sends the end-of-run counters: the `key=value` line of `nav440_pipeline::Pipeline::summary`

@@ -32,16 +32,29 @@ fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
 /// The bank constructor the pipeline calls after the warm-up.
 pub type BuildFn = fn(Axis, &BankConfig) -> Result<Bank, ConfigError>;
 
-/// The firmware's pipeline.
-pub type Pipeline = nav440_pipeline::Pipeline<Bank, ConfigError, BuildFn>;
+/// Bank slots of the firmware's pipeline: one per axis of [`AXES`] (RAM: one bank with
+/// `one-axis` instead of three).
+pub const BANK_SLOTS: usize = AXES.len();
 
-/// A pipeline with the bank preset of `nav440 estimate` (`BankConfig::NAV440`; the paper's
-/// presets are `BankConfig::PAPER`, `nav440 estimate --preset paper`), checked here once so
-/// that a bad configuration fails at start.
-pub fn new() -> Result<Pipeline, ConfigError> {
-    let cfg = BankConfig::NAV440;
-    build_bank(Axis::Yaw, &cfg)?;
-    Ok(Pipeline::new(AXES, cfg, build_bank))
+/// The firmware's pipeline.
+pub type Pipeline = nav440_pipeline::Pipeline<Bank, ConfigError, BuildFn, BANK_SLOTS>;
+
+/// The bank preset the firmware runs: the one `nav440 estimate` runs by default
+/// (`BankConfig::NAV440`; the paper's presets are `BankConfig::PAPER`, `nav440 estimate
+/// --preset paper`).
+pub const PRESET: BankConfig = BankConfig::NAV440;
+
+/// Checks once, at start, that [`PRESET`] builds, so that a bad configuration fails at start.
+pub fn check() -> Result<(), ConfigError> {
+    build_bank(Axis::Yaw, &PRESET).map(|_| ())
+}
+
+/// A pipeline with [`PRESET`] (see [`check`]). Infallible, so that the caller's binding is
+/// built in place (no second, pipeline-sized `Result` on the stack).
+#[inline(always)]
+pub fn new() -> Pipeline {
+    Pipeline::with_slots(AXES, PRESET, build_bank)
+}
 }
 
 /// Writes the CSV header line of [`AXES`] (without line terminator).

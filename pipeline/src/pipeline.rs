@@ -138,22 +138,26 @@ enum Phase {
 /// [`Row`]s. `build(axis, cfg)` makes an axis's bank once the period is known (e.g.
 /// [`axis_bank`]); its error is returned by the call that ends the warm-up and by every later
 /// one.
-pub struct Estimation<B, E, F> {
+///
+/// `N` (default 3) is the number of bank slots: the selected axes take the slots in CSV
+/// order, so a one-axis firmware sets `N = 1` and holds one bank instead of three (RAM on a
+/// small MCU). Axes beyond the first `N` of the selection are not estimated (see
+/// [`Estimation::with_slots`]).
+pub struct Estimation<B, E, F, const N: usize = 3> {
     axes: Axes,
     cfg: BankConfig,
     build: F,
     phase: Phase,
     /// The first samples, held until the period is known.
     held: heapless::Vec<Sample, WARMUP_SAMPLES>,
-    /// One bank per selected axis once running (built in place: no bank-sized temporaries
-    /// beyond the constructor's own result).
-    banks: [Option<B>; 3],
+    /// One bank per selected axis once running, in the order of `axes` (`None` before).
+    banks: [Option<B>; N],
     /// A bank could not be built for the measured period.
     failed: Option<E>,
     counters: Counters,
 }
 
-impl<B, E, F> core::fmt::Debug for Estimation<B, E, F> {
+impl<B, E, F, const N: usize> core::fmt::Debug for Estimation<B, E, F, N> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("Estimation")
             .field("axes", &self.axes)
@@ -162,22 +166,27 @@ impl<B, E, F> core::fmt::Debug for Estimation<B, E, F> {
     }
 }
 
-impl<B, E, F> Estimation<B, E, F>
+impl<B, E, F, const N: usize> Estimation<B, E, F, N>
 where
     B: AxisBank,
     E: Clone,
     F: FnMut(Axis, &BankConfig) -> Result<B, E>,
 {
-    /// A back end for `axes` with the configuration `cfg` (its sample period is replaced by the
-    /// measured one) and the bank constructor `build`.
-    pub fn new(axes: Axes, cfg: BankConfig, build: F) -> Self {
+    /// A back end with `N` bank slots for `axes`, the configuration `cfg` (its sample period
+    /// is replaced by the measured one) and the bank constructor `build`. Only the first `N`
+    /// selected axes (CSV order) are kept ([`Estimation::axes`] tells which).
+    pub fn with_slots(axes: Axes, cfg: BankConfig, build: F) -> Self {
+        let mut kept = Axes::NONE;
+        for a in axes.iter().take(N) {
+            kept = kept.with(a);
+        }
         Self {
-            axes,
+            axes: kept,
             cfg,
             build,
             phase: Phase::Warmup,
             held: heapless::Vec::new(),
-            banks: [None, None, None],
+            banks: core::array::from_fn(|_| None),
             failed: None,
             counters: Counters::default(),
         }
@@ -193,9 +202,14 @@ where
         &self.counters
     }
 
-    /// The banks, once running (indexed by [`Axis::index`]).
-    pub fn banks(&self) -> Option<&[Option<B>; 3]> {
-        (self.phase == Phase::Running && self.failed.is_none()).then_some(&self.banks)
+    /// The bank of `axis`, once running (`None` before, after a failed build, or for an axis
+    /// that is not estimated).
+    pub fn bank(&self, axis: Axis) -> Option<&B> {
+        if self.phase != Phase::Running || self.failed.is_some() {
+            return None;
+        }
+        let slot = self.axes.iter().position(|a| a == axis)?;
+        self.banks.get(slot)?.as_ref()
     }
 
     /// Takes the next sample; `emit` gets every row that is ready (none during the warm-up,
@@ -239,11 +253,11 @@ where
         }
         let cfg = PeriodEstimator::from_times(self.held.iter().map(|s| s.t_us)).apply(self.cfg);
         self.phase = Phase::Running;
-        for axis in self.axes.iter() {
+        for (slot, axis) in self.banks.iter_mut().zip(self.axes.iter()) {
             match (self.build)(axis, &cfg) {
-                Ok(b) => self.banks[axis.index()] = Some(b),
+                Ok(b) => *slot = Some(b),
                 Err(e) => {
-                    self.banks = [None, None, None];
+                    self.banks.iter_mut().for_each(|b| *b = None);
                     self.failed = Some(e.clone());
                     return Err(e);
                 }
@@ -257,10 +271,23 @@ where
     }
 }
 
+impl<B, E, F> Estimation<B, E, F>
+where
+    B: AxisBank,
+    E: Clone,
+    F: FnMut(Axis, &BankConfig) -> Result<B, E>,
+{
+    /// A back end for `axes` (any of the three) with the configuration `cfg` (its sample
+    /// period is replaced by the measured one) and the bank constructor `build`.
+    pub fn new(axes: Axes, cfg: BankConfig, build: F) -> Self {
+        Self::with_slots(axes, cfg, build)
+    }
+}
+
 /// Runs one sample through every selected axis's bank and emits its row.
 #[inline(never)]
 fn run_sample<B: AxisBank>(
-    banks: &mut [Option<B>; 3],
+    banks: &mut [Option<B>],
     axes: Axes,
     counters: &mut Counters,
     s: &Sample,
@@ -273,9 +300,9 @@ fn run_sample<B: AxisBank>(
     };
     let mut err = None;
     let mut gaps = 0;
-    for axis in axes.iter() {
+    for (slot, axis) in banks.iter_mut().zip(axes.iter()) {
         let i = axis.index();
-        let Some(bank) = banks[i].as_mut() else {
+        let Some(bank) = slot.as_mut() else {
             continue;
         };
         match bank.step(s, s.angle(axis)) {
@@ -309,14 +336,15 @@ pub type CsvLine = heapless::String<ROW_CAPACITY>;
 
 /// The whole pipeline: [`Frontend`] (bytes -> frames -> BIT check -> clock -> samples) and
 /// [`Estimation`] (warm-up/period -> banks -> rows). The firmware runs it as is; `nav440
-/// estimate` runs it with its own bank type (noise, fixed point).
-pub struct Pipeline<B, E, F> {
+/// estimate` runs it with its own bank type (noise, fixed point). `N`: the bank slots (see
+/// [`Estimation`]).
+pub struct Pipeline<B, E, F, const N: usize = 3> {
     front: Frontend,
-    est: Estimation<B, E, F>,
+    est: Estimation<B, E, F, N>,
     format_errors: u64,
 }
 
-impl<B, E, F> core::fmt::Debug for Pipeline<B, E, F> {
+impl<B, E, F, const N: usize> core::fmt::Debug for Pipeline<B, E, F, N> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("Pipeline")
             .field("front", &self.front)
@@ -325,17 +353,18 @@ impl<B, E, F> core::fmt::Debug for Pipeline<B, E, F> {
     }
 }
 
-impl<B, E, F> Pipeline<B, E, F>
+impl<B, E, F, const N: usize> Pipeline<B, E, F, N>
 where
     B: AxisBank,
     E: Clone,
     F: FnMut(Axis, &BankConfig) -> Result<B, E>,
 {
-    /// A pipeline estimating `axes` (see [`Estimation::new`]).
-    pub fn new(axes: Axes, cfg: BankConfig, build: F) -> Self {
+    /// A pipeline with `N` bank slots estimating the first `N` of `axes` (see
+    /// [`Estimation::with_slots`]).
+    pub fn with_slots(axes: Axes, cfg: BankConfig, build: F) -> Self {
         Self {
             front: Frontend::new(),
-            est: Estimation::new(axes, cfg, build),
+            est: Estimation::with_slots(axes, cfg, build),
             format_errors: 0,
         }
     }
@@ -391,7 +420,7 @@ where
     }
 
     /// The back end (counters, banks).
-    pub fn estimation(&self) -> &Estimation<B, E, F> {
+    pub fn estimation(&self) -> &Estimation<B, E, F, N> {
         &self.est
     }
 
@@ -431,6 +460,18 @@ where
             fc.bit.software_error,
             fc.bit.last_word
         )
+    }
+}
+
+impl<B, E, F> Pipeline<B, E, F>
+where
+    B: AxisBank,
+    E: Clone,
+    F: FnMut(Axis, &BankConfig) -> Result<B, E>,
+{
+    /// A pipeline estimating `axes` (any of the three; see [`Estimation::new`]).
+    pub fn new(axes: Axes, cfg: BankConfig, build: F) -> Self {
+        Self::with_slots(axes, cfg, build)
     }
 }
 

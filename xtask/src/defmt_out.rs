@@ -4,10 +4,10 @@
 //! diagnostics and counters on stderr.
 //!
 //! The frames are decoded with `defmt-decoder` from the ELF's defmt table. A `row` message
-//! carries the sample time (u64, us) and, per estimated axis, a flag byte, the angle (f32), its
-//! f64 residual, the reference rate (f32) and the 14 channel values (f32). defmt-decoder
-//! prints floats in their shortest round-trip form (ryu), so parsing them back gives the
-//! exact bits the firmware sent.
+//! carries one byte payload (little-endian): the sample time (u64, us) and, per estimated axis,
+//! a flag byte, the angle (f32), its f64 residual, the reference rate (f32) and the 14 channel
+//! values (f32) (`firmware-example/src/out.rs`). The values are rebuilt from their bytes, so
+//! they are the exact bits the firmware sent.
 
 use defmt_decoder::{DecodeError, StreamDecoder, Table};
 use estimators::BankOutput;
@@ -15,7 +15,7 @@ use nav440_pipeline::{csv, Axes, Axis, AxisRow, Row};
 use std::path::Path;
 
 /// The format string of the firmware's row message.
-const ROW_FORMAT: &str = "row {=u64} {=[?]}";
+const ROW_FORMAT: &str = "row {=[u8]}";
 
 /// The defmt table of `elf` if that firmware sends its output as defmt rows (the firmware
 /// binary); `None` for images with text output (bench, embassy example, panic check).
@@ -73,42 +73,57 @@ impl Converter {
     }
 }
 
-/// Parses `T [AXIS, AXIS, ...]` (the display of a row message after `row `).
-fn parse_row(s: &str, axes: Axes) -> Option<Row> {
-    let (t, list) = s.split_once(' ')?;
-    let t_us: u64 = t.parse().ok()?;
-    let list = list.trim().strip_prefix('[')?.strip_suffix(']')?;
-    let mut row = Row {
-        t_us,
-        axes: [None; 3],
-    };
-    let mut parts = list.split(", ");
-    for axis in axes.iter() {
-        row.axes[axis.index()] = Some(parse_axis(parts.next()?)?);
-    }
-    parts.next().is_none().then_some(row)
-}
+/// Bytes of one axis in a row payload: flags, angle (f32), residual (f64), reference (f32),
+/// the channel values (f32).
+const AXIS_BYTES: usize = 1 + 4 + 8 + 4 + 4 * estimators::Channel::COUNT;
 
-/// Parses one axis: `flags angle residual reference v0 .. v13`.
-fn parse_axis(s: &str) -> Option<AxisRow> {
-    let mut it = s.split_whitespace();
-    let flags: u8 = it.next()?.parse().ok()?;
-    let mut out = BankOutput {
-        yaw_unwrapped_deg: it.next()?.parse().ok()?,
-        yaw_residual_deg: it.next()?.parse().ok()?,
-        ..BankOutput::default()
-    };
-    let reference: f32 = it.next()?.parse().ok()?;
-    for v in out.values.iter_mut() {
-        *v = it.next()?.parse().ok()?;
-    }
-    if it.next().is_some() {
+/// Parses `[B, B, ...]` (the display of a row message's byte payload after `row `).
+fn parse_row(s: &str, axes: Axes) -> Option<Row> {
+    let list = s.trim().strip_prefix('[')?.strip_suffix(']')?;
+    let bytes = list
+        .split(", ")
+        .map(|b| b.parse::<u8>().ok())
+        .collect::<Option<Vec<u8>>>()?;
+    if bytes.len() != 8 + AXIS_BYTES * axes.len() {
         return None;
     }
-    Some(AxisRow {
-        reference_deg_s: (flags & 1 != 0).then_some(reference),
+    let (t, rest) = bytes.split_first_chunk::<8>()?;
+    let mut row = Row {
+        t_us: u64::from_le_bytes(*t),
+        axes: [None; 3],
+    };
+    let (blocks, tail) = rest.as_chunks::<AXIS_BYTES>();
+    if !tail.is_empty() {
+        return None;
+    }
+    for (axis, b) in axes.iter().zip(blocks) {
+        row.axes[axis.index()] = Some(parse_axis(b));
+    }
+    Some(row)
+}
+
+/// The `N` bytes at `b[at..]`.
+fn take<const N: usize>(b: &[u8; AXIS_BYTES], at: usize) -> [u8; N] {
+    let mut v = [0u8; N];
+    v.copy_from_slice(&b[at..at + N]);
+    v
+}
+
+/// Parses one axis: flags, angle, residual, reference, 14 values.
+fn parse_axis(b: &[u8; AXIS_BYTES]) -> AxisRow {
+    let mut out = BankOutput {
+        yaw_unwrapped_deg: f32::from_le_bytes(take(b, 1)),
+        yaw_residual_deg: f64::from_le_bytes(take(b, 5)),
+        ..BankOutput::default()
+    };
+    let reference = f32::from_le_bytes(take(b, 13));
+    for (i, v) in out.values.iter_mut().enumerate() {
+        *v = f32::from_le_bytes(take(b, 17 + 4 * i));
+    }
+    AxisRow {
+        reference_deg_s: (b[0] & 1 != 0).then_some(reference),
         out,
-    })
+    }
 }
 
 /// Decodes a stream of defmt frames chunk by chunk.
@@ -211,20 +226,38 @@ pub fn spawn_reader(
 mod tests {
     use super::*;
 
-    /// A row message as defmt-decoder displays it gives the CSV line `nav440 estimate` writes
-    /// for the same values (formatted by `csv::write_row`, checked here against hand-written
-    /// text: time 0.0100 s from 10000 us, `{}` of each f32, empty reference field).
+    /// The payload bytes of one axis (layout of `firmware-example/src/out.rs`).
+    fn axis_bytes(flags: u8, angle: f32, residual: f64, reference: f32, vals: &[f32]) -> Vec<u8> {
+        let mut b = vec![flags];
+        b.extend(angle.to_le_bytes());
+        b.extend(residual.to_le_bytes());
+        b.extend(reference.to_le_bytes());
+        for v in vals {
+            b.extend(v.to_le_bytes());
+        }
+        b
+    }
+
+    /// A row message as defmt-decoder displays it (`{:?}` of the payload bytes) gives the CSV
+    /// line `nav440 estimate` writes for the same values (formatted by `csv::write_row`,
+    /// checked here against hand-written text: time 0.0100 s from 10000 us, `{}` of each f32,
+    /// empty reference field when flag bit 0 is clear).
     #[test]
     fn row_message_becomes_csv_line() {
         let mut c = Converter::default();
         let mut t = Text::default();
         c.message("header 4", &mut t).unwrap();
         assert_eq!(t.csv, format!("{}\n", csv::HEADER));
-        let vals = "0.5 1e-5 -2.25 3 4 5 6 7 8 9 10 11 12 13";
-        c.message(&format!("row 10000 [1 12.5 0.0 -0.75 {vals}]"), &mut t)
-            .unwrap();
-        c.message(&format!("row 10049 [0 12.5 0.0 0.0 {vals}]"), &mut t)
-            .unwrap();
+        let vals = [
+            0.5, 1e-5, -2.25, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0, 11.0, 12.0, 13.0,
+        ];
+        let msg = |t_us: u64, flags: u8, reference: f32| {
+            let mut b = t_us.to_le_bytes().to_vec();
+            b.extend(axis_bytes(flags, 12.5, 0.0, reference, &vals));
+            format!("row {b:?}")
+        };
+        c.message(&msg(10000, 1, -0.75), &mut t).unwrap();
+        c.message(&msg(10049, 0, 0.0), &mut t).unwrap();
         let lines: Vec<&str> = t.csv.lines().collect();
         assert_eq!(
             lines[1],
@@ -236,6 +269,7 @@ mod tests {
         );
         c.message("firmware: bytes=3", &mut t).unwrap();
         assert_eq!(t.diag, "firmware: bytes=3\n");
-        assert!(c.message("row 1 [1 2]", &mut t).is_err());
+        // A payload of the wrong length is an error, not a row.
+        assert!(c.message("row [1, 2]", &mut t).is_err());
     }
 }

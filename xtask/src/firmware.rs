@@ -54,22 +54,71 @@ fn work_dir() -> Result<PathBuf, String> {
 
 /// Builds the firmware binaries for `target` (release) and returns the path of `bin`.
 fn build(target: &str, features: &[&str], bin: &str) -> Result<PathBuf, String> {
+    build_profile(target, features, bin, "release")
+}
+
+/// The cargo profile of the small-MCU firmware (`Cargo.toml`: release with `opt-level = "z"`).
+const SMALL_PROFILE: &str = "small";
+
+/// Builds `bin` as the small-MCU firmware for `target`: yaw only (feature `one-axis`), cargo
+/// profile [`SMALL_PROFILE`].
+fn build_small(target: &str, bin: &str) -> Result<PathBuf, String> {
+    build_profile(target, &[ONE_AXIS], bin, SMALL_PROFILE)
+}
+
+/// `nav440 estimate` arguments that print the small-MCU firmware's CSV on `target`.
+fn small_host_args(target: &str) -> &'static [&'static str] {
+    if target == "thumbv7em-none-eabihf" {
+        &["--axis", "yaw"]
+    } else {
+        &["--fixed", "--axis", "yaw"]
+    }
+}
+
+/// The small-MCU builds `cargo xtask size` and `ci` measure and check: (board, label).
+fn small_boards() -> [(qemu::Board, &'static str); 2] {
+    [
+        (qemu::BOARDS[0], "thumbv7em small (yaw, z)"),
+        (qemu::BOARDS[2], "thumbv6m small (yaw, z)"),
+    ]
+}
+
+/// Builds the firmware binaries for `target` with the cargo `profile` and returns the path of
+/// `bin`.
+fn build_profile(
+    target: &str,
+    features: &[&str],
+    bin: &str,
+    profile: &str,
+) -> Result<PathBuf, String> {
     let feats = features.join(",");
-    let mut args = vec!["build", "-p", FW, "--target", target, "--release", "--bins"];
+    let mut args = vec![
+        "build",
+        "-p",
+        FW,
+        "--target",
+        target,
+        "--profile",
+        profile,
+        "--bins",
+    ];
     if !feats.is_empty() {
         args.extend(["--features", &feats]);
     }
     cargo(&args)?;
-    let elf = target_dir().join(target).join("release").join(bin);
+    let elf = target_dir().join(target).join(profile).join(bin);
     if !elf.is_file() {
         return Err(format!("built firmware not found at {}", elf.display()));
     }
     // Builds with other features overwrite cargo's output: keep a copy per configuration.
-    let tag = if feats.is_empty() {
+    let mut tag = if feats.is_empty() {
         "default".to_owned()
     } else {
         feats.replace(',', "+")
     };
+    if profile != "release" {
+        tag = format!("{tag}-{profile}");
+    }
     let copy = work_dir()?.join(format!("{bin}-{target}-{tag}.elf"));
     std::fs::copy(&elf, &copy)
         .map_err(|e| format!("cannot copy {} to {}: {e}", elf.display(), copy.display()))?;
@@ -452,9 +501,13 @@ fn print_estimates(csv: &str) -> Result<(), String> {
 }
 
 /// `cargo xtask qemu FILE [--board B]`.
-pub fn qemu(board: Board, file: &Path) -> Result<(), String> {
+pub fn qemu(board: Board, file: &Path, small: bool) -> Result<(), String> {
     qemu::ensure_qemu()?;
-    let elf = build(board.target, &[], FW_BIN)?;
+    let elf = if small {
+        build_small(board.target, FW_BIN)?
+    } else {
+        build(board.target, &[], FW_BIN)?
+    };
     let capture = read_file(file)?;
     let r = run_capture(&board, &elf, &capture, Output::Inherit)?;
     eprint!("{}", r.stderr);
@@ -484,8 +537,12 @@ impl Measure {
 /// Measurements and `size_of` lines (label, bytes) printed by the bench firmware.
 type BenchOutput = (Vec<Measure>, Vec<(String, u64)>);
 
-fn run_bench(board: &Board) -> Result<BenchOutput, String> {
-    let elf = build(board.target, &[], BENCH_BIN)?;
+fn run_bench(board: &Board, small: bool) -> Result<BenchOutput, String> {
+    let elf = if small {
+        build_small(board.target, BENCH_BIN)?
+    } else {
+        build(board.target, &[], BENCH_BIN)?
+    };
     let r = qemu::run_plain(
         board,
         &elf,
@@ -541,12 +598,18 @@ fn run_bench(board: &Board) -> Result<BenchOutput, String> {
 }
 
 /// `cargo xtask bench`.
-pub fn bench(board: Board) -> Result<(), String> {
+pub fn bench(board: Board, small: bool) -> Result<(), String> {
     qemu::ensure_qemu()?;
-    let (m, _) = run_bench(&board)?;
+    let (m, _) = run_bench(&board, small)?;
     println!(
-        "== instructions on QEMU {} ({}), counted with -icount shift=6 + SysTick ==",
-        board.machine, board.about
+        "== instructions on QEMU {} ({}{}), counted with -icount shift=6 + SysTick ==",
+        board.machine,
+        board.about,
+        if small {
+            "; small-MCU build: one axis, opt-level \"z\""
+        } else {
+            ""
+        }
     );
     println!(
         "cycle column: ESTIMATE = instructions x {ASSUMED_CPI} (assumed average CPI of a Cortex-M4F), VSQRT.F32 counted as {VSQRT_CYCLES} cycles;\nCPU share: estimated cycles x {SAMPLE_RATE_HZ} Hz / {} MHz; last column: instructions x {SAMPLE_RATE_HZ} Hz / {} MHz (CPI 1, a floor)",
@@ -645,11 +708,34 @@ pub fn bench(board: Board) -> Result<(), String> {
             if p.instr < 30.0 { "met" } else { "NOT met" }
         );
     }
+    // Issue 11 goal: the output stage (one defmt row message per sample).
+    if let Some(o) = m.iter().find(|x| x.label.starts_with("defmt row message")) {
+        println!(
+            "goal (issue 11): output stage <= {OUTPUT_GOAL:.0} instructions per sample -> {:.0}: {}",
+            o.instr,
+            if o.instr <= OUTPUT_GOAL { "met" } else { "NOT met" }
+        );
+    }
     Ok(())
 }
 
+/// Issue 11 goal: instructions of the output stage per sample.
+const OUTPUT_GOAL: f64 = 500.0;
+/// Issue 11 goal: flash (text + data) of the small-MCU firmware, bytes.
+const FLASH_GOAL: u64 = 32 * 1024;
+/// Issue 11 goal: RAM (data + bss + stack high-water mark) of the thumbv6m firmware, bytes.
+const RAM_GOAL: u64 = 8 * 1024;
+
 /// The component (crate, or a group) a demangled symbol name belongs to.
 fn component(name: &str) -> String {
+    // Symbols llvm-nm leaves in the legacy escaped form (`_$LT$T$u20$as$u20$a..b$GT$::f`):
+    // unescape the characters that matter here first.
+    let name = name
+        .replace("_$LT$", "<")
+        .replace("$LT$", "<")
+        .replace("$RF$", "&")
+        .replace("$u20$", " ")
+        .replace("..", "::");
     // `<T as Trait>::f` and `<T>::f` belong to T's crate; `_ZN..` names are already demangled.
     let n = name.trim_start_matches('<').trim_start_matches('&');
     let n = n.strip_prefix("mut ").unwrap_or(n);
@@ -685,15 +771,21 @@ fn component(name: &str) -> String {
 }
 
 /// `cargo xtask size --components`: flash bytes per component of the release firmware of each
-/// target, from `llvm-nm --print-size -C` (code, read-only data and initialised data symbols;
+/// target and of the small-MCU builds ([`small_boards`]), from `llvm-nm --print-size -C` (code, read-only data and initialised data symbols;
 /// `unattributed` is text + data minus the symbols' sum: alignment, anonymous constants, the
 /// vector table).
 pub fn size_components() -> Result<(), String> {
     let size_tool = llvm_size()?;
     let nm = size_tool.with_file_name("llvm-nm");
     let mut cols: Vec<(String, std::collections::BTreeMap<String, u64>, u64)> = Vec::new();
+    let mut elfs: Vec<(String, PathBuf)> = Vec::new();
     for target in crate::THUMB_TARGETS {
-        let elf = build(target, &[], FW_BIN)?;
+        elfs.push(((*target).to_owned(), build(target, &[], FW_BIN)?));
+    }
+    for (board, label) in small_boards() {
+        elfs.push((label.to_owned(), build_small(board.target, FW_BIN)?));
+    }
+    for (target, elf) in elfs {
         let (t, d, _) = sizes(&size_tool, &elf)?;
         let o = Command::new(&nm)
             .args(["--print-size", "-C", "--size-sort"])
@@ -720,12 +812,12 @@ pub fn size_components() -> Result<(), String> {
             sum += size;
         }
         per.insert("unattributed".into(), (t + d).saturating_sub(sum));
-        cols.push(((*target).to_owned(), per, t + d));
+        cols.push((target, per, t + d));
     }
-    println!("== flash per component (llvm-nm symbol sizes, release {FW_BIN}), bytes ==");
+    println!("== flash per component (llvm-nm symbol sizes, {FW_BIN}: release per target, then the small-MCU builds), bytes ==");
     print!("{:<38}", "component");
     for (t, _, _) in &cols {
-        print!(" {t:>22}");
+        print!(" {t:>24}");
     }
     println!();
     let mut names: Vec<String> = cols
@@ -739,13 +831,13 @@ pub fn size_components() -> Result<(), String> {
     for n in &names {
         print!("{n:<38}");
         for (_, p, _) in &cols {
-            print!(" {:>22}", p.get(n).copied().unwrap_or(0));
+            print!(" {:>24}", p.get(n).copied().unwrap_or(0));
         }
         println!();
     }
     print!("{:<38}", "total flash (text + data)");
     for (_, _, total) in &cols {
-        print!(" {total:>22}");
+        print!(" {total:>24}");
     }
     println!();
     Ok(())
@@ -805,60 +897,94 @@ const ONE_AXIS: &str = "one-axis";
 /// `cargo xtask size`.
 pub fn size() -> Result<(), String> {
     let tool = llvm_size()?;
-    println!("== firmware size (llvm-size, release, {FW_BIN}) ==");
+    // (label, board it runs on, ELF, data + bss)
+    let mut builds: Vec<(String, qemu::Board, PathBuf, u64, u64)> = Vec::new();
+    for board in qemu::BOARDS {
+        let elf = build(board.target, &[], FW_BIN)?;
+        builds.push((board.target.to_owned(), *board, elf, 0, 0));
+    }
+    // One axis (feature `one-axis`) on the Cortex-M0 ISA, release profile.
+    builds.push((
+        "thumbv6m + one-axis".to_owned(),
+        qemu::BOARDS[2],
+        build("thumbv6m-none-eabi", &[ONE_AXIS], FW_BIN)?,
+        0,
+        0,
+    ));
+    // The small-MCU firmware: one axis, cargo profile `small` (opt-level "z").
+    for (board, label) in small_boards() {
+        builds.push((
+            label.to_owned(),
+            board,
+            build_small(board.target, FW_BIN)?,
+            0,
+            0,
+        ));
+    }
+    println!("== firmware size (llvm-size, {FW_BIN}; release profile unless `small`) ==");
     println!(
-        "{:<24} {:>9} {:>7} {:>7} {:>13} {:>15}",
-        "target", "text", "data", "bss", "flash (t+d)", "static RAM (d+b)"
+        "{:<28} {:>9} {:>7} {:>7} {:>13} {:>15}",
+        "build", "text", "data", "bss", "flash (t+d)", "static RAM (d+b)"
     );
-    for target in crate::THUMB_TARGETS {
-        let elf = build(target, &[], FW_BIN)?;
-        let (t, d, b) = sizes(&tool, &elf)?;
+    for (label, _, elf, flash, ram) in &mut builds {
+        let (t, d, b) = sizes(&tool, elf)?;
         println!(
-            "{target:<24} {t:>9} {d:>7} {b:>7} {:>13} {:>15}",
+            "{label:<28} {t:>9} {d:>7} {b:>7} {:>13} {:>15}",
             t + d,
             d + b
         );
+        *flash = t + d;
+        *ram = d + b;
     }
-    // The smallest configuration: one axis (feature `one-axis`) on the Cortex-M0 ISA.
-    let v6m_one = build("thumbv6m-none-eabi", &[ONE_AXIS], FW_BIN)?;
-    let (t, d, b) = sizes(&tool, &v6m_one)?;
-    println!(
-        "{:<24} {t:>9} {d:>7} {b:>7} {:>13} {:>15}",
-        "thumbv6m + one-axis",
-        t + d,
-        d + b
-    );
     println!(
         "(the bank, parser and buffers live on the stack of `main`: see the stack peak below)"
     );
+    let mut peaks: Vec<Option<u64>> = vec![None; builds.len()];
     if qemu::qemu_available() {
         let capture = root().join("host-tests/data/fig5_a2_100hz_corrupt.bin");
         if let Ok(bytes) = std::fs::read(&capture) {
-            let mut runs: Vec<(qemu::Board, PathBuf, &str)> = Vec::new();
-            for board in qemu::BOARDS {
-                runs.push((*board, build(board.target, &[], FW_BIN)?, ""));
-            }
-            if let Some(v6m) = qemu::BOARDS
-                .iter()
-                .find(|b| b.target == "thumbv6m-none-eabi")
-            {
-                runs.push((*v6m, v6m_one, " + one-axis"));
-            }
-            for (board, elf, what) in &runs {
+            for ((label, board, elf, _, _), peak) in builds.iter().zip(&mut peaks) {
                 let r = run_capture(board, elf, &bytes, Output::Capture)?;
                 let c = counters(&r.stderr);
-                if let Some(peak) = counter(&c, "stack_peak") {
+                *peak = counter(&c, "stack_peak");
+                if let Some(p) = peak {
                     println!(
-                        "stack high-water mark on {} ({}{what}): {peak} B (painted stack, run of {})",
+                        "stack high-water mark of {label} on {}: {p} B (painted stack, run of {})",
                         board.name,
-                        board.target,
                         capture.display()
                     );
                 }
             }
         }
-        let (_, ram_f32) = run_bench(&qemu::BOARDS[0])?;
-        let (_, ram_fx) = run_bench(&qemu::BOARDS[1])?;
+    }
+    println!();
+    println!("== goals (issue 11) ==");
+    for ((label, board, _, flash, ram), peak) in builds.iter().zip(&peaks) {
+        if label.starts_with("thumbv7m") {
+            continue;
+        }
+        println!(
+            "flash <= {FLASH_GOAL} B: {label}: {flash} B: {}",
+            if *flash <= FLASH_GOAL {
+                "met"
+            } else {
+                "NOT met"
+            }
+        );
+        if board.target == "thumbv6m-none-eabi" {
+            match peak {
+                Some(p) => println!(
+                    "RAM (data + bss + stack peak) <= {RAM_GOAL} B: {label}: {ram} + {p} = {} B: {}",
+                    ram + p,
+                    if ram + p <= RAM_GOAL { "met" } else { "NOT met" }
+                ),
+                None => println!("RAM goal of {label}: no stack measurement (QEMU missing)"),
+            }
+        }
+    }
+    if qemu::qemu_available() {
+        let (_, ram_f32) = run_bench(&qemu::BOARDS[0], false)?;
+        let (_, ram_fx) = run_bench(&qemu::BOARDS[1], false)?;
         println!();
         println!("== RAM per estimator (core::mem::size_of of the state) ==");
         println!("{:<40} {:>14} {:>16}", "", "f32 (v7em)", "Fx Q31.32 (v7m)");
@@ -1418,6 +1544,24 @@ pub fn ci_steps() -> Result<(), String> {
         "warnings",
     ])?;
     build("thumbv7em-none-eabihf", &[STM32_FEATURE], FW_BIN)?;
+    // The small-MCU firmware (one axis, profile `small`): lint and build for M4F and thumbv6m.
+    let mut small_elfs = Vec::new();
+    for (board, label) in small_boards() {
+        cargo(&[
+            "clippy",
+            "-p",
+            FW,
+            "--target",
+            board.target,
+            "--bins",
+            "--features",
+            ONE_AXIS,
+            "--",
+            "-D",
+            "warnings",
+        ])?;
+        small_elfs.push((board, label, build_small(board.target, FW_BIN)?));
+    }
     if !qemu_ok {
         return Ok(());
     }
@@ -1478,6 +1622,14 @@ pub fn ci_steps() -> Result<(), String> {
             }
         }
     }
+    // The small-MCU firmware prints the CSV of `nav440 estimate --axis yaw` (`--fixed` on
+    // thumbv6m), byte for byte, on every capture.
+    for (board, label, elf) in &small_elfs {
+        eprintln!("xtask: small-MCU firmware: {label}");
+        for capture in &captures {
+            equivalence(board, elf, capture, small_host_args(board.target))?;
+        }
+    }
     // Input without the length prefix is refused with exit status 1 (never a hang).
     let m4f_board = elfs[0].0;
     let raw = read_file(&bundled)?;
@@ -1521,7 +1673,7 @@ pub fn ci_steps() -> Result<(), String> {
         Err(e) => return Err(format!("unexpected failure of the fault check: {e}")),
         Ok(_) => return Err("hard-float image ran on the FPU-less board without a fault".into()),
     }
-    bench(qemu::BOARDS[0])?;
+    bench(qemu::BOARDS[0], false)?;
     size()?;
     Ok(())
 }

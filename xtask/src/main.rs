@@ -82,6 +82,10 @@ enum Cmd {
         /// Emulated board (see `demo --help`).
         #[arg(long, default_value = "an386", value_parser = qemu::board)]
         board: Board,
+        /// The small-MCU firmware (yaw only, feature `one-axis`, cargo profile `small`):
+        /// prints the CSV of `nav440 estimate --axis yaw` (`--fixed` without FPU).
+        #[arg(long)]
+        small: bool,
     },
     /// Instructions per estimator update, bank update, parsed byte, transmitted byte and boot
     /// sequence (QEMU -icount + SysTick).
@@ -89,6 +93,10 @@ enum Cmd {
         /// Emulated board (see `demo --help`).
         #[arg(long, default_value = "an386", value_parser = qemu::board)]
         board: Board,
+        /// The bench built like the small-MCU firmware (feature `one-axis`, cargo profile
+        /// `small`, opt-level "z"): what optimising for size costs in instructions.
+        #[arg(long)]
+        small: bool,
     },
     /// Flash/RAM of the firmware (llvm-size) and RAM per estimator.
     Size {
@@ -122,8 +130,8 @@ fn main() -> ExitCode {
         Cmd::CiFirmware => firmware::ci_steps(),
         Cmd::CiUnit => firmware::ci_unit(),
         Cmd::Demo { board, capture } => firmware::demo(board, capture),
-        Cmd::Qemu { file, board } => firmware::qemu(board, &file),
-        Cmd::Bench { board } => firmware::bench(board),
+        Cmd::Qemu { file, board, small } => firmware::qemu(board, &file, small),
+        Cmd::Bench { board, small } => firmware::bench(board, small),
         Cmd::Size { components: false } => firmware::size(),
         Cmd::Size { components: true } => firmware::size_components(),
         Cmd::Msrv => package::msrv(),

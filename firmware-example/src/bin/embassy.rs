@@ -157,10 +157,10 @@ async fn main(_spawner: Spawner) {
         core_clock_hz,
     } = board;
     let _blocking_delay = time::start(core.SYST, core_clock_hz);
-    let mut pipe = match pipeline::new() {
-        Ok(p) => p,
-        Err(e) => fail(1, format_args!("bank configuration rejected: {e:?}")),
-    };
+    if let Err(e) = pipeline::check() {
+        fail(1, format_args!("bank configuration rejected: {e:?}"))
+    }
+    let mut pipe = pipeline::new();
 
     // 1. Configure the unit: the async driver, the same sequence as the blocking firmware.
     let mut driver = AsyncDriver::new(AsyncUart(nav));
