@@ -55,7 +55,6 @@ pub fn check() -> Result<(), ConfigError> {
 pub fn new() -> Pipeline {
     Pipeline::with_slots(AXES, PRESET, build_bank)
 }
-}
 
 /// Writes the CSV header line of [`AXES`] (without line terminator).
 pub fn write_header(w: &mut impl core::fmt::Write) -> core::fmt::Result {
