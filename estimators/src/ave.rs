@@ -1,8 +1,9 @@
 //! Adaptive velocity estimator, AVE (paper eq. 4).
 
 use crate::error::{non_negative, positive};
-use crate::law::{Law, Stateful};
-use crate::{ConfigError, Real};
+use crate::fxk::{frac, inputs, mulf, Coef};
+use crate::law::{step_n, Law, Stateful};
+use crate::{ConfigError, Hold, Real};
 
 /// What happens to the switching gain `deltahat`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -198,5 +199,201 @@ impl<T: Real> Law for AveParams<T> {
     #[inline]
     fn translate(&self, s: &mut AveState<T>, d: T) {
         s.xhat = s.xhat + d;
+    }
+
+    /// [`crate::Fx`]: the integer kernel (same results, see [`crate::fxk`]); otherwise, or if
+    /// the kernel gives up, `n` steps.
+    #[inline]
+    fn advance(&self, s: &mut AveState<T>, y_prev: T, y_new: T, n: u32, hold: Hold) -> T {
+        if n > 0 {
+            if let (Some(k), Some(ys)) = (AveFx::of(self), inputs(y_prev, y_new, n, hold)) {
+                let mut dummy = *s;
+                if k.advance(None, s, &mut dummy, ys, n) {
+                    return s.theta;
+                }
+            }
+        }
+        step_n(self, s, y_prev, y_new, n, hold)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn advance_pair(
+        v: &Self,
+        a2: &Self,
+        sv: &mut AveState<T>,
+        sa: &mut AveState<T>,
+        y_prev: T,
+        y_new: T,
+        n: u32,
+        hold: Hold,
+    ) -> bool {
+        match (AveFx::of(v), AveFx::of(a2), inputs(y_prev, y_new, n, hold)) {
+            (Some(kv), Some(ka), Some(ys)) => kv.advance(Some(&ka), sv, sa, ys, n),
+            _ => false,
+        }
+    }
+}
+
+/// The `deltahat` law of [`AveFx`].
+#[derive(Clone, Copy, Debug)]
+enum DeltaFx {
+    Paper,
+    Bounded(i64),
+    Leaky(i32),
+}
+
+/// The AVE's coefficients as raw Q31.32 bits for the integer kernel ([`crate::fxk`]): `h`,
+/// `h k` and `h sigma` fractions below 1/2, `h gamma1` general.
+#[derive(Clone, Copy, Debug)]
+struct AveFx {
+    h: i32,
+    hk: i32,
+    hg: Coef,
+    delta: DeltaFx,
+}
+
+/// [`AveState`] as raw Q31.32 bits.
+#[derive(Clone, Copy, Debug)]
+struct AveFxState {
+    x: i64,
+    th: i64,
+    d: i64,
+}
+
+const PAPER: u8 = 0;
+const BOUNDED: u8 = 1;
+const LEAKY: u8 = 2;
+
+impl AveFxState {
+    #[inline(always)]
+    fn of<T: Real>(s: &AveState<T>) -> Option<Self> {
+        Some(Self {
+            x: s.xhat.fx_bits()?,
+            th: s.theta.fx_bits()?,
+            d: s.delta.fx_bits()?,
+        })
+    }
+
+    #[inline(always)]
+    fn store<T: Real>(&self, s: &mut AveState<T>) {
+        s.xhat = T::from_fx_bits(self.x);
+        s.theta = T::from_fx_bits(self.th);
+        s.delta = T::from_fx_bits(self.d);
+    }
+}
+
+impl AveFx {
+    /// `None` for the float types or when a coefficient is outside the kernel's classes.
+    #[inline(always)]
+    fn of<T: Real>(p: &AveParams<T>) -> Option<Self> {
+        Some(Self {
+            h: frac(p.h)?,
+            hk: frac(p.hk)?,
+            hg: Coef::of(p.hg)?,
+            delta: match p.delta {
+                DeltaLaw::Paper => DeltaFx::Paper,
+                DeltaLaw::Bounded { max } => DeltaFx::Bounded(max.fx_bits()?),
+                DeltaLaw::Leaky { hsigma } => DeltaFx::Leaky(frac(hsigma)?),
+            },
+        })
+    }
+
+    fn law(&self) -> u8 {
+        match self.delta {
+            DeltaFx::Paper => PAPER,
+            DeltaFx::Bounded(_) => BOUNDED,
+            DeltaFx::Leaky(_) => LEAKY,
+        }
+    }
+
+    /// [`AveParams::step`] on raw bits, the same operations in the same order, checked:
+    /// `None` where the saturating code would saturate.
+    #[inline(always)]
+    fn step<const D: u8>(&self, s: &mut AveFxState, y: i64) -> Option<i64> {
+        let e = s.x.checked_sub(y)?;
+        let sw = if e > 0 {
+            s.d
+        } else if e < 0 {
+            s.d.checked_neg()?
+        } else {
+            0
+        };
+        let t = s.th.checked_sub(sw)?;
+        let (ke, ge, ae) = match i32::try_from(e) {
+            // |e| < 1/2: one or two 32-bit products each.
+            Ok(e32) => (
+                (i64::from(e32) * i64::from(self.hk)) >> 32,
+                self.hg.mul_i32(e32),
+                i64::from(e32.unsigned_abs()),
+            ),
+            Err(_) => (mulf(self.hk, e), self.hg.mul(e)?, e.checked_abs()?),
+        };
+        let inc = mulf(self.h, t).checked_sub(ke)?;
+        s.x = s.x.checked_add(inc)?;
+        s.th = s.th.checked_sub(ge)?;
+        let i = mulf(self.h, ae);
+        s.d = match (D, self.delta) {
+            (BOUNDED, DeltaFx::Bounded(max)) => s.d.checked_add(i)?.min(max),
+            (LEAKY, DeltaFx::Leaky(hs)) => s.d.checked_add(i)?.checked_sub(mulf(hs, s.d))?,
+            _ => s.d.checked_add(i)?,
+        };
+        Some(s.th)
+    }
+
+    /// `n >= 1` steps of the velocity law `self` and, when `a2` is given, of the series'
+    /// second stage fed by it (the shared [`crate::VelAcc`] row).
+    #[inline(always)]
+    fn run<const D: u8>(
+        &self,
+        a2: Option<&AveFx>,
+        sv: &mut AveFxState,
+        sa: &mut AveFxState,
+        (mut y, inc, y_new): (i64, i64, i64),
+        n: u32,
+    ) -> Option<()> {
+        for _ in 1..n {
+            y = y.checked_add(inc)?;
+            let o = self.step::<D>(sv, y)?;
+            if let Some(a2) = a2 {
+                a2.step::<D>(sa, o)?;
+            }
+        }
+        let o = self.step::<D>(sv, y_new)?;
+        if let Some(a2) = a2 {
+            a2.step::<D>(sa, o)?;
+        }
+        Some(())
+    }
+
+    /// The kernel over one interval; the states are written only when it succeeds.
+    #[inline(always)]
+    fn advance<T: Real>(
+        &self,
+        a2: Option<&AveFx>,
+        sv: &mut AveState<T>,
+        sa: &mut AveState<T>,
+        ys: (i64, i64, i64),
+        n: u32,
+    ) -> bool {
+        let (Some(mut v), Some(mut a)) = (AveFxState::of(sv), AveFxState::of(sa)) else {
+            return false;
+        };
+        if let Some(a2) = a2 {
+            if a2.law() != self.law() {
+                return false;
+            }
+        }
+        let ok = match self.law() {
+            PAPER => self.run::<PAPER>(a2, &mut v, &mut a, ys, n),
+            BOUNDED => self.run::<BOUNDED>(a2, &mut v, &mut a, ys, n),
+            _ => self.run::<LEAKY>(a2, &mut v, &mut a, ys, n),
+        };
+        if ok.is_none() {
+            return false;
+        }
+        v.store(sv);
+        a.store(sa);
+        true
     }
 }

@@ -1,7 +1,9 @@
 //! Levant's robust exact differentiator, ED (paper eqs. 5-7; Levant 1998).
 
 use crate::error::positive;
+use crate::fxk::{frac, inputs, mulf, Coef};
 use crate::law::{step_n, Law, Stateful};
+use crate::real::fx_sqrt;
 use crate::{ConfigError, ExactSqrt, Hold, Real, SqrtFn};
 use core::marker::PhantomData;
 
@@ -220,9 +222,36 @@ impl<T: Real, S: SqrtFn<T>> Law for EdParams<T, S> {
         s.z = s.z + d;
     }
 
-    /// `n` steps; the scheme is chosen once per interval, not per step.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn advance_pair(
+        v: &Self,
+        a2: &Self,
+        sv: &mut EdState<T>,
+        sa: &mut EdState<T>,
+        y_prev: T,
+        y_new: T,
+        n: u32,
+        hold: Hold,
+    ) -> bool {
+        match (EdFx::of(v), EdFx::of(a2), inputs(y_prev, y_new, n, hold)) {
+            (Some(kv), Some(ka), Some(ys)) => kv.advance(Some(&ka), sv, sa, ys, n),
+            _ => false,
+        }
+    }
+
+    /// `n` steps; the scheme is chosen once per interval, not per step. [`crate::Fx`] with
+    /// the explicit scheme: the integer kernel (same results, see [`crate::fxk`]).
     #[inline]
     fn advance(&self, s: &mut EdState<T>, y_prev: T, y_new: T, n: u32, hold: Hold) -> T {
+        if n > 0 {
+            if let (Some(k), Some(ys)) = (EdFx::of(self), inputs(y_prev, y_new, n, hold)) {
+                let mut dummy = *s;
+                if k.advance(None, s, &mut dummy, ys, n) {
+                    return s.u;
+                }
+            }
+        }
         match self.scheme {
             EdScheme::Euler => step_n(&Euler(*self), s, y_prev, y_new, n, hold),
             EdScheme::Implicit => step_n(self, s, y_prev, y_new, n, hold),
@@ -249,5 +278,123 @@ impl<T: Real, S: SqrtFn<T>> Law for Euler<T, S> {
     }
     fn translate(&self, s: &mut EdState<T>, d: T) {
         self.0.translate(s, d);
+    }
+}
+
+/// The explicit ED's coefficients as raw Q31.32 bits for the integer kernel
+/// ([`crate::fxk`]): `h` a fraction below 1/2, `lambda` general, `h alpha` and its negation.
+#[derive(Clone, Copy, Debug)]
+struct EdFx {
+    h: i32,
+    lambda: Coef,
+    halpha: i64,
+    neg_halpha: i64,
+}
+
+/// [`EdState`] as raw Q31.32 bits.
+#[derive(Clone, Copy, Debug)]
+struct EdFxState {
+    z: i64,
+    u1: i64,
+    u: i64,
+}
+
+impl EdFxState {
+    #[inline(always)]
+    fn of<T: Real>(s: &EdState<T>) -> Option<Self> {
+        Some(Self {
+            z: s.z.fx_bits()?,
+            u1: s.u1.fx_bits()?,
+            u: s.u.fx_bits()?,
+        })
+    }
+
+    #[inline(always)]
+    fn store<T: Real>(&self, s: &mut EdState<T>) {
+        s.z = T::from_fx_bits(self.z);
+        s.u1 = T::from_fx_bits(self.u1);
+        s.u = T::from_fx_bits(self.u);
+    }
+}
+
+impl EdFx {
+    /// `None` for the float types, the implicit scheme, or a coefficient outside the kernel's
+    /// classes.
+    #[inline(always)]
+    fn of<T: Real, S: SqrtFn<T>>(p: &EdParams<T, S>) -> Option<Self> {
+        if p.scheme != EdScheme::Euler {
+            return None;
+        }
+        Some(Self {
+            h: frac(p.h)?,
+            lambda: Coef::of(p.lambda)?,
+            halpha: p.halpha.fx_bits()?,
+            neg_halpha: (-p.halpha).fx_bits()?,
+        })
+    }
+
+    /// `lambda * sqrt(a)` for `a > 0` (the Q31.32 square root, exact, is what every
+    /// [`SqrtFn`] must return for [`crate::Fx`]).
+    #[inline(always)]
+    fn lroot(&self, a: i64) -> Option<i64> {
+        let r = fx_sqrt(a);
+        match i32::try_from(r) {
+            Ok(r32) => Some(self.lambda.mul_i32(r32)),
+            Err(_) => self.lambda.mul(r),
+        }
+    }
+
+    /// [`EdParams::step_euler`] on raw bits, the same operations in the same order, checked:
+    /// `None` where the saturating code would saturate.
+    #[inline(always)]
+    fn step(&self, s: &mut EdFxState, y: i64) -> Option<i64> {
+        let e = s.z.checked_sub(y)?;
+        let (u, du1) = if e > 0 {
+            (s.u1.checked_sub(self.lroot(e)?)?, self.neg_halpha)
+        } else if e < 0 {
+            (s.u1.checked_add(self.lroot(e.checked_neg()?)?)?, self.halpha)
+        } else {
+            (s.u1, 0)
+        };
+        s.z = s.z.checked_add(mulf(self.h, u))?;
+        s.u1 = s.u1.checked_add(du1)?;
+        s.u = u;
+        Some(u)
+    }
+
+    /// The kernel over one interval (`a2`: the series' second stage fed by `self`); the states
+    /// are written only when it succeeds.
+    #[inline(always)]
+    fn advance<T: Real>(
+        &self,
+        a2: Option<&EdFx>,
+        sv: &mut EdState<T>,
+        sa: &mut EdState<T>,
+        (mut y, inc, y_new): (i64, i64, i64),
+        n: u32,
+    ) -> bool {
+        let (Some(mut v), Some(mut a)) = (EdFxState::of(sv), EdFxState::of(sa)) else {
+            return false;
+        };
+        let mut run = || -> Option<()> {
+            for _ in 1..n {
+                y = y.checked_add(inc)?;
+                let o = self.step(&mut v, y)?;
+                if let Some(a2) = a2 {
+                    a2.step(&mut a, o)?;
+                }
+            }
+            let o = self.step(&mut v, y_new)?;
+            if let Some(a2) = a2 {
+                a2.step(&mut a, o)?;
+            }
+            Some(())
+        };
+        if run().is_none() {
+            return false;
+        }
+        v.store(sv);
+        a.store(sa);
+        true
     }
 }
