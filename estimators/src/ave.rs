@@ -1,7 +1,8 @@
 //! Adaptive velocity estimator, AVE (paper eq. 4).
 
 use crate::error::{non_negative, positive};
-use crate::fxk::{frac, inputs, mulf, Coef};
+use crate::fxk::{frac, inputs, mag, mulf, mulf32, Coef};
+use crate::real::fx_mul;
 use crate::law::{step_n, Law, Stateful};
 use crate::{ConfigError, Hold, Real};
 
@@ -208,7 +209,7 @@ impl<T: Real> Law for AveParams<T> {
         if n > 0 {
             if let (Some(k), Some(ys)) = (AveFx::of(self), inputs(y_prev, y_new, n, hold)) {
                 let mut dummy = *s;
-                if k.advance(None, s, &mut dummy, ys, n) {
+                if k.advance::<T, false>(&k, s, &mut dummy, ys, n) {
                     return s.theta;
                 }
             }
@@ -229,7 +230,7 @@ impl<T: Real> Law for AveParams<T> {
         hold: Hold,
     ) -> bool {
         match (AveFx::of(v), AveFx::of(a2), inputs(y_prev, y_new, n, hold)) {
-            (Some(kv), Some(ka), Some(ys)) => kv.advance(Some(&ka), sv, sa, ys, n),
+            (Some(kv), Some(ka), Some(ys)) => kv.advance::<T, true>(&ka, sv, sa, ys, n),
             _ => false,
         }
     }
@@ -244,13 +245,15 @@ enum DeltaFx {
 }
 
 /// The AVE's coefficients as raw Q31.32 bits for the integer kernel ([`crate::fxk`]): `h`,
-/// `h k` and `h sigma` fractions below 1/2, `h gamma1` general.
+/// `h k` and `h sigma` fractions below 1/2, `h gamma1` general, `bound`: the range guard
+/// `2^(B - 32)` with `B = 60 - G`, `|h gamma1| < 2^G` (see [`AveFx::step`]).
 #[derive(Clone, Copy, Debug)]
 struct AveFx {
     h: i32,
     hk: i32,
     hg: Coef,
     delta: DeltaFx,
+    bound: u32,
 }
 
 /// [`AveState`] as raw Q31.32 bits.
@@ -281,21 +284,33 @@ impl AveFxState {
         s.theta = T::from_fx_bits(self.th);
         s.delta = T::from_fx_bits(self.d);
     }
+
+    /// The OR of the states' folded high words (see [`crate::fxk::mag`]).
+    #[inline(always)]
+    fn mag(&self) -> u32 {
+        mag(self.x) | mag(self.th) | mag(self.d)
+    }
 }
 
 impl AveFx {
     /// `None` for the float types or when a coefficient is outside the kernel's classes.
     #[inline(always)]
     fn of<T: Real>(p: &AveParams<T>) -> Option<Self> {
+        let hg = Coef::of(p.hg)?;
+        let b = 60u32.checked_sub(hg.log2_bound())?;
+        if b < 40 {
+            return None;
+        }
         Some(Self {
             h: frac(p.h)?,
             hk: frac(p.hk)?,
-            hg: Coef::of(p.hg)?,
+            hg,
             delta: match p.delta {
                 DeltaLaw::Paper => DeltaFx::Paper,
                 DeltaLaw::Bounded { max } => DeltaFx::Bounded(max.fx_bits()?),
                 DeltaLaw::Leaky { hsigma } => DeltaFx::Leaky(frac(hsigma)?),
             },
+            bound: 1 << (b - 32),
         })
     }
 
@@ -307,70 +322,89 @@ impl AveFx {
         }
     }
 
-    /// [`AveParams::step`] on raw bits, the same operations in the same order, checked:
-    /// `None` where the saturating code would saturate.
+    /// [`AveParams::step`] on raw bits: the same operations in the same order, wrapping.
+    ///
+    /// Range (raw bits): with `|x|, |y|, |th|, |d| < 2^B` and `B = 60 - G`: `|e| < 2^(B+1)`,
+    /// `|th - sw| < 2^(B+1)`, `|h (th - sw)|, |h k e|, |h |e||, |h sigma d| < 2^B` (fractions
+    /// below 1/2), `|h gamma1 e| < 2^(B+1+G)`, and the new `|x|, |d| < 2^(B+2)`,
+    /// `|th| < 2^(B+2+G) = 2^62`: no operation leaves `i64`, so each is exact and equal to the
+    /// saturating one. (The caller checks the bound before every step.)
     #[inline(always)]
-    fn step<const D: u8>(&self, s: &mut AveFxState, y: i64) -> Option<i64> {
-        let e = s.x.checked_sub(y)?;
+    fn step<const D: u8>(&self, s: &mut AveFxState, y: i64) -> i64 {
+        let e = s.x.wrapping_sub(y);
         let sw = if e > 0 {
             s.d
         } else if e < 0 {
-            s.d.checked_neg()?
+            s.d.wrapping_neg()
         } else {
             0
         };
-        let t = s.th.checked_sub(sw)?;
+        let t = s.th.wrapping_sub(sw);
         let (ke, ge, ae) = match i32::try_from(e) {
-            // |e| < 1/2: one or two 32-bit products each.
+            // |e| < 1/2: one 32-bit product each.
             Ok(e32) => (
-                (i64::from(e32) * i64::from(self.hk)) >> 32,
+                mulf32(self.hk, e32),
                 self.hg.mul_i32(e32),
                 i64::from(e32.unsigned_abs()),
             ),
-            Err(_) => (mulf(self.hk, e), self.hg.mul(e)?, e.checked_abs()?),
+            Err(_) => (mulf(self.hk, e), fx_mul(self.hg.raw, e), e.wrapping_abs()),
         };
-        let inc = mulf(self.h, t).checked_sub(ke)?;
-        s.x = s.x.checked_add(inc)?;
-        s.th = s.th.checked_sub(ge)?;
+        s.x = s.x.wrapping_add(mulf(self.h, t).wrapping_sub(ke));
+        s.th = s.th.wrapping_sub(ge);
         let i = mulf(self.h, ae);
         s.d = match (D, self.delta) {
-            (BOUNDED, DeltaFx::Bounded(max)) => s.d.checked_add(i)?.min(max),
-            (LEAKY, DeltaFx::Leaky(hs)) => s.d.checked_add(i)?.checked_sub(mulf(hs, s.d))?,
-            _ => s.d.checked_add(i)?,
+            (BOUNDED, DeltaFx::Bounded(max)) => s.d.wrapping_add(i).min(max),
+            (LEAKY, DeltaFx::Leaky(hs)) => s.d.wrapping_add(i).wrapping_sub(mulf(hs, s.d)),
+            _ => s.d.wrapping_add(i),
         };
-        Some(s.th)
+        s.th
     }
 
     /// `n >= 1` steps of the velocity law `self` and, when `a2` is given, of the series'
-    /// second stage fed by it (the shared [`crate::VelAcc`] row).
+    /// second stage fed by it (the shared [`crate::VelAcc`] row); `None` when the range guard
+    /// fails before a step (the caller then runs the generic code).
     #[inline(always)]
-    fn run<const D: u8>(
+    fn run<const D: u8, const PAIR: bool>(
         &self,
-        a2: Option<&AveFx>,
+        a2: &AveFx,
         sv: &mut AveFxState,
         sa: &mut AveFxState,
         (mut y, inc, y_new): (i64, i64, i64),
         n: u32,
     ) -> Option<()> {
-        for _ in 1..n {
-            y = y.checked_add(inc)?;
-            let o = self.step::<D>(sv, y)?;
-            if let Some(a2) = a2 {
-                a2.step::<D>(sa, o)?;
-            }
+        // The guard on the inputs: y_prev and y_new (every y_j lies between them).
+        let bound = if PAIR {
+            self.bound.min(a2.bound)
+        } else {
+            self.bound
+        };
+        let pair_mag = |sa: &AveFxState| if PAIR { sa.mag() } else { 0 };
+        if (mag(y) | mag(y_new) | sv.mag() | pair_mag(sa)) >= bound {
+            return None;
         }
-        let o = self.step::<D>(sv, y_new)?;
-        if let Some(a2) = a2 {
-            a2.step::<D>(sa, o)?;
+        for j in 1..=n {
+            y = if j == n { y_new } else { y.wrapping_add(inc) };
+            let o = self.step::<D>(sv, y);
+            // The first stage's new states (`o` among them: the second stage's input) ...
+            if sv.mag() >= bound {
+                return None;
+            }
+            if PAIR {
+                a2.step::<D>(sa, o);
+                // ... and the second stage's, before the next step.
+                if sa.mag() >= bound {
+                    return None;
+                }
+            }
         }
         Some(())
     }
 
     /// The kernel over one interval; the states are written only when it succeeds.
     #[inline(always)]
-    fn advance<T: Real>(
+    fn advance<T: Real, const PAIR: bool>(
         &self,
-        a2: Option<&AveFx>,
+        a2: &AveFx,
         sv: &mut AveState<T>,
         sa: &mut AveState<T>,
         ys: (i64, i64, i64),
@@ -379,21 +413,21 @@ impl AveFx {
         let (Some(mut v), Some(mut a)) = (AveFxState::of(sv), AveFxState::of(sa)) else {
             return false;
         };
-        if let Some(a2) = a2 {
-            if a2.law() != self.law() {
-                return false;
-            }
+        if PAIR && a2.law() != self.law() {
+            return false;
         }
         let ok = match self.law() {
-            PAPER => self.run::<PAPER>(a2, &mut v, &mut a, ys, n),
-            BOUNDED => self.run::<BOUNDED>(a2, &mut v, &mut a, ys, n),
-            _ => self.run::<LEAKY>(a2, &mut v, &mut a, ys, n),
+            PAPER => self.run::<PAPER, PAIR>(a2, &mut v, &mut a, ys, n),
+            BOUNDED => self.run::<BOUNDED, PAIR>(a2, &mut v, &mut a, ys, n),
+            _ => self.run::<LEAKY, PAIR>(a2, &mut v, &mut a, ys, n),
         };
         if ok.is_none() {
             return false;
         }
         v.store(sv);
-        a.store(sa);
+        if PAIR {
+            a.store(sa);
+        }
         true
     }
 }

@@ -1,9 +1,9 @@
 //! Levant's robust exact differentiator, ED (paper eqs. 5-7; Levant 1998).
 
 use crate::error::positive;
-use crate::fxk::{frac, inputs, mulf, Coef};
+use crate::fxk::{frac, inputs, mag, mulf, sqrt_q32, Coef};
 use crate::law::{step_n, Law, Stateful};
-use crate::real::fx_sqrt;
+use crate::real::{fx_mul, fx_sqrt};
 use crate::{ConfigError, ExactSqrt, Hold, Real, SqrtFn};
 use core::marker::PhantomData;
 
@@ -235,7 +235,7 @@ impl<T: Real, S: SqrtFn<T>> Law for EdParams<T, S> {
         hold: Hold,
     ) -> bool {
         match (EdFx::of(v), EdFx::of(a2), inputs(y_prev, y_new, n, hold)) {
-            (Some(kv), Some(ka), Some(ys)) => kv.advance(Some(&ka), sv, sa, ys, n),
+            (Some(kv), Some(ka), Some(ys)) => kv.advance::<T, true>(&ka, sv, sa, ys, n),
             _ => false,
         }
     }
@@ -247,7 +247,7 @@ impl<T: Real, S: SqrtFn<T>> Law for EdParams<T, S> {
         if n > 0 {
             if let (Some(k), Some(ys)) = (EdFx::of(self), inputs(y_prev, y_new, n, hold)) {
                 let mut dummy = *s;
-                if k.advance(None, s, &mut dummy, ys, n) {
+                if k.advance::<T, false>(&k, s, &mut dummy, ys, n) {
                     return s.u;
                 }
             }
@@ -282,7 +282,8 @@ impl<T: Real, S: SqrtFn<T>> Law for Euler<T, S> {
 }
 
 /// The explicit ED's coefficients as raw Q31.32 bits for the integer kernel
-/// ([`crate::fxk`]): `h` a fraction below 1/2, `lambda` general, `h alpha` and its negation.
+/// ([`crate::fxk`]): `h` a fraction below 1/2, `lambda` below 2^13, `h alpha` below 2^28 in
+/// magnitude, and its negation.
 #[derive(Clone, Copy, Debug)]
 struct EdFx {
     h: i32,
@@ -290,6 +291,10 @@ struct EdFx {
     halpha: i64,
     neg_halpha: i64,
 }
+
+/// The ED kernel's range guard: every state and input below `2^(ED_B - 32)` (raw `2^ED_B`).
+const ED_B: u32 = 60;
+const ED_BOUND: u32 = 1 << (ED_B - 32);
 
 /// [`EdState`] as raw Q31.32 bits.
 #[derive(Clone, Copy, Debug)]
@@ -315,6 +320,12 @@ impl EdFxState {
         s.u1 = T::from_fx_bits(self.u1);
         s.u = T::from_fx_bits(self.u);
     }
+
+    /// The OR of the states' folded high words (see [`crate::fxk::mag`]).
+    #[inline(always)]
+    fn mag(&self) -> u32 {
+        mag(self.z) | mag(self.u1) | mag(self.u)
+    }
 }
 
 impl EdFx {
@@ -325,76 +336,104 @@ impl EdFx {
         if p.scheme != EdScheme::Euler {
             return None;
         }
+        let lambda = Coef::of(p.lambda)?;
+        let halpha = p.halpha.fx_bits()?;
+        if lambda.log2_bound() > 13 || halpha.unsigned_abs() >= 1 << 60 {
+            return None;
+        }
         Some(Self {
             h: frac(p.h)?,
-            lambda: Coef::of(p.lambda)?,
-            halpha: p.halpha.fx_bits()?,
+            lambda,
+            halpha,
             neg_halpha: (-p.halpha).fx_bits()?,
         })
     }
 
-    /// `lambda * sqrt(a)` for `a > 0` (the Q31.32 square root, exact, is what every
-    /// [`SqrtFn`] must return for [`crate::Fx`]).
+    /// `lambda * sqrt(a)` for `0 < a < 2^(ED_B + 1)` (the Q31.32 square root, exact: what
+    /// every [`SqrtFn`] must return for [`crate::Fx`]). `a < 2^32` (below 1, the usual case):
+    /// [`sqrt_q32`] and one 32 x 32-bit product per word of `lambda`.
     #[inline(always)]
-    fn lroot(&self, a: i64) -> Option<i64> {
-        let r = fx_sqrt(a);
-        match i32::try_from(r) {
-            Ok(r32) => Some(self.lambda.mul_i32(r32)),
-            Err(_) => self.lambda.mul(r),
+    fn lroot(&self, a: i64) -> i64 {
+        match u32::try_from(a) {
+            Ok(a32) => self.lambda.mul_u32(sqrt_q32(a32)),
+            Err(_) => fx_mul(self.lambda.raw, fx_sqrt(a)),
         }
     }
 
-    /// [`EdParams::step_euler`] on raw bits, the same operations in the same order, checked:
-    /// `None` where the saturating code would saturate.
+    /// [`EdParams::step_euler`] on raw bits: the same operations in the same order, wrapping.
+    ///
+    /// Range (raw bits): with `|z|, |y|, |u1| < 2^60`: `|e| < 2^61`, `sqrt|e| < 2^47`,
+    /// `|lambda sqrt|e|| < 2^60` (`lambda < 2^13`), `|u| < 2^61`, `|h u| < 2^60`, new
+    /// `|z| < 2^61`, `|u1| < 2^60 + 2^60`: no operation leaves `i64`, so each is exact and
+    /// equal to the saturating one. (The caller checks the bound before every step.)
     #[inline(always)]
-    fn step(&self, s: &mut EdFxState, y: i64) -> Option<i64> {
-        let e = s.z.checked_sub(y)?;
+    fn step(&self, s: &mut EdFxState, y: i64) -> i64 {
+        let e = s.z.wrapping_sub(y);
         let (u, du1) = if e > 0 {
-            (s.u1.checked_sub(self.lroot(e)?)?, self.neg_halpha)
+            (s.u1.wrapping_sub(self.lroot(e)), self.neg_halpha)
         } else if e < 0 {
-            (s.u1.checked_add(self.lroot(e.checked_neg()?)?)?, self.halpha)
+            (s.u1.wrapping_add(self.lroot(e.wrapping_neg())), self.halpha)
         } else {
             (s.u1, 0)
         };
-        s.z = s.z.checked_add(mulf(self.h, u))?;
-        s.u1 = s.u1.checked_add(du1)?;
+        s.z = s.z.wrapping_add(mulf(self.h, u));
+        s.u1 = s.u1.wrapping_add(du1);
         s.u = u;
-        Some(u)
+        u
     }
 
-    /// The kernel over one interval (`a2`: the series' second stage fed by `self`); the states
-    /// are written only when it succeeds.
+    /// `n >= 1` steps of `self` and, when `PAIR`, of the series' second stage `a2` fed by it;
+    /// `None` when the range guard fails before a step.
     #[inline(always)]
-    fn advance<T: Real>(
+    fn run<const PAIR: bool>(
         &self,
-        a2: Option<&EdFx>,
+        a2: &EdFx,
+        v: &mut EdFxState,
+        a: &mut EdFxState,
+        (mut y, inc, y_new): (i64, i64, i64),
+        n: u32,
+    ) -> Option<()> {
+        let pair_mag = |a: &EdFxState| if PAIR { a.mag() } else { 0 };
+        if (mag(y) | mag(y_new) | v.mag() | pair_mag(a)) >= ED_BOUND {
+            return None;
+        }
+        for j in 1..=n {
+            y = if j == n { y_new } else { y.wrapping_add(inc) };
+            let o = self.step(v, y);
+            if v.mag() >= ED_BOUND {
+                return None;
+            }
+            if PAIR {
+                a2.step(a, o);
+                if a.mag() >= ED_BOUND {
+                    return None;
+                }
+            }
+        }
+        Some(())
+    }
+
+    /// The kernel over one interval (`a2`: the series' second stage fed by `self`, when
+    /// `PAIR`); the states are written only when it succeeds.
+    #[inline(always)]
+    fn advance<T: Real, const PAIR: bool>(
+        &self,
+        a2: &EdFx,
         sv: &mut EdState<T>,
         sa: &mut EdState<T>,
-        (mut y, inc, y_new): (i64, i64, i64),
+        ys: (i64, i64, i64),
         n: u32,
     ) -> bool {
         let (Some(mut v), Some(mut a)) = (EdFxState::of(sv), EdFxState::of(sa)) else {
             return false;
         };
-        let mut run = || -> Option<()> {
-            for _ in 1..n {
-                y = y.checked_add(inc)?;
-                let o = self.step(&mut v, y)?;
-                if let Some(a2) = a2 {
-                    a2.step(&mut a, o)?;
-                }
-            }
-            let o = self.step(&mut v, y_new)?;
-            if let Some(a2) = a2 {
-                a2.step(&mut a, o)?;
-            }
-            Some(())
-        };
-        if run().is_none() {
+        if self.run::<PAIR>(a2, &mut v, &mut a, ys, n).is_none() {
             return false;
         }
         v.store(sv);
-        a.store(sa);
+        if PAIR {
+            a.store(sa);
+        }
         true
     }
 }
