@@ -199,10 +199,10 @@ mod tests {
     /// below 2^32 of a dense sweep, at the range ends and at perfect squares.
     #[test]
     fn sqrt_q32_is_fx_sqrt() {
-        let mut r: u32 = 1;
-        while r < u32::MAX - 1_000 {
+        let mut r: u64 = 1;
+        while r < u64::from(u32::MAX - 1_000) {
             for d in 0..3 {
-                let v = r + d;
+                let v = (r + d) as u32;
                 assert_eq!(i64::from(sqrt_q32(v)), fx_sqrt(i64::from(v)), "{v}");
             }
             r = r + (r >> 7) + 1;
