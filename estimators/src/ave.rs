@@ -1,8 +1,8 @@
 //! Adaptive velocity estimator, AVE (paper eq. 4).
 
 use crate::error::{non_negative, positive};
-use crate::fxk::{frac, inputs, mag, mulf, mulf32, Coef};
-use crate::real::fx_mul;
+use crate::fxk::{frac, inputs, mag, mulf, mulf32, run, Coef, Stage};
+use crate::real::{fx_mul, umul32};
 use crate::law::{step_n, Law, Stateful};
 use crate::{ConfigError, Hold, Real};
 
@@ -209,7 +209,7 @@ impl<T: Real> Law for AveParams<T> {
         if n > 0 {
             if let (Some(k), Some(ys)) = (AveFx::of(self), inputs(y_prev, y_new, n, hold)) {
                 let mut dummy = *s;
-                if k.advance::<T, false>(&k, s, &mut dummy, ys, n) {
+                if k.advance(None, s, &mut dummy, ys, n) {
                     return s.theta;
                 }
             }
@@ -230,7 +230,7 @@ impl<T: Real> Law for AveParams<T> {
         hold: Hold,
     ) -> bool {
         match (AveFx::of(v), AveFx::of(a2), inputs(y_prev, y_new, n, hold)) {
-            (Some(kv), Some(ka), Some(ys)) => kv.advance::<T, true>(&ka, sv, sa, ys, n),
+            (Some(kv), Some(ka), Some(ys)) => kv.advance(Some(&ka), sv, sa, ys, n),
             _ => false,
         }
     }
@@ -245,8 +245,9 @@ enum DeltaFx {
 }
 
 /// The AVE's coefficients as raw Q31.32 bits for the integer kernel ([`crate::fxk`]): `h`,
-/// `h k` and `h sigma` fractions below 1/2, `h gamma1` general, `bound`: the range guard
-/// `2^(B - 32)` with `B = 60 - G`, `|h gamma1| < 2^G` (see [`AveFx::step`]).
+/// `h k` and `h sigma` fractions below 1/2, `h gamma1` general; `bound`: the range guard
+/// `2^(B - 32)` on the states' high words, `B = 60 - G`, `|h gamma1| < 2^G` (see
+/// [`AveStage::step`]).
 #[derive(Clone, Copy, Debug)]
 struct AveFx {
     h: i32,
@@ -284,12 +285,6 @@ impl AveFxState {
         s.theta = T::from_fx_bits(self.th);
         s.delta = T::from_fx_bits(self.d);
     }
-
-    /// The OR of the states' folded high words (see [`crate::fxk::mag`]).
-    #[inline(always)]
-    fn mag(&self) -> u32 {
-        mag(self.x) | mag(self.th) | mag(self.d)
-    }
 }
 
 impl AveFx {
@@ -322,89 +317,12 @@ impl AveFx {
         }
     }
 
-    /// [`AveParams::step`] on raw bits: the same operations in the same order, wrapping.
-    ///
-    /// Range (raw bits): with `|x|, |y|, |th|, |d| < 2^B` and `B = 60 - G`: `|e| < 2^(B+1)`,
-    /// `|th - sw| < 2^(B+1)`, `|h (th - sw)|, |h k e|, |h |e||, |h sigma d| < 2^B` (fractions
-    /// below 1/2), `|h gamma1 e| < 2^(B+1+G)`, and the new `|x|, |d| < 2^(B+2)`,
-    /// `|th| < 2^(B+2+G) = 2^62`: no operation leaves `i64`, so each is exact and equal to the
-    /// saturating one. (The caller checks the bound before every step.)
+    /// The kernel over one interval (`a2`: the series' second stage fed by `self`); the states
+    /// are written only when it succeeds.
     #[inline(always)]
-    fn step<const D: u8>(&self, s: &mut AveFxState, y: i64) -> i64 {
-        let e = s.x.wrapping_sub(y);
-        let sw = if e > 0 {
-            s.d
-        } else if e < 0 {
-            s.d.wrapping_neg()
-        } else {
-            0
-        };
-        let t = s.th.wrapping_sub(sw);
-        let (ke, ge, ae) = match i32::try_from(e) {
-            // |e| < 1/2: one 32-bit product each.
-            Ok(e32) => (
-                mulf32(self.hk, e32),
-                self.hg.mul_i32(e32),
-                i64::from(e32.unsigned_abs()),
-            ),
-            Err(_) => (mulf(self.hk, e), fx_mul(self.hg.raw, e), e.wrapping_abs()),
-        };
-        s.x = s.x.wrapping_add(mulf(self.h, t).wrapping_sub(ke));
-        s.th = s.th.wrapping_sub(ge);
-        let i = mulf(self.h, ae);
-        s.d = match (D, self.delta) {
-            (BOUNDED, DeltaFx::Bounded(max)) => s.d.wrapping_add(i).min(max),
-            (LEAKY, DeltaFx::Leaky(hs)) => s.d.wrapping_add(i).wrapping_sub(mulf(hs, s.d)),
-            _ => s.d.wrapping_add(i),
-        };
-        s.th
-    }
-
-    /// `n >= 1` steps of the velocity law `self` and, when `a2` is given, of the series'
-    /// second stage fed by it (the shared [`crate::VelAcc`] row); `None` when the range guard
-    /// fails before a step (the caller then runs the generic code).
-    #[inline(always)]
-    fn run<const D: u8, const PAIR: bool>(
+    fn advance<T: Real>(
         &self,
-        a2: &AveFx,
-        sv: &mut AveFxState,
-        sa: &mut AveFxState,
-        (mut y, inc, y_new): (i64, i64, i64),
-        n: u32,
-    ) -> Option<()> {
-        // The guard on the inputs: y_prev and y_new (every y_j lies between them).
-        let bound = if PAIR {
-            self.bound.min(a2.bound)
-        } else {
-            self.bound
-        };
-        let pair_mag = |sa: &AveFxState| if PAIR { sa.mag() } else { 0 };
-        if (mag(y) | mag(y_new) | sv.mag() | pair_mag(sa)) >= bound {
-            return None;
-        }
-        for j in 1..=n {
-            y = if j == n { y_new } else { y.wrapping_add(inc) };
-            let o = self.step::<D>(sv, y);
-            // The first stage's new states (`o` among them: the second stage's input) ...
-            if sv.mag() >= bound {
-                return None;
-            }
-            if PAIR {
-                a2.step::<D>(sa, o);
-                // ... and the second stage's, before the next step.
-                if sa.mag() >= bound {
-                    return None;
-                }
-            }
-        }
-        Some(())
-    }
-
-    /// The kernel over one interval; the states are written only when it succeeds.
-    #[inline(always)]
-    fn advance<T: Real, const PAIR: bool>(
-        &self,
-        a2: &AveFx,
+        a2: Option<&AveFx>,
         sv: &mut AveState<T>,
         sa: &mut AveState<T>,
         ys: (i64, i64, i64),
@@ -413,21 +331,96 @@ impl AveFx {
         let (Some(mut v), Some(mut a)) = (AveFxState::of(sv), AveFxState::of(sa)) else {
             return false;
         };
-        if PAIR && a2.law() != self.law() {
-            return false;
-        }
+        let bound = match a2 {
+            Some(a2) if a2.law() != self.law() => return false,
+            Some(a2) => self.bound.min(a2.bound),
+            None => self.bound,
+        };
         let ok = match self.law() {
-            PAPER => self.run::<PAPER, PAIR>(a2, &mut v, &mut a, ys, n),
-            BOUNDED => self.run::<BOUNDED, PAIR>(a2, &mut v, &mut a, ys, n),
-            _ => self.run::<LEAKY, PAIR>(a2, &mut v, &mut a, ys, n),
+            PAPER => run_law::<PAPER>(self, a2, &mut v, &mut a, ys, n, bound),
+            BOUNDED => run_law::<BOUNDED>(self, a2, &mut v, &mut a, ys, n, bound),
+            _ => run_law::<LEAKY>(self, a2, &mut v, &mut a, ys, n, bound),
         };
         if ok.is_none() {
             return false;
         }
         v.store(sv);
-        if PAIR {
+        if a2.is_some() {
             a.store(sa);
         }
         true
+    }
+}
+
+/// [`crate::fxk::run`] for the `deltahat` law `D`.
+#[inline(never)]
+fn run_law<const D: u8>(
+    k: &AveFx,
+    a2: Option<&AveFx>,
+    v: &mut AveFxState,
+    a: &mut AveFxState,
+    ys: (i64, i64, i64),
+    n: u32,
+    bound: u32,
+) -> Option<()> {
+    let a2 = a2.map(|x| AveStage::<D>(*x));
+    run(&AveStage::<D>(*k), a2.as_ref(), v, a, ys, n, bound)
+}
+
+/// The AVE with the `deltahat` law `D` as a kernel stage.
+#[derive(Clone, Copy, Debug)]
+struct AveStage<const D: u8>(AveFx);
+
+impl<const D: u8> Stage for AveStage<D> {
+    type S = AveFxState;
+
+    /// [`AveParams::step`] on raw bits: the same operations in the same order, wrapping.
+    ///
+    /// Range (raw bits): with `|x|, |y|, |th|, |d| <= 2^B` and `B = 60 - G`: `|e| <= 2^(B+1)`,
+    /// `|th - sw| <= 2^(B+1)`, `|h (th - sw)|, |h k e|, |h |e||, |h sigma d| <= 2^B` (fractions
+    /// below 1/2), `|h gamma1 e| < 2^(B+1+G) = 2^61`, and the new `|x|, |d| <= 2^(B+2)`,
+    /// `|th| < 2^62`: no operation leaves `i64`, so each is exact and equal to the saturating
+    /// one. ([`crate::fxk::run`] checks the bound before every step.)
+    #[inline(always)]
+    fn step(&self, s: &mut AveFxState, y: i64) -> i64 {
+        let k = &self.0;
+        let e = s.x.wrapping_sub(y);
+        let (sw, ke, ge, ie) = match i32::try_from(e) {
+            // |e| < 1/2 (the usual case): one 32-bit product each.
+            Ok(e32) => {
+                let sw = if e32 == 0 {
+                    0
+                } else {
+                    // d or -d by the sign of e.
+                    let m = i64::from(e32 >> 31);
+                    (s.d ^ m).wrapping_sub(m)
+                };
+                let ie = (umul32(e32.unsigned_abs(), k.h as u32) >> 32) as i64;
+                (sw, mulf32(k.hk, e32), k.hg.mul_i32(e32), ie)
+            }
+            Err(_) => {
+                let sw = if e > 0 { s.d } else { s.d.wrapping_neg() };
+                (
+                    sw,
+                    mulf(k.hk, e),
+                    fx_mul(k.hg.raw, e),
+                    mulf(k.h, e.wrapping_abs()),
+                )
+            }
+        };
+        let t = s.th.wrapping_sub(sw);
+        s.x = s.x.wrapping_add(mulf(k.h, t).wrapping_sub(ke));
+        s.th = s.th.wrapping_sub(ge);
+        s.d = match (D, k.delta) {
+            (BOUNDED, DeltaFx::Bounded(max)) => s.d.wrapping_add(ie).min(max),
+            (LEAKY, DeltaFx::Leaky(hs)) => s.d.wrapping_add(ie).wrapping_sub(mulf(hs, s.d)),
+            _ => s.d.wrapping_add(ie),
+        };
+        s.th
+    }
+
+    #[inline(always)]
+    fn mag(s: &AveFxState) -> u32 {
+        mag(s.x) | mag(s.th) | mag(s.d)
     }
 }

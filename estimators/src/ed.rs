@@ -1,7 +1,7 @@
 //! Levant's robust exact differentiator, ED (paper eqs. 5-7; Levant 1998).
 
 use crate::error::positive;
-use crate::fxk::{frac, inputs, mag, mulf, sqrt_q32, Coef};
+use crate::fxk::{frac, inputs, mag, mulf, run, sqrt_q32, Coef, Stage};
 use crate::law::{step_n, Law, Stateful};
 use crate::real::{fx_mul, fx_sqrt};
 use crate::{ConfigError, ExactSqrt, Hold, Real, SqrtFn};
@@ -235,7 +235,7 @@ impl<T: Real, S: SqrtFn<T>> Law for EdParams<T, S> {
         hold: Hold,
     ) -> bool {
         match (EdFx::of(v), EdFx::of(a2), inputs(y_prev, y_new, n, hold)) {
-            (Some(kv), Some(ka), Some(ys)) => kv.advance::<T, true>(&ka, sv, sa, ys, n),
+            (Some(kv), Some(ka), Some(ys)) => kv.advance(Some(&ka), sv, sa, ys, n),
             _ => false,
         }
     }
@@ -247,7 +247,7 @@ impl<T: Real, S: SqrtFn<T>> Law for EdParams<T, S> {
         if n > 0 {
             if let (Some(k), Some(ys)) = (EdFx::of(self), inputs(y_prev, y_new, n, hold)) {
                 let mut dummy = *s;
-                if k.advance::<T, false>(&k, s, &mut dummy, ys, n) {
+                if k.advance(None, s, &mut dummy, ys, n) {
                     return s.u;
                 }
             }
@@ -320,12 +320,6 @@ impl EdFxState {
         s.u1 = T::from_fx_bits(self.u1);
         s.u = T::from_fx_bits(self.u);
     }
-
-    /// The OR of the states' folded high words (see [`crate::fxk::mag`]).
-    #[inline(always)]
-    fn mag(&self) -> u32 {
-        mag(self.z) | mag(self.u1) | mag(self.u)
-    }
 }
 
 impl EdFx {
@@ -349,30 +343,69 @@ impl EdFx {
         })
     }
 
-    /// `lambda * sqrt(a)` for `0 < a < 2^(ED_B + 1)` (the Q31.32 square root, exact: what
-    /// every [`SqrtFn`] must return for [`crate::Fx`]). `a < 2^32` (below 1, the usual case):
-    /// [`sqrt_q32`] and one 32 x 32-bit product per word of `lambda`.
+    /// The kernel over one interval (`a2`: the series' second stage fed by `self`); the states
+    /// are written only when it succeeds.
     #[inline(always)]
-    fn lroot(&self, a: i64) -> i64 {
-        match u32::try_from(a) {
-            Ok(a32) => self.lambda.mul_u32(sqrt_q32(a32)),
-            Err(_) => fx_mul(self.lambda.raw, fx_sqrt(a)),
+    fn advance<T: Real>(
+        &self,
+        a2: Option<&EdFx>,
+        sv: &mut EdState<T>,
+        sa: &mut EdState<T>,
+        ys: (i64, i64, i64),
+        n: u32,
+    ) -> bool {
+        let (Some(mut v), Some(mut a)) = (EdFxState::of(sv), EdFxState::of(sa)) else {
+            return false;
+        };
+        if run_ed(self, a2, &mut v, &mut a, ys, n).is_none() {
+            return false;
         }
+        v.store(sv);
+        if a2.is_some() {
+            a.store(sa);
+        }
+        true
     }
+}
 
-    /// [`EdParams::step_euler`] on raw bits: the same operations in the same order, wrapping.
+/// [`crate::fxk::run`] for the ED.
+#[inline(never)]
+fn run_ed(
+    k: &EdFx,
+    a2: Option<&EdFx>,
+    v: &mut EdFxState,
+    a: &mut EdFxState,
+    ys: (i64, i64, i64),
+    n: u32,
+) -> Option<()> {
+    run(k, a2, v, a, ys, n, ED_BOUND)
+}
+
+impl Stage for EdFx {
+    type S = EdFxState;
+
+    /// [`EdParams::step_euler`] on raw bits: the same operations in the same order, wrapping;
+    /// `|e| < 1` (the usual case): the square root [`sqrt_q32`] in 32-bit words and one
+    /// 32 x 32-bit product per word of `lambda`.
     ///
-    /// Range (raw bits): with `|z|, |y|, |u1| < 2^60`: `|e| < 2^61`, `sqrt|e| < 2^47`,
+    /// Range (raw bits): with `|z|, |y|, |u1| <= 2^60`: `|e| <= 2^61`, `sqrt|e| < 2^47`,
     /// `|lambda sqrt|e|| < 2^60` (`lambda < 2^13`), `|u| < 2^61`, `|h u| < 2^60`, new
-    /// `|z| < 2^61`, `|u1| < 2^60 + 2^60`: no operation leaves `i64`, so each is exact and
-    /// equal to the saturating one. (The caller checks the bound before every step.)
+    /// `|z| < 2^62`, `|u1| < 2^61` (`|h alpha| < 2^60`): no operation leaves `i64`, so each is
+    /// exact and equal to the saturating one. ([`crate::fxk::run`] checks the bound before
+    /// every step.)
     #[inline(always)]
     fn step(&self, s: &mut EdFxState, y: i64) -> i64 {
         let e = s.z.wrapping_sub(y);
+        let ae = e.wrapping_abs();
+        // lambda sqrt|e| (0 when e = 0; the generic code then adds nothing either).
+        let lr = match u32::try_from(ae) {
+            Ok(a32) => self.lambda.mul_u32(sqrt_q32(a32)),
+            Err(_) => fx_mul(self.lambda.raw, fx_sqrt(ae)),
+        };
         let (u, du1) = if e > 0 {
-            (s.u1.wrapping_sub(self.lroot(e)), self.neg_halpha)
+            (s.u1.wrapping_sub(lr), self.neg_halpha)
         } else if e < 0 {
-            (s.u1.wrapping_add(self.lroot(e.wrapping_neg())), self.halpha)
+            (s.u1.wrapping_add(lr), self.halpha)
         } else {
             (s.u1, 0)
         };
@@ -382,58 +415,8 @@ impl EdFx {
         u
     }
 
-    /// `n >= 1` steps of `self` and, when `PAIR`, of the series' second stage `a2` fed by it;
-    /// `None` when the range guard fails before a step.
     #[inline(always)]
-    fn run<const PAIR: bool>(
-        &self,
-        a2: &EdFx,
-        v: &mut EdFxState,
-        a: &mut EdFxState,
-        (mut y, inc, y_new): (i64, i64, i64),
-        n: u32,
-    ) -> Option<()> {
-        let pair_mag = |a: &EdFxState| if PAIR { a.mag() } else { 0 };
-        if (mag(y) | mag(y_new) | v.mag() | pair_mag(a)) >= ED_BOUND {
-            return None;
-        }
-        for j in 1..=n {
-            y = if j == n { y_new } else { y.wrapping_add(inc) };
-            let o = self.step(v, y);
-            if v.mag() >= ED_BOUND {
-                return None;
-            }
-            if PAIR {
-                a2.step(a, o);
-                if a.mag() >= ED_BOUND {
-                    return None;
-                }
-            }
-        }
-        Some(())
-    }
-
-    /// The kernel over one interval (`a2`: the series' second stage fed by `self`, when
-    /// `PAIR`); the states are written only when it succeeds.
-    #[inline(always)]
-    fn advance<T: Real, const PAIR: bool>(
-        &self,
-        a2: &EdFx,
-        sv: &mut EdState<T>,
-        sa: &mut EdState<T>,
-        ys: (i64, i64, i64),
-        n: u32,
-    ) -> bool {
-        let (Some(mut v), Some(mut a)) = (EdFxState::of(sv), EdFxState::of(sa)) else {
-            return false;
-        };
-        if self.run::<PAIR>(a2, &mut v, &mut a, ys, n).is_none() {
-            return false;
-        }
-        v.store(sv);
-        if PAIR {
-            a.store(sa);
-        }
-        true
+    fn mag(s: &EdFxState) -> u32 {
+        mag(s.z) | mag(s.u1) | mag(s.u)
     }
 }

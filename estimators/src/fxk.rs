@@ -190,6 +190,81 @@ pub(crate) fn inputs<T: Real>(y_prev: T, y_new: T, n: u32, hold: Hold) -> Option
     }
 }
 
+/// One law of a kernel: a step on raw Q31.32 states that is exact (wrapping operations that
+/// cannot overflow) while every state and the input are below the law's guard bound.
+pub(crate) trait Stage {
+    /// The raw state.
+    type S: Copy;
+    /// One step with input `y`; returns the output (a state word, covered by [`Stage::mag`]).
+    fn step(&self, s: &mut Self::S, y: i64) -> i64;
+    /// The OR of the states' folded high words ([`mag`]).
+    fn mag(s: &Self::S) -> u32;
+}
+
+/// Steps per chunk of [`run`]: the first stage's outputs are buffered (256 bytes of stack) so
+/// that each stage's loop keeps its own states in registers.
+const CHUNK: usize = 32;
+
+/// `n >= 1` steps of `a` with the inputs `(y_prev, inc, y_new)` of [`inputs`] and, when `b`
+/// is given, of a second stage fed by `a`'s output of each step (the paper's series), on local
+/// copies of the states; every state and input is checked against `bound` (raw high-word
+/// bound `2^(B-32)`) before each step. `None` (states untouched) when the guard fails.
+#[inline(always)]
+pub(crate) fn run<A: Stage>(
+    a: &A,
+    b: Option<&A>,
+    sa: &mut A::S,
+    sb: &mut A::S,
+    (mut y, inc, y_new): (i64, i64, i64),
+    n: u32,
+    bound: u32,
+) -> Option<()> {
+    let mut va = *sa;
+    let mut vb = *sb;
+    let mb = |v: &A::S| if b.is_some() { A::mag(v) } else { 0 };
+    if (mag(y) | mag(y_new) | A::mag(&va) | mb(&vb)) >= bound {
+        return None;
+    }
+    let mut buf = [0i64; CHUNK];
+    let mut left = n as usize;
+    while left > 0 {
+        let m = left.min(CHUNK);
+        left -= m;
+        let (head, last) = if left == 0 {
+            // The interval's last step sees y_new exactly.
+            buf.split_at_mut(m - 1)
+        } else {
+            buf.split_at_mut(m)
+        };
+        for o in head.iter_mut() {
+            y = y.wrapping_add(inc);
+            *o = a.step(&mut va, y);
+            if A::mag(&va) >= bound {
+                return None;
+            }
+        }
+        if left == 0 {
+            if let Some(o) = last.first_mut() {
+                *o = a.step(&mut va, y_new);
+                if A::mag(&va) >= bound {
+                    return None;
+                }
+            }
+        }
+        if let Some(b) = b {
+            for o in buf.iter().take(m) {
+                b.step(&mut vb, *o);
+                if A::mag(&vb) >= bound {
+                    return None;
+                }
+            }
+        }
+    }
+    *sa = va;
+    *sb = vb;
+    Some(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
