@@ -2,8 +2,8 @@
 
 use crate::error::{non_negative, positive};
 use crate::fxk::{frac, inputs, mag, mulf, mulf32, run, Coef, Stage};
-use crate::real::{fx_mul, umul32};
 use crate::law::{step_n, Law, Stateful};
+use crate::real::{fx_mul, umul32};
 use crate::{ConfigError, Hold, Real};
 
 /// What happens to the switching gain `deltahat`.
@@ -202,7 +202,7 @@ impl<T: Real> Law for AveParams<T> {
         s.xhat = s.xhat + d;
     }
 
-    /// [`crate::Fx`]: the integer kernel (same results, see [`crate::fxk`]); otherwise, or if
+    /// [`crate::Fx`]: the integer kernel (same results, see docs/FIXED-POINT.md); otherwise, or if
     /// the kernel gives up, `n` steps.
     #[inline]
     fn advance(&self, s: &mut AveState<T>, y_prev: T, y_new: T, n: u32, hold: Hold) -> T {

@@ -241,7 +241,7 @@ impl<T: Real, S: SqrtFn<T>> Law for EdParams<T, S> {
     }
 
     /// `n` steps; the scheme is chosen once per interval, not per step. [`crate::Fx`] with
-    /// the explicit scheme: the integer kernel (same results, see [`crate::fxk`]).
+    /// the explicit scheme: the integer kernel (same results, see docs/FIXED-POINT.md).
     #[inline]
     fn advance(&self, s: &mut EdState<T>, y_prev: T, y_new: T, n: u32, hold: Hold) -> T {
         if n > 0 {

@@ -325,9 +325,15 @@ mod tests {
             assert_eq!(mulf32(c, e), ((i128::from(c) * i128::from(e)) >> 32) as i64);
             let raw = (next() as i64) >> (next() % 64);
             let k = Coef::of(crate::Fx::from_bits(raw)).unwrap();
-            assert_eq!(k.mul_i32(e), ((i128::from(raw) * i128::from(e)) >> 32) as i64);
+            assert_eq!(
+                k.mul_i32(e),
+                ((i128::from(raw) * i128::from(e)) >> 32) as i64
+            );
             let u = next() as u32;
-            assert_eq!(k.mul_u32(u), ((i128::from(raw) * i128::from(u)) >> 32) as i64);
+            assert_eq!(
+                k.mul_u32(u),
+                ((i128::from(raw) * i128::from(u)) >> 32) as i64
+            );
             assert!(raw.unsigned_abs() < 1u64 << (32 + k.log2_bound()).min(63) || raw == i64::MIN);
         }
     }

@@ -430,7 +430,7 @@ pub trait Real:
         }
     }
     /// The raw Q31.32 bits when `Self` is [`Fx`] (`None` for the float types): lets a law take
-    /// its integer-only fast path ([`crate::fxk`]) without specialisation.
+    /// its integer-only fast path (module `fxk`) without specialisation.
     #[doc(hidden)]
     #[inline(always)]
     fn fx_bits(self) -> Option<i64> {
