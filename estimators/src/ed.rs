@@ -1,7 +1,7 @@
 //! Levant's robust exact differentiator, ED (paper eqs. 5-7; Levant 1998).
 
 use crate::error::positive;
-use crate::fxk::{frac, inputs, mag, mulf, run, sqrt_q32, Coef, Stage};
+use crate::fxk::{frac, inputs, mag, mulf, run, sqrt_q32, sqrt_q64, Coef, Stage};
 use crate::law::{step_n, Law, Stateful};
 use crate::real::{fx_mul, fx_sqrt};
 use crate::{ConfigError, ExactSqrt, Hold, Real, SqrtFn};
@@ -398,9 +398,14 @@ impl Stage for EdFx {
         let e = s.z.wrapping_sub(y);
         let ae = e.wrapping_abs();
         // lambda sqrt|e| (0 when e = 0; the generic code then adds nothing either).
-        let lr = match u32::try_from(ae) {
-            Ok(a32) => self.lambda.mul_u32(sqrt_q32(a32)),
-            Err(_) => fx_mul(self.lambda.raw, fx_sqrt(ae)),
+        let lr = if let Ok(a32) = u32::try_from(ae) {
+            self.lambda.mul_u32(sqrt_q32(a32))
+        } else if ae < 1 << 62 {
+            // 1 <= |e| < 2^30 (the ED-ED's second stage: velocity errors of the chattering
+            // first stage); the root is below 2^47.
+            self.lambda.mul_u47(sqrt_q64(ae as u64))
+        } else {
+            fx_mul(self.lambda.raw, fx_sqrt(ae))
         };
         let (u, du1) = if e > 0 {
             (s.u1.wrapping_sub(lr), self.neg_halpha)

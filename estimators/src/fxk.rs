@@ -103,6 +103,19 @@ impl Coef {
         }
     }
 
+    /// The exact `c * r` (Q31.32) for a raw `r < 2^47` and `|c| < 2^13`:
+    /// `hi rh 2^32 + hi rl + lo rh + floor(lo rl / 2^32)` (`r = rh 2^32 + rl`), below 2^61.
+    #[inline(always)]
+    pub(crate) fn mul_u47(&self, r: u64) -> i64 {
+        let (rh, rl) = ((r >> 32) as u32, r as u32);
+        let p = ((i64::from(self.hi) * i64::from(rh)) << 32) + smul32u(self.hi, rl);
+        if self.lo == 0 {
+            p
+        } else {
+            p + umul32(self.lo, rh) as i64 + (umul32(self.lo, rl) >> 32) as i64
+        }
+    }
+
     /// The exact `c * r` (Q31.32) for an unsigned 32-bit raw `r`.
     #[inline(always)]
     pub(crate) fn mul_u32(&self, r: u32) -> i64 {
@@ -172,6 +185,55 @@ pub(crate) fn sqrt_q32(r: u32) -> u32 {
         s += 1;
     }
     s >> k
+}
+
+/// `floor(sqrt(r 2^32))` for `2^32 <= r < 2^62`: the Q31.32 square root of a raw value from 1
+/// to 2^30 (what `fx_sqrt` returns for it), exact, in 32-bit words.
+///
+/// `r` is normalised to `m = r 4^k` in `[2^62, 2^64)`; the Newton iteration of [`sqrt_q32`] on
+/// its top word and a correction by whole units give `q = floor(sqrt(m))` and the remainder
+/// `m - q^2 <= 2 q`. The result is `s = q 2^j + t` with `j = 16 - k` more bits: `t` is the
+/// largest value with `(q 2^j + t)^2 <= m 4^j`, that is with
+/// `2^j A(t) >= t^2`, `A(t) = 2^j rem - 2 q t`; it is estimated from the remainder and the
+/// reciprocal root `y` (`t ~ rem 2^(j-1) / q`, within a few units) and corrected by whole units.
+#[inline(always)]
+pub(crate) fn sqrt_q64(r: u64) -> u64 {
+    let k = r.leading_zeros() / 2; // 1 ..= 15
+    let m = r << (2 * k);
+    let x = (m >> 32) as u32; // X = x / 2^30 in [1, 4)
+    let idx = ((x >> 24) as usize).saturating_sub(64);
+    let mut y = u32::from(RSQRT192.get(idx).copied().unwrap_or(1 << 15)) << 15; // Q1.31
+    for _ in 0..2 {
+        let y2 = (umul32(y, y) >> 31) as u32;
+        let xy2 = (umul32(x, y2) >> 31) as u32;
+        let t = (3u32 << 29).wrapping_sub(xy2 >> 1);
+        y = (umul32(y, t) >> 30) as u32;
+    }
+    let mut q = (umul32(x, y) >> 30).min(u64::from(u32::MAX)) as u32;
+    while umul32(q, q) > m {
+        q -= 1;
+    }
+    while q < u32::MAX && umul32(q + 1, q + 1) <= m {
+        q += 1;
+    }
+    let rem = m - umul32(q, q); // <= 2 q < 2^33
+    let j = 16 - k;
+    // t ~ rem 2^(j-1) / q with 1 / q ~ y / 2^62.
+    let est = umul32((rem >> 1) as u32, y) >> (62 - j);
+    let tmax = (1u64 << j) - 1;
+    let ok = |t: u64| -> bool {
+        // 2^j A >= t^2 with A = 2^j rem - 2 q t (|A| < 2^50).
+        let a = ((rem << j) as i64) - 2 * (umul32(q, t as u32) as i64);
+        a >= 0 && (a >= 1 << 32 || ((a as u64) << j) >= t * t)
+    };
+    let mut t = est.min(tmax);
+    while t > 0 && !ok(t) {
+        t -= 1;
+    }
+    while t < tmax && ok(t + 1) {
+        t += 1;
+    }
+    (u64::from(q) << j) + t
 }
 
 /// The inputs of the `n` steps of one interval, as [`crate::law::step_n`] presents them:
@@ -292,6 +354,41 @@ mod tests {
             x ^= x << 17;
             let v = (x >> (32 + (x & 31))) as u32;
             assert_eq!(i64::from(sqrt_q32(v)), fx_sqrt(i64::from(v)), "{v}");
+        }
+    }
+
+    /// `sqrt_q64` is `fx_sqrt` on `[2^32, 2^62)`: the ends, powers of two and their
+    /// neighbours, perfect squares of the Q31.32 grid and their neighbours, 2 million random
+    /// values of every magnitude.
+    #[test]
+    fn sqrt_q64_is_fx_sqrt() {
+        let check = |v: u64| {
+            if (1u64 << 32..1u64 << 62).contains(&v) {
+                assert_eq!(sqrt_q64(v) as i64, fx_sqrt(v as i64), "{v}");
+            }
+        };
+        for b in 32..62 {
+            for d in 0..5u64 {
+                check((1u64 << b) + d);
+                check((1u64 << b).wrapping_sub(d));
+            }
+        }
+        check((1u64 << 62) - 1);
+        let mut x: u64 = 0x0123_4567_89AB_CDEF;
+        for _ in 0..2_000_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let v = (x >> 2) >> (x % 30);
+            check(v);
+            // v = s^2 / 2^32 near an exact square of the result grid.
+            let s = (x >> 17) | (1 << 46);
+            let s = s >> (x % 16);
+            let sq = u128::from(s) * u128::from(s) >> 32;
+            for d in [0u64, 1, 2] {
+                check((sq as u64).wrapping_add(d));
+                check((sq as u64).wrapping_sub(d));
+            }
         }
     }
 
