@@ -384,7 +384,7 @@ mod tests {
             // v = s^2 / 2^32 near an exact square of the result grid.
             let s = (x >> 17) | (1 << 46);
             let s = s >> (x % 16);
-            let sq = u128::from(s) * u128::from(s) >> 32;
+            let sq = (u128::from(s) * u128::from(s)) >> 32;
             for d in [0u64, 1, 2] {
                 check((sq as u64).wrapping_add(d));
                 check((sq as u64).wrapping_sub(d));
