@@ -8,13 +8,14 @@
 //!   two 32 x 32-bit products ([`mulf`]);
 //! * an error `e = xhat - y` below 1/2 in magnitude (raw bits fit an `i32`, the usual case):
 //!   one 32 x 32-bit product per coefficient ([`Coef::mul_i32`]), `|e|` and its square root in
-//!   32-bit words ([`sqrt_q32`]);
+//!   32-bit words ([`sqrt_q32`]); an error from 1 to 2^30: the square root from 32-bit words too
+//!   ([`sqrt_q64`]);
 //! * anything else: the generic `fx_mul` / `fx_sqrt` on the raw bits.
 //!
 //! **Why no saturation is needed (the range guard).** Before the interval and after every step
 //! the kernel checks that every state and input is below `2^(B-32)` in magnitude (raw below
-//! `2^B`), with `B` derived from the coefficients at construction ([`AveGuard`] in `ave.rs`,
-//! `ED_B` in `ed.rs`: B = 60 - G where `|h gamma1| < 2^G`, and B = 60 for the ED with
+//! `2^B`), with `B` derived from the coefficients (`AveFx::of` in `ave.rs`, `ED_B` in `ed.rs`:
+//! B = 60 - G where `|h gamma1| < 2^G`, and B = 60 for the ED with
 //! `lambda < 2^13`). Under that bound no intermediate of one step can leave the `i64` range
 //! (each law's step function states the bound of every intermediate), so every wrapping
 //! operation gives the exact integer, which is also what the saturating code gives. When the
@@ -24,7 +25,7 @@
 //! [`crate::Fx`] code**, on every target: the kernels change the cost, not the results.
 //!
 //! The check itself is one `EOR` with the sign and one `ORR` per state word, and one compare
-//! per step.
+//! per stage and step.
 //!
 //! See docs/FIXED-POINT.md for the measured cost.
 
