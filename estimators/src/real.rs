@@ -186,7 +186,7 @@ pub fn fx_mul(a: i64, b: i64) -> i64 {
 /// `floor(a b / 2^32) = bh al + floor(al bl / 2^32)`, two products; the sum cannot overflow
 /// and is never out of range (`|a b| < |b|`).
 #[inline(always)]
-pub(crate) fn fx_mul_frac(al: u32, b: i64) -> i64 {
+fn fx_mul_frac(al: u32, b: i64) -> i64 {
     let (bh, bl) = ((b >> 32) as i32, b as u32);
     smul32u(bh, al) + (umul32(al, bl) >> 32) as i64
 }
