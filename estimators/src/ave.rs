@@ -1,8 +1,10 @@
 //! Adaptive velocity estimator, AVE (paper eq. 4).
 
 use crate::error::{non_negative, positive};
-use crate::law::{Law, Stateful};
-use crate::{ConfigError, Real};
+use crate::fxk::{frac, inputs, mag, mulf, mulf32, run, Coef, Stage};
+use crate::law::{step_n, Law, Stateful};
+use crate::real::{fx_mul, umul32};
+use crate::{ConfigError, Hold, Real};
 
 /// What happens to the switching gain `deltahat`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -198,5 +200,227 @@ impl<T: Real> Law for AveParams<T> {
     #[inline]
     fn translate(&self, s: &mut AveState<T>, d: T) {
         s.xhat = s.xhat + d;
+    }
+
+    /// [`crate::Fx`]: the integer kernel (same results, see docs/FIXED-POINT.md); otherwise, or if
+    /// the kernel gives up, `n` steps.
+    #[inline]
+    fn advance(&self, s: &mut AveState<T>, y_prev: T, y_new: T, n: u32, hold: Hold) -> T {
+        if n > 0 {
+            if let (Some(k), Some(ys)) = (AveFx::of(self), inputs(y_prev, y_new, n, hold)) {
+                let mut dummy = *s;
+                if k.advance(None, s, &mut dummy, ys, n) {
+                    return s.theta;
+                }
+            }
+        }
+        step_n(self, s, y_prev, y_new, n, hold)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn advance_pair(
+        v: &Self,
+        a2: &Self,
+        sv: &mut AveState<T>,
+        sa: &mut AveState<T>,
+        y_prev: T,
+        y_new: T,
+        n: u32,
+        hold: Hold,
+    ) -> bool {
+        match (AveFx::of(v), AveFx::of(a2), inputs(y_prev, y_new, n, hold)) {
+            (Some(kv), Some(ka), Some(ys)) => kv.advance(Some(&ka), sv, sa, ys, n),
+            _ => false,
+        }
+    }
+}
+
+/// The `deltahat` law of [`AveFx`].
+#[derive(Clone, Copy, Debug)]
+enum DeltaFx {
+    Paper,
+    Bounded(i64),
+    Leaky(i32),
+}
+
+/// The AVE's coefficients as raw Q31.32 bits for the integer kernel ([`crate::fxk`]): `h`,
+/// `h k` and `h sigma` fractions below 1/2, `h gamma1` general; `bound`: the range guard
+/// `2^(B - 32)` on the states' high words, `B = 60 - G`, `|h gamma1| < 2^G` (see
+/// [`AveStage::step`]).
+#[derive(Clone, Copy, Debug)]
+struct AveFx {
+    h: i32,
+    hk: i32,
+    hg: Coef,
+    delta: DeltaFx,
+    bound: u32,
+}
+
+/// [`AveState`] as raw Q31.32 bits.
+#[derive(Clone, Copy, Debug)]
+struct AveFxState {
+    x: i64,
+    th: i64,
+    d: i64,
+}
+
+const PAPER: u8 = 0;
+const BOUNDED: u8 = 1;
+const LEAKY: u8 = 2;
+
+impl AveFxState {
+    #[inline(always)]
+    fn of<T: Real>(s: &AveState<T>) -> Option<Self> {
+        Some(Self {
+            x: s.xhat.fx_bits()?,
+            th: s.theta.fx_bits()?,
+            d: s.delta.fx_bits()?,
+        })
+    }
+
+    #[inline(always)]
+    fn store<T: Real>(&self, s: &mut AveState<T>) {
+        s.xhat = T::from_fx_bits(self.x);
+        s.theta = T::from_fx_bits(self.th);
+        s.delta = T::from_fx_bits(self.d);
+    }
+}
+
+impl AveFx {
+    /// `None` for the float types or when a coefficient is outside the kernel's classes.
+    #[inline(always)]
+    fn of<T: Real>(p: &AveParams<T>) -> Option<Self> {
+        let hg = Coef::of(p.hg)?;
+        let b = 60u32.checked_sub(hg.log2_bound())?;
+        if b < 40 {
+            return None;
+        }
+        Some(Self {
+            h: frac(p.h)?,
+            hk: frac(p.hk)?,
+            hg,
+            delta: match p.delta {
+                DeltaLaw::Paper => DeltaFx::Paper,
+                DeltaLaw::Bounded { max } => DeltaFx::Bounded(max.fx_bits()?),
+                DeltaLaw::Leaky { hsigma } => DeltaFx::Leaky(frac(hsigma)?),
+            },
+            bound: 1 << (b - 32),
+        })
+    }
+
+    fn law(&self) -> u8 {
+        match self.delta {
+            DeltaFx::Paper => PAPER,
+            DeltaFx::Bounded(_) => BOUNDED,
+            DeltaFx::Leaky(_) => LEAKY,
+        }
+    }
+
+    /// The kernel over one interval (`a2`: the series' second stage fed by `self`); the states
+    /// are written only when it succeeds.
+    #[inline(always)]
+    fn advance<T: Real>(
+        &self,
+        a2: Option<&AveFx>,
+        sv: &mut AveState<T>,
+        sa: &mut AveState<T>,
+        ys: (i64, i64, i64),
+        n: u32,
+    ) -> bool {
+        let (Some(mut v), Some(mut a)) = (AveFxState::of(sv), AveFxState::of(sa)) else {
+            return false;
+        };
+        let bound = match a2 {
+            Some(a2) if a2.law() != self.law() => return false,
+            Some(a2) => self.bound.min(a2.bound),
+            None => self.bound,
+        };
+        let ok = match self.law() {
+            PAPER => run_law::<PAPER>(self, a2, &mut v, &mut a, ys, n, bound),
+            BOUNDED => run_law::<BOUNDED>(self, a2, &mut v, &mut a, ys, n, bound),
+            _ => run_law::<LEAKY>(self, a2, &mut v, &mut a, ys, n, bound),
+        };
+        if ok.is_none() {
+            return false;
+        }
+        v.store(sv);
+        if a2.is_some() {
+            a.store(sa);
+        }
+        true
+    }
+}
+
+/// [`crate::fxk::run`] for the `deltahat` law `D`.
+#[inline(never)]
+fn run_law<const D: u8>(
+    k: &AveFx,
+    a2: Option<&AveFx>,
+    v: &mut AveFxState,
+    a: &mut AveFxState,
+    ys: (i64, i64, i64),
+    n: u32,
+    bound: u32,
+) -> Option<()> {
+    let a2 = a2.map(|x| AveStage::<D>(*x));
+    run(&AveStage::<D>(*k), a2.as_ref(), v, a, ys, n, bound)
+}
+
+/// The AVE with the `deltahat` law `D` as a kernel stage.
+#[derive(Clone, Copy, Debug)]
+struct AveStage<const D: u8>(AveFx);
+
+impl<const D: u8> Stage for AveStage<D> {
+    type S = AveFxState;
+
+    /// [`AveParams::step`] on raw bits: the same operations in the same order, wrapping.
+    ///
+    /// Range (raw bits): with `|x|, |y|, |th|, |d| <= 2^B` and `B = 60 - G`: `|e| <= 2^(B+1)`,
+    /// `|th - sw| <= 2^(B+1)`, `|h (th - sw)|, |h k e|, |h |e||, |h sigma d| <= 2^B` (fractions
+    /// below 1/2), `|h gamma1 e| < 2^(B+1+G) = 2^61`, and the new `|x|, |d| <= 2^(B+2)`,
+    /// `|th| < 2^62`: no operation leaves `i64`, so each is exact and equal to the saturating
+    /// one. ([`crate::fxk::run`] checks the bound before every step.)
+    #[inline(always)]
+    fn step(&self, s: &mut AveFxState, y: i64) -> i64 {
+        let k = &self.0;
+        let e = s.x.wrapping_sub(y);
+        let (sw, ke, ge, ie) = match i32::try_from(e) {
+            // |e| < 1/2 (the usual case): one 32-bit product each.
+            Ok(e32) => {
+                let sw = if e32 == 0 {
+                    0
+                } else {
+                    // d or -d by the sign of e.
+                    let m = i64::from(e32 >> 31);
+                    (s.d ^ m).wrapping_sub(m)
+                };
+                let ie = (umul32(e32.unsigned_abs(), k.h as u32) >> 32) as i64;
+                (sw, mulf32(k.hk, e32), k.hg.mul_i32(e32), ie)
+            }
+            Err(_) => {
+                let sw = if e > 0 { s.d } else { s.d.wrapping_neg() };
+                (
+                    sw,
+                    mulf(k.hk, e),
+                    fx_mul(k.hg.raw, e),
+                    mulf(k.h, e.wrapping_abs()),
+                )
+            }
+        };
+        let t = s.th.wrapping_sub(sw);
+        s.x = s.x.wrapping_add(mulf(k.h, t).wrapping_sub(ke));
+        s.th = s.th.wrapping_sub(ge);
+        s.d = match (D, k.delta) {
+            (BOUNDED, DeltaFx::Bounded(max)) => s.d.wrapping_add(ie).min(max),
+            (LEAKY, DeltaFx::Leaky(hs)) => s.d.wrapping_add(ie).wrapping_sub(mulf(hs, s.d)),
+            _ => s.d.wrapping_add(ie),
+        };
+        s.th
+    }
+
+    #[inline(always)]
+    fn mag(s: &AveFxState) -> u32 {
+        mag(s.x) | mag(s.th) | mag(s.d)
     }
 }

@@ -1,7 +1,9 @@
 //! Levant's robust exact differentiator, ED (paper eqs. 5-7; Levant 1998).
 
 use crate::error::positive;
+use crate::fxk::{frac, inputs, mag, mulf, run, sqrt_q32, sqrt_q64, Coef, Stage};
 use crate::law::{step_n, Law, Stateful};
+use crate::real::{fx_mul, fx_sqrt};
 use crate::{ConfigError, ExactSqrt, Hold, Real, SqrtFn};
 use core::marker::PhantomData;
 
@@ -220,9 +222,36 @@ impl<T: Real, S: SqrtFn<T>> Law for EdParams<T, S> {
         s.z = s.z + d;
     }
 
-    /// `n` steps; the scheme is chosen once per interval, not per step.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn advance_pair(
+        v: &Self,
+        a2: &Self,
+        sv: &mut EdState<T>,
+        sa: &mut EdState<T>,
+        y_prev: T,
+        y_new: T,
+        n: u32,
+        hold: Hold,
+    ) -> bool {
+        match (EdFx::of(v), EdFx::of(a2), inputs(y_prev, y_new, n, hold)) {
+            (Some(kv), Some(ka), Some(ys)) => kv.advance(Some(&ka), sv, sa, ys, n),
+            _ => false,
+        }
+    }
+
+    /// `n` steps; the scheme is chosen once per interval, not per step. [`crate::Fx`] with
+    /// the explicit scheme: the integer kernel (same results, see docs/FIXED-POINT.md).
     #[inline]
     fn advance(&self, s: &mut EdState<T>, y_prev: T, y_new: T, n: u32, hold: Hold) -> T {
+        if n > 0 {
+            if let (Some(k), Some(ys)) = (EdFx::of(self), inputs(y_prev, y_new, n, hold)) {
+                let mut dummy = *s;
+                if k.advance(None, s, &mut dummy, ys, n) {
+                    return s.u;
+                }
+            }
+        }
         match self.scheme {
             EdScheme::Euler => step_n(&Euler(*self), s, y_prev, y_new, n, hold),
             EdScheme::Implicit => step_n(self, s, y_prev, y_new, n, hold),
@@ -249,5 +278,150 @@ impl<T: Real, S: SqrtFn<T>> Law for Euler<T, S> {
     }
     fn translate(&self, s: &mut EdState<T>, d: T) {
         self.0.translate(s, d);
+    }
+}
+
+/// The explicit ED's coefficients as raw Q31.32 bits for the integer kernel
+/// ([`crate::fxk`]): `h` a fraction below 1/2, `lambda` below 2^13, `h alpha` below 2^28 in
+/// magnitude, and its negation.
+#[derive(Clone, Copy, Debug)]
+struct EdFx {
+    h: i32,
+    lambda: Coef,
+    halpha: i64,
+    neg_halpha: i64,
+}
+
+/// The ED kernel's range guard: every state and input below `2^(ED_B - 32)` (raw `2^ED_B`).
+const ED_B: u32 = 60;
+const ED_BOUND: u32 = 1 << (ED_B - 32);
+
+/// [`EdState`] as raw Q31.32 bits.
+#[derive(Clone, Copy, Debug)]
+struct EdFxState {
+    z: i64,
+    u1: i64,
+    u: i64,
+}
+
+impl EdFxState {
+    #[inline(always)]
+    fn of<T: Real>(s: &EdState<T>) -> Option<Self> {
+        Some(Self {
+            z: s.z.fx_bits()?,
+            u1: s.u1.fx_bits()?,
+            u: s.u.fx_bits()?,
+        })
+    }
+
+    #[inline(always)]
+    fn store<T: Real>(&self, s: &mut EdState<T>) {
+        s.z = T::from_fx_bits(self.z);
+        s.u1 = T::from_fx_bits(self.u1);
+        s.u = T::from_fx_bits(self.u);
+    }
+}
+
+impl EdFx {
+    /// `None` for the float types, the implicit scheme, or a coefficient outside the kernel's
+    /// classes.
+    #[inline(always)]
+    fn of<T: Real, S: SqrtFn<T>>(p: &EdParams<T, S>) -> Option<Self> {
+        if p.scheme != EdScheme::Euler {
+            return None;
+        }
+        let lambda = Coef::of(p.lambda)?;
+        let halpha = p.halpha.fx_bits()?;
+        if lambda.log2_bound() > 13 || halpha.unsigned_abs() >= 1 << 60 {
+            return None;
+        }
+        Some(Self {
+            h: frac(p.h)?,
+            lambda,
+            halpha,
+            neg_halpha: (-p.halpha).fx_bits()?,
+        })
+    }
+
+    /// The kernel over one interval (`a2`: the series' second stage fed by `self`); the states
+    /// are written only when it succeeds.
+    #[inline(always)]
+    fn advance<T: Real>(
+        &self,
+        a2: Option<&EdFx>,
+        sv: &mut EdState<T>,
+        sa: &mut EdState<T>,
+        ys: (i64, i64, i64),
+        n: u32,
+    ) -> bool {
+        let (Some(mut v), Some(mut a)) = (EdFxState::of(sv), EdFxState::of(sa)) else {
+            return false;
+        };
+        if run_ed(self, a2, &mut v, &mut a, ys, n).is_none() {
+            return false;
+        }
+        v.store(sv);
+        if a2.is_some() {
+            a.store(sa);
+        }
+        true
+    }
+}
+
+/// [`crate::fxk::run`] for the ED.
+#[inline(never)]
+fn run_ed(
+    k: &EdFx,
+    a2: Option<&EdFx>,
+    v: &mut EdFxState,
+    a: &mut EdFxState,
+    ys: (i64, i64, i64),
+    n: u32,
+) -> Option<()> {
+    run(k, a2, v, a, ys, n, ED_BOUND)
+}
+
+impl Stage for EdFx {
+    type S = EdFxState;
+
+    /// [`EdParams::step_euler`] on raw bits: the same operations in the same order, wrapping;
+    /// `|e| < 1` (the usual case): the square root [`sqrt_q32`] in 32-bit words and one
+    /// 32 x 32-bit product per word of `lambda`.
+    ///
+    /// Range (raw bits): with `|z|, |y|, |u1| <= 2^60`: `|e| <= 2^61`, `sqrt|e| < 2^47`,
+    /// `|lambda sqrt|e|| < 2^60` (`lambda < 2^13`), `|u| < 2^61`, `|h u| < 2^60`, new
+    /// `|z| < 2^62`, `|u1| < 2^61` (`|h alpha| < 2^60`): no operation leaves `i64`, so each is
+    /// exact and equal to the saturating one. ([`crate::fxk::run`] checks the bound before
+    /// every step.)
+    #[inline(always)]
+    fn step(&self, s: &mut EdFxState, y: i64) -> i64 {
+        let e = s.z.wrapping_sub(y);
+        let ae = e.wrapping_abs();
+        // lambda sqrt|e| (0 when e = 0; the generic code then adds nothing either).
+        let lr = if let Ok(a32) = u32::try_from(ae) {
+            self.lambda.mul_u32(sqrt_q32(a32))
+        } else if ae < 1 << 62 {
+            // 1 <= |e| < 2^30 (the ED-ED's second stage: velocity errors of the chattering
+            // first stage); the root is below 2^47.
+            self.lambda.mul_u47(sqrt_q64(ae as u64))
+        } else {
+            fx_mul(self.lambda.raw, fx_sqrt(ae))
+        };
+        let (u, du1) = if e > 0 {
+            (s.u1.wrapping_sub(lr), self.neg_halpha)
+        } else if e < 0 {
+            (s.u1.wrapping_add(lr), self.halpha)
+        } else {
+            (s.u1, 0)
+        };
+        s.z = s.z.wrapping_add(mulf(self.h, u));
+        s.u1 = s.u1.wrapping_add(du1);
+        s.u = u;
+        u
+    }
+
+    #[inline(always)]
+    fn mag(s: &EdFxState) -> u32 {
+        mag(s.z) | mag(s.u1) | mag(s.u)
     }
 }

@@ -54,6 +54,27 @@ pub trait Law: Copy + core::fmt::Debug {
     ) -> Self::Num {
         step_n(self, s, y_prev, y_new, n, hold)
     }
+
+    /// `n >= 1` steps of the velocity law `v` and of a series' second stage `a2` fed by its
+    /// output in every step (a shared [`crate::VelAcc`] row), by a faster path of the law's own
+    /// with exactly the results of stepping; `false` (states untouched) when the law has no such
+    /// path for its number type. Internal hook of the fixed-point kernels ([`crate::Fx`]).
+    #[doc(hidden)]
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn advance_pair(
+        v: &Self,
+        a2: &Self,
+        sv: &mut Self::State,
+        sa: &mut Self::State,
+        y_prev: Self::Num,
+        y_new: Self::Num,
+        n: u32,
+        hold: Hold,
+    ) -> bool {
+        let _ = (v, a2, sv, sa, y_prev, y_new, n, hold);
+        false
+    }
 }
 
 /// The stepping implementation of [`Law::advance`] (usable by overriding impls as their

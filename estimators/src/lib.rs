@@ -71,6 +71,7 @@ mod bank;
 mod ed;
 mod error;
 mod estimator;
+mod fxk;
 pub mod gilo;
 mod ilo;
 pub mod kalman;

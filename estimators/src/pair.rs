@@ -129,7 +129,13 @@ impl<T: Real, L: Law<Num = T>> Law for VelAcc<L> {
     #[inline]
     fn advance(&self, s: &mut Self::State, y_prev: T, y_new: T, n: u32, hold: Hold) -> T {
         if n > 0 {
-            if self.shared {
+            if self.shared
+                && L::advance_pair(
+                    &self.v, &self.a2, &mut s.v, &mut s.a2, y_prev, y_new, n, hold,
+                )
+            {
+                // The law's own fast path (the fixed-point kernels): same results.
+            } else if self.shared {
                 self.run::<true>(s, y_prev, y_new, n, hold);
             } else {
                 self.run::<false>(s, y_prev, y_new, n, hold);

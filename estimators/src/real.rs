@@ -86,7 +86,7 @@ impl Mul for Fx {
 /// only 32-bit Arm target without 32-bit atomics) [`umul32_split`] instead of the 64 x 64-bit
 /// library multiply; elsewhere the native product (`UMULL`).
 #[inline(always)]
-fn umul32(a: u32, b: u32) -> u64 {
+pub(crate) fn umul32(a: u32, b: u32) -> u64 {
     #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
     {
         umul32_split(a, b)
@@ -117,7 +117,7 @@ fn umul32_split(a: u32, b: u32) -> u64 {
 /// 16 bits (the high words of the bank's values and coefficients: |x| < 32768), else the
 /// library multiply; elsewhere the native product (`SMULL`).
 #[inline(always)]
-fn smul32(a: i32, b: i32) -> i64 {
+pub(crate) fn smul32(a: i32, b: i32) -> i64 {
     #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
     {
         if a as i16 as i32 == a && b as i16 as i32 == b {
@@ -130,7 +130,7 @@ fn smul32(a: i32, b: i32) -> i64 {
 /// `a * b` of a signed and an unsigned 32-bit number (`|a b| < 2^63`), from the unsigned
 /// unsigned product (one [`umul32`]).
 #[inline(always)]
-fn smul32u(a: i32, b: u32) -> i64 {
+pub(crate) fn smul32u(a: i32, b: u32) -> i64 {
     #[cfg(all(target_arch = "arm", not(target_has_atomic = "32")))]
     {
         // Cortex-M0: the sign handled apart, so that the compiler keeps `umul32_split` (it
@@ -429,6 +429,21 @@ pub trait Real:
             Self::ZERO
         }
     }
+    /// The raw Q31.32 bits when `Self` is [`Fx`] (`None` for the float types): lets a law take
+    /// its integer-only fast path (module `fxk`) without specialisation.
+    #[doc(hidden)]
+    #[inline(always)]
+    fn fx_bits(self) -> Option<i64> {
+        None
+    }
+    /// The value with raw Q31.32 bits `b` when `Self` is [`Fx`]; only called after
+    /// [`Real::fx_bits`] returned `Some` (0 for the float types).
+    #[doc(hidden)]
+    #[inline(always)]
+    fn from_fx_bits(b: i64) -> Self {
+        let _ = b;
+        Self::ZERO
+    }
     /// The larger of two values.
     fn max(self, other: Self) -> Self {
         if other > self {
@@ -540,6 +555,14 @@ impl Real for f64 {
 impl Real for Fx {
     const ZERO: Self = Fx(I32F32::ZERO);
     const ONE: Self = Fx(I32F32::ONE);
+    #[inline(always)]
+    fn fx_bits(self) -> Option<i64> {
+        Some(self.to_bits())
+    }
+    #[inline(always)]
+    fn from_fx_bits(b: i64) -> Self {
+        Fx::from_bits(b)
+    }
     #[inline]
     fn from_f64(x: f64) -> Self {
         // `checked_from_num` (not `saturating_from_num`, which panics on NaN) keeps the

@@ -1,0 +1,438 @@
+//! Integer fast paths of the stepped laws (AVE, ED and their series rows) for [`crate::Fx`].
+//!
+//! The generic laws compute in [`crate::Fx`] with saturating `+ - *` on Q31.32. The kernels
+//! here compute **the same expression trees on the same Q31.32 bits**, but with wrapping
+//! (plain) `i64` additions and multiplies specialised to what the operands are:
+//!
+//! * a coefficient in `[0, 1/2)` (`h`, `h k`, `h sigma`: raw bits below 2^31) times a state:
+//!   two 32 x 32-bit products ([`mulf`]);
+//! * an error `e = xhat - y` below 1/2 in magnitude (raw bits fit an `i32`, the usual case):
+//!   one 32 x 32-bit product per coefficient ([`Coef::mul_i32`]), `|e|` and its square root in
+//!   32-bit words ([`sqrt_q32`]); an error from 1 to 2^30: the square root from 32-bit words too
+//!   ([`sqrt_q64`]);
+//! * anything else: the generic `fx_mul` / `fx_sqrt` on the raw bits.
+//!
+//! **Why no saturation is needed (the range guard).** Before the interval and after every step
+//! the kernel checks that every state and input is below `2^(B-32)` in magnitude (raw below
+//! `2^B`), with `B` derived from the coefficients (`AveFx::of` in `ave.rs`, `ED_B` in `ed.rs`:
+//! B = 60 - G where `|h gamma1| < 2^G`, and B = 60 for the ED with
+//! `lambda < 2^13`). Under that bound no intermediate of one step can leave the `i64` range
+//! (each law's step function states the bound of every intermediate), so every wrapping
+//! operation gives the exact integer, which is also what the saturating code gives. When the
+//! check fails (never on a physical input: with the paper's gains B = 58, about 6.7e7 deg,
+//! deg/s or deg/s^2) the kernel drops its work and the caller runs the generic saturating path
+//! on the untouched state. The outputs are therefore **bit for bit those of the generic
+//! [`crate::Fx`] code**, on every target: the kernels change the cost, not the results.
+//!
+//! The check itself is one `EOR` with the sign and one `ORR` per state word, and one compare
+//! per stage and step.
+//!
+//! See docs/FIXED-POINT.md for the measured cost.
+
+use crate::real::{smul32u, umul32};
+use crate::{Hold, Real};
+
+/// A coefficient in `[0, 1/2)` as raw Q0.32 bits below 2^31 (so it is also a positive `i32`).
+pub(crate) fn frac<T: Real>(c: T) -> Option<i32> {
+    let b = c.fx_bits()?;
+    i32::try_from(b).ok().filter(|x| *x >= 0)
+}
+
+/// `floor(c x / 2^32)` for a fraction `c` from [`frac`]: the exact Q31.32 product `c * x`
+/// (what `fx_mul` returns), never out of range (`|c x| < |x| / 2`).
+#[inline(always)]
+pub(crate) fn mulf(c: i32, x: i64) -> i64 {
+    // x = xh 2^32 + xl: c x / 2^32 = xh c + c xl / 2^32, the first term an integer.
+    let xh = (x >> 32) as i32;
+    let xl = x as u32;
+    i64::from(xh) * i64::from(c) + (umul32(xl, c as u32) >> 32) as i64
+}
+
+/// `floor(c e / 2^32)` for a fraction `c` from [`frac`] and a 32-bit `e`: one product.
+#[inline(always)]
+pub(crate) fn mulf32(c: i32, e: i32) -> i64 {
+    smul(c, e) >> 32
+}
+
+/// The signed 32 x 32 -> 64-bit product (`SMULL`; on the Cortex-M0 from unsigned pieces).
+#[inline(always)]
+pub(crate) fn smul(a: i32, b: i32) -> i64 {
+    crate::real::smul32(a, b)
+}
+
+/// `|v| < 2^bits` test material: the high word with its sign folded (`h ^ (h >> 31)`), to be
+/// OR-ed over several values and compared once.
+#[inline(always)]
+pub(crate) fn mag(v: i64) -> u32 {
+    let h = (v >> 32) as i32;
+    (h ^ (h >> 31)) as u32
+}
+
+/// A general Q31.32 coefficient `c = hi + lo / 2^32`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Coef {
+    pub(crate) raw: i64,
+    hi: i32,
+    lo: u32,
+}
+
+impl Coef {
+    pub(crate) fn of<T: Real>(c: T) -> Option<Self> {
+        let raw = c.fx_bits()?;
+        Some(Self {
+            raw,
+            hi: (raw >> 32) as i32,
+            lo: raw as u32,
+        })
+    }
+
+    /// The smallest `g >= 0` with `|c| < 2^g`.
+    pub(crate) fn log2_bound(&self) -> u32 {
+        let m = self.raw.unsigned_abs();
+        (64 - m.leading_zeros()).saturating_sub(32)
+    }
+
+    /// The exact `c * x` (Q31.32) for a 32-bit raw `x`: `hi x + floor(lo x / 2^32)`;
+    /// `|hi x| < 2^62`, so it cannot overflow.
+    #[inline(always)]
+    pub(crate) fn mul_i32(&self, x: i32) -> i64 {
+        let p = smul(self.hi, x);
+        if self.lo == 0 {
+            p
+        } else {
+            p + (smul32u(x, self.lo) >> 32)
+        }
+    }
+
+    /// The exact `c * r` (Q31.32) for a raw `r < 2^47` and `|c| < 2^13`:
+    /// `hi rh 2^32 + hi rl + lo rh + floor(lo rl / 2^32)` (`r = rh 2^32 + rl`), below 2^61.
+    #[inline(always)]
+    pub(crate) fn mul_u47(&self, r: u64) -> i64 {
+        let (rh, rl) = ((r >> 32) as u32, r as u32);
+        let p = ((i64::from(self.hi) * i64::from(rh)) << 32) + smul32u(self.hi, rl);
+        if self.lo == 0 {
+            p
+        } else {
+            p + umul32(self.lo, rh) as i64 + (umul32(self.lo, rl) >> 32) as i64
+        }
+    }
+
+    /// The exact `c * r` (Q31.32) for an unsigned 32-bit raw `r`.
+    #[inline(always)]
+    pub(crate) fn mul_u32(&self, r: u32) -> i64 {
+        let p = smul32u(self.hi, r);
+        if self.lo == 0 {
+            p
+        } else {
+            p + (umul32(self.lo, r) >> 32) as i64
+        }
+    }
+}
+
+/// `1 / sqrt(X) / 2` in Q0.16 (the top 16 bits of the Q1.31 value) at the middle of each of
+/// 192 steps of `X` in `[1, 4)` (`X = (i + 64.5) / 64` for `i = 0 .. 191`): the start of
+/// [`sqrt_q32`]'s Newton iteration (about 8 bits). Computed at compile time, by bisection on
+/// integers: the largest `y` with `y^2 X <= 2^62`, shifted right by 15.
+const RSQRT192: [u16; 192] = {
+    let mut t = [0u16; 192];
+    let mut i = 0;
+    while i < 192 {
+        // X = (2 i + 129) / 128: the largest y with y^2 (2 i + 129) <= 128 2^62.
+        let d = (2 * i as u128) + 129;
+        let target = 128u128 << 62;
+        let (mut lo, mut hi) = (0u128, 1u128 << 33);
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if mid * mid * d <= target {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        t[i] = (lo >> 15) as u16;
+        i += 1;
+    }
+    t
+};
+
+/// `floor(sqrt(r 2^32))` for `r < 2^32`: the Q31.32 square root of a raw value below 1 (what
+/// `fx_sqrt` returns for it), exact, in 32-bit words. `r` is normalised to
+/// `x = r 4^k` in `[2^30, 2^32)`, `1/sqrt(x / 2^30)` starts from [`RSQRT192`] (8 bits) and two
+/// Newton steps `y <- y (3 - X y^2) / 2` give about 29 bits; `s ~ x y` is then corrected by
+/// whole units until `s^2 <= x 2^32 < (s + 1)^2` (exact whatever the estimate), and
+/// `floor(sqrt(r 2^32)) = floor(s / 2^k)`.
+#[inline(always)]
+pub(crate) fn sqrt_q32(r: u32) -> u32 {
+    if r == 0 {
+        return 0;
+    }
+    let k = r.leading_zeros() / 2;
+    let x = r << (2 * k); // X = x / 2^30 in [1, 4)
+    let idx = ((x >> 24) as usize).saturating_sub(64);
+    let mut y = u32::from(RSQRT192.get(idx).copied().unwrap_or(1 << 15)) << 15; // Q1.31
+    for _ in 0..2 {
+        let y2 = (umul32(y, y) >> 31) as u32; // y^2, Q1.31 (in (1/4, 1])
+        let xy2 = (umul32(x, y2) >> 31) as u32; // X y^2 / 2, Q1.31 (about 1/2)
+        let t = (3u32 << 29).wrapping_sub(xy2 >> 1); // (3 - X y^2) / 2, Q2.30
+        y = (umul32(y, t) >> 30) as u32; // Q1.31
+    }
+    // sqrt(x 2^32) = sqrt(X) 2^31 = X y 2^31 = x y / 2^30.
+    let m = u64::from(x) << 32;
+    let mut s = (umul32(x, y) >> 30).min(u64::from(u32::MAX)) as u32;
+    while umul32(s, s) > m {
+        s -= 1;
+    }
+    while s < u32::MAX && umul32(s + 1, s + 1) <= m {
+        s += 1;
+    }
+    s >> k
+}
+
+/// `floor(sqrt(r 2^32))` for `2^32 <= r < 2^62`: the Q31.32 square root of a raw value from 1
+/// to 2^30 (what `fx_sqrt` returns for it), exact, in 32-bit words.
+///
+/// `r` is normalised to `m = r 4^k` in `[2^62, 2^64)`; the Newton iteration of [`sqrt_q32`] on
+/// its top word and a correction by whole units give `q = floor(sqrt(m))` and the remainder
+/// `m - q^2 <= 2 q`. The result is `s = q 2^j + t` with `j = 16 - k` more bits: `t` is the
+/// largest value with `(q 2^j + t)^2 <= m 4^j`, that is with
+/// `2^j A(t) >= t^2`, `A(t) = 2^j rem - 2 q t`; it is estimated from the remainder and the
+/// reciprocal root `y` (`t ~ rem 2^(j-1) / q`, within a few units) and corrected by whole units.
+#[inline(always)]
+pub(crate) fn sqrt_q64(r: u64) -> u64 {
+    let k = r.leading_zeros() / 2; // 1 ..= 15
+    let m = r << (2 * k);
+    let x = (m >> 32) as u32; // X = x / 2^30 in [1, 4)
+    let idx = ((x >> 24) as usize).saturating_sub(64);
+    let mut y = u32::from(RSQRT192.get(idx).copied().unwrap_or(1 << 15)) << 15; // Q1.31
+    for _ in 0..2 {
+        let y2 = (umul32(y, y) >> 31) as u32;
+        let xy2 = (umul32(x, y2) >> 31) as u32;
+        let t = (3u32 << 29).wrapping_sub(xy2 >> 1);
+        y = (umul32(y, t) >> 30) as u32;
+    }
+    let mut q = (umul32(x, y) >> 30).min(u64::from(u32::MAX)) as u32;
+    while umul32(q, q) > m {
+        q -= 1;
+    }
+    while q < u32::MAX && umul32(q + 1, q + 1) <= m {
+        q += 1;
+    }
+    let rem = m - umul32(q, q); // <= 2 q < 2^33
+    let j = 16 - k;
+    // t ~ rem 2^(j-1) / q with 1 / q ~ y / 2^62.
+    let est = umul32((rem >> 1) as u32, y) >> (62 - j);
+    let tmax = (1u64 << j) - 1;
+    let ok = |t: u64| -> bool {
+        // 2^j A >= t^2 with A = 2^j rem - 2 q t (|A| < 2^50).
+        let a = ((rem << j) as i64) - 2 * (umul32(q, t as u32) as i64);
+        a >= 0 && (a >= 1 << 32 || ((a as u64) << j) >= t * t)
+    };
+    let mut t = est.min(tmax);
+    while t > 0 && !ok(t) {
+        t -= 1;
+    }
+    while t < tmax && ok(t + 1) {
+        t += 1;
+    }
+    (u64::from(q) << j) + t
+}
+
+/// The inputs of the `n` steps of one interval, as [`crate::law::step_n`] presents them:
+/// `(first, inc, y_new)` such that steps `1 .. n-1` see `first + j inc` (accumulated with `+`,
+/// as the generic loop does) and the last step sees `y_new`. `None` if `T` is not
+/// [`crate::Fx`].
+#[inline(always)]
+pub(crate) fn inputs<T: Real>(y_prev: T, y_new: T, n: u32, hold: Hold) -> Option<(i64, i64, i64)> {
+    match hold {
+        // Every step sees y_new: start there and add 0.
+        Hold::ZeroOrder => Some((y_new.fx_bits()?, 0, y_new.fx_bits()?)),
+        Hold::Linear => {
+            let inc = (y_new - y_prev).div_int(n);
+            Some((y_prev.fx_bits()?, inc.fx_bits()?, y_new.fx_bits()?))
+        }
+    }
+}
+
+/// One law of a kernel: a step on raw Q31.32 states that is exact (wrapping operations that
+/// cannot overflow) while every state and the input are below the law's guard bound.
+pub(crate) trait Stage {
+    /// The raw state.
+    type S: Copy;
+    /// One step with input `y`; returns the output (a state word, covered by [`Stage::mag`]).
+    fn step(&self, s: &mut Self::S, y: i64) -> i64;
+    /// The OR of the states' folded high words ([`mag`]).
+    fn mag(s: &Self::S) -> u32;
+}
+
+/// Steps per chunk of [`run`]: the first stage's outputs are buffered (256 bytes of stack) so
+/// that each stage's loop keeps its own states in registers.
+const CHUNK: usize = 32;
+
+/// `n >= 1` steps of `a` with the inputs `(y_prev, inc, y_new)` of [`inputs`] and, when `b`
+/// is given, of a second stage fed by `a`'s output of each step (the paper's series), on local
+/// copies of the states; every state and input is checked against `bound` (raw high-word
+/// bound `2^(B-32)`) before each step. `None` (states untouched) when the guard fails.
+#[inline(always)]
+pub(crate) fn run<A: Stage>(
+    a: &A,
+    b: Option<&A>,
+    sa: &mut A::S,
+    sb: &mut A::S,
+    (mut y, inc, y_new): (i64, i64, i64),
+    n: u32,
+    bound: u32,
+) -> Option<()> {
+    let mut va = *sa;
+    let mut vb = *sb;
+    let mb = |v: &A::S| if b.is_some() { A::mag(v) } else { 0 };
+    if (mag(y) | mag(y_new) | A::mag(&va) | mb(&vb)) >= bound {
+        return None;
+    }
+    let mut buf = [0i64; CHUNK];
+    let mut left = n as usize;
+    while left > 0 {
+        let m = left.min(CHUNK);
+        left -= m;
+        let (head, last) = if left == 0 {
+            // The interval's last step sees y_new exactly.
+            buf.split_at_mut(m - 1)
+        } else {
+            buf.split_at_mut(m)
+        };
+        for o in head.iter_mut() {
+            y = y.wrapping_add(inc);
+            *o = a.step(&mut va, y);
+            if A::mag(&va) >= bound {
+                return None;
+            }
+        }
+        if left == 0 {
+            if let Some(o) = last.first_mut() {
+                *o = a.step(&mut va, y_new);
+                if A::mag(&va) >= bound {
+                    return None;
+                }
+            }
+        }
+        if let Some(b) = b {
+            for o in buf.iter().take(m) {
+                b.step(&mut vb, *o);
+                if A::mag(&vb) >= bound {
+                    return None;
+                }
+            }
+        }
+    }
+    *sa = va;
+    *sb = vb;
+    Some(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::real::fx_sqrt;
+
+    /// `sqrt_q32` is `fx_sqrt` (itself checked against the `fixed` crate) on every raw value
+    /// below 2^32 of a dense sweep, at the range ends and at perfect squares.
+    #[test]
+    fn sqrt_q32_is_fx_sqrt() {
+        let mut r: u64 = 1;
+        while r < u64::from(u32::MAX - 1_000) {
+            for d in 0..3 {
+                let v = (r + d) as u32;
+                assert_eq!(i64::from(sqrt_q32(v)), fx_sqrt(i64::from(v)), "{v}");
+            }
+            r = r + (r >> 7) + 1;
+        }
+        for v in (u32::MAX - 2_000..=u32::MAX).chain(0..100_000) {
+            assert_eq!(i64::from(sqrt_q32(v)), fx_sqrt(i64::from(v)), "{v}");
+        }
+        let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
+        for _ in 0..2_000_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let v = (x >> (32 + (x & 31))) as u32;
+            assert_eq!(i64::from(sqrt_q32(v)), fx_sqrt(i64::from(v)), "{v}");
+        }
+    }
+
+    /// `sqrt_q64` is `fx_sqrt` on `[2^32, 2^62)`: the ends, powers of two and their
+    /// neighbours, perfect squares of the Q31.32 grid and their neighbours, 2 million random
+    /// values of every magnitude.
+    #[test]
+    fn sqrt_q64_is_fx_sqrt() {
+        let check = |v: u64| {
+            if (1u64 << 32..1u64 << 62).contains(&v) {
+                assert_eq!(sqrt_q64(v) as i64, fx_sqrt(v as i64), "{v}");
+            }
+        };
+        for b in 32..62 {
+            for d in 0..5u64 {
+                check((1u64 << b) + d);
+                check((1u64 << b).wrapping_sub(d));
+            }
+        }
+        check((1u64 << 62) - 1);
+        let mut x: u64 = 0x0123_4567_89AB_CDEF;
+        for _ in 0..2_000_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let v = (x >> 2) >> (x % 30);
+            check(v);
+            // v = s^2 / 2^32 near an exact square of the result grid.
+            let s = (x >> 17) | (1 << 46);
+            let s = s >> (x % 16);
+            let sq = (u128::from(s) * u128::from(s)) >> 32;
+            for d in [0u64, 1, 2] {
+                check((sq as u64).wrapping_add(d));
+                check((sq as u64).wrapping_sub(d));
+            }
+        }
+    }
+
+    /// The seed table is `2^31 / sqrt(X)` at the middle of each step (checked in f64).
+    #[test]
+    fn rsqrt_seed() {
+        for (i, y) in RSQRT192.iter().enumerate() {
+            let x = (2.0 * i as f64 + 129.0) / 128.0;
+            let want = 2f64.powi(16) / x.sqrt();
+            assert!((f64::from(*y) - want).abs() <= 1.0, "{i}: {y} {want}");
+        }
+    }
+
+    /// `mulf`, `mulf32`, `Coef::mul_i32` and `Coef::mul_u32` are the exact floor of the
+    /// product (computed in i128).
+    #[test]
+    fn products_exact() {
+        let mut x: u64 = 12345;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        for _ in 0..1_000_000 {
+            let c = (next() >> 33) as i32; // [0, 2^31)
+            let v = (next() as i64) >> (next() % 40);
+            let want = ((i128::from(c) * i128::from(v)) >> 32) as i64;
+            assert_eq!(mulf(c, v), want);
+            let e = next() as i32;
+            assert_eq!(mulf32(c, e), ((i128::from(c) * i128::from(e)) >> 32) as i64);
+            let raw = (next() as i64) >> (next() % 64);
+            let k = Coef::of(crate::Fx::from_bits(raw)).unwrap();
+            assert_eq!(
+                k.mul_i32(e),
+                ((i128::from(raw) * i128::from(e)) >> 32) as i64
+            );
+            let u = next() as u32;
+            assert_eq!(
+                k.mul_u32(u),
+                ((i128::from(raw) * i128::from(u)) >> 32) as i64
+            );
+            assert!(raw.unsigned_abs() < 1u64 << (32 + k.log2_bound()).min(63) || raw == i64::MIN);
+        }
+    }
+}

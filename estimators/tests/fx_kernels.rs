@@ -1,0 +1,166 @@
+//! The integer kernels of the fixed-point AVE and ED rows (`estimators::fxk`, used by
+//! `Law::advance` for `Fx`) give bit for bit the states of the generic saturating code stepped
+//! one step at a time (`Law::step`, the independent reference here), on ordinary inputs, on
+//! inputs that leave the kernels' fast 32-bit paths (errors of 1 deg and more, the ED-ED's
+//! second stage), and on inputs near the ends of the Q31.32 range where the range guard hands
+//! the interval to the generic code (saturation).
+
+use estimators::law::step_n;
+use estimators::presets::*;
+use estimators::{
+    AveConfig, AveParams, DeltaMode, EdConfig, EdParams, EdScheme, Fx, Hold, Law, Real, VelAcc,
+};
+
+/// xorshift64*.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+    /// Uniform in [-1, 1).
+    fn unit(&mut self) -> f64 {
+        (self.next() >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+    }
+}
+
+/// The input of sample `k` of scenario `sc`, deg.
+fn input(sc: u32, k: u32, r: &mut Rng) -> f64 {
+    let t = f64::from(k) * 0.01;
+    match sc {
+        // The paper-like run: +-90 deg, 0.1 deg noise.
+        0 => 90.0 * (1.3 * t).sin() + 0.1 * r.unit(),
+        // Fast spin with big noise: errors of several deg (the 64-bit paths).
+        1 => 2000.0 * t % 360.0 - 180.0 + 5.0 * r.unit(),
+        // Jumps across the whole accepted input range.
+        2 => 1.0e6 * r.unit(),
+        // Near the Q31.32 range ends: the generic code saturates.
+        _ => 2.0e9 * r.unit(),
+    }
+}
+
+/// `n` steps per interval for sample `k` (mostly 100, some gaps and short intervals).
+fn steps(k: u32) -> u32 {
+    match k % 17 {
+        3 => 1,
+        7 => 250,
+        11 => 37,
+        _ => 100,
+    }
+}
+
+fn check_pair<L: Law<Num = Fx>>(v: L, a2: L, label: &str)
+where
+    L::State: PartialEq,
+{
+    let row = VelAcc::new(v, v, a2, true);
+    for sc in 0..4 {
+        for hold in [Hold::Linear, Hold::ZeroOrder] {
+            let mut r = Rng(0x9E37_79B9 + u64::from(sc));
+            let y0 = Fx::from_f64(input(sc, 0, &mut r));
+            let mut s = row.init(y0);
+            // The reference: the three laws stepped one by one with the generic code.
+            let (mut rv, mut ra) = (v.init(y0), a2.init(v.output(&v.init(y0))));
+            let mut yp = y0;
+            for k in 1..300 {
+                let y = Fx::from_f64(input(sc, k, &mut r));
+                let n = steps(k);
+                row.advance(&mut s, yp, y, n, hold);
+                // Generic: the same inputs as the kernels (`step_n`'s), the second stage fed
+                // by the first's output of each step.
+                let inc = (y - yp).div_int(n);
+                let mut yy = yp;
+                for j in 1..=n {
+                    let x = match hold {
+                        Hold::ZeroOrder => y,
+                        Hold::Linear if j == n => y,
+                        Hold::Linear => {
+                            yy = yy + inc;
+                            yy
+                        }
+                    };
+                    let o = v.step(&mut rv, x);
+                    a2.step(&mut ra, o);
+                }
+                assert!(
+                    s.v == rv && s.a2 == ra,
+                    "{label}: scenario {sc}, {hold:?}, sample {k}"
+                );
+                // The single law too (`Law::advance` against `step_n` of the generic step).
+                let mut one = rv;
+                let mut reference = rv;
+                v.advance(&mut one, yp, y, n, hold);
+                step_n(&Generic(v), &mut reference, yp, y, n, hold);
+                assert!(one == reference, "{label} alone: scenario {sc}, sample {k}");
+                yp = y;
+            }
+        }
+    }
+}
+
+/// A law with the default `advance` (the generic stepping), as the reference.
+#[derive(Clone, Copy, Debug)]
+struct Generic<L>(L);
+
+impl<L: Law> Law for Generic<L> {
+    type Num = L::Num;
+    type State = L::State;
+    fn init(&self, y0: L::Num) -> L::State {
+        self.0.init(y0)
+    }
+    fn step(&self, s: &mut L::State, y: L::Num) -> L::Num {
+        self.0.step(s, y)
+    }
+    fn output(&self, s: &L::State) -> L::Num {
+        self.0.output(s)
+    }
+    fn translate(&self, s: &mut L::State, d: L::Num) {
+        self.0.translate(s, d);
+    }
+}
+
+#[test]
+fn ave_kernels_equal_generic_steps() {
+    let h = H_PAPER;
+    for (cfg, label) in [
+        (AVE_PAPER, "AVE paper"),
+        (AVE_DEFAULT, "AVE leaky"),
+        (
+            AveConfig {
+                delta: DeltaMode::Bounded { max: 50.0 },
+                ..AVE_PAPER
+            },
+            "AVE bounded",
+        ),
+        (
+            AveConfig {
+                k: 300.0,
+                gamma1: 12345.6,
+                delta: DeltaMode::Paper,
+            },
+            "AVE other gains",
+        ),
+    ] {
+        let p = AveParams::<Fx>::new(&cfg, h).unwrap();
+        check_pair(p, p, label);
+    }
+}
+
+#[test]
+fn ed_kernels_equal_generic_steps() {
+    for (cfg, label) in [
+        (ED_PAPER, "ED paper"),
+        (
+            EdConfig {
+                lambda: 123.4,
+                alpha: 5000.5,
+            },
+            "ED other gains",
+        ),
+    ] {
+        let p = EdParams::<Fx>::new(&cfg, H_PAPER, EdScheme::Euler).unwrap();
+        check_pair(p, p, label);
+    }
+}
