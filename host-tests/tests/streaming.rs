@@ -5,6 +5,7 @@
 //! The memory tests are release-only (CI: `cargo test --release -p host-tests --test
 //! streaming`); the first-rows tests run in every build.
 
+use host_tests::replay::EstimateOptions;
 use host_tests::synth::{encode_packet, PacketKind, ANGLE_LSB_DEG, RATE_LSB_DEG_S};
 use std::io::{BufRead, BufReader, Read, Write};
 use std::process::{Child, Command, Stdio};
@@ -197,19 +198,25 @@ fn estimate_streams_in_constant_memory() {
     );
     // A steady rotation: the measured rate within an LSB; the velocity estimates within the
     // quantisation (two angle LSBs per 10 ms), the leaky ILOs at their steady-state gain
-    // c / (L + c), c = K2 / (1 - K1) (paper presets: ILO2 K1 0.9, L 5, K2 10; ILO3 K1 0.7, L 1,
-    // K2 20; see tests/replay.rs), ED (which chatters) only bounded.
+    // c / (L + c), c = K2 / (1 - K1) (see tests/replay.rs), computed from the gains `nav440
+    // estimate` runs by default (`BankConfig::NAV440`); ED (which chatters) only bounded.
     assert!((last[2] - RATE).abs() <= RATE_LSB_DEG_S, "{}", last[2]);
-    let g = |k1: f64, l: f64, k2: f64| (k2 / (1.0 - k1)) / (l + k2 / (1.0 - k1));
-    let gains = [
-        1.0,
-        1.0,
-        g(0.9, 5.0, 10.0),
-        g(0.7, 1.0, 20.0),
-        1.0,
-        1.0,
-        1.0,
-    ];
+    let g = |k1: f64, l: f64, k2: f64| {
+        if k1 >= 1.0 {
+            1.0
+        } else {
+            (k2 / (1.0 - k1)) / (l + k2 / (1.0 - k1))
+        }
+    };
+    let ilo = EstimateOptions::default().bank_config().velocity.ilo;
+    let gi = |i: usize| {
+        g(
+            f64::from(ilo[i].k1),
+            f64::from(ilo[i].l),
+            f64::from(ilo[i].k2),
+        )
+    };
+    let gains = [1.0, gi(0), gi(1), gi(2), 1.0, 1.0, 1.0];
     for i in [0, 1, 2, 3, 4, 6] {
         let v = last[3 + i];
         assert!(
