@@ -4,6 +4,8 @@
 //! packet period, yaw and rate against the closed-form motion, velocities against the
 //! analytic rate with bounds from the estimators' linear error transfer functions.
 
+mod common;
+
 use host_tests::corrupt::Corruption;
 use host_tests::motion::{Profile, ProfileKind};
 use host_tests::replay::{self, Axis, EstimateOptions, Noise};
@@ -192,21 +194,8 @@ fn spin_is_unwrapped_through_many_turns() {
     // chatters on a 20 Hz piecewise-linear input (a kink every 50 ms), so it is only required
     // to stay bounded.
     let rate = motion.at(20.0).rate_deg_s;
-    let g = |k1: f64, l: f64, k2: f64| {
-        if k1 >= 1.0 {
-            1.0
-        } else {
-            (k2 / (1.0 - k1)) / (l + k2 / (1.0 - k1))
-        }
-    };
     let ilo = EstimateOptions::default().bank_config().velocity.ilo;
-    let gi = |i: usize| {
-        g(
-            f64::from(ilo[i].k1),
-            f64::from(ilo[i].l),
-            f64::from(ilo[i].k2),
-        )
-    };
+    let gi = |i: usize| common::ilo_dc_gain(&ilo[i]);
     let gains = [1.0, gi(0), gi(1), gi(2), 1.0, 1.0, 1.0];
     for i in [0, 1, 2, 3, 4, 6] {
         let want = rate * gains[i];

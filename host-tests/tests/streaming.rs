@@ -5,6 +5,8 @@
 //! The memory tests are release-only (CI: `cargo test --release -p host-tests --test
 //! streaming`); the first-rows tests run in every build.
 
+mod common;
+
 use host_tests::replay::EstimateOptions;
 use host_tests::synth::{encode_packet, PacketKind, ANGLE_LSB_DEG, RATE_LSB_DEG_S};
 use std::io::{BufRead, BufReader, Read, Write};
@@ -201,21 +203,8 @@ fn estimate_streams_in_constant_memory() {
     // c / (L + c), c = K2 / (1 - K1) (see tests/replay.rs), computed from the gains `nav440
     // estimate` runs by default (`BankConfig::NAV440`); ED (which chatters) only bounded.
     assert!((last[2] - RATE).abs() <= RATE_LSB_DEG_S, "{}", last[2]);
-    let g = |k1: f64, l: f64, k2: f64| {
-        if k1 >= 1.0 {
-            1.0
-        } else {
-            (k2 / (1.0 - k1)) / (l + k2 / (1.0 - k1))
-        }
-    };
     let ilo = EstimateOptions::default().bank_config().velocity.ilo;
-    let gi = |i: usize| {
-        g(
-            f64::from(ilo[i].k1),
-            f64::from(ilo[i].l),
-            f64::from(ilo[i].k2),
-        )
-    };
+    let gi = |i: usize| common::ilo_dc_gain(&ilo[i]);
     let gains = [1.0, gi(0), gi(1), gi(2), 1.0, 1.0, 1.0];
     for i in [0, 1, 2, 3, 4, 6] {
         let v = last[3 + i];

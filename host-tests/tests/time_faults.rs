@@ -3,6 +3,8 @@
 //! `nav440 estimate` and, through `nav440_proto::TimeBase`, the firmware. Expected values come
 //! from the stamps written into the capture and the closed-form motion.
 
+mod common;
+
 use host_tests::replay::{self, Axis, EstimateOptions};
 use nav440_proto::{A0Fields, A2Fields};
 
@@ -191,14 +193,7 @@ fn two_hertz_capture_gives_estimates() {
         // c = K2 / (1 - K1) (the paper's ILO2/ILO3: 0.952, 0.985) and 2 %; ED within its
         // chatter.
         let ilo = opts.bank_config().velocity.ilo;
-        let dc = |i: usize| {
-            let c = f64::from(ilo[i].k2) / (1.0 - f64::from(ilo[i].k1));
-            if c.is_finite() {
-                c / (f64::from(ilo[i].l) + c)
-            } else {
-                1.0
-            }
-        };
+        let dc = |i: usize| common::ilo_dc_gain(&ilo[i]);
         for (i, v) in last.iter().enumerate() {
             let (gain, tol) = match i {
                 1..=3 => (dc(i - 1) as f32, 0.02),
