@@ -156,6 +156,8 @@ fn replay_requested() -> bool {
 type Pending = heapless::Vec<u8, { nav440_proto::MAX_FRAME }>;
 
 /// Runs the boot sequence until it succeeds (real board) or fails once (QEMU: exits).
+/// Out of line: its frame (driver, boot state, error text) is not live while estimating.
+#[inline(never)]
 fn configure(uart: Uart0, delay: &mut time::Delay) -> (Uart0, Report, Pending) {
     let mut driver = IoDriver::new(uart);
     driver.set_timing(Timing {
@@ -249,6 +251,7 @@ impl ResetWatch {
 /// Estimation from the first byte after the read-back until the end message's count (then
 /// exits). Returns the UART only when the unit reset mid-stream on the real-board profile
 /// (under QEMU's mps2 boards a reset ends the run with [`Status::UnitReset`]).
+#[inline(never)]
 fn stream(
     mut uart: Uart0,
     control: &mut Control,

@@ -50,7 +50,8 @@ pub fn check() -> Result<(), ConfigError> {
 }
 
 /// A pipeline with [`PRESET`] (see [`check`]). Infallible, so that the caller's binding is
-/// built in place (no second, pipeline-sized `Result` on the stack).
+/// built in place (no second, pipeline-sized `Result` on the stack; the back end's
+/// constructor is out of line for the same reason, see `Estimation::with_slots`).
 #[inline(always)]
 pub fn new() -> Pipeline {
     Pipeline::with_slots(AXES, PRESET, build_bank)

@@ -150,8 +150,8 @@ pub struct Estimation<B, E, F, const N: usize = 3> {
     phase: Phase,
     /// The first samples, held until the period is known.
     held: heapless::Vec<Sample, WARMUP_SAMPLES>,
-    /// One bank per selected axis once running, in the order of `axes` (`None` before).
-    banks: [Option<B>; N],
+    /// One bank per selected axis once running, in the order of `axes` (empty before).
+    banks: heapless::Vec<B, N>,
     /// A bank could not be built for the measured period.
     failed: Option<E>,
     counters: Counters,
@@ -175,6 +175,10 @@ where
     /// A back end with `N` bank slots for `axes`, the configuration `cfg` (its sample period
     /// is replaced by the measured one) and the bank constructor `build`. Only the first `N`
     /// selected axes (CSV order) are kept ([`Estimation::axes`] tells which).
+    // Out of line: the value is then written straight into the caller's place; inlined, the
+    // compiler builds it in a temporary and copies it, bank slots included (a second
+    // pipeline-sized stack frame on a small MCU).
+    #[inline(never)]
     pub fn with_slots(axes: Axes, cfg: BankConfig, build: F) -> Self {
         let mut kept = Axes::NONE;
         for a in axes.iter().take(N) {
@@ -186,7 +190,7 @@ where
             build,
             phase: Phase::Warmup,
             held: heapless::Vec::new(),
-            banks: core::array::from_fn(|_| None),
+            banks: heapless::Vec::new(),
             failed: None,
             counters: Counters::default(),
         }
@@ -209,7 +213,7 @@ where
             return None;
         }
         let slot = self.axes.iter().position(|a| a == axis)?;
-        self.banks.get(slot)?.as_ref()
+        self.banks.get(slot)
     }
 
     /// Takes the next sample; `emit` gets every row that is ready (none during the warm-up,
@@ -253,11 +257,14 @@ where
         }
         let cfg = PeriodEstimator::from_times(self.held.iter().map(|s| s.t_us)).apply(self.cfg);
         self.phase = Phase::Running;
-        for (slot, axis) in self.banks.iter_mut().zip(self.axes.iter()) {
+        for axis in self.axes.iter().take(N) {
             match (self.build)(axis, &cfg) {
-                Ok(b) => *slot = Some(b),
+                // Cannot fail: at most `N` axes are kept.
+                Ok(b) => {
+                    let _ = self.banks.push(b);
+                }
                 Err(e) => {
-                    self.banks.iter_mut().for_each(|b| *b = None);
+                    self.banks.clear();
                     self.failed = Some(e.clone());
                     return Err(e);
                 }
@@ -287,7 +294,7 @@ where
 /// Runs one sample through every selected axis's bank and emits its row.
 #[inline(never)]
 fn run_sample<B: AxisBank>(
-    banks: &mut [Option<B>],
+    banks: &mut [B],
     axes: Axes,
     counters: &mut Counters,
     s: &Sample,
@@ -300,11 +307,8 @@ fn run_sample<B: AxisBank>(
     };
     let mut err = None;
     let mut gaps = 0;
-    for (slot, axis) in banks.iter_mut().zip(axes.iter()) {
+    for (bank, axis) in banks.iter_mut().zip(axes.iter()) {
         let i = axis.index();
-        let Some(bank) = slot.as_mut() else {
-            continue;
-        };
         match bank.step(s, s.angle(axis)) {
             Ok(out) => {
                 row.axes[i] = Some(AxisRow {
