@@ -446,19 +446,14 @@ mod tests {
     use super::*;
     use crate::presets::{ILO1_TABLE2, ILO3_TABLE2};
 
-    /// Independent Gaussian draws (64-bit LCG + Box-Muller), no dependency.
-    struct Gauss(u64);
+    /// Independent N(0, 1) draws (rand's xoshiro256++ and rand_distr's normal distribution).
+    struct Gauss(rand::rngs::Xoshiro256PlusPlus);
     impl Gauss {
-        fn uniform(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((self.0 >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+        fn new(seed: u64) -> Self {
+            Self(rand::SeedableRng::seed_from_u64(seed))
         }
         fn next(&mut self) -> f64 {
-            let (u, v) = (self.uniform(), self.uniform());
-            (-2.0 * libm::log(u)).sqrt() * libm::cos(core::f64::consts::TAU * v)
+            rand_distr::Distribution::sample(&rand_distr::StandardNormal, &mut self.0)
         }
     }
 
@@ -466,7 +461,7 @@ mod tests {
     /// constant 5 s: about 1000 independent terms), and it follows a step of the noise.
     #[test]
     fn noise_estimate_matches_the_added_variance() {
-        let mut g = Gauss(3);
+        let mut g = Gauss::new(3);
         let mut e = NoiseEstimator::new(5.0, 0.01).unwrap();
         assert_eq!(e.variance(), None);
         let mut at = |e: &mut NoiseEstimator, k: u64, var: f64| {
@@ -558,7 +553,7 @@ mod tests {
         let cfg = AdaptiveConfig::DEFAULT;
         let mut b = AdaptiveBank::<f32>::new(&BankConfig::PAPER, &s, &cfg).unwrap();
         assert_eq!(b.gain_level(), 0.01);
-        let mut g = Gauss(9);
+        let mut g = Gauss::new(9);
         let n = 1000u64;
         for k in 0..n {
             let var = if k < 500 { 0.01 } else { 0.5 };

@@ -2,6 +2,8 @@
 
 use estimators::presets::AVE_PAPER;
 use estimators::{Ave, AveConfig, ConfigError, DeltaMode, Estimator};
+use rand::rngs::Xoshiro256PlusPlus;
+use rand::{RngExt, SeedableRng};
 
 /// Runs the AVE on a noisy sine for 3 s at h = 1e-4 and returns the `deltahat` trace maximum,
 /// its final value and the max |e| seen.
@@ -9,12 +11,9 @@ fn run(delta: DeltaMode) -> (f64, f64, f64) {
     let mut a = Ave::<f64>::new(&AveConfig { delta, ..AVE_PAPER }, 1e-4).unwrap();
     a.reset(0.0);
     let (mut dmax, mut emax, mut prev) = (0.0f64, 0.0f64, 0.0f64);
-    let mut seed = 1u64;
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(1);
     for i in 0..30_000 {
-        seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        let n = ((seed >> 40) as f64 / (1u64 << 24) as f64 - 0.5) * 0.2;
+        let n: f64 = rng.random_range(-0.1..0.1);
         let y = 20.0 * (i as f64 * 1e-4 * 6.0).sin() + n;
         emax = emax.max((a.xhat() - y).abs());
         a.step(y);

@@ -3,6 +3,8 @@
 
 use estimators::presets::ED_PAPER;
 use estimators::{Ed, EdConfig, Estimator};
+use rand::rngs::Xoshiro256PlusPlus;
+use rand::{RngExt, SeedableRng};
 
 /// `y = 50 sin 2t` deg: `y' = 100 cos 2t`, `|y''| <= 200 < alpha = 770` deg/s^2.
 fn signal(t: f64) -> (f64, f64) {
@@ -95,15 +97,10 @@ fn finite_time_exact_convergence() {
     assert!(max_u1 < 0.5 * 0.75 * l2 * h, "{max_u1}");
 }
 
-/// Deterministic uniform noise in [-eps, eps] (xorshift64*).
+/// Deterministic uniform noise in [-eps, eps], a function of the step index (the same noise
+/// for every scheme compared): rand's xoshiro256++ seeded with the index.
 fn uniform(eps: f64) -> impl Fn(usize) -> f64 {
-    move |i| {
-        let mut x = (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ 0xD1B5_4A32_D192_ED03;
-        x ^= x >> 33;
-        x = x.wrapping_mul(0xFF51_AFD7_ED55_8CCD);
-        x ^= x >> 33;
-        eps * ((x >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0)
-    }
+    move |i| eps * Xoshiro256PlusPlus::seed_from_u64(i as u64).random_range(-1.0..=1.0)
 }
 
 /// With noise of amplitude eps the error is of order sqrt(eps): 100x more noise gives about
