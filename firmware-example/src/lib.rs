@@ -58,4 +58,9 @@ pub type BankSqrt = sqrt::Vsqrt;
 pub type BankSqrt = estimators::ExactSqrt;
 
 /// The estimator bank the firmware runs.
+#[cfg(not(feature = "adaptive-gains"))]
 pub type Bank = estimators::YawBank<Num, BankSqrt>;
+/// The estimator bank the firmware runs: with `adaptive-gains`, the noise-adaptive bank
+/// (`estimators::AdaptiveBank`, gains from [`pipeline::SCHEDULE`]).
+#[cfg(feature = "adaptive-gains")]
+pub type Bank = estimators::AdaptiveBank<Num, BankSqrt>;

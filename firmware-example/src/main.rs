@@ -373,6 +373,8 @@ fn finish(pipe: &mut pipeline::Pipeline, uart: &Uart0, unit_bytes: u64) -> ! {
     if let Err(e) = pipe.finish(&mut out::row) {
         bank_failed(&e);
     }
+    #[cfg(feature = "adaptive-gains")]
+    adaptive_summary(pipe);
     out::summary(
         pipe,
         uart.overruns(),
@@ -381,6 +383,23 @@ fn finish(pipe: &mut pipeline::Pipeline, uart: &Uart0, unit_bytes: u64) -> ! {
         stack::peak(),
     );
     host::exit(true)
+}
+
+/// With `adaptive-gains`: one line per axis, how many times its gains changed and the noise
+/// variance (deg^2) the current gains are for; `{axis}_retunes` is a counter for `xtask`.
+#[cfg(feature = "adaptive-gains")]
+fn adaptive_summary(pipe: &pipeline::Pipeline) {
+    for axis in pipeline::AXES.iter() {
+        if let Some(b) = pipe.estimation().bank(axis) {
+            defmt::println!(
+                "firmware: adaptive gains, {=str}: {=str}_retunes={=u32} gain_level_deg2={=f32}",
+                axis.name(),
+                axis.name(),
+                b.retune_count(),
+                b.gain_level()
+            );
+        }
+    }
 }
 
 /// The bank cannot run at the measured packet period: report and exit with status 1 (as

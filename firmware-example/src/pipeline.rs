@@ -24,9 +24,31 @@ pub const AXES: Axes = Axes::only(Axis::Yaw);
 pub type ConfigError = estimators::ConfigError;
 
 /// Builds an axis's bank (out of line: the constructor is large).
+#[cfg(not(feature = "adaptive-gains"))]
 #[inline(never)]
 fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
     nav440_pipeline::axis_bank(axis, cfg)
+}
+
+/// The gain schedule of the noise-adaptive bank (feature `adaptive-gains`), as `nav440 tune
+/// --schedule 0.001,0.01,0.1,0.5,1 --rust` wrote it (`host-tests/data/gains/schedule_fig5.rs`,
+/// beside the `schedule_fig5.toml` that `nav440 estimate --gains` reads). Its hold is
+/// [`PRESET`]'s (linear; the file's header names the hold it was tuned with).
+#[cfg(feature = "adaptive-gains")]
+#[allow(missing_docs)] // generated file: its constant is documented at the `pub use` below
+mod schedule {
+    include!("../../host-tests/data/gains/schedule_fig5.rs");
+}
+/// The schedule's levels (noise variance, deg^2 -> velocity and acceleration gains).
+#[cfg(feature = "adaptive-gains")]
+pub use schedule::SCHEDULE;
+
+/// Builds an axis's noise-adaptive bank (out of line: the constructor is large).
+#[cfg(feature = "adaptive-gains")]
+#[inline(never)]
+fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
+    let schedule = estimators::GainSchedule::new(&SCHEDULE)?;
+    nav440_pipeline::adaptive_axis_bank(axis, cfg, &schedule)
 }
 
 /// The bank constructor the pipeline calls after the warm-up.

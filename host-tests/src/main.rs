@@ -310,6 +310,13 @@ enum Cmd {
         /// Seed of the corruption.
         #[arg(long, default_value_t = 1)]
         corrupt_seed: u64,
+        /// Gaussian noise added to the yaw angle: VAR (deg^2) from the start, or VAR@T from T s
+        /// on; repeat for a noise level that changes (e.g. --yaw-noise 0.01 --yaw-noise 0.5@10).
+        #[arg(long = "yaw-noise", value_name = "VAR[@T]")]
+        yaw_noise: Vec<synth::NoiseStep>,
+        /// Seed of the yaw noise.
+        #[arg(long, default_value_t = 1)]
+        noise_seed: u64,
         /// Output capture file.
         #[arg(short, long, value_name = "FILE")]
         output: PathBuf,
@@ -671,6 +678,8 @@ fn run(cli: Cli) -> Result<()> {
             garbage,
             garbage_max_len,
             corrupt_seed,
+            yaw_noise,
+            noise_seed,
             output,
         } => {
             let cfg = synth::SynthConfig {
@@ -689,6 +698,8 @@ fn run(cli: Cli) -> Result<()> {
                     garbage_max_len,
                     seed: corrupt_seed,
                 },
+                yaw_noise,
+                noise_seed,
             };
             let cap = synth::generate(&cfg)?;
             let motion = host_tests::motion::Profile::new(profile, duration, seed);

@@ -18,7 +18,10 @@
 use crate::period::{PeriodEstimator, WARMUP_SAMPLES};
 use crate::sample::{Frontend, Sample};
 use crate::{Axes, Axis};
-use estimators::{BankConfig, BankOutput, Real, SampleError, SqrtFn, Wrap, YawBank};
+use estimators::{
+    AdaptiveBank, AdaptiveConfig, BankConfig, BankOutput, GainSchedule, Real, SampleError, SqrtFn,
+    Wrap, YawBank,
+};
 
 /// One axis's estimator bank as the pipeline drives it.
 pub trait AxisBank {
@@ -41,18 +44,49 @@ impl<T: Real, S: SqrtFn<T>> AxisBank for YawBank<T, S> {
     }
 }
 
+/// The noise-adaptive bank drives like the paper bank (it is one, with gains that follow the
+/// noise; `nav440 estimate --gains schedule.toml`).
+impl<T: Real, S: SqrtFn<T>> AxisBank for AdaptiveBank<T, S> {
+    fn step(&mut self, s: &Sample, angle_deg: f32) -> Result<BankOutput, SampleError> {
+        if s.new_epoch {
+            self.new_epoch();
+        }
+        self.update(s.t_us, angle_deg)
+    }
+
+    fn gaps(&self) -> u32 {
+        self.reinit_count()
+    }
+}
+
+/// `cfg` for `axis`: the +-180 deg unwrapping switched off for pitch ([`Axis::wraps`]).
+fn axis_config(axis: Axis, cfg: &BankConfig) -> BankConfig {
+    let wrap = if axis.wraps() {
+        Wrap::Deg180
+    } else {
+        Wrap::None
+    };
+    BankConfig { wrap, ..*cfg }
+}
+
 /// The bank of one axis: `YawBank::new(cfg)`, with the +-180 deg unwrapping switched off for
 /// pitch ([`Axis::wraps`]).
 pub fn axis_bank<T: Real, S: SqrtFn<T>>(
     axis: Axis,
     cfg: &BankConfig,
 ) -> Result<YawBank<T, S>, estimators::ConfigError> {
-    let wrap = if axis.wraps() {
-        Wrap::Deg180
-    } else {
-        Wrap::None
-    };
-    YawBank::new(&BankConfig { wrap, ..*cfg })
+    YawBank::new(&axis_config(axis, cfg))
+}
+
+/// The noise-adaptive bank of one axis (what `nav440 estimate --gains schedule.toml` runs):
+/// `AdaptiveBank::new` with `cfg` (step, hold, period, gap rule; unwrapping as
+/// [`axis_bank`]), the gain `schedule` and [`AdaptiveConfig::DEFAULT`].
+pub fn adaptive_axis_bank<T: Real, S: SqrtFn<T>>(
+    axis: Axis,
+    cfg: &BankConfig,
+    schedule: &GainSchedule,
+) -> Result<AdaptiveBank<T, S>, estimators::ConfigError> {
+    AdaptiveBank::new(&axis_config(axis, cfg), schedule, &AdaptiveConfig::DEFAULT)
 }
 
 /// One axis of a row: the reference rate and the bank's output.

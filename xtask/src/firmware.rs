@@ -500,11 +500,13 @@ fn print_estimates(csv: &str) -> Result<(), String> {
     Ok(())
 }
 
-/// `cargo xtask qemu FILE [--board B]`.
-pub fn qemu(board: Board, file: &Path, small: bool) -> Result<(), String> {
+/// `cargo xtask qemu FILE [--board B] [--small | --adaptive]`.
+pub fn qemu(board: Board, file: &Path, small: bool, adaptive: bool) -> Result<(), String> {
     qemu::ensure_qemu()?;
     let elf = if small {
         build_small(board.target, FW_BIN)?
+    } else if adaptive {
+        build(board.target, &[ADAPTIVE], FW_BIN)?
     } else {
         build(board.target, &[], FW_BIN)?
     };
@@ -893,6 +895,32 @@ fn sizes(tool: &Path, elf: &Path) -> Result<(u64, u64, u64), String> {
 
 /// Feature of the one-axis (yaw) firmware.
 const ONE_AXIS: &str = "one-axis";
+
+/// Feature of the firmware with noise-adaptive gains (`estimators::AdaptiveBank`).
+const ADAPTIVE: &str = "adaptive-gains";
+
+/// The schedule the `adaptive-gains` firmware is built with (its `.rs` twin is included by
+/// `firmware-example/src/pipeline.rs`), relative to the workspace root.
+const ADAPTIVE_SCHEDULE: &str = "host-tests/data/gains/schedule_fig5.toml";
+
+/// `nav440 estimate` arguments that print the `adaptive-gains` firmware's CSV on `target`.
+fn adaptive_host_args(target: &str) -> Vec<String> {
+    let mut a = vec![
+        "--gains".to_owned(),
+        root().join(ADAPTIVE_SCHEDULE).display().to_string(),
+        "--axis".to_owned(),
+        FIRMWARE_AXIS.to_owned(),
+    ];
+    if target != "thumbv7em-none-eabihf" {
+        a.push("--fixed".to_owned());
+    }
+    a
+}
+
+/// The boards the `adaptive-gains` firmware is checked on: the M4F (f32) and thumbv6m (`Fx`).
+fn adaptive_boards() -> [qemu::Board; 2] {
+    [qemu::BOARDS[0], qemu::BOARDS[2]]
+}
 
 /// `cargo xtask size`.
 pub fn size() -> Result<(), String> {
@@ -1562,6 +1590,24 @@ pub fn ci_steps() -> Result<(), String> {
         ])?;
         small_elfs.push((board, label, build_small(board.target, FW_BIN)?));
     }
+    // The firmware with noise-adaptive gains: lint and build for M4F and thumbv6m.
+    let mut adaptive_elfs = Vec::new();
+    for board in adaptive_boards() {
+        cargo(&[
+            "clippy",
+            "-p",
+            FW,
+            "--target",
+            board.target,
+            "--bins",
+            "--features",
+            ADAPTIVE,
+            "--",
+            "-D",
+            "warnings",
+        ])?;
+        adaptive_elfs.push((board, build(board.target, &[ADAPTIVE], FW_BIN)?));
+    }
     if !qemu_ok {
         return Ok(());
     }
@@ -1629,6 +1675,44 @@ pub fn ci_steps() -> Result<(), String> {
         for capture in &captures {
             equivalence(board, elf, capture, small_host_args(board.target))?;
         }
+    }
+    // The noise-adaptive firmware prints the CSV of `nav440 estimate --gains
+    // schedule_fig5.toml`, byte for byte: on a capture whose yaw noise switches from 0.01 to
+    // 0.5 deg^2 at 10 s (the gains follow it: several retunes) and on the noise-free bundled
+    // capture (the lowest level).
+    let switch = work_dir()?.join("ci-noise-switch.bin");
+    nav440_synth(
+        &switch,
+        &[
+            "--duration",
+            "20",
+            "--seed",
+            "2",
+            "--yaw-noise",
+            "0.01",
+            "--yaw-noise",
+            "0.5@10",
+            "--noise-seed",
+            "3",
+        ],
+    )?;
+    for (board, elf) in &adaptive_elfs {
+        let args = adaptive_host_args(board.target);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let c = equivalence(board, elf, &switch, &args)?;
+        // The gains followed the noise: the initial level, then 0.01 deg^2, then 0.5.
+        let retunes = counter(&c, "yaw_retunes").unwrap_or(0);
+        if retunes < 2 {
+            return Err(format!(
+                "the adaptive firmware on {} retuned its yaw gains {retunes} times on a noise switch (expected at least 2)",
+                board.name
+            ));
+        }
+        eprintln!(
+            "xtask: OK: adaptive gains on {}: yaw_retunes={retunes}",
+            board.name
+        );
+        equivalence(board, elf, &bundled, &args)?;
     }
     // Input without the length prefix is refused with exit status 1 (never a hang).
     let m4f_board = elfs[0].0;

@@ -84,8 +84,13 @@ enum Cmd {
         board: Board,
         /// The small-MCU firmware (yaw only, feature `one-axis`, cargo profile `small`):
         /// prints the CSV of `nav440 estimate --axis yaw` (`--fixed` without FPU).
-        #[arg(long)]
+        #[arg(long, conflicts_with = "adaptive")]
         small: bool,
+        /// The firmware with noise-adaptive gains (feature `adaptive-gains`): prints the CSV
+        /// of `nav440 estimate --gains host-tests/data/gains/schedule_fig5.toml --axis all`
+        /// (`--fixed` without FPU).
+        #[arg(long)]
+        adaptive: bool,
     },
     /// Instructions per estimator update, bank update, parsed byte, transmitted byte and boot
     /// sequence (QEMU -icount + SysTick).
@@ -130,7 +135,12 @@ fn main() -> ExitCode {
         Cmd::CiFirmware => firmware::ci_steps(),
         Cmd::CiUnit => firmware::ci_unit(),
         Cmd::Demo { board, capture } => firmware::demo(board, capture),
-        Cmd::Qemu { file, board, small } => firmware::qemu(board, &file, small),
+        Cmd::Qemu {
+            file,
+            board,
+            small,
+            adaptive,
+        } => firmware::qemu(board, &file, small, adaptive),
         Cmd::Bench { board, small } => firmware::bench(board, small),
         Cmd::Size { components: false } => firmware::size(),
         Cmd::Size { components: true } => firmware::size_components(),

@@ -27,7 +27,11 @@ use estimators::{
     Estimator, Hold, Ilo, IloParams, Kalman, KalmanConfig, ProductBank, Real, Series, Stateful,
     Wrap, YawBank,
 };
-use firmware_example::{cycles::Counter, host, uart::Board, Bank, BankSqrt, Num};
+use firmware_example::{cycles::Counter, host, uart::Board, BankSqrt, Num};
+
+/// The paper bank as the firmware runs it (also with `adaptive-gains`, whose bank is measured
+/// separately below).
+type Bank = YawBank<Num, BankSqrt>;
 use heapless::String;
 use nav440_proto::boot::{Options, Target};
 use nav440_proto::driver::IoDriver;
