@@ -6,13 +6,12 @@
 
 use crate::error::{Error, Result};
 use estimators::{
-    AdaptiveBank, AdaptiveConfig, BankConfig, BankOutput, Fx, GainSchedule, Hold, SampleError,
-    Wrap, YawBank,
+    AdaptiveBank, BankConfig, BankOutput, Fx, GainSchedule, Hold, SampleError, YawBank,
 };
 pub use nav440_pipeline::bit::BitCounts;
 use nav440_pipeline::period::PeriodEstimator;
 pub use nav440_pipeline::period::WARMUP_SAMPLES;
-use nav440_pipeline::{axis_bank, AxisBank, Frontend, Pipeline};
+use nav440_pipeline::{adaptive_axis_bank, axis_bank, AxisBank, Frontend, Pipeline};
 use nav440_proto::Parser;
 pub use nav440_proto::TimeFaults;
 use rand::rngs::Xoshiro256PlusPlus;
@@ -684,17 +683,10 @@ impl Bank {
             m
         };
         if let Some(sched) = schedule {
-            let wrap = if axis.wraps() {
-                Wrap::Deg180
-            } else {
-                Wrap::None
-            };
-            let base = BankConfig { wrap, ..*cfg };
-            let ac = AdaptiveConfig::DEFAULT;
             return Ok(if fixed {
-                Bank::AdaptiveFx(Box::new(AdaptiveBank::new(&base, sched, &ac).map_err(bad)?))
+                Bank::AdaptiveFx(Box::new(adaptive_axis_bank(axis, cfg, sched).map_err(bad)?))
             } else {
-                Bank::AdaptiveF32(Box::new(AdaptiveBank::new(&base, sched, &ac).map_err(bad)?))
+                Bank::AdaptiveF32(Box::new(adaptive_axis_bank(axis, cfg, sched).map_err(bad)?))
             });
         }
         Ok(if fixed {
