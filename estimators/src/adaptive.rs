@@ -508,6 +508,39 @@ mod tests {
         }
     }
 
+    /// `set_gains` reuses the closed-form maps of rows whose gains did not change: the
+    /// parameters after each gain change are bit for bit those of a fresh build for the same
+    /// configuration (compared through `Debug`, which prints every float's shortest
+    /// round-trip form), for changes within one level's band (only the AD and the tracker
+    /// change), across levels, back, and to the same gains; f32 and Fx.
+    #[test]
+    fn set_gains_equals_a_fresh_build() {
+        extern crate std;
+        use std::format;
+        fn check<T: Real>() {
+            let s = GainSchedule::new(&[
+                level(0.01, 100.0, ILO1_TABLE2),
+                level(1.0, 10_000.0, ILO3_TABLE2),
+            ])
+            .unwrap();
+            let base = BankConfig::PAPER;
+            let mut bank = PaperBank::<T>::new(&s.config_at(&base, 0.01)).unwrap();
+            for v in [0.02, 0.03, 0.5, 0.9, 0.9, 0.05, 0.011, 1.0] {
+                let cfg = s.config_at(&base, v);
+                bank.set_gains(&cfg).unwrap();
+                let (_, n0) = crate::BankInput::<T>::new(&cfg).unwrap();
+                let fresh = crate::bank::PaperParams::<T>::new(&cfg, n0).unwrap();
+                assert_eq!(
+                    format!("{:?}", bank.params()),
+                    format!("{fresh:?}"),
+                    "noise {v}"
+                );
+            }
+        }
+        check::<f32>();
+        check::<crate::Fx>();
+    }
+
     #[test]
     fn gains_are_interpolated_geometrically_in_the_noise() {
         let s = GainSchedule::new(&[

@@ -435,7 +435,10 @@ impl<T: Real> BankInput<T> {
 /// nominal period, for [`ClosedForm`]), named by `build(cfg, n0)`, are in scope of the
 /// builder, which returns
 /// `Result<Law, ConfigError>`; each `Channel = method` takes the row's output from
-/// `law.method(&state)`.
+/// `law.method(&state)`. With `build(cfg, n0, prev)` the builder also sees `prev:
+/// Option<&Law>`, the row being replaced by `set_gains` (`None` in `new`), so that it can
+/// keep what did not change ([`ClosedForm::new_reusing`]: a gain change that leaves a row's
+/// gains alone then costs nothing for that row).
 ///
 /// ```
 /// use estimators::{estimator_bank, AdAdMap, AdParams, BankConfig, ClosedForm, Law, Series};
@@ -476,6 +479,21 @@ macro_rules! estimator_bank {
         $(#[$bm:meta])*
         bank $Bank:ident, params $Params:ident, state $State:ident, output $Out:ident, channel $Chan:ident;
         build($cfg:ident, $n0:ident);
+        channels { $($chans:tt)* }
+        rows { $($rows:tt)* }
+    ) => {
+        $crate::estimator_bank! {
+            $(#[$bm])*
+            bank $Bank, params $Params, state $State, output $Out, channel $Chan;
+            build($cfg, $n0, __estimator_bank_prev);
+            channels { $($chans)* }
+            rows { $($rows)* }
+        }
+    };
+    (
+        $(#[$bm:meta])*
+        bank $Bank:ident, params $Params:ident, state $State:ident, output $Out:ident, channel $Chan:ident;
+        build($cfg:ident, $n0:ident, $prev:ident);
         channels { $( $(#[$cm:meta])* $ch:ident = $csv:literal ),+ $(,)? }
         rows { $( $(#[$rm:meta])* $field:ident : $Law:ty = $build:expr => [ $( $rch:ident = $get:ident ),+ ] ; )+ }
     ) => {
@@ -560,10 +578,26 @@ macro_rules! estimator_bank {
         impl<T: $crate::Real, S: $crate::SqrtFn<T>> $Params<T, S> {
             /// Validates `cfg` and builds every row's parameters; `n0` = steps per nominal
             /// sample period for the closed-form maps (0: no map).
-            #[allow(unused_variables)]
             pub fn new($cfg: &$crate::BankConfig, $n0: u32) -> Result<Self, $crate::ConfigError> {
+                Self::new_reusing($cfg, $n0, None)
+            }
+
+            /// [`Self::new`], where each row's builder may reuse the row of `prev` (the
+            /// parameters being replaced; named by the third name of `build(cfg, n0, prev)`,
+            /// an `Option<&Law>` in the row's scope) instead of recomputing what did not
+            /// change, e.g. `ClosedForm::new_reusing`. Same result as `new`.
+            #[allow(unused_variables)]
+            pub fn new_reusing(
+                $cfg: &$crate::BankConfig,
+                $n0: u32,
+                previous: Option<&Self>,
+            ) -> Result<Self, $crate::ConfigError> {
                 Ok(Self {
-                    $( $field: { let r: Result<$Law, $crate::ConfigError> = $build; r? }, )+
+                    $( $field: {
+                        let $prev: Option<&$Law> = previous.map(|p| &p.$field);
+                        let r: Result<$Law, $crate::ConfigError> = $build;
+                        r?
+                    }, )+
                     _sqrt: core::marker::PhantomData,
                 })
             }
@@ -671,11 +705,13 @@ macro_rules! estimator_bank {
             /// `AdaptiveBank`). Only the gains of `cfg` are meant to differ from the
             /// configuration the bank was built with: the input stage (step, hold, nominal
             /// period, gap rule, unwrapping) is kept as built. On error nothing changes.
-            /// Cost: that of building the parameters (closed-form maps, Kalman gains), see
+            /// Cost: that of building the parameters (closed-form maps, Kalman gains) of the
+            /// rows whose gains changed (for rows whose builder reuses the previous row, see
+            /// `new_reusing` of the parameters; the same parameters as a full rebuild), see
             /// `cargo xtask bench`.
             pub fn set_gains(&mut self, cfg: &$crate::BankConfig) -> Result<(), $crate::ConfigError> {
                 let (_, n0) = $crate::BankInput::<T>::new(cfg)?;
-                self.params = $Params::new(cfg, n0)?;
+                self.params = $Params::new_reusing(cfg, n0, Some(&self.params))?;
                 Ok(())
             }
 
@@ -727,16 +763,28 @@ fn ilo_v<T: Real>(
     cfg: &BankConfig,
     i: usize,
     n0: u32,
+    prev: Option<&ClosedForm<IloParams<T, 1>>>,
 ) -> Result<ClosedForm<IloParams<T, 1>>, ConfigError> {
     let c: &IloConfig = cfg.velocity.ilo.get(i).unwrap_or(&ILO1_TABLE2);
-    Ok(ClosedForm::new(IloParams::new(c, cfg.h)?, n0, cfg.hold))
+    let p = IloParams::new(c, cfg.h)?;
+    Ok(ClosedForm::new_reusing(p, n0, cfg.hold, prev))
 }
 
 /// ILO-ILO row `i` of the acceleration half (both stages the same gains), closed form.
-fn ilo_a<T: Real>(cfg: &BankConfig, i: usize, n0: u32) -> Result<IloIloMap<T>, ConfigError> {
+fn ilo_a<T: Real>(
+    cfg: &BankConfig,
+    i: usize,
+    n0: u32,
+    prev: Option<&IloIloMap<T>>,
+) -> Result<IloIloMap<T>, ConfigError> {
     let c: &IloConfig = cfg.acceleration.ilo.get(i).unwrap_or(&ILO1_TABLE4);
     let p = IloParams::new(c, cfg.h)?;
-    Ok(ClosedForm::new(Series::new(p, p), n0, cfg.hold))
+    Ok(ClosedForm::new_reusing(
+        Series::new(p, p),
+        n0,
+        cfg.hold,
+        prev,
+    ))
 }
 
 /// AVE and AVE-AVE (shared first stage when the velocity and acceleration AVE are equal).
@@ -759,18 +807,28 @@ fn ed_pair<T: Real, S: SqrtFn<T>>(cfg: &BankConfig) -> Result<VelAcc<EdParams<T,
 }
 
 /// AD velocity, closed form.
-fn ad_v<T: Real>(cfg: &BankConfig, n0: u32) -> Result<ClosedForm<AdParams<T>>, ConfigError> {
-    Ok(ClosedForm::new(
-        AdParams::new(cfg.velocity.ad_t, cfg.h)?,
-        n0,
-        cfg.hold,
-    ))
+fn ad_v<T: Real>(
+    cfg: &BankConfig,
+    n0: u32,
+    prev: Option<&ClosedForm<AdParams<T>>>,
+) -> Result<ClosedForm<AdParams<T>>, ConfigError> {
+    let p = AdParams::new(cfg.velocity.ad_t, cfg.h)?;
+    Ok(ClosedForm::new_reusing(p, n0, cfg.hold, prev))
 }
 
 /// AD-AD acceleration, closed form.
-fn ad_a<T: Real>(cfg: &BankConfig, n0: u32) -> Result<AdAdMap<T>, ConfigError> {
+fn ad_a<T: Real>(
+    cfg: &BankConfig,
+    n0: u32,
+    prev: Option<&AdAdMap<T>>,
+) -> Result<AdAdMap<T>, ConfigError> {
     let p = AdParams::new(cfg.acceleration.ad_t, cfg.h)?;
-    Ok(ClosedForm::new(Series::new(p, p), n0, cfg.hold))
+    Ok(ClosedForm::new_reusing(
+        Series::new(p, p),
+        n0,
+        cfg.hold,
+        prev,
+    ))
 }
 
 estimator_bank! {
@@ -784,7 +842,7 @@ estimator_bank! {
     /// the ED's square root (default [`ExactSqrt`]; see [`SqrtFn`] for plugging in an FPU
     /// instruction with identical results).
     bank PaperBank, params PaperParams, state PaperState, output PaperOutput, channel Channel;
-    build(cfg, n0);
+    build(cfg, n0, prev);
     channels {
         /// AVE velocity, deg/s.
         AveV = "ave_v",
@@ -819,25 +877,25 @@ estimator_bank! {
         /// AVE and AVE-AVE.
         ave: VelAcc<AveParams<T>> = ave_pair(cfg) => [AveV = velocity, AveA = acceleration];
         /// ILO1, Table 2 gains.
-        ilo1_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 0, n0) => [Ilo1V = output];
+        ilo1_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 0, n0, prev) => [Ilo1V = output];
         /// ILO2, Table 2 gains.
-        ilo2_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 1, n0) => [Ilo2V = output];
+        ilo2_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 1, n0, prev) => [Ilo2V = output];
         /// ILO3, Table 2 gains.
-        ilo3_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 2, n0) => [Ilo3V = output];
+        ilo3_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 2, n0, prev) => [Ilo3V = output];
         /// AD.
-        ad_v: ClosedForm<AdParams<T>> = ad_v(cfg, n0) => [AdV = output];
+        ad_v: ClosedForm<AdParams<T>> = ad_v(cfg, n0, prev) => [AdV = output];
         /// ED and ED-ED.
         ed: VelAcc<EdParams<T, S>> = ed_pair(cfg) => [EdV = velocity, EdA = acceleration];
         /// Kalman tracker with the velocity noise.
         kf_v: KalmanParams<T> = kalman(cfg, &cfg.velocity, KalmanOutput::Velocity) => [KfV = velocity];
         /// ILO1-ILO1, Table 4 gains.
-        ilo1_a: IloIloMap<T> = ilo_a(cfg, 0, n0) => [Ilo1A = output];
+        ilo1_a: IloIloMap<T> = ilo_a(cfg, 0, n0, prev) => [Ilo1A = output];
         /// ILO2-ILO2, Table 4 gains.
-        ilo2_a: IloIloMap<T> = ilo_a(cfg, 1, n0) => [Ilo2A = output];
+        ilo2_a: IloIloMap<T> = ilo_a(cfg, 1, n0, prev) => [Ilo2A = output];
         /// ILO3-ILO3, Table 4 gains.
-        ilo3_a: IloIloMap<T> = ilo_a(cfg, 2, n0) => [Ilo3A = output];
+        ilo3_a: IloIloMap<T> = ilo_a(cfg, 2, n0, prev) => [Ilo3A = output];
         /// AD-AD.
-        ad_a: AdAdMap<T> = ad_a(cfg, n0) => [AdA = output];
+        ad_a: AdAdMap<T> = ad_a(cfg, n0, prev) => [AdA = output];
         /// Kalman tracker with the acceleration noise.
         kf_a: KalmanParams<T> = kalman(cfg, &cfg.acceleration, KalmanOutput::Acceleration) => [KfA = acceleration];
     }
@@ -891,7 +949,7 @@ estimator_bank! {
     /// sample. Same input stage, API and output conventions as [`PaperBank`]; a firmware that
     /// wants other estimators writes its own table with [`crate::estimator_bank!`].
     bank ProductBank, params ProductParams, state ProductState, output ProductOutput, channel ProductChannel;
-    build(cfg, n0);
+    build(cfg, n0, prev);
     channels {
         /// ILO1 velocity, deg/s.
         Ilo1V = "ilo1_v",
@@ -900,7 +958,7 @@ estimator_bank! {
     }
     rows {
         /// ILO1, Table 2 gains.
-        ilo1_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 0, n0) => [Ilo1V = output];
+        ilo1_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 0, n0, prev) => [Ilo1V = output];
         /// Kalman tracker with the acceleration noise.
         kf_a: KalmanParams<T> = kalman(cfg, &cfg.acceleration, KalmanOutput::Acceleration) => [KfA = acceleration];
     }

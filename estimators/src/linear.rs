@@ -99,6 +99,20 @@ impl<E: LinearLaw> ClosedForm<E> {
         }
     }
 
+    /// [`Self::new`], or a copy of `prev` when `prev` was built from the same `inner`, `n` and
+    /// `hold`: the map is a pure function of those, so the result is bit for bit what `new`
+    /// computes, without its `(DIM + 1) n` steps in `f64` (what makes a gain change of
+    /// [`crate::AdaptiveBank`] cheap when only some rows' gains change).
+    pub fn new_reusing(inner: E, n: u32, hold: Hold, prev: Option<&Self>) -> Self
+    where
+        E: PartialEq,
+    {
+        match prev {
+            Some(p) if p.inner == inner && p.n == n && p.hold == hold => *p,
+            _ => Self::new(inner, n, hold),
+        }
+    }
+
     /// The estimator object of `inner`'s parameters with the map (state reset to 0).
     pub fn of(inner: &Stateful<E>, n: u32, hold: Hold) -> Stateful<Self> {
         Stateful::from_law(Self::new(*inner.law(), n, hold))
