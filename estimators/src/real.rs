@@ -416,6 +416,15 @@ pub trait Real:
     /// host and MCU agree bit for bit), the `fixed` crate's integer square root for [`Fx`].
     /// Negative arguments give 0.
     fn sqrt(self) -> Self;
+    /// The square root of the ED's `|e|^(1/2)` term ([`ExactSqrt`], the banks' default):
+    /// [`Real::sqrt`] for the float types (exact, IEEE correctly rounded); for [`Fx`] a
+    /// cheaper root within a relative `2^-27` of the exact one (`fxk::sqrt_fast`: Newton
+    /// iteration in 32-bit words without the final correction; issue 12, accuracy loss
+    /// measured in docs/FIXED-POINT.md). Negative arguments give 0.
+    #[inline(always)]
+    fn ed_sqrt(self) -> Self {
+        self.sqrt()
+    }
     /// `self / n` for an integer `n >= 1` (`n = 0` returns `self`); integer division for fixed
     /// point, so it never needs an FPU.
     fn div_int(self, n: u32) -> Self;
@@ -605,6 +614,11 @@ impl Real for Fx {
     fn sqrt(self) -> Self {
         Fx::from_bits(fx_sqrt(self.to_bits()))
     }
+    /// `fxk::sqrt_fast`: within a relative `2^-27` of [`Real::sqrt`], not to the last bit.
+    #[inline(always)]
+    fn ed_sqrt(self) -> Self {
+        Fx::from_bits(crate::fxk::sqrt_fast(self.to_bits()) as i64)
+    }
     #[inline]
     fn div_int(self, n: u32) -> Self {
         if n == 0 {
@@ -618,23 +632,26 @@ impl Real for Fx {
 /// The square root the [`crate::Ed`] uses for its `|e|^(1/2)` term (a type parameter, so a
 /// firmware can plug in its FPU's square-root instruction without `unsafe` in this crate).
 ///
-/// Contract: `sqrt(x)` for `x >= 0` must return exactly what [`Real::sqrt`] returns (for `f32`:
-/// the correctly rounded IEEE 754 root, which the Cortex-M4F `VSQRT.F32` instruction also
-/// computes), so that every implementation gives bit-identical estimator outputs.
+/// Contract: `sqrt(x)` for `x >= 0` must return exactly what [`Real::ed_sqrt`] returns (for
+/// `f32`: [`Real::sqrt`], the correctly rounded IEEE 754 root, which the Cortex-M4F
+/// `VSQRT.F32` instruction also computes), so that every implementation gives bit-identical
+/// estimator outputs.
 pub trait SqrtFn<T: Real>: Copy + Default + Debug {
     /// Square root of `x >= 0`.
     fn sqrt(x: T) -> T;
 }
 
-/// The portable exact square root, [`Real::sqrt`] (`libm::sqrtf` for `f32`: about 45
-/// instructions on a Cortex-M4F, which has no stable Rust path to `VSQRT` without `unsafe`).
+/// The portable default square root of the ED, [`Real::ed_sqrt`]: for the float types the
+/// exact [`Real::sqrt`] (`libm::sqrtf` for `f32`: about 45 instructions on a Cortex-M4F, which
+/// has no stable Rust path to `VSQRT` without `unsafe`); for [`Fx`] the cheaper root within a
+/// relative `2^-27` of the exact one (issue 12; the name is kept for the float types' sake).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ExactSqrt;
 
 impl<T: Real> SqrtFn<T> for ExactSqrt {
     #[inline]
     fn sqrt(x: T) -> T {
-        x.sqrt()
+        x.ed_sqrt()
     }
 }
 
