@@ -131,11 +131,13 @@ impl Coef {
 }
 
 /// `1 / sqrt(X) / 2` in Q0.16 (the top 16 bits of the Q1.31 value) at the middle of each of
-/// 192 steps of `X` in `[1, 4)` (`X = (i + 64.5) / 64` for `i = 0 .. 191`): the start of
-/// [`sqrt_newton`]'s iteration (about 8 bits). Computed at compile time, by bisection on
-/// integers: the largest `y` with `y^2 X <= 2^62`, shifted right by 15.
-const RSQRT192: [u16; 192] = {
-    let mut t = [0u16; 192];
+/// 192 steps of `X` in `[1, 4)`, indexed by the top byte `j = 64 .. 255` of `x = X 2^30`
+/// (`X = (j + 0.5) / 64`; entries 0 .. 63, below the normalised range, are never used and
+/// hold 2^15): the start of [`sqrt_newton`]'s iteration (about 8 bits). Indexed by a byte, so
+/// no bounds check. Computed at compile time, by bisection on integers: the largest `y` with
+/// `y^2 X <= 2^62`, shifted right by 15.
+const RSQRT256: [u16; 256] = {
+    let mut t = [1u16 << 15; 256];
     let mut i = 0;
     while i < 192 {
         // X = (2 i + 129) / 128: the largest y with y^2 (2 i + 129) <= 128 2^62.
@@ -150,7 +152,7 @@ const RSQRT192: [u16; 192] = {
                 hi = mid;
             }
         }
-        t[i] = (lo >> 15) as u16;
+        t[i + 64] = (lo >> 15) as u16;
         i += 1;
     }
     t
@@ -158,20 +160,21 @@ const RSQRT192: [u16; 192] = {
 
 /// The Newton iteration of the fixed-point ED's square root: for `x` in
 /// `[2^30, 2^32)` (`X = x / 2^30` in `[1, 4)`), `q ~ sqrt(x 2^32) = sqrt(X) 2^31`, from the
-/// [`RSQRT192`] seed (8 bits) and two Newton steps of `1 / sqrt(X)` in 32-bit words; `q` is
+/// [`RSQRT256`] seed (8 bits) and two Newton steps of `1 / sqrt(X)` in 32-bit words; `q` is
 /// within a few units of `floor(sqrt(x 2^32))` (relative error below 2^-28, checked in the
 /// tests), never above `2^32 - 1`.
 #[inline(always)]
 fn sqrt_newton(x: u32) -> u32 {
-    let idx = ((x >> 24) as usize).saturating_sub(64);
-    let mut y = u32::from(RSQRT192.get(idx).copied().unwrap_or(1 << 15)) << 15; // Q1.31
+    let mut y = u32::from(RSQRT256[(x >> 24) as u8 as usize]) << 15; // Q1.31
     for _ in 0..2 {
         let y2 = (umul32(y, y) >> 31) as u32; // y^2, Q1.31
         let xy2 = (umul32(x, y2) >> 31) as u32; // X y^2 / 2, Q1.31
         let t = (3u32 << 29).wrapping_sub(xy2 >> 1); // (3 - X y^2) / 2, Q2.30
         y = (umul32(y, t) >> 30) as u32; // Q1.31
     }
-    (umul32(x, y) >> 30).min(u64::from(u32::MAX)) as u32
+    // Each Newton step ends at or below 1 / sqrt(X) (`y (3 - X y^2) / 2 <= 1 / sqrt(X)` for
+    // every `y >= 0`, and the truncations only lower it), so `x y / 2^30 <= sqrt(X) 2^31 < 2^32`.
+    (umul32(x, y) >> 30) as u32
 }
 
 /// The fixed-point bank's ED square root ([`crate::Real::ed_sqrt`] of [`crate::Fx`]): the
@@ -333,8 +336,8 @@ mod tests {
     /// The seed table is `2^31 / sqrt(X)` at the middle of each step (checked in f64).
     #[test]
     fn rsqrt_seed() {
-        for (i, y) in RSQRT192.iter().enumerate() {
-            let x = (2.0 * i as f64 + 129.0) / 128.0;
+        for (i, y) in RSQRT256.iter().enumerate().skip(64) {
+            let x = (2.0 * i as f64 + 1.0) / 128.0;
             let want = 2f64.powi(16) / x.sqrt();
             assert!((f64::from(*y) - want).abs() <= 1.0, "{i}: {y} {want}");
         }
