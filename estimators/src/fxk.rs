@@ -7,7 +7,7 @@
 //! * a coefficient in `[0, 1/2)` (`h`, `h k`, `h sigma`: raw bits below 2^31) times a state:
 //!   two 32 x 32-bit products ([`mulf`]);
 //! * an error `e = xhat - y` below 1/2 in magnitude (raw bits fit an `i32`, the usual case):
-//!   one 32 x 32-bit product per coefficient ([`Coef::mul_i32`]);
+//!   one 32 x 32-bit product per coefficient (`h gamma1` in Q3.28, see `AveFx` in `ave.rs`);
 //! * the ED's square root: the fixed-point bank's own root [`sqrt_fast`] (a Newton iteration
 //!   in 32-bit words, within a relative 2^-27 of the exact root; the generic [`crate::Fx`] ED
 //!   uses the same function through [`crate::Real::ed_sqrt`]);
@@ -91,18 +91,6 @@ impl Coef {
     pub(crate) fn log2_bound(&self) -> u32 {
         let m = self.raw.unsigned_abs();
         (64 - m.leading_zeros()).saturating_sub(32)
-    }
-
-    /// The exact `c * x` (Q31.32) for a 32-bit raw `x`: `hi x + floor(lo x / 2^32)`;
-    /// `|hi x| < 2^62`, so it cannot overflow.
-    #[inline(always)]
-    pub(crate) fn mul_i32(&self, x: i32) -> i64 {
-        let p = smul(self.hi, x);
-        if self.lo == 0 {
-            p
-        } else {
-            p + (smul32u(x, self.lo) >> 32)
-        }
     }
 
     /// The exact `c * r` (Q31.32) for a raw `r < 2^47` and `|c| < 2^13`:
@@ -343,7 +331,7 @@ mod tests {
         }
     }
 
-    /// `mulf`, `mulf32`, `Coef::mul_i32` and `Coef::mul_u32` are the exact floor of the
+    /// `mulf`, `mulf32` and `Coef::mul_u32` are the exact floor of the
     /// product (computed in i128).
     #[test]
     fn products_exact() {
@@ -363,10 +351,6 @@ mod tests {
             assert_eq!(mulf32(c, e), ((i128::from(c) * i128::from(e)) >> 32) as i64);
             let raw = (next() as i64) >> (next() % 64);
             let k = Coef::of(crate::Fx::from_bits(raw)).unwrap();
-            assert_eq!(
-                k.mul_i32(e),
-                ((i128::from(raw) * i128::from(e)) >> 32) as i64
-            );
             let u = next() as u32;
             assert_eq!(
                 k.mul_u32(u),

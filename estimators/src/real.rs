@@ -404,6 +404,14 @@ pub trait Real:
     fn from_f64(x: f64) -> Self;
     /// Converts from `f32` (exact for `f32`/`f64`, saturating for fixed point; NaN gives 0).
     fn from_f32(x: f32) -> Self;
+    /// Converts a coefficient from `f64` for a 32-bit product: [`Real::from_f64`] for the
+    /// float types; for [`Fx`], a value below 8 in magnitude is rounded to a multiple of
+    /// 2^-28 (Q3.28, its raw bits / 16 fit an `i32`), others as [`Real::from_f64`]. The
+    /// fixed-point AVE's `h gamma1` (issue 12: `h gamma1 e` is then one 32 x 32-bit product
+    /// in the kernel; relative change of the coefficient below 2^-29 for `h gamma1 >= 1/2`).
+    fn from_f64_q28(x: f64) -> Self {
+        Self::from_f64(x)
+    }
     /// Converts from an integer (saturating for fixed point).
     fn from_i32(x: i32) -> Self;
     /// Converts to `f32` (rounding to nearest for fixed point, via soft-float conversion only).
@@ -590,6 +598,14 @@ impl Real for Fx {
             None if x.is_nan() => Self::ZERO,
             None if x.is_sign_negative() => Fx(I32F32::MIN),
             None => Fx(I32F32::MAX),
+        }
+    }
+    fn from_f64_q28(x: f64) -> Self {
+        if x.abs() < 8.0 {
+            // |x 2^28| < 2^31: exact in f64, rounded to nearest; raw bits = 16 times that.
+            Fx::from_bits((libm::round(x * (1u64 << 28) as f64) as i64) << 4)
+        } else {
+            Self::from_f64(x)
         }
     }
     #[inline]
@@ -798,6 +814,27 @@ mod tests {
             assert_eq!((p + q).to_bits(), (x + y).0.to_bits());
             assert_eq!((p - q).to_bits(), (x - y).0.to_bits());
             assert_eq!((-p).to_bits(), (-x).0.to_bits());
+        }
+    }
+
+    /// `from_f64_q28`: for `Fx` below 8 the nearest multiple of 2^-28 (raw bits a multiple of
+    /// 16, within 2^-29 of `x`, the raw / 16 an `i32`), otherwise `from_f64`; for the float
+    /// types exactly `from_f64`.
+    #[test]
+    fn from_f64_q28_rounds_to_q3_28() {
+        let mut r = Rng(7);
+        for _ in 0..100_000 {
+            let x = (r.raw() as f64) / 2f64.powi(40);
+            let q = Fx::from_f64_q28(x);
+            if x.abs() < 8.0 {
+                assert_eq!(q.to_bits() & 15, 0, "{x}");
+                assert!((q.to_f64() - x).abs() <= 2f64.powi(-29), "{x}");
+                assert!(i32::try_from(q.to_bits() >> 4).is_ok(), "{x}");
+            } else {
+                assert_eq!(q, Fx::from_f64(x));
+            }
+            assert_eq!(f32::from_f64_q28(x).to_bits(), f32::from_f64(x).to_bits());
+            assert_eq!(f64::from_f64_q28(x).to_bits(), x.to_bits());
         }
     }
 }
