@@ -1,7 +1,7 @@
 //! Adaptive velocity estimator, AVE (paper eq. 4).
 
 use crate::error::{non_negative, positive};
-use crate::fxk::{frac, inputs, mag, mulf, mulf32, run, Coef, Stage};
+use crate::fxk::{frac, inputs, mag, mulf, mulf32, run, smul, Coef, Stage};
 use crate::law::{step_n, Law, Stateful};
 use crate::real::{fx_mul, umul32};
 use crate::{ConfigError, Hold, Real};
@@ -126,7 +126,7 @@ impl<T: Real> AveParams<T> {
         };
         Ok(Self {
             hk: T::from_f64(h * k),
-            hg: T::from_f64(h * g),
+            hg: T::from_f64_q28(h * g),
             h: T::from_f64(h),
             delta,
         })
@@ -245,7 +245,8 @@ enum DeltaFx {
 }
 
 /// The AVE's coefficients as raw Q31.32 bits for the integer kernel ([`crate::fxk`]): `h`,
-/// `h k` and `h sigma` fractions below 1/2, `h gamma1` general; `bound`: the range guard
+/// `h k` and `h sigma` fractions below 1/2, `h gamma1` below 8 and a multiple of 2^-28
+/// ([`Real::from_f64_q28`]; `hg28` = its raw bits / 16, an `i32`); `bound`: the range guard
 /// `2^(B - 32)` on the states' high words, `B = 60 - G`, `|h gamma1| < 2^G` (see
 /// [`AveStage::step`]).
 #[derive(Clone, Copy, Debug)]
@@ -253,6 +254,7 @@ struct AveFx {
     h: i32,
     hk: i32,
     hg: Coef,
+    hg28: i32,
     delta: DeltaFx,
     bound: u32,
 }
@@ -292,6 +294,11 @@ impl AveFx {
     #[inline(always)]
     fn of<T: Real>(p: &AveParams<T>) -> Option<Self> {
         let hg = Coef::of(p.hg)?;
+        // h gamma1 = hg28 / 2^28 exactly (Real::from_f64_q28), below 8 in magnitude.
+        if hg.raw & 15 != 0 {
+            return None;
+        }
+        let hg28 = i32::try_from(hg.raw >> 4).ok()?;
         let b = 60u32.checked_sub(hg.log2_bound())?;
         if b < 40 {
             return None;
@@ -300,6 +307,7 @@ impl AveFx {
             h: frac(p.h)?,
             hk: frac(p.hk)?,
             hg,
+            hg28,
             delta: match p.delta {
                 DeltaLaw::Paper => DeltaFx::Paper,
                 DeltaLaw::Bounded { max } => DeltaFx::Bounded(max.fx_bits()?),
@@ -396,7 +404,8 @@ impl<const D: u8> Stage for AveStage<D> {
                     (s.d ^ m).wrapping_sub(m)
                 };
                 let ie = (umul32(e32.unsigned_abs(), k.h as u32) >> 32) as i64;
-                (sw, mulf32(k.hk, e32), k.hg.mul_i32(e32), ie)
+                // h gamma1 e = hg28 e / 2^28 (hg28 = raw / 16): one product, exact.
+                (sw, mulf32(k.hk, e32), smul(k.hg28, e32) >> 28, ie)
             }
             Err(_) => {
                 let sw = if e > 0 { s.d } else { s.d.wrapping_neg() };

@@ -1,9 +1,8 @@
 //! Levant's robust exact differentiator, ED (paper eqs. 5-7; Levant 1998).
 
 use crate::error::positive;
-use crate::fxk::{frac, inputs, mag, mulf, run, sqrt_q32, sqrt_q64, Coef, Stage};
+use crate::fxk::{frac, inputs, mag, mulf, run, sqrt_fast, Coef, Stage};
 use crate::law::{step_n, Law, Stateful};
-use crate::real::{fx_mul, fx_sqrt};
 use crate::{ConfigError, ExactSqrt, Hold, Real, SqrtFn};
 use core::marker::PhantomData;
 
@@ -385,7 +384,7 @@ impl Stage for EdFx {
     type S = EdFxState;
 
     /// [`EdParams::step_euler`] on raw bits: the same operations in the same order, wrapping;
-    /// `|e| < 1` (the usual case): the square root [`sqrt_q32`] in 32-bit words and one
+    /// the bank's root [`sqrt_fast`] (`Real::ed_sqrt` of `Fx`) in 32-bit words and one
     /// 32 x 32-bit product per word of `lambda`.
     ///
     /// Range (raw bits): with `|z|, |y|, |u1| <= 2^60`: `|e| <= 2^61`, `sqrt|e| < 2^47`,
@@ -397,15 +396,13 @@ impl Stage for EdFx {
     fn step(&self, s: &mut EdFxState, y: i64) -> i64 {
         let e = s.z.wrapping_sub(y);
         let ae = e.wrapping_abs();
-        // lambda sqrt|e| (0 when e = 0; the generic code then adds nothing either).
+        // lambda sqrt|e| (0 when e = 0; the generic code then adds nothing either), with the
+        // bank's root `sqrt_fast` (`Real::ed_sqrt` of `Fx`); `|e| <= 2^61` (the guard), so the
+        // root is below 2^47.
         let lr = if let Ok(a32) = u32::try_from(ae) {
-            self.lambda.mul_u32(sqrt_q32(a32))
-        } else if ae < 1 << 62 {
-            // 1 <= |e| < 2^30 (the ED-ED's second stage: velocity errors of the chattering
-            // first stage); the root is below 2^47.
-            self.lambda.mul_u47(sqrt_q64(ae as u64))
+            self.lambda.mul_u32(sqrt_fast(i64::from(a32)) as u32)
         } else {
-            fx_mul(self.lambda.raw, fx_sqrt(ae))
+            self.lambda.mul_u47(sqrt_fast(ae))
         };
         let (u, du1) = if e > 0 {
             (s.u1.wrapping_sub(lr), self.neg_halpha)

@@ -7,10 +7,11 @@
 //! * a coefficient in `[0, 1/2)` (`h`, `h k`, `h sigma`: raw bits below 2^31) times a state:
 //!   two 32 x 32-bit products ([`mulf`]);
 //! * an error `e = xhat - y` below 1/2 in magnitude (raw bits fit an `i32`, the usual case):
-//!   one 32 x 32-bit product per coefficient ([`Coef::mul_i32`]), `|e|` and its square root in
-//!   32-bit words ([`sqrt_q32`]); an error from 1 to 2^30: the square root from 32-bit words too
-//!   ([`sqrt_q64`]);
-//! * anything else: the generic `fx_mul` / `fx_sqrt` on the raw bits.
+//!   one 32 x 32-bit product per coefficient (`h gamma1` in Q3.28, see `AveFx` in `ave.rs`);
+//! * the ED's square root: the fixed-point bank's own root [`sqrt_fast`] (a Newton iteration
+//!   in 32-bit words, within a relative 2^-27 of the exact root; the generic [`crate::Fx`] ED
+//!   uses the same function through [`crate::Real::ed_sqrt`]);
+//! * anything else: the generic `fx_mul` on the raw bits.
 //!
 //! **Why no saturation is needed (the range guard).** Before the interval and after every step
 //! the kernel checks that every state and input is below `2^(B-32)` in magnitude (raw below
@@ -92,18 +93,6 @@ impl Coef {
         (64 - m.leading_zeros()).saturating_sub(32)
     }
 
-    /// The exact `c * x` (Q31.32) for a 32-bit raw `x`: `hi x + floor(lo x / 2^32)`;
-    /// `|hi x| < 2^62`, so it cannot overflow.
-    #[inline(always)]
-    pub(crate) fn mul_i32(&self, x: i32) -> i64 {
-        let p = smul(self.hi, x);
-        if self.lo == 0 {
-            p
-        } else {
-            p + (smul32u(x, self.lo) >> 32)
-        }
-    }
-
     /// The exact `c * r` (Q31.32) for a raw `r < 2^47` and `|c| < 2^13`:
     /// `hi rh 2^32 + hi rl + lo rh + floor(lo rl / 2^32)` (`r = rh 2^32 + rl`), below 2^61.
     #[inline(always)]
@@ -130,11 +119,13 @@ impl Coef {
 }
 
 /// `1 / sqrt(X) / 2` in Q0.16 (the top 16 bits of the Q1.31 value) at the middle of each of
-/// 192 steps of `X` in `[1, 4)` (`X = (i + 64.5) / 64` for `i = 0 .. 191`): the start of
-/// [`sqrt_q32`]'s Newton iteration (about 8 bits). Computed at compile time, by bisection on
-/// integers: the largest `y` with `y^2 X <= 2^62`, shifted right by 15.
-const RSQRT192: [u16; 192] = {
-    let mut t = [0u16; 192];
+/// 192 steps of `X` in `[1, 4)`, indexed by the top byte `j = 64 .. 255` of `x = X 2^30`
+/// (`X = (j + 0.5) / 64`; entries 0 .. 63, below the normalised range, are never used and
+/// hold 2^15): the start of [`sqrt_newton`]'s iteration (about 8 bits). Indexed by a byte, so
+/// no bounds check. Computed at compile time, by bisection on integers: the largest `y` with
+/// `y^2 X <= 2^62`, shifted right by 15.
+const RSQRT256: [u16; 256] = {
+    let mut t = [1u16 << 15; 256];
     let mut i = 0;
     while i < 192 {
         // X = (2 i + 129) / 128: the largest y with y^2 (2 i + 129) <= 128 2^62.
@@ -149,92 +140,53 @@ const RSQRT192: [u16; 192] = {
                 hi = mid;
             }
         }
-        t[i] = (lo >> 15) as u16;
+        t[i + 64] = (lo >> 15) as u16;
         i += 1;
     }
     t
 };
 
-/// `floor(sqrt(r 2^32))` for `r < 2^32`: the Q31.32 square root of a raw value below 1 (what
-/// `fx_sqrt` returns for it), exact, in 32-bit words. `r` is normalised to
-/// `x = r 4^k` in `[2^30, 2^32)`, `1/sqrt(x / 2^30)` starts from [`RSQRT192`] (8 bits) and two
-/// Newton steps `y <- y (3 - X y^2) / 2` give about 29 bits; `s ~ x y` is then corrected by
-/// whole units until `s^2 <= x 2^32 < (s + 1)^2` (exact whatever the estimate), and
-/// `floor(sqrt(r 2^32)) = floor(s / 2^k)`.
+/// The Newton iteration of the fixed-point ED's square root: for `x` in
+/// `[2^30, 2^32)` (`X = x / 2^30` in `[1, 4)`), `q ~ sqrt(x 2^32) = sqrt(X) 2^31`, from the
+/// [`RSQRT256`] seed (8 bits) and two Newton steps of `1 / sqrt(X)` in 32-bit words; `q` is
+/// within a few units of `floor(sqrt(x 2^32))` (relative error below 2^-28, checked in the
+/// tests), never above `2^32 - 1`.
 #[inline(always)]
-pub(crate) fn sqrt_q32(r: u32) -> u32 {
-    if r == 0 {
-        return 0;
-    }
-    let k = r.leading_zeros() / 2;
-    let x = r << (2 * k); // X = x / 2^30 in [1, 4)
-    let idx = ((x >> 24) as usize).saturating_sub(64);
-    let mut y = u32::from(RSQRT192.get(idx).copied().unwrap_or(1 << 15)) << 15; // Q1.31
+fn sqrt_newton(x: u32) -> u32 {
+    let mut y = u32::from(RSQRT256[(x >> 24) as u8 as usize]) << 15; // Q1.31
     for _ in 0..2 {
-        let y2 = (umul32(y, y) >> 31) as u32; // y^2, Q1.31 (in (1/4, 1])
-        let xy2 = (umul32(x, y2) >> 31) as u32; // X y^2 / 2, Q1.31 (about 1/2)
+        let y2 = (umul32(y, y) >> 31) as u32; // y^2, Q1.31
+        let xy2 = (umul32(x, y2) >> 31) as u32; // X y^2 / 2, Q1.31
         let t = (3u32 << 29).wrapping_sub(xy2 >> 1); // (3 - X y^2) / 2, Q2.30
         y = (umul32(y, t) >> 30) as u32; // Q1.31
     }
-    // sqrt(x 2^32) = sqrt(X) 2^31 = X y 2^31 = x y / 2^30.
-    let m = u64::from(x) << 32;
-    let mut s = (umul32(x, y) >> 30).min(u64::from(u32::MAX)) as u32;
-    while umul32(s, s) > m {
-        s -= 1;
-    }
-    while s < u32::MAX && umul32(s + 1, s + 1) <= m {
-        s += 1;
-    }
-    s >> k
+    // Each Newton step ends at or below 1 / sqrt(X) (`y (3 - X y^2) / 2 <= 1 / sqrt(X)` for
+    // every `y >= 0`, and the truncations only lower it), so `x y / 2^30 <= sqrt(X) 2^31 < 2^32`.
+    (umul32(x, y) >> 30) as u32
 }
 
-/// `floor(sqrt(r 2^32))` for `2^32 <= r < 2^62`: the Q31.32 square root of a raw value from 1
-/// to 2^30 (what `fx_sqrt` returns for it), exact, in 32-bit words.
-///
-/// `r` is normalised to `m = r 4^k` in `[2^62, 2^64)`; the Newton iteration of [`sqrt_q32`] on
-/// its top word and a correction by whole units give `q = floor(sqrt(m))` and the remainder
-/// `m - q^2 <= 2 q`. The result is `s = q 2^j + t` with `j = 16 - k` more bits: `t` is the
-/// largest value with `(q 2^j + t)^2 <= m 4^j`, that is with
-/// `2^j A(t) >= t^2`, `A(t) = 2^j rem - 2 q t`; it is estimated from the remainder and the
-/// reciprocal root `y` (`t ~ rem 2^(j-1) / q`, within a few units) and corrected by whole units.
+/// The fixed-point bank's ED square root ([`crate::Real::ed_sqrt`] of [`crate::Fx`]): the
+/// Q31.32 root of a raw `r >= 0`, `sqrt(r 2^32)`, **not** rounded to the last bit: `r` is
+/// normalised to `m = r 4^k` in `[2^62, 2^64)`, [`sqrt_newton`] of its top word gives
+/// `q ~ sqrt(m)` to about 29 bits, and the root is `q 2^(16 - k)` (shifted right for `k > 16`,
+/// which truncates). Relative error below `2^-27` (a few units of 2^-32 of the root, tested
+/// against the exact `fx_sqrt`); 0 for `r <= 0`. About a third of the exact root's cost: no
+/// correction by whole units, no remainder digits (docs/FIXED-POINT.md, "ED square root").
 #[inline(always)]
-pub(crate) fn sqrt_q64(r: u64) -> u64 {
-    let k = r.leading_zeros() / 2; // 1 ..= 15
-    let m = r << (2 * k);
-    let x = (m >> 32) as u32; // X = x / 2^30 in [1, 4)
-    let idx = ((x >> 24) as usize).saturating_sub(64);
-    let mut y = u32::from(RSQRT192.get(idx).copied().unwrap_or(1 << 15)) << 15; // Q1.31
-    for _ in 0..2 {
-        let y2 = (umul32(y, y) >> 31) as u32;
-        let xy2 = (umul32(x, y2) >> 31) as u32;
-        let t = (3u32 << 29).wrapping_sub(xy2 >> 1);
-        y = (umul32(y, t) >> 30) as u32;
+pub(crate) fn sqrt_fast(r: i64) -> u64 {
+    if r <= 0 {
+        return 0;
     }
-    let mut q = (umul32(x, y) >> 30).min(u64::from(u32::MAX)) as u32;
-    while umul32(q, q) > m {
-        q -= 1;
+    let r = r as u64;
+    if let Ok(r32) = u32::try_from(r) {
+        // r < 2^32 (|e| < 1, the usual case): k = 16 + k32, m's top word is r32 4^k32.
+        let k32 = r32.leading_zeros() / 2;
+        u64::from(sqrt_newton(r32 << (2 * k32)) >> k32)
+    } else {
+        let k = r.leading_zeros() / 2; // 0 ..= 15
+        let q = u64::from(sqrt_newton(((r << (2 * k)) >> 32) as u32));
+        q << (16 - k)
     }
-    while q < u32::MAX && umul32(q + 1, q + 1) <= m {
-        q += 1;
-    }
-    let rem = m - umul32(q, q); // <= 2 q < 2^33
-    let j = 16 - k;
-    // t ~ rem 2^(j-1) / q with 1 / q ~ y / 2^62.
-    let est = umul32((rem >> 1) as u32, y) >> (62 - j);
-    let tmax = (1u64 << j) - 1;
-    let ok = |t: u64| -> bool {
-        // 2^j A >= t^2 with A = 2^j rem - 2 q t (|A| < 2^50).
-        let a = ((rem << j) as i64) - 2 * (umul32(q, t as u32) as i64);
-        a >= 0 && (a >= 1 << 32 || ((a as u64) << j) >= t * t)
-    };
-    let mut t = est.min(tmax);
-    while t > 0 && !ok(t) {
-        t -= 1;
-    }
-    while t < tmax && ok(t + 1) {
-        t += 1;
-    }
-    (u64::from(q) << j) + t
 }
 
 /// The inputs of the `n` steps of one interval, as [`crate::law::step_n`] presents them:
@@ -333,77 +285,53 @@ mod tests {
     use super::*;
     use crate::real::fx_sqrt;
 
-    /// `sqrt_q32` is `fx_sqrt` (itself checked against the `fixed` crate) on every raw value
-    /// below 2^32 of a dense sweep, at the range ends and at perfect squares.
+    /// `sqrt_fast` is within a relative `2^-27` (plus one unit) of the exact `fx_sqrt` on
+    /// every magnitude: powers of two and neighbours, a dense sweep below 1, 2 million random
+    /// values; never negative, 0 at 0.
     #[test]
-    fn sqrt_q32_is_fx_sqrt() {
-        let mut r: u64 = 1;
-        while r < u64::from(u32::MAX - 1_000) {
-            for d in 0..3 {
-                let v = (r + d) as u32;
-                assert_eq!(i64::from(sqrt_q32(v)), fx_sqrt(i64::from(v)), "{v}");
-            }
-            r = r + (r >> 7) + 1;
-        }
-        for v in (u32::MAX - 2_000..=u32::MAX).chain(0..100_000) {
-            assert_eq!(i64::from(sqrt_q32(v)), fx_sqrt(i64::from(v)), "{v}");
-        }
-        let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
-        for _ in 0..2_000_000 {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            let v = (x >> (32 + (x & 31))) as u32;
-            assert_eq!(i64::from(sqrt_q32(v)), fx_sqrt(i64::from(v)), "{v}");
-        }
-    }
-
-    /// `sqrt_q64` is `fx_sqrt` on `[2^32, 2^62)`: the ends, powers of two and their
-    /// neighbours, perfect squares of the Q31.32 grid and their neighbours, 2 million random
-    /// values of every magnitude.
-    #[test]
-    fn sqrt_q64_is_fx_sqrt() {
-        let check = |v: u64| {
-            if (1u64 << 32..1u64 << 62).contains(&v) {
-                assert_eq!(sqrt_q64(v) as i64, fx_sqrt(v as i64), "{v}");
-            }
+    fn sqrt_fast_error_bound() {
+        let check = |v: i64| {
+            let exact = fx_sqrt(v) as f64;
+            let fast = sqrt_fast(v) as f64;
+            assert!(
+                (fast - exact).abs() <= exact * 2f64.powi(-27) + 1.0,
+                "{v}: {fast} vs {exact}"
+            );
         };
-        for b in 32..62 {
-            for d in 0..5u64 {
-                check((1u64 << b) + d);
-                check((1u64 << b).wrapping_sub(d));
+        assert_eq!(sqrt_fast(0), 0);
+        assert_eq!(sqrt_fast(-5), 0);
+        for b in 0..63 {
+            for d in 0..5i64 {
+                check((1i64 << b).wrapping_add(d).max(1));
+                check((1i64 << b).wrapping_sub(d).max(1));
             }
         }
-        check((1u64 << 62) - 1);
-        let mut x: u64 = 0x0123_4567_89AB_CDEF;
+        check(i64::MAX);
+        let mut r: u64 = 1;
+        while r < u64::from(u32::MAX) {
+            check(r as i64);
+            r = r + (r >> 9) + 1;
+        }
+        let mut x: u64 = 0x0F1E_2D3C_4B5A_6978;
         for _ in 0..2_000_000 {
             x ^= x << 13;
             x ^= x >> 7;
             x ^= x << 17;
-            let v = (x >> 2) >> (x % 30);
-            check(v);
-            // v = s^2 / 2^32 near an exact square of the result grid.
-            let s = (x >> 17) | (1 << 46);
-            let s = s >> (x % 16);
-            let sq = (u128::from(s) * u128::from(s)) >> 32;
-            for d in [0u64, 1, 2] {
-                check((sq as u64).wrapping_add(d));
-                check((sq as u64).wrapping_sub(d));
-            }
+            check(((x >> 1) >> (x % 63)) as i64);
         }
     }
 
     /// The seed table is `2^31 / sqrt(X)` at the middle of each step (checked in f64).
     #[test]
     fn rsqrt_seed() {
-        for (i, y) in RSQRT192.iter().enumerate() {
-            let x = (2.0 * i as f64 + 129.0) / 128.0;
+        for (i, y) in RSQRT256.iter().enumerate().skip(64) {
+            let x = (2.0 * i as f64 + 1.0) / 128.0;
             let want = 2f64.powi(16) / x.sqrt();
             assert!((f64::from(*y) - want).abs() <= 1.0, "{i}: {y} {want}");
         }
     }
 
-    /// `mulf`, `mulf32`, `Coef::mul_i32` and `Coef::mul_u32` are the exact floor of the
+    /// `mulf`, `mulf32` and `Coef::mul_u32` are the exact floor of the
     /// product (computed in i128).
     #[test]
     fn products_exact() {
@@ -423,10 +351,6 @@ mod tests {
             assert_eq!(mulf32(c, e), ((i128::from(c) * i128::from(e)) >> 32) as i64);
             let raw = (next() as i64) >> (next() % 64);
             let k = Coef::of(crate::Fx::from_bits(raw)).unwrap();
-            assert_eq!(
-                k.mul_i32(e),
-                ((i128::from(raw) * i128::from(e)) >> 32) as i64
-            );
             let u = next() as u32;
             assert_eq!(
                 k.mul_u32(u),

@@ -137,6 +137,14 @@ impl<T: Real, L: Law<Num = T>> Law for VelAcc<L> {
                 // The law's own fast path (the fixed-point kernels): same results.
             } else if self.shared {
                 self.run::<true>(s, y_prev, y_new, n, hold);
+            } else if L::advance_pair(
+                &self.a1, &self.a2, &mut s.a1, &mut s.a2, y_prev, y_new, n, hold,
+            ) {
+                // Own acceleration gains (the NAV440 preset) and a fast path (the fixed-point
+                // kernels): the series through it, the velocity law through its own
+                // `Law::advance`. The velocity law and the series are independent, so the
+                // results are those of the interleaved loop.
+                self.v.advance(&mut s.v, y_prev, y_new, n, hold);
             } else {
                 self.run::<false>(s, y_prev, y_new, n, hold);
             }

@@ -404,6 +404,14 @@ pub trait Real:
     fn from_f64(x: f64) -> Self;
     /// Converts from `f32` (exact for `f32`/`f64`, saturating for fixed point; NaN gives 0).
     fn from_f32(x: f32) -> Self;
+    /// Converts a coefficient from `f64` for a 32-bit product: [`Real::from_f64`] for the
+    /// float types; for [`Fx`], a value below 8 in magnitude is rounded to a multiple of
+    /// 2^-28 (Q3.28, its raw bits / 16 fit an `i32`), others as [`Real::from_f64`]. The
+    /// fixed-point AVE's `h gamma1` (issue 12: `h gamma1 e` is then one 32 x 32-bit product
+    /// in the kernel; relative change of the coefficient below 2^-29 for `h gamma1 >= 1/2`).
+    fn from_f64_q28(x: f64) -> Self {
+        Self::from_f64(x)
+    }
     /// Converts from an integer (saturating for fixed point).
     fn from_i32(x: i32) -> Self;
     /// Converts to `f32` (rounding to nearest for fixed point, via soft-float conversion only).
@@ -416,6 +424,15 @@ pub trait Real:
     /// host and MCU agree bit for bit), the `fixed` crate's integer square root for [`Fx`].
     /// Negative arguments give 0.
     fn sqrt(self) -> Self;
+    /// The square root of the ED's `|e|^(1/2)` term ([`ExactSqrt`], the banks' default):
+    /// [`Real::sqrt`] for the float types (exact, IEEE correctly rounded); for [`Fx`] a
+    /// cheaper root within a relative `2^-27` of the exact one (`fxk::sqrt_fast`: Newton
+    /// iteration in 32-bit words without the final correction; issue 12, accuracy loss
+    /// measured in docs/FIXED-POINT.md). Negative arguments give 0.
+    #[inline(always)]
+    fn ed_sqrt(self) -> Self {
+        self.sqrt()
+    }
     /// `self / n` for an integer `n >= 1` (`n = 0` returns `self`); integer division for fixed
     /// point, so it never needs an FPU.
     fn div_int(self, n: u32) -> Self;
@@ -583,6 +600,14 @@ impl Real for Fx {
             None => Fx(I32F32::MAX),
         }
     }
+    fn from_f64_q28(x: f64) -> Self {
+        if x.abs() < 8.0 {
+            // |x 2^28| < 2^31: exact in f64, rounded to nearest; raw bits = 16 times that.
+            Fx::from_bits((libm::round(x * (1u64 << 28) as f64) as i64) << 4)
+        } else {
+            Self::from_f64(x)
+        }
+    }
     #[inline]
     fn from_i32(x: i32) -> Self {
         Fx(I32F32::from_num(x))
@@ -605,6 +630,11 @@ impl Real for Fx {
     fn sqrt(self) -> Self {
         Fx::from_bits(fx_sqrt(self.to_bits()))
     }
+    /// `fxk::sqrt_fast`: within a relative `2^-27` of [`Real::sqrt`], not to the last bit.
+    #[inline(always)]
+    fn ed_sqrt(self) -> Self {
+        Fx::from_bits(crate::fxk::sqrt_fast(self.to_bits()) as i64)
+    }
     #[inline]
     fn div_int(self, n: u32) -> Self {
         if n == 0 {
@@ -618,23 +648,26 @@ impl Real for Fx {
 /// The square root the [`crate::Ed`] uses for its `|e|^(1/2)` term (a type parameter, so a
 /// firmware can plug in its FPU's square-root instruction without `unsafe` in this crate).
 ///
-/// Contract: `sqrt(x)` for `x >= 0` must return exactly what [`Real::sqrt`] returns (for `f32`:
-/// the correctly rounded IEEE 754 root, which the Cortex-M4F `VSQRT.F32` instruction also
-/// computes), so that every implementation gives bit-identical estimator outputs.
+/// Contract: `sqrt(x)` for `x >= 0` must return exactly what [`Real::ed_sqrt`] returns (for
+/// `f32`: [`Real::sqrt`], the correctly rounded IEEE 754 root, which the Cortex-M4F
+/// `VSQRT.F32` instruction also computes), so that every implementation gives bit-identical
+/// estimator outputs.
 pub trait SqrtFn<T: Real>: Copy + Default + Debug {
     /// Square root of `x >= 0`.
     fn sqrt(x: T) -> T;
 }
 
-/// The portable exact square root, [`Real::sqrt`] (`libm::sqrtf` for `f32`: about 45
-/// instructions on a Cortex-M4F, which has no stable Rust path to `VSQRT` without `unsafe`).
+/// The portable default square root of the ED, [`Real::ed_sqrt`]: for the float types the
+/// exact [`Real::sqrt`] (`libm::sqrtf` for `f32`: about 45 instructions on a Cortex-M4F, which
+/// has no stable Rust path to `VSQRT` without `unsafe`); for [`Fx`] the cheaper root within a
+/// relative `2^-27` of the exact one (issue 12; the name is kept for the float types' sake).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ExactSqrt;
 
 impl<T: Real> SqrtFn<T> for ExactSqrt {
     #[inline]
     fn sqrt(x: T) -> T {
-        x.sqrt()
+        x.ed_sqrt()
     }
 }
 
@@ -781,6 +814,27 @@ mod tests {
             assert_eq!((p + q).to_bits(), (x + y).0.to_bits());
             assert_eq!((p - q).to_bits(), (x - y).0.to_bits());
             assert_eq!((-p).to_bits(), (-x).0.to_bits());
+        }
+    }
+
+    /// `from_f64_q28`: for `Fx` below 8 the nearest multiple of 2^-28 (raw bits a multiple of
+    /// 16, within 2^-29 of `x`, the raw / 16 an `i32`), otherwise `from_f64`; for the float
+    /// types exactly `from_f64`.
+    #[test]
+    fn from_f64_q28_rounds_to_q3_28() {
+        let mut r = Rng(7);
+        for _ in 0..100_000 {
+            let x = (r.raw() as f64) / 2f64.powi(40);
+            let q = Fx::from_f64_q28(x);
+            if x.abs() < 8.0 {
+                assert_eq!(q.to_bits() & 15, 0, "{x}");
+                assert!((q.to_f64() - x).abs() <= 2f64.powi(-29), "{x}");
+                assert!(i32::try_from(q.to_bits() >> 4).is_ok(), "{x}");
+            } else {
+                assert_eq!(q, Fx::from_f64(x));
+            }
+            assert_eq!(f32::from_f64_q28(x).to_bits(), f32::from_f64(x).to_bits());
+            assert_eq!(f64::from_f64_q28(x).to_bits(), x.to_bits());
         }
     }
 }

@@ -54,14 +54,25 @@ fn check_pair<L: Law<Num = Fx>>(v: L, a2: L, label: &str)
 where
     L::State: PartialEq,
 {
-    let row = VelAcc::new(v, v, a2, true);
+    check_row(v, None, a2, label);
+}
+
+/// `a1`: the series' own first stage (a row with its own acceleration gains, not shared with
+/// the velocity law), or `None` (shared: the velocity law feeds `a2`).
+fn check_row<L: Law<Num = Fx>>(v: L, a1: Option<L>, a2: L, label: &str)
+where
+    L::State: PartialEq,
+{
+    let row = VelAcc::new(v, a1.unwrap_or(v), a2, a1.is_none());
+    let first = a1.unwrap_or(v);
     for sc in 0..4 {
         for hold in [Hold::Linear, Hold::ZeroOrder] {
             let mut r = Rng::new(0x9E37_79B9 + u64::from(sc));
             let y0 = Fx::from_f64(input(sc, 0, &mut r));
             let mut s = row.init(y0);
             // The reference: the three laws stepped one by one with the generic code.
-            let (mut rv, mut ra) = (v.init(y0), a2.init(v.output(&v.init(y0))));
+            let (mut rv, mut r1) = (v.init(y0), first.init(y0));
+            let mut ra = a2.init(first.output(&first.init(y0)));
             let mut yp = y0;
             for k in 1..300 {
                 let y = Fx::from_f64(input(sc, k, &mut r));
@@ -81,10 +92,15 @@ where
                         }
                     };
                     let o = v.step(&mut rv, x);
-                    a2.step(&mut ra, o);
+                    let o1 = if a1.is_some() {
+                        first.step(&mut r1, x)
+                    } else {
+                        o
+                    };
+                    a2.step(&mut ra, o1);
                 }
                 assert!(
-                    s.v == rv && s.a2 == ra,
+                    s.v == rv && s.a2 == ra && (a1.is_none() || s.a1 == r1),
                     "{label}: scenario {sc}, {hold:?}, sample {k}"
                 );
                 // The single law too (`Law::advance` against `step_n` of the generic step).
@@ -162,4 +178,23 @@ fn ed_kernels_equal_generic_steps() {
         let p = EdParams::<Fx>::new(&cfg, H_PAPER, EdScheme::Euler).unwrap();
         check_pair(p, p, label);
     }
+}
+
+/// Rows whose series has its own gains (the NAV440 preset: velocity and acceleration AVE and
+/// ED gains differ, so the first stage is not shared): the series runs through the kernels
+/// and the velocity law through its own; the same states as the generic steps.
+#[test]
+fn unshared_rows_equal_generic_steps() {
+    use estimators::BankGains;
+    let (v, a) = (BankGains::NAV440_VELOCITY, BankGains::NAV440_ACCELERATION);
+    let (pv, pa) = (
+        AveParams::<Fx>::new(&v.ave, H_PAPER).unwrap(),
+        AveParams::<Fx>::new(&a.ave, H_PAPER).unwrap(),
+    );
+    check_row(pv, Some(pa), pa, "AVE, NAV440 gains");
+    let (ev, ea) = (
+        EdParams::<Fx>::new(&v.ed, H_PAPER, EdScheme::Euler).unwrap(),
+        EdParams::<Fx>::new(&a.ed, H_PAPER, EdScheme::Euler).unwrap(),
+    );
+    check_row(ev, Some(ea), ea, "ED, NAV440 gains");
 }
