@@ -31,33 +31,28 @@ pub trait AxisBank {
     fn gaps(&self) -> u32;
 }
 
-impl<T: Real, S: SqrtFn<T>> AxisBank for YawBank<T, S> {
-    fn step(&mut self, s: &Sample, angle_deg: f32) -> Result<BankOutput, SampleError> {
-        if s.new_epoch {
-            self.new_epoch();
-        }
-        self.update(s.t_us, angle_deg)
-    }
+/// [`AxisBank`] for a bank with the paper bank's `new_epoch`, `update` and `reinit_count`.
+macro_rules! impl_axis_bank {
+    ($Bank:ident) => {
+        impl<T: Real, S: SqrtFn<T>> AxisBank for $Bank<T, S> {
+            fn step(&mut self, s: &Sample, angle_deg: f32) -> Result<BankOutput, SampleError> {
+                if s.new_epoch {
+                    self.new_epoch();
+                }
+                self.update(s.t_us, angle_deg)
+            }
 
-    fn gaps(&self) -> u32 {
-        self.reinit_count()
-    }
+            fn gaps(&self) -> u32 {
+                self.reinit_count()
+            }
+        }
+    };
 }
 
-/// The noise-adaptive bank drives like the paper bank (it is one, with gains that follow the
-/// noise; `nav440 estimate --gains schedule.toml`).
-impl<T: Real, S: SqrtFn<T>> AxisBank for AdaptiveBank<T, S> {
-    fn step(&mut self, s: &Sample, angle_deg: f32) -> Result<BankOutput, SampleError> {
-        if s.new_epoch {
-            self.new_epoch();
-        }
-        self.update(s.t_us, angle_deg)
-    }
-
-    fn gaps(&self) -> u32 {
-        self.reinit_count()
-    }
-}
+// The paper bank, and the noise-adaptive bank (the paper bank with gains that follow the
+// noise; `nav440 estimate --gains schedule.toml`).
+impl_axis_bank!(YawBank);
+impl_axis_bank!(AdaptiveBank);
 
 /// `cfg` for `axis`: the +-180 deg unwrapping switched off for pitch ([`Axis::wraps`]).
 fn axis_config(axis: Axis, cfg: &BankConfig) -> BankConfig {

@@ -500,6 +500,16 @@ fn print_estimates(csv: &str) -> Result<(), String> {
     Ok(())
 }
 
+/// `cargo clippy -D warnings` on the firmware's binaries for `target`, with `feature`.
+fn clippy_firmware(target: &str, feature: Option<&str>) -> Result<(), String> {
+    let mut args = vec!["clippy", "-p", FW, "--target", target, "--bins"];
+    if let Some(f) = feature {
+        args.extend(["--features", f]);
+    }
+    args.extend(["--", "-D", "warnings"]);
+    cargo(&args)
+}
+
 /// `cargo xtask qemu FILE [--board B] [--small | --adaptive]`.
 pub fn qemu(board: Board, file: &Path, small: bool, adaptive: bool) -> Result<(), String> {
     qemu::ensure_qemu()?;
@@ -1549,63 +1559,25 @@ pub fn ci_steps() -> Result<(), String> {
     };
     // Lints: the FPU build and the no-FPU (fixed-point) builds.
     for target in crate::THUMB_TARGETS {
-        cargo(&[
-            "clippy", "-p", FW, "--target", target, "--bins", "--", "-D", "warnings",
-        ])?;
+        clippy_firmware(target, None)?;
     }
     let mut elfs = Vec::new();
     for board in qemu::BOARDS {
         elfs.push((*board, build(board.target, &[], FW_BIN)?));
     }
     // The real-board profile: same code, its own memory map (see firmware README section).
-    cargo(&[
-        "clippy",
-        "-p",
-        FW,
-        "--target",
-        "thumbv7em-none-eabihf",
-        "--bins",
-        "--features",
-        STM32_FEATURE,
-        "--",
-        "-D",
-        "warnings",
-    ])?;
+    clippy_firmware("thumbv7em-none-eabihf", Some(STM32_FEATURE))?;
     build("thumbv7em-none-eabihf", &[STM32_FEATURE], FW_BIN)?;
     // The small-MCU firmware (one axis, profile `small`): lint and build for M4F and thumbv6m.
     let mut small_elfs = Vec::new();
     for (board, label) in small_boards() {
-        cargo(&[
-            "clippy",
-            "-p",
-            FW,
-            "--target",
-            board.target,
-            "--bins",
-            "--features",
-            ONE_AXIS,
-            "--",
-            "-D",
-            "warnings",
-        ])?;
+        clippy_firmware(board.target, Some(ONE_AXIS))?;
         small_elfs.push((board, label, build_small(board.target, FW_BIN)?));
     }
     // The firmware with noise-adaptive gains: lint and build for M4F and thumbv6m.
     let mut adaptive_elfs = Vec::new();
     for board in adaptive_boards() {
-        cargo(&[
-            "clippy",
-            "-p",
-            FW,
-            "--target",
-            board.target,
-            "--bins",
-            "--features",
-            ADAPTIVE,
-            "--",
-            "-D",
-            "warnings",
-        ])?;
+        clippy_firmware(board.target, Some(ADAPTIVE))?;
         adaptive_elfs.push((board, build(board.target, &[ADAPTIVE], FW_BIN)?));
     }
     if !qemu_ok {

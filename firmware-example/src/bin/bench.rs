@@ -331,32 +331,24 @@ fn adaptive_bank(c: &Counter, overhead: u64, cfg: &BankConfig) {
         total as f32 / SAMPLES as f32,
         "sample",
     );
-    let mut total = 0u64;
-    for k in 0..SAMPLES {
-        // Alternate between two points between levels: every call interpolates and rebuilds.
-        let v = if k % 2 == 0 { 0.02 } else { 0.3 };
-        let (n, ()) = c.measure(|| black_box(&mut bank).retune(black_box(v)));
-        total += n.saturating_sub(overhead);
-    }
-    line(
-        "instr",
-        "adaptive bank retune (interpolate + rebuild)",
-        total as f32 / SAMPLES as f32,
-        "call",
-    );
-    let mut total = 0u64;
-    for k in 0..SAMPLES {
-        // Two points near one level (0.01 deg^2): the observers keep their gains and their
-        // closed-form maps are reused; the AD's T and the tracker's noise are re-blended.
-        let v = if k % 2 == 0 { 0.02 } else { 0.03 };
-        let (n, ()) = c.measure(|| black_box(&mut bank).retune(black_box(v)));
-        total += n.saturating_sub(overhead);
-    }
-    line(
-        "instr",
+    // Per call of `retune`, alternating between two noise variances (deg^2).
+    let mut retunes = |a: f32, b: f32, label: &str| {
+        let mut total = 0u64;
+        for k in 0..SAMPLES {
+            let v = if k % 2 == 0 { a } else { b };
+            let (n, ()) = c.measure(|| black_box(&mut bank).retune(black_box(v)));
+            total += n.saturating_sub(overhead);
+        }
+        line("instr", label, total as f32 / SAMPLES as f32, "call");
+    };
+    // Two points between levels: every call interpolates and rebuilds.
+    retunes(0.02, 0.3, "adaptive bank retune (interpolate + rebuild)");
+    // Two points near one level (0.01 deg^2): the observers keep their gains and their
+    // closed-form maps are reused; the AD's T and the tracker's noise are re-blended.
+    retunes(
+        0.02,
+        0.03,
         "adaptive bank retune, same observer level (AD + Kalman rebuilt)",
-        total as f32 / SAMPLES as f32,
-        "call",
     );
     ram(
         "AdaptiveBank (bank + schedule + noise estimate)",
