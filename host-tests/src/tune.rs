@@ -688,8 +688,8 @@ pub struct PresetCase {
 /// the cases of its MSE (the objective of `nav440 tune`, one noise seed per case, `seed`), so
 /// that no case's scale dominates; with `beat`, the worst ratio of that MSE to `beat`'s MSE
 /// on the same case and seed, times the geometric mean of the ratios to the power 0.2, plus 1
-/// unless it beats `beat` in every case. Starts from `base`'s gains (the paper's gains; the AVE keeps `base`'s
-/// `deltahat` law), with `base`'s hold and step. Returns the gains and the tuned objective
+/// unless it beats `beat` in every case. Starts from `base`'s gains (the paper's gains; the
+/// AVE keeps `base`'s `deltahat` law), with `base`'s hold and step. Returns the gains and the tuned objective
 /// per family (velocity, acceleration).
 pub fn tune_preset(
     cases: &[PresetCase],
