@@ -68,35 +68,35 @@ impl BankGains {
     };
     /// Velocity gains of [`BankConfig::NAV440`] (see there how they were produced: printed by
     /// `cargo test --release -p host-tests --test preset -- --ignored --nocapture`). The AVE
-    /// keeps the leaky `deltahat` law of [`AVE_DEFAULT`]; ILO1-3 are one family once every
-    /// gain is free and reach the same gains; the tracker's `q/r` is what was tuned.
+    /// keeps the leaky `deltahat` law of [`AVE_DEFAULT`]; each ILO was tuned to beat its own
+    /// paper preset, so ILO1-3 differ; the tracker's `q/r` is what was tuned.
     pub const NAV440_VELOCITY: Self = Self {
         ave: AveConfig {
-            k: 49.68095,
-            gamma1: 2333.3284,
+            k: 43.55046,
+            gamma1: 1848.5444,
             ..AVE_DEFAULT
         },
         ilo: [
             IloConfig {
-                k1: 0.99811673,
-                l: 5.278966,
-                k2: 45.166603,
+                k1: 0.9975162,
+                l: 0.13922282,
+                k2: 45.476727,
             },
             IloConfig {
-                k1: 0.9987548,
-                l: 0.6670562,
-                k2: 0.079569295,
+                k1: 0.9988422,
+                l: 0.81672835,
+                k2: 0.072374955,
             },
             IloConfig {
-                k1: 0.9966446,
-                l: 0.23964658,
-                k2: 0.1924676,
+                k1: 0.9975247,
+                l: 0.29125896,
+                k2: 0.1364848,
             },
         ],
         ad_t: 0.011006941,
         ed: EdConfig {
-            lambda: 26.724169,
-            alpha: 875.628,
+            lambda: 26.93642,
+            alpha: 873.99744,
         },
         kf: KalmanNoise {
             q: 421696.5,
@@ -106,31 +106,31 @@ impl BankGains {
     /// Acceleration gains of [`BankConfig::NAV440`] (both stages of each series).
     pub const NAV440_ACCELERATION: Self = Self {
         ave: AveConfig {
-            k: 329.29242,
-            gamma1: 10667.703,
+            k: 452.36716,
+            gamma1: 14271.597,
             ..AVE_DEFAULT
         },
         ilo: [
             IloConfig {
-                k1: 0.9997536,
-                l: 16.102184,
-                k2: 0.033709116,
+                k1: 0.9987728,
+                l: 2.9622777,
+                k2: 0.026748411,
             },
             IloConfig {
-                k1: 0.94982654,
-                l: 1.2598504,
-                k2: 1.3189589,
+                k1: 0.8708157,
+                l: 1.530036,
+                k2: 3.4881077,
             },
             IloConfig {
-                k1: 0.9998693,
-                l: 480.38992,
-                k2: 1.2638867,
+                k1: 0.99987406,
+                l: 574.7061,
+                k2: 1.5084013,
             },
         ],
         ad_t: 0.1,
         ed: EdConfig {
-            lambda: 28.095552,
-            alpha: 6855.925,
+            lambda: 28.747272,
+            alpha: 6858.6904,
         },
         kf: KalmanNoise {
             q: 316227.78,

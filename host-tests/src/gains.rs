@@ -304,29 +304,36 @@ impl FamilyGains {
     }
 
     pub(crate) fn rust(&self, base: &BankGains, indent: &str) -> String {
-        let g = self.apply(*base);
-        let ilo = |c: &IloConfig| {
-            format!(
-                "IloConfig {{ k1: {:?}, l: {:?}, k2: {:?} }}",
-                c.k1, c.l, c.k2
-            )
-        };
-        format!(
-            "BankGains {{\n{i}    ave: AveConfig {{ k: {:?}, gamma1: {:?}, delta: DeltaMode::{:?} }},\n{i}    ilo: [\n{i}        {},\n{i}        {},\n{i}        {},\n{i}    ],\n{i}    ad_t: {:?},\n{i}    ed: EdConfig {{ lambda: {:?}, alpha: {:?} }},\n{i}    kf: KalmanNoise {{ q: {:?}, r: {:?} }},\n{i}}}",
-            g.ave.k,
-            g.ave.gamma1,
-            g.ave.delta,
-            ilo(&g.ilo[0]),
-            ilo(&g.ilo[1]),
-            ilo(&g.ilo[2]),
-            g.ad_t,
-            g.ed.lambda,
-            g.ed.alpha,
-            g.kf.q,
-            g.kf.r,
-            i = indent
-        )
+        bank_gains_literal(&self.apply(*base), indent)
     }
+}
+
+/// A Rust expression `BankGains { .. }` that builds `g` (every field spelled out; gains printed
+/// with `{:?}`, which round-trips f32 exactly), each line after the first indented by `indent`.
+/// Used by `nav440 tune --rust` and by the test that prints `BankGains::NAV440_*`
+/// (host-tests/tests/preset.rs).
+pub fn bank_gains_literal(g: &BankGains, indent: &str) -> String {
+    let ilo = |c: &IloConfig| {
+        format!(
+            "IloConfig {{ k1: {:?}, l: {:?}, k2: {:?} }}",
+            c.k1, c.l, c.k2
+        )
+    };
+    format!(
+        "BankGains {{\n{i}    ave: AveConfig {{ k: {:?}, gamma1: {:?}, delta: DeltaMode::{:?} }},\n{i}    ilo: [\n{i}        {},\n{i}        {},\n{i}        {},\n{i}    ],\n{i}    ad_t: {:?},\n{i}    ed: EdConfig {{ lambda: {:?}, alpha: {:?} }},\n{i}    kf: KalmanNoise {{ q: {:?}, r: {:?} }},\n{i}}}",
+        g.ave.k,
+        g.ave.gamma1,
+        g.ave.delta,
+        ilo(&g.ilo[0]),
+        ilo(&g.ilo[1]),
+        ilo(&g.ilo[2]),
+        g.ad_t,
+        g.ed.lambda,
+        g.ed.alpha,
+        g.kf.q,
+        g.kf.r,
+        i = indent
+    )
 }
 
 impl GainsFile {
