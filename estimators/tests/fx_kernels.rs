@@ -44,8 +44,11 @@ fn input(sc: u32, k: u32, r: &mut Rng) -> f64 {
 fn steps(k: u32) -> u32 {
     match k % 17 {
         3 => 1,
+        5 => 2,
         7 => 250,
+        9 if k % 3 == 0 => 5000,
         11 => 37,
+        13 => 99,
         _ => 100,
     }
 }
@@ -78,19 +81,31 @@ where
                 let y = Fx::from_f64(input(sc, k, &mut r));
                 let n = steps(k);
                 row.advance(&mut s, yp, y, n, hold);
-                // Generic: the same inputs as the kernels (`step_n`'s), the second stage fed
-                // by the first's output of each step.
+                // Generic: the same inputs as the kernels (`step_n`'s grid), the second stage
+                // fed by the first's output of each step. With a coarse step (the fixed-point
+                // AVE, `Law::coarse`, factor m): steps m, 2m, .. of the grid as coarse steps,
+                // each seeing the grid's input at its end, then the rest one by one.
                 let inc = (y - yp).div_int(n);
+                let mut grid = Vec::with_capacity(n as usize);
                 let mut yy = yp;
                 for j in 1..=n {
-                    let x = match hold {
+                    grid.push(match hold {
                         Hold::ZeroOrder => y,
                         Hold::Linear if j == n => y,
                         Hold::Linear => {
                             yy = yy + inc;
                             yy
                         }
-                    };
+                    });
+                }
+                let coarse = match (v.coarse(), a2.coarse(), a1.map(|l| l.coarse())) {
+                    (Some((cv, m)), Some((ca, _)), None) => Some((cv, cv, ca, m)),
+                    (Some((cv, m)), Some((ca, _)), Some(Some((c1, _)))) => Some((cv, c1, ca, m)),
+                    _ => None,
+                };
+                let m = coarse.map_or(1, |c| c.3);
+                let q = if coarse.is_some() { n / m } else { 0 };
+                let mut one = |v: &L, first: &L, a2: &L, x: Fx| {
                     let o = v.step(&mut rv, x);
                     let o1 = if a1.is_some() {
                         first.step(&mut r1, x)
@@ -98,6 +113,14 @@ where
                         o
                     };
                     a2.step(&mut ra, o1);
+                };
+                if let Some((cv, c1, ca, _)) = coarse {
+                    for g in 1..=q {
+                        one(&cv, &c1, &ca, grid[(g * m - 1) as usize]);
+                    }
+                }
+                for j in q * m + 1..=n {
+                    one(&v, &first, &a2, grid[(j - 1) as usize]);
                 }
                 assert!(
                     s.v == rv && s.a2 == ra && (a1.is_none() || s.a1 == r1),
@@ -109,13 +132,21 @@ where
                 v.advance(&mut one, yp, y, n, hold);
                 step_n(&Generic(v), &mut reference, yp, y, n, hold);
                 assert!(one == reference, "{label} alone: scenario {sc}, sample {k}");
+                // The frame translation of the bank (every 50 samples), on both.
+                if k % 50 == 0 {
+                    let d = Fx::from_f64(-12.5);
+                    row.translate(&mut s, d);
+                    v.translate(&mut rv, d);
+                    first.translate(&mut r1, d);
+                }
                 yp = y;
             }
         }
     }
 }
 
-/// A law with the default `advance` (the generic stepping), as the reference.
+/// A law with the default `advance` (the generic stepping, with the law's coarse step), as
+/// the reference.
 #[derive(Clone, Copy, Debug)]
 struct Generic<L>(L);
 
@@ -133,6 +164,9 @@ impl<L: Law> Law for Generic<L> {
     }
     fn translate(&self, s: &mut L::State, d: L::Num) {
         self.0.translate(s, d);
+    }
+    fn coarse(&self) -> Option<(Self, u32)> {
+        self.0.coarse().map(|(c, m)| (Generic(c), m))
     }
 }
 
