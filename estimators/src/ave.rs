@@ -76,9 +76,12 @@ pub enum DeltaLaw<T: Real> {
 /// For [`crate::Fx`] ([`Real::AVE_STEP_FACTOR`] = 2) the parameters also hold the
 /// coefficients of one Euler step of `2 h` (`2 h k`, `2 h gamma1`, `2 h`, `2 h sigma`,
 /// computed in `f64` from the configuration like those of `h`), used by [`Law::advance`] for
-/// whole pairs of steps ([`Law::coarse`], docs/FIXED-POINT.md part 4); they exist when `2 h`
-/// passes the same validation as `h` (`2 h k < 1`, `(2 h)^2 gamma1 < 1`, `2 h sigma < 1`),
-/// otherwise that AVE steps at `h`. For `f32` and `f64` that field is zero-sized and unused.
+/// whole pairs of steps ([`Law::coarse`], docs/FIXED-POINT.md part 4); they exist when the
+/// `deltahat` law is bounded ([`DeltaMode::Leaky`], the banks' default, or
+/// [`DeltaMode::Bounded`]; not [`DeltaMode::Paper`], whose `deltahat` grows without bound) and
+/// `2 h` passes the same validation as `h` (`2 h k < 1`, `(2 h)^2 gamma1 < 1`,
+/// `2 h sigma < 1`); otherwise that AVE steps at `h`. For `f32` and `f64` that field is
+/// zero-sized and unused.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AveParams<T: Real> {
     c: AveCoef<T>,
@@ -118,7 +121,11 @@ impl<T: Real> AveParams<T> {
         let h = positive("h", f64::from(h))?;
         let c = AveCoef::new(cfg, h)?;
         let m = T::AVE_STEP_FACTOR;
-        let coarse = if m > 1 {
+        // The coarse step needs a bounded deltahat (Leaky, Bounded): with the paper's law
+        // deltahat, and with it the switching term's jump `m h deltahat` per step, grows
+        // without bound, and so does the effect of the step size (docs/FIXED-POINT.md part 4:
+        // over a 6 h spin the paper's law at 2 h no longer behaves as at h).
+        let coarse = if m > 1 && cfg.delta != DeltaMode::Paper {
             AveCoef::new(cfg, h * f64::from(m)).ok()
         } else {
             None

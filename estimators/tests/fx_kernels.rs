@@ -191,6 +191,14 @@ fn ave_kernels_equal_generic_steps() {
             },
             "AVE other gains",
         ),
+        (
+            AveConfig {
+                k: 300.0,
+                gamma1: 12345.6,
+                delta: DeltaMode::Leaky { sigma: 0.37 },
+            },
+            "AVE other gains, leaky",
+        ),
     ] {
         let p = AveParams::<Fx>::new(&cfg, h).unwrap();
         check_pair(p, p, label);
@@ -231,4 +239,85 @@ fn unshared_rows_equal_generic_steps() {
         EdParams::<Fx>::new(&a.ed, H_PAPER, EdScheme::Euler).unwrap(),
     );
     check_row(ev, Some(ea), ea, "ED, NAV440 gains");
+}
+
+/// The fixed-point AVE's coarse step (`Real::AVE_STEP_FACTOR`): `2 h` for a bounded `deltahat`
+/// law, `h` for the paper's law and for the float types.
+#[test]
+fn ave_step_factor() {
+    let h = H_PAPER;
+    assert_eq!(
+        AveParams::<Fx>::new(&AVE_DEFAULT, h).unwrap().step_factor(),
+        2
+    );
+    let bounded = AveConfig {
+        delta: DeltaMode::Bounded { max: 50.0 },
+        ..AVE_PAPER
+    };
+    assert_eq!(AveParams::<Fx>::new(&bounded, h).unwrap().step_factor(), 2);
+    assert_eq!(
+        AveParams::<Fx>::new(&AVE_PAPER, h).unwrap().step_factor(),
+        1
+    );
+    assert_eq!(
+        AveParams::<f32>::new(&AVE_DEFAULT, h)
+            .unwrap()
+            .step_factor(),
+        1
+    );
+    assert_eq!(
+        AveParams::<f64>::new(&AVE_DEFAULT, h)
+            .unwrap()
+            .step_factor(),
+        1
+    );
+    // 2 h k = 1.2 >= 1: valid at h, no coarse step.
+    let big_k = AveConfig {
+        k: 6000.0,
+        ..AVE_DEFAULT
+    };
+    assert_eq!(AveParams::<Fx>::new(&big_k, h).unwrap().step_factor(), 1);
+}
+
+/// A row whose laws disagree on the coarse step (velocity AVE leaky: `2 h`; the series with
+/// the paper's law: `h`) runs every law at `h`, kernel or not: the states equal the generic
+/// steps at `h` (the reference of `check_row` steps at `h` when the laws disagree).
+#[test]
+fn ave_row_with_mixed_step_factors() {
+    let pv = AveParams::<Fx>::new(&AVE_DEFAULT, H_PAPER).unwrap();
+    let pa = AveParams::<Fx>::new(&AVE_PAPER, H_PAPER).unwrap();
+    check_row(pv, Some(pa), pa, "AVE leaky velocity, paper series");
+}
+
+/// The inputs of the coarse steps under linear hold are the true input at the end of each
+/// step's span: on a ramp (exact in f64 up to rounding), `f(y)` of the step ending at
+/// `j h` is `y_prev + j (y_new - y_prev) / n`; the coarse / step-h split is `floor(n / m)`
+/// then `n mod m`; zero-order hold gives `y_new` throughout.
+#[test]
+fn stepped_inputs_are_on_the_grid() {
+    use estimators::law::stepped_inputs;
+    for n in [1u32, 2, 3, 37, 99, 100, 5000] {
+        for m in [1u32, 2, 3] {
+            let (y0, y1) = (-3.25f64, 17.5f64);
+            let mut calls = Vec::new();
+            stepped_inputs(y0, y1, n, m, Hold::Linear, |y, c| calls.push((y, c)));
+            let q = (n / m) as usize;
+            assert_eq!(calls.len(), q + (n % m) as usize);
+            let mut j = 0u32;
+            for (i, (y, c)) in calls.iter().enumerate() {
+                assert_eq!(*c, i < q);
+                j += if *c { m } else { 1 };
+                let want = y0 + f64::from(j) * (y1 - y0) / f64::from(n);
+                assert!(
+                    (y - want).abs() < 1e-9,
+                    "n {n} m {m} step {i}: {y} vs {want}"
+                );
+            }
+            assert_eq!(j, n);
+            assert_eq!(calls.last().unwrap().0, y1);
+            let mut zoh = Vec::new();
+            stepped_inputs(y0, y1, n, m, Hold::ZeroOrder, |y, c| zoh.push((y, c)));
+            assert!(zoh.iter().all(|(y, _)| *y == y1) && zoh.len() == calls.len());
+        }
+    }
 }
