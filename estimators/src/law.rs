@@ -103,14 +103,15 @@ pub fn step_n<L: Law>(
     if n == 0 {
         return law.output(s);
     }
-    if let Some((c, m)) = law.coarse() {
+    if <L::Num as Real>::AVE_STEP_FACTOR > 1 {
+        // A number type with coarse steps (Fx): one loop for every law of that type, with or
+        // without its coarse step (`m = 1`: the inputs below, exactly those of the loop at
+        // the end), so that the law's step is inlined once.
+        let (c, m) = law.coarse().unwrap_or((*law, 1));
         let mut st = *s;
         stepped_inputs(y_prev, y_new, n, m, hold, |y, coarse| {
-            if coarse {
-                c.step(&mut st, y);
-            } else {
-                law.step(&mut st, y);
-            }
+            let l = if coarse { &c } else { law };
+            l.step(&mut st, y);
         });
         *s = st;
         return law.output(s);
@@ -155,33 +156,25 @@ pub fn stepped_inputs<T: Real>(
     mut f: impl FnMut(T, bool),
 ) {
     let m = m.max(1);
-    let q = n / m;
-    match hold {
-        Hold::ZeroOrder => {
-            for _ in 0..q {
-                f(y_new, true);
-            }
-            for _ in q * m..n {
-                f(y_new, false);
-            }
+    // Steps 1 ..= big_end of the grid are covered by coarse steps.
+    let big_end = n / m * m;
+    let zoh = matches!(hold, Hold::ZeroOrder);
+    let inc = if zoh {
+        T::ZERO
+    } else {
+        (y_new - y_prev).div_int(n)
+    };
+    let mut y = y_prev;
+    let mut j = 0;
+    // One call site (the callers inline `f`, a law step, once).
+    while j < n {
+        let big = j < big_end;
+        let adv = if big { m } else { 1 };
+        for _ in 0..adv {
+            y = y + inc;
         }
-        Hold::Linear => {
-            let inc = (y_new - y_prev).div_int(n);
-            let mut y = y_prev;
-            let mut j = 0;
-            for _ in 0..q {
-                for _ in 0..m {
-                    y = y + inc;
-                }
-                j += m;
-                f(if j == n { y_new } else { y }, true);
-            }
-            while j < n {
-                y = y + inc;
-                j += 1;
-                f(if j == n { y_new } else { y }, false);
-            }
-        }
+        j += adv;
+        f(if zoh || j == n { y_new } else { y }, big);
     }
 }
 

@@ -83,19 +83,20 @@ impl<L: Law> VelAcc<L> {
         hold: Hold,
         coarse: bool,
     ) {
-        if coarse {
-            if let Some((c, m)) = self.coarse() {
-                let mut st = *s;
-                stepped_inputs(y_prev, y_new, n, m, hold, |y, big| {
-                    if big {
-                        c.one::<SHARED>(&mut st, y);
-                    } else {
-                        self.one::<SHARED>(&mut st, y);
-                    }
-                });
-                *s = st;
-                return;
-            }
+        if <L::Num as Real>::AVE_STEP_FACTOR > 1 {
+            // A number type with coarse steps (Fx): one loop, with or without them (`m = 1`:
+            // the inputs of the loop below), so that the steps are inlined once.
+            let (c, m) = match self.coarse() {
+                Some(c) if coarse => c,
+                _ => (*self, 1),
+            };
+            let mut st = *s;
+            stepped_inputs(y_prev, y_new, n, m, hold, |y, big| {
+                let l = if big { &c } else { self };
+                l.one::<SHARED>(&mut st, y);
+            });
+            *s = st;
+            return;
         }
         let mut st = *s;
         match hold {
@@ -177,31 +178,29 @@ impl<T: Real, L: Law<Num = T>> Law for VelAcc<L> {
     #[inline]
     fn advance(&self, s: &mut Self::State, y_prev: T, y_new: T, n: u32, hold: Hold) -> T {
         if n > 0 {
-            let Some(f) = self.factors() else {
-                if self.shared {
-                    self.run::<true>(s, y_prev, y_new, n, hold, false);
-                } else {
-                    self.run::<false>(s, y_prev, y_new, n, hold, false);
-                }
-                return self.output(s);
-            };
-            let coarse = f.is_some();
-            if self.shared
+            // `None`: the laws disagree on the coarse step, all three run at `h` (below).
+            let f = self.factors();
+            let coarse = matches!(f, Some(Some(_)));
+            if f.is_some()
+                && self.shared
                 && L::advance_pair(
                     &self.v, &self.a2, &mut s.v, &mut s.a2, y_prev, y_new, n, hold,
                 )
             {
                 // The law's own fast path (the fixed-point kernels): same results.
-            } else if self.shared {
-                self.run::<true>(s, y_prev, y_new, n, hold, coarse);
-            } else if L::advance_pair(
-                &self.a1, &self.a2, &mut s.a1, &mut s.a2, y_prev, y_new, n, hold,
-            ) {
+            } else if f.is_some()
+                && !self.shared
+                && L::advance_pair(
+                    &self.a1, &self.a2, &mut s.a1, &mut s.a2, y_prev, y_new, n, hold,
+                )
+            {
                 // Own acceleration gains (the NAV440 preset) and a fast path (the fixed-point
                 // kernels): the series through it, the velocity law through its own
                 // `Law::advance`. The velocity law and the series are independent, so the
                 // results are those of the interleaved loop.
                 self.v.advance(&mut s.v, y_prev, y_new, n, hold);
+            } else if self.shared {
+                self.run::<true>(s, y_prev, y_new, n, hold, coarse);
             } else {
                 self.run::<false>(s, y_prev, y_new, n, hold, coarse);
             }
