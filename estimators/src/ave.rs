@@ -72,8 +72,25 @@ pub enum DeltaLaw<T: Real> {
 /// transfer is `gamma1 s / (s^2 + k s + gamma1)`.
 ///
 /// The validated coefficients of one step `h` ([`crate::Law`]); the state is [`AveState`].
+///
+/// For [`crate::Fx`] ([`Real::AVE_STEP_FACTOR`] = 2) the parameters also hold the
+/// coefficients of one Euler step of `2 h` (`2 h k`, `2 h gamma1`, `2 h`, `2 h sigma`,
+/// computed in `f64` from the configuration like those of `h`), used by [`Law::advance`] for
+/// whole pairs of steps ([`Law::coarse`], docs/FIXED-POINT.md part 4); they exist when the
+/// `deltahat` law is bounded ([`DeltaMode::Leaky`], the banks' default, or
+/// [`DeltaMode::Bounded`]; not [`DeltaMode::Paper`], whose `deltahat` grows without bound) and
+/// `2 h` passes the same validation as `h` (`2 h k < 1`, `(2 h)^2 gamma1 < 1`,
+/// `2 h sigma < 1`); otherwise that AVE steps at `h`. For `f32` and `f64` that field is
+/// zero-sized and unused.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AveParams<T: Real> {
+    c: AveCoef<T>,
+    coarse: T::Coarse<AveCoef<T>>,
+}
+
+/// The coefficients of one Euler step of the AVE (of `h`, or of `2 h` for the coarse step).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct AveCoef<T: Real> {
     hk: T,
     hg: T,
     h: T,
@@ -98,9 +115,37 @@ pub type Ave<T> = Stateful<AveParams<T>>;
 impl<T: Real> AveParams<T> {
     /// Validates `cfg` for step `h` (s). Errors: non-finite or non-positive `k`,
     /// `gamma1`, `h`; `h * k >= 1` or `h^2 * gamma1 >= 1` (forward-Euler stability); negative
-    /// bound or leakage; `h * sigma >= 1`.
+    /// bound or leakage; `h * sigma >= 1`. For [`crate::Fx`], also the coefficients of the
+    /// coarse step `2 h` (see [`AveParams`]).
     pub fn new(cfg: &AveConfig, h: f32) -> Result<Self, ConfigError> {
         let h = positive("h", f64::from(h))?;
+        let c = AveCoef::new(cfg, h)?;
+        let m = T::AVE_STEP_FACTOR;
+        // The coarse step needs a bounded deltahat (Leaky, Bounded): with the paper's law
+        // deltahat, and with it the switching term's jump `m h deltahat` per step, grows
+        // without bound, and so does the effect of the step size (docs/FIXED-POINT.md part 4:
+        // over a 6 h spin the paper's law at 2 h no longer behaves as at h).
+        let coarse = if m > 1 && cfg.delta != DeltaMode::Paper {
+            AveCoef::new(cfg, h * f64::from(m)).ok()
+        } else {
+            None
+        };
+        Ok(Self {
+            c,
+            coarse: T::coarse_new(coarse),
+        })
+    }
+
+    /// The steps `h` one Euler step of [`Law::advance`] spans inside an interval: 2 for
+    /// [`crate::Fx`] when the coarse step is valid (see [`AveParams`]), else 1.
+    pub fn step_factor(&self) -> u32 {
+        self.coarse().map_or(1, |c| c.1)
+    }
+}
+
+impl<T: Real> AveCoef<T> {
+    /// The coefficients of an Euler step `h` (s), validated (see [`AveParams::new`]).
+    fn new(cfg: &AveConfig, h: f64) -> Result<Self, ConfigError> {
         let k = positive("k", f64::from(cfg.k))?;
         let g = positive("gamma1", f64::from(cfg.gamma1))?;
         if h * k >= 1.0 {
@@ -173,6 +218,7 @@ impl<T: Real> Law for AveParams<T> {
     /// Returns `theta_{n+1}`, which already contains `y_n`.
     #[inline(always)]
     fn step(&self, s: &mut AveState<T>, y: T) -> T {
+        let c = &self.c;
         let e = s.xhat - y;
         let sw = if e > T::ZERO {
             s.delta
@@ -181,10 +227,10 @@ impl<T: Real> Law for AveParams<T> {
         } else {
             T::ZERO
         };
-        s.xhat = s.xhat + (self.h * (s.theta - sw) - self.hk * e);
-        s.theta = s.theta - self.hg * e;
-        let inc = self.h * e.abs();
-        s.delta = match self.delta {
+        s.xhat = s.xhat + (c.h * (s.theta - sw) - c.hk * e);
+        s.theta = s.theta - c.hg * e;
+        let inc = c.h * e.abs();
+        s.delta = match c.delta {
             DeltaLaw::Paper => s.delta + inc,
             DeltaLaw::Bounded { max } => (s.delta + inc).min(max),
             DeltaLaw::Leaky { hsigma } => s.delta + inc - hsigma * s.delta,
@@ -202,12 +248,27 @@ impl<T: Real> Law for AveParams<T> {
         s.xhat = s.xhat + d;
     }
 
+    /// The coarse step `2 h` of the fixed-point AVE (see [`AveParams`]); `None` for the float
+    /// types.
+    #[inline(always)]
+    fn coarse(&self) -> Option<(Self, u32)> {
+        T::coarse_get(&self.coarse).map(|c| {
+            (
+                Self {
+                    c,
+                    coarse: self.coarse,
+                },
+                T::AVE_STEP_FACTOR,
+            )
+        })
+    }
+
     /// [`crate::Fx`]: the integer kernel (same results, see docs/FIXED-POINT.md); otherwise, or if
-    /// the kernel gives up, `n` steps.
+    /// the kernel gives up, [`step_n`] (with the coarse steps of [`Law::coarse`]).
     #[inline]
     fn advance(&self, s: &mut AveState<T>, y_prev: T, y_new: T, n: u32, hold: Hold) -> T {
         if n > 0 {
-            if let (Some(k), Some(ys)) = (AveFx::of(self), inputs(y_prev, y_new, n, hold)) {
+            if let (Some(k), Some(ys)) = (AveK::of(self), inputs(y_prev, y_new, n, hold)) {
                 let mut dummy = *s;
                 if k.advance(None, s, &mut dummy, ys, n) {
                     return s.theta;
@@ -229,10 +290,93 @@ impl<T: Real> Law for AveParams<T> {
         n: u32,
         hold: Hold,
     ) -> bool {
-        match (AveFx::of(v), AveFx::of(a2), inputs(y_prev, y_new, n, hold)) {
+        match (AveK::of(v), AveK::of(a2), inputs(y_prev, y_new, n, hold)) {
             (Some(kv), Some(ka), Some(ys)) => kv.advance(Some(&ka), sv, sa, ys, n),
             _ => false,
         }
+    }
+}
+
+/// The fixed-point AVE's kernel coefficients: those of the step `h` and, when the law has
+/// one, of its coarse step `m h` ([`Law::coarse`]).
+#[derive(Clone, Copy, Debug)]
+struct AveK {
+    fine: AveFx,
+    coarse: Option<(AveFx, u32)>,
+}
+
+impl AveK {
+    /// `None` for the float types or when a coefficient is outside the kernel's classes.
+    #[inline(always)]
+    fn of<T: Real>(p: &AveParams<T>) -> Option<Self> {
+        let coarse = match p.coarse() {
+            Some((c, m)) => Some((AveFx::of(&c.c)?, m)),
+            None => None,
+        };
+        Some(Self {
+            fine: AveFx::of(&p.c)?,
+            coarse,
+        })
+    }
+
+    /// The kernel over one interval of `n >= 1` steps `h` (`a2`: the series' second stage fed
+    /// by `self`): `floor(n / m)` coarse steps, then `n mod m` steps `h`, with the inputs of
+    /// [`crate::law::stepped_inputs`]; the states are written only when every part succeeds
+    /// (else the caller steps the whole interval with the generic code, from the same state).
+    #[inline(always)]
+    fn advance<T: Real>(
+        &self,
+        a2: Option<&AveK>,
+        sv: &mut AveState<T>,
+        sa: &mut AveState<T>,
+        (first, inc, y_new): (i64, i64, i64),
+        n: u32,
+    ) -> bool {
+        let (Some(mut v), Some(mut a)) = (AveFxState::of(sv), AveFxState::of(sa)) else {
+            return false;
+        };
+        let mut y0 = first;
+        let mut left = n;
+        if let Some((cv, m)) = self.coarse {
+            let ca = match a2.map(|k| k.coarse) {
+                None => None,
+                Some(Some((ca, ma))) if ma == m => Some(ca),
+                // The stages disagree on the coarse step: the generic code decides.
+                Some(_) => return false,
+            };
+            let q = n / m;
+            let r = n % m;
+            if q > 0 {
+                // The coarse steps see first + j m inc (j = 1 .. q), the last y_new when no
+                // step h follows: the values the generic loop accumulates (exact, no wrap:
+                // between y_prev and y_new).
+                let y_end = if r == 0 {
+                    y_new
+                } else {
+                    first.wrapping_add(inc.wrapping_mul(i64::from(q * m)))
+                };
+                let ys = (first, inc.wrapping_mul(i64::from(m)), y_end);
+                if !cv.run(ca.as_ref(), &mut v, &mut a, ys, q) {
+                    return false;
+                }
+                y0 = y_end;
+            }
+            left = r;
+        } else if a2.is_some_and(|k| k.coarse.is_some()) {
+            return false;
+        }
+        if left > 0
+            && !self
+                .fine
+                .run(a2.map(|k| &k.fine), &mut v, &mut a, (y0, inc, y_new), left)
+        {
+            return false;
+        }
+        v.store(sv);
+        if a2.is_some() {
+            a.store(sa);
+        }
+        true
     }
 }
 
@@ -292,7 +436,7 @@ impl AveFxState {
 impl AveFx {
     /// `None` for the float types or when a coefficient is outside the kernel's classes.
     #[inline(always)]
-    fn of<T: Real>(p: &AveParams<T>) -> Option<Self> {
+    fn of<T: Real>(p: &AveCoef<T>) -> Option<Self> {
         let hg = Coef::of(p.hg)?;
         // h gamma1 = hg28 / 2^28 exactly (Real::from_f64_q28), below 8 in magnitude.
         if hg.raw & 15 != 0 {
@@ -325,38 +469,29 @@ impl AveFx {
         }
     }
 
-    /// The kernel over one interval (`a2`: the series' second stage fed by `self`); the states
-    /// are written only when it succeeds.
+    /// [`crate::fxk::run`] of `n >= 1` steps with these coefficients (`a2`: the series' second
+    /// stage fed by `self`) on the raw states; `false` when the range guard fails (the states
+    /// are then unspecified: the caller drops them).
     #[inline(always)]
-    fn advance<T: Real>(
+    fn run(
         &self,
         a2: Option<&AveFx>,
-        sv: &mut AveState<T>,
-        sa: &mut AveState<T>,
+        v: &mut AveFxState,
+        a: &mut AveFxState,
         ys: (i64, i64, i64),
         n: u32,
     ) -> bool {
-        let (Some(mut v), Some(mut a)) = (AveFxState::of(sv), AveFxState::of(sa)) else {
-            return false;
-        };
         let bound = match a2 {
             Some(a2) if a2.law() != self.law() => return false,
             Some(a2) => self.bound.min(a2.bound),
             None => self.bound,
         };
         let ok = match self.law() {
-            PAPER => run_law::<PAPER>(self, a2, &mut v, &mut a, ys, n, bound),
-            BOUNDED => run_law::<BOUNDED>(self, a2, &mut v, &mut a, ys, n, bound),
-            _ => run_law::<LEAKY>(self, a2, &mut v, &mut a, ys, n, bound),
+            PAPER => run_law::<PAPER>(self, a2, v, a, ys, n, bound),
+            BOUNDED => run_law::<BOUNDED>(self, a2, v, a, ys, n, bound),
+            _ => run_law::<LEAKY>(self, a2, v, a, ys, n, bound),
         };
-        if ok.is_none() {
-            return false;
-        }
-        v.store(sv);
-        if a2.is_some() {
-            a.store(sa);
-        }
-        true
+        ok.is_some()
     }
 }
 

@@ -55,6 +55,18 @@ pub trait Law: Copy + core::fmt::Debug {
         step_n(self, s, y_prev, y_new, n, hold)
     }
 
+    /// The law of one *coarse* Euler step of `m` steps `h` (that is, of `m h`) and `m`, when
+    /// the law advances whole groups of `m` steps at once inside an interval: [`step_n`] (so
+    /// the default [`Law::advance`]) and [`crate::VelAcc`] then run `floor(n / m)` coarse steps
+    /// and the remaining `n mod m` steps `h`, each coarse step seeing the input at the end of
+    /// its span ([`stepped_inputs`]). `None` (the default, and every law of the float banks):
+    /// every step is a step `h`. [`Law::step`] is always one step `h`. Used by the fixed-point
+    /// AVE ([`crate::Real::AVE_STEP_FACTOR`], docs/FIXED-POINT.md part 4).
+    #[inline(always)]
+    fn coarse(&self) -> Option<(Self, u32)> {
+        None
+    }
+
     /// `n >= 1` steps of the velocity law `v` and of a series' second stage `a2` fed by its
     /// output in every step (a shared [`crate::VelAcc`] row), by a faster path of the law's own
     /// with exactly the results of stepping; `false` (states untouched) when the law has no such
@@ -91,6 +103,19 @@ pub fn step_n<L: Law>(
     if n == 0 {
         return law.output(s);
     }
+    if <L::Num as Real>::AVE_STEP_FACTOR > 1 {
+        // A number type with coarse steps (Fx): one loop for every law of that type, with or
+        // without its coarse step (`m = 1`: the inputs below, exactly those of the loop at
+        // the end), so that the law's step is inlined once.
+        let (c, m) = law.coarse().unwrap_or((*law, 1));
+        let mut st = *s;
+        stepped_inputs(y_prev, y_new, n, m, hold, |y, coarse| {
+            let l = if coarse { &c } else { law };
+            l.step(&mut st, y);
+        });
+        *s = st;
+        return law.output(s);
+    }
     let mut st = *s;
     match hold {
         Hold::ZeroOrder => {
@@ -111,6 +136,46 @@ pub fn step_n<L: Law>(
     }
     *s = st;
     law.output(s)
+}
+
+/// The inputs of an interval of `n >= 1` steps `h` from `y_prev` to `y_new` advanced in
+/// `floor(n / m)` coarse steps of `m h` followed by `n mod m` steps `h` (`m >= 1`): calls
+/// `f(y, true)` for each coarse step and `f(y, false)` for each step `h`, in time order.
+/// Every step sees the input at the end of its span on the grid of [`step_n`]: with
+/// [`Hold::Linear`], `y_prev + j inc` (`inc = (y_new - y_prev) / n`, accumulated with `+`
+/// one `inc` per step `h` as [`step_n`] does, so the values are those [`step_n`] gives its
+/// steps `m, 2m, ...`) and `y_new` for the interval's last step; with [`Hold::ZeroOrder`],
+/// `y_new`. With `m = 1` these are exactly [`step_n`]'s inputs.
+#[inline(always)]
+pub fn stepped_inputs<T: Real>(
+    y_prev: T,
+    y_new: T,
+    n: u32,
+    m: u32,
+    hold: Hold,
+    mut f: impl FnMut(T, bool),
+) {
+    let m = m.max(1);
+    // Steps 1 ..= big_end of the grid are covered by coarse steps.
+    let big_end = n / m * m;
+    let zoh = matches!(hold, Hold::ZeroOrder);
+    let inc = if zoh {
+        T::ZERO
+    } else {
+        (y_new - y_prev).div_int(n)
+    };
+    let mut y = y_prev;
+    let mut j = 0;
+    // One call site (the callers inline `f`, a law step, once).
+    while j < n {
+        let big = j < big_end;
+        let adv = if big { m } else { 1 };
+        for _ in 0..adv {
+            y = y + inc;
+        }
+        j += adv;
+        f(if zoh || j == n { y_new } else { y }, big);
+    }
 }
 
 /// One parameter set bound to one state: the classic estimator object, implementing

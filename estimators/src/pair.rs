@@ -1,6 +1,6 @@
 //! A velocity law and the acceleration series of the same family in one row of a bank.
 
-use crate::law::Law;
+use crate::law::{stepped_inputs, Law};
 use crate::{Hold, Real};
 
 /// A velocity law `v` and the acceleration series `a1 -> a2` of the same family (AVE and
@@ -61,7 +61,18 @@ impl<L: Law> VelAcc<L> {
         self.a2.step(&mut st.a2, o1);
     }
 
-    /// `n >= 1` steps on a local copy of the state.
+    /// The coarse-step factor of the three laws ([`Law::coarse`]) when they agree (`a1`
+    /// ignored when shared), `Some(None)` when none has a coarse step, `None` when they
+    /// disagree (then the row runs every law at `h`, [`VelAcc::advance`]).
+    #[inline(always)]
+    fn factors(&self) -> Option<Option<u32>> {
+        let f = |l: &L| l.coarse().map(|c| c.1);
+        let v = f(&self.v);
+        (f(&self.a2) == v && (self.shared || f(&self.a1) == v)).then_some(v)
+    }
+
+    /// `n >= 1` steps on a local copy of the state (with the laws' coarse steps when
+    /// `coarse`, [`Law::coarse`]).
     #[inline(always)]
     fn run<const SHARED: bool>(
         &self,
@@ -70,7 +81,23 @@ impl<L: Law> VelAcc<L> {
         y_new: L::Num,
         n: u32,
         hold: Hold,
+        coarse: bool,
     ) {
+        if <L::Num as Real>::AVE_STEP_FACTOR > 1 {
+            // A number type with coarse steps (Fx): one loop, with or without them (`m = 1`:
+            // the inputs of the loop below), so that the steps are inlined once.
+            let (c, m) = match self.coarse() {
+                Some(c) if coarse => c,
+                _ => (*self, 1),
+            };
+            let mut st = *s;
+            stepped_inputs(y_prev, y_new, n, m, hold, |y, big| {
+                let l = if big { &c } else { self };
+                l.one::<SHARED>(&mut st, y);
+            });
+            *s = st;
+            return;
+        }
         let mut st = *s;
         match hold {
             Hold::ZeroOrder => {
@@ -126,27 +153,56 @@ impl<T: Real, L: Law<Num = T>> Law for VelAcc<L> {
         self.a1.translate(&mut s.a1, d);
     }
 
+    /// The row of the three laws' coarse steps, when all three (`a1` ignored when shared) have
+    /// one with the same factor.
+    #[inline(always)]
+    fn coarse(&self) -> Option<(Self, u32)> {
+        let (v, m) = self.v.coarse()?;
+        let (a2, ma) = self.a2.coarse()?;
+        let a1 = if self.shared {
+            v
+        } else {
+            match self.a1.coarse()? {
+                (a1, m1) if m1 == m => a1,
+                _ => return None,
+            }
+        };
+        (ma == m).then_some((Self::new(v, a1, a2, self.shared), m))
+    }
+
+    /// The `n` steps of the interval: through the laws' fast path ([`Law::advance_pair`], the
+    /// fixed-point kernels) when they have one, else stepped here; with the laws' coarse steps
+    /// ([`Law::coarse`]) when all three have the same, else (a row whose laws disagree, e.g.
+    /// one AVE gain set too large for the coarse step) every law at `h`. Same results either
+    /// way.
     #[inline]
     fn advance(&self, s: &mut Self::State, y_prev: T, y_new: T, n: u32, hold: Hold) -> T {
         if n > 0 {
-            if self.shared
+            // `None`: the laws disagree on the coarse step, all three run at `h` (below).
+            let f = self.factors();
+            let coarse = matches!(f, Some(Some(_)));
+            if f.is_some()
+                && self.shared
                 && L::advance_pair(
                     &self.v, &self.a2, &mut s.v, &mut s.a2, y_prev, y_new, n, hold,
                 )
             {
                 // The law's own fast path (the fixed-point kernels): same results.
-            } else if self.shared {
-                self.run::<true>(s, y_prev, y_new, n, hold);
-            } else if L::advance_pair(
-                &self.a1, &self.a2, &mut s.a1, &mut s.a2, y_prev, y_new, n, hold,
-            ) {
+            } else if f.is_some()
+                && !self.shared
+                && L::advance_pair(
+                    &self.a1, &self.a2, &mut s.a1, &mut s.a2, y_prev, y_new, n, hold,
+                )
+            {
                 // Own acceleration gains (the NAV440 preset) and a fast path (the fixed-point
                 // kernels): the series through it, the velocity law through its own
                 // `Law::advance`. The velocity law and the series are independent, so the
                 // results are those of the interleaved loop.
                 self.v.advance(&mut s.v, y_prev, y_new, n, hold);
+            } else if self.shared {
+                self.run::<true>(s, y_prev, y_new, n, hold, coarse);
             } else {
-                self.run::<false>(s, y_prev, y_new, n, hold);
+                self.run::<false>(s, y_prev, y_new, n, hold, coarse);
             }
         }
         self.output(s)

@@ -11,7 +11,7 @@
 //!
 //! | type | f32 | Fx (Q31.32) |
 //! |---|---|---|
-//! | [`Ave`] (params + state) | 32 | 64 |
+//! | [`Ave`] (params + state) | 32 | 104 (with the coarse `2 h` step's coefficients, [`AveParams`]) |
 //! | [`Ilo`]`<T, 1>` | 32 | 64 |
 //! | [`Ad`] | 16 | 32 |
 //! | [`Ed`] | 44 | 88 |
@@ -20,9 +20,9 @@
 //! | [`ClosedForm`]`<IloParams<T, 1>>` (params) | 104 | 200 |
 //! | [`ClosedForm`]`<AdParams<T>>` (params) | 96 | 184 |
 //! | [`ClosedForm`]`<Series<IloParams<T, 1>, IloParams<T, 1>>>` (params) | 120 | 232 |
-//! | [`PaperParams`] (all 12 rows' parameters) | 1092 | 2104 |
+//! | [`PaperParams`] (all 12 rows' parameters) | 1092 | 2224 |
 //! | [`PaperState`] (all 12 rows' state, one axis) | 264 | 528 |
-//! | [`YawBank`] = [`PaperBank`] (whole bank, one axis) | 1440 | 2720 |
+//! | [`YawBank`] = [`PaperBank`] (whole bank, one axis) | 1440 | 2840 |
 //! | [`ProductBank`] (ILO1 + Kalman, one axis) | 240 | 392 |
 //!
 //! A [`Series`] is the sum of its stages; an `Ilo<T, D>` adds `D - 1` words of `T`; a closed
@@ -32,7 +32,7 @@ use crate::*;
 use core::mem::size_of;
 
 /// `(f32 size, Fx size)` of [`Ave`].
-pub const AVE: (usize, usize) = (32, 64);
+pub const AVE: (usize, usize) = (32, 104);
 /// `(f32, Fx)` of [`Ilo`]`<T, 1>`.
 pub const ILO_D1: (usize, usize) = (32, 64);
 /// `(f32, Fx)` of [`Ad`].
@@ -50,11 +50,11 @@ pub const CLOSED_AD: (usize, usize) = (96, 184);
 /// `(f32, Fx)` of [`ClosedForm`]`<Series<IloParams<T, 1>, IloParams<T, 1>>>`.
 pub const CLOSED_ILO_ILO: (usize, usize) = (120, 232);
 /// `(f32, Fx)` of [`PaperParams`].
-pub const PAPER_PARAMS: (usize, usize) = (1092, 2104);
+pub const PAPER_PARAMS: (usize, usize) = (1092, 2224);
 /// `(f32, Fx)` of [`PaperState`].
 pub const PAPER_STATE: (usize, usize) = (264, 528);
 /// `(f32, Fx)` of the whole [`YawBank`].
-pub const YAW_BANK: (usize, usize) = (1440, 2720);
+pub const YAW_BANK: (usize, usize) = (1440, 2840);
 /// `(f32, Fx)` of the [`ProductBank`].
 pub const PRODUCT_BANK: (usize, usize) = (240, 392);
 

@@ -400,6 +400,24 @@ pub trait Real:
     const ZERO: Self;
     /// 1.
     const ONE: Self;
+    /// How many steps `h` the AVE advances in one Euler step inside an interval (issue 12,
+    /// docs/FIXED-POINT.md part 4): 1 for `f32` and `f64` (every step is a step `h`); 2 for
+    /// [`Fx`], whose AVE and AVE-AVE run `floor(n / 2)` Euler steps of `2 h` per interval of
+    /// `n` steps and the remainder (`n` odd) as one step `h`, with coefficients computed for
+    /// `2 h` (`AveParams` keeps both sets; see `Law::coarse`). Halves the fixed-point AVE row's
+    /// cost on the no-FPU targets; accuracy loss measured in `tests/bank.rs`.
+    const AVE_STEP_FACTOR: u32;
+    /// Storage of a law's coarse-step parameters (`Law::coarse`): zero-sized
+    /// (`PhantomData`) for the float types, which never use it, so their parameters keep their
+    /// size; `Option<X>` for [`Fx`].
+    #[doc(hidden)]
+    type Coarse<X: Copy + Debug + PartialEq>: Copy + Debug + PartialEq;
+    /// Stores `x` (dropped by the float types).
+    #[doc(hidden)]
+    fn coarse_new<X: Copy + Debug + PartialEq>(x: Option<X>) -> Self::Coarse<X>;
+    /// The stored coarse-step parameters (`None` for the float types).
+    #[doc(hidden)]
+    fn coarse_get<X: Copy + Debug + PartialEq>(c: &Self::Coarse<X>) -> Option<X>;
     /// Converts from `f64` (rounding for floats, saturating for fixed point; NaN gives 0).
     fn from_f64(x: f64) -> Self;
     /// Converts from `f32` (exact for `f32`/`f64`, saturating for fixed point; NaN gives 0).
@@ -482,6 +500,16 @@ pub trait Real:
 impl Real for f32 {
     const ZERO: Self = 0.0;
     const ONE: Self = 1.0;
+    const AVE_STEP_FACTOR: u32 = 1;
+    type Coarse<X: Copy + Debug + PartialEq> = core::marker::PhantomData<X>;
+    #[inline(always)]
+    fn coarse_new<X: Copy + Debug + PartialEq>(_x: Option<X>) -> Self::Coarse<X> {
+        core::marker::PhantomData
+    }
+    #[inline(always)]
+    fn coarse_get<X: Copy + Debug + PartialEq>(_c: &Self::Coarse<X>) -> Option<X> {
+        None
+    }
     #[inline]
     fn from_f64(x: f64) -> Self {
         x as f32
@@ -527,6 +555,16 @@ impl Real for f32 {
 impl Real for f64 {
     const ZERO: Self = 0.0;
     const ONE: Self = 1.0;
+    const AVE_STEP_FACTOR: u32 = 1;
+    type Coarse<X: Copy + Debug + PartialEq> = core::marker::PhantomData<X>;
+    #[inline(always)]
+    fn coarse_new<X: Copy + Debug + PartialEq>(_x: Option<X>) -> Self::Coarse<X> {
+        core::marker::PhantomData
+    }
+    #[inline(always)]
+    fn coarse_get<X: Copy + Debug + PartialEq>(_c: &Self::Coarse<X>) -> Option<X> {
+        None
+    }
     #[inline]
     fn from_f64(x: f64) -> Self {
         x
@@ -572,6 +610,16 @@ impl Real for f64 {
 impl Real for Fx {
     const ZERO: Self = Fx(I32F32::ZERO);
     const ONE: Self = Fx(I32F32::ONE);
+    const AVE_STEP_FACTOR: u32 = 2;
+    type Coarse<X: Copy + Debug + PartialEq> = Option<X>;
+    #[inline(always)]
+    fn coarse_new<X: Copy + Debug + PartialEq>(x: Option<X>) -> Self::Coarse<X> {
+        x
+    }
+    #[inline(always)]
+    fn coarse_get<X: Copy + Debug + PartialEq>(c: &Self::Coarse<X>) -> Option<X> {
+        *c
+    }
     #[inline(always)]
     fn fx_bits(self) -> Option<i64> {
         Some(self.to_bits())

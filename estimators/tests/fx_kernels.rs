@@ -44,8 +44,11 @@ fn input(sc: u32, k: u32, r: &mut Rng) -> f64 {
 fn steps(k: u32) -> u32 {
     match k % 17 {
         3 => 1,
+        5 => 2,
         7 => 250,
+        9 if k.is_multiple_of(3) => 5000,
         11 => 37,
+        13 => 99,
         _ => 100,
     }
 }
@@ -78,19 +81,31 @@ where
                 let y = Fx::from_f64(input(sc, k, &mut r));
                 let n = steps(k);
                 row.advance(&mut s, yp, y, n, hold);
-                // Generic: the same inputs as the kernels (`step_n`'s), the second stage fed
-                // by the first's output of each step.
+                // Generic: the same inputs as the kernels (`step_n`'s grid), the second stage
+                // fed by the first's output of each step. With a coarse step (the fixed-point
+                // AVE, `Law::coarse`, factor m): steps m, 2m, .. of the grid as coarse steps,
+                // each seeing the grid's input at its end, then the rest one by one.
                 let inc = (y - yp).div_int(n);
+                let mut grid = Vec::with_capacity(n as usize);
                 let mut yy = yp;
                 for j in 1..=n {
-                    let x = match hold {
+                    grid.push(match hold {
                         Hold::ZeroOrder => y,
                         Hold::Linear if j == n => y,
                         Hold::Linear => {
                             yy = yy + inc;
                             yy
                         }
-                    };
+                    });
+                }
+                let coarse = match (v.coarse(), a2.coarse(), a1.map(|l| l.coarse())) {
+                    (Some((cv, m)), Some((ca, _)), None) => Some((cv, cv, ca, m)),
+                    (Some((cv, m)), Some((ca, _)), Some(Some((c1, _)))) => Some((cv, c1, ca, m)),
+                    _ => None,
+                };
+                let m = coarse.map_or(1, |c| c.3);
+                let q = if coarse.is_some() { n / m } else { 0 };
+                let mut one = |v: &L, first: &L, a2: &L, x: Fx| {
                     let o = v.step(&mut rv, x);
                     let o1 = if a1.is_some() {
                         first.step(&mut r1, x)
@@ -98,6 +113,14 @@ where
                         o
                     };
                     a2.step(&mut ra, o1);
+                };
+                if let Some((cv, c1, ca, _)) = coarse {
+                    for g in 1..=q {
+                        one(&cv, &c1, &ca, grid[(g * m - 1) as usize]);
+                    }
+                }
+                for j in q * m + 1..=n {
+                    one(&v, &first, &a2, grid[(j - 1) as usize]);
                 }
                 assert!(
                     s.v == rv && s.a2 == ra && (a1.is_none() || s.a1 == r1),
@@ -109,13 +132,21 @@ where
                 v.advance(&mut one, yp, y, n, hold);
                 step_n(&Generic(v), &mut reference, yp, y, n, hold);
                 assert!(one == reference, "{label} alone: scenario {sc}, sample {k}");
+                // The frame translation of the bank (every 50 samples), on both.
+                if k % 50 == 0 {
+                    let d = Fx::from_f64(-12.5);
+                    row.translate(&mut s, d);
+                    v.translate(&mut rv, d);
+                    first.translate(&mut r1, d);
+                }
                 yp = y;
             }
         }
     }
 }
 
-/// A law with the default `advance` (the generic stepping), as the reference.
+/// A law with the default `advance` (the generic stepping, with the law's coarse step), as
+/// the reference.
 #[derive(Clone, Copy, Debug)]
 struct Generic<L>(L);
 
@@ -133,6 +164,9 @@ impl<L: Law> Law for Generic<L> {
     }
     fn translate(&self, s: &mut L::State, d: L::Num) {
         self.0.translate(s, d);
+    }
+    fn coarse(&self) -> Option<(Self, u32)> {
+        self.0.coarse().map(|(c, m)| (Generic(c), m))
     }
 }
 
@@ -156,6 +190,14 @@ fn ave_kernels_equal_generic_steps() {
                 delta: DeltaMode::Paper,
             },
             "AVE other gains",
+        ),
+        (
+            AveConfig {
+                k: 300.0,
+                gamma1: 12345.6,
+                delta: DeltaMode::Leaky { sigma: 0.37 },
+            },
+            "AVE other gains, leaky",
         ),
     ] {
         let p = AveParams::<Fx>::new(&cfg, h).unwrap();
@@ -197,4 +239,85 @@ fn unshared_rows_equal_generic_steps() {
         EdParams::<Fx>::new(&a.ed, H_PAPER, EdScheme::Euler).unwrap(),
     );
     check_row(ev, Some(ea), ea, "ED, NAV440 gains");
+}
+
+/// The fixed-point AVE's coarse step (`Real::AVE_STEP_FACTOR`): `2 h` for a bounded `deltahat`
+/// law, `h` for the paper's law and for the float types.
+#[test]
+fn ave_step_factor() {
+    let h = H_PAPER;
+    assert_eq!(
+        AveParams::<Fx>::new(&AVE_DEFAULT, h).unwrap().step_factor(),
+        2
+    );
+    let bounded = AveConfig {
+        delta: DeltaMode::Bounded { max: 50.0 },
+        ..AVE_PAPER
+    };
+    assert_eq!(AveParams::<Fx>::new(&bounded, h).unwrap().step_factor(), 2);
+    assert_eq!(
+        AveParams::<Fx>::new(&AVE_PAPER, h).unwrap().step_factor(),
+        1
+    );
+    assert_eq!(
+        AveParams::<f32>::new(&AVE_DEFAULT, h)
+            .unwrap()
+            .step_factor(),
+        1
+    );
+    assert_eq!(
+        AveParams::<f64>::new(&AVE_DEFAULT, h)
+            .unwrap()
+            .step_factor(),
+        1
+    );
+    // 2 h k = 1.2 >= 1: valid at h, no coarse step.
+    let big_k = AveConfig {
+        k: 6000.0,
+        ..AVE_DEFAULT
+    };
+    assert_eq!(AveParams::<Fx>::new(&big_k, h).unwrap().step_factor(), 1);
+}
+
+/// A row whose laws disagree on the coarse step (velocity AVE leaky: `2 h`; the series with
+/// the paper's law: `h`) runs every law at `h`, kernel or not: the states equal the generic
+/// steps at `h` (the reference of `check_row` steps at `h` when the laws disagree).
+#[test]
+fn ave_row_with_mixed_step_factors() {
+    let pv = AveParams::<Fx>::new(&AVE_DEFAULT, H_PAPER).unwrap();
+    let pa = AveParams::<Fx>::new(&AVE_PAPER, H_PAPER).unwrap();
+    check_row(pv, Some(pa), pa, "AVE leaky velocity, paper series");
+}
+
+/// The inputs of the coarse steps under linear hold are the true input at the end of each
+/// step's span: on a ramp (exact in f64 up to rounding), `f(y)` of the step ending at
+/// `j h` is `y_prev + j (y_new - y_prev) / n`; the coarse / step-h split is `floor(n / m)`
+/// then `n mod m`; zero-order hold gives `y_new` throughout.
+#[test]
+fn stepped_inputs_are_on_the_grid() {
+    use estimators::law::stepped_inputs;
+    for n in [1u32, 2, 3, 37, 99, 100, 5000] {
+        for m in [1u32, 2, 3] {
+            let (y0, y1) = (-3.25f64, 17.5f64);
+            let mut calls = Vec::new();
+            stepped_inputs(y0, y1, n, m, Hold::Linear, |y, c| calls.push((y, c)));
+            let q = (n / m) as usize;
+            assert_eq!(calls.len(), q + (n % m) as usize);
+            let mut j = 0u32;
+            for (i, (y, c)) in calls.iter().enumerate() {
+                assert_eq!(*c, i < q);
+                j += if *c { m } else { 1 };
+                let want = y0 + f64::from(j) * (y1 - y0) / f64::from(n);
+                assert!(
+                    (y - want).abs() < 1e-9,
+                    "n {n} m {m} step {i}: {y} vs {want}"
+                );
+            }
+            assert_eq!(j, n);
+            assert_eq!(calls.last().unwrap().0, y1);
+            let mut zoh = Vec::new();
+            stepped_inputs(y0, y1, n, m, Hold::ZeroOrder, |y, c| zoh.push((y, c)));
+            assert!(zoh.iter().all(|(y, _)| *y == y1) && zoh.len() == calls.len());
+        }
+    }
 }
