@@ -1,7 +1,9 @@
 //! Adaptive velocity estimator, AVE (paper eq. 4).
 
 use crate::error::{non_negative, positive};
-use crate::fxk::{frac, inputs, mag, mulf, mulf32, run, smul, Coef, Stage};
+use crate::fxk::{
+    advance_one, advance_two, frac, mag, mulf, mulf32, run, smul, Coef, Kernel, Stage,
+};
 use crate::law::{step_n, Law, Stateful};
 use crate::real::{fx_mul, umul32};
 use crate::{ConfigError, Hold, Real};
@@ -267,13 +269,8 @@ impl<T: Real> Law for AveParams<T> {
     /// the kernel gives up, [`step_n`] (with the coarse steps of [`Law::coarse`]).
     #[inline]
     fn advance(&self, s: &mut AveState<T>, y_prev: T, y_new: T, n: u32, hold: Hold) -> T {
-        if n > 0 {
-            if let (Some(k), Some(ys)) = (AveK::of(self), inputs(y_prev, y_new, n, hold)) {
-                let mut dummy = *s;
-                if k.advance(None, s, &mut dummy, ys, n) {
-                    return s.theta;
-                }
-            }
+        if advance_one(AveK::of(self), s, y_prev, y_new, n, hold) {
+            return s.theta;
         }
         step_n(self, s, y_prev, y_new, n, hold)
     }
@@ -290,10 +287,7 @@ impl<T: Real> Law for AveParams<T> {
         n: u32,
         hold: Hold,
     ) -> bool {
-        match (AveK::of(v), AveK::of(a2), inputs(y_prev, y_new, n, hold)) {
-            (Some(kv), Some(ka), Some(ys)) => kv.advance(Some(&ka), sv, sa, ys, n),
-            _ => false,
-        }
+        advance_two(AveK::of(v), AveK::of(a2), sv, sa, y_prev, y_new, n, hold)
     }
 }
 
@@ -318,15 +312,17 @@ impl AveK {
             coarse,
         })
     }
+}
 
+impl<T: Real> Kernel<AveState<T>> for AveK {
     /// The kernel over one interval of `n >= 1` steps `h` (`a2`: the series' second stage fed
     /// by `self`): `floor(n / m)` coarse steps, then `n mod m` steps `h`, with the inputs of
     /// [`crate::law::stepped_inputs`]; the states are written only when every part succeeds
     /// (else the caller steps the whole interval with the generic code, from the same state).
     #[inline(always)]
-    fn advance<T: Real>(
+    fn advance(
         &self,
-        a2: Option<&AveK>,
+        a2: Option<&Self>,
         sv: &mut AveState<T>,
         sa: &mut AveState<T>,
         (first, inc, y_new): (i64, i64, i64),

@@ -1,7 +1,7 @@
 //! Levant's robust exact differentiator, ED (paper eqs. 5-7; Levant 1998).
 
 use crate::error::positive;
-use crate::fxk::{frac, inputs, mag, mulf, run, sqrt_fast, Coef, Stage};
+use crate::fxk::{advance_one, advance_two, frac, mag, mulf, run, sqrt_fast, Coef, Kernel, Stage};
 use crate::law::{step_n, Law, Stateful};
 use crate::{ConfigError, ExactSqrt, Hold, Real, SqrtFn};
 use core::marker::PhantomData;
@@ -233,23 +233,15 @@ impl<T: Real, S: SqrtFn<T>> Law for EdParams<T, S> {
         n: u32,
         hold: Hold,
     ) -> bool {
-        match (EdFx::of(v), EdFx::of(a2), inputs(y_prev, y_new, n, hold)) {
-            (Some(kv), Some(ka), Some(ys)) => kv.advance(Some(&ka), sv, sa, ys, n),
-            _ => false,
-        }
+        advance_two(EdFx::of(v), EdFx::of(a2), sv, sa, y_prev, y_new, n, hold)
     }
 
     /// `n` steps; the scheme is chosen once per interval, not per step. [`crate::Fx`] with
     /// the explicit scheme: the integer kernel (same results, see docs/FIXED-POINT.md).
     #[inline]
     fn advance(&self, s: &mut EdState<T>, y_prev: T, y_new: T, n: u32, hold: Hold) -> T {
-        if n > 0 {
-            if let (Some(k), Some(ys)) = (EdFx::of(self), inputs(y_prev, y_new, n, hold)) {
-                let mut dummy = *s;
-                if k.advance(None, s, &mut dummy, ys, n) {
-                    return s.u;
-                }
-            }
+        if advance_one(EdFx::of(self), s, y_prev, y_new, n, hold) {
+            return s.u;
         }
         match self.scheme {
             EdScheme::Euler => step_n(&Euler(*self), s, y_prev, y_new, n, hold),
@@ -341,11 +333,13 @@ impl EdFx {
             neg_halpha: (-p.halpha).fx_bits()?,
         })
     }
+}
 
+impl<T: Real> Kernel<EdState<T>> for EdFx {
     /// The kernel over one interval (`a2`: the series' second stage fed by `self`); the states
     /// are written only when it succeeds.
     #[inline(always)]
-    fn advance<T: Real>(
+    fn advance(
         &self,
         a2: Option<&EdFx>,
         sv: &mut EdState<T>,

@@ -205,6 +205,62 @@ pub(crate) fn inputs<T: Real>(y_prev: T, y_new: T, n: u32, hold: Hold) -> Option
     }
 }
 
+/// A law's integer kernel over one sample interval (the AVE's, the ED's): `a2` is the
+/// series' second stage fed by `self`; the states are written only when it succeeds (else
+/// the caller runs the generic code from the same states).
+/// `S`: the law's state (`AveState<T>`, `EdState<T>`).
+pub(crate) trait Kernel<S> {
+    /// The interval of `n >= 1` steps with the inputs `ys` of [`inputs`].
+    fn advance(
+        &self,
+        a2: Option<&Self>,
+        sv: &mut S,
+        sa: &mut S,
+        ys: (i64, i64, i64),
+        n: u32,
+    ) -> bool;
+}
+
+/// `Law::advance` of one law through its kernel `k` (`None`: a float type, or coefficients
+/// outside the kernel's classes); `true` when the kernel ran the interval.
+#[inline(always)]
+pub(crate) fn advance_one<S: Copy, K: Kernel<S>, T: Real>(
+    k: Option<K>,
+    s: &mut S,
+    y_prev: T,
+    y_new: T,
+    n: u32,
+    hold: Hold,
+) -> bool {
+    if n == 0 {
+        return false;
+    }
+    let (Some(k), Some(ys)) = (k, inputs(y_prev, y_new, n, hold)) else {
+        return false;
+    };
+    let mut unused = *s;
+    k.advance(None, s, &mut unused, ys, n)
+}
+
+/// `Law::advance_pair` through the kernels of both stages; `true` when they ran the interval.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn advance_two<S, K: Kernel<S>, T: Real>(
+    kv: Option<K>,
+    ka: Option<K>,
+    sv: &mut S,
+    sa: &mut S,
+    y_prev: T,
+    y_new: T,
+    n: u32,
+    hold: Hold,
+) -> bool {
+    match (kv, ka, inputs(y_prev, y_new, n, hold)) {
+        (Some(kv), Some(ka), Some(ys)) => kv.advance(Some(&ka), sv, sa, ys, n),
+        _ => false,
+    }
+}
+
 /// One law of a kernel: a step on raw Q31.32 states that is exact (wrapping operations that
 /// cannot overflow) while every state and the input are below the law's guard bound.
 pub(crate) trait Stage {

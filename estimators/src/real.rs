@@ -497,19 +497,26 @@ pub trait Real:
     }
 }
 
+/// The float types step every law at `h`: no coarse step, nothing stored for it.
+macro_rules! float_without_coarse_step {
+    () => {
+        const AVE_STEP_FACTOR: u32 = 1;
+        type Coarse<X: Copy + Debug + PartialEq> = core::marker::PhantomData<X>;
+        #[inline(always)]
+        fn coarse_new<X: Copy + Debug + PartialEq>(_x: Option<X>) -> Self::Coarse<X> {
+            core::marker::PhantomData
+        }
+        #[inline(always)]
+        fn coarse_get<X: Copy + Debug + PartialEq>(_c: &Self::Coarse<X>) -> Option<X> {
+            None
+        }
+    };
+}
+
 impl Real for f32 {
     const ZERO: Self = 0.0;
     const ONE: Self = 1.0;
-    const AVE_STEP_FACTOR: u32 = 1;
-    type Coarse<X: Copy + Debug + PartialEq> = core::marker::PhantomData<X>;
-    #[inline(always)]
-    fn coarse_new<X: Copy + Debug + PartialEq>(_x: Option<X>) -> Self::Coarse<X> {
-        core::marker::PhantomData
-    }
-    #[inline(always)]
-    fn coarse_get<X: Copy + Debug + PartialEq>(_c: &Self::Coarse<X>) -> Option<X> {
-        None
-    }
+    float_without_coarse_step!();
     #[inline]
     fn from_f64(x: f64) -> Self {
         x as f32
@@ -555,16 +562,7 @@ impl Real for f32 {
 impl Real for f64 {
     const ZERO: Self = 0.0;
     const ONE: Self = 1.0;
-    const AVE_STEP_FACTOR: u32 = 1;
-    type Coarse<X: Copy + Debug + PartialEq> = core::marker::PhantomData<X>;
-    #[inline(always)]
-    fn coarse_new<X: Copy + Debug + PartialEq>(_x: Option<X>) -> Self::Coarse<X> {
-        core::marker::PhantomData
-    }
-    #[inline(always)]
-    fn coarse_get<X: Copy + Debug + PartialEq>(_c: &Self::Coarse<X>) -> Option<X> {
-        None
-    }
+    float_without_coarse_step!();
     #[inline]
     fn from_f64(x: f64) -> Self {
         x
