@@ -85,6 +85,16 @@ impl<T: Real> Law for AdParams<T> {
     fn translate(&self, s: &mut AdState<T>, d: T) {
         s.z = s.z + d;
     }
+
+    /// In equilibrium `y - z = T u`: `z = y - T u`, the output `u` kept, so the next step at
+    /// `y` returns `u`. `T` in f64. Nothing when `T` did not change.
+    fn retune_state(&self, old: &Self, s: &mut AdState<T>, y: T) {
+        if self == old {
+            return;
+        }
+        let t = 1.0 / self.inv_t.to_f64();
+        s.z = y - T::from_f64(t * s.u.to_f64());
+    }
 }
 
 impl<T: Real> LinearLaw for AdParams<T> {

@@ -574,6 +574,101 @@ mod tests {
         assert!(GainSchedule::new(&[level(0.0, 1.0, ILO1_TABLE2)]).is_err());
     }
 
+    /// A gain change is bumpless (`Law::retune_state`): on a ramp of 30 deg/s, after the
+    /// bank settled with one schedule level's ILO gains (`K1 = 0.99966, L = 3.52,
+    /// K2 = 0.0345`, the 1 deg^2 level of a tuned schedule: a slow ILO whose steady state is
+    /// `V K2 / (K2 + L (1 - K1))` = 29.0 deg/s) and AD `T = 0.01 s`, the gains change to
+    /// another level's (`K1 = 0.99924, L = 0.506, K2 = 37.0`: a lightly damped ILO ringing
+    /// near 100 Hz; AD `T = 0.04 s`) and their series' (ILO-ILO, AD-AD). Kept as they were,
+    /// the ILO states meet the new `K2` with the old steady error (`(1 - K1) / K2 * v` =
+    /// 0.28 deg) and the ILO velocity swings between -97 and +97 deg/s in the next 0.2 s
+    /// (measured with the ILO's `retune_state` disabled). Here every velocity stays within
+    /// 2 deg/s of the ramp's 30 deg/s (the ILO moves from 29.0 to its new steady state, 30.0,
+    /// overshooting to 30.9) and every acceleration within 3 deg/s^2 of 0, f32 and Fx; but
+    /// the ED's: its paper gains (not changed here) sit in a limit cycle on this ramp (f32:
+    /// 44.6 deg/s, 2684 deg/s^2), so its velocity is only held within 0.5 deg/s of its value
+    /// before the change.
+    #[test]
+    fn gain_changes_are_bumpless() {
+        fn check<T: Real>() {
+            let slow = IloConfig {
+                k1: 0.999_664_07,
+                l: 3.523_521_4,
+                k2: 0.034_486_07,
+            };
+            let ringing = IloConfig {
+                k1: 0.999_241_3,
+                l: 0.506_463_9,
+                k2: 36.988_247,
+            };
+            let mut a = BankConfig::PAPER;
+            a.velocity.ilo = [slow; 3];
+            a.acceleration.ilo = [crate::presets::ILO2_TABLE4; 3];
+            let mut b = a;
+            b.velocity.ilo = [ringing; 3];
+            b.velocity.ad_t = 0.04;
+            b.acceleration.ilo = [IloConfig {
+                k1: 0.999_456,
+                l: 5.096_741_7,
+                k2: 0.028_180_722,
+            }; 3];
+            b.acceleration.ad_t = 0.2;
+            let mut bank = PaperBank::<T>::new(&a).unwrap();
+            let y = |k: u64| (30.0 * k as f64 * 0.01) as f32;
+            let mut before = [0.0f32; 7];
+            for k in 0..600u64 {
+                before = bank.update(k * 10_000, y(k)).unwrap().velocities();
+            }
+            bank.set_gains(&b).unwrap();
+            for k in 600..700u64 {
+                let o = bank.update(k * 10_000, y(k)).unwrap();
+                for (i, (v, v0)) in o.velocities().iter().zip(before).enumerate() {
+                    let bound = if i == 5 { 0.5 } else { 2.0 };
+                    let reference = if i == 5 { v0 } else { 30.0 };
+                    assert!((v - reference).abs() < bound, "k {k} velocity {i}: {v}");
+                }
+                for (i, acc) in o.accelerations().iter().enumerate() {
+                    assert!(i == 5 || acc.abs() < 3.0, "k {k} acceleration {i}: {acc}");
+                }
+            }
+        }
+        check::<f32>();
+        check::<crate::Fx>();
+    }
+
+    /// A row whose series shared the velocity law's first stage (the AVE with equal velocity
+    /// and acceleration gains: the first stage is not computed) and no longer does after a
+    /// gain change starts the series' first stage from the velocity law's state: on a ramp of
+    /// 30 deg/s the AVE-AVE stays within 1 deg/s^2 of 0 and the AVE velocity within 0.1
+    /// deg/s of 30 (f32 and Fx). Without it the first stage restarts from a state that
+    /// last moved when the bank was built, and the AVE-AVE jumps (to 1.7e5 deg/s^2 in the
+    /// first sample, measured with the copy disabled).
+    #[test]
+    fn a_row_that_stops_sharing_continues() {
+        fn check<T: Real>() {
+            let a = BankConfig::PAPER;
+            let mut b = a;
+            b.acceleration.ave.k = 400.0;
+            b.acceleration.ave.gamma1 = 15_000.0;
+            let mut bank = PaperBank::<T>::new(&a).unwrap();
+            let y = |k: u64| (30.0 * k as f64 * 0.01) as f32;
+            for k in 0..600u64 {
+                bank.update(k * 10_000, y(k)).unwrap();
+            }
+            bank.set_gains(&b).unwrap();
+            for k in 600..700u64 {
+                let o = bank.update(k * 10_000, y(k)).unwrap();
+                let (v, acc) = (o.velocities()[0], o.accelerations()[0]);
+                assert!(
+                    (v - 30.0).abs() < 0.1 && acc.abs() < 1.0,
+                    "k {k}: {v} {acc}"
+                );
+            }
+        }
+        check::<f32>();
+        check::<crate::Fx>();
+    }
+
     /// The adaptive bank moves its gains to the level of the noise it is fed, changing them
     /// at most once per `retune_every` samples.
     #[test]

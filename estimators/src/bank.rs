@@ -400,6 +400,11 @@ impl<T: Real> BankInput<T> {
         Ok(Accepted { shift, feed, angle })
     }
 
+    /// The last accepted sample in the laws' (local) frame, deg (0 before the first).
+    pub fn last(&self) -> T {
+        self.y_prev
+    }
+
     /// Gaps longer than the gap rule that re-initialised the laws.
     pub fn reinit_count(&self) -> u32 {
         self.reinits
@@ -615,6 +620,14 @@ macro_rules! estimator_bank {
                 $( self.$field.translate(&mut s.$field, d); )+
             }
 
+            /// Bumpless gain change: moves every row's state `s`, produced by the parameters
+            /// `old`, to the equilibrium of these parameters at the last input `y` (the
+            /// laws' frame) with the same outputs (`Law::retune_state`).
+            pub fn retune_state(&self, old: &Self, s: &mut $State<T, S>, y: T) {
+                use $crate::Law as _;
+                $( self.$field.retune_state(&old.$field, &mut s.$field, y); )+
+            }
+
             /// Advances every row over one sample interval.
             #[inline]
             pub fn advance(&self, s: &mut $State<T, S>, y_prev: T, y: T, n: u32, hold: $crate::Hold) {
@@ -700,9 +713,10 @@ macro_rules! estimator_bank {
                 self.state = self.params.init(T::ZERO);
             }
 
-            /// Replaces every row's parameters by those of `cfg` and keeps every state: the
-            /// laws continue from where they are with the new gains (what a gain schedule does,
-            /// `AdaptiveBank`). Only the gains of `cfg` are meant to differ from the
+            /// Replaces every row's parameters by those of `cfg`; the laws continue from where
+            /// they are with the new gains (what a gain schedule does, `AdaptiveBank`), their
+            /// states moved so that each output continues without a jump (bumpless transfer,
+            /// `Law::retune_state`: the ILO's and AD's steady state depends on their gains). Only the gains of `cfg` are meant to differ from the
             /// configuration the bank was built with: the input stage (step, hold, nominal
             /// period, gap rule, unwrapping) is kept as built. On error nothing changes.
             /// Cost: that of building the parameters (closed-form maps, Kalman gains) of the
@@ -711,7 +725,9 @@ macro_rules! estimator_bank {
             /// `cargo xtask bench`.
             pub fn set_gains(&mut self, cfg: &$crate::BankConfig) -> Result<(), $crate::ConfigError> {
                 let (_, n0) = $crate::BankInput::<T>::new(cfg)?;
-                self.params = $Params::new_reusing(cfg, n0, Some(&self.params))?;
+                let params = $Params::new_reusing(cfg, n0, Some(&self.params))?;
+                params.retune_state(&self.params, &mut self.state, self.input.last());
+                self.params = params;
                 Ok(())
             }
 

@@ -160,6 +160,18 @@ impl<T: Real, const D: usize> Law for IloParams<T, D> {
     fn translate(&self, s: &mut IloState<T, D>, d: T) {
         s.xhat = s.xhat + d;
     }
+
+    /// In equilibrium `v = K1 v + K2 e`, so the error `e = y - xhat` is `c v` with
+    /// `c = (1 - K1) / K2` (s): `xhat = y - c v`, the output `v` and the delay line kept; the
+    /// next step at `y` returns `K1 v + K2 c v = v`. `c` in f64 (a retune is rare). Nothing
+    /// when the gains did not change (the state is then where these gains put it).
+    fn retune_state(&self, old: &Self, s: &mut IloState<T, D>, y: T) {
+        if self == old {
+            return;
+        }
+        let c = (1.0 - self.k1.to_f64()) / self.k2.to_f64();
+        s.xhat = y - T::from_f64(c * s.out.to_f64());
+    }
 }
 
 impl<T: Real, const D: usize> LinearLaw for IloParams<T, D> {

@@ -67,6 +67,20 @@ pub trait Law: Copy + core::fmt::Debug {
         None
     }
 
+    /// Bumpless gain change ([`crate::PaperBank::set_gains`], [`crate::AdaptiveBank`]): `s`
+    /// was produced by the parameters `old` and `y` is the last input; moves `s` to the state
+    /// in which `self`, at input `y`, is in equilibrium with its present output (the steady
+    /// state of a ramp whose rate is that output), so that the estimate continues from where
+    /// it is instead of ringing. The default leaves `s` as it is, which is right for laws
+    /// whose equilibrium does not depend on their gains (AVE: `xhat = y`, `theta` = the rate;
+    /// ED: `z0 = y`, `z1` = the rate; the Kalman tracker's physical states). Without it a
+    /// retune of a tuned, lightly damped ILO rang with a swing of 1600 deg/s
+    /// (docs/CALIBRATION.md, "Bumpless gain changes").
+    #[inline]
+    fn retune_state(&self, old: &Self, s: &mut Self::State, y: Self::Num) {
+        let _ = (old, s, y);
+    }
+
     /// `n >= 1` steps of the velocity law `v` and of a series' second stage `a2` fed by its
     /// output in every step (a shared [`crate::VelAcc`] row), by a faster path of the law's own
     /// with exactly the results of stepping; `false` (states untouched) when the law has no such

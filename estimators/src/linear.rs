@@ -166,6 +166,10 @@ impl<E: LinearLaw> Law for ClosedForm<E> {
         self.inner.translate(s, d);
     }
 
+    fn retune_state(&self, old: &Self, s: &mut E::State, y: E::Num) {
+        self.inner.retune_state(&old.inner, s, y);
+    }
+
     /// `s' = P y_prev + Phi (s - P y_prev) + g (y_new - y_prev)` when `n` and `hold` match the
     /// precomputed map, else `n` Euler steps.
     #[inline(always)]

@@ -153,6 +153,28 @@ impl<T: Real, L: Law<Num = T>> Law for VelAcc<L> {
         self.a1.translate(&mut s.a1, d);
     }
 
+    /// Each law on its own. A shared row's series first stage was not computed (its state is
+    /// stale): when the new row no longer shares, it starts from the velocity law's state,
+    /// which is what it would have been.
+    fn retune_state(&self, old: &Self, s: &mut Self::State, y: T) {
+        let old_a1 = if old.shared {
+            s.a1 = s.v;
+            &old.v
+        } else {
+            &old.a1
+        };
+        if !self.shared {
+            self.a1.retune_state(old_a1, &mut s.a1, y);
+        }
+        self.v.retune_state(&old.v, &mut s.v, y);
+        let y2 = if self.shared {
+            self.v.output(&s.v)
+        } else {
+            self.a1.output(&s.a1)
+        };
+        self.a2.retune_state(&old.a2, &mut s.a2, y2);
+    }
+
     /// The row of the three laws' coarse steps, when all three (`a1` ignored when shared) have
     /// one with the same factor.
     #[inline(always)]

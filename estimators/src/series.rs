@@ -71,6 +71,13 @@ impl<T: Real, A: Law<Num = T>, B: Law<Num = T>> Law for Series<A, B> {
     fn translate(&self, s: &mut Self::State, d: T) {
         self.a.translate(&mut s.a, d);
     }
+
+    /// Each stage on its own; the second stage's input is the first stage's output.
+    fn retune_state(&self, old: &Self, s: &mut Self::State, y: T) {
+        self.a.retune_state(&old.a, &mut s.a, y);
+        let y2 = self.a.output(&s.a);
+        self.b.retune_state(&old.b, &mut s.b, y2);
+    }
 }
 
 impl<T: Real, A: LinearLaw<Num = T>, B: LinearLaw<Num = T>> LinearLaw for Series<A, B> {

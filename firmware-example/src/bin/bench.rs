@@ -511,12 +511,18 @@ fn main() -> ! {
     per_sample_stepped(&c, overhead, "ED-ED (Euler x100)", Series::of(&ed, &ed));
     // The bank's two stepped rows as the bank runs them: velocity law and series in one
     // interval loop (`VelAcc`, shared first stage) through `Law::advance` (for `Fx` the
-    // integer kernels of `estimators::fxk`; issue 12).
+    // integer kernels of `estimators::fxk`; issue 12), over one 0.01 s sample interval: 100
+    // steps of h, but for `Fx` the AVE row's 50 steps of 2h (`Real::AVE_STEP_FACTOR`).
     let (pa, pe) = (*ave.law(), *ed.law());
     let ave_row = Stateful::from_law(estimators::VelAcc::new(pa, pa, pa, true));
-    per_sample(&c, overhead, "AVE + AVE-AVE row (bank, x100)", ave_row);
+    per_sample(
+        &c,
+        overhead,
+        "AVE + AVE-AVE row (bank, per 0.01 s)",
+        ave_row,
+    );
     let ed_row = Stateful::from_law(estimators::VelAcc::new(pe, pe, pe, true));
-    per_sample(&c, overhead, "ED + ED-ED row (bank, x100)", ed_row);
+    per_sample(&c, overhead, "ED + ED-ED row (bank, per 0.01 s)", ed_row);
     // Linear laws through their exact 100-step map (what the bank uses).
     per_sample(
         &c,
