@@ -13,7 +13,10 @@
 //! * in each half, the scheduled bank is within 1.2x of the gains tuned for that half;
 //! * over the whole capture, it is below every fixed gain set: each schedule level, both
 //!   gains tuned for a half, `BankConfig::PAPER` and `BankConfig::NAV440` - for every family
-//!   but the ED, which is held to 1.15 x the best of them (not met: see the test).
+//!   but the ED, which is held to 1.02 x the best of them (not met: see the test);
+//! * on six other noise draws of the same switch (`scheduled_bank_does_not_ring_on_other_noise_draws`),
+//!   in each half, every family is within 2x of the gains tuned for that half: a gain change
+//!   does not ring (it did before gain changes were made bumpless: ILO 161x).
 //!
 //! Release only (tuning): `cargo test --release -p host-tests --test schedule -- --nocapture`.
 
@@ -48,8 +51,8 @@ fn clean() -> Vec<Sample> {
 }
 
 /// The capture with the switching noise added to yaw (re-wrapped to +-180 deg).
-fn switching(samples: &[Sample]) -> Vec<Sample> {
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(7);
+fn switching(samples: &[Sample], seed: u64) -> Vec<Sample> {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
     let low = Normal::new(0.0, 0.01f64.sqrt()).unwrap();
     let high = Normal::new(0.0, 0.5f64.sqrt()).unwrap();
     samples
@@ -106,6 +109,29 @@ fn fixed(cfg: BankConfig) -> EstimateOptions {
     }
 }
 
+/// The schedule file and the options that run it (`nav440 estimate FILE --gains
+/// schedule_fig5.toml`).
+fn schedule_fig5() -> (gains::ScheduleFile, EstimateOptions) {
+    let Loaded::Schedule(file) = gains::load_any(&data("gains/schedule_fig5.toml")).unwrap() else {
+        panic!("not a schedule file");
+    };
+    let opts = EstimateOptions {
+        hold: file.hold().unwrap(),
+        config: Some(BankConfig::NAV440),
+        schedule: Some(file.schedule(&BankConfig::NAV440).unwrap()),
+        ..Default::default()
+    };
+    (file, opts)
+}
+
+/// The gains tuned for the first half (0.01 deg^2) and for the second (0.5 deg^2).
+fn tuned_for_the_halves(clean: &[Sample]) -> (BankConfig, BankConfig) {
+    (
+        tuned_for(clean, 0.01, (0.0, SWITCH_S - 0.005)),
+        tuned_for(clean, 0.5, (SWITCH_S, END_S)),
+    )
+}
+
 /// Gains tuned by `nav440 tune` for one half: that half's noise, MSE over that half.
 fn tuned_for(samples: &[Sample], noise_var: f64, range: (f64, f64)) -> BankConfig {
     let res = tune_with(
@@ -131,22 +157,11 @@ fn tuned_for(samples: &[Sample], noise_var: f64, range: (f64, f64)) -> BankConfi
 )]
 fn scheduled_bank_follows_a_noise_switch() {
     let clean = clean();
-    let noisy = switching(&clean);
-    let Loaded::Schedule(file) = gains::load_any(&data("gains/schedule_fig5.toml")).unwrap() else {
-        panic!("not a schedule file");
-    };
-    let schedule = file.schedule(&BankConfig::NAV440).unwrap();
-    let sched = mse(
-        &noisy,
-        &EstimateOptions {
-            hold: file.hold().unwrap(),
-            config: Some(BankConfig::NAV440),
-            schedule: Some(schedule),
-            ..Default::default()
-        },
-    );
-    let first = tuned_for(&clean, 0.01, (0.0, SWITCH_S - 0.005));
-    let second = tuned_for(&clean, 0.5, (SWITCH_S, END_S));
+    let noisy = switching(&clean, 7);
+    let (file, scheduled) = schedule_fig5();
+    let schedule = scheduled.schedule.unwrap();
+    let sched = mse(&noisy, &scheduled);
+    let (first, second) = tuned_for_the_halves(&clean);
     let t_first = mse(&noisy, &fixed(first));
     let t_second = mse(&noisy, &fixed(second));
     let mut failures = Vec::new();
@@ -182,18 +197,17 @@ fn scheduled_bank_follows_a_noise_switch() {
         let row: Vec<String> = (0..7).map(|i| format!("{:.3}", m[2][i])).collect();
         println!("  {name:<18} {}", row.join(" "));
         for i in 0..7 {
-            // Not met for the ED (measured: scheduled 220.2 vs 198.3 for the gains tuned for
-            // 10-20 s, 199.8 for level 0.01). In 10-20 s the scheduled ED runs the 0.5 level's
-            // gains (lambda 11.7, alpha 745: 364.6, that level fixed 364.8) where the other
-            // levels' (lambda 12.5-15.1, alpha about 750, the same basin) give 323.8-344.0 and
-            // the half's own tuning 321.2: the ED's MSE is rugged in lambda and depends on the
-            // noise draw (docs/CALIBRATION.md). Even the best level there (0.01) is 199.8 over
-            // the whole capture as a fixed set. Held to 1.15 x the best fixed set.
+            // Not met for the ED (measured: scheduled 177.6 against 175.7 for the 0.5 level as
+            // a fixed set, below every other set). In 10-20 s the scheduled ED runs the 0.5
+            // level's gains (282.4, below the half's own tuning, 321.2); in 0-10 s the 0.01
+            // level's (72.7), where the 0.5 level's ED gains happen to do better on this noise
+            // draw (about 69): the ED's MSE is rugged in its gains and depends on the noise
+            // draw (docs/CALIBRATION.md). Held to 1.02 x the best fixed set.
             if i == 5 {
-                let held = sched[2][i] <= 1.15 * m[2][i];
+                let held = sched[2][i] <= 1.02 * m[2][i];
                 if !held {
                     failures.push(format!(
-                        "ED: scheduled {} above 1.15 x {name} {}",
+                        "ED: scheduled {} above 1.02 x {name} {}",
                         sched[2][i], m[2][i]
                     ));
                 }
@@ -211,6 +225,43 @@ fn scheduled_bank_follows_a_noise_switch() {
     let row: Vec<String> = (0..7).map(|i| format!("{:.3}", sched[2][i])).collect();
     println!("  {:<18} {}", "scheduled", row.join(" "));
     assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// The same switch with six other noise draws (xoshiro256++ seeds 101-106): in each half,
+/// every family of the scheduled bank is within 2x of the gains tuned for that half (tuned
+/// once, as above). Guards the bumpless gain change (`estimators::Law::retune_state`): with the
+/// states kept as they were, a retune between the 1 and 0.5 deg^2 levels made the tuned,
+/// lightly damped ILO ring (10-20 s MSE 13,962 against 86.8 tuned, on draw 103). Measured
+/// now: worst ratio 1.64 (the AVE in 10-20 s on draw 101: the noise estimate, time constant
+/// 0.5 s, takes about 2 s to reach the new level, while the low-noise AVE gains see 0.5 deg^2
+/// noise), every other family at most 1.31.
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "release only: cargo test --release -p host-tests --test schedule"
+)]
+fn scheduled_bank_does_not_ring_on_other_noise_draws() {
+    let clean = clean();
+    let (_, scheduled) = schedule_fig5();
+    let (first, second) = tuned_for_the_halves(&clean);
+    let mut worst = [0.0f64; 7];
+    for seed in 101..=106 {
+        let noisy = switching(&clean, seed);
+        let sched = mse(&noisy, &scheduled);
+        let t1 = mse(&noisy, &fixed(first));
+        let t2 = mse(&noisy, &fixed(second));
+        let ratios: Vec<String> = (0..7)
+            .map(|i| {
+                let r = (sched[0][i] / t1[0][i]).max(sched[1][i] / t2[1][i]);
+                worst[i] = worst[i].max(r);
+                format!("{} {r:.3}", NAMES[i])
+            })
+            .collect();
+        println!("draw {seed}: worst half ratio {}", ratios.join(", "));
+    }
+    for i in 0..7 {
+        assert!(worst[i] <= 2.0, "{}: {}", NAMES[i], worst[i]);
+    }
 }
 
 /// The `--rust` output of the same run (`host-tests/data/gains/schedule_fig5.rs`, compiled
