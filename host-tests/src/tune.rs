@@ -785,8 +785,10 @@ pub fn tune_schedule(
     let hold = spec.holds.first().copied().unwrap_or(Hold::Linear);
     // A schedule is for the device, which runs for hours: its AVE is tuned with the product's
     // leaky `deltahat` law (`estimators::presets::AVE_DEFAULT`) whatever law the start gains
-    // have. The paper's law (`deltahat` only grows) degrades a long run (docs/RELIABILITY.md).
-    let mut start = opts.bank_config();
+    // have (the start is the paper's gains, as for `nav440 tune`, unless a gains file is
+    // given). The paper's law (`deltahat` only grows) degrades a long run
+    // (docs/RELIABILITY.md).
+    let mut start = opts.paper_law().bank_config();
     for half in [&mut start.velocity, &mut start.acceleration] {
         half.ave.delta = estimators::presets::AVE_DEFAULT.delta;
     }
