@@ -577,6 +577,26 @@ mod tests {
         assert!(GainSchedule::new(&[level(0.0, 1.0, ILO1_TABLE2)]).is_err());
     }
 
+    /// A 30 deg/s ramp at 100 Hz through a bank built with `a`: 6 s, then `set_gains(b)`,
+    /// then 1 s more, each of those samples handed to `check` (sample index, the velocities
+    /// of the last sample before the change, the output).
+    fn ramp_across_a_gain_change<T: Real>(
+        a: &BankConfig,
+        b: &BankConfig,
+        mut check: impl FnMut(u64, [f32; 7], &crate::PaperOutput),
+    ) {
+        let mut bank = PaperBank::<T>::new(a).unwrap();
+        let y = |k: u64| (30.0 * k as f64 * 0.01) as f32;
+        let mut before = [0.0f32; 7];
+        for k in 0..600u64 {
+            before = bank.update(k * 10_000, y(k)).unwrap().velocities();
+        }
+        bank.set_gains(b).unwrap();
+        for k in 600..700u64 {
+            check(k, before, &bank.update(k * 10_000, y(k)).unwrap());
+        }
+    }
+
     /// A gain change is bumpless (`Law::retune_state`): on a ramp of 30 deg/s, after the
     /// bank settled with one schedule level's ILO gains (`K1 = 0.99966, L = 3.52,
     /// K2 = 0.0345`, the 1 deg^2 level of a tuned schedule: a slow ILO whose steady state is
@@ -616,15 +636,7 @@ mod tests {
                 k2: 0.028_180_722,
             }; 3];
             b.acceleration.ad_t = 0.2;
-            let mut bank = PaperBank::<T>::new(&a).unwrap();
-            let y = |k: u64| (30.0 * k as f64 * 0.01) as f32;
-            let mut before = [0.0f32; 7];
-            for k in 0..600u64 {
-                before = bank.update(k * 10_000, y(k)).unwrap().velocities();
-            }
-            bank.set_gains(&b).unwrap();
-            for k in 600..700u64 {
-                let o = bank.update(k * 10_000, y(k)).unwrap();
+            ramp_across_a_gain_change::<T>(&a, &b, |k, before, o| {
                 for (i, (v, v0)) in o.velocities().iter().zip(before).enumerate() {
                     let bound = if i == 5 { 0.5 } else { 2.0 };
                     let reference = if i == 5 { v0 } else { 30.0 };
@@ -633,7 +645,7 @@ mod tests {
                 for (i, acc) in o.accelerations().iter().enumerate() {
                     assert!(i == 5 || acc.abs() < 3.0, "k {k} acceleration {i}: {acc}");
                 }
-            }
+            });
         }
         check::<f32>();
         check::<crate::Fx>();
@@ -653,20 +665,13 @@ mod tests {
             let mut b = a;
             b.acceleration.ave.k = 400.0;
             b.acceleration.ave.gamma1 = 15_000.0;
-            let mut bank = PaperBank::<T>::new(&a).unwrap();
-            let y = |k: u64| (30.0 * k as f64 * 0.01) as f32;
-            for k in 0..600u64 {
-                bank.update(k * 10_000, y(k)).unwrap();
-            }
-            bank.set_gains(&b).unwrap();
-            for k in 600..700u64 {
-                let o = bank.update(k * 10_000, y(k)).unwrap();
+            ramp_across_a_gain_change::<T>(&a, &b, |k, _, o| {
                 let (v, acc) = (o.velocities()[0], o.accelerations()[0]);
                 assert!(
                     (v - 30.0).abs() < 0.1 && acc.abs() < 1.0,
                     "k {k}: {v} {acc}"
                 );
-            }
+            });
         }
         check::<f32>();
         check::<crate::Fx>();

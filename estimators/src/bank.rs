@@ -716,9 +716,10 @@ macro_rules! estimator_bank {
             /// Replaces every row's parameters by those of `cfg`; the laws continue from where
             /// they are with the new gains (what a gain schedule does, `AdaptiveBank`), their
             /// states moved so that each output continues without a jump (bumpless transfer,
-            /// `Law::retune_state`: the ILO's and AD's steady state depends on their gains). Only the gains of `cfg` are meant to differ from the
-            /// configuration the bank was built with: the input stage (step, hold, nominal
-            /// period, gap rule, unwrapping) is kept as built. On error nothing changes.
+            /// `Law::retune_state`: the ILO's and AD's steady state depends on their gains).
+            /// Only the gains of `cfg` are meant to differ from the configuration the bank was
+            /// built with: the input stage (step, hold, nominal period, gap rule, unwrapping)
+            /// is kept as built. On error nothing changes.
             /// Cost: that of building the parameters (closed-form maps, Kalman gains) of the
             /// rows whose gains changed (for rows whose builder reuses the previous row, see
             /// `new_reusing` of the parameters; the same parameters as a full rebuild), see
