@@ -72,8 +72,8 @@ impl BankGains {
     /// paper preset, so ILO1-3 differ; the tracker's `q/r` is what was tuned.
     pub const NAV440_VELOCITY: Self = Self {
         ave: AveConfig {
-            k: 43.55046,
-            gamma1: 1848.5444,
+            k: 43.09086,
+            gamma1: 1860.1345,
             ..AVE_DEFAULT
         },
         ilo: [
@@ -127,7 +127,7 @@ impl BankGains {
                 k2: 1.5084013,
             },
         ],
-        ad_t: 0.1,
+        ad_t: 0.09932768,
         ed: EdConfig {
             lambda: 28.747272,
             alpha: 6858.6904,

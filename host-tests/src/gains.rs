@@ -277,6 +277,35 @@ impl FamilyGains {
         }
     }
 
+    /// These gains with only the columns `keep(i)` is true for (bank column order: AVE,
+    /// ILO1, ILO2, ILO3, AD, ED, KF); the others `None`.
+    pub fn only(&self, keep: impl Fn(usize) -> bool) -> Self {
+        let mut out = *self;
+        for i in 0..7 {
+            if !keep(i) {
+                out.clear_column(i);
+            }
+        }
+        out
+    }
+
+    /// Sets column `i` (bank column order) to `src`'s.
+    pub fn set_column(&mut self, i: usize, src: &Self) {
+        match i {
+            0 => self.ave = src.ave,
+            1 => self.ilo1 = src.ilo1,
+            2 => self.ilo2 = src.ilo2,
+            3 => self.ilo3 = src.ilo3,
+            4 => self.ad = src.ad,
+            5 => self.ed = src.ed,
+            _ => self.kf = src.kf,
+        }
+    }
+
+    fn clear_column(&mut self, i: usize) {
+        self.set_column(i, &Self::default());
+    }
+
     /// `base` with every gain present here replaced.
     pub fn apply(&self, mut base: BankGains) -> BankGains {
         if let Some(a) = self.ave {

@@ -10,8 +10,8 @@
 //!   captures, at the paper's two noise levels, the MSE of every column (7 velocity, 7
 //!   acceleration) with `BankConfig::NAV440` is below the MSE with `BankConfig::PAPER` (both
 //!   measured as `nav440 tune` measures its "before"/"after": through the whole bank, mean of
-//!   3 noise seeds, `host_tests::tune::bank_mse`), but for the 12 listed cells ([`EXCEPTIONS`]:
-//!   10 of them the AD, for which no gain beats the paper's everywhere, shown by
+//!   3 noise seeds, `host_tests::tune::bank_mse`), but for the 5 listed cells ([`EXCEPTIONS`]:
+//!   4 of them the AD, for which no gain beats the paper's everywhere, shown by
 //!   `no_single_ad_t_beats_the_paper_on_every_bundled_capture`), held to 1.02 x PAPER. The
 //!   references are independent of the code under test: the motion's analytic rate, and the
 //!   paper's AVE on that rate for acceleration.
@@ -94,8 +94,9 @@ fn literal(name: &str, g: &BankGains) -> String {
 fn print_nav440_preset() {
     let cases = family();
     let t = std::time::Instant::now();
-    // Each family minimises its worst MSE ratio to the paper's preset over the cases.
-    let (gains, cost) = tune_preset(
+    // Each family minimises its worst MSE ratio to the paper's preset over the cases; where
+    // that cannot beat it in every case, a second search counts every case (`tune_preset`).
+    let (gains, cost, report) = tune_preset(
         &cases,
         &BankConfig::DEFAULT,
         Some(&BankConfig::PAPER),
@@ -104,12 +105,13 @@ fn print_nav440_preset() {
     .unwrap();
     let cfg = gains.apply(BankConfig::DEFAULT);
     println!(
-        "tuned on {} cases in {:.0} s; objective (worst MSE ratio to PAPER over the cases x geometric mean of the ratios^0.2):",
+        "tuned on {} cases in {:.0} s; objective (worst MSE ratio to PAPER over the cases x geometric mean of the ratios^0.2, +1 if some case is not below PAPER; where the second, hinge search was kept: 1 + its hinge sum):",
         cases.len(),
         t.elapsed().as_secs_f64()
     );
     println!("  velocity     {:?}", cost[0]);
     println!("  acceleration {:?}", cost[1]);
+    print!("{report}");
     println!("{}", literal("NAV440_VELOCITY", &cfg.velocity));
     println!("{}", literal("NAV440_ACCELERATION", &cfg.acceleration));
 }
@@ -159,23 +161,15 @@ fn nav440_vs_paper() -> Vec<Scores> {
 /// acceleration, column), each held to at most [`EXCEPTION_BOUND`] x PAPER; every other cell
 /// must be strictly below PAPER.
 ///
-/// * The AD (10 cells): no AD gain beats the paper's on every bundled capture (the AD has one
+/// * The AD (4 cells): no AD gain beats the paper's on every bundled capture (the AD has one
 ///   gain, T; see [`no_single_ad_t_beats_the_paper_on_every_bundled_capture`]). The preset
-///   keeps the paper's T = 0.1 s for AD-AD (equal MSE) and T = 0.011 s for the velocity AD
-///   (+1.0 % on sin5 at 25 Hz and +0.006 % on the spin at 0.01 deg^2, below PAPER on the other
-///   six cells).
-/// * The AVE velocity on fig5 at 0.01 deg^2 (+0.2 %) and the ILO3-ILO3 on the spin at
-///   0.01 deg^2 (+0.35 %): their training objective could not beat PAPER in every one of the
-///   24 tuning cases either (docs/CALIBRATION.md).
-const EXCEPTIONS: [(&str, f64, usize, usize); 12] = [
-    ("fig5_a2_100hz.bin", 0.01, 0, 0),
-    ("fig5_a2_100hz.bin", 0.01, 1, 4),
-    ("fig5_a2_100hz.bin", 0.5, 1, 4),
-    ("sin5_a1_50hz.bin", 0.01, 1, 4),
-    ("sin5_a1_50hz.bin", 0.5, 1, 4),
+///   has T = 0.011 s for the velocity AD (+1.0 % on sin5 at 25 Hz and +0.006 % on the spin at
+///   0.01 deg^2, below PAPER on the other six cells) and T = 0.0993 s for AD-AD (+0.7 % and
+///   +1.4 % on the spin, below PAPER on the other six).
+/// * The ILO3-ILO3 on the spin at 0.01 deg^2 (+0.35 %): its training objective could not beat
+///   PAPER in every one of the 24 tuning cases either (docs/CALIBRATION.md).
+const EXCEPTIONS: [(&str, f64, usize, usize); 5] = [
     ("sin5_a2_25hz_weekwrap.bin", 0.01, 0, 4),
-    ("sin5_a2_25hz_weekwrap.bin", 0.01, 1, 4),
-    ("sin5_a2_25hz_weekwrap.bin", 0.5, 1, 4),
     ("spin_n1_20hz.bin", 0.01, 0, 4),
     ("spin_n1_20hz.bin", 0.01, 1, 3),
     ("spin_n1_20hz.bin", 0.01, 1, 4),
