@@ -654,10 +654,13 @@ mod tests {
     /// A row whose series shared the velocity law's first stage (the AVE with equal velocity
     /// and acceleration gains: the first stage is not computed) and no longer does after a
     /// gain change starts the series' first stage from the velocity law's state: on a ramp of
-    /// 30 deg/s the AVE-AVE stays within 1 deg/s^2 of 0 and the AVE velocity within 0.1
+    /// 30 deg/s the AVE-AVE stays within 5 deg/s^2 of 0 and the AVE velocity within 0.1
     /// deg/s of 30 (f32 and Fx). Without it the first stage restarts from a state that
     /// last moved when the bank was built, and the AVE-AVE jumps (to 1.7e5 deg/s^2 in the
-    /// first sample, measured with the copy disabled).
+    /// first sample, measured with the copy disabled). (Within 1 deg/s^2 before the AVE's
+    /// own `retune_state`; since, the second stage starts at `xhat` = the first stage's last
+    /// output, which chatters about 0.04 deg/s around 30, and the new `gamma1` = 15,000 turns
+    /// that into 3.6 deg/s^2 in the first sample, f32.)
     #[test]
     fn a_row_that_stops_sharing_continues() {
         fn check<T: Real>() {
@@ -668,7 +671,7 @@ mod tests {
             ramp_across_a_gain_change::<T>(&a, &b, |k, _, o| {
                 let (v, acc) = (o.velocities()[0], o.accelerations()[0]);
                 assert!(
-                    (v - 30.0).abs() < 0.1 && acc.abs() < 1.0,
+                    (v - 30.0).abs() < 0.1 && acc.abs() < 5.0,
                     "k {k}: {v} {acc}"
                 );
             });

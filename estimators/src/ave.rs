@@ -245,6 +245,18 @@ impl<T: Real> Law for AveParams<T> {
         s.theta
     }
 
+    /// New gains start from `xhat = y` (the last input), `theta1hat` (the output) and
+    /// `deltahat` kept: the position error the old gains left (at 20 Hz, a noise-sized
+    /// fraction of a degree) would otherwise meet the new `gamma1` and, from a slow gain set
+    /// to a fast one, swing the velocity by hundreds of deg/s (docs/CALIBRATION.md). Nothing
+    /// when the gains did not change.
+    fn retune_state(&self, old: &Self, s: &mut AveState<T>, y: T) {
+        if self == old {
+            return;
+        }
+        s.xhat = y;
+    }
+
     #[inline]
     fn translate(&self, s: &mut AveState<T>, d: T) {
         s.xhat = s.xhat + d;

@@ -16,7 +16,9 @@
 //!   but the ED, which is held to 1.02 x the best of them (not met: see the test);
 //! * on six other noise draws of the same switch (`scheduled_bank_does_not_ring_on_other_noise_draws`),
 //!   in each half, every family is within 2x of the gains tuned for that half: a gain change
-//!   does not ring (it did before gain changes were made bumpless: ILO 161x).
+//!   does not ring (it did before gain changes were made bumpless: ILO 161x);
+//! * on a 20 Hz spin (`the_100_hz_schedule_survives_retunes_at_20_hz`), every family within
+//!   1.2x of fixed `BankConfig::NAV440` (the AVE was 5.74x before its retune was bumpless).
 //!
 //! Release only (tuning): `cargo test --release -p host-tests --test schedule -- --nocapture`.
 
@@ -80,6 +82,14 @@ fn switching(samples: &[Sample], seed: u64) -> Vec<Sample> {
 
 /// Velocity MSE per family over the first half, the second half and the whole capture.
 fn mse(samples: &[Sample], opts: &EstimateOptions) -> [[f64; 7]; 3] {
+    // Halves: [0, 10 s) and [10 s, 20 s] (mse_range includes both ends: 9.99 s ends the first).
+    let ranges = [(0.0, SWITCH_S - 0.005), (SWITCH_S, END_S), (0.0, END_S)];
+    let m = mse_over(samples, opts, &ranges);
+    [m[0], m[1], m[2]]
+}
+
+/// Velocity MSE per family over each range (s), against the motion's analytic rate.
+fn mse_over(samples: &[Sample], opts: &EstimateOptions, ranges: &[(f64, f64)]) -> Vec<[f64; 7]> {
     let (rows, rejected) = replay::estimate(samples, opts).unwrap();
     assert_eq!(rejected, 0);
     let t: Vec<u64> = rows.iter().map(|r| r.t_us).collect();
@@ -87,20 +97,21 @@ fn mse(samples: &[Sample], opts: &EstimateOptions) -> [[f64; 7]; 3] {
         .iter()
         .map(|r| r.axis(Axis::Yaw).unwrap().reference_deg_s.unwrap())
         .collect();
-    let mut out = [[0.0; 7]; 3];
     let velocities: Vec<[f32; 7]> = rows
         .iter()
         .map(|r| r.axis(Axis::Yaw).unwrap().out.velocities())
         .collect();
-    // Halves: [0, 10 s) and [10 s, 20 s] (mse_range includes both ends: 9.99 s ends the first).
-    let ranges = [(0.0, SWITCH_S - 0.005), (SWITCH_S, END_S), (0.0, END_S)];
-    for (k, range) in ranges.iter().enumerate() {
-        for (i, o) in out[k].iter_mut().enumerate() {
-            let est: Vec<f32> = velocities.iter().map(|v| v[i]).collect();
-            *o = mse_range(&t, &est, &reference, *range);
-        }
-    }
-    out
+    ranges
+        .iter()
+        .map(|range| {
+            let mut o = [0.0; 7];
+            for (i, o) in o.iter_mut().enumerate() {
+                let est: Vec<f32> = velocities.iter().map(|v| v[i]).collect();
+                *o = mse_range(&t, &est, &reference, *range);
+            }
+            o
+        })
+        .collect()
 }
 
 fn fixed(cfg: BankConfig) -> EstimateOptions {
@@ -294,7 +305,7 @@ fn rust_snippet_and_toml_hold_the_same_schedule() {
 /// quantised to the A2 yaw LSB by `synth::angle_raw`) with N(0, 0.1 deg^2) yaw noise: every velocity column's RMS error against the true
 /// rate in the third hour is within 5 % of the first hour's (after its first second), and the
 /// AVE's within 10 % of the ILO1's every hour.
-/// Measured: AVE 4.67, 4.74, 4.66 deg/s in hours 1-3. With the paper's law (the schedule
+/// Measured: AVE 4.67, 4.65, 4.66 deg/s in hours 1-3. With the paper's law (the schedule
 /// before `--schedule` switched the law, `git show c8bcf79:host-tests/data/gains/schedule_fig5.rs`)
 /// the AVE was 40.4, 33.4, 27.0 deg/s.
 #[test]
@@ -368,5 +379,56 @@ fn the_schedule_runs_for_hours_without_degrading() {
             NAMES[i],
             hourly.iter().map(|r| r[i]).collect::<Vec<_>>()
         );
+    }
+}
+
+/// The 100 Hz schedule on a unit streaming at 20 Hz does not blow up on a retune: a 30 s
+/// spin (`nav440 synth --profile spin --rate 20 --yaw-noise 0.5`, motion seed 21, noise seed
+/// 5) run through the adaptive bank and through fixed `BankConfig::NAV440`, velocity MSE
+/// against the motion's analytic rate over 2-30 s. At 20 Hz the noise estimate (10 terms per
+/// time constant) wanders between 0.2 and 1.4 deg^2 and the bank retunes 13 times, each
+/// across AVE gains that differ up to 35-fold. Before the AVE's `retune_state` (`xhat = y`), the
+/// retune at 5.95 s from the 0.68 to the 0.21 deg^2 level swung the AVE to 981 deg/s (true
+/// rate 295) and its MSE over 6-8 s was 19,835 (deg/s)^2: the adaptive AVE was 5.74 x
+/// NAV440's over the capture (1716 against 299). Now every family is within 1.2 x NAV440's
+/// (measured: AVE 1.06; the ILO1 0.20, the noise-adaptive gains' gain at 0.5 deg^2). The
+/// schedule was tuned at 100 Hz: at 10 Hz the AVE and ILO1 are 1.5-2.2 x NAV440's (not held
+/// here; docs/CALIBRATION.md).
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "release only: cargo test --release -p host-tests --test schedule"
+)]
+fn the_100_hz_schedule_survives_retunes_at_20_hz() {
+    use host_tests::synth::{self, NoiseStep, PacketKind, SynthConfig};
+    let cap = synth::generate(&SynthConfig {
+        profile: ProfileKind::Spin,
+        seed: 21,
+        duration_s: 30.0,
+        rate_hz: 20,
+        packet: PacketKind::A2,
+        yaw_noise: vec![NoiseStep {
+            var_deg2: 0.5,
+            from_s: 0.0,
+        }],
+        noise_seed: 5,
+        ..Default::default()
+    })
+    .unwrap();
+    let samples = replay::samples(&cap.bytes).unwrap();
+    let (_, adaptive) = schedule_fig5();
+    let fixed_opts = EstimateOptions {
+        hold: adaptive.hold,
+        config: Some(BankConfig::NAV440),
+        ..Default::default()
+    };
+    let run = |o: &EstimateOptions| mse_over(&samples, o, &[(2.0, 30.0)])[0];
+    let (a, f) = (run(&adaptive), run(&fixed_opts));
+    let ratios: Vec<f64> = a.iter().zip(&f).map(|(a, f)| a / f).collect();
+    println!(
+        "20 Hz spin, 0.5 deg^2: adaptive / NAV440 velocity MSE {ratios:.2?} (adaptive {a:.1?})"
+    );
+    for (i, r) in ratios.iter().enumerate() {
+        assert!(*r <= 1.2, "{}: {r:.2} x NAV440", NAMES[i]);
     }
 }
