@@ -383,16 +383,17 @@ fn the_schedule_runs_for_hours_without_degrading() {
 }
 
 /// The 100 Hz schedule on a unit streaming at 20 Hz does not blow up on a retune: a 30 s
-/// spin (`nav440 synth --profile spin --rate 20 --yaw-noise 0.5`, motion seed 21, noise seed
-/// 5) run through the adaptive bank and through fixed `BankConfig::NAV440`, velocity MSE
+/// spin (`nav440 synth --profile spin --rate 20 --duration 30 --yaw-noise 0.5 --noise-seed 5`;
+/// the spin is closed-form, its seed unused) run through the adaptive bank and through fixed `BankConfig::NAV440`, velocity MSE
 /// against the motion's analytic rate over 2-30 s. At 20 Hz the noise estimate (10 terms per
-/// time constant) wanders between 0.2 and 1.4 deg^2 and the bank retunes 13 times, each
-/// across AVE gains that differ up to 35-fold. Before the AVE's `retune_state` (`xhat = y`), the
+/// time constant) wanders between 0.2 and 1.4 deg^2 and the bank retunes 13 times; the AVE
+/// takes the nearer level's gains (`gamma1` 498 at the 0.5 level, 425,822 at the 0.1 level).
+/// Before the AVE's `retune_state` (`xhat = y`), the
 /// retune at 5.95 s from the 0.68 to the 0.21 deg^2 level swung the AVE to 981 deg/s (true
 /// rate 295) and its MSE over 6-8 s was 19,835 (deg/s)^2: the adaptive AVE was 5.74 x
 /// NAV440's over the capture (1716 against 299). Now every family is within 1.2 x NAV440's
 /// (measured: AVE 1.06; the ILO1 0.20, the noise-adaptive gains' gain at 0.5 deg^2). The
-/// schedule was tuned at 100 Hz: at 10 Hz the AVE and ILO1 are 1.5-2.2 x NAV440's (not held
+/// schedule was tuned at 100 Hz: at 10 Hz the AVE and ILO1 are 1.3-2.2 x NAV440's (not held
 /// here; docs/CALIBRATION.md).
 #[test]
 #[cfg_attr(
