@@ -179,7 +179,7 @@ impl Eval for Problem<'_> {
 /// 1 % counts, not only the worst: see [`tune_preset`]). Infinite if any problem is.
 struct Problems<'a> {
     problems: &'a [Problem<'a>],
-    baselines: Option<Vec<[[f64; 7]; 2]>>,
+    baselines: Option<&'a [[[f64; 7]; 2]]>,
     hinge: bool,
 }
 
@@ -190,7 +190,7 @@ impl Problems<'_> {
         let mut hinge = 0.0f64;
         for (k, p) in self.problems.iter().enumerate() {
             let mut v = f(p);
-            if let Some(b) = &self.baselines {
+            if let Some(b) = self.baselines {
                 v /= b[k][usize::from(acc)][i];
             }
             if !(v.is_finite() && v > 0.0) {
@@ -699,8 +699,8 @@ pub struct PresetCase {
 /// AVE keeps `base`'s `deltahat` law), with `base`'s hold and step.
 ///
 /// With `beat`, a family that does not beat it in every case after that search (an objective
-/// of 1 or more: the worst case cannot be beaten) is searched a second time from `base`'s gains with
-/// the hinge objective (see `Problems`: every case not beaten by 1 % counts, where the first
+/// of 1 or more: the worst case cannot be beaten) is searched a second time from `base`'s
+/// gains with the hinge objective (see `Problems`: every case not beaten by 1 % counts, where the first
 /// objective only sees the worst one). The second result is kept if, scored through the whole
 /// bank, it loses fewer cases to `beat` (MSE ratio >= 1) and its geometric mean ratio is not
 /// larger; otherwise the first is kept (the hinge objective does not reward a case beyond
@@ -762,7 +762,7 @@ pub fn tune_preset(
     let start = GainsFile::from_bank(base);
     let first = Problems {
         problems: &problems,
-        baselines: beat.map(|_| baselines.clone()),
+        baselines: beat.map(|_| baselines.as_slice()),
         hinge: false,
     };
     let (mut gains, mut cost) = tune_both(&first, &start, |_, _| true, method)?;
@@ -773,7 +773,7 @@ pub fn tune_preset(
     let infeasible = cost;
     let second = Problems {
         problems: &problems,
-        baselines: Some(baselines.clone()),
+        baselines: Some(&baselines),
         hinge: true,
     };
     let (hinged, hinge_cost) = tune_both(
@@ -807,21 +807,23 @@ pub fn tune_preset(
     };
     // The first gains with every family searched twice replaced by its second result.
     let mut merged = gains;
-    for i in (0..7).filter(|&i| infeasible[0][i] >= 1.0) {
-        merged.velocity.set_column(i, &hinged.velocity);
-    }
-    for i in (0..7).filter(|&i| infeasible[1][i] >= 1.0) {
-        merged.acceleration.set_column(i, &hinged.acceleration);
+    for (half, (m, h)) in [
+        (&mut merged.velocity, &hinged.velocity),
+        (&mut merged.acceleration, &hinged.acceleration),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        for i in (0..7).filter(|&i| infeasible[half][i] >= 1.0) {
+            m.set_column(i, h);
+        }
     }
     let (s1, s2) = (score(&gains)?, score(&merged)?);
     let mut report = String::new();
     for half in 0..2 {
-        for i in 0..7 {
+        for i in (0..7).filter(|&i| infeasible[half][i] >= 1.0) {
             let (l1, g1) = s1[half][i];
             let (l2, g2) = s2[half][i];
-            if infeasible[half][i] < 1.0 {
-                continue;
-            }
             let keep = l2 < l1 && g2 <= g1;
             report += &format!(
                 "{} {}: first search {l1} of {n} cases lost, geometric mean ratio {:.3}; hinge search {l2} lost, {:.3}: {} kept\n",
@@ -834,9 +836,9 @@ pub fn tune_preset(
             );
             if keep {
                 let (dst, src) = if half == 0 {
-                    (&mut gains.velocity, &merged.velocity)
+                    (&mut gains.velocity, &hinged.velocity)
                 } else {
-                    (&mut gains.acceleration, &merged.acceleration)
+                    (&mut gains.acceleration, &hinged.acceleration)
                 };
                 dst.set_column(i, src);
                 cost[half][i] = hinge_cost[half][i];

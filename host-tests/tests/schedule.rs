@@ -302,11 +302,12 @@ fn rust_snippet_and_toml_hold_the_same_schedule() {
 /// with), and the adaptive bank with this schedule (`AdaptiveBank<f32>`, the firmware's
 /// `adaptive-gains` bank) does not degrade over 3 h of a spin (rate 200 + 100 sin(0.4 pi t)
 /// deg/s, `motion::ProfileKind::Spin`, the closed-form motion of `estimators/tests/long_run.rs`,
-/// quantised to the A2 yaw LSB by `synth::angle_raw`) with N(0, 0.1 deg^2) yaw noise: every velocity column's RMS error against the true
-/// rate in the third hour is within 5 % of the first hour's (after its first second), and the
-/// AVE's within 10 % of the ILO1's every hour.
+/// quantised to the A2 yaw LSB by `synth::angle_raw`) with N(0, 0.1 deg^2) yaw noise: every
+/// velocity column's RMS error against the true rate in the third hour is within 5 % of the
+/// first hour's (after its first second), and the AVE's within 10 % of the ILO1's every hour.
 /// Measured: AVE 4.67, 4.65, 4.66 deg/s in hours 1-3. With the paper's law (the schedule
-/// before `--schedule` switched the law, `git show c8bcf79:host-tests/data/gains/schedule_fig5.rs`)
+/// before `--schedule` switched the law,
+/// `git show c8bcf79:host-tests/data/gains/schedule_fig5.rs`)
 /// the AVE was 40.4, 33.4, 27.0 deg/s.
 #[test]
 #[cfg_attr(
@@ -384,11 +385,11 @@ fn the_schedule_runs_for_hours_without_degrading() {
 
 /// The 100 Hz schedule on a unit streaming at 20 Hz does not blow up on a retune: a 30 s
 /// spin (`nav440 synth --profile spin --rate 20 --duration 30 --yaw-noise 0.5 --noise-seed 5`;
-/// the spin is closed-form, its seed unused) run through the adaptive bank and through fixed `BankConfig::NAV440`, velocity MSE
-/// against the motion's analytic rate over 2-30 s. At 20 Hz the noise estimate (10 terms per
-/// time constant) wanders between 0.2 and 1.4 deg^2 and the bank retunes 13 times; the AVE
-/// takes the nearer level's gains (`gamma1` 498 at the 0.5 level, 425,822 at the 0.1 level).
-/// Before the AVE's `retune_state` (`xhat = y`), the
+/// the spin is closed-form, its seed unused) run through the adaptive bank and through fixed
+/// `BankConfig::NAV440`, velocity MSE against the motion's analytic rate over 2-30 s. At
+/// 20 Hz the noise estimate (10 terms per time constant) wanders between 0.2 and 1.4 deg^2
+/// and the bank retunes 13 times; the AVE takes the nearer level's gains (`gamma1` 498 at the
+/// 0.5 level, 425,822 at the 0.1 level). Before the AVE's `retune_state` (`xhat = y`), the
 /// retune at 5.95 s from the 0.68 to the 0.21 deg^2 level swung the AVE to 981 deg/s (true
 /// rate 295) and its MSE over 6-8 s was 19,835 (deg/s)^2: the adaptive AVE was 5.74 x
 /// NAV440's over the capture (1716 against 299). Now every family is within 1.2 x NAV440's
@@ -418,13 +419,8 @@ fn the_100_hz_schedule_survives_retunes_at_20_hz() {
     .unwrap();
     let samples = replay::samples(&cap.bytes).unwrap();
     let (_, adaptive) = schedule_fig5();
-    let fixed_opts = EstimateOptions {
-        hold: adaptive.hold,
-        config: Some(BankConfig::NAV440),
-        ..Default::default()
-    };
     let run = |o: &EstimateOptions| mse_over(&samples, o, &[(2.0, 30.0)])[0];
-    let (a, f) = (run(&adaptive), run(&fixed_opts));
+    let (a, f) = (run(&adaptive), run(&fixed(BankConfig::NAV440)));
     let ratios: Vec<f64> = a.iter().zip(&f).map(|(a, f)| a / f).collect();
     println!(
         "20 Hz spin, 0.5 deg^2: adaptive / NAV440 velocity MSE {ratios:.2?} (adaptive {a:.1?})"
