@@ -39,7 +39,16 @@ pub struct GainSchedule {
     levels: [ScheduleLevel; MAX_LEVELS],
     len: usize,
     blend: Blend,
+    /// The nominal sample period the levels were tuned at, s (`None`: not recorded).
+    period_s: Option<f32>,
 }
+
+/// A [`GainSchedule`] fits a bank whose nominal sample period is within this factor of the
+/// period the schedule was tuned at ([`GainSchedule::fits_period`]). The NAV440's packet rates
+/// (1, 2, 4, 5, 10, 20, 25, 50, 100 Hz) differ by at least 1.25x from one to the next, so
+/// 1.2 accepts the rate a schedule was tuned at (and the warm-up's measured period of it) and
+/// no other.
+pub const PERIOD_TOLERANCE: f32 = 1.2;
 
 /// `a^(1-w) b^w` for positive `a`, `b`; linear otherwise. `w` in `[0, 1]`.
 fn interp(a: f32, b: f32, w: f32) -> f32 {
@@ -132,6 +141,7 @@ impl GainSchedule {
             levels: [levels[0]; MAX_LEVELS],
             len: levels.len(),
             blend: Blend::default(),
+            period_s: None,
         };
         s.levels[..levels.len()].copy_from_slice(levels);
         Ok(s)
@@ -145,6 +155,41 @@ impl GainSchedule {
     /// How levels are blended.
     pub fn blend(&self) -> Blend {
         self.blend
+    }
+
+    /// This schedule, recorded as tuned at the nominal sample period `period_s` (s, finite and
+    /// positive; `nav440 tune --schedule` records the capture's). The observers' tuned gains
+    /// are tied to the sample period they were tuned at (a tuned ILO can ring at a frequency
+    /// the samples at that rate do not see, see [`Blend`]): run at another rate, a schedule's
+    /// gains can be worse than the fixed `BankConfig::NAV440` preset's (a 100 Hz schedule at
+    /// 10 Hz with 0.5 deg^2 noise: up to 2x, docs/CALIBRATION.md "Low packet rates"). The
+    /// schedule still runs at any rate; [`AdaptiveBank::period_fits`] tells whether it was
+    /// tuned for its bank's.
+    pub fn with_sample_period(self, period_s: f32) -> Result<Self, ConfigError> {
+        if !period_s.is_finite() {
+            return Err(ConfigError::NotFinite("sample_period_s"));
+        }
+        if period_s <= 0.0 {
+            return Err(ConfigError::NotPositive("sample_period_s"));
+        }
+        Ok(Self {
+            period_s: Some(period_s),
+            ..self
+        })
+    }
+
+    /// The nominal sample period the schedule was tuned at, s (`None` if not recorded).
+    pub fn sample_period_s(&self) -> Option<f32> {
+        self.period_s
+    }
+
+    /// `true` if the schedule was tuned for a nominal sample period of `period_s` (s): within
+    /// a factor [`PERIOD_TOLERANCE`] of the recorded one, or none is recorded.
+    pub fn fits_period(&self, period_s: f32) -> bool {
+        match self.period_s {
+            None => true,
+            Some(p) => period_s <= p * PERIOD_TOLERANCE && period_s * PERIOD_TOLERANCE >= p,
+        }
     }
 
     /// The levels, in increasing noise variance.
@@ -198,14 +243,17 @@ impl GainSchedule {
 /// variance `20 sigma^2` for white noise of variance `sigma^2`, while a smooth motion only
 /// contributes `(jerk dt^3)^2` (at 100 Hz and a hand's jerk of 1e4 deg/s^3: 1e-4 deg^2, a
 /// hundredth of `20 * 0.01`). The estimate is the exponentially weighted mean of
-/// `d3^2 / 20` with time constant `tau_s` (weight `dt / tau` per sample; the first
-/// `tau / dt` samples are averaged with weight `1/k` so the estimate starts at once), where
-/// each term is clipped to 9 times the current estimate (a robust mean: a motion burst or a
-/// glitch moves it by at most `9 dt / tau` of itself; for Gaussian noise the clip removes
-/// under 1 % of the mean). A sample interval that differs from the previous one by more than
-/// a quarter (a lost packet, a gap, a new epoch) restarts the differences (the estimate is
-/// kept). Limitation: at low packet rates the motion term grows as `dt^6` (20 Hz: 1.6e4
-/// times larger than at 100 Hz), so fast motion then reads as noise.
+/// `d3^2 / 20` with time constant `tau_s`, at least [`NoiseEstimator::MIN_TAU_SAMPLES`]
+/// periods (weight `dt / tau` per sample; the first `tau / dt` samples are averaged with
+/// weight `1/k` so the estimate starts at once), where each term is clipped to 9 times the
+/// current estimate (a robust mean: a motion burst or a glitch moves it by at most
+/// `9 dt / tau` of itself; for Gaussian noise the clip removes under 1 % of the mean). A
+/// sample interval that differs from the previous one by more than a quarter (a lost packet,
+/// a gap, a new epoch) restarts the differences (the estimate is kept). Limitation: at low
+/// packet rates the motion term grows as `dt^6` (20 Hz: 1.6e4 times larger than at 100 Hz),
+/// so fast motion then reads as noise: the noise-free synthetic fig5 hand motion reads
+/// 2.4e-6 deg^2 at 100 Hz, 6.6e-4 at 20 Hz and 0.041 at 10 Hz (a steady spin: 1.2e-5 at
+/// 20 Hz, 6.2e-4 at 10 Hz).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NoiseEstimator {
     /// Weight of a new term once started, `dt / tau`.
@@ -224,7 +272,14 @@ pub struct NoiseEstimator {
 }
 
 impl NoiseEstimator {
-    /// An estimator with time constant `tau_s` (s) for samples every `sample_period_s` (s).
+    /// The time constant is at least this many sample periods (the weight of a new term at
+    /// most `1 / 50`): the estimate's jitter depends on how many terms it averages, not on
+    /// seconds. At 100 Hz the default 0.5 s is exactly 50 periods; at 20 Hz the time constant
+    /// becomes 2.5 s (with 0.5 s, 10 terms, a steady 0.01 deg^2 read between 0.003 and 0.035).
+    pub const MIN_TAU_SAMPLES: f32 = 50.0;
+
+    /// An estimator with time constant `tau_s` (s), or [`Self::MIN_TAU_SAMPLES`] periods if
+    /// that is longer, for samples every `sample_period_s` (s).
     pub fn new(tau_s: f32, sample_period_s: f32) -> Result<Self, ConfigError> {
         if !(tau_s.is_finite() && sample_period_s.is_finite()) {
             return Err(ConfigError::NotFinite("tau_s"));
@@ -233,7 +288,7 @@ impl NoiseEstimator {
             return Err(ConfigError::NotPositive("tau_s"));
         }
         Ok(NoiseEstimator {
-            alpha: (sample_period_s / tau_s).min(1.0),
+            alpha: (sample_period_s / tau_s).min(1.0 / Self::MIN_TAU_SAMPLES),
             var: 0.0,
             count: 0,
             prev: None,
@@ -291,7 +346,8 @@ impl NoiseEstimator {
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AdaptiveConfig {
-    /// Time constant of the noise estimate, s (default 0.5).
+    /// Time constant of the noise estimate, s (default 0.5; at least
+    /// [`NoiseEstimator::MIN_TAU_SAMPLES`] sample periods: 2.5 s at 20 Hz).
     pub tau_s: f32,
     /// Noise variance the gains start at, deg^2 (default 0.01, the paper's small noise).
     pub initial_noise_var: f32,
@@ -442,6 +498,23 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
     pub fn bank(&self) -> &PaperBank<T, S> {
         &self.bank
     }
+
+    /// The gain schedule.
+    pub fn schedule(&self) -> &GainSchedule {
+        &self.schedule
+    }
+
+    /// The bank's nominal sample period, s (`BankConfig::sample_period_s`).
+    pub fn sample_period_s(&self) -> f32 {
+        self.base.sample_period_s
+    }
+
+    /// `true` unless the schedule records a tuning period that this bank's nominal sample
+    /// period does not fit ([`GainSchedule::fits_period`]). The bank runs the schedule either
+    /// way; `nav440 estimate` and the firmware warn when this is `false`.
+    pub fn period_fits(&self) -> bool {
+        self.schedule.fits_period(self.base.sample_period_s)
+    }
 }
 
 #[cfg(test)]
@@ -483,6 +556,78 @@ mod tests {
         }
         let v = e.variance().unwrap();
         assert!((v - 0.01).abs() < 0.001, "{v}");
+    }
+
+    /// At 20 Hz the time constant is 50 periods (2.5 s), not the 0.5 s asked for: the
+    /// estimator is the same as one asked for 2.5 s, and on N(0, 0.01) noise over a smooth
+    /// motion it stays within 0.5x to 2x of 0.01 once started (with 0.5 s, 10 terms, it read
+    /// 0.003 to 0.035 on a synthetic spin at 20 Hz; at 100 Hz with 0.5 s: 0.005 to 0.02).
+    #[test]
+    fn the_time_constant_is_at_least_fifty_periods() {
+        assert_eq!(
+            NoiseEstimator::new(0.5, 0.05).unwrap(),
+            NoiseEstimator::new(2.5, 0.05).unwrap()
+        );
+        assert_ne!(
+            NoiseEstimator::new(0.5, 0.01).unwrap(),
+            NoiseEstimator::new(2.5, 0.01).unwrap()
+        );
+        let mut g = Gauss::new(11);
+        let mut e = NoiseEstimator::new(0.5, 0.05).unwrap();
+        let (mut lo, mut hi) = (f32::MAX, 0.0f32);
+        for k in 0..2400u64 {
+            let t = k as f64 * 0.05;
+            // 30 deg amplitude, 0.2 Hz: jerk 30 (0.4 pi)^3 = 60 deg/s^3, (jerk dt^3)^2 = 5e-5.
+            let y = 30.0 * libm::sin(0.4 * core::f64::consts::PI * t) + 0.1 * g.next();
+            e.update(k * 50_000, y as f32);
+            if t >= 10.0 {
+                let v = e.variance().unwrap();
+                (lo, hi) = (lo.min(v), hi.max(v));
+            }
+        }
+        assert!(lo > 0.005 && hi < 0.02, "{lo} {hi}");
+    }
+
+    /// A schedule records the period it was tuned at and fits banks within 1.2x of it.
+    #[test]
+    fn a_schedule_fits_the_period_it_was_tuned_at() {
+        let s = GainSchedule::new(&[level(0.01, 100.0, ILO1_TABLE2)]).unwrap();
+        assert_eq!(s.sample_period_s(), None);
+        assert!(s.fits_period(0.01) && s.fits_period(0.5));
+        assert_eq!(
+            s.with_sample_period(f32::NAN),
+            Err(ConfigError::NotFinite("sample_period_s"))
+        );
+        assert_eq!(
+            s.with_sample_period(0.0),
+            Err(ConfigError::NotPositive("sample_period_s"))
+        );
+        let s = s.with_sample_period(0.01).unwrap();
+        assert_eq!(s.sample_period_s(), Some(0.01));
+        // 100 Hz fits 100 Hz and periods within 1.2x (0.0085 to 0.0118 s); not 80 Hz
+        // (0.0125 s), 125 Hz (0.008 s), 50 Hz or 10 Hz: the NAV440's neighbouring rates.
+        for (p, fits) in [
+            (0.01, true),
+            (0.0085, true),
+            (0.0118, true),
+            (0.0125, false),
+            (0.008, false),
+            (0.02, false),
+            (0.1, false),
+        ] {
+            assert_eq!(s.fits_period(p), fits, "{p}");
+        }
+        // The bank runs it at any period and tells.
+        for (p, fits) in [(0.01, true), (0.05, false)] {
+            let base = BankConfig {
+                sample_period_s: p,
+                ..BankConfig::PAPER
+            };
+            let b = AdaptiveBank::<f32>::new(&base, &s, &AdaptiveConfig::DEFAULT).unwrap();
+            assert_eq!(b.period_fits(), fits);
+            assert_eq!(b.sample_period_s(), p);
+            assert_eq!(b.schedule().sample_period_s(), Some(0.01));
+        }
     }
 
     /// A wrapping spin (500 deg/s, through +-180 deg) without noise reads as (almost) no

@@ -39,16 +39,31 @@ fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
 mod schedule {
     include!("../../host-tests/data/gains/schedule_fig5.rs");
 }
-/// The schedule's levels (noise variance, deg^2 -> velocity and acceleration gains).
+/// The schedule's levels (noise variance, deg^2 -> velocity and acceleration gains) and the
+/// nominal sample period they were tuned at (s).
 #[cfg(feature = "adaptive-gains")]
-pub use schedule::SCHEDULE;
+pub use schedule::{SCHEDULE, SCHEDULE_PERIOD_S};
 
-/// Builds an axis's noise-adaptive bank (out of line: the constructor is large).
+/// Builds an axis's noise-adaptive bank (out of line: the constructor is large). A schedule
+/// tuned at another packet rate than the measured one still runs, with a warning line
+/// (`estimators::AdaptiveBank::period_fits`; `nav440 estimate --gains` warns the same way).
 #[cfg(feature = "adaptive-gains")]
 #[inline(never)]
 fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
-    let schedule = estimators::GainSchedule::new(&SCHEDULE)?;
-    nav440_pipeline::adaptive_axis_bank(axis, cfg, &schedule)
+    let mut schedule = estimators::GainSchedule::new(&SCHEDULE)?;
+    if let Some(p) = SCHEDULE_PERIOD_S {
+        schedule = schedule.with_sample_period(p)?;
+    }
+    let bank = nav440_pipeline::adaptive_axis_bank(axis, cfg, &schedule)?;
+    if !bank.period_fits() {
+        defmt::println!(
+            "firmware: warning: {=str}: the gain schedule was tuned at a sample period of {=f32} s, the unit's is {=f32} s: tune a schedule at this rate (docs/CALIBRATION.md, Low packet rates)",
+            axis.name(),
+            SCHEDULE_PERIOD_S.unwrap_or(0.0),
+            cfg.sample_period_s
+        );
+    }
+    Ok(bank)
 }
 
 /// The bank constructor the pipeline calls after the warm-up.

@@ -527,6 +527,16 @@ impl EstimateOptions {
         PeriodEstimator::from_times(samples.iter().map(|s| s.t_us).take(WARMUP_SAMPLES))
             .apply(self.bank_config())
     }
+
+    /// The nominal sample period the bank runs at on `samples`, s: the step `step_s` with
+    /// `--noise-at step` (the bank sees one sample per step), else
+    /// [`EstimateOptions::bank_config_for`]'s.
+    pub fn bank_period_s(&self, samples: &[Sample]) -> f32 {
+        match self.noise_at {
+            NoiseAt::Step => self.step_s,
+            NoiseAt::Sample => self.bank_config_for(samples).sample_period_s,
+        }
+    }
 }
 
 /// What a run of the bank gives: rows and the counts of samples it did not turn into rows.
@@ -613,6 +623,9 @@ pub struct StreamReport {
     pub faults: TimeFaults,
     /// Samples not estimated because their BIT word flags a failure.
     pub bit: BitCounts,
+    /// With a gain schedule tuned at another sample period than the capture's
+    /// (`estimators::GainSchedule::fits_period`): (the schedule's period, the bank's), us.
+    pub schedule_misfit_us: Option<(u64, u64)>,
 }
 
 impl StreamReport {
@@ -623,7 +636,22 @@ impl StreamReport {
             .into_iter()
             .chain(rejection_warning(&self.summary.rejected))
             .chain(fault_warning(&self.faults, self.summary.gaps))
+            .chain(self.schedule_misfit_us.map(schedule_warning))
     }
+}
+
+/// The CLI's warning for a gain schedule run at another sample period than it was tuned at
+/// (periods in us).
+pub fn schedule_warning((tuned_us, run_us): (u64, u64)) -> String {
+    let at = |us: u64| {
+        let (s, hz) = (us as f64 / 1e6, (1e9 / us.max(1) as f64).round() / 1e3);
+        format!("{s} s ({hz} Hz)")
+    };
+    format!(
+        "the gain schedule was tuned at a sample period of {}, this capture runs at {}: a schedule's gains are tuned to its rate and can do worse here than the fixed NAV440 preset (docs/CALIBRATION.md, Low packet rates); tune one on a capture at this rate (nav440 tune CAPTURE --schedule ...)",
+        at(tuned_us),
+        at(run_us)
+    )
 }
 
 /// The CLI's one-line warning for rejected samples, `None` if nothing was rejected, e.g. "3
@@ -694,6 +722,19 @@ impl Bank {
         } else {
             Bank::F32(Box::new(axis_bank(axis, cfg).map_err(bad)?))
         })
+    }
+
+    /// For a noise-adaptive bank whose schedule was tuned at another sample period
+    /// (`AdaptiveBank::period_fits`): (the schedule's period, the bank's), s.
+    fn schedule_misfit(&self) -> Option<(f32, f32)> {
+        let (s, p) = match self {
+            Bank::AdaptiveF32(b) => (b.schedule(), b.sample_period_s()),
+            Bank::AdaptiveFx(b) => (b.schedule(), b.sample_period_s()),
+            Bank::F32(_) | Bank::Fx(_) => return None,
+        };
+        s.sample_period_s()
+            .filter(|_| !s.fits_period(p))
+            .map(|t| (t, p))
     }
 
     fn update(&mut self, t_us: u64, deg: f32) -> std::result::Result<BankOutput, SampleError> {
@@ -812,6 +853,13 @@ impl HostBank {
             noise,
             step,
         })
+    }
+}
+
+impl HostBank {
+    /// See `Bank::schedule_misfit`.
+    fn schedule_misfit(&self) -> Option<(f32, f32)> {
+        self.bank.schedule_misfit()
     }
 }
 
@@ -1039,7 +1087,17 @@ pub fn estimate_stream<'a, W: std::io::Write + ?Sized>(
         },
         faults: *pipe.front().time_faults(),
         bit: pipe.front().counters().bit,
+        schedule_misfit_us: opts
+            .axes
+            .iter()
+            .find_map(|a| pipe.estimation().bank(a)?.schedule_misfit())
+            .map(|(t, p)| (s_to_us(t), s_to_us(p))),
     })
+}
+
+/// A period in s as whole us (rounded).
+fn s_to_us(s: f32) -> u64 {
+    (f64::from(s) * 1e6).round() as u64
 }
 
 /// A byte stream given in chunks: a slice (one chunk) or a [`CaptureReader`].

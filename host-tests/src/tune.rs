@@ -881,7 +881,8 @@ fn tune_both(
 }
 
 /// `nav440 tune --schedule V1,V2,..`: [`tune_with`] at each noise level (`spec.noise_var`
-/// replaced; one hold: `spec.holds[0]`, linear by default); returns the schedule file and the
+/// replaced; one hold: `spec.holds[0]`, linear by default); returns the schedule file (with
+/// the nominal sample period the bank ran at, [`EstimateOptions::bank_period_s`]) and the
 /// printed report (each level's report).
 pub fn tune_schedule(
     samples: &[Sample],
@@ -937,6 +938,8 @@ pub fn tune_schedule(
     Ok((
         crate::gains::ScheduleFile {
             hold: hold_name(hold).to_string(),
+            // The f32's shortest decimal form (0.01, not 0.009999999776482582).
+            sample_period_s: opts.bank_period_s(samples).to_string().parse().ok(),
             level,
         },
         text,

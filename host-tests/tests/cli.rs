@@ -735,3 +735,79 @@ fn estimate_runs_a_schedule_file() {
     );
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// `nav440 tune --schedule` records the capture's nominal sample period in the schedule file
+/// (`sample_period_s`) and the Rust snippet (`SCHEDULE_PERIOD_S`); `nav440 estimate --gains`
+/// warns (stderr, one line; the CSV is unchanged) when a capture's period does not fit it
+/// (more than 1.2x off, `estimators::GainSchedule::fits_period`), and only then: a 20 Hz
+/// schedule on a 20 Hz capture and on a 100 Hz one, the bundled 100 Hz schedule on 100 Hz and
+/// 50 Hz captures, and a file without the period (written before it was recorded).
+#[test]
+fn a_schedule_records_its_rate_and_estimate_warns_off_it() {
+    let d = scratch("schedule_rate");
+    let cap20 = d.join("fig5_20hz.bin");
+    ok(&[
+        "synth",
+        "--profile",
+        "fig5",
+        "--rate",
+        "20",
+        "--duration",
+        "3",
+        "-o",
+        p(&cap20),
+    ]);
+    let (toml, rs) = (d.join("s20.toml"), d.join("s20.rs"));
+    ok(&[
+        "tune",
+        p(&cap20),
+        "--schedule",
+        "0.01,0.5",
+        "--seeds",
+        "1",
+        "-o",
+        p(&toml),
+        "--rust",
+        p(&rs),
+    ]);
+    let text = std::fs::read_to_string(&toml).unwrap();
+    assert!(text.contains("\nsample_period_s = 0.05"), "{text}");
+    let snippet = std::fs::read_to_string(&rs).unwrap();
+    assert!(
+        snippet.contains("pub const SCHEDULE_PERIOD_S: Option<f32> = Some(0.05);"),
+        "{snippet}"
+    );
+    let estimate = |cap: &Path, sched: &Path| {
+        let o = run(&["estimate", p(cap), "--gains", p(sched)]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        (
+            String::from_utf8(o.stdout).unwrap(),
+            String::from_utf8(o.stderr).unwrap(),
+        )
+    };
+    let warning = |tuned: &str, run: &str| {
+        format!("nav440: warning: the gain schedule was tuned at a sample period of {tuned}, this capture runs at {run}: ")
+    };
+    let fig5 = data("fig5_a2_100hz.bin");
+    let sin5 = data("sin5_a1_50hz.bin");
+    let bundled = data("gains/schedule_fig5.toml");
+    assert_eq!(estimate(&cap20, &toml).1, "");
+    let (_, err) = estimate(&fig5, &toml);
+    assert!(
+        err.starts_with(&warning("0.05 s (20 Hz)", "0.01 s (100 Hz)")) && err.lines().count() == 1,
+        "{err}"
+    );
+    assert_eq!(estimate(&fig5, &bundled).1, "");
+    let (csv, err) = estimate(&sin5, &bundled);
+    assert!(
+        err.starts_with(&warning("0.01 s (100 Hz)", "0.02 s (50 Hz)")),
+        "{err}"
+    );
+    // Without the period: the same rows, no warning.
+    let old = d.join("old.toml");
+    let bundled_text = std::fs::read_to_string(&bundled).unwrap();
+    assert!(bundled_text.contains("sample_period_s = 0.01\n"));
+    std::fs::write(&old, bundled_text.replace("sample_period_s = 0.01\n", "")).unwrap();
+    assert_eq!(estimate(&sin5, &old), (csv, String::new()));
+    let _ = std::fs::remove_dir_all(&d);
+}

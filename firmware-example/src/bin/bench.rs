@@ -302,7 +302,12 @@ mod schedule {
 /// the bank does at most once per `AdaptiveConfig::retune_every` samples.
 fn adaptive_bank(c: &Counter, overhead: u64, cfg: &BankConfig) {
     use estimators::{AdaptiveBank, AdaptiveConfig, GainSchedule};
-    let Ok(sched) = GainSchedule::new(&schedule::SCHEDULE) else {
+    let sched =
+        GainSchedule::new(&schedule::SCHEDULE).and_then(|s| match schedule::SCHEDULE_PERIOD_S {
+            Some(p) => s.with_sample_period(p),
+            None => Ok(s),
+        });
+    let Ok(sched) = sched else {
         fail("the gain schedule")
     };
     let held = AdaptiveConfig {
