@@ -385,18 +385,22 @@ fn finish(pipe: &mut pipeline::Pipeline, uart: &Uart0, unit_bytes: u64) -> ! {
     host::exit(true)
 }
 
-/// With `adaptive-gains`: one line per axis, how many times its gains changed and the noise
-/// variance (deg^2) the current gains are for; `{axis}_retunes` is a counter for `xtask`.
+/// With `adaptive-gains`: one line per axis, how many times its gains changed, the noise
+/// variance (deg^2) the current gains are for and whether the schedule runs off the rate it
+/// was tuned at (1, `AdaptiveBank::period_fits` false; else 0); `{axis}_retunes` and
+/// `{axis}_schedule_off_rate` are counters for `xtask`.
 #[cfg(feature = "adaptive-gains")]
 fn adaptive_summary(pipe: &pipeline::Pipeline) {
     for axis in pipeline::AXES.iter() {
         if let Some(b) = pipe.estimation().bank(axis) {
             defmt::println!(
-                "firmware: adaptive gains, {=str}: {=str}_retunes={=u32} gain_level_deg2={=f32}",
+                "firmware: adaptive gains, {=str}: {=str}_retunes={=u32} gain_level_deg2={=f32} {=str}_schedule_off_rate={=u32}",
                 axis.name(),
                 axis.name(),
                 b.retune_count(),
-                b.gain_level()
+                b.gain_level(),
+                axis.name(),
+                u32::from(!b.period_fits())
             );
         }
     }

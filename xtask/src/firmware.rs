@@ -913,6 +913,9 @@ const ADAPTIVE: &str = "adaptive-gains";
 /// `firmware-example/src/pipeline.rs`), relative to the workspace root.
 const ADAPTIVE_SCHEDULE: &str = "host-tests/data/gains/schedule_fig5.toml";
 
+/// A bundled capture at 20 Hz (the adaptive firmware's schedule is tuned at 100 Hz).
+const SPIN_20HZ: &str = "host-tests/data/spin_n1_20hz.bin";
+
 /// `nav440 estimate` arguments that print the `adaptive-gains` firmware's CSV on `target`.
 fn adaptive_host_args(target: &str) -> Vec<String> {
     let mut a = vec![
@@ -1685,6 +1688,22 @@ pub fn ci_steps() -> Result<(), String> {
             board.name
         );
         equivalence(board, elf, &bundled, &args)?;
+        // The schedule (tuned at 100 Hz) on the 20 Hz capture: the same CSV as the host, and
+        // the firmware says it runs off its rate (only there: 0 on the 100 Hz captures).
+        let c20 = equivalence(board, elf, &root().join(SPIN_20HZ), &args)?;
+        for (cc, name, off) in [(&c, "the noise switch", 0), (&c20, SPIN_20HZ, 1)] {
+            let got = counter(cc, "yaw_schedule_off_rate");
+            if got != Some(off) {
+                return Err(format!(
+                    "the adaptive firmware on {} reported yaw_schedule_off_rate={got:?} on {name} (expected {off})",
+                    board.name
+                ));
+            }
+        }
+        eprintln!(
+            "xtask: OK: adaptive gains on {}: the 100 Hz schedule is reported off its rate on {SPIN_20HZ} only",
+            board.name
+        );
     }
     // Input without the length prefix is refused with exit status 1 (never a hang).
     let m4f_board = elfs[0].0;
