@@ -648,7 +648,7 @@ pub fn schedule_warning((tuned_us, run_us): (u64, u64)) -> String {
         format!("{s} s ({hz} Hz)")
     };
     format!(
-        "the gain schedule was tuned at a sample period of {}, this capture runs at {}: a schedule's gains are tuned to its rate and can do worse here than the fixed NAV440 preset (docs/CALIBRATION.md, Low packet rates); tune one on a capture at this rate (nav440 tune CAPTURE --schedule ...)",
+        "the gain schedule was tuned at a sample period of {}, the bank runs at {} on this capture: a schedule's gains are tuned to its rate and can do worse here than the fixed NAV440 preset (docs/CALIBRATION.md, Low packet rates); tune one on a capture at this rate (nav440 tune CAPTURE --schedule ...)",
         at(tuned_us),
         at(run_us)
     )

@@ -786,7 +786,7 @@ fn a_schedule_records_its_rate_and_estimate_warns_off_it() {
         )
     };
     let warning = |tuned: &str, run: &str| {
-        format!("nav440: warning: the gain schedule was tuned at a sample period of {tuned}, this capture runs at {run}: ")
+        format!("nav440: warning: the gain schedule was tuned at a sample period of {tuned}, the bank runs at {run} on this capture: ")
     };
     let fig5 = data("fig5_a2_100hz.bin");
     let sin5 = data("sin5_a1_50hz.bin");
