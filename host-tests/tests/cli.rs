@@ -809,5 +809,24 @@ fn a_schedule_records_its_rate_and_estimate_warns_off_it() {
     assert!(bundled_text.contains("sample_period_s = 0.01\n"));
     std::fs::write(&old, bundled_text.replace("sample_period_s = 0.01\n", "")).unwrap();
     assert_eq!(estimate(&sin5, &old), (csv, String::new()));
+    // A bad period is a usage error (exit 2) naming it.
+    for (bad, why) in [
+        ("-1", "parameter `sample_period_s` must be > 0"),
+        ("nan", "parameter `sample_period_s` is not finite"),
+        ("\"x\"", "invalid type: string"),
+    ] {
+        let f = d.join("bad.toml");
+        let text = bundled_text.replace(
+            "sample_period_s = 0.01\n",
+            &format!("sample_period_s = {bad}\n"),
+        );
+        std::fs::write(&f, text).unwrap();
+        let (code, err) = fails(&["estimate", p(&sin5), "--gains", p(&f)]);
+        assert_eq!(code, 2, "{bad}");
+        assert!(
+            err.contains("bad schedule file") && err.contains(why),
+            "{err}"
+        );
+    }
     let _ = std::fs::remove_dir_all(&d);
 }
