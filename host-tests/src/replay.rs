@@ -727,14 +727,12 @@ impl Bank {
     /// For a noise-adaptive bank whose schedule was tuned at another sample period
     /// (`AdaptiveBank::period_fits`): (the schedule's period, the bank's), s.
     fn schedule_misfit(&self) -> Option<(f32, f32)> {
-        let (s, p) = match self {
-            Bank::AdaptiveF32(b) => (b.schedule(), b.sample_period_s()),
-            Bank::AdaptiveFx(b) => (b.schedule(), b.sample_period_s()),
+        let (fits, tuned, run) = match self {
+            Bank::AdaptiveF32(b) => (b.period_fits(), b.schedule(), b.sample_period_s()),
+            Bank::AdaptiveFx(b) => (b.period_fits(), b.schedule(), b.sample_period_s()),
             Bank::F32(_) | Bank::Fx(_) => return None,
         };
-        s.sample_period_s()
-            .filter(|_| !s.fits_period(p))
-            .map(|t| (t, p))
+        (!fits).then_some((tuned.sample_period_s()?, run))
     }
 
     fn update(&mut self, t_us: u64, deg: f32) -> std::result::Result<BankOutput, SampleError> {
@@ -834,7 +832,7 @@ impl HostBank {
         let noise = NoiseGen::new(opts.noise, axis).map_err(|e| e.to_string())?;
         let step = if opts.noise_at == NoiseAt::Step {
             // The packet-level gap rule (the bank itself sees one sample per step).
-            let gap_us = (f64::from(cfg.max_gap_s()) * 1e6).round() as u64;
+            let gap_us = s_to_us(cfg.max_gap_s());
             // The bank sees one sample per step: closed-form maps and Kalman gains for that
             // period.
             cfg.sample_period_s = opts.step_s;
@@ -854,9 +852,7 @@ impl HostBank {
             step,
         })
     }
-}
 
-impl HostBank {
     /// See `Bank::schedule_misfit`.
     fn schedule_misfit(&self) -> Option<(f32, f32)> {
         self.bank.schedule_misfit()
