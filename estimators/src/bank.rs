@@ -194,9 +194,12 @@ impl BankConfig {
     /// The shipped preset (`nav440 estimate` and the firmware run it; `--preset paper` or
     /// [`BankConfig::PAPER`] selects the paper's): [`BankConfig::DEFAULT`]'s laws, step, hold
     /// (linear) and gap rule with every family's gains tuned on a family of synthetic motions
-    /// and noise levels (not the bundled test captures). Produced by
+    /// at 100, 50, 25 and 20 Hz and noise levels (not the bundled test captures). Produced by
     /// `cargo test --release -p host-tests --test preset -- --ignored --nocapture`
-    /// (docs/CALIBRATION.md, "Shipped defaults").
+    /// (docs/CALIBRATION.md, "Shipped defaults"). These gains are for 20-100 Hz: at a lower
+    /// packet rate `nav440 estimate` and the firmware run the rate's entry of
+    /// [`BankConfig::NAV440_RATES`] ([`BankConfig::with_nav440_gains`] once the period is
+    /// measured).
     pub const NAV440: Self = Self {
         velocity: BankGains::NAV440_VELOCITY,
         acceleration: BankGains::NAV440_ACCELERATION,

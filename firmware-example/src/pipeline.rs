@@ -2,7 +2,7 @@
 //! runs too) with the firmware's bank type ([`crate::Bank`]) on the axes [`AXES`] selects.
 //!
 //! bytes -> parser -> attitude packets -> BIT check -> `TimeBase` -> warm-up/period rule ->
-//! one bank per axis (`BankConfig::NAV440`: h = 1e-4 s, linear hold, tuned gains) -> one CSV row per
+//! one bank per axis (`BankConfig::NAV440`: h = 1e-4 s, linear hold, gains tuned for the packet rate) -> one CSV row per
 //! sample, formatted by `nav440_pipeline::csv` exactly as the host does. See
 //! docs/PIPELINE.md and docs/RELIABILITY.md.
 
@@ -23,11 +23,17 @@ pub const AXES: Axes = Axes::only(Axis::Yaw);
 /// The bank could not be built (from the defaults, or for the measured packet period).
 pub type ConfigError = estimators::ConfigError;
 
-/// Builds an axis's bank (out of line: the constructor is large).
+/// Builds an axis's bank for the measured packet period (out of line: the constructor is
+/// large): with [`FOLLOW_RATE`], the shipped preset's gains for that period
+/// (`BankConfig::with_nav440_gains`, as `nav440 estimate` does).
 #[cfg(not(feature = "adaptive-gains"))]
 #[inline(never)]
 fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
-    nav440_pipeline::axis_bank(axis, cfg)
+    if FOLLOW_RATE {
+        nav440_pipeline::axis_bank(axis, &cfg.with_nav440_gains())
+    } else {
+        nav440_pipeline::axis_bank(axis, cfg)
+    }
 }
 
 /// The gain schedule of the noise-adaptive bank (feature `adaptive-gains`), as `nav440 tune
@@ -80,6 +86,13 @@ pub type Pipeline = nav440_pipeline::Pipeline<Bank, ConfigError, BuildFn, BANK_S
 /// (`BankConfig::NAV440`; the paper's presets are `BankConfig::PAPER`, `nav440 estimate
 /// --preset paper`).
 pub const PRESET: BankConfig = BankConfig::NAV440;
+
+/// Whether the banks run the shipped preset's gains for the unit's measured packet rate
+/// (`BankConfig::NAV440_RATES`) instead of [`PRESET`]'s own: `true` for the NAV440 preset,
+/// whose gains are a table per packet rate; set it `false` to run fixed gains (e.g.
+/// `BankConfig::PAPER` or `nav440 tune --rust` output) at every rate. The `adaptive-gains`
+/// banks take their gains from the schedule.
+pub const FOLLOW_RATE: bool = true;
 
 /// Checks once, at start, that [`PRESET`] builds, so that a bad configuration fails at start.
 pub fn check() -> Result<(), ConfigError> {

@@ -417,16 +417,25 @@ fn bank_options(b: &BankArgs, default_preset: PresetArg) -> Result<replay::Estim
             b.step
         )));
     }
-    let base = b.preset.unwrap_or(default_preset).config();
+    let preset = b.preset.unwrap_or(default_preset);
+    let base = preset.config();
     let (mut config, mut schedule, mut file_hold) = (b.preset.map(PresetArg::config), None, None);
+    // The NAV440 preset's gains follow the measured packet rate (a gains file over it is
+    // applied over the rate's gains); the paper's and a schedule's do not.
+    let mut follow_rate = preset == PresetArg::Nav440;
+    let mut overlay = None;
     match b.gains.as_deref().map(gains::load_any).transpose()? {
         None => {}
-        Some(gains::Loaded::Fixed(g)) => config = Some(g.apply(base)),
+        Some(gains::Loaded::Fixed(g)) => {
+            config = Some(g.apply(base));
+            overlay = Some(g);
+        }
         Some(gains::Loaded::Schedule(f)) => {
             // Validated by `load_any`.
             schedule = Some(f.schedule(&base)?);
             file_hold = Some(f.hold()?);
             config = Some(base);
+            follow_rate = false;
         }
     }
     Ok(replay::EstimateOptions {
@@ -439,6 +448,8 @@ fn bank_options(b: &BankArgs, default_preset: PresetArg) -> Result<replay::Estim
         noise: None,
         fixed: false,
         config,
+        follow_rate,
+        overlay,
         noise_at: b.noise_at.into(),
         axes: b.axis.into(),
         schedule,

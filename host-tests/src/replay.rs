@@ -449,8 +449,17 @@ pub struct EstimateOptions {
     pub noise: Option<Noise>,
     /// Run the fixed-point bank (`YawBank<Fx>`) instead of f32.
     pub fixed: bool,
-    /// Bank configuration with gains (from `--gains`), `None` = paper presets.
+    /// Bank configuration with gains (from `--preset`, `--gains`); `None` =
+    /// `BankConfig::NAV440` (with [`EstimateOptions::paper_law`]: `BankConfig::PAPER`).
     pub config: Option<BankConfig>,
+    /// Replace the gains by the shipped preset's for the measured packet period
+    /// (`BankConfig::with_nav440_gains`) once the warm-up has measured it, then apply
+    /// [`EstimateOptions::overlay`]: what `nav440 estimate` does with the default `--preset
+    /// nav440`, as the firmware does. Default `false`: `config`'s gains as they are.
+    pub follow_rate: bool,
+    /// With [`EstimateOptions::follow_rate`]: a `--gains` file applied over the rate's preset
+    /// gains (the families it leaves out keep the preset's).
+    pub overlay: Option<crate::gains::GainsFile>,
     /// Where the noise enters (per packet, or per observer step).
     pub noise_at: NoiseAt,
     /// The estimated axes (`--axis`; default yaw only).
@@ -483,6 +492,8 @@ impl Default for EstimateOptions {
             noise: None,
             fixed: false,
             config: None,
+            follow_rate: false,
+            overlay: None,
             noise_at: NoiseAt::Sample,
             axes: Axes::only(Axis::Yaw),
             schedule: None,
@@ -524,8 +535,24 @@ impl EstimateOptions {
     /// the warm-up uses the intervals it has, a single sample keeps the configured period. The
     /// closed-form maps and the Kalman gains are computed for it.
     pub fn bank_config_for(&self, samples: &[Sample]) -> BankConfig {
-        PeriodEstimator::from_times(samples.iter().map(|s| s.t_us).take(WARMUP_SAMPLES))
-            .apply(self.bank_config())
+        self.at_period(
+            PeriodEstimator::from_times(samples.iter().map(|s| s.t_us).take(WARMUP_SAMPLES))
+                .apply(self.bank_config()),
+        )
+    }
+
+    /// The configuration the bank runs once the warm-up has set `cfg`'s nominal sample
+    /// period: with [`EstimateOptions::follow_rate`], the shipped preset's gains for that
+    /// period with [`EstimateOptions::overlay`] over them; else `cfg` itself.
+    pub fn at_period(&self, cfg: BankConfig) -> BankConfig {
+        if !self.follow_rate {
+            return cfg;
+        }
+        let cfg = cfg.with_nav440_gains();
+        match &self.overlay {
+            Some(g) => g.apply(cfg),
+            None => cfg,
+        }
     }
 
     /// The nominal sample period the bank runs at on `samples`, s: the step `step_s` with
@@ -828,7 +855,7 @@ impl HostBank {
         opts: &EstimateOptions,
         cfg: &BankConfig,
     ) -> std::result::Result<Self, String> {
-        let mut cfg = *cfg;
+        let mut cfg = opts.at_period(*cfg);
         let noise = NoiseGen::new(opts.noise, axis).map_err(|e| e.to_string())?;
         let step = if opts.noise_at == NoiseAt::Step {
             // The packet-level gap rule (the bank itself sees one sample per step).

@@ -305,11 +305,16 @@ pub fn live(a: &LiveArgs) -> Result<()> {
     eprintln!("nav440 live: {}", report_json(&a.port.port, &report, &t));
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
-    // The same streaming pipeline as `nav440 estimate` (warm-up, bank, CSV, warnings).
+    // The same streaming pipeline as `nav440 estimate` (warm-up, bank with the shipped
+    // preset's gains for the unit's packet rate, CSV, warnings).
+    let opts = EstimateOptions {
+        follow_rate: true,
+        ..EstimateOptions::default()
+    };
     let source = replay::FnChunks(|f: &mut dyn FnMut(&[u8]) -> Result<bool>| {
         stream_after_boot(d, a.duration, f).map(|_| ())
     });
-    let report = replay::estimate_stream(source, &EstimateOptions::default(), &mut out)?;
+    let report = replay::estimate_stream(source, &opts, &mut out)?;
     for w in report.warnings() {
         eprintln!("nav440: warning: {w}");
     }

@@ -830,3 +830,83 @@ fn a_schedule_records_its_rate_and_estimate_warns_off_it() {
     }
     let _ = std::fs::remove_dir_all(&d);
 }
+
+/// The shipped preset follows the unit's packet rate (`BankConfig::NAV440_RATES`): on a 10 Hz
+/// capture `nav440 estimate` runs the 10 Hz entry's gains - the same CSV as `--preset paper
+/// --gains FILE` with those gains written out in full - and not the 100 Hz ones; a gains
+/// file that names only the AVE changes only the AVE columns; `--preset paper` runs the
+/// paper's gains at every rate.
+#[test]
+fn estimate_runs_the_preset_of_the_capture_rate() {
+    use estimators::BankConfig;
+    use host_tests::gains::GainsFile;
+    let d = scratch("rate-preset");
+    let cap = d.join("10hz.bin");
+    ok(&[
+        "synth",
+        "--rate",
+        "10",
+        "--duration",
+        "12",
+        "--seed",
+        "4",
+        "-o",
+        p(&cap),
+    ]);
+    let write = |name: &str, cfg: &BankConfig| {
+        let path = d.join(name);
+        std::fs::write(&path, GainsFile::from_bank(cfg).to_toml()).unwrap();
+        path
+    };
+    let entry = BankConfig::nav440_rate_gains(0.1);
+    assert_eq!(entry.tuned_period_s, [0.1, 0.1]);
+    let at_10_hz = BankConfig {
+        velocity: entry.velocity,
+        acceleration: entry.acceleration,
+        ..BankConfig::NAV440
+    };
+    let g10 = write("g10.toml", &at_10_hz);
+    let g100 = write("g100.toml", &BankConfig::NAV440);
+    let noisy = ["--noise-var", "0.1", "--seed", "5"];
+    let est = |extra: &[&str]| {
+        let mut a = vec!["estimate", p(&cap)];
+        a.extend_from_slice(&noisy);
+        a.extend_from_slice(extra);
+        ok(&a)
+    };
+    let default = est(&[]);
+    // 121 packets (0 to 12 s at 10 Hz) and the header.
+    assert_eq!(default.lines().count(), 122);
+    assert_eq!(default, est(&["--preset", "nav440"]));
+    assert_eq!(default, est(&["--preset", "paper", "--gains", p(&g10)]));
+    assert_ne!(default, est(&["--preset", "paper", "--gains", p(&g100)]));
+    assert_ne!(default, est(&["--preset", "paper"]));
+    // A gains file with the AVE alone: the other families keep the 10 Hz entry's gains.
+    let ave_only = d.join("ave.toml");
+    std::fs::write(
+        &ave_only,
+        "[velocity.ave]\nk = 100.0\ngamma1 = 5000.0\n\n[acceleration.ave]\nk = 100.0\ngamma1 = 5000.0\n",
+    )
+    .unwrap();
+    let partial = est(&["--gains", p(&ave_only)]);
+    let columns = |csv: &str, pick: &dyn Fn(&str) -> bool| -> Vec<String> {
+        let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+        csv.lines()
+            .map(|l| {
+                l.split(',')
+                    .zip(&header)
+                    .filter(|(_, h)| pick(h))
+                    .map(|(v, _)| v)
+                    .collect::<Vec<_>>()
+                    .join(",")
+            })
+            .collect()
+    };
+    let is_ave = |h: &str| h.starts_with("ave_");
+    assert_eq!(
+        columns(&partial, &|h| !is_ave(h)),
+        columns(&default, &|h| !is_ave(h))
+    );
+    assert_ne!(columns(&partial, &is_ave), columns(&default, &is_ave));
+    let _ = std::fs::remove_dir_all(&d);
+}

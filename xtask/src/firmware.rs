@@ -1621,9 +1621,22 @@ pub fn ci_steps() -> Result<(), String> {
     // The bundled capture with 101 packets flagging a BIT failure (masterFail): not estimated,
     // counted in the firmware's summary (`bit_failed`) and dropped alike by `nav440 estimate`.
     let bit_fail = bit_fail_capture(&bundled)?;
-    // Every bundled capture (all packet types and rates, the week wrap) plus those four.
+    // Packet rates below the bundled captures' (20-100 Hz), where the shipped preset runs
+    // other gains (`BankConfig::NAV440_RATES`: one entry for 10 Hz, one for 2 Hz): the
+    // firmware picks the same entry as `nav440 estimate`.
+    let mut low_rates = Vec::new();
+    for (rate, duration) in [("10", "12"), ("2", "40")] {
+        let path = work_dir()?.join(format!("ci-{rate}hz.bin"));
+        nav440_synth(
+            &path,
+            &["--rate", rate, "--duration", duration, "--seed", "4"],
+        )?;
+        low_rates.push(path);
+    }
+    // Every bundled capture (all packet types and rates, the week wrap) plus those six.
     let mut captures = data_captures();
     captures.extend([corrupted, short, rate_change, bit_fail.clone()]);
+    captures.extend(low_rates);
     for (board, elf) in &elfs {
         let host_extra: &[&str] = if board.target == "thumbv7em-none-eabihf" {
             &["--axis", FIRMWARE_AXIS]
