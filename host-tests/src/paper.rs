@@ -9,7 +9,7 @@
 
 use crate::error::{Error, Result};
 use crate::replay::{self, Axis, EstimateOptions, Noise, Row, Sample};
-use estimators::{Ave, AveConfig, Channel, DeltaMode, SampleAdapter};
+use estimators::{Ave, AveConfig, BankConfig, Channel, DeltaMode, SampleAdapter};
 
 /// Noise variances of the paper's Tables 1 and 3, deg^2.
 pub const NOISE_VARS: [f64; 2] = [0.01, 0.5];
@@ -184,7 +184,17 @@ pub fn run(
     capture: &str,
 ) -> Result<PaperResult> {
     check_window(window_s)?;
-    let from_file = opts.config.is_some();
+    // What the report names as the gains (`--gains` files set `overlay`, `--preset nav440`
+    // `follow_rate`).
+    let gains = if opts.overlay.is_some() {
+        "from --gains file"
+    } else if opts.follow_rate {
+        "NAV440 preset (its entry for the capture's packet rate)"
+    } else if opts.config.is_none_or(|c| c == BankConfig::PAPER) {
+        "paper presets (Tables 2 and 4)"
+    } else {
+        "given bank configuration"
+    };
     let opts = &opts.paper_law();
     let acc_ref = ave_on_rate(samples, &REFERENCE_AVE, opts)?;
     let jobs: Vec<(usize, u64)> = (0..NOISE_VARS.len())
@@ -247,11 +257,7 @@ pub fn run(
         hold: opts.hold,
         step_s: opts.step_s,
         window_s,
-        gains: if from_file {
-            "from --gains file".into()
-        } else {
-            "paper presets (Tables 2 and 4)".into()
-        },
+        gains: gains.into(),
         noise_at: opts.noise_at,
         vel,
         acc,

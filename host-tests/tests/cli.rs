@@ -908,5 +908,25 @@ fn estimate_runs_the_preset_of_the_capture_rate() {
         columns(&default, &|h| !is_ave(h))
     );
     assert_ne!(columns(&partial, &is_ave), columns(&default, &is_ave));
+    // `nav440 paper --preset nav440` scores the rate's entry too, and says so.
+    let paper = |extra: &[&str]| {
+        let mut a = vec!["paper", p(&cap), "--window", "12", "--json"];
+        a.extend_from_slice(extra);
+        json(&ok(&a))
+    };
+    let (by_paper, by_nav440) = (paper(&[]), paper(&["--preset", "nav440"]));
+    assert_eq!(
+        by_paper["settings"]["gains"],
+        "paper presets (Tables 2 and 4)"
+    );
+    assert_eq!(
+        by_nav440["settings"]["gains"],
+        "NAV440 preset (its entry for the capture's packet rate)"
+    );
+    assert_eq!(
+        paper(&["--preset", "paper", "--gains", p(&g10)])["velocity_mse"],
+        by_nav440["velocity_mse"]
+    );
+    assert_ne!(by_paper["velocity_mse"], by_nav440["velocity_mse"]);
     let _ = std::fs::remove_dir_all(&d);
 }
