@@ -457,8 +457,10 @@ pub struct EstimateOptions {
     /// [`EstimateOptions::overlay`]: what `nav440 estimate` does with the default `--preset
     /// nav440`, as the firmware does. Default `false`: `config`'s gains as they are.
     pub follow_rate: bool,
-    /// With [`EstimateOptions::follow_rate`]: a `--gains` file applied over the rate's preset
-    /// gains (the families it leaves out keep the preset's).
+    /// The `--gains` file's gains, if one was given (`nav440 paper` names them in its
+    /// settings). With [`EstimateOptions::follow_rate`] they are applied over the rate's preset
+    /// gains (the families the file leaves out keep the preset's); without, `config` already
+    /// holds them.
     pub overlay: Option<crate::gains::GainsFile>,
     /// Where the noise enters (per packet, or per observer step).
     pub noise_at: NoiseAt,

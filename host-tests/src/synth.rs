@@ -271,6 +271,25 @@ pub fn generate(cfg: &SynthConfig) -> Result<Capture> {
     })
 }
 
+/// The samples of a clean capture of A2 packets of `profile` (shape `seed`), `duration_s`
+/// s at `rate_hz` Hz, as `nav440 synth --packet A2` writes it and the replay decodes it.
+pub fn a2_samples(
+    profile: ProfileKind,
+    seed: u64,
+    rate_hz: u32,
+    duration_s: f64,
+) -> Result<Vec<crate::replay::Sample>> {
+    let cap = generate(&SynthConfig {
+        profile,
+        seed,
+        duration_s,
+        rate_hz,
+        packet: PacketKind::A2,
+        ..Default::default()
+    })?;
+    crate::replay::samples(&cap.bytes)
+}
+
 /// Encodes one packet of a level unit with the given yaw (deg, any range), z rate (deg/s),
 /// timeITOW (ms) and BIT word.
 pub fn encode_packet(

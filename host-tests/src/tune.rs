@@ -690,6 +690,37 @@ pub struct PresetCase {
     pub range: (f64, f64),
 }
 
+/// A preset's tuning family from synthetic motions: each motion (profile, shape seed, packet
+/// rate Hz, duration s; [`crate::synth::a2_samples`]) at each of `noise_vars` (deg^2), MSE
+/// over the whole capture. Noise seed 1 for the fig5 motions (their seed is their shape's),
+/// the motion's seed for the closed-form spin and sin5 (it only draws their noise).
+pub fn synth_family(
+    motions: &[(crate::motion::ProfileKind, u64, u32, f64)],
+    noise_vars: &[f64],
+) -> Result<Vec<PresetCase>> {
+    let mut cases = Vec::new();
+    for &(profile, seed, rate_hz, duration_s) in motions {
+        let samples = crate::synth::a2_samples(profile, seed, rate_hz, duration_s)?;
+        for &noise_var in noise_vars {
+            cases.push(PresetCase {
+                name: format!(
+                    "{} seed {seed} {rate_hz} Hz, {noise_var} deg^2",
+                    profile.name()
+                ),
+                samples: samples.clone(),
+                noise_var,
+                seed: if profile == crate::motion::ProfileKind::Fig5 {
+                    1
+                } else {
+                    seed
+                },
+                range: (0.0, duration_s),
+            });
+        }
+    }
+    Ok(cases)
+}
+
 /// Tunes one set of gains for a whole family of cases (the shipped preset,
 /// `BankConfig::NAV440`): each family's objective is, without `beat`, the geometric mean over
 /// the cases of its MSE (the objective of `nav440 tune`, one noise seed per case, `seed`), so

@@ -21,8 +21,7 @@ use host_tests::gains::bank_gains_literal;
 use host_tests::motion::ProfileKind;
 use host_tests::optim::Method;
 use host_tests::replay;
-use host_tests::synth::{self, PacketKind, SynthConfig};
-use host_tests::tune::{bank_mse, tune_preset, PresetCase};
+use host_tests::tune::{bank_mse, synth_family, tune_preset, PresetCase};
 use std::path::PathBuf;
 
 fn data(name: &str) -> PathBuf {
@@ -51,36 +50,7 @@ fn family() -> Vec<PresetCase> {
         (ProfileKind::Spin, 11, 20, 16.0),
         (ProfileKind::Sin5, 11, 25, 8.0),
     ];
-    let mut cases = Vec::new();
-    for (profile, seed, rate_hz, duration_s) in motions {
-        let cap = synth::generate(&SynthConfig {
-            profile,
-            seed,
-            duration_s,
-            rate_hz,
-            packet: PacketKind::A2,
-            ..Default::default()
-        })
-        .unwrap();
-        let samples = replay::samples(&cap.bytes).unwrap();
-        for noise_var in [0.01, 0.1, 0.5] {
-            cases.push(PresetCase {
-                name: format!(
-                    "{} seed {seed} {rate_hz} Hz, {noise_var} deg^2",
-                    profile.name()
-                ),
-                samples: samples.clone(),
-                noise_var,
-                seed: if profile == ProfileKind::Fig5 {
-                    1
-                } else {
-                    seed
-                },
-                range: (0.0, duration_s),
-            });
-        }
-    }
-    cases
+    synth_family(&motions, &[0.01, 0.1, 0.5]).unwrap()
 }
 
 /// `pub const NAME: Self = BankGains { .. };` for bank.rs's `impl BankGains` (the printer of

@@ -17,9 +17,9 @@ use estimators::BankConfig;
 use host_tests::gains::{bank_gains_literal, GainsFile};
 use host_tests::motion::ProfileKind;
 use host_tests::optim::Method;
-use host_tests::replay::{self, Sample};
-use host_tests::synth::{self, PacketKind, SynthConfig};
-use host_tests::tune::{bank_mse, tune_preset, PresetCase};
+use host_tests::replay::Sample;
+use host_tests::synth;
+use host_tests::tune::{bank_mse, synth_family, tune_preset, PresetCase};
 
 /// The NAV440 rates below 20 Hz, each with its own entry, Hz (4 Hz runs the 5 Hz entry).
 const RATES: [u32; 3] = [10, 5, 2];
@@ -41,20 +41,6 @@ fn scale(rate_hz: u32) -> f64 {
     }
 }
 
-/// A synthetic capture's samples (A2 packets).
-fn synth_samples(profile: ProfileKind, seed: u64, rate_hz: u32, duration_s: f64) -> Vec<Sample> {
-    let cap = synth::generate(&SynthConfig {
-        profile,
-        seed,
-        duration_s,
-        rate_hz,
-        packet: PacketKind::A2,
-        ..Default::default()
-    })
-    .unwrap();
-    replay::samples(&cap.bytes).unwrap()
-}
-
 /// The tuning family at `rate_hz`: the fig5 shapes of seeds 11-13 (20 s), the spin (16 s)
 /// and sin5 (8 s) motions with noise seed 11 (durations times [`scale`]), each at 0.01, 0.1
 /// and 0.5 deg^2: 15 cases. The fig5 cases use noise seed 1. None is a test motion of this
@@ -67,28 +53,8 @@ fn family(rate_hz: u32) -> Vec<PresetCase> {
         (ProfileKind::Spin, 11, 16.0),
         (ProfileKind::Sin5, 11, 8.0),
     ];
-    let mut cases = Vec::new();
-    for (profile, seed, d) in motions {
-        let duration_s = d * scale(rate_hz);
-        let samples = synth_samples(profile, seed, rate_hz, duration_s);
-        for noise_var in [0.01, 0.1, 0.5] {
-            cases.push(PresetCase {
-                name: format!(
-                    "{} seed {seed} {rate_hz} Hz, {noise_var} deg^2",
-                    profile.name()
-                ),
-                samples: samples.clone(),
-                noise_var,
-                seed: if profile == ProfileKind::Fig5 {
-                    1
-                } else {
-                    seed
-                },
-                range: (0.0, duration_s),
-            });
-        }
-    }
-    cases
+    let motions = motions.map(|(profile, seed, d)| (profile, seed, rate_hz, d * scale(rate_hz)));
+    synth_family(&motions, &[0.01, 0.1, 0.5]).unwrap()
 }
 
 /// Per column (half, family), the geometric mean over `cases` of `a`'s MSE over `b`'s (noise
@@ -174,7 +140,7 @@ fn test_motions(rate_hz: u32) -> Vec<(String, Vec<Sample>, f64)> {
         let duration_s = d * scale(rate_hz);
         (
             format!("{} {rate_hz} Hz", profile.name()),
-            synth_samples(profile, seed, rate_hz, duration_s),
+            synth::a2_samples(profile, seed, rate_hz, duration_s).unwrap(),
             duration_s,
         )
     })
