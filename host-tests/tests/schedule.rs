@@ -33,6 +33,7 @@ use rand::rngs::Xoshiro256PlusPlus;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 use std::path::PathBuf;
+use std::sync::OnceLock;
 
 const NAMES: [&str; 7] = ["AVE", "ILO1", "ILO2", "ILO3", "AD", "ED", "KF"];
 /// Capture length and switch time, s.
@@ -165,12 +166,38 @@ fn schedule(name: &str) -> (gains::ScheduleFile, EstimateOptions) {
     (file, opts)
 }
 
-/// The gains tuned for the first half (0.01 deg^2) and for the second (0.5 deg^2).
+/// The gains tuned for the first half (0.01 deg^2) and for the second (0.5 deg^2), tuned
+/// once per test binary (the tests that need them run in parallel and share them).
 fn tuned_for_the_halves(clean: &[Sample]) -> (BankConfig, BankConfig) {
-    (
-        tuned_for(clean, 0.01, (0.0, SWITCH_S - 0.005)),
-        tuned_for(clean, 0.5, (SWITCH_S, END_S)),
-    )
+    static TUNED: OnceLock<(BankConfig, BankConfig)> = OnceLock::new();
+    *TUNED.get_or_init(|| {
+        (
+            tuned_for(clean, 0.01, (0.0, SWITCH_S - 0.005)),
+            tuned_for(clean, 0.5, (SWITCH_S, END_S)),
+        )
+    })
+}
+
+/// Every fixed gain set the scheduled bank is compared with over the whole capture: both
+/// halves' tuned gains, `PAPER`, `NAV440` and each level of the schedule as a fixed set.
+fn fixed_sets(clean: &[Sample], file: &gains::ScheduleFile) -> Vec<(String, BankConfig)> {
+    let (first, second) = tuned_for_the_halves(clean);
+    let mut sets = vec![
+        ("tuned for 0-10 s".to_string(), first),
+        ("tuned for 10-20 s".to_string(), second),
+        ("PAPER".to_string(), BankConfig::PAPER),
+        ("NAV440".to_string(), BankConfig::NAV440),
+    ];
+    for l in file.schedule(&BankConfig::NAV440).unwrap().levels() {
+        let cfg = BankConfig {
+            velocity: l.velocity,
+            acceleration: l.acceleration,
+            hold: file.hold().unwrap(),
+            ..BankConfig::NAV440
+        };
+        sets.push((format!("level {}", l.noise_var), cfg));
+    }
+    sets
 }
 
 /// Gains tuned by `nav440 tune` for one half: that half's noise, MSE over that half.
@@ -200,7 +227,6 @@ fn scheduled_bank_follows_a_noise_switch() {
     let clean = clean();
     let noisy = switching(&clean, 7);
     let (file, scheduled) = schedule_fig5();
-    let schedule = scheduled.schedule.unwrap();
     let sched = mse(&noisy, &scheduled);
     let (first, second) = tuned_for_the_halves(&clean);
     let t_first = mse(&noisy, &fixed(first));
@@ -218,21 +244,10 @@ fn scheduled_bank_follows_a_noise_switch() {
             failures.push(format!("{}: ratios {r1:.3} {r2:.3} > 1.2", NAMES[i]));
         }
     }
-    let mut sets: Vec<(String, [[f64; 7]; 3])> = vec![
-        ("tuned for 0-10 s".into(), t_first),
-        ("tuned for 10-20 s".into(), t_second),
-        ("PAPER".into(), mse(&noisy, &fixed(BankConfig::PAPER))),
-        ("NAV440".into(), mse(&noisy, &fixed(BankConfig::NAV440))),
-    ];
-    for l in schedule.levels() {
-        let cfg = BankConfig {
-            velocity: l.velocity,
-            acceleration: l.acceleration,
-            hold: file.hold().unwrap(),
-            ..BankConfig::NAV440
-        };
-        sets.push((format!("level {}", l.noise_var), mse(&noisy, &fixed(cfg))));
-    }
+    let sets: Vec<(String, [[f64; 7]; 3])> = fixed_sets(&clean, &file)
+        .into_iter()
+        .map(|(name, cfg)| (name, mse(&noisy, &fixed(cfg))))
+        .collect();
     println!("whole capture, 0-20 s:");
     for (name, m) in &sets {
         let row: Vec<String> = (0..7).map(|i| format!("{:.3}", m[2][i])).collect();
@@ -303,6 +318,130 @@ fn scheduled_bank_does_not_ring_on_other_noise_draws() {
     for i in 0..7 {
         assert!(worst[i] <= 2.0, "{}: {}", NAMES[i], worst[i]);
     }
+}
+
+/// Item 3's "below every fixed gain set over the whole capture" on 40 other noise draws of the
+/// same switch (xoshiro256++ seeds 101-140; the capture of
+/// `scheduled_bank_follows_a_noise_switch` is draw 7): per family, on how many draws the
+/// scheduled bank's 0-20 s velocity MSE is below every fixed set of [`fixed_sets`], and the
+/// geometric mean over the draws of its ratio to the best fixed set of that draw.
+///
+/// Measured (docs/CALIBRATION.md "Forty noise draws"): ILO1-3 below every fixed set on 38 of
+/// 40 draws, the AD and the tracker on 40 (geometric mean ratios 0.82, 0.79, 0.79); **the AVE
+/// on 11 (1.050; the best fixed set is the 0.1 level on 38 draws) and the ED on 3 (1.028)**, so draw 7's result
+/// for the AVE (0.9 % below the 0.1 level) is not typical. Why, for the AVE: switching its
+/// gains costs a transient that the noise estimate's delay does not explain. With the switch
+/// made at exactly 10 s (`AdaptiveBank::retune(0.5)`, no estimate), the mean AVE MSE over the
+/// draws in 10-11 s and 11-12 s is still about twice the fixed 0.5 level's (166.4 and 144.1
+/// against 89.0 and 76.6; 140.2 for both in 12-20 s):
+/// the 0.5 level's AVE is a slow, lightly damped one (`k` 3.8 1/s, `gamma1` 498 1/s^2) that
+/// leans on its switching gain `deltahat`, which after the switch must grow by about 30x with
+/// the leak's 10 s time constant (`sigma` 0.1 1/s). The ED's tuned gains hardly depend on the
+/// noise (its levels' fixed sets are within 2 % of each other here), so a schedule can at best
+/// tie a fixed set. The assertions hold these figures (the AVE and ED as regression bounds).
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "release only: cargo test --release -p host-tests --test schedule"
+)]
+fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
+    let clean = clean();
+    let (file, scheduled) = schedule_fig5();
+    let sets = fixed_sets(&clean, &file);
+    let draws = 101..=140u64;
+    let n = draws.clone().count() as f64;
+    let mut wins = [0u32; 7];
+    let mut log_ratio = [0.0f64; 7];
+    let mut best_count: Vec<[u32; 7]> = vec![[0; 7]; sets.len()];
+    for seed in draws.clone() {
+        let noisy = switching(&clean, seed);
+        let sched = mse(&noisy, &scheduled)[2];
+        let fixed_mse: Vec<[f64; 7]> = sets
+            .iter()
+            .map(|(_, cfg)| mse(&noisy, &fixed(*cfg))[2])
+            .collect();
+        for i in 0..7 {
+            let (k, best) = fixed_mse
+                .iter()
+                .map(|m| m[i])
+                .enumerate()
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .unwrap();
+            best_count[k][i] += 1;
+            if sched[i] < best {
+                wins[i] += 1;
+            }
+            log_ratio[i] += (sched[i] / best).ln();
+        }
+    }
+    let gm = log_ratio.map(|l| (l / n).exp());
+    println!("0-20 s velocity MSE, draws 101-140: scheduled below every fixed set / geometric mean ratio to the best fixed set");
+    for i in 0..7 {
+        let most = (0..sets.len()).max_by_key(|&k| best_count[k][i]).unwrap();
+        println!(
+            "  {:<4} {:>2} of {n} draws, {:.3} (best fixed set most often: {}, {} draws)",
+            NAMES[i], wins[i], gm[i], sets[most].0, best_count[most][i]
+        );
+    }
+
+    // The switch made exactly at 10 s: the AVE's transient after a gain change.
+    let levels = file.schedule(&BankConfig::NAV440).unwrap();
+    let base = BankConfig {
+        hold: file.hold().unwrap(),
+        sample_period_s: 0.01,
+        ..BankConfig::NAV440
+    };
+    let level_05 = sets.iter().find(|(name, _)| name == "level 0.5").unwrap().1;
+    let windows = [(SWITCH_S, 11.0), (11.0, 12.0), (12.0, END_S)];
+    let (mut at_switch, mut fixed_05) = ([0.0f64; 3], [0.0f64; 3]);
+    for seed in draws {
+        let noisy = switching(&clean, seed);
+        let hold = mse_over(&noisy, &fixed(level_05), &windows);
+        let (rows, _) = replay::estimate(&noisy, &fixed(base)).unwrap();
+        let reference: std::collections::HashMap<u64, f32> = rows
+            .iter()
+            .map(|r| (r.t_us, r.axis(Axis::Yaw).unwrap().reference_deg_s.unwrap()))
+            .collect();
+        let never = estimators::AdaptiveConfig {
+            retune_ratio: f32::MAX,
+            ..estimators::AdaptiveConfig::DEFAULT
+        };
+        let mut bank = estimators::AdaptiveBank::<f32>::new(&base, &levels, &never).unwrap();
+        let (mut t, mut est, mut reference_deg_s) = (Vec::new(), Vec::new(), Vec::new());
+        for s in &noisy {
+            if s.t_s() >= SWITCH_S && bank.retune_count() == 0 {
+                bank.retune(0.5);
+            }
+            let out = bank.update(s.t_us, s.angles_deg[2]).unwrap();
+            if let Some(r) = reference.get(&s.t_us) {
+                t.push(s.t_us);
+                est.push(out.velocities()[0]);
+                reference_deg_s.push(*r);
+            }
+        }
+        for (k, w) in windows.iter().enumerate() {
+            at_switch[k] += mse_range(&t, &est, &reference_deg_s, *w) / n;
+            fixed_05[k] += hold[k][0] / n;
+        }
+    }
+    println!("AVE, mean velocity MSE over the draws in 10-11 s, 11-12 s, 12-20 s:");
+    println!("  0.01 level's gains, the 0.5 level's from exactly 10 s: {at_switch:.1?}");
+    println!("  the 0.5 level's gains throughout:                   {fixed_05:.1?}");
+
+    for i in [1, 2, 3, 4, 6] {
+        assert!(
+            wins[i] >= 36 && gm[i] < 0.9,
+            "{}: {} draws, {}",
+            NAMES[i],
+            wins[i],
+            gm[i]
+        );
+    }
+    // Not met (above): regression bounds on the measured 1.050 and 1.028.
+    assert!(gm[0] < 1.08, "AVE: {}", gm[0]);
+    assert!(gm[5] < 1.04, "ED: {}", gm[5]);
+    // The transient: with a perfect switch the AVE still pays in the first two seconds.
+    assert!(at_switch[0] > 1.5 * fixed_05[0] && at_switch[1] > 1.5 * fixed_05[1]);
 }
 
 /// The `--rust` output of the same run (`host-tests/data/gains/schedule_fig5.rs`, compiled
