@@ -14,6 +14,9 @@
 //! * over the whole capture, it is below every fixed gain set: each schedule level, both
 //!   gains tuned for a half, `BankConfig::PAPER` and `BankConfig::NAV440` - for every family
 //!   but the ED, which is held to 1.02 x the best of them (not met: see the test);
+//! * on 40 other noise draws (`scheduled_bank_against_every_fixed_set_on_forty_draws`), the
+//!   previous point holds for the ILO, AD and tracker on at least 36 draws, but not for the
+//!   AVE (11 of 40) or the ED (3 of 40): measured, bounded and explained there;
 //! * on six other noise draws of the same switch (`scheduled_bank_does_not_ring_on_other_noise_draws`),
 //!   in each half, every family is within 2x of the gains tuned for that half: a gain change
 //!   does not ring (it did before gain changes were made bumpless: ILO 161x);
