@@ -7,7 +7,7 @@ use crate::replay::{self, EstimateOptions, Sample};
 use plotters::style::{RGBColor, BLACK};
 use std::path::Path;
 
-const NAMES: [&str; 7] = ["AVE", "ILO1", "ILO2", "ILO3", "AD", "ED", "KF"];
+use crate::paper::COLUMNS as NAMES;
 
 /// Builds the panels: yaw; velocity (AVE, ILOs) and (AD, ED, KF) against the measured rate;
 /// acceleration likewise against the reference (AVE on the measured rate). Only rows with

@@ -26,8 +26,8 @@ use estimators::{
 };
 use std::time::Instant;
 
-/// Column names in bank order.
-const NAMES: [&str; 7] = ["AVE", "ILO1", "ILO2", "ILO3", "AD", "ED", "KF"];
+// Column names in bank order.
+use crate::paper::COLUMNS as NAMES;
 
 /// What to tune and how.
 #[derive(Clone, Debug)]

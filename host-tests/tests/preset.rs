@@ -20,6 +20,7 @@ use estimators::{BankConfig, BankGains, Hold};
 use host_tests::gains::bank_gains_literal;
 use host_tests::motion::ProfileKind;
 use host_tests::optim::Method;
+use host_tests::paper::COLUMNS;
 use host_tests::replay;
 use host_tests::tune::{bank_mse, synth_family, tune_preset, PresetCase};
 use std::path::PathBuf;
@@ -158,7 +159,7 @@ const EXCEPTION_BOUND: f64 = 1.02;
 fn nav440_beats_paper_on_the_bundled_captures_but_for_the_listed_cells() {
     assert_eq!(BankConfig::NAV440.hold, Hold::Linear);
     assert_eq!(BankConfig::NAV440.h, BankConfig::PAPER.h);
-    let names = ["AVE", "ILO1", "ILO2", "ILO3", "AD", "ED", "KF"];
+    let names = COLUMNS;
     let mut failures = Vec::new();
     let (mut wins, mut cells, mut log_ratio) = (0, 0, 0.0);
     let scores = nav440_vs_paper();

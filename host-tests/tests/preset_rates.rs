@@ -17,6 +17,7 @@ use estimators::BankConfig;
 use host_tests::gains::{bank_gains_literal, GainsFile};
 use host_tests::motion::ProfileKind;
 use host_tests::optim::Method;
+use host_tests::paper::COLUMNS;
 use host_tests::replay::Sample;
 use host_tests::synth;
 use host_tests::tune::{bank_mse, synth_family, tune_preset, PresetCase};
@@ -172,7 +173,7 @@ const RATE_BOUND: f64 = 1.02;
     ignore = "release only: cargo test --release -p host-tests --test preset_rates"
 )]
 fn rate_presets_beat_the_100_hz_gains_below_20_hz() {
-    let names = ["AVE", "ILO1", "ILO2", "ILO3", "AD", "ED", "KF"];
+    let names = COLUMNS;
     let mut failures = Vec::new();
     for rate_hz in RATES {
         let entry = nav440_at(rate_hz);

@@ -10,6 +10,7 @@
 
 use estimators::Hold;
 use host_tests::optim::Method;
+use host_tests::paper::COLUMNS;
 use host_tests::replay::{self, EstimateOptions};
 use host_tests::tune::{tune_with, TuneSpec};
 use std::path::PathBuf;
@@ -50,7 +51,7 @@ fn check(file: &str, slice_s: f64, noise_var: f64, hold: Hold) {
         hold,
         Method::Exhaustive { points: 8 },
     );
-    let names = ["AVE", "ILO1", "ILO2", "ILO3", "AD", "ED", "KF"];
+    let names = COLUMNS;
     for half in 0..2 {
         for i in 0..7 {
             let (s, g) = (search[half][i], grid[half][i]);
