@@ -26,6 +26,47 @@ pub struct ScheduleLevel {
     pub velocity: BankGains,
     /// Acceleration series' gains.
     pub acceleration: BankGains,
+    /// The AVEs' switching gains `deltahat` these gains were tuned with: their mean over the
+    /// tuning run (`nav440 tune --schedule` records them); `None`: not recorded. When an
+    /// [`AdaptiveBank`] changes its AVE gains, it sets the AVEs' `deltahat` to these, so that
+    /// the new gains do not start from the `deltahat` the old ones left (see [`AveDeltahat`]).
+    pub ave_deltahat: Option<AveDeltahat>,
+}
+
+/// The switching gains `deltahat` of a bank's AVE rows ([`crate::PaperBank::ave_deltahat`]).
+///
+/// Why a schedule records them: the tuned AVE gains of different noise levels can be different
+/// kinds of observer. In the bundled schedule (fig5 at 100 Hz) the 0.5 deg^2 level's AVE is
+/// slow (`k` 3.8 1/s, `gamma1` 498 1/s^2) and was tuned with a mean `deltahat` of 5.7 deg/s,
+/// while the 0.01 deg^2 level's is fast (`k` 42 1/s, `gamma1` 3.5e5 1/s^2) and leaves
+/// `deltahat` at 0.12 deg/s. Kept through a gain change, `deltahat` takes the leaky law's
+/// time constant (`1 / sigma`, 10 s) to move from one to the other, and the AVE is worse than
+/// either fixed set in the seconds after the change; set, the scheduled AVE on a
+/// 0.01 -> 0.5 deg^2 noise switch beat every fixed gain set on 22 of 40 noise draws instead of
+/// 11 (docs/CALIBRATION.md, "Forty noise draws").
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct AveDeltahat {
+    /// The velocity AVE's `deltahat`, deg/s (finite, >= 0).
+    pub velocity: f32,
+    /// The AVE-AVE acceleration series' first stage's (deg/s) and second stage's (deg/s^2)
+    /// (finite, >= 0). The first stage is the velocity AVE itself when both have the same
+    /// gains; then its value is the velocity's.
+    pub acceleration: [f32; 2],
+}
+
+impl AveDeltahat {
+    /// `Ok` if every value is finite and >= 0.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let all = [self.velocity, self.acceleration[0], self.acceleration[1]];
+        if all.iter().any(|x| !x.is_finite()) {
+            return Err(ConfigError::NotFinite("ave_deltahat"));
+        }
+        if all.iter().any(|&x| x < 0.0) {
+            return Err(ConfigError::Negative("ave_deltahat"));
+        }
+        Ok(())
+    }
 }
 
 /// A gain schedule: 1 to [`MAX_LEVELS`] levels in increasing noise variance. Between two
@@ -136,6 +177,9 @@ impl GainSchedule {
                 return Err(ConfigError::ScheduleLevels);
             }
             prev = l.noise_var;
+            if let Some(d) = &l.ave_deltahat {
+                d.validate()?;
+            }
         }
         let mut s = GainSchedule {
             levels: [levels[0]; MAX_LEVELS],
@@ -223,6 +267,34 @@ impl GainSchedule {
             interp_gains(&a.velocity, &b.velocity, w, self.blend),
             interp_gains(&a.acceleration, &b.acceleration, w, self.blend),
         )
+    }
+
+    /// The recorded AVE switching gains for `noise_var` (deg^2): those of the level whose AVE
+    /// gains [`Self::gains_at`] takes (the nearer level in `ln(noise_var)` with
+    /// [`Blend::NearestObservers`]; interpolated geometrically with [`Blend::Geometric`]).
+    /// `None` if a level it needs has none recorded.
+    pub fn ave_deltahat_at(&self, noise_var: f32) -> Option<AveDeltahat> {
+        let l = self.levels();
+        let v = self.clamp(noise_var);
+        let i = l.iter().rposition(|x| x.noise_var <= v).unwrap_or(0);
+        let a = l[i].ave_deltahat?;
+        let Some(next) = l.get(i + 1) else {
+            return Some(a);
+        };
+        let w = libm::logf(v / l[i].noise_var) / libm::logf(next.noise_var / l[i].noise_var);
+        let w = match self.blend {
+            Blend::Geometric => w,
+            Blend::NearestObservers if w < 0.5 => return Some(a),
+            Blend::NearestObservers => 1.0,
+        };
+        let b = next.ave_deltahat?;
+        Some(AveDeltahat {
+            velocity: interp(a.velocity, b.velocity, w),
+            acceleration: [
+                interp(a.acceleration[0], b.acceleration[0], w),
+                interp(a.acceleration[1], b.acceleration[1], w),
+            ],
+        })
     }
 
     /// `base` with the gains for `noise_var` (deg^2).
@@ -449,15 +521,26 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
     }
 
     /// Sets the gains for the noise variance `noise_var` (deg^2, clamped to the schedule) now.
+    /// When the AVE gains change and the schedule records the AVEs' steady switching gains
+    /// ([`ScheduleLevel::ave_deltahat`]), the AVEs' `deltahat` are set to those for
+    /// `noise_var` ([`GainSchedule::ave_deltahat_at`]); otherwise they are kept.
     pub fn retune(&mut self, noise_var: f32) {
         let v = self.schedule.clamp(noise_var);
+        let old = self.schedule.gains_at(self.level);
+        let new = self.schedule.config_at(&self.base, v);
         // Interpolated between levels that all build: cannot fail but for rounding at a
         // constraint's edge; then the current gains are kept.
-        if self
-            .bank
-            .set_gains(&self.schedule.config_at(&self.base, v))
-            .is_ok()
-        {
+        if self.bank.set_gains(&new).is_ok() {
+            if let Some(d) = self.schedule.ave_deltahat_at(v) {
+                let mut now = self.bank.ave_deltahat();
+                if new.velocity.ave != old.0.ave {
+                    now.velocity = d.velocity;
+                }
+                if new.acceleration.ave != old.1.ave {
+                    now.acceleration = d.acceleration;
+                }
+                self.bank.set_ave_deltahat(&now);
+            }
             self.level = v;
             self.retunes = self.retunes.saturating_add(1);
         }
@@ -653,7 +736,153 @@ mod tests {
             noise_var,
             velocity: g,
             acceleration: BankConfig::PAPER.acceleration,
+            ave_deltahat: None,
         }
+    }
+
+    fn with_deltahat(mut l: ScheduleLevel, velocity: f32, acceleration: [f32; 2]) -> ScheduleLevel {
+        l.ave_deltahat = Some(AveDeltahat {
+            velocity,
+            acceleration,
+        });
+        l
+    }
+
+    /// The recorded switching gains are validated, and read from the level whose AVE gains
+    /// the schedule uses (the nearer one by default, interpolated with the geometric blend).
+    #[test]
+    fn ave_deltahat_follows_the_ave_gains_level() {
+        let lo = with_deltahat(level(0.01, 100.0, ILO1_TABLE2), 0.1, [1.0, 10.0]);
+        let hi = with_deltahat(level(1.0, 10_000.0, ILO3_TABLE2), 10.0, [4.0, 40.0]);
+        let s = GainSchedule::new(&[lo, hi]).unwrap();
+        for (v, want) in [(0.001, lo), (0.09, lo), (0.11, hi), (5.0, hi)] {
+            assert_eq!(s.ave_deltahat_at(v), want.ave_deltahat, "{v}");
+            assert_eq!(s.gains_at(v).0.ave, want.velocity.ave, "{v}");
+        }
+        // Geometric: half-way in ln(noise), the geometric means.
+        let g = s.with_blend(Blend::Geometric).ave_deltahat_at(0.1).unwrap();
+        assert!((g.velocity - 1.0).abs() < 1e-5, "{g:?}");
+        assert!((g.acceleration[0] - 2.0).abs() < 1e-5, "{g:?}");
+        assert!((g.acceleration[1] - 20.0).abs() < 1e-4, "{g:?}");
+        // A level without: none where it is needed.
+        let s = GainSchedule::new(&[lo, level(1.0, 10_000.0, ILO3_TABLE2)]).unwrap();
+        assert!(s.ave_deltahat_at(0.09).is_some());
+        assert_eq!(s.ave_deltahat_at(0.11), None);
+        // Validation.
+        let bad = |v: f32| {
+            GainSchedule::new(&[with_deltahat(
+                level(0.01, 100.0, ILO1_TABLE2),
+                1.0,
+                [v, 1.0],
+            )])
+        };
+        assert_eq!(bad(f32::NAN), Err(ConfigError::NotFinite("ave_deltahat")));
+        assert_eq!(
+            bad(f32::INFINITY),
+            Err(ConfigError::NotFinite("ave_deltahat"))
+        );
+        assert_eq!(bad(-0.5), Err(ConfigError::Negative("ave_deltahat")));
+        assert!(bad(0.0).is_ok());
+    }
+
+    /// A retune that changes the velocity AVE's gains sets its `deltahat` to the level's
+    /// recorded value; the acceleration series' AVEs, whose gains do not change here, keep
+    /// theirs; a retune within the same AVE gains keeps every `deltahat`; a schedule without
+    /// recorded values keeps them all (f32 and Fx).
+    #[test]
+    fn a_retune_sets_the_recorded_deltahat() {
+        fn check<T: Real>() {
+            let lo = with_deltahat(level(0.01, 100.0, ILO1_TABLE2), 0.1, [1.0, 10.0]);
+            let hi = with_deltahat(level(1.0, 400.0, ILO3_TABLE2), 10.0, [4.0, 40.0]);
+            let never = AdaptiveConfig {
+                retune_ratio: f32::MAX,
+                ..AdaptiveConfig::DEFAULT
+            };
+            let close = |a: f32, b: f32| (a - b).abs() < 1e-3;
+            for recorded in [true, false] {
+                let s = if recorded {
+                    GainSchedule::new(&[lo, hi]).unwrap()
+                } else {
+                    GainSchedule::new(&[
+                        ScheduleLevel {
+                            ave_deltahat: None,
+                            ..lo
+                        },
+                        ScheduleLevel {
+                            ave_deltahat: None,
+                            ..hi
+                        },
+                    ])
+                    .unwrap()
+                };
+                let mut b = AdaptiveBank::<T>::new(&BankConfig::PAPER, &s, &never).unwrap();
+                let mut k = 0u64;
+                let mut run = |b: &mut AdaptiveBank<T>, n: u64| {
+                    for _ in 0..n {
+                        // A 30 deg/s ramp with a 0.1 deg alternation: deltahat grows.
+                        let y = 0.3 * k as f32 + if k.is_multiple_of(2) { 0.1 } else { -0.1 };
+                        b.update(k * 10_000, y).unwrap();
+                        k += 1;
+                    }
+                };
+                run(&mut b, 200);
+                let before = b.bank().ave_deltahat();
+                assert!(
+                    before.velocity > 0.05 && before.acceleration[1] > 0.0,
+                    "{before:?}"
+                );
+                b.retune(1.0);
+                let after = b.bank().ave_deltahat();
+                let want = if recorded { 10.0 } else { before.velocity };
+                assert!(close(after.velocity, want), "{recorded}: {after:?}");
+                assert_eq!(after.acceleration, before.acceleration);
+                run(&mut b, 50);
+                let before = b.bank().ave_deltahat();
+                b.retune(0.5);
+                assert_eq!(b.bank().ave_deltahat(), before);
+                b.retune(0.01);
+                let after = b.bank().ave_deltahat();
+                let want = if recorded { 0.1 } else { before.velocity };
+                assert!(close(after.velocity, want), "{recorded}: {after:?}");
+                assert_eq!(after.acceleration, before.acceleration);
+                assert_eq!(b.retune_count(), 3);
+            }
+        }
+        check::<f32>();
+        check::<crate::Fx>();
+    }
+
+    /// `PaperBank::set_ave_deltahat` sets what `ave_deltahat` reads (the shared first stage
+    /// of the AVE-AVE series reads as the velocity AVE's) and ignores negative and
+    /// non-finite values.
+    #[test]
+    fn set_ave_deltahat_round_trips() {
+        let mut b = PaperBank::<f32>::new(&BankConfig::PAPER).unwrap();
+        assert_eq!(
+            BankConfig::PAPER.velocity.ave,
+            BankConfig::PAPER.acceleration.ave
+        );
+        b.update(0, 1.0).unwrap();
+        let d = AveDeltahat {
+            velocity: 2.0,
+            acceleration: [3.0, 4.0],
+        };
+        b.set_ave_deltahat(&d);
+        // Shared: the first stage is the velocity AVE.
+        assert_eq!(b.ave_deltahat().velocity, 2.0);
+        assert_eq!(b.ave_deltahat().acceleration, [2.0, 4.0]);
+        b.set_ave_deltahat(&AveDeltahat {
+            velocity: -1.0,
+            acceleration: [f32::NAN, f32::INFINITY],
+        });
+        assert_eq!(b.ave_deltahat().velocity, 2.0);
+        assert_eq!(b.ave_deltahat().acceleration, [2.0, 4.0]);
+        let mut cfg = BankConfig::PAPER;
+        cfg.acceleration.ave.k = 400.0;
+        let mut b = PaperBank::<f32>::new(&cfg).unwrap();
+        b.update(0, 1.0).unwrap();
+        b.set_ave_deltahat(&d);
+        assert_eq!(b.ave_deltahat(), d);
     }
 
     /// `set_gains` reuses the closed-form maps of rows whose gains did not change: the

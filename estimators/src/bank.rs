@@ -748,6 +748,39 @@ macro_rules! estimator_bank {
     };
 }
 
+impl<T: Real, S: SqrtFn<T>> PaperBank<T, S> {
+    /// The switching gains `deltahat` of the AVE row: the velocity AVE's (deg/s) and the
+    /// AVE-AVE series' stages' (deg/s, deg/s^2; the first stage's is the velocity AVE's when
+    /// the row shares it, [`VelAcc::is_shared`]).
+    pub fn ave_deltahat(&self) -> crate::AveDeltahat {
+        let s = &self.state.ave;
+        let a1 = if self.params.ave.is_shared() {
+            s.v.delta
+        } else {
+            s.a1.delta
+        };
+        crate::AveDeltahat {
+            velocity: s.v.delta.to_f32(),
+            acceleration: [a1.to_f32(), s.a2.delta.to_f32()],
+        }
+    }
+
+    /// Sets the AVE row's switching gains (see [`Self::ave_deltahat`]; a negative or
+    /// non-finite value leaves its `deltahat` as it is). What [`crate::AdaptiveBank`] does
+    /// when it changes the AVE gains and its schedule records their steady `deltahat`.
+    pub fn set_ave_deltahat(&mut self, d: &crate::AveDeltahat) {
+        let set = |x: &mut T, v: f32| {
+            if v.is_finite() && v >= 0.0 {
+                *x = T::from_f32(v);
+            }
+        };
+        let s = &mut self.state.ave;
+        set(&mut s.v.delta, d.velocity);
+        set(&mut s.a1.delta, d.acceleration[0]);
+        set(&mut s.a2.delta, d.acceleration[1]);
+    }
+}
+
 /// Comma-joins string literals (for [`estimator_bank!`]'s `CSV_COLUMNS`).
 #[doc(hidden)]
 #[macro_export]

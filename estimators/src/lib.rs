@@ -88,7 +88,7 @@ mod unwrap;
 pub use ad::{Ad, AdConfig, AdParams, AdState};
 pub use adapter::{SampleAdapter, SampleClock, Tick};
 pub use adaptive::{
-    AdaptiveBank, AdaptiveConfig, Blend, GainSchedule, NoiseEstimator, ScheduleLevel,
+    AdaptiveBank, AdaptiveConfig, AveDeltahat, Blend, GainSchedule, NoiseEstimator, ScheduleLevel,
 };
 pub use ave::{Ave, AveConfig, AveParams, AveState, DeltaLaw, DeltaMode};
 pub use bank::{

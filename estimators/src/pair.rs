@@ -37,6 +37,11 @@ impl<L: Law> VelAcc<L> {
         Self { v, a1, a2, shared }
     }
 
+    /// `true` when the series' first stage is the velocity law (not computed on its own).
+    pub fn is_shared(&self) -> bool {
+        self.shared
+    }
+
     /// The velocity estimate (unit/s).
     #[inline]
     pub fn velocity(&self, s: &VelAccState<L::State>) -> L::Num {

@@ -128,6 +128,39 @@ pub struct ScheduleLevelFile {
     pub velocity: FamilyGains,
     /// Acceleration gains.
     pub acceleration: FamilyGains,
+    /// The AVEs' steady switching gains with these gains at this noise
+    /// (`estimators::ScheduleLevel::ave_deltahat`; optional: without it a gain change keeps
+    /// the AVEs' `deltahat`, as files written before it was recorded do).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ave_deltahat: Option<AveDeltahatFile>,
+}
+
+/// The `[level.ave_deltahat]` table of a schedule file (`estimators::AveDeltahat`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AveDeltahatFile {
+    /// The velocity AVE's `deltahat`, deg/s.
+    pub velocity: f32,
+    /// The AVE-AVE series' stages', deg/s and deg/s^2.
+    pub acceleration: [f32; 2],
+}
+
+impl From<AveDeltahatFile> for estimators::AveDeltahat {
+    fn from(d: AveDeltahatFile) -> Self {
+        estimators::AveDeltahat {
+            velocity: d.velocity,
+            acceleration: d.acceleration,
+        }
+    }
+}
+
+impl From<estimators::AveDeltahat> for AveDeltahatFile {
+    fn from(d: estimators::AveDeltahat) -> Self {
+        AveDeltahatFile {
+            velocity: d.velocity,
+            acceleration: d.acceleration,
+        }
+    }
 }
 
 /// A schedule file (TOML), what `nav440 tune --schedule V1,V2,.. -o FILE` writes:
@@ -139,6 +172,9 @@ pub struct ScheduleLevelFile {
 /// noise_var = 0.001          # deg^2, increasing from level to level
 /// [level.velocity.ave]       # the tables of a gains file, every one present
 /// ...
+/// [level.ave_deltahat]        # optional: the AVEs' steady switching gains at this level
+/// velocity = 0.9             # deg/s
+/// acceleration = [0.9, 12.0] # the AVE-AVE series' stages, deg/s and deg/s^2
 /// [[level]]
 /// noise_var = 0.01
 /// ...
@@ -178,6 +214,7 @@ impl ScheduleFile {
                 noise_var: l.noise_var as f32,
                 velocity: l.velocity.apply(base.velocity),
                 acceleration: l.acceleration.apply(base.acceleration),
+                ave_deltahat: l.ave_deltahat.map(Into::into),
             })
             .collect();
         let schedule = estimators::GainSchedule::new(&levels);
@@ -206,7 +243,7 @@ impl ScheduleFile {
              // `AdaptiveBank::new(&BankConfig {{ hold, ..BankConfig::NAV440 }}, &schedule, &AdaptiveConfig::DEFAULT)`,\n\
              // `schedule` being `GainSchedule::new(&SCHEDULE)?` with `.with_sample_period(p)?` when\n\
              // `SCHEDULE_PERIOD_S` is `Some(p)`.\n\
-             use estimators::{{AveConfig, BankGains, DeltaMode, EdConfig, IloConfig, KalmanNoise, ScheduleLevel}};\n\n\
+             use estimators::{{AveConfig, AveDeltahat, BankGains, DeltaMode, EdConfig, IloConfig, KalmanNoise, ScheduleLevel}};\n\n\
              /// The nominal sample period the levels were tuned at, s.\n\
              pub const SCHEDULE_PERIOD_S: Option<f32> = {period};\n\n\
              pub const SCHEDULE: [ScheduleLevel; {}] = [\n",
@@ -214,8 +251,15 @@ impl ScheduleFile {
             self.level.len()
         );
         for l in &self.level {
+            let deltahat = match l.ave_deltahat {
+                Some(d) => format!(
+                    "Some(AveDeltahat {{ velocity: {:?}, acceleration: [{:?}, {:?}] }})",
+                    d.velocity, d.acceleration[0], d.acceleration[1]
+                ),
+                None => "None".to_string(),
+            };
             s.push_str(&format!(
-                "    ScheduleLevel {{\n        noise_var: {:?},\n        velocity: {},\n        acceleration: {},\n    }},\n",
+                "    ScheduleLevel {{\n        noise_var: {:?},\n        velocity: {},\n        acceleration: {},\n        ave_deltahat: {deltahat},\n    }},\n",
                 l.noise_var as f32,
                 l.velocity.rust(&base.velocity, "        "),
                 l.acceleration.rust(&base.acceleration, "        ")

@@ -960,10 +960,20 @@ pub fn tune_schedule(
         text.push_str(&format!("== schedule level {v} deg^2 ==\n"));
         text.push_str(&res.to_text());
         text.push('\n');
+        let tuned = BankConfig {
+            hold,
+            ..res.gains.apply(opts.bank_config_for(samples))
+        };
+        let deltahat = tuned_ave_deltahat(samples, opts, &tuned, v, spec.seeds, spec.train)?;
+        text.push_str(&format!(
+            "AVE deltahat tuned with (mean over the run): velocity {} deg/s, AVE-AVE {} deg/s, {} deg/s^2\n\n",
+            deltahat.velocity, deltahat.acceleration[0], deltahat.acceleration[1]
+        ));
         level.push(crate::gains::ScheduleLevelFile {
             noise_var: v,
             velocity: res.gains.velocity,
             acceleration: res.gains.acceleration,
+            ave_deltahat: Some(deltahat.into()),
         });
     }
     Ok((
@@ -975,6 +985,76 @@ pub fn tune_schedule(
         },
         text,
     ))
+}
+
+/// The AVE row's switching gains `deltahat` (`estimators::PaperBank::ave_deltahat`) that
+/// the bank configuration `cfg` is tuned with on `samples` with N(0, `noise_var`) noise
+/// (deg^2) on the first axis of `opts`: the mean of `deltahat` over `range` (s) in a run from
+/// the capture's start (where `deltahat` starts at 0, as in every evaluation of the tuner),
+/// averaged over the noise seeds `1..=seeds`. `nav440 tune --schedule` records it per level
+/// (`estimators::ScheduleLevel::ave_deltahat`).
+///
+/// Why the tuning run's mean, not the law's steady state: the leak's time constant
+/// (`1 / sigma`, 10 s) is a third of a 30 s capture, so the gains are tuned with a `deltahat`
+/// that is still growing. On the noise-switch test's 40 draws, setting the fig5 schedule's
+/// 0.5 deg^2 level's run mean (5.7 deg/s) at a gain change left the AVE below every fixed set
+/// on 22 draws (geometric mean ratio 0.988); the steady state reached after three runs
+/// (8.1 deg/s, each run starting at the previous one's mean over its second half) on 16
+/// (1.027), with a worse 12-20 s MSE (157.0 against 146.9 (deg/s)^2).
+pub fn tuned_ave_deltahat(
+    samples: &[Sample],
+    opts: &EstimateOptions,
+    cfg: &BankConfig,
+    noise_var: f64,
+    seeds: u64,
+    range: (f64, f64),
+) -> Result<estimators::AveDeltahat> {
+    let axis = opts.axis();
+    let (from, to) = (
+        (range.0 * 1e6).round() as u64,
+        (range.1 * 1e6).round() as u64,
+    );
+    let seeds = seeds.max(1);
+    let mut sum = [0.0f64; 3];
+    for seed in 1..=seeds {
+        let y = replay::noisy_angle(
+            samples,
+            axis,
+            Some(Noise {
+                var: noise_var,
+                seed,
+            }),
+        )?;
+        let mut bank: estimators::YawBank<f32> = nav440_pipeline::axis_bank(axis, cfg)
+            .map_err(|e| Error::Usage(format!("bad estimator configuration: {e}")))?;
+        let (mut acc, mut n) = ([0.0f64; 3], 0u32);
+        for (s, &y) in samples.iter().zip(&y) {
+            if bank.update(s.t_us, y).is_ok() && (from..=to).contains(&s.t_us) {
+                let d = bank.ave_deltahat();
+                for (a, x) in acc
+                    .iter_mut()
+                    .zip([d.velocity, d.acceleration[0], d.acceleration[1]])
+                {
+                    *a += f64::from(x);
+                }
+                n += 1;
+            }
+        }
+        if n == 0 {
+            return Err(Error::Usage(format!(
+                "no sample in {}-{} s to measure the AVE's deltahat on",
+                range.0, range.1
+            )));
+        }
+        for (s, a) in sum.iter_mut().zip(acc) {
+            *s += a / f64::from(n);
+        }
+    }
+    let m = sum.map(|x| (x / seeds as f64) as f32);
+    Ok(estimators::AveDeltahat {
+        velocity: m[0],
+        acceleration: [m[1], m[2]],
+    })
 }
 
 /// The CLI's name of a hold (`--hold`).

@@ -709,7 +709,10 @@ fn estimate_runs_a_schedule_file() {
     let one = d.join("one.toml");
     std::fs::write(&one, format!("hold = \"linear\"\n[[level]]{first}")).unwrap();
     let fixed = d.join("fixed.toml");
-    let body: String = first
+    // The level's gains, without its recorded AVE switching gains (a schedule key).
+    let gains = first.split("[level.ave_deltahat]").next().unwrap();
+    assert_ne!(gains, first);
+    let body: String = gains
         .lines()
         .filter(|l| !l.starts_with("noise_var"))
         .map(|l| format!("{}\n", l.replace("[level.", "[")))
@@ -733,6 +736,26 @@ fn estimate_runs_a_schedule_file() {
             p(&fixed)
         ])
     );
+    // The recorded switching gains are checked: a usage error (exit 2) naming them.
+    for (bad, why) in [
+        ("velocity = -1.0", "parameter `ave_deltahat` must be >= 0"),
+        ("velocity = nan", "parameter `ave_deltahat` is not finite"),
+        ("speed = 1.0", "unknown field `speed`"),
+    ] {
+        let f = d.join("bad.toml");
+        let line = first
+            .lines()
+            .skip_while(|l| !l.starts_with("[level.ave_deltahat]"))
+            .find(|l| l.starts_with("velocity = "))
+            .unwrap();
+        std::fs::write(&f, text.replacen(line, bad, 1)).unwrap();
+        let (code, err) = fails(&["estimate", p(&cap), "--gains", p(&f)]);
+        assert_eq!(code, 2, "{bad}");
+        assert!(
+            err.contains("bad schedule file") && err.contains(why),
+            "{bad}: {err}"
+        );
+    }
     let _ = std::fs::remove_dir_all(&d);
 }
 

@@ -13,12 +13,17 @@
 //! * in each half, the scheduled bank is within 1.2x of the gains tuned for that half;
 //! * over the whole capture, it is below every fixed gain set: each schedule level, both
 //!   gains tuned for a half, `BankConfig::PAPER` and `BankConfig::NAV440` - for every family
-//!   but the ED, which is held to 1.02 x the best of them (not met: see the test);
+//!   but the AVE and the ED, which are held to 1.02 x the best of them (not met on this
+//!   draw: see the test);
 //! * on 40 other noise draws (`scheduled_bank_against_every_fixed_set_on_forty_draws`), the
-//!   previous point holds for the ILO, AD and tracker on at least 36 draws, but not for the
-//!   AVE (11 of 40) or the ED (3 of 40): measured, bounded and explained there;
+//!   previous point holds for the ILO, AD and tracker on at least 36 draws, for the AVE on 22
+//!   (below the best fixed set on a typical draw, thanks to the switching gains the schedule
+//!   records: 11 without them), and not for the ED (3 of 40): measured, bounded and
+//!   explained there;
+//! * each level records the AVEs' switching gains it was tuned with
+//!   (`each_level_records_the_deltahat_it_was_tuned_with`);
 //! * on six other noise draws of the same switch (`scheduled_bank_does_not_ring_on_other_noise_draws`),
-//!   in each half, every family is within 2x of the gains tuned for that half: a gain change
+//!   in each half, every family is within 1.2x of the gains tuned for that half: a gain change
 //!   does not ring (it did before gain changes were made bumpless: ILO 161x);
 //! * on a 20 Hz spin (`the_100_hz_schedule_survives_retunes_at_20_hz`), every family within
 //!   1.2x of fixed `BankConfig::NAV440` (the AVE was 5.74x before its retune was bumpless).
@@ -32,7 +37,7 @@ use host_tests::optim::Method;
 use host_tests::paper::COLUMNS as NAMES;
 use host_tests::replay::{self, Axis, EstimateOptions, Sample};
 use host_tests::synth::{angle_raw, ANGLE_LSB_DEG};
-use host_tests::tune::{mse_range, tune_with, TuneSpec};
+use host_tests::tune::{mse_range, tune_with, tuned_ave_deltahat, TuneSpec};
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -261,13 +266,17 @@ fn scheduled_bank_follows_a_noise_switch() {
             // level's gains (282.4, below the half's own tuning, 321.2); in 0-10 s the 0.01
             // level's (72.7), where the 0.5 level's ED gains happen to do better on this noise
             // draw (about 69): the ED's MSE is rugged in its gains and depends on the noise
-            // draw (docs/CALIBRATION.md). Held to 1.02 x the best fixed set.
-            if i == 5 {
+            // draw (docs/CALIBRATION.md). Nor, on this draw, for the AVE: 69.19 against 68.97
+            // for the 0.1 level (+0.3 %); on 40 other draws it is below every fixed set on 22,
+            // 1.2 % below the best on a typical one
+            // (`scheduled_bank_against_every_fixed_set_on_forty_draws`). Both held to 1.02 x
+            // the best fixed set.
+            if i == 0 || i == 5 {
                 let held = sched[2][i] <= 1.02 * m[2][i];
                 if !held {
                     failures.push(format!(
-                        "ED: scheduled {} above 1.02 x {name} {}",
-                        sched[2][i], m[2][i]
+                        "{}: scheduled {} above 1.02 x {name} {}",
+                        NAMES[i], sched[2][i], m[2][i]
                     ));
                 }
                 continue;
@@ -291,9 +300,9 @@ fn scheduled_bank_follows_a_noise_switch() {
 /// once, as above). Guards the bumpless gain change (`estimators::Law::retune_state`): with the
 /// states kept as they were, a retune between the 1 and 0.5 deg^2 levels made the tuned,
 /// lightly damped ILO ring (10-20 s MSE 13,962 against 86.8 tuned, on draw 103). Measured
-/// now: worst ratio 1.26 (the AVE in 10-20 s on draw 101: the noise estimate, time constant
-/// 0.5 s, takes about 2 s to reach the new level, while the low-noise AVE gains see 0.5 deg^2
-/// noise), every other family at most 1.17.
+/// now: worst ratio 1.172 (the ILO on draw 103); the AVE at most 1.127 (draw 101, 10-20 s;
+/// 1.263 before the schedule recorded the AVEs' switching gains, `ScheduleLevel::ave_deltahat`).
+/// So item 3's 1.2x holds on these draws too, and is asserted; 2x would still catch ringing.
 #[test]
 #[cfg_attr(
     debug_assertions,
@@ -319,7 +328,7 @@ fn scheduled_bank_does_not_ring_on_other_noise_draws() {
         println!("draw {seed}: worst half ratio {}", ratios.join(", "));
     }
     for i in 0..7 {
-        assert!(worst[i] <= 2.0, "{}: {}", NAMES[i], worst[i]);
+        assert!(worst[i] <= 1.2, "{}: {}", NAMES[i], worst[i]);
     }
 }
 
@@ -330,18 +339,22 @@ fn scheduled_bank_does_not_ring_on_other_noise_draws() {
 /// geometric mean over the draws of its ratio to the best fixed set of that draw.
 ///
 /// Measured (docs/CALIBRATION.md "Forty noise draws"): ILO1-3 below every fixed set on 38 of
-/// 40 draws, the AD and the tracker on 40 (geometric mean ratios 0.82, 0.79, 0.79); **the AVE
-/// on 11 (1.050; the best fixed set is the 0.1 level on 38 draws) and the ED on 3 (1.028)**, so draw 7's result
-/// for the AVE (0.9 % below the 0.1 level) is not typical. Why, for the AVE: switching its
-/// gains costs a transient that the noise estimate's delay does not explain. With the switch
-/// made at exactly 10 s (`AdaptiveBank::retune(0.5)`, no estimate), the mean AVE MSE over the
-/// draws in 10-11 s and 11-12 s is still about twice the fixed 0.5 level's (166.4 and 144.1
-/// against 89.0 and 76.6; 140.2 for both in 12-20 s):
-/// the 0.5 level's AVE is a slow, lightly damped one (`k` 3.8 1/s, `gamma1` 498 1/s^2) that
-/// leans on its switching gain `deltahat`, which after the switch must grow by about 30x with
-/// the leak's 10 s time constant (`sigma` 0.1 1/s). The ED's tuned gains hardly depend on the
-/// noise (its levels' fixed sets are within 2 % of each other here), so a schedule can at best
-/// tie a fixed set. The assertions hold these figures (the AVE and ED as regression bounds).
+/// 40 draws, the AD and the tracker on 40 (geometric mean ratios 0.82, 0.79, 0.79); the AVE on
+/// 22 (0.988; the best fixed set is the 0.1 level on 38 draws), **the ED on 3 (1.028)**.
+///
+/// The AVE's figure depends on the switching gains the schedule records
+/// (`ScheduleLevel::ave_deltahat`: a gain change sets `deltahat` to the new level's). The same
+/// schedule without them (a gain change keeps `deltahat`, as before they were recorded): 11
+/// draws, 1.050. Why: the 0.5 level's AVE is a slow, lightly damped one (`k` 3.8 1/s, `gamma1`
+/// 498 1/s^2) tuned with a `deltahat` of 5.7 deg/s, 46x the 0.01 level's 0.12; kept, it grows
+/// there with the leak's 10 s time constant. With the switch made at exactly 10 s
+/// (`AdaptiveBank::retune(0.5)`, no estimate), mean AVE MSE over the draws in 10-11 s, 11-12 s,
+/// 12-20 s: 166.4, 144.1, 140.2 kept; 122.3, 69.4, 142.7 set; 89.0, 76.6, 140.2 for the 0.5
+/// level throughout. What is left in 10-11 s is the gain change itself; with the estimate, its
+/// delay adds to it (the level reaches the 0.5 level's AVE gains about 1 s after the switch).
+/// The ED's tuned gains hardly depend on the noise (its levels' fixed sets are within 2 % of
+/// each other here), so a schedule can at best tie a fixed set. The assertions hold these
+/// figures (the ED's as a regression bound).
 #[test]
 #[cfg_attr(
     debug_assertions,
@@ -350,15 +363,26 @@ fn scheduled_bank_does_not_ring_on_other_noise_draws() {
 fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
     let clean = clean();
     let (file, scheduled) = schedule_fig5();
+    // The same schedule with no switching gains recorded.
+    let kept = {
+        let mut f = file.clone();
+        for l in &mut f.level {
+            l.ave_deltahat = None;
+        }
+        EstimateOptions {
+            schedule: Some(f.schedule(&BankConfig::NAV440).unwrap()),
+            ..scheduled.clone()
+        }
+    };
     let sets = fixed_sets(&clean, &file);
     let draws = 101..=140u64;
     let n = draws.clone().count() as f64;
     let mut wins = [0u32; 7];
     let mut log_ratio = [0.0f64; 7];
+    let (mut kept_wins, mut kept_log_ratio) = (0u32, 0.0f64);
     let mut best_count: Vec<[u32; 7]> = vec![[0; 7]; sets.len()];
-    // The switch made exactly at 10 s: the AVE's transient after a gain change, against the
-    // 0.5 level's gains throughout.
-    let levels = file.schedule(&BankConfig::NAV440).unwrap();
+    // The switch made exactly at 10 s: the AVE's transient after a gain change, with the
+    // recorded switching gains and without, against the 0.5 level's gains throughout.
     let base = BankConfig {
         hold: file.hold().unwrap(),
         sample_period_s: 0.01,
@@ -370,10 +394,11 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
     };
     let level_05 = sets.iter().find(|(name, _)| name == "level 0.5").unwrap().1;
     let windows = [(SWITCH_S, 11.0), (11.0, 12.0), (12.0, END_S)];
-    let (mut at_switch, mut fixed_05) = ([0.0f64; 3], [0.0f64; 3]);
+    let (mut at_switch, mut at_switch_kept, mut fixed_05) = ([0.0f64; 3], [0.0f64; 3], [0.0f64; 3]);
     for seed in draws {
         let noisy = switching(&clean, seed);
         let sched = mse(&noisy, &scheduled)[2];
+        let sched_kept = mse(&noisy, &kept)[2][0];
         let fixed_mse: Vec<[f64; 7]> = sets
             .iter()
             .map(|(_, cfg)| mse(&noisy, &fixed(*cfg))[2])
@@ -390,26 +415,36 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
                 wins[i] += 1;
             }
             log_ratio[i] += (sched[i] / best).ln();
+            if i == 0 {
+                kept_wins += u32::from(sched_kept < best);
+                kept_log_ratio += (sched_kept / best).ln();
+            }
         }
 
         let hold = mse_over(&noisy, &fixed(level_05), &windows);
-        let mut bank = estimators::AdaptiveBank::<f32>::new(&base, &levels, &never).unwrap();
-        let (mut t, mut est, mut reference) = (Vec::new(), Vec::new(), Vec::new());
-        for s in &noisy {
-            if s.t_s() >= SWITCH_S && bank.retune_count() == 0 {
-                bank.retune(0.5);
+        for (opts, sums) in [(&scheduled, &mut at_switch), (&kept, &mut at_switch_kept)] {
+            let levels = opts.schedule.as_ref().unwrap();
+            let mut bank = estimators::AdaptiveBank::<f32>::new(&base, levels, &never).unwrap();
+            let (mut t, mut est, mut reference) = (Vec::new(), Vec::new(), Vec::new());
+            for s in &noisy {
+                if s.t_s() >= SWITCH_S && bank.retune_count() == 0 {
+                    bank.retune(0.5);
+                }
+                let out = bank.update(s.t_us, s.angles_deg[2]).unwrap();
+                t.push(s.t_us);
+                est.push(out.velocities()[0]);
+                reference.push(s.reference(Axis::Yaw).unwrap());
             }
-            let out = bank.update(s.t_us, s.angles_deg[2]).unwrap();
-            t.push(s.t_us);
-            est.push(out.velocities()[0]);
-            reference.push(s.reference(Axis::Yaw).unwrap());
+            for (k, w) in windows.iter().enumerate() {
+                sums[k] += mse_range(&t, &est, &reference, *w) / n;
+            }
         }
-        for (k, w) in windows.iter().enumerate() {
-            at_switch[k] += mse_range(&t, &est, &reference, *w) / n;
+        for k in 0..windows.len() {
             fixed_05[k] += hold[k][0] / n;
         }
     }
     let gm = log_ratio.map(|l| (l / n).exp());
+    let kept_gm = (kept_log_ratio / n).exp();
     println!("0-20 s velocity MSE, draws 101-140: scheduled below every fixed set / geometric mean ratio to the best fixed set");
     for i in 0..7 {
         let most = (0..sets.len()).max_by_key(|&k| best_count[k][i]).unwrap();
@@ -418,9 +453,15 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
             NAMES[i], wins[i], gm[i], sets[most].0, best_count[most][i]
         );
     }
+    println!("  AVE without recorded switching gains: {kept_wins} of {n} draws, {kept_gm:.3}");
     println!("AVE, mean velocity MSE over the draws in 10-11 s, 11-12 s, 12-20 s:");
-    println!("  0.01 level's gains, the 0.5 level's from exactly 10 s: {at_switch:.1?}");
-    println!("  the 0.5 level's gains throughout:                   {fixed_05:.1?}");
+    println!(
+        "  0.01 level's gains, the 0.5 level's from exactly 10 s, deltahat set: {at_switch:.1?}"
+    );
+    println!(
+        "  the same, deltahat kept (not recorded):                       {at_switch_kept:.1?}"
+    );
+    println!("  the 0.5 level's gains throughout:                             {fixed_05:.1?}");
 
     for i in [1, 2, 3, 4, 6] {
         assert!(
@@ -431,11 +472,26 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
             gm[i]
         );
     }
-    // Not met (above): regression bounds on the measured 1.050 and 1.028.
-    assert!(gm[0] < 1.08, "AVE: {}", gm[0]);
+    // The AVE: below the best fixed set on a typical draw, and clearly better than without
+    // the recorded switching gains (measured 22 / 0.988 against 11 / 1.050).
+    assert!(
+        wins[0] >= 18 && gm[0] < 1.0,
+        "AVE: {} draws, {}",
+        wins[0],
+        gm[0]
+    );
+    assert!(
+        kept_gm > gm[0] + 0.04,
+        "AVE: {kept_gm} without, {} with",
+        gm[0]
+    );
+    // Not met (above): a regression bound on the measured 1.028.
     assert!(gm[5] < 1.04, "ED: {}", gm[5]);
-    // The transient: with a perfect switch the AVE still pays in the first two seconds.
-    assert!(at_switch[0] > 1.5 * fixed_05[0] && at_switch[1] > 1.5 * fixed_05[1]);
+    // The transient of a perfect switch: set, the 11-12 s second is as good as the 0.5
+    // level's throughout (69.4 against 76.6), kept it is not (144.1); the first second still
+    // pays for the gain change (122.3 against 89.0).
+    assert!(at_switch[1] < 1.1 * fixed_05[1] && at_switch_kept[1] > 1.5 * fixed_05[1]);
+    assert!(at_switch[0] < at_switch_kept[0] && at_switch[0] > 1.2 * fixed_05[0]);
 }
 
 /// The `--rust` output of the same run (`host-tests/data/gains/schedule_fig5.rs`, compiled
@@ -462,6 +518,54 @@ fn rust_snippet_and_toml_hold_the_same_schedule() {
     );
     let levels: Vec<f32> = snippet::SCHEDULE.iter().map(|l| l.noise_var).collect();
     assert_eq!(levels, [0.001, 0.01, 0.1, 0.5, 1.0]);
+}
+
+/// Each level of the bundled schedule records the AVEs' switching gains its gains were tuned
+/// with (`ave_deltahat`): the mean of `deltahat` over the tuning run, what
+/// `host_tests::tune::tuned_ave_deltahat` computes for the level's gains on the tuning capture
+/// (fig5, 0-30 s, noise seeds 1-8 at the level's variance). Recomputed here from the file's
+/// gains, it matches the file to f32 rounding. Property: it grows with the noise level (the
+/// AVE's `|e|` does) for every stage.
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "release only: cargo test --release -p host-tests --test schedule"
+)]
+fn each_level_records_the_deltahat_it_was_tuned_with() {
+    let (file, _) = schedule_fig5();
+    let samples = replay::read_samples(&data("fig5_a2_100hz.bin")).unwrap();
+    let opts = EstimateOptions::default();
+    let mut prev = [0.0f32; 3];
+    for (l, s) in file
+        .level
+        .iter()
+        .zip(file.schedule(&BankConfig::NAV440).unwrap().levels())
+    {
+        let cfg = BankConfig {
+            hold: file.hold().unwrap(),
+            velocity: s.velocity,
+            acceleration: s.acceleration,
+            ..opts.bank_config_for(&samples)
+        };
+        let d = tuned_ave_deltahat(&samples, &opts, &cfg, l.noise_var, 8, (0.0, 30.0)).unwrap();
+        let recorded = s.ave_deltahat.unwrap();
+        println!("level {}: {d:?}", l.noise_var);
+        let now = [d.velocity, d.acceleration[0], d.acceleration[1]];
+        let was = [
+            recorded.velocity,
+            recorded.acceleration[0],
+            recorded.acceleration[1],
+        ];
+        for k in 0..3 {
+            assert!(
+                (now[k] - was[k]).abs() <= 1e-5 * was[k],
+                "{}: {now:?} {was:?}",
+                l.noise_var
+            );
+            assert!(was[k] > prev[k], "{}: {was:?} after {prev:?}", l.noise_var);
+        }
+        prev = was;
+    }
 }
 
 /// The schedule runs on the device for hours (issue 13 asks "would it survive 24 h"): every
@@ -560,10 +664,11 @@ fn the_schedule_runs_for_hours_without_degrading() {
 /// between 0.2 and 1.4 deg^2 and the bank retuned 13 times), the retune at 5.95 s from the
 /// 0.68 to the 0.21 deg^2 level swung the AVE to 981 deg/s (true rate 295) and its MSE over
 /// 6-8 s was 19,835 (deg/s)^2: the adaptive AVE was 5.74 x NAV440's over the capture (1716
-/// against 299). Now every family is within 1.2 x NAV440's (measured: AVE 1.02, 1.06 before
-/// the 50-sample floor; the ILO1 0.20, the noise-adaptive gains' gain at 0.5 deg^2). The
+/// against 299). Now every family is within 1.2 x NAV440's (measured: AVE 0.79; 1.02 before
+/// the schedule recorded the AVEs' switching gains, 1.06 before the 50-sample floor; the ILO1
+/// 0.20, the noise-adaptive gains' gain at 0.5 deg^2). The
 /// schedule was tuned at 100 Hz and runs off its rate here on purpose (`nav440 estimate`
-/// warns); at 10 Hz its AVE and ILO1 reach 1.26-1.98 x NAV440's, which a schedule tuned at
+/// warns); at 10 Hz its AVE and ILO1 reach 1.20-1.98 x NAV440's, which a schedule tuned at
 /// 10 Hz fixes (`a_schedule_tuned_at_10_hz_fits_10_hz`).
 #[test]
 #[cfg_attr(
@@ -585,12 +690,12 @@ fn the_100_hz_schedule_survives_retunes_at_20_hz() {
 }
 
 /// A schedule tuned at the unit's rate is the remedy for a low rate: at 10 Hz with 0.5 deg^2
-/// the 100 Hz schedule's AVE and ILO1 reach 1.26-1.98 x fixed `BankConfig::NAV440`'s (the
+/// the 100 Hz schedule's AVE and ILO1 reach 1.20-1.98 x fixed `BankConfig::NAV440`'s (the
 /// adaptive bank runs the schedule's 0.5 level there: its gains, tuned at 100 Hz, not the
 /// noise estimate, are the cause), while `data/gains/schedule_fig5_10hz.toml`, tuned at 10 Hz
 /// on another fig5 motion (`nav440 synth --profile fig5 --rate 10 --duration 35 --seed 3 -o
 /// fig5_10hz.bin`, then `nav440 tune fig5_10hz.bin --schedule 0.001,0.01,0.1,0.5,1 --seeds 8
-/// -o schedule_fig5_10hz.toml`: 7.1 min), keeps them within 1.1x (measured: 0.69 to 1.08) on
+/// -o schedule_fig5_10hz.toml`: 7.1 min), keeps them within 1.1x (measured: 0.17 to 1.08) on
 /// the fig5 and spin motions of seed 21 at 10 Hz, 0.01 and 0.5 deg^2 (noise seed 5), and is
 /// better than the 100 Hz schedule in each of those AVE and ILO1 cells at 0.5 deg^2.
 #[test]

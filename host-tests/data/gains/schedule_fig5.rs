@@ -2,7 +2,7 @@
 // `AdaptiveBank::new(&BankConfig { hold, ..BankConfig::NAV440 }, &schedule, &AdaptiveConfig::DEFAULT)`,
 // `schedule` being `GainSchedule::new(&SCHEDULE)?` with `.with_sample_period(p)?` when
 // `SCHEDULE_PERIOD_S` is `Some(p)`.
-use estimators::{AveConfig, BankGains, DeltaMode, EdConfig, IloConfig, KalmanNoise, ScheduleLevel};
+use estimators::{AveConfig, AveDeltahat, BankGains, DeltaMode, EdConfig, IloConfig, KalmanNoise, ScheduleLevel};
 
 /// The nominal sample period the levels were tuned at, s.
 pub const SCHEDULE_PERIOD_S: Option<f32> = Some(0.01);
@@ -32,6 +32,7 @@ pub const SCHEDULE: [ScheduleLevel; 5] = [
             ed: EdConfig { lambda: 21.23143, alpha: 5039.2783 },
             kf: KalmanNoise { q: 1154782.0, r: 0.01 },
         },
+        ave_deltahat: Some(AveDeltahat { velocity: 0.014618677, acceleration: [0.97046983, 6.6055694] }),
     },
     ScheduleLevel {
         noise_var: 0.01,
@@ -57,6 +58,7 @@ pub const SCHEDULE: [ScheduleLevel; 5] = [
             ed: EdConfig { lambda: 19.50073, alpha: 5469.868 },
             kf: KalmanNoise { q: 237137.38, r: 0.01 },
         },
+        ave_deltahat: Some(AveDeltahat { velocity: 0.12345989, acceleration: [1.8421813, 13.339276] }),
     },
     ScheduleLevel {
         noise_var: 0.1,
@@ -82,6 +84,7 @@ pub const SCHEDULE: [ScheduleLevel; 5] = [
             ed: EdConfig { lambda: 23.871288, alpha: 7134.0317 },
             kf: KalmanNoise { q: 42169.65, r: 0.01 },
         },
+        ave_deltahat: Some(AveDeltahat { velocity: 0.2730495, acceleration: [3.3232386, 25.322184] }),
     },
     ScheduleLevel {
         noise_var: 0.5,
@@ -107,6 +110,7 @@ pub const SCHEDULE: [ScheduleLevel; 5] = [
             ed: EdConfig { lambda: 52.504585, alpha: 10.306895 },
             kf: KalmanNoise { q: 11547.82, r: 0.01 },
         },
+        ave_deltahat: Some(AveDeltahat { velocity: 5.673903, acceleration: [5.208553, 38.979923] }),
     },
     ScheduleLevel {
         noise_var: 1.0,
@@ -132,5 +136,6 @@ pub const SCHEDULE: [ScheduleLevel; 5] = [
             ed: EdConfig { lambda: 0.4637242, alpha: 10.531283 },
             kf: KalmanNoise { q: 5623.413, r: 0.01 },
         },
+        ave_deltahat: Some(AveDeltahat { velocity: 7.063896, acceleration: [6.6273303, 47.43187] }),
     },
 ];
