@@ -518,6 +518,19 @@ fn rust_snippet_and_toml_hold_the_same_schedule() {
     );
     let levels: Vec<f32> = snippet::SCHEDULE.iter().map(|l| l.noise_var).collect();
     assert_eq!(levels, [0.001, 0.01, 0.1, 0.5, 1.0]);
+    assert!(snippet::SCHEDULE.iter().all(|l| l.ave_deltahat.is_some()));
+    // The committed snippet is what the generator writes from the TOML file.
+    let committed = std::fs::read_to_string(data("gains/schedule_fig5.rs")).unwrap();
+    let what = "--schedule 0.001,0.01,0.1,0.5,1";
+    assert_eq!(file.to_rust(what, &BankConfig::NAV440), committed);
+    // Without recorded switching gains (a file written before they were): `None`, and no
+    // import of `AveDeltahat` (it would be unused).
+    let mut old = file.clone();
+    for l in &mut old.level {
+        l.ave_deltahat = None;
+    }
+    let text = old.to_rust(what, &BankConfig::NAV440);
+    assert!(!text.contains("AveDeltahat") && text.contains("ave_deltahat: None,"));
 }
 
 /// Each level of the bundled schedule records the AVEs' switching gains its gains were tuned
