@@ -245,13 +245,18 @@ impl<T: Real> Law for AveParams<T> {
         s.theta
     }
 
-    /// New gains start from `xhat = y` (the last input), `theta1hat` (the output) and
-    /// `deltahat` kept: the position error the old gains left (at 20 Hz, a noise-sized
-    /// fraction of a degree) would otherwise meet the new `gamma1` and, from a slow gain set
-    /// to a fast one, swing the velocity by hundreds of deg/s (docs/CALIBRATION.md). Nothing
-    /// when the gains did not change.
+    /// New gains keep `theta1hat` (the output) and `deltahat` (a gain schedule may set it,
+    /// `PaperBank::set_ave_deltahat`), and start from `xhat = y` (the last input) when the new
+    /// `gamma1` is at least the old one: the position error a slower gain set left (at 20 Hz,
+    /// a noise-sized fraction of a degree) would otherwise meet the new, larger `gamma1` and
+    /// swing the velocity by hundreds of deg/s (docs/CALIBRATION.md). To a smaller `gamma1`
+    /// (slower gains) `xhat` is kept: the faster gains left it close to the input, and the last
+    /// input itself carries a full noise sample, which the slow, lightly damped AVE turns into
+    /// ringing (about `sqrt(gamma1)` times the offset in deg/s; measured on the noise-switch
+    /// test's 40 draws: 26 draws below every fixed gain set instead of 22). Nothing when the
+    /// gains did not change.
     fn retune_state(&self, old: &Self, s: &mut AveState<T>, y: T) {
-        if self == old {
+        if self == old || self.c.hg < old.c.hg {
             return;
         }
         s.xhat = y;

@@ -1000,7 +1000,9 @@ pub fn tune_schedule(
 /// 0.5 deg^2 level's run mean (5.7 deg/s) at a gain change left the AVE below every fixed set
 /// on 22 draws (geometric mean ratio 0.988); the steady state reached after three runs
 /// (8.1 deg/s, each run starting at the previous one's mean over its second half) on 16
-/// (1.027), with a worse 12-20 s MSE (157.0 against 146.9 (deg/s)^2).
+/// (1.027), with a worse 12-20 s MSE (157.0 against 146.9 (deg/s)^2). (Measured before the AVE's
+/// retune kept `xhat` towards slower gains, which took the run mean's result to 26 draws,
+/// 0.972.)
 pub fn tuned_ave_deltahat(
     samples: &[Sample],
     opts: &EstimateOptions,

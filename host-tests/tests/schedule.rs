@@ -16,7 +16,7 @@
 //!   but the AVE and the ED, which are held to 1.02 x the best of them (not met on this
 //!   draw: see the test);
 //! * on 40 other noise draws (`scheduled_bank_against_every_fixed_set_on_forty_draws`), the
-//!   previous point holds for the ILO, AD and tracker on at least 36 draws, for the AVE on 22
+//!   previous point holds for the ILO, AD and tracker on at least 36 draws, for the AVE on 26
 //!   (below the best fixed set on a typical draw, thanks to the switching gains the schedule
 //!   records: 11 without them), and not for the ED (3 of 40): measured, bounded and
 //!   explained there;
@@ -266,9 +266,9 @@ fn scheduled_bank_follows_a_noise_switch() {
             // level's gains (282.4, below the half's own tuning, 321.2); in 0-10 s the 0.01
             // level's (72.7), where the 0.5 level's ED gains happen to do better on this noise
             // draw (about 69): the ED's MSE is rugged in its gains and depends on the noise
-            // draw (docs/CALIBRATION.md). Nor, on this draw, for the AVE: 69.19 against 68.97
-            // for the 0.1 level (+0.3 %); on 40 other draws it is below every fixed set on 22,
-            // 1.2 % below the best on a typical one
+            // draw (docs/CALIBRATION.md). Nor, on this draw, for the AVE: 69.155 against 68.966
+            // for the 0.1 level (+0.3 %); on 40 other draws it is below every fixed set on 26,
+            // 2.8 % below the best on a typical one
             // (`scheduled_bank_against_every_fixed_set_on_forty_draws`). Both held to 1.02 x
             // the best fixed set.
             if i == 0 || i == 5 {
@@ -300,7 +300,7 @@ fn scheduled_bank_follows_a_noise_switch() {
 /// once, as above). Guards the bumpless gain change (`estimators::Law::retune_state`): with the
 /// states kept as they were, a retune between the 1 and 0.5 deg^2 levels made the tuned,
 /// lightly damped ILO ring (10-20 s MSE 13,962 against 86.8 tuned, on draw 103). Measured
-/// now: worst ratio 1.172 (the ILO on draw 103); the AVE at most 1.127 (draw 101, 10-20 s;
+/// now: worst ratio 1.172 (the ILO on draw 103); the AVE at most 1.126 (draw 101, 10-20 s;
 /// 1.263 before the schedule recorded the AVEs' switching gains, `ScheduleLevel::ave_deltahat`).
 /// So item 3's 1.2x holds on these draws too, and is asserted; 2x would still catch ringing.
 #[test]
@@ -340,16 +340,18 @@ fn scheduled_bank_does_not_ring_on_other_noise_draws() {
 ///
 /// Measured (docs/CALIBRATION.md "Forty noise draws"): ILO1-3 below every fixed set on 38 of
 /// 40 draws, the AD and the tracker on 40 (geometric mean ratios 0.82, 0.79, 0.79); the AVE on
-/// 22 (0.988; the best fixed set is the 0.1 level on 38 draws), **the ED on 3 (1.028)**.
+/// 26 (0.972; the best fixed set is the 0.1 level on 38 draws), **the ED on 3 (1.028)**.
 ///
 /// The AVE's figure depends on the switching gains the schedule records
 /// (`ScheduleLevel::ave_deltahat`: a gain change sets `deltahat` to the new level's). The same
-/// schedule without them (a gain change keeps `deltahat`, as before they were recorded): 11
-/// draws, 1.050. Why: the 0.5 level's AVE is a slow, lightly damped one (`k` 3.8 1/s, `gamma1`
+/// schedule without them (a gain change keeps `deltahat`, as before they were recorded): 14
+/// draws, 1.028 (11 and 1.050 before the AVE's retune kept `xhat` towards slower gains,
+/// `Law::retune_state` of `AveParams`). Why: the 0.5 level's AVE is a slow, lightly damped one
+/// (`k` 3.8 1/s, `gamma1`
 /// 498 1/s^2) tuned with a `deltahat` of 5.7 deg/s, 46x the 0.01 level's 0.12; kept, it grows
 /// there with the leak's 10 s time constant. With the switch made at exactly 10 s
 /// (`AdaptiveBank::retune(0.5)`, no estimate), mean AVE MSE over the draws in 10-11 s, 11-12 s,
-/// 12-20 s: 166.4, 144.1, 140.2 kept; 122.3, 69.4, 142.7 set; 89.0, 76.6, 140.2 for the 0.5
+/// 12-20 s: 169.7, 144.1, 140.2 kept; 123.6, 69.3, 142.7 set; 89.0, 76.6, 140.2 for the 0.5
 /// level throughout. What is left in 10-11 s is the gain change itself; with the estimate, its
 /// delay adds to it (the level reaches the 0.5 level's AVE gains about 1 s after the switch).
 /// The ED's tuned gains hardly depend on the noise (its levels' fixed sets are within 2 % of
@@ -473,9 +475,9 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
         );
     }
     // The AVE: below the best fixed set on a typical draw, and clearly better than without
-    // the recorded switching gains (measured 22 / 0.988 against 11 / 1.050).
+    // the recorded switching gains (measured 26 / 0.972 against 14 / 1.028).
     assert!(
-        wins[0] >= 18 && gm[0] < 1.0,
+        wins[0] >= 22 && gm[0] < 0.99,
         "AVE: {} draws, {}",
         wins[0],
         gm[0]
@@ -489,7 +491,7 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
     assert!(gm[5] < 1.04, "ED: {}", gm[5]);
     // The transient of a perfect switch: set, the 11-12 s second is as good as the 0.5
     // level's throughout (69.4 against 76.6), kept it is not (144.1); the first second still
-    // pays for the gain change (122.3 against 89.0).
+    // pays for the gain change (123.6 against 89.0).
     assert!(at_switch[1] < 1.1 * fixed_05[1] && at_switch_kept[1] > 1.5 * fixed_05[1]);
     assert!(at_switch[0] < at_switch_kept[0] && at_switch[0] > 1.2 * fixed_05[0]);
 }
