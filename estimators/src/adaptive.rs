@@ -521,9 +521,9 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
     }
 
     /// Sets the gains for the noise variance `noise_var` (deg^2, clamped to the schedule) now.
-    /// When the AVE gains change and the schedule records the AVEs' steady switching gains
-    /// ([`ScheduleLevel::ave_deltahat`]), the AVEs' `deltahat` are set to those for
-    /// `noise_var` ([`GainSchedule::ave_deltahat_at`]); otherwise they are kept.
+    /// When the AVE gains change and the schedule records the switching gains its levels' AVEs
+    /// were tuned with ([`ScheduleLevel::ave_deltahat`]), the AVEs' `deltahat` are set to
+    /// those for `noise_var` ([`GainSchedule::ave_deltahat_at`]); otherwise they are kept.
     pub fn retune(&mut self, noise_var: f32) {
         let v = self.schedule.clamp(noise_var);
         let old = self.schedule.gains_at(self.level);

@@ -767,7 +767,8 @@ impl<T: Real, S: SqrtFn<T>> PaperBank<T, S> {
 
     /// Sets the AVE row's switching gains (see [`Self::ave_deltahat`]; a negative or
     /// non-finite value leaves its `deltahat` as it is). What [`crate::AdaptiveBank`] does
-    /// when it changes the AVE gains and its schedule records their steady `deltahat`.
+    /// when it changes the AVE gains and its schedule records the `deltahat` they were tuned
+    /// with.
     pub fn set_ave_deltahat(&mut self, d: &crate::AveDeltahat) {
         let set = |x: &mut T, v: f32| {
             if v.is_finite() && v >= 0.0 {

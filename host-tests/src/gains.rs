@@ -128,7 +128,7 @@ pub struct ScheduleLevelFile {
     pub velocity: FamilyGains,
     /// Acceleration gains.
     pub acceleration: FamilyGains,
-    /// The AVEs' steady switching gains with these gains at this noise
+    /// The AVEs' switching gains these gains were tuned with, their mean over the tuning run
     /// (`estimators::ScheduleLevel::ave_deltahat`; optional: without it a gain change keeps
     /// the AVEs' `deltahat`, as files written before it was recorded do).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -172,7 +172,7 @@ impl From<estimators::AveDeltahat> for AveDeltahatFile {
 /// noise_var = 0.001          # deg^2, increasing from level to level
 /// [level.velocity.ave]       # the tables of a gains file, every one present
 /// ...
-/// [level.ave_deltahat]        # optional: the AVEs' steady switching gains at this level
+/// [level.ave_deltahat]       # optional: the AVEs' deltahat this level was tuned with
 /// velocity = 0.9             # deg/s
 /// acceleration = [0.9, 12.0] # the AVE-AVE series' stages, deg/s and deg/s^2
 /// [[level]]
