@@ -121,18 +121,20 @@ pub enum Blend {
     NearestObservers,
 }
 
-fn interp_gains(a: &BankGains, b: &BankGains, w: f32, blend: Blend) -> BankGains {
-    // Weight of the upper level for the observers (AVE, ILO, ED).
-    let wo = match blend {
-        Blend::Geometric => w,
-        Blend::NearestObservers => {
-            if w < 0.5 {
-                0.0
-            } else {
-                1.0
-            }
+impl Blend {
+    /// The weight of the upper level for the observers (AVE, ILO, ED) between two levels,
+    /// given the geometric weight `w` in `[0, 1]`: `w`, or 0 or 1 for the nearer level.
+    fn observer_weight(self, w: f32) -> f32 {
+        match self {
+            Blend::Geometric => w,
+            Blend::NearestObservers if w < 0.5 => 0.0,
+            Blend::NearestObservers => 1.0,
         }
-    };
+    }
+}
+
+fn interp_gains(a: &BankGains, b: &BankGains, w: f32, blend: Blend) -> BankGains {
+    let wo = blend.observer_weight(w);
     let ilo = |x: &IloConfig, y: &IloConfig| IloConfig {
         k1: 1.0 - interp(1.0 - x.k1, 1.0 - y.k1, wo),
         l: interp(x.l, y.l, wo),
@@ -254,45 +256,52 @@ impl GainSchedule {
 
     /// The interpolated gains (velocity, acceleration) for `noise_var`, deg^2.
     pub fn gains_at(&self, noise_var: f32) -> (BankGains, BankGains) {
-        let l = self.levels();
-        let v = self.clamp(noise_var);
-        let i = l.iter().rposition(|x| x.noise_var <= v).unwrap_or(0);
-        let Some(b) = l.get(i + 1) else {
-            let a = &l[i];
+        let (a, upper) = self.bracket(noise_var);
+        let Some((b, w)) = upper else {
             return (a.velocity, a.acceleration);
         };
-        let a = &l[i];
-        let w = libm::logf(v / a.noise_var) / libm::logf(b.noise_var / a.noise_var);
         (
             interp_gains(&a.velocity, &b.velocity, w, self.blend),
             interp_gains(&a.acceleration, &b.acceleration, w, self.blend),
         )
     }
 
-    /// The recorded AVE switching gains for `noise_var` (deg^2): those of the level whose AVE
-    /// gains [`Self::gains_at`] takes (the nearer level in `ln(noise_var)` with
-    /// [`Blend::NearestObservers`]; interpolated geometrically with [`Blend::Geometric`]).
-    /// `None` if a level it needs has none recorded.
-    pub fn ave_deltahat_at(&self, noise_var: f32) -> Option<AveDeltahat> {
+    /// The levels around `noise_var` (deg^2, clamped to the schedule): the last level at or
+    /// below it, and the next one with the weight of `noise_var` between the two (0 to 1,
+    /// linear in `ln(noise_var)`), if there is a next one.
+    fn bracket(&self, noise_var: f32) -> (&ScheduleLevel, Option<(&ScheduleLevel, f32)>) {
         let l = self.levels();
         let v = self.clamp(noise_var);
         let i = l.iter().rposition(|x| x.noise_var <= v).unwrap_or(0);
-        let a = l[i].ave_deltahat?;
-        let Some(next) = l.get(i + 1) else {
-            return Some(a);
+        let a = &l[i];
+        let upper = l.get(i + 1).map(|b| {
+            let w = libm::logf(v / a.noise_var) / libm::logf(b.noise_var / a.noise_var);
+            (b, w)
+        });
+        (a, upper)
+    }
+
+    /// The recorded AVE switching gains for `noise_var` (deg^2): those of the level whose AVE
+    /// gains [`Self::gains_at`] takes (the nearer level in `ln(noise_var)` with
+    /// [`Blend::NearestObservers`]; interpolated geometrically with [`Blend::Geometric`]).
+    /// `None` if the level at or below `noise_var` has none recorded, or the level above it
+    /// when that one is taken or interpolated with.
+    pub fn ave_deltahat_at(&self, noise_var: f32) -> Option<AveDeltahat> {
+        let (a, upper) = self.bracket(noise_var);
+        let da = a.ave_deltahat?;
+        let Some((b, w)) = upper else {
+            return Some(da);
         };
-        let w = libm::logf(v / l[i].noise_var) / libm::logf(next.noise_var / l[i].noise_var);
-        let w = match self.blend {
-            Blend::Geometric => w,
-            Blend::NearestObservers if w < 0.5 => return Some(a),
-            Blend::NearestObservers => 1.0,
-        };
-        let b = next.ave_deltahat?;
+        let w = self.blend.observer_weight(w);
+        if w <= 0.0 {
+            return Some(da);
+        }
+        let db = b.ave_deltahat?;
         Some(AveDeltahat {
-            velocity: interp(a.velocity, b.velocity, w),
+            velocity: interp(da.velocity, db.velocity, w),
             acceleration: [
-                interp(a.acceleration[0], b.acceleration[0], w),
-                interp(a.acceleration[1], b.acceleration[1], w),
+                interp(da.acceleration[0], db.acceleration[0], w),
+                interp(da.acceleration[1], db.acceleration[1], w),
             ],
         })
     }

@@ -737,17 +737,17 @@ fn estimate_runs_a_schedule_file() {
         ])
     );
     // The recorded switching gains are checked: a usage error (exit 2) naming them.
+    let line = first
+        .lines()
+        .skip_while(|l| !l.starts_with("[level.ave_deltahat]"))
+        .find(|l| l.starts_with("velocity = "))
+        .unwrap();
     for (bad, why) in [
         ("velocity = -1.0", "parameter `ave_deltahat` must be >= 0"),
         ("velocity = nan", "parameter `ave_deltahat` is not finite"),
         ("speed = 1.0", "unknown field `speed`"),
     ] {
         let f = d.join("bad.toml");
-        let line = first
-            .lines()
-            .skip_while(|l| !l.starts_with("[level.ave_deltahat]"))
-            .find(|l| l.starts_with("velocity = "))
-            .unwrap();
         std::fs::write(&f, text.replacen(line, bad, 1)).unwrap();
         let (code, err) = fails(&["estimate", p(&cap), "--gains", p(&f)]);
         assert_eq!(code, 2, "{bad}");
