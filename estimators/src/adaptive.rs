@@ -441,7 +441,14 @@ pub struct AdaptiveConfig {
     /// retuned 12,637 times in 3 h of a spin, with 1.5 4,122 times, with 2 469 times;
     /// docs/CALIBRATION.md).
     pub retune_ratio: f32,
+    /// A gain change replays the last this many samples (at most [`REPLAY_CAPACITY`]) through
+    /// the new gains (warm start, [`PaperBank::set_gains_replaying`]); 0: the states are moved
+    /// to the new gains' equilibrium instead (bumpless, [`PaperBank::set_gains`]).
+    pub replay_samples: u32,
 }
+
+/// Most samples an [`AdaptiveBank`] keeps for a warm-start gain change.
+pub const REPLAY_CAPACITY: usize = 64;
 
 impl AdaptiveConfig {
     /// The defaults (see the fields).
@@ -450,6 +457,7 @@ impl AdaptiveConfig {
         initial_noise_var: 0.01,
         retune_every: 20,
         retune_ratio: 1.5,
+        replay_samples: REPLAY_CAPACITY as u32,
     };
 }
 
@@ -466,7 +474,7 @@ impl Default for AdaptiveConfig {
 /// schedule and the laws' coefficients rebuilt ([`PaperBank::set_gains`]), their states
 /// kept. Generic over [`Real`] like the bank (`AdaptiveBank<Fx>` for FPU-less cores; the noise
 /// estimate and the interpolation are f32 there too).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct AdaptiveBank<T: Real, S: SqrtFn<T> = ExactSqrt> {
     bank: PaperBank<T, S>,
     base: BankConfig,
@@ -476,6 +484,7 @@ pub struct AdaptiveBank<T: Real, S: SqrtFn<T> = ExactSqrt> {
     level: f32,
     since: u32,
     retunes: u32,
+    history: heapless::HistoryBuf<crate::Fed<T>, REPLAY_CAPACITY>,
 }
 
 impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
@@ -507,13 +516,17 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
             level,
             since: 0,
             retunes: 0,
+            history: heapless::HistoryBuf::new(),
         })
     }
 
     /// Feeds one sample (as [`PaperBank::update`]); the noise estimate is updated with it and
     /// the gains follow it (see the type).
     pub fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<PaperOutput, SampleError> {
-        let out = self.bank.update(t_us, angle_deg)?;
+        let (out, fed) = self.bank.update_fed(t_us, angle_deg)?;
+        if self.cfg.replay_samples > 0 {
+            self.history.write(fed);
+        }
         self.noise.update(t_us, angle_deg);
         self.since = self.since.saturating_add(1);
         if self.since >= self.cfg.retune_every {
@@ -537,6 +550,18 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
         let v = self.schedule.clamp(noise_var);
         let old = self.schedule.gains_at(self.level);
         let new = self.schedule.config_at(&self.base, v);
+        let keep = (self.cfg.replay_samples as usize).min(self.history.len());
+        if keep > 0 {
+            let old = self.schedule.config_at(&self.base, self.level);
+            let d = self.schedule.ave_deltahat_at(v);
+            let skip = self.history.len() - keep;
+            let history = self.history.oldest_ordered().skip(skip);
+            if self.bank.set_gains_warm(&old, &new, history, d).is_ok() {
+                self.level = v;
+                self.retunes = self.retunes.saturating_add(1);
+            }
+            return;
+        }
         // Interpolated between levels that all build: cannot fail but for rounding at a
         // constraint's edge; then the current gains are kept.
         if self.bank.set_gains(&new).is_ok() {
@@ -794,10 +819,10 @@ mod tests {
         assert!(bad(0.0).is_ok());
     }
 
-    /// A retune that changes the velocity AVE's gains sets its `deltahat` to the level's
-    /// recorded value; the acceleration series' AVEs, whose gains do not change here, keep
-    /// theirs; a retune within the same AVE gains keeps every `deltahat`; a schedule without
-    /// recorded values keeps them all (f32 and Fx).
+    /// A bumpless retune (no replay, `replay_samples: 0`) that changes the velocity AVE's
+    /// gains sets its `deltahat` to the level's recorded value; the acceleration series' AVEs,
+    /// whose gains do not change here, keep theirs; a retune within the same AVE gains keeps
+    /// every `deltahat`; a schedule without recorded values keeps them all (f32 and Fx).
     #[test]
     fn a_retune_sets_the_recorded_deltahat() {
         fn check<T: Real>() {
@@ -805,6 +830,7 @@ mod tests {
             let hi = with_deltahat(level(1.0, 400.0, ILO3_TABLE2), 10.0, [4.0, 40.0]);
             let never = AdaptiveConfig {
                 retune_ratio: f32::MAX,
+                replay_samples: 0,
                 ..AdaptiveConfig::DEFAULT
             };
             let close = |a: f32, b: f32| (a - b).abs() < 1e-3;
@@ -925,6 +951,122 @@ mod tests {
         }
         check::<f32>();
         check::<crate::Fx>();
+    }
+
+    /// A noisy ramp at 100 Hz that crosses +180 deg (so the history holds frame shifts),
+    /// with a 0.3 s gap (a re-initialisation) at sample 20 when `gap` is set.
+    fn wrapping_ramp(k: u64, gap: bool, g: &mut Gauss) -> (u64, f32) {
+        let t_us = k * 10_000 + if gap && k >= 20 { 300_000 } else { 0 };
+        let y = 150.0 + 120.0 * k as f64 * 0.01 + 0.3 * g.next();
+        let y = if y > 180.0 { y - 360.0 } else { y };
+        (t_us, y as f32)
+    }
+
+    /// `set_gains_replaying` over every sample since the bank's last (re-)initialisation is
+    /// exact: afterwards the bank is, bit for bit, a bank that ran the new gains from the start
+    /// (its state through `Debug`, every float's shortest round-trip form, and the outputs of
+    /// the next 100 samples), across frame shifts (the ramp crosses +180 deg) and a gap that
+    /// re-initialises the laws inside the history; f32 and Fx.
+    #[test]
+    fn a_replayed_gain_change_is_a_bank_run_with_the_new_gains() {
+        extern crate std;
+        use std::{format, vec::Vec};
+        fn check<T: Real>(gap: bool) {
+            let s = GainSchedule::new(&[
+                level(0.01, 100.0, ILO1_TABLE2),
+                level(1.0, 10_000.0, ILO3_TABLE2),
+            ])
+            .unwrap();
+            let (a, b) = (
+                s.config_at(&BankConfig::PAPER, 0.01),
+                s.config_at(&BankConfig::PAPER, 1.0),
+            );
+            let mut old = PaperBank::<T>::new(&a).unwrap();
+            let mut fresh = PaperBank::<T>::new(&b).unwrap();
+            let mut g = Gauss::new(5);
+            let mut history = Vec::new();
+            for k in 0..60 {
+                let (t, y) = wrapping_ramp(k, gap, &mut g);
+                let (_, fed) = old.update_fed(t, y).unwrap();
+                history.push(fed);
+                fresh.update(t, y).unwrap();
+            }
+            assert!(history.iter().any(|f| f.shift.is_some()));
+            old.set_gains_replaying(&b, &history, |_| {}).unwrap();
+            assert_eq!(format!("{:?}", old.state()), format!("{:?}", fresh.state()));
+            for k in 60..160 {
+                let (t, y) = wrapping_ramp(k, gap, &mut g);
+                assert_eq!(
+                    old.update(t, y).unwrap(),
+                    fresh.update(t, y).unwrap(),
+                    "{k}"
+                );
+            }
+        }
+        for gap in [false, true] {
+            check::<f32>(gap);
+            check::<crate::Fx>(gap);
+        }
+    }
+
+    /// `AdaptiveBank::retune` with the default warm start (the history holds every sample
+    /// since the first, 50 < `REPLAY_CAPACITY`): the rows whose gains changed (here the
+    /// ILOs, the AD and the trackers, and the AVE, started at the level's recorded
+    /// `deltahat`) continue as a bank that ran the new gains from the start with that
+    /// `deltahat`; the ED row continues as the bumpless retune (`replay_samples: 0`) does;
+    /// a retune to the same gains changes nothing (f32).
+    #[test]
+    fn a_warm_retune_replays_the_changed_rows() {
+        let lo = with_deltahat(level(0.01, 100.0, ILO1_TABLE2), 0.1, [1.0, 10.0]);
+        let hi = with_deltahat(level(1.0, 400.0, ILO3_TABLE2), 10.0, [4.0, 40.0]);
+        let s = GainSchedule::new(&[lo, hi]).unwrap();
+        let never = AdaptiveConfig {
+            retune_ratio: f32::MAX,
+            ..AdaptiveConfig::DEFAULT
+        };
+        let bumpless = AdaptiveConfig {
+            replay_samples: 0,
+            ..never
+        };
+        let base = BankConfig::PAPER;
+        let mut warm = AdaptiveBank::<f32>::new(&base, &s, &never).unwrap();
+        let mut cold = AdaptiveBank::<f32>::new(&base, &s, &bumpless).unwrap();
+        let mut fresh = PaperBank::<f32>::new(&s.config_at(&base, 1.0)).unwrap();
+        let mut g = Gauss::new(8);
+        for k in 0..50 {
+            let (t, y) = wrapping_ramp(k, false, &mut g);
+            warm.update(t, y).unwrap();
+            cold.update(t, y).unwrap();
+            fresh.update(t, y).unwrap();
+            if k == 0 {
+                fresh.set_ave_deltahat(&hi.ave_deltahat.unwrap());
+            }
+        }
+        extern crate std;
+        let before = *warm.bank().state();
+        warm.retune(0.01);
+        assert_eq!(
+            std::format!("{:?}", warm.bank().state()),
+            std::format!("{before:?}")
+        );
+        warm.retune(1.0);
+        cold.retune(1.0);
+        for k in 50..150 {
+            let (t, y) = wrapping_ramp(k, false, &mut g);
+            let (w, c, f) = (
+                warm.update(t, y).unwrap(),
+                cold.update(t, y).unwrap(),
+                fresh.update(t, y).unwrap(),
+            );
+            for ch in crate::Channel::ALL {
+                let want = if matches!(ch, crate::Channel::EdV | crate::Channel::EdA) {
+                    c[*ch]
+                } else {
+                    f[*ch]
+                };
+                assert_eq!(w[*ch], want, "{k} {}", ch.name());
+            }
+        }
     }
 
     #[test]

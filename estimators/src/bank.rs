@@ -292,6 +292,16 @@ pub enum Feed<T: Real> {
     },
 }
 
+/// What a bank's laws were fed for one sample ([`PaperBank::update_fed`]): a frame shift
+/// (deg, applied to every law first) and the feed.
+#[derive(Clone, Copy, Debug)]
+pub struct Fed<T: Real> {
+    /// Every law was translated by this (deg) before the feed.
+    pub shift: Option<T>,
+    /// What the laws were fed.
+    pub feed: Feed<T>,
+}
+
 /// A sample accepted by [`BankInput::accept`].
 #[derive(Clone, Copy, Debug)]
 pub struct Accepted<T: Real> {
@@ -675,6 +685,13 @@ macro_rules! estimator_bank {
             /// later than the previous sample.
             #[inline]
             pub fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<$Out, $crate::SampleError> {
+                self.update_fed(t_us, angle_deg).map(|(out, _)| out)
+            }
+
+            /// [`Self::update`], also returning what the laws were fed ([`$crate::Fed`]): what
+            /// [`Self::set_gains_replaying`] replays.
+            #[inline(always)]
+            pub fn update_fed(&mut self, t_us: u64, angle_deg: f32) -> Result<($Out, $crate::Fed<T>), $crate::SampleError> {
                 let a = self.input.accept(t_us, angle_deg)?;
                 if let Some(d) = a.shift {
                     self.params.translate(&mut self.state, d);
@@ -689,7 +706,8 @@ macro_rules! estimator_bank {
                         self.params.values(&self.state)
                     }
                 };
-                Ok($Out { yaw_unwrapped_deg: a.angle.0, yaw_residual_deg: a.angle.1, values })
+                let out = $Out { yaw_unwrapped_deg: a.angle.0, yaw_residual_deg: a.angle.1, values };
+                Ok((out, $crate::Fed { shift: a.shift, feed: a.feed }))
             }
 
             /// How many times a gap longer than the gap rule re-initialised the bank.
@@ -735,6 +753,58 @@ macro_rules! estimator_bank {
                 Ok(())
             }
 
+            /// [`Self::set_gains`], with the new laws' states rebuilt by replaying `history`
+            /// (oldest first: what the laws were fed for the last samples, from
+            /// [`Self::update_fed`], ending with the last sample) through the new parameters,
+            /// started at rest at the first sample's input and passed to `on_init` after
+            /// every (re-)initialisation. The laws then continue as if they had run with the
+            /// new gains over the history (warm start), not from the old gains' states. An
+            /// empty history is [`Self::set_gains`]. On error nothing changes.
+            /// Cost: [`Self::set_gains`] plus one advance of every row per history entry.
+            pub fn set_gains_replaying<'h, I, F>(
+                &mut self,
+                cfg: &$crate::BankConfig,
+                history: I,
+                mut on_init: F,
+            ) -> Result<(), $crate::ConfigError>
+            where
+                I: IntoIterator<Item = &'h $crate::Fed<T>>,
+                F: FnMut(&mut $State<T, S>),
+                T: 'h,
+            {
+                let (_, n0) = $crate::BankInput::<T>::new(cfg)?;
+                let params = $Params::new_reusing(cfg, n0, Some(&self.params))?;
+                let mut state: Option<$State<T, S>> = None;
+                for fed in history {
+                    match (fed.feed, state.as_mut()) {
+                        ($crate::Feed::Reset(y), _) => {
+                            let mut s = params.init(y);
+                            on_init(&mut s);
+                            state = Some(s);
+                        }
+                        ($crate::Feed::Advance { y_prev, y, n, hold }, Some(s)) => {
+                            if let Some(d) = fed.shift {
+                                params.translate(s, d);
+                            }
+                            params.advance(s, y_prev, y, n, hold);
+                        }
+                        ($crate::Feed::Advance { y_prev, y, n, hold }, None) => {
+                            // `y_prev` is already in this sample's frame.
+                            let mut s = params.init(y_prev);
+                            on_init(&mut s);
+                            params.advance(&mut s, y_prev, y, n, hold);
+                            state = Some(s);
+                        }
+                    }
+                }
+                match state {
+                    Some(s) => self.state = s,
+                    None => params.retune_state(&self.params, &mut self.state, self.input.last()),
+                }
+                self.params = params;
+                Ok(())
+            }
+
             /// The rows' validated parameters.
             pub fn params(&self) -> &$Params<T, S> {
                 &self.params
@@ -770,16 +840,98 @@ impl<T: Real, S: SqrtFn<T>> PaperBank<T, S> {
     /// when it changes the AVE gains and its schedule records the `deltahat` they were tuned
     /// with.
     pub fn set_ave_deltahat(&mut self, d: &crate::AveDeltahat) {
-        let set = |x: &mut T, v: f32| {
-            if v.is_finite() && v >= 0.0 {
-                *x = T::from_f32(v);
-            }
-        };
-        let s = &mut self.state.ave;
-        set(&mut s.v.delta, d.velocity);
-        set(&mut s.a1.delta, d.acceleration[0]);
-        set(&mut s.a2.delta, d.acceleration[1]);
+        set_ave_deltahat(&mut self.state, d);
     }
+}
+
+impl<T: Real, S: SqrtFn<T>> PaperBank<T, S> {
+    /// The gain change of [`crate::AdaptiveBank`] (warm start) from the gains of `old` (what
+    /// the bank runs now; only its gains are read) to those of `new`:
+    ///
+    /// * a row whose gains changed is rebuilt by replaying `history` (what the laws were fed
+    ///   for the last samples, oldest first, ending with the last one; see
+    ///   [`Self::update_fed`] and [`Self::set_gains_replaying`]) through its new gains, started
+    ///   at rest at the history's first sample, so that it continues as if it had run with
+    ///   them over the history; the AVE row starts its replay with the switching gains
+    ///   `deltahat` (deg/s, deg/s^2), or, when `None`, with those it has now;
+    /// * a row whose gains did not change keeps its state exactly;
+    /// * the ED row, when its gains changed, keeps its state, moved bumplessly
+    ///   ([`crate::Law::retune_state`]): started at rest its velocity state moves at most
+    ///   `alpha` deg/s per second and a tuned `lambda` is small, so it overshoots for longer
+    ///   than a replay covers (replayed, the scheduled ED's velocity MSE in the second after
+    ///   the first gain change of the noise-switch capture was 1049 (deg/s)^2 instead of 206).
+    ///
+    /// An empty history is [`Self::set_gains`] (every row bumpless). On error nothing changes.
+    /// Cost: [`Self::set_gains`] plus one sample of the whole bank per history entry.
+    pub fn set_gains_warm<'h, I>(
+        &mut self,
+        old: &BankConfig,
+        new: &BankConfig,
+        history: I,
+        deltahat: Option<crate::AveDeltahat>,
+    ) -> Result<(), ConfigError>
+    where
+        I: IntoIterator<Item = &'h Fed<T>>,
+        T: 'h,
+    {
+        use crate::Law as _;
+        let (old_ed, old_state) = (self.params.ed, self.state);
+        let deltahat = deltahat.unwrap_or_else(|| self.ave_deltahat());
+        self.set_gains_replaying(new, history, |s| set_ave_deltahat(s, &deltahat))?;
+        let (o, n) = (
+            (&old.velocity, &old.acceleration),
+            (&new.velocity, &new.acceleration),
+        );
+        let s = &mut self.state;
+        macro_rules! keep_if_same {
+            ($($row:ident: $gains:ident;)+) => {$(
+                if $gains(o) == $gains(n) {
+                    s.$row = old_state.$row;
+                }
+            )+};
+        }
+        type Halves<'a> = (&'a BankGains, &'a BankGains);
+        let (ilo1_v, ilo2_v, ilo3_v) = (
+            |h: Halves| h.0.ilo[0],
+            |h: Halves| h.0.ilo[1],
+            |h: Halves| h.0.ilo[2],
+        );
+        let (ilo1_a, ilo2_a, ilo3_a) = (
+            |h: Halves| h.1.ilo[0],
+            |h: Halves| h.1.ilo[1],
+            |h: Halves| h.1.ilo[2],
+        );
+        let (ad_v, ad_a) = (|h: Halves| h.0.ad_t, |h: Halves| h.1.ad_t);
+        let (kf_v, kf_a) = (|h: Halves| h.0.kf, |h: Halves| h.1.kf);
+        let ave = |h: Halves| (h.0.ave, h.1.ave);
+        keep_if_same! {
+            ave: ave; ilo1_v: ilo1_v; ilo2_v: ilo2_v; ilo3_v: ilo3_v; ad_v: ad_v; kf_v: kf_v;
+            ilo1_a: ilo1_a; ilo2_a: ilo2_a; ilo3_a: ilo3_a; ad_a: ad_a; kf_a: kf_a;
+        }
+        s.ed = old_state.ed;
+        if (o.0.ed, o.1.ed) != (n.0.ed, n.1.ed) {
+            self.params
+                .ed
+                .retune_state(&old_ed, &mut s.ed, self.input.last());
+        }
+        Ok(())
+    }
+}
+
+/// Sets the AVE row's switching gains in `state` (see [`PaperBank::set_ave_deltahat`]).
+pub(crate) fn set_ave_deltahat<T: Real, S: SqrtFn<T>>(
+    state: &mut PaperState<T, S>,
+    d: &crate::AveDeltahat,
+) {
+    let set = |x: &mut T, v: f32| {
+        if v.is_finite() && v >= 0.0 {
+            *x = T::from_f32(v);
+        }
+    };
+    let s = &mut state.ave;
+    set(&mut s.v.delta, d.velocity);
+    set(&mut s.a1.delta, d.acceleration[0]);
+    set(&mut s.a2.delta, d.acceleration[1]);
 }
 
 /// Comma-joins string literals (for [`estimator_bank!`]'s `CSV_COLUMNS`).

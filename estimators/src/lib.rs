@@ -92,9 +92,10 @@ pub use adaptive::{
 };
 pub use ave::{Ave, AveConfig, AveParams, AveState, DeltaLaw, DeltaMode};
 pub use bank::{
-    Accepted, AdAdMap, BankConfig, BankGains, BankInput, BankOutput, Channel, Feed, KalmanNoise,
-    PaperBank, PaperOutput, PaperParams, PaperState, ProductBank, ProductChannel, ProductOutput,
-    ProductParams, ProductState, Wrap, YawBank, GAP_PERIODS, KF_DEFAULT, VELOCITY_NAMES,
+    Accepted, AdAdMap, BankConfig, BankGains, BankInput, BankOutput, Channel, Fed, Feed,
+    KalmanNoise, PaperBank, PaperOutput, PaperParams, PaperState, ProductBank, ProductChannel,
+    ProductOutput, ProductParams, ProductState, Wrap, YawBank, GAP_PERIODS, KF_DEFAULT,
+    VELOCITY_NAMES,
 };
 pub use ed::{Ed, EdConfig, EdParams, EdScheme, EdState};
 pub use error::{ConfigError, SampleError};

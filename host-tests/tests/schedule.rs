@@ -397,6 +397,11 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
     let level_05 = sets.iter().find(|(name, _)| name == "level 0.5").unwrap().1;
     let windows = [(SWITCH_S, 11.0), (11.0, 12.0), (12.0, END_S)];
     let (mut at_switch, mut at_switch_kept, mut fixed_05) = ([0.0f64; 3], [0.0f64; 3], [0.0f64; 3]);
+    let bumpless = estimators::AdaptiveConfig {
+        replay_samples: 0,
+        ..estimators::AdaptiveConfig::DEFAULT
+    };
+    let (mut bumpless_wins, mut bumpless_log_ratio) = ([0u32; 7], [0.0f64; 7]);
     for seed in draws {
         let noisy = switching(&clean, seed);
         let sched = mse(&noisy, &scheduled)[2];
@@ -405,6 +410,7 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
             .iter()
             .map(|(_, cfg)| mse(&noisy, &fixed(*cfg))[2])
             .collect();
+        let mut best_of = [0.0f64; 7];
         for i in 0..7 {
             let (k, best) = fixed_mse
                 .iter()
@@ -412,6 +418,7 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
                 .enumerate()
                 .min_by(|a, b| a.1.total_cmp(&b.1))
                 .unwrap();
+            best_of[i] = best;
             best_count[k][i] += 1;
             if sched[i] < best {
                 wins[i] += 1;
@@ -444,6 +451,23 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
         for k in 0..windows.len() {
             fixed_05[k] += hold[k][0] / n;
         }
+
+        // The same schedule with bumpless gain changes (no replay), run directly.
+        let levels = scheduled.schedule.as_ref().unwrap();
+        let mut bank = estimators::AdaptiveBank::<f32>::new(&base, levels, &bumpless).unwrap();
+        let (mut t, mut est, mut reference) = (Vec::new(), Vec::new(), Vec::new());
+        for s in &noisy {
+            let out = bank.update(s.t_us, s.angles_deg[2]).unwrap();
+            t.push(s.t_us);
+            est.push(out.velocities());
+            reference.push(s.reference(Axis::Yaw).unwrap());
+        }
+        for i in 0..7 {
+            let e: Vec<f32> = est.iter().map(|v| v[i]).collect();
+            let m = mse_range(&t, &e, &reference, (0.0, END_S));
+            bumpless_wins[i] += u32::from(m < best_of[i]);
+            bumpless_log_ratio[i] += (m / best_of[i]).ln();
+        }
     }
     let gm = log_ratio.map(|l| (l / n).exp());
     let kept_gm = (kept_log_ratio / n).exp();
@@ -456,6 +480,14 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
         );
     }
     println!("  AVE without recorded switching gains: {kept_wins} of {n} draws, {kept_gm:.3}");
+    let bumpless_gm = bumpless_log_ratio.map(|l| (l / n).exp());
+    println!("bumpless gain changes instead of the warm start (replay_samples 0):");
+    for i in 0..7 {
+        println!(
+            "  {:<4} {:>2} of {n} draws, {:.3}",
+            NAMES[i], bumpless_wins[i], bumpless_gm[i]
+        );
+    }
     println!("AVE, mean velocity MSE over the draws in 10-11 s, 11-12 s, 12-20 s:");
     println!(
         "  0.01 level's gains, the 0.5 level's from exactly 10 s, deltahat set: {at_switch:.1?}"
@@ -467,7 +499,7 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
 
     for i in [1, 2, 3, 4, 6] {
         assert!(
-            wins[i] >= 36 && gm[i] < 0.9,
+            wins[i] >= 38 && gm[i] < 0.85,
             "{}: {} draws, {}",
             NAMES[i],
             wins[i],
@@ -475,9 +507,9 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
         );
     }
     // The AVE: below the best fixed set on a typical draw, and clearly better than without
-    // the recorded switching gains (measured 26 / 0.972 against 14 / 1.028).
+    // the recorded switching gains (measured 25 / 0.951 against 21 / 1.001).
     assert!(
-        wins[0] >= 22 && gm[0] < 0.99,
+        wins[0] >= 22 && gm[0] < 0.97,
         "AVE: {} draws, {}",
         wins[0],
         gm[0]
@@ -489,11 +521,17 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
     );
     // Not met (above): a regression bound on the measured 1.028.
     assert!(gm[5] < 1.04, "ED: {}", gm[5]);
-    // The transient of a perfect switch: set, the 11-12 s second is as good as the 0.5
-    // level's throughout (69.4 against 76.6), kept it is not (144.1); the first second still
-    // pays for the gain change (123.6 against 89.0).
-    assert!(at_switch[1] < 1.1 * fixed_05[1] && at_switch_kept[1] > 1.5 * fixed_05[1]);
-    assert!(at_switch[0] < at_switch_kept[0] && at_switch[0] > 1.2 * fixed_05[0]);
+    // The warm start is worth it: the AVE and the ILOs are further below the best fixed set
+    // than with bumpless gain changes (measured 0.951 against 0.972 and 0.776 against 0.819);
+    // the other families' figures do not move (their rows are linear and at equilibrium).
+    assert!(gm[0] < bumpless_gm[0] - 0.01, "AVE {} {}", gm[0], bumpless_gm[0]);
+    assert!(gm[1] < bumpless_gm[1] - 0.02, "ILO1 {} {}", gm[1], bumpless_gm[1]);
+    // The transient of a perfect switch: with the warm start the first two seconds after it
+    // are as good as the 0.5 level's throughout (88.8 and 68.3 against 89.0 and 76.6; with a
+    // bumpless change the first second was 123.6); without recorded switching gains (the
+    // replay starts from the `deltahat` the 0.01 level left) they are not (114.5, 129.9).
+    assert!(at_switch[0] < 1.05 * fixed_05[0] && at_switch[1] < 1.05 * fixed_05[1]);
+    assert!(at_switch_kept[0] > 1.2 * fixed_05[0] && at_switch_kept[1] > 1.5 * fixed_05[1]);
 }
 
 /// The `--rust` output of the same run (`host-tests/data/gains/schedule_fig5.rs`, compiled
