@@ -43,7 +43,9 @@ pub struct ScheduleLevel {
 /// time constant (`1 / sigma`, 10 s) to move from one to the other, and the AVE is worse than
 /// either fixed set in the seconds after the change; set, the scheduled AVE on a
 /// 0.01 -> 0.5 deg^2 noise switch beat every fixed gain set on 26 of 40 noise draws instead of
-/// 14 (docs/CALIBRATION.md, "Forty noise draws").
+/// 14 with bumpless gain changes, and 25 instead of 21 with the warm start (geometric mean
+/// ratio to the best fixed set 0.951 instead of 1.001; docs/CALIBRATION.md, "Forty noise
+/// draws"): a warm start replays with these values.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AveDeltahat {
@@ -471,9 +473,22 @@ impl Default for AdaptiveConfig {
 /// [`NoiseEstimator`]; at most every [`AdaptiveConfig::retune_every`] samples, if the
 /// estimate left the band `[level / ratio, level * ratio]` around the level the current
 /// gains were interpolated for, the gains for the estimate are interpolated from the
-/// schedule and the laws' coefficients rebuilt ([`PaperBank::set_gains`]), their states
-/// kept. Generic over [`Real`] like the bank (`AdaptiveBank<Fx>` for FPU-less cores; the noise
-/// estimate and the interpolation are f32 there too).
+/// schedule and the laws' coefficients rebuilt (see [`AdaptiveBank::retune`]). Generic over
+/// [`Real`] like the bank (`AdaptiveBank<Fx>` for FPU-less cores; the noise estimate and the
+/// interpolation are f32 there too).
+///
+/// **Warm start.** The bank keeps what its laws were fed for the last
+/// [`AdaptiveConfig::replay_samples`] samples (at most [`REPLAY_CAPACITY`], 64: 0.64 s at
+/// 100 Hz, 3.2 s at 20 Hz; `64 * size_of::<Fed<T>>()` bytes: 1,536 for f32, 2,560 for `Fx`), and a gain
+/// change replays them through the rows whose gains changed
+/// ([`PaperBank::set_gains_warm`]): those rows then continue as if they had run the new gains
+/// over that history, which also covers most of the noise estimate's delay in noticing a
+/// change. On a 0.01 -> 0.5 deg^2 noise switch (docs/CALIBRATION.md, "Warm-start gain
+/// changes") the scheduled AVE's velocity MSE in the second after a perfect switch went from
+/// 123.6 (deg/s)^2 (bumpless change) to 88.8 (0.5 level's gains throughout: 89.0), and over
+/// 40 noise draws the AVE and the ILOs went from 0.972 and 0.819 of the best fixed gain set
+/// (geometric mean) to 0.951 and 0.776. Cost: one sample of the whole bank per replayed sample
+/// on top of the coefficients' rebuild (`cargo xtask bench`).
 #[derive(Clone, Debug)]
 pub struct AdaptiveBank<T: Real, S: SqrtFn<T> = ExactSqrt> {
     bank: PaperBank<T, S>,
@@ -543,9 +558,17 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
     }
 
     /// Sets the gains for the noise variance `noise_var` (deg^2, clamped to the schedule) now.
-    /// When the AVE gains change and the schedule records the switching gains its levels' AVEs
-    /// were tuned with ([`ScheduleLevel::ave_deltahat`]), the AVEs' `deltahat` are set to
-    /// those for `noise_var` ([`GainSchedule::ave_deltahat_at`]); otherwise they are kept.
+    ///
+    /// With a history (the default, see the type's warm start): the rows whose gains changed
+    /// are replayed over it ([`PaperBank::set_gains_warm`]), the AVEs starting with the
+    /// switching gains `deltahat` the schedule records for `noise_var`
+    /// ([`ScheduleLevel::ave_deltahat`], [`GainSchedule::ave_deltahat_at`]) or, when it
+    /// records none, with their present ones; the ED row is moved bumplessly.
+    ///
+    /// Without one ([`AdaptiveConfig::replay_samples`] 0, or before the first sample): the
+    /// laws continue from their states moved bumplessly ([`PaperBank::set_gains`]), and when
+    /// the AVE gains change and the schedule records switching gains, the AVEs' `deltahat` are
+    /// set to those for `noise_var`; otherwise they are kept.
     pub fn retune(&mut self, noise_var: f32) {
         let v = self.schedule.clamp(noise_var);
         let old = self.schedule.gains_at(self.level);

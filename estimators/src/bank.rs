@@ -641,6 +641,43 @@ macro_rules! estimator_bank {
                 $( self.$field.retune_state(&old.$field, &mut s.$field, y); )+
             }
 
+            /// Every row's state after replaying `history` (what a bank's laws were fed,
+            /// oldest first, see `update_fed`) through these parameters: started at rest at
+            /// the first entry's input (`init`, then `on_init`), re-initialised where the
+            /// history was (`Feed::Reset`, then `on_init`), translated where the frame
+            /// shifted. `None` for an empty history.
+            pub fn replay<'h, I, F>(&self, history: I, mut on_init: F) -> Option<$State<T, S>>
+            where
+                I: IntoIterator<Item = &'h $crate::Fed<T>>,
+                F: FnMut(&mut $State<T, S>),
+                T: 'h,
+            {
+                let mut state: Option<$State<T, S>> = None;
+                for fed in history {
+                    match (fed.feed, state.as_mut()) {
+                        ($crate::Feed::Reset(y), _) => {
+                            let mut s = self.init(y);
+                            on_init(&mut s);
+                            state = Some(s);
+                        }
+                        ($crate::Feed::Advance { y_prev, y, n, hold }, Some(s)) => {
+                            if let Some(d) = fed.shift {
+                                self.translate(s, d);
+                            }
+                            self.advance(s, y_prev, y, n, hold);
+                        }
+                        ($crate::Feed::Advance { y_prev, y, n, hold }, None) => {
+                            // `y_prev` is already in this sample's frame.
+                            let mut s = self.init(y_prev);
+                            on_init(&mut s);
+                            self.advance(&mut s, y_prev, y, n, hold);
+                            state = Some(s);
+                        }
+                    }
+                }
+                state
+            }
+
             /// Advances every row over one sample interval.
             #[inline]
             pub fn advance(&self, s: &mut $State<T, S>, y_prev: T, y: T, n: u32, hold: $crate::Hold) {
@@ -755,17 +792,16 @@ macro_rules! estimator_bank {
 
             /// [`Self::set_gains`], with the new laws' states rebuilt by replaying `history`
             /// (oldest first: what the laws were fed for the last samples, from
-            /// [`Self::update_fed`], ending with the last sample) through the new parameters,
-            /// started at rest at the first sample's input and passed to `on_init` after
-            /// every (re-)initialisation. The laws then continue as if they had run with the
-            /// new gains over the history (warm start), not from the old gains' states. An
-            /// empty history is [`Self::set_gains`]. On error nothing changes.
+            /// [`Self::update_fed`], ending with the last sample) through the new parameters
+            /// (see the parameters' `replay`). The laws then continue as if they had run with
+            /// the new gains over the history (warm start), not from the old gains' states.
+            /// An empty history is [`Self::set_gains`]. On error nothing changes.
             /// Cost: [`Self::set_gains`] plus one advance of every row per history entry.
             pub fn set_gains_replaying<'h, I, F>(
                 &mut self,
                 cfg: &$crate::BankConfig,
                 history: I,
-                mut on_init: F,
+                on_init: F,
             ) -> Result<(), $crate::ConfigError>
             where
                 I: IntoIterator<Item = &'h $crate::Fed<T>>,
@@ -774,30 +810,7 @@ macro_rules! estimator_bank {
             {
                 let (_, n0) = $crate::BankInput::<T>::new(cfg)?;
                 let params = $Params::new_reusing(cfg, n0, Some(&self.params))?;
-                let mut state: Option<$State<T, S>> = None;
-                for fed in history {
-                    match (fed.feed, state.as_mut()) {
-                        ($crate::Feed::Reset(y), _) => {
-                            let mut s = params.init(y);
-                            on_init(&mut s);
-                            state = Some(s);
-                        }
-                        ($crate::Feed::Advance { y_prev, y, n, hold }, Some(s)) => {
-                            if let Some(d) = fed.shift {
-                                params.translate(s, d);
-                            }
-                            params.advance(s, y_prev, y, n, hold);
-                        }
-                        ($crate::Feed::Advance { y_prev, y, n, hold }, None) => {
-                            // `y_prev` is already in this sample's frame.
-                            let mut s = params.init(y_prev);
-                            on_init(&mut s);
-                            params.advance(&mut s, y_prev, y, n, hold);
-                            state = Some(s);
-                        }
-                    }
-                }
-                match state {
+                match params.replay(history, on_init) {
                     Some(s) => self.state = s,
                     None => params.retune_state(&self.params, &mut self.state, self.input.last()),
                 }
@@ -875,18 +888,23 @@ impl<T: Real, S: SqrtFn<T>> PaperBank<T, S> {
         T: 'h,
     {
         use crate::Law as _;
-        let (old_ed, old_state) = (self.params.ed, self.state);
+        let (_, n0) = BankInput::<T>::new(new)?;
+        let params = PaperParams::<T, S>::new_reusing(new, n0, Some(&self.params))?;
         let deltahat = deltahat.unwrap_or_else(|| self.ave_deltahat());
-        self.set_gains_replaying(new, history, |s| set_ave_deltahat(s, &deltahat))?;
+        let Some(replayed) = params.replay(history, |s| set_ave_deltahat(s, &deltahat)) else {
+            params.retune_state(&self.params, &mut self.state, self.input.last());
+            self.params = params;
+            return Ok(());
+        };
         let (o, n) = (
             (&old.velocity, &old.acceleration),
             (&new.velocity, &new.acceleration),
         );
         let s = &mut self.state;
-        macro_rules! keep_if_same {
+        macro_rules! take_if_changed {
             ($($row:ident: $gains:ident;)+) => {$(
-                if $gains(o) == $gains(n) {
-                    s.$row = old_state.$row;
+                if $gains(o) != $gains(n) {
+                    s.$row = replayed.$row;
                 }
             )+};
         }
@@ -904,16 +922,16 @@ impl<T: Real, S: SqrtFn<T>> PaperBank<T, S> {
         let (ad_v, ad_a) = (|h: Halves| h.0.ad_t, |h: Halves| h.1.ad_t);
         let (kf_v, kf_a) = (|h: Halves| h.0.kf, |h: Halves| h.1.kf);
         let ave = |h: Halves| (h.0.ave, h.1.ave);
-        keep_if_same! {
+        take_if_changed! {
             ave: ave; ilo1_v: ilo1_v; ilo2_v: ilo2_v; ilo3_v: ilo3_v; ad_v: ad_v; kf_v: kf_v;
             ilo1_a: ilo1_a; ilo2_a: ilo2_a; ilo3_a: ilo3_a; ad_a: ad_a; kf_a: kf_a;
         }
-        s.ed = old_state.ed;
         if (o.0.ed, o.1.ed) != (n.0.ed, n.1.ed) {
-            self.params
+            params
                 .ed
-                .retune_state(&old_ed, &mut s.ed, self.input.last());
+                .retune_state(&self.params.ed, &mut s.ed, self.input.last());
         }
+        self.params = params;
         Ok(())
     }
 }

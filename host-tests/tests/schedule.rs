@@ -524,8 +524,18 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
     // The warm start is worth it: the AVE and the ILOs are further below the best fixed set
     // than with bumpless gain changes (measured 0.951 against 0.972 and 0.776 against 0.819);
     // the other families' figures do not move (their rows are linear and at equilibrium).
-    assert!(gm[0] < bumpless_gm[0] - 0.01, "AVE {} {}", gm[0], bumpless_gm[0]);
-    assert!(gm[1] < bumpless_gm[1] - 0.02, "ILO1 {} {}", gm[1], bumpless_gm[1]);
+    assert!(
+        gm[0] < bumpless_gm[0] - 0.01,
+        "AVE {} {}",
+        gm[0],
+        bumpless_gm[0]
+    );
+    assert!(
+        gm[1] < bumpless_gm[1] - 0.02,
+        "ILO1 {} {}",
+        gm[1],
+        bumpless_gm[1]
+    );
     // The transient of a perfect switch: with the warm start the first two seconds after it
     // are as good as the 0.5 level's throughout (88.8 and 68.3 against 89.0 and 76.6; with a
     // bumpless change the first second was 123.6); without recorded switching gains (the
