@@ -1033,11 +1033,11 @@ mod tests {
     }
 
     /// `AdaptiveBank::retune` with the default warm start (the history holds every sample
-    /// since the first, 50 < `REPLAY_CAPACITY`): the rows whose gains changed (here the
-    /// ILOs, the AD and the trackers, and the AVE, started at the level's recorded
-    /// `deltahat`) continue as a bank that ran the new gains from the start with that
-    /// `deltahat`; the ED row continues as the bumpless retune (`replay_samples: 0`) does;
-    /// a retune to the same gains changes nothing (f32).
+    /// since the first, 50 < `REPLAY_CAPACITY`): the replayed rows whose gains changed (here
+    /// the velocity ILOs and AD, the trackers, and the AVE row, started at the level's
+    /// recorded `deltahat`) continue as a bank that ran the new gains from the start with that
+    /// `deltahat`; the ED row and the ILO-ILO and AD-AD series continue as the bumpless retune
+    /// (`replay_samples: 0`) does; a retune to the same gains changes nothing (f32).
     #[test]
     fn a_warm_retune_replays_the_changed_rows() {
         let lo = with_deltahat(level(0.01, 100.0, ILO1_TABLE2), 0.1, [1.0, 10.0]);
@@ -1082,7 +1082,8 @@ mod tests {
                 fresh.update(t, y).unwrap(),
             );
             for ch in crate::Channel::ALL {
-                let want = if matches!(ch, crate::Channel::EdV | crate::Channel::EdA) {
+                use crate::Channel::{AdA, EdA, EdV, Ilo1A, Ilo2A, Ilo3A};
+                let want = if matches!(ch, EdV | EdA | Ilo1A | Ilo2A | Ilo3A | AdA) {
                     c[*ch]
                 } else {
                     f[*ch]

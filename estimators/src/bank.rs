@@ -861,18 +861,22 @@ impl<T: Real, S: SqrtFn<T>> PaperBank<T, S> {
     /// The gain change of [`crate::AdaptiveBank`] (warm start) from the gains of `old` (what
     /// the bank runs now; only its gains are read) to those of `new`:
     ///
-    /// * a row whose gains changed is rebuilt by replaying `history` (what the laws were fed
-    ///   for the last samples, oldest first, ending with the last one; see
-    ///   [`Self::update_fed`] and [`Self::set_gains_replaying`]) through its new gains, started
-    ///   at rest at the history's first sample, so that it continues as if it had run with
-    ///   them over the history; the AVE row starts its replay with the switching gains
-    ///   `deltahat` (deg/s, deg/s^2), or, when `None`, with those it has now;
-    /// * a row whose gains did not change keeps its state exactly;
-    /// * the ED row, when its gains changed, keeps its state, moved bumplessly
-    ///   ([`crate::Law::retune_state`]): started at rest its velocity state moves at most
-    ///   `alpha` deg/s per second and a tuned `lambda` is small, so it overshoots for longer
-    ///   than a replay covers (replayed, the scheduled ED's velocity MSE in the second after
-    ///   the first gain change of the noise-switch capture was 1049 (deg/s)^2 instead of 206).
+    /// * the AVE / AVE-AVE row, the velocity ILOs and AD and both trackers, when their gains
+    ///   changed, are rebuilt by replaying `history` (what the laws were fed for the last
+    ///   samples, oldest first, ending with the last one; see [`Self::update_fed`] and
+    ///   [`PaperParams::replay`]) through their new gains, started at rest at the history's
+    ///   first sample, so that they continue as if they had run with them over the history;
+    ///   the AVE row starts its replay with the switching gains `deltahat` (deg/s, deg/s^2),
+    ///   or, when `None`, with those it has now;
+    /// * the ED / ED-ED row and the ILO-ILO and AD-AD series, when their gains changed, keep
+    ///   their state, moved bumplessly ([`crate::Law::retune_state`]): replayed from rest they
+    ///   take longer than a 64-sample history to settle. The ED's velocity state moves at most
+    ///   `alpha` deg/s per second and a tuned `lambda` is small (replayed, the scheduled ED's
+    ///   velocity MSE in the second after the first gain change of the noise-switch capture
+    ///   was 1049 (deg/s)^2 instead of 206); a series' second stage starts from zero
+    ///   acceleration (replayed, the ILO-ILO's acceleration MSE over the noise switch was 7 %
+    ///   above the bumpless change's, the AD-AD's 0.3 %; docs/CALIBRATION.md);
+    /// * a row whose gains did not change keeps its state exactly.
     ///
     /// An empty history is [`Self::set_gains`] (every row bumpless). On error nothing changes.
     /// Cost: [`Self::set_gains`] plus one sample of the whole bank per history entry.
@@ -924,8 +928,16 @@ impl<T: Real, S: SqrtFn<T>> PaperBank<T, S> {
         let ave = |h: Halves| (h.0.ave, h.1.ave);
         take_if_changed! {
             ave: ave; ilo1_v: ilo1_v; ilo2_v: ilo2_v; ilo3_v: ilo3_v; ad_v: ad_v; kf_v: kf_v;
-            ilo1_a: ilo1_a; ilo2_a: ilo2_a; ilo3_a: ilo3_a; ad_a: ad_a; kf_a: kf_a;
+            kf_a: kf_a;
         }
+        macro_rules! bumpless_if_changed {
+            ($($row:ident: $gains:ident;)+) => {$(
+                if $gains(o) != $gains(n) {
+                    params.$row.retune_state(&self.params.$row, &mut s.$row, self.input.last());
+                }
+            )+};
+        }
+        bumpless_if_changed! { ilo1_a: ilo1_a; ilo2_a: ilo2_a; ilo3_a: ilo3_a; ad_a: ad_a; }
         if (o.0.ed, o.1.ed) != (n.0.ed, n.1.ed) {
             params
                 .ed
