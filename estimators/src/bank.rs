@@ -725,7 +725,7 @@ macro_rules! estimator_bank {
                 self.update_fed(t_us, angle_deg).map(|(out, _)| out)
             }
 
-            /// [`Self::update`], also returning what the laws were fed ([`$crate::Fed`]): what
+            /// [`Self::update`], also returning what the laws were fed (`Fed`): what
             /// [`Self::set_gains_replaying`] replays.
             #[inline(always)]
             pub fn update_fed(&mut self, t_us: u64, angle_deg: f32) -> Result<($Out, $crate::Fed<T>), $crate::SampleError> {
