@@ -479,11 +479,11 @@ impl Default for AdaptiveConfig {
 ///
 /// **Warm start.** The bank keeps what its laws were fed for the last
 /// [`AdaptiveConfig::replay_samples`] samples (at most [`REPLAY_CAPACITY`], 64: 0.64 s at
-/// 100 Hz, 3.2 s at 20 Hz; `64 * size_of::<Fed<T>>()` bytes: 1,536 for f32, 2,560 for `Fx`), and a gain
-/// change replays them through the rows whose gains changed
-/// ([`PaperBank::set_gains_warm`]): those rows then continue as if they had run the new gains
-/// over that history, which also covers most of the noise estimate's delay in noticing a
-/// change. On a 0.01 -> 0.5 deg^2 noise switch (docs/CALIBRATION.md, "Warm-start gain
+/// 100 Hz, 3.2 s at 20 Hz; `64 * size_of::<Fed<T>>()` bytes: 1,536 for f32, 2,560 for `Fx`),
+/// and a gain change replays them through the rows whose gains changed
+/// ([`PaperBank::set_gains_warm`]; the ED and the ILO-ILO and AD-AD series change
+/// bumplessly): those rows then continue as if they had run the new gains over that history,
+/// which also covers most of the noise estimate's delay in noticing a change. On a 0.01 -> 0.5 deg^2 noise switch (docs/CALIBRATION.md, "Warm-start gain
 /// changes") the scheduled AVE's velocity MSE in the second after a perfect switch went from
 /// 123.6 (deg/s)^2 (bumpless change) to 88.8 (0.5 level's gains throughout: 89.0), and over
 /// 40 noise draws the AVE and the ILOs went from 0.972 and 0.819 of the best fixed gain set
@@ -563,7 +563,8 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
     /// are replayed over it ([`PaperBank::set_gains_warm`]), the AVEs starting with the
     /// switching gains `deltahat` the schedule records for `noise_var`
     /// ([`ScheduleLevel::ave_deltahat`], [`GainSchedule::ave_deltahat_at`]) or, when it
-    /// records none, with their present ones; the ED row is moved bumplessly.
+    /// records none, with their present ones; the ED row and the ILO-ILO and AD-AD series are
+    /// moved bumplessly.
     ///
     /// Without one ([`AdaptiveConfig::replay_samples`] 0, or before the first sample): the
     /// laws continue from their states moved bumplessly ([`PaperBank::set_gains`]), and when
@@ -575,7 +576,11 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
         let new = self.schedule.config_at(&self.base, v);
         let keep = (self.cfg.replay_samples as usize).min(self.history.len());
         if keep > 0 {
-            let old = self.schedule.config_at(&self.base, self.level);
+            let old = BankConfig {
+                velocity: old.0,
+                acceleration: old.1,
+                ..new
+            };
             let d = self.schedule.ave_deltahat_at(v);
             let skip = self.history.len() - keep;
             let history = self.history.oldest_ordered().skip(skip);
