@@ -575,24 +575,21 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
         let old = self.schedule.gains_at(self.level);
         let new = self.schedule.config_at(&self.base, v);
         let keep = (self.cfg.replay_samples as usize).min(self.history.len());
-        if keep > 0 {
+        // Interpolated between levels that all build: a gain change cannot fail but for
+        // rounding at a constraint's edge; then the current gains are kept.
+        let changed = if keep > 0 {
             let old = BankConfig {
                 velocity: old.0,
                 acceleration: old.1,
                 ..new
             };
             let d = self.schedule.ave_deltahat_at(v);
-            let skip = self.history.len() - keep;
-            let history = self.history.oldest_ordered().skip(skip);
-            if self.bank.set_gains_warm(&old, &new, history, d).is_ok() {
-                self.level = v;
-                self.retunes = self.retunes.saturating_add(1);
-            }
-            return;
-        }
-        // Interpolated between levels that all build: cannot fail but for rounding at a
-        // constraint's edge; then the current gains are kept.
-        if self.bank.set_gains(&new).is_ok() {
+            let history = self
+                .history
+                .oldest_ordered()
+                .skip(self.history.len() - keep);
+            self.bank.set_gains_warm(&old, &new, history, d).is_ok()
+        } else if self.bank.set_gains(&new).is_ok() {
             if let Some(d) = self.schedule.ave_deltahat_at(v) {
                 let mut now = self.bank.ave_deltahat();
                 if new.velocity.ave != old.0.ave {
@@ -603,6 +600,11 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
                 }
                 self.bank.set_ave_deltahat(&now);
             }
+            true
+        } else {
+            false
+        };
+        if changed {
             self.level = v;
             self.retunes = self.retunes.saturating_add(1);
         }

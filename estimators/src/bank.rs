@@ -900,48 +900,39 @@ impl<T: Real, S: SqrtFn<T>> PaperBank<T, S> {
             self.params = params;
             return Ok(());
         };
-        let (o, n) = (
-            (&old.velocity, &old.acceleration),
-            (&new.velocity, &new.acceleration),
+        let (ov, oa, nv, na) = (
+            &old.velocity,
+            &old.acceleration,
+            &new.velocity,
+            &new.acceleration,
         );
-        let s = &mut self.state;
-        macro_rules! take_if_changed {
-            ($($row:ident: $gains:ident;)+) => {$(
-                if $gains(o) != $gains(n) {
-                    s.$row = replayed.$row;
+        let (s, y) = (&mut self.state, self.input.last());
+        // `$row: $changed;`: the row's gains changed.
+        macro_rules! replayed_if {
+            ($($row:ident: $changed:expr;)+) => {$( if $changed { s.$row = replayed.$row; } )+};
+        }
+        macro_rules! bumpless_if {
+            ($($row:ident: $changed:expr;)+) => {$(
+                if $changed {
+                    params.$row.retune_state(&self.params.$row, &mut s.$row, y);
                 }
             )+};
         }
-        type Halves<'a> = (&'a BankGains, &'a BankGains);
-        let (ilo1_v, ilo2_v, ilo3_v) = (
-            |h: Halves| h.0.ilo[0],
-            |h: Halves| h.0.ilo[1],
-            |h: Halves| h.0.ilo[2],
-        );
-        let (ilo1_a, ilo2_a, ilo3_a) = (
-            |h: Halves| h.1.ilo[0],
-            |h: Halves| h.1.ilo[1],
-            |h: Halves| h.1.ilo[2],
-        );
-        let (ad_v, ad_a) = (|h: Halves| h.0.ad_t, |h: Halves| h.1.ad_t);
-        let (kf_v, kf_a) = (|h: Halves| h.0.kf, |h: Halves| h.1.kf);
-        let ave = |h: Halves| (h.0.ave, h.1.ave);
-        take_if_changed! {
-            ave: ave; ilo1_v: ilo1_v; ilo2_v: ilo2_v; ilo3_v: ilo3_v; ad_v: ad_v; kf_v: kf_v;
-            kf_a: kf_a;
+        replayed_if! {
+            ave: (ov.ave, oa.ave) != (nv.ave, na.ave);
+            ilo1_v: ov.ilo[0] != nv.ilo[0];
+            ilo2_v: ov.ilo[1] != nv.ilo[1];
+            ilo3_v: ov.ilo[2] != nv.ilo[2];
+            ad_v: ov.ad_t != nv.ad_t;
+            kf_v: ov.kf != nv.kf;
+            kf_a: oa.kf != na.kf;
         }
-        macro_rules! bumpless_if_changed {
-            ($($row:ident: $gains:ident;)+) => {$(
-                if $gains(o) != $gains(n) {
-                    params.$row.retune_state(&self.params.$row, &mut s.$row, self.input.last());
-                }
-            )+};
-        }
-        bumpless_if_changed! { ilo1_a: ilo1_a; ilo2_a: ilo2_a; ilo3_a: ilo3_a; ad_a: ad_a; }
-        if (o.0.ed, o.1.ed) != (n.0.ed, n.1.ed) {
-            params
-                .ed
-                .retune_state(&self.params.ed, &mut s.ed, self.input.last());
+        bumpless_if! {
+            ed: (ov.ed, oa.ed) != (nv.ed, na.ed);
+            ilo1_a: oa.ilo[0] != na.ilo[0];
+            ilo2_a: oa.ilo[1] != na.ilo[1];
+            ilo3_a: oa.ilo[2] != na.ilo[2];
+            ad_a: oa.ad_t != na.ad_t;
         }
         self.params = params;
         Ok(())

@@ -435,19 +435,15 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
         }
 
         let hold = mse_over(&noisy, &fixed(level_05), &windows);
+        let t: Vec<u64> = noisy.iter().map(|s| s.t_us).collect();
+        let reference: Vec<f32> = noisy
+            .iter()
+            .map(|s| s.reference(Axis::Yaw).unwrap())
+            .collect();
         for (opts, sums) in [(&scheduled, &mut at_switch), (&kept, &mut at_switch_kept)] {
             let levels = opts.schedule.as_ref().unwrap();
-            let mut bank = estimators::AdaptiveBank::<f32>::new(&base, levels, &never).unwrap();
-            let (mut t, mut est, mut reference) = (Vec::new(), Vec::new(), Vec::new());
-            for s in &noisy {
-                if s.t_s() >= SWITCH_S && bank.retune_count() == 0 {
-                    bank.retune(0.5);
-                }
-                let out = bank.update(s.t_us, s.angles_deg[2]).unwrap();
-                t.push(s.t_us);
-                est.push(out.velocities()[0]);
-                reference.push(s.reference(Axis::Yaw).unwrap());
-            }
+            let out = run_adaptive(&noisy, &base, levels, &never, Some(0.5));
+            let est: Vec<f32> = out.iter().map(|o| o.velocities()[0]).collect();
             for (k, w) in windows.iter().enumerate() {
                 sums[k] += mse_range(&t, &est, &reference, *w) / n;
             }
@@ -464,19 +460,12 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
             .iter()
             .enumerate()
         {
-            let mut bank = estimators::AdaptiveBank::<f32>::new(&base, levels, cfg).unwrap();
-            let (mut t, mut est, mut reference) = (Vec::new(), Vec::new(), Vec::new());
-            for s in &noisy {
-                let out = bank.update(s.t_us, s.angles_deg[2]).unwrap();
-                t.push(s.t_us);
-                est.push((out.velocities(), out.accelerations()));
-                reference.push(s.reference(Axis::Yaw).unwrap());
-            }
+            let out = run_adaptive(&noisy, &base, levels, cfg, None);
             for i in 0..7 {
-                let a: Vec<f32> = est.iter().map(|v| v.1[i]).collect();
+                let a: Vec<f32> = out.iter().map(|o| o.accelerations()[i]).collect();
                 acc[j][i] = mse_range(&t, &a, &acc_ref, (0.0, END_S));
                 if j == 0 {
-                    let e: Vec<f32> = est.iter().map(|v| v.0[i]).collect();
+                    let e: Vec<f32> = out.iter().map(|o| o.velocities()[i]).collect();
                     let m = mse_range(&t, &e, &reference, (0.0, END_S));
                     bumpless_wins[i] += u32::from(m < best_of[i]);
                     bumpless_log_ratio[i] += (m / best_of[i]).ln();
@@ -566,6 +555,32 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
     // replay starts from the `deltahat` the 0.01 level left) they are not (114.5, 129.9).
     assert!(at_switch[0] < 1.05 * fixed_05[0] && at_switch[1] < 1.05 * fixed_05[1]);
     assert!(at_switch_kept[0] > 1.2 * fixed_05[0] && at_switch_kept[1] > 1.5 * fixed_05[1]);
+}
+
+/// The yaw of `samples` through an `AdaptiveBank` built from `base`, `levels` and `cfg`: one
+/// output per sample; with `switch_to`, the gains are set for that noise variance (deg^2) at
+/// the first sample at or after the switch (`SWITCH_S`).
+fn run_adaptive(
+    samples: &[Sample],
+    base: &BankConfig,
+    levels: &estimators::GainSchedule,
+    cfg: &estimators::AdaptiveConfig,
+    switch_to: Option<f32>,
+) -> Vec<estimators::PaperOutput> {
+    let mut bank = estimators::AdaptiveBank::<f32>::new(base, levels, cfg).unwrap();
+    let mut switched = false;
+    samples
+        .iter()
+        .map(|s| {
+            if let (Some(v), false) = (switch_to, switched) {
+                if s.t_s() >= SWITCH_S {
+                    bank.retune(v);
+                    switched = true;
+                }
+            }
+            bank.update(s.t_us, s.angles_deg[2]).unwrap()
+        })
+        .collect()
 }
 
 /// The `--rust` output of the same run (`host-tests/data/gains/schedule_fig5.rs`, compiled
