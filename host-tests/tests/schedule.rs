@@ -16,10 +16,12 @@
 //!   but the AVE and the ED, which are held to 1.02 x the best of them (not met on this
 //!   draw: see the test);
 //! * on 40 other noise draws (`scheduled_bank_against_every_fixed_set_on_forty_draws`), the
-//!   previous point holds for the ILO, AD and tracker on at least 36 draws, for the AVE on 26
+//!   previous point holds for the ILO, AD and tracker on at least 38 draws, for the AVE on 25
 //!   (below the best fixed set on a typical draw, thanks to the switching gains the schedule
-//!   records: 11 without them), and not for the ED (3 of 40): measured, bounded and
+//!   records: 21 without them), and not for the ED (3 of 40): measured, bounded and
 //!   explained there;
+//! * on one draw, the AVE's and the ED's MSE move by more than those margins when their gains
+//!   move by 0.5 % (`one_draw_margins_of_the_ave_and_ed_are_inside_their_gain_jitter`);
 //! * each level records the AVEs' switching gains it was tuned with
 //!   (`each_level_records_the_deltahat_it_was_tuned_with`);
 //! * on six other noise draws of the same switch (`scheduled_bank_does_not_ring_on_other_noise_draws`),
@@ -266,11 +268,13 @@ fn scheduled_bank_follows_a_noise_switch() {
             // level's gains (282.4, below the half's own tuning, 321.2); in 0-10 s the 0.01
             // level's (72.7), where the 0.5 level's ED gains happen to do better on this noise
             // draw (about 69): the ED's MSE is rugged in its gains and depends on the noise
-            // draw (docs/CALIBRATION.md). Nor, on this draw, for the AVE: 69.155 against 68.966
-            // for the 0.1 level (+0.3 %); on 40 other draws it is below every fixed set on 26,
-            // 2.8 % below the best on a typical one
-            // (`scheduled_bank_against_every_fixed_set_on_forty_draws`). Both held to 1.02 x
-            // the best fixed set.
+            // draw (docs/CALIBRATION.md). Nor, on this draw, for the AVE: 69.063 against 68.966
+            // for the 0.1 level (+0.14 %); on 40 other draws it is below every fixed set on 25,
+            // 4.9 % below the best on a typical one
+            // (`scheduled_bank_against_every_fixed_set_on_forty_draws`). Both margins are
+            // inside what 0.5 % gain changes do to one draw's MSE
+            // (`one_draw_margins_of_the_ave_and_ed_are_inside_their_gain_jitter`). Both held
+            // to 1.02 x the best fixed set.
             if i == 0 || i == 5 {
                 let held = sched[2][i] <= 1.02 * m[2][i];
                 if !held {
@@ -293,6 +297,128 @@ fn scheduled_bank_follows_a_noise_switch() {
     let row: Vec<String> = (0..7).map(|i| format!("{:.3}", sched[2][i])).collect();
     println!("  {:<18} {}", "scheduled", row.join(" "));
     assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// Why "below every fixed set" on one noise draw is not a fair test of the AVE and the ED:
+/// their MSE on one draw is rugged in the gains, more than the margins at stake.
+///
+/// * On draw 7, moving the best fixed set's two gains (the AVE of the 0.1 level: `k`,
+///   `gamma1`; the ED of the 0.5 level: `lambda`, `alpha`) by at most 0.5 % each (5 x 5
+///   points) moves the family's 0-20 s velocity MSE by more than 2 % (measured: AVE 64.1-78.4,
+///   a 22 % spread; ED 174.7-183.3, 4.9 %), more than the schedule's margin to that set on
+///   this draw (AVE +0.14 %, ED +1.1 %). A fixed AVE set within 0.5 % of the 0.1 level's
+///   gains is 7 % below the schedule on this draw; no tuner can tell such sets apart.
+/// * An estimate of what any ED schedule can gain over fixed ED gains on this switch: on a
+///   log grid of (`lambda`, `alpha`) (14 x 14 points, 3-60 x 100-4000), the grid's best pair
+///   for each half (mean MSE over draws 101-110) against its best pair for the whole
+///   capture. Measured 1.8 %: less than 3 %, and less than the ED's spread above. The Levant
+///   differentiator's gains are set by the motion (`alpha` above the bound of the velocity's
+///   derivative), not by the noise, so there is little to schedule.
+///
+/// Independent of the code under test: MSE against the motion's analytic rate.
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "release only: cargo test --release -p host-tests --test schedule"
+)]
+fn one_draw_margins_of_the_ave_and_ed_are_inside_their_gain_jitter() {
+    let clean = clean();
+    let noisy = switching(&clean, 7);
+    let (file, scheduled) = schedule_fig5();
+    let sched = mse(&noisy, &scheduled)[2];
+    let sets = fixed_sets(&clean, &file);
+    let level = |name: &str| sets.iter().find(|(n, _)| n == name).unwrap().1;
+    let factors = [0.995f32, 0.9975, 1.0, 1.0025, 1.005];
+    // (column, best fixed set on this draw, how to set its two gains)
+    type Set2 = fn(&mut BankConfig, f32, f32);
+    let cases: [(usize, &str, Set2); 2] = [
+        (0, "level 0.1", |c, a, b| {
+            c.velocity.ave.k *= a;
+            c.velocity.ave.gamma1 *= b;
+        }),
+        (5, "level 0.5", |c, a, b| {
+            c.velocity.ed.lambda *= a;
+            c.velocity.ed.alpha *= b;
+        }),
+    ];
+    let mut spreads = [0.0f64; 2];
+    for (j, (col, name, set)) in cases.into_iter().enumerate() {
+        let base = level(name);
+        let mut all = Vec::new();
+        for a in factors {
+            for b in factors {
+                let mut cfg = base;
+                set(&mut cfg, a, b);
+                all.push(mse(&noisy, &fixed(cfg))[2][col]);
+            }
+        }
+        let (lo, hi) = all
+            .iter()
+            .fold((f64::MAX, 0.0f64), |(lo, hi), &m| (lo.min(m), hi.max(m)));
+        let at = mse(&noisy, &fixed(base))[2][col];
+        spreads[j] = hi / lo - 1.0;
+        let margin = sched[col] / at - 1.0;
+        println!(
+            "{}: {name} gains within 0.5 %: MSE {lo:.3}-{hi:.3} (spread {:.1} %); scheduled {:.3}, {name} {at:.3} (margin {:+.2} %)",
+            NAMES[col],
+            100.0 * spreads[j],
+            sched[col],
+            100.0 * margin
+        );
+        assert!(spreads[j] > 0.02, "{}: spread {}", NAMES[col], spreads[j]);
+        assert!(spreads[j] > margin.abs(), "{}: margin {margin}", NAMES[col]);
+    }
+    // What an ED schedule could gain at best: per-half grid optima against the whole's.
+    let draws: Vec<Vec<Sample>> = (101..=110).map(|d| switching(&clean, d)).collect();
+    let grid: Vec<(f32, f32)> = (0..14)
+        .flat_map(|i| {
+            (0..14).map(move |j| {
+                (
+                    3.0 * 20f32.powf(i as f32 / 13.0),
+                    100.0 * 40f32.powf(j as f32 / 13.0),
+                )
+            })
+        })
+        .collect();
+    let base = level("level 0.5");
+    let means: Vec<[f64; 3]> = std::thread::scope(|scope| {
+        let jobs: Vec<_> = grid
+            .chunks(grid.len().div_ceil(2))
+            .map(|chunk| {
+                let draws = &draws;
+                scope.spawn(move || {
+                    chunk
+                        .iter()
+                        .map(|&(lambda, alpha)| {
+                            let mut cfg = base;
+                            cfg.velocity.ed = estimators::EdConfig { lambda, alpha };
+                            let mut m = [0.0f64; 3];
+                            for d in draws {
+                                let r = mse(d, &fixed(cfg));
+                                for (k, m) in m.iter_mut().enumerate() {
+                                    *m += r[k][5] / draws.len() as f64;
+                                }
+                            }
+                            m
+                        })
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        jobs.into_iter().flat_map(|j| j.join().unwrap()).collect()
+    });
+    let best = |k: usize| means.iter().map(|m| m[k]).fold(f64::MAX, f64::min);
+    // Halves of 999 and 1001 samples ([0, 9.99] s, [10, 20] s): weight them as mse_range does.
+    let (n1, n2) = (999.0, 1001.0);
+    let per_half = (n1 * best(0) + n2 * best(1)) / (n1 + n2);
+    let gain = 1.0 - per_half / best(2);
+    println!(
+        "ED, draws 101-110: best fixed pair {:.3}, best pair per half {:.3} ({:.1} % below)",
+        best(2),
+        per_half,
+        100.0 * gain
+    );
+    assert!(gain < 0.03 && gain < spreads[1], "ED schedule gain {gain}");
 }
 
 /// The same switch with six other noise draws (xoshiro256++ seeds 101-106): in each half,
@@ -338,25 +464,30 @@ fn scheduled_bank_does_not_ring_on_other_noise_draws() {
 /// scheduled bank's 0-20 s velocity MSE is below every fixed set of [`fixed_sets`], and the
 /// geometric mean over the draws of its ratio to the best fixed set of that draw.
 ///
-/// Measured (docs/CALIBRATION.md "Forty noise draws"): ILO1-3 below every fixed set on 38 of
-/// 40 draws, the AD and the tracker on 40 (geometric mean ratios 0.82, 0.79, 0.79); the AVE on
-/// 26 (0.972; the best fixed set is the 0.1 level on 38 draws), **the ED on 3 (1.028)**.
+/// Measured (docs/CALIBRATION.md "Forty noise draws"): ILO1-3, the AD and the tracker below
+/// every fixed set on 40 of 40 draws (geometric mean ratios 0.776, 0.790, 0.790); the AVE on
+/// 25 (0.951; the best fixed set is the 0.1 level on 38 draws), **the ED on 3 (1.028)**. With
+/// bumpless gain changes instead of the warm start (`replay_samples` 0): ILO 38 (0.819), AVE
+/// 26 (0.972).
 ///
 /// The AVE's figure depends on the switching gains the schedule records
 /// (`ScheduleLevel::ave_deltahat`: a gain change sets `deltahat` to the new level's). The same
-/// schedule without them (a gain change keeps `deltahat`, as before they were recorded): 14
-/// draws, 1.028 (11 and 1.050 before the AVE's retune kept `xhat` towards slower gains,
-/// `Law::retune_state` of `AveParams`). Why: the 0.5 level's AVE is a slow, lightly damped one
+/// schedule without them (a gain change keeps `deltahat`, as before they were recorded): 21
+/// draws, 1.001 (11 and 1.050 before the AVE's retune kept `xhat` towards slower gains,
+/// `Law::retune_state` of `AveParams`, and before the warm start). Why: the 0.5 level's AVE is a slow, lightly damped one
 /// (`k` 3.8 1/s, `gamma1`
 /// 498 1/s^2) tuned with a `deltahat` of 5.7 deg/s, 46x the 0.01 level's 0.12; kept, it grows
 /// there with the leak's 10 s time constant. With the switch made at exactly 10 s
 /// (`AdaptiveBank::retune(0.5)`, no estimate), mean AVE MSE over the draws in 10-11 s, 11-12 s,
-/// 12-20 s: 169.7, 144.1, 140.2 kept; 123.6, 69.3, 142.7 set; 89.0, 76.6, 140.2 for the 0.5
-/// level throughout. What is left in 10-11 s is the gain change itself; with the estimate, its
-/// delay adds to it (the level reaches the 0.5 level's AVE gains about 1 s after the switch).
+/// 12-20 s, with the warm start: 114.5, 129.9, 139.1 kept; 88.8, 68.3, 143.2 set; 89.0, 76.6,
+/// 140.2 for the 0.5 level throughout (with bumpless changes the first second was 123.6 set).
+/// With the estimate, its delay adds to this (the level reaches the 0.5 level's AVE gains
+/// about 1 s after the switch).
 /// The ED's tuned gains hardly depend on the noise (its levels' fixed sets are within 2 % of
-/// each other here), so a schedule can at best tie a fixed set. The assertions hold these
-/// figures (the ED's as a regression bound).
+/// each other here), so a schedule can at best tie a fixed set; on one draw its MSE jitters
+/// with the gains by more than scheduling could gain
+/// (`one_draw_margins_of_the_ave_and_ed_are_inside_their_gain_jitter`). The assertions hold
+/// these figures (the ED's as a regression bound).
 #[test]
 #[cfg_attr(
     debug_assertions,
