@@ -39,7 +39,8 @@ pub enum DeltaMode {
 pub struct AveConfig {
     /// Position feedback gain `k`, 1/s (paper: 500). `h * k < 1`.
     pub k: f32,
-    /// Velocity adaptation gain `gamma1`, 1/s^2 (paper: 20000). `h^2 * gamma1 < 1`.
+    /// Velocity adaptation gain `gamma1`, 1/s^2 (paper: 20000). `h * gamma1 < k` (stability
+    /// of the explicit Euler step, see [`AveParams::new`]).
     pub gamma1: f32,
     /// `deltahat` law.
     pub delta: DeltaMode,
@@ -62,6 +63,14 @@ pub enum DeltaLaw<T: Real> {
     },
 }
 
+/// The fixed-point AVE's coarse step `m h` ([`AveParams`]) is used only when it is at least
+/// this many times shorter than the longest stable Euler step `k / gamma1`: the Euler map
+/// keeps the fraction `1 - m h gamma1 / k` of the linear part's damping per unit time, so at
+/// least 90 % here. Gains tuned close to the step `h`'s own limit (a lightly damped observer
+/// at `h gamma1 / k` of 0.8-0.98, as some tuned schedule levels are: docs/CALIBRATION.md,
+/// "Gains at the edge of the Euler step") would be unstable at `2 h`; they step at `h`.
+pub const COARSE_STABILITY_MARGIN: f64 = 10.0;
+
 /// The adaptive velocity estimator of eq. 4 for `dx/dt = theta1(t)`, `e = xhat - y`:
 ///
 /// ```text
@@ -80,10 +89,12 @@ pub enum DeltaLaw<T: Real> {
 /// computed in `f64` from the configuration like those of `h`), used by [`Law::advance`] for
 /// whole pairs of steps ([`Law::coarse`], docs/FIXED-POINT.md part 4); they exist when the
 /// `deltahat` law is bounded ([`DeltaMode::Leaky`], the banks' default, or
-/// [`DeltaMode::Bounded`]; not [`DeltaMode::Paper`], whose `deltahat` grows without bound) and
-/// `2 h` passes the same validation as `h` (`2 h k < 1`, `(2 h)^2 gamma1 < 1`,
-/// `2 h sigma < 1`); otherwise that AVE steps at `h`. For `f32` and `f64` that field is
-/// zero-sized and unused.
+/// [`DeltaMode::Bounded`]; not [`DeltaMode::Paper`], whose `deltahat` grows without bound),
+/// `2 h` passes the same validation as `h` (`2 h k < 1`, `2 h gamma1 < k`, `2 h sigma < 1`)
+/// and the step `2 h` is at least [`COARSE_STABILITY_MARGIN`] times shorter than the
+/// longest stable step `k / gamma1` (so that it keeps at least 90 % of the linear part's
+/// damping per unit time, as the step `h` does); otherwise that AVE steps at `h`. For `f32`
+/// and `f64` that field is zero-sized and unused.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AveParams<T: Real> {
     c: AveCoef<T>,
@@ -116,9 +127,24 @@ pub type Ave<T> = Stateful<AveParams<T>>;
 
 impl<T: Real> AveParams<T> {
     /// Validates `cfg` for step `h` (s). Errors: non-finite or non-positive `k`,
-    /// `gamma1`, `h`; `h * k >= 1` or `h^2 * gamma1 >= 1` (forward-Euler stability); negative
-    /// bound or leakage; `h * sigma >= 1`. For [`crate::Fx`], also the coefficients of the
-    /// coarse step `2 h` (see [`AveParams`]).
+    /// `gamma1`, `h`; `h * k >= 1` ([`ConfigError::StepTooLarge`]`("k")`) or
+    /// `h * gamma1 >= k` (`StepTooLarge("gamma1 / k")`): the explicit Euler map of the linear
+    /// part (`deltahat = 0`), `[[1 - h k, h], [-h gamma1, 1]]`, is stable (Jury) exactly when
+    /// `h gamma1 < k` (given `h k < 1`), and loses the fraction `h gamma1 / k` of the
+    /// continuous law's damping per unit time; negative bound or leakage; `h * sigma >= 1`.
+    /// For [`crate::Fx`], also the coefficients of the coarse step `2 h` (see
+    /// [`AveParams`]).
+    ///
+    /// ```
+    /// use estimators::{AveConfig, AveParams, ConfigError, DeltaMode};
+    /// let cfg = |gamma1| AveConfig { k: 50.0, gamma1, delta: DeltaMode::Paper };
+    /// // h = 1e-4 s: stable below gamma1 = k / h = 5e5 1/s^2.
+    /// assert!(AveParams::<f32>::new(&cfg(4.9e5), 1e-4).is_ok());
+    /// assert_eq!(
+    ///     AveParams::<f32>::new(&cfg(5.1e5), 1e-4),
+    ///     Err(ConfigError::StepTooLarge("gamma1 / k"))
+    /// );
+    /// ```
     pub fn new(cfg: &AveConfig, h: f32) -> Result<Self, ConfigError> {
         let h = positive("h", f64::from(h))?;
         let c = AveCoef::new(cfg, h)?;
@@ -127,7 +153,9 @@ impl<T: Real> AveParams<T> {
         // deltahat, and with it the switching term's jump `m h deltahat` per step, grows
         // without bound, and so does the effect of the step size (docs/FIXED-POINT.md part 4:
         // over a 6 h spin the paper's law at 2 h no longer behaves as at h).
-        let coarse = if m > 1 && cfg.delta != DeltaMode::Paper {
+        let resolved =
+            |step: f64| step * f64::from(cfg.gamma1) * COARSE_STABILITY_MARGIN <= f64::from(cfg.k);
+        let coarse = if m > 1 && cfg.delta != DeltaMode::Paper && resolved(h * f64::from(m)) {
             AveCoef::new(cfg, h * f64::from(m)).ok()
         } else {
             None
@@ -153,8 +181,8 @@ impl<T: Real> AveCoef<T> {
         if h * k >= 1.0 {
             return Err(ConfigError::StepTooLarge("k"));
         }
-        if h * h * g >= 1.0 {
-            return Err(ConfigError::StepTooLarge("gamma1"));
+        if h * g >= k {
+            return Err(ConfigError::StepTooLarge("gamma1 / k"));
         }
         let delta = match cfg.delta {
             DeltaMode::Paper => DeltaLaw::Paper,

@@ -90,7 +90,7 @@ pub use adapter::{SampleAdapter, SampleClock, Tick};
 pub use adaptive::{
     AdaptiveBank, AdaptiveConfig, AveDeltahat, Blend, GainSchedule, NoiseEstimator, ScheduleLevel,
 };
-pub use ave::{Ave, AveConfig, AveParams, AveState, DeltaLaw, DeltaMode};
+pub use ave::{Ave, AveConfig, AveParams, AveState, DeltaLaw, DeltaMode, COARSE_STABILITY_MARGIN};
 pub use bank::{
     Accepted, AdAdMap, BankConfig, BankGains, BankInput, BankOutput, Channel, Fed, Feed,
     KalmanNoise, PaperBank, PaperOutput, PaperParams, PaperState, ProductBank, ProductChannel,

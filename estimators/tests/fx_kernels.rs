@@ -8,7 +8,8 @@
 use estimators::law::step_n;
 use estimators::presets::*;
 use estimators::{
-    AveConfig, AveParams, DeltaMode, EdConfig, EdParams, EdScheme, Fx, Hold, Law, Real, VelAcc,
+    AveConfig, AveParams, BankGains, DeltaMode, EdConfig, EdParams, EdScheme, Fx, Hold, Law, Real,
+    VelAcc, COARSE_STABILITY_MARGIN,
 };
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
@@ -277,6 +278,38 @@ fn ave_step_factor() {
         ..AVE_DEFAULT
     };
     assert_eq!(AveParams::<Fx>::new(&big_k, h).unwrap().step_factor(), 1);
+    // The coarse step only at COARSE_STABILITY_MARGIN (10) x below the longest stable step
+    // k / gamma1: the 0.1 deg^2 level of the bundled schedule (k 47.39 1/s, gamma1 425,822
+    // 1/s^2: h gamma1 / k = 0.90, stable at h, unstable at 2 h) steps at h; at 2 h it diverged
+    // to the Q31.32 limit (`nav440 estimate --gains schedule_fig5.toml --fixed`).
+    let tuned = AveConfig {
+        k: 47.390957,
+        gamma1: 425822.44,
+        ..AVE_DEFAULT
+    };
+    assert_eq!(AveParams::<Fx>::new(&tuned, h).unwrap().step_factor(), 1);
+    let at = |ratio: f64| AveConfig {
+        gamma1: (ratio * 50.0 / (2.0 * f64::from(h))) as f32,
+        k: 50.0,
+        ..AVE_DEFAULT
+    };
+    assert_eq!(
+        AveParams::<Fx>::new(&at(0.099), h).unwrap().step_factor(),
+        2
+    );
+    assert_eq!(
+        AveParams::<Fx>::new(&at(0.101), h).unwrap().step_factor(),
+        1
+    );
+    assert!((COARSE_STABILITY_MARGIN - 10.0).abs() < 1e-12);
+    // The shipped presets keep the coarse step (2 h gamma1 / k: paper 0.008, NAV440 velocity
+    // 0.0086, acceleration 0.0063).
+    for cfg in [
+        BankGains::NAV440_VELOCITY.ave,
+        BankGains::NAV440_ACCELERATION.ave,
+    ] {
+        assert_eq!(AveParams::<Fx>::new(&cfg, h).unwrap().step_factor(), 2);
+    }
 }
 
 /// A row whose laws disagree on the coarse step (velocity AVE leaky: `2 h`; the series with

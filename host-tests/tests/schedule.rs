@@ -21,7 +21,7 @@
 //!   records: 21 without them), and not for the ED (3 of 40): measured, bounded and
 //!   explained there;
 //! * on one draw, the AVE's and the ED's MSE move by more than those margins when their gains
-//!   move by 0.5 % (`one_draw_margins_of_the_ave_and_ed_are_inside_their_gain_jitter`);
+//!   move by 0.5 % (`one_draw_margins_of_the_ave_and_ed_are_inside_their_gain_sensitivity`);
 //! * each level records the AVEs' switching gains it was tuned with
 //!   (`each_level_records_the_deltahat_it_was_tuned_with`);
 //! * on six other noise draws of the same switch (`scheduled_bank_does_not_ring_on_other_noise_draws`),
@@ -273,7 +273,7 @@ fn scheduled_bank_follows_a_noise_switch() {
             // 4.9 % below the best on a typical one
             // (`scheduled_bank_against_every_fixed_set_on_forty_draws`). Both margins are
             // inside what 0.5 % gain changes do to one draw's MSE
-            // (`one_draw_margins_of_the_ave_and_ed_are_inside_their_gain_jitter`). Both held
+            // (`one_draw_margins_of_the_ave_and_ed_are_inside_their_gain_sensitivity`). Both held
             // to 1.02 x the best fixed set.
             if i == 0 || i == 5 {
                 let held = sched[2][i] <= 1.02 * m[2][i];
@@ -299,8 +299,44 @@ fn scheduled_bank_follows_a_noise_switch() {
     assert!(failures.is_empty(), "{failures:#?}");
 }
 
+/// The fixed-point adaptive bank (`nav440 estimate FILE --gains schedule_fig5.toml --fixed`,
+/// what the `adaptive-gains` firmware runs on thumbv6m) follows the f32 one on the noise
+/// switch: in each half, every family's velocity MSE within 1.05x of f32's (measured: at most
+/// 1.0002x, the ILOs in 0-10 s; the AVE 0.997 and 0.996), and no estimate beyond 1000 deg/s.
+/// Before the fixed-point AVE's coarse step `2 h` was limited to gains it keeps stable
+/// (`estimators::COARSE_STABILITY_MARGIN`), the schedule's 0.001-0.1 levels (tuned at
+/// `h gamma1 / k` = 0.83-0.98) ran at `2 h` and the AVE saturated at the Q31.32 limit
+/// (2.1e9 deg/s) on this capture; CI's firmware check compares the firmware with this host
+/// path byte for byte, so this test is what says that path is right.
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "release only: cargo test --release -p host-tests --test schedule"
+)]
+fn the_fixed_point_schedule_follows_f32_on_the_noise_switch() {
+    let noisy = switching(&clean(), 7);
+    let (_, scheduled) = schedule_fig5();
+    let fx = EstimateOptions {
+        fixed: true,
+        ..scheduled.clone()
+    };
+    let (f, x) = (mse(&noisy, &scheduled), mse(&noisy, &fx));
+    for half in 0..2 {
+        let r: Vec<f64> = (0..7).map(|i| x[half][i] / f[half][i]).collect();
+        println!("half {half}: fixed point / f32 velocity MSE {r:.4?}");
+        for (i, r) in r.iter().enumerate() {
+            assert!(*r < 1.05, "{} half {half}: {r}", NAMES[i]);
+        }
+    }
+    let (rows, _) = replay::estimate(&noisy, &fx).unwrap();
+    for r in &rows {
+        let v = r.axis(Axis::Yaw).unwrap().out.velocities();
+        assert!(v.iter().all(|v| v.abs() < 1000.0), "{} s: {v:?}", r.t_us);
+    }
+}
+
 /// Why "below every fixed set" on one noise draw is not a fair test of the AVE and the ED:
-/// their MSE on one draw is rugged in the gains, more than the margins at stake.
+/// on one draw their MSE moves with the gains by more than the margins at stake.
 ///
 /// * On draw 7, moving the best fixed set's two gains (the AVE of the 0.1 level: `k`,
 ///   `gamma1`; the ED of the 0.5 level: `lambda`, `alpha`) by at most 0.5 % each (5 x 5
@@ -308,6 +344,11 @@ fn scheduled_bank_follows_a_noise_switch() {
 ///   a 22 % spread; ED 174.7-183.3, 4.9 %), more than the schedule's margin to that set on
 ///   this draw (AVE +0.14 %, ED +1.1 %). A fixed AVE set within 0.5 % of the 0.1 level's
 ///   gains is 7 % below the schedule on this draw; no tuner can tell such sets apart.
+///   The two differ in kind. The AVE's MSE is smooth but steep in `gamma1` (about +1.2 % per
+///   +0.05 %): the tuned 0.1 level sits at 0.90 of the Euler step's stability bound
+///   (`h gamma1 < k`), where the step keeps a tenth of the continuous law's damping
+///   (docs/CALIBRATION.md, "Gains at the edge of the Euler step"). The ED's is rugged: its
+///   switching law's MSE changes by percents between gain sets 0.1 % apart.
 /// * An estimate of what any ED schedule can gain over fixed ED gains on this switch: on a
 ///   log grid of (`lambda`, `alpha`) (14 x 14 points, 3-60 x 100-4000), the grid's best pair
 ///   for each half (mean MSE over draws 101-110) against its best pair for the whole
@@ -321,7 +362,7 @@ fn scheduled_bank_follows_a_noise_switch() {
     debug_assertions,
     ignore = "release only: cargo test --release -p host-tests --test schedule"
 )]
-fn one_draw_margins_of_the_ave_and_ed_are_inside_their_gain_jitter() {
+fn one_draw_margins_of_the_ave_and_ed_are_inside_their_gain_sensitivity() {
     let clean = clean();
     let noisy = switching(&clean, 7);
     let (file, scheduled) = schedule_fig5();
@@ -484,9 +525,9 @@ fn scheduled_bank_does_not_ring_on_other_noise_draws() {
 /// With the estimate, its delay adds to this (the level reaches the 0.5 level's AVE gains
 /// about 1 s after the switch).
 /// The ED's tuned gains hardly depend on the noise (its levels' fixed sets are within 2 % of
-/// each other here), so a schedule can at best tie a fixed set; on one draw its MSE jitters
+/// each other here), so a schedule can at best tie a fixed set; on one draw its MSE moves
 /// with the gains by more than scheduling could gain
-/// (`one_draw_margins_of_the_ave_and_ed_are_inside_their_gain_jitter`). The assertions hold
+/// (`one_draw_margins_of_the_ave_and_ed_are_inside_their_gain_sensitivity`). The assertions hold
 /// these figures (the ED's as a regression bound).
 #[test]
 #[cfg_attr(

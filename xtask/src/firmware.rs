@@ -1085,6 +1085,39 @@ fn compare_csv(fw: &str, host: &str) -> Result<usize, String> {
 }
 
 /// Largest absolute difference per column between two CSVs of the same shape.
+/// The largest |value| in the velocity columns (`PREFIX..._v`) of a `nav440 estimate` CSV,
+/// deg/s (NaN counts as infinite).
+fn peak_velocity(csv: &str, prefix: &str) -> Result<f64, String> {
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().ok_or("empty CSV")?.split(',').collect();
+    let cols: Vec<usize> = header
+        .iter()
+        .enumerate()
+        .filter(|(_, h)| h.starts_with(prefix) && h.ends_with("_v"))
+        .map(|(i, _)| i)
+        .collect();
+    if cols.is_empty() {
+        return Err(format!("no {prefix}*_v column in the CSV"));
+    }
+    let mut peak = 0.0f64;
+    for line in lines {
+        let fields: Vec<&str> = line.split(',').collect();
+        for &i in &cols {
+            let v: f64 = fields
+                .get(i)
+                .ok_or("short CSV line")?
+                .parse()
+                .map_err(|e| format!("CSV value: {e}"))?;
+            peak = if v.is_nan() {
+                f64::INFINITY
+            } else {
+                peak.max(v.abs())
+            };
+        }
+    }
+    Ok(peak)
+}
+
 fn max_abs_diff(a: &str, b: &str) -> Result<Vec<(String, f64)>, String> {
     let mut la = a.lines();
     let mut lb = b.lines();
@@ -1700,6 +1733,20 @@ pub fn ci_steps() -> Result<(), String> {
             "xtask: OK: adaptive gains on {}: yaw_retunes={retunes}",
             board.name
         );
+        // Identical is not enough: both sides once printed a fixed-point AVE saturated at
+        // 2.1e9 deg/s (docs/CALIBRATION.md, "Gains at the edge of the Euler step"). The
+        // capture's peak rate is 265 deg/s.
+        let peak = peak_velocity(&host_estimate(&switch, &args)?, "yaw_")?;
+        if peak >= 1000.0 {
+            return Err(format!(
+                "the adaptive firmware on {} printed a yaw velocity estimate of {peak} deg/s on the noise switch (peak rate 265 deg/s)",
+                board.name
+            ));
+        }
+        eprintln!(
+            "xtask: OK: adaptive gains on {}: yaw velocity estimates within {peak:.1} deg/s",
+            board.name
+        );
         equivalence(board, elf, &bundled, &args)?;
         // The schedule (tuned at 100 Hz) on the 20 Hz capture: the same CSV as the host, and
         // the firmware says it runs off its rate (only there: 0 on the 100 Hz captures).
@@ -1769,6 +1816,18 @@ pub fn ci_steps() -> Result<(), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn peak_velocity_reads_the_velocity_columns_of_one_axis() {
+        let csv = "t,yaw,yaw_rate,yaw_ave_v,yaw_ave_a,pitch_ave_v\n0,1,900,-12.5,5000,7000\n0.01,2,0,3,0,0\n";
+        // Not the angle, the reference rate, an acceleration or another axis.
+        assert_eq!(peak_velocity(csv, "yaw_").unwrap(), 12.5);
+        assert_eq!(peak_velocity(csv, "pitch_").unwrap(), 7000.0);
+        let nan = "t,yaw_ave_v\n0,NaN\n0.01,1\n";
+        assert_eq!(peak_velocity(nan, "yaw_").unwrap(), f64::INFINITY);
+        assert!(peak_velocity(csv, "roll_").is_err());
+        assert!(peak_velocity("t,yaw_ave_v\n0,x\n", "yaw_").is_err());
+    }
 
     #[test]
     fn counters_line_is_parsed() {
