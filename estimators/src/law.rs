@@ -72,8 +72,10 @@ pub trait Law: Copy + core::fmt::Debug {
     /// in which `self`, at input `y`, is in equilibrium with its present output (the steady
     /// state of a ramp whose rate is that output), so that the estimate continues from where
     /// it is instead of ringing. The default leaves `s` as it is, which is right for laws
-    /// whose equilibrium does not depend on their gains (ED: `z0 = y`, `z1` = the rate; the
-    /// Kalman tracker's physical states). The AVE's equilibrium (`xhat = y`, `theta` = the
+    /// whose equilibrium does not depend on their gains and whose state is on it (the Kalman
+    /// tracker's physical states). The ED's equilibrium (`z = y`, `u1` = the rate) does not
+    /// depend on its gains either, but a low-`alpha` set runs away from it, so its
+    /// `retune_state` puts the state there (`z = y + h u`, `u1 = u`, `u` the output). The AVE's equilibrium (`xhat = y`, `theta` = the
     /// rate) does not depend on its gains either, but its state is off it by the position
     /// error the old gains left, so its `retune_state` sets `xhat = y`. Without it a
     /// retune of a tuned, lightly damped ILO rang with a swing of 1600 deg/s

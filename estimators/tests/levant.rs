@@ -262,3 +262,66 @@ fn implicit_scheme_is_chattering_free() {
     assert!((5.0..20.0).contains(&(rms_l / rms_s)), "{}", rms_l / rms_s);
     assert!(rms_l <= rms_le * 1.05);
 }
+
+/// A gain change of the ED (`Law::retune_state`, what the adaptive bank does) continues from
+/// the present output. The case that needs it: a low-`alpha` set (the bundled schedule's
+/// 0.001 deg^2 level, `lambda` 167, `alpha` 11.5 deg/s^2) on a 100 deg/s ramp does not slide:
+/// `u1` lags the rate and the root term carries the rest on a position error of
+/// `((rate - u1) / lambda)^2`. Changing to the 0.01 level's gains (`lambda` 15.0, `alpha`
+/// 758) with the state kept, the next output falls by `(167 - 15) |e|^(1/2)`: computed below
+/// from the state itself, and it is what the old rule did (tens of deg/s, until `alpha`
+/// caught up). With `retune_state` the next output is within 0.1 deg/s of the last one, and
+/// the estimate stays within 1 deg/s of the rate over the next 0.1 s.
+#[test]
+fn a_gain_change_continues_from_the_present_output() {
+    use estimators::{EdParams, EdScheme, Law};
+    let h = 1e-4f32;
+    let low = EdConfig {
+        lambda: 167.36,
+        alpha: 11.51,
+    };
+    let high = EdConfig {
+        lambda: 15.03,
+        alpha: 757.8,
+    };
+    let (pl, ph) = (
+        EdParams::<f64>::new(&low, h, EdScheme::Euler).unwrap(),
+        EdParams::<f64>::new(&high, h, EdScheme::Euler).unwrap(),
+    );
+    let rate = 100.0;
+    let y = |k: u32| rate * f64::from(k) * f64::from(h);
+    let mut s = pl.init(0.0);
+    let n = 20_000; // 2 s
+    for k in 0..n {
+        pl.step(&mut s, y(k));
+    }
+    let before = pl.output(&s);
+    // Not sliding: u1 well below the rate, the root term carrying the rest.
+    assert!(rate - s.u1 > 50.0, "u1 {}", s.u1);
+    assert!((before - rate).abs() < 2.0, "{before}");
+    // The old rule (state kept): the next output, from the state alone.
+    let mut kept = s;
+    let jump_kept = ph.step(&mut kept, y(n)) - before;
+    let e = s.z - y(n);
+    let predicted = (167.36 - 15.03) * e.abs().sqrt() * e.signum();
+    assert!(
+        jump_kept < -20.0 && (jump_kept - predicted).abs() < 2.0,
+        "{jump_kept} {predicted}"
+    );
+    // The bumpless rule.
+    ph.retune_state(&pl, &mut s, y(n - 1));
+    let mut worst = 0.0f64;
+    let first = ph.step(&mut s, y(n));
+    assert!((first - before).abs() < 0.1, "{first} {before}");
+    for k in n + 1..n + 1000 {
+        worst = worst.max((ph.step(&mut s, y(k)) - rate).abs());
+    }
+    assert!(worst < 1.0, "{worst}");
+    // And back, from sliding to the low-alpha set: within 1 deg/s (the sliding output
+    // chatters by about 0.1 deg/s around the rate, and the new root term sees that error).
+    let m = n + 1000;
+    let before = ph.output(&s);
+    pl.retune_state(&ph, &mut s, y(m - 1));
+    let first = pl.step(&mut s, y(m));
+    assert!((first - before).abs() < 1.0, "{first} {before}");
+}

@@ -18,7 +18,7 @@
 //! * on 40 other noise draws (`scheduled_bank_against_every_fixed_set_on_forty_draws`), the
 //!   previous point holds for the ILO, AD and tracker on at least 38 draws, for the AVE on 25
 //!   (below the best fixed set on a typical draw, thanks to the switching gains the schedule
-//!   records: 21 without them), and not for the ED (3 of 40): measured, bounded and
+//!   records: 21 without them), and not for the ED (5 of 40): measured, bounded and
 //!   explained there;
 //! * on one draw, the AVE's and the ED's MSE move by more than those margins when their gains
 //!   move by 0.5 % (`one_draw_margins_of_the_ave_and_ed_are_inside_their_gain_sensitivity`);
@@ -263,9 +263,9 @@ fn scheduled_bank_follows_a_noise_switch() {
         let row: Vec<String> = (0..7).map(|i| format!("{:.3}", m[2][i])).collect();
         println!("  {name:<18} {}", row.join(" "));
         for i in 0..7 {
-            // Not met for the ED (measured: scheduled 177.6 against 175.7 for the 0.5 level as
+            // Not met for the ED (measured: scheduled 177.7 against 175.7 for the 0.5 level as
             // a fixed set, below every other set). In 10-20 s the scheduled ED runs the 0.5
-            // level's gains (282.4, below the half's own tuning, 321.2); in 0-10 s the 0.01
+            // level's gains (282.7, below the half's own tuning, 321.2); in 0-10 s the 0.01
             // level's (72.7), where the 0.5 level's ED gains happen to do better on this noise
             // draw (about 69): the ED's MSE is rugged in its gains and depends on the noise
             // draw (docs/CALIBRATION.md). Nor, on this draw, for the AVE: 69.063 against 68.966
@@ -297,6 +297,122 @@ fn scheduled_bank_follows_a_noise_switch() {
     let row: Vec<String> = (0..7).map(|i| format!("{:.3}", sched[2][i])).collect();
     println!("  {:<18} {}", "scheduled", row.join(" "));
     assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// A steady noise level between two schedule levels, where the noise estimate (about +-25 %)
+/// hovers around the boundary of the nearer level and the gains change back and forth: fig5
+/// (the whole 30 s, MSE over 2-30 s) with constant N(0, v) yaw noise, v = 0.002, 0.003 (the
+/// 0.001 and 0.01 levels meet at 0.0032 in ln(noise)), 0.2 and 0.3 (0.1 and 0.5 meet at
+/// 0.22), noise seeds 201-205. Per family, the scheduled bank's velocity MSE against the best
+/// schedule level run as a fixed set on the same draw (geometric mean and worst over the
+/// seeds), and the same for the level the schedule's observers take (the nearer one in
+/// ln(noise)) run as a fixed set.
+///
+/// Measured: the ED 1.23x at 0.002 and 0.003 (worst 1.38). Before its gain change was made
+/// bumpless (`EdParams`' `retune_state`), 2.07x and 9.6x (worst 87x): the 0.001 level's ED
+/// (`alpha` 11.5, `lambda` 167) does not slide, and each change of `lambda` made the output
+/// jump. What is left is the level choice: the nearer level's ED as a fixed set is 1.23x and
+/// 1.45x. The AVE: 1.02-1.28x (worst 1.49 at 0.003), the ILO at most 1.03x, the AD and
+/// tracker below 1. The AVE's gap at 0.003 and 0.2 is the back-and-forth between the two
+/// levels (the nearer level as a fixed set is the best there, 1.00x), at 0.3 the level choice
+/// (the nearer 0.5 level's AVE is 1.24x the 0.1 level's); a hysteresis on the observers'
+/// level was tried and not kept (docs/CALIBRATION.md, "Between the levels").
+///
+/// Independent of the code under test: MSE against the motion's analytic rate.
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "release only: cargo test --release -p host-tests --test schedule"
+)]
+fn the_schedule_between_its_levels() {
+    let (file, scheduled) = schedule_fig5();
+    let levels = file
+        .schedule(&BankConfig::NAV440)
+        .unwrap()
+        .levels()
+        .to_vec();
+    let clean = replay::read_samples(&data("fig5_a2_100hz.bin")).unwrap();
+    let window = [(2.0, 30.0)];
+    let level_cfg = |l: &estimators::ScheduleLevel| BankConfig {
+        velocity: l.velocity,
+        acceleration: l.acceleration,
+        hold: file.hold().unwrap(),
+        ..BankConfig::NAV440
+    };
+    for v in [0.002f64, 0.003, 0.2, 0.3] {
+        // The level the observers take: the nearer in ln(noise).
+        let nearer = levels
+            .iter()
+            .min_by(|a, b| {
+                let d = |l: &estimators::ScheduleLevel| (f64::from(l.noise_var) / v).ln().abs();
+                d(a).total_cmp(&d(b))
+            })
+            .unwrap();
+        let seeds = 201..=205u64;
+        let n = seeds.clone().count() as f64;
+        let (mut gm, mut worst, mut gm_nearer) = ([0.0f64; 7], [0.0f64; 7], [0.0f64; 7]);
+        for seed in seeds {
+            let noisy = constant_noise(&clean, v, seed);
+            let sched = mse_over(&noisy, &scheduled, &window)[0];
+            let fixed_mse: Vec<[f64; 7]> = levels
+                .iter()
+                .map(|l| mse_over(&noisy, &fixed(level_cfg(l)), &window)[0])
+                .collect();
+            let near = mse_over(&noisy, &fixed(level_cfg(nearer)), &window)[0];
+            for i in 0..7 {
+                let best = fixed_mse.iter().map(|m| m[i]).fold(f64::MAX, f64::min);
+                gm[i] += (sched[i] / best).ln() / n;
+                gm_nearer[i] += (near[i] / best).ln() / n;
+                worst[i] = worst[i].max(sched[i] / best);
+            }
+        }
+        let (gm, gm_nearer) = (gm.map(f64::exp), gm_nearer.map(f64::exp));
+        println!(
+            "{v} deg^2: scheduled / best level, geometric mean {gm:.2?}, worst {worst:.2?}; the nearer level ({}) as a fixed set {gm_nearer:.2?}",
+            nearer.noise_var
+        );
+        assert!(
+            gm[5] < 1.3 && worst[5] < 1.5,
+            "ED at {v}: {} {}",
+            gm[5],
+            worst[5]
+        );
+        assert!(
+            gm[0] < 1.35 && worst[0] < 1.6,
+            "AVE at {v}: {} {}",
+            gm[0],
+            worst[0]
+        );
+        for i in [1, 2, 3, 4, 6] {
+            assert!(
+                gm[i] < 1.1 && worst[i] < 1.15,
+                "{} at {v}: {}",
+                NAMES[i],
+                gm[i]
+            );
+        }
+    }
+}
+
+/// `samples` with N(0, `var_deg2`) added to yaw (xoshiro256++ `seed`), re-wrapped to
+/// +-180 deg.
+fn constant_noise(samples: &[Sample], var_deg2: f64, seed: u64) -> Vec<Sample> {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+    let noise = Normal::new(0.0, var_deg2.sqrt()).unwrap();
+    samples
+        .iter()
+        .map(|s| {
+            let mut y = f64::from(s.angles_deg[2]) + noise.sample(&mut rng);
+            if y > 180.0 {
+                y -= 360.0;
+            } else if y <= -180.0 {
+                y += 360.0;
+            }
+            let mut o = *s;
+            o.angles_deg[2] = y as f32;
+            o
+        })
+        .collect()
 }
 
 /// The fixed-point adaptive bank (`nav440 estimate FILE --gains schedule_fig5.toml --fixed`,
@@ -342,7 +458,7 @@ fn the_fixed_point_schedule_follows_f32_on_the_noise_switch() {
 ///   `gamma1`; the ED of the 0.5 level: `lambda`, `alpha`) by at most 0.5 % each (5 x 5
 ///   points) moves the family's 0-20 s velocity MSE by more than 2 % (measured: AVE 64.1-78.4,
 ///   a 22 % spread; ED 174.7-183.3, 4.9 %), more than the schedule's margin to that set on
-///   this draw (AVE +0.14 %, ED +1.1 %). A fixed AVE set within 0.5 % of the 0.1 level's
+///   this draw (AVE +0.14 %, ED +1.15 %). A fixed AVE set within 0.5 % of the 0.1 level's
 ///   gains is 7 % below the schedule on this draw; no tuner can tell such sets apart.
 ///   The two differ in kind. The AVE's MSE is smooth but steep in `gamma1` (about +1.2 % per
 ///   +0.05 %): the tuned 0.1 level sits at 0.90 of the Euler step's stability bound
@@ -507,7 +623,7 @@ fn scheduled_bank_does_not_ring_on_other_noise_draws() {
 ///
 /// Measured (docs/CALIBRATION.md "Forty noise draws"): ILO1-3, the AD and the tracker below
 /// every fixed set on 40 of 40 draws (geometric mean ratios 0.776, 0.790, 0.790); the AVE on
-/// 25 (0.951; the best fixed set is the 0.1 level on 38 draws), **the ED on 3 (1.028)**. With
+/// 25 (0.951; the best fixed set is the 0.1 level on 38 draws), **the ED on 5 (1.034)**. With
 /// bumpless gain changes instead of the warm start (`replay_samples` 0): ILO 38 (0.819), AVE
 /// 26 (0.972).
 ///
@@ -700,7 +816,7 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
         "AVE: {kept_gm} without, {} with",
         gm[0]
     );
-    // Not met (above): a regression bound on the measured 1.028.
+    // Not met (above): a regression bound on the measured 1.034.
     assert!(gm[5] < 1.04, "ED: {}", gm[5]);
     // The warm start is worth it: the AVE and the ILOs are further below the best fixed set
     // than with bumpless gain changes (measured 0.951 against 0.972 and 0.776 against 0.819);
