@@ -313,10 +313,11 @@ fn scheduled_bank_follows_a_noise_switch() {
 /// (`alpha` 11.5, `lambda` 167) does not slide, and each change of `lambda` made the output
 /// jump. What is left is the level choice: the nearer level's ED as a fixed set is 1.23x and
 /// 1.45x. The AVE: 1.02-1.28x (worst 1.49 at 0.003), the ILO at most 1.03x, the AD and
-/// tracker below 1. The AVE's gap at 0.003 and 0.2 is the back-and-forth between the two
-/// levels (the nearer level as a fixed set is the best there, 1.00x), at 0.3 the level choice
-/// (the nearer 0.5 level's AVE is 1.24x the 0.1 level's); a hysteresis on the observers'
-/// level was tried and not kept (docs/CALIBRATION.md, "Between the levels").
+/// tracker below 1. The AVE's gap is where the observers change level: at 0.003 and 0.2 the
+/// nearer level as a fixed set is the best (1.00x), but the estimate is past the midpoint part
+/// of the time and the other level's AVE is much worse at this noise; at 0.3 the nearer
+/// (0.5) level's AVE is itself 1.24x the 0.1 level's. A longer replay and a hysteresis on the
+/// observers' level were tried and not kept (docs/CALIBRATION.md, "Between the levels").
 ///
 /// Independent of the code under test: MSE against the motion's analytic rate.
 #[test]
