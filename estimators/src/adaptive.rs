@@ -31,6 +31,46 @@ pub struct ScheduleLevel {
     /// [`AdaptiveBank`] changes its AVE gains, it sets the AVEs' `deltahat` to these, so that
     /// the new gains do not start from the `deltahat` the old ones left (see [`AveDeltahat`]).
     pub ave_deltahat: Option<AveDeltahat>,
+    /// Where each observer family moves on to the next level's gains (with
+    /// [`Blend::NearestObservers`]; see [`ObserverSwitch`]); `None`: at the two levels'
+    /// geometric midpoint. Ignored on the last level.
+    pub switch_up: Option<ObserverSwitch>,
+}
+
+/// The noise variances (deg^2) at which each observer family (velocity and acceleration
+/// gains alike) leaves a level for the next one: the noise at which the next level's gains
+/// become the better of the two. `nav440 tune --schedule` records it from each level's MSE at
+/// its neighbour's noise (`[level.switch_up]`; docs/CALIBRATION.md, "Between the levels").
+///
+/// Why not the geometric midpoint: two neighbouring levels' tuned observers can be different
+/// kinds of observer, and one of them stays the better one well past the midpoint. In the
+/// bundled schedule, at a steady 0.003 deg^2 (below the 0.001/0.01 midpoint, 0.0032) the
+/// 0.01 level's AVE is 1.48x the 0.001 level's; switched at the midpoint, the scheduled AVE
+/// was 1.28x the best level run as a fixed set there, and 1.18-1.28x at 0.2-0.3 deg^2.
+/// A value outside `[this level, next level]` is clamped into it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ObserverSwitch {
+    /// AVE (velocity AVE and the AVE-AVE series), deg^2.
+    pub ave: f32,
+    /// ILO1, ILO2, ILO3 (and their ILO-ILO series), deg^2.
+    pub ilo: [f32; 3],
+    /// ED (and the ED-ED series), deg^2.
+    pub ed: f32,
+}
+
+impl ObserverSwitch {
+    /// `Ok` if every value is finite and > 0.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let all = [self.ave, self.ilo[0], self.ilo[1], self.ilo[2], self.ed];
+        if all.iter().any(|x| !x.is_finite()) {
+            return Err(ConfigError::NotFinite("switch_up"));
+        }
+        if all.iter().any(|&x| x <= 0.0) {
+            return Err(ConfigError::NotPositive("switch_up"));
+        }
+        Ok(())
+    }
 }
 
 /// The switching gains `deltahat` of a bank's AVE rows ([`crate::PaperBank::ave_deltahat`]).
@@ -135,28 +175,34 @@ impl Blend {
     }
 }
 
-fn interp_gains(a: &BankGains, b: &BankGains, w: f32, blend: Blend) -> BankGains {
-    let wo = blend.observer_weight(w);
-    let ilo = |x: &IloConfig, y: &IloConfig| IloConfig {
+/// The observers' weights of the upper level: AVE, ILO1, ILO2, ILO3, ED.
+type ObserverWeights = [f32; 5];
+
+fn interp_gains(a: &BankGains, b: &BankGains, w: f32, wo: ObserverWeights) -> BankGains {
+    let ilo = |x: &IloConfig, y: &IloConfig, wo: f32| IloConfig {
         k1: 1.0 - interp(1.0 - x.k1, 1.0 - y.k1, wo),
         l: interp(x.l, y.l, wo),
         k2: interp(x.k2, y.k2, wo),
     };
     BankGains {
         ave: AveConfig {
-            k: interp(a.ave.k, b.ave.k, wo),
-            gamma1: interp(a.ave.gamma1, b.ave.gamma1, wo),
-            delta: if wo < 0.5 { a.ave.delta } else { b.ave.delta },
+            k: interp(a.ave.k, b.ave.k, wo[0]),
+            gamma1: interp(a.ave.gamma1, b.ave.gamma1, wo[0]),
+            delta: if wo[0] < 0.5 {
+                a.ave.delta
+            } else {
+                b.ave.delta
+            },
         },
         ilo: [
-            ilo(&a.ilo[0], &b.ilo[0]),
-            ilo(&a.ilo[1], &b.ilo[1]),
-            ilo(&a.ilo[2], &b.ilo[2]),
+            ilo(&a.ilo[0], &b.ilo[0], wo[1]),
+            ilo(&a.ilo[1], &b.ilo[1], wo[2]),
+            ilo(&a.ilo[2], &b.ilo[2], wo[3]),
         ],
         ad_t: interp(a.ad_t, b.ad_t, w),
         ed: EdConfig {
-            lambda: interp(a.ed.lambda, b.ed.lambda, wo),
-            alpha: interp(a.ed.alpha, b.ed.alpha, wo),
+            lambda: interp(a.ed.lambda, b.ed.lambda, wo[4]),
+            alpha: interp(a.ed.alpha, b.ed.alpha, wo[4]),
         },
         kf: KalmanNoise {
             q: interp(a.kf.q, b.kf.q, w),
@@ -183,6 +229,9 @@ impl GainSchedule {
             prev = l.noise_var;
             if let Some(d) = &l.ave_deltahat {
                 d.validate()?;
+            }
+            if let Some(w) = &l.switch_up {
+                w.validate()?;
             }
         }
         let mut s = GainSchedule {
@@ -262,10 +311,46 @@ impl GainSchedule {
         let Some((b, w)) = upper else {
             return (a.velocity, a.acceleration);
         };
+        let wo = self.observer_weights(a, b, noise_var, w);
         (
-            interp_gains(&a.velocity, &b.velocity, w, self.blend),
-            interp_gains(&a.acceleration, &b.acceleration, w, self.blend),
+            interp_gains(&a.velocity, &b.velocity, w, wo),
+            interp_gains(&a.acceleration, &b.acceleration, w, wo),
         )
+    }
+
+    /// The weight of the upper level `b` for each observer family between the levels `a` and
+    /// `b` at `noise_var` (deg^2), whose geometric weight is `w`: `w` with
+    /// [`Blend::Geometric`]; with [`Blend::NearestObservers`] 1 at or past the family's switch
+    /// point (`a`'s [`ScheduleLevel::switch_up`], clamped to `[a, b]`; without one, the
+    /// geometric midpoint), else 0.
+    fn observer_weights(
+        &self,
+        a: &ScheduleLevel,
+        b: &ScheduleLevel,
+        noise_var: f32,
+        w: f32,
+    ) -> ObserverWeights {
+        match (self.blend, a.switch_up) {
+            (Blend::Geometric, _) => [w; 5],
+            (Blend::NearestObservers, None) => [self.blend.observer_weight(w); 5],
+            (Blend::NearestObservers, Some(sw)) => {
+                let v = self.clamp(noise_var);
+                let up = |t: f32| {
+                    if v >= t.clamp(a.noise_var, b.noise_var) {
+                        1.0
+                    } else {
+                        0.0
+                    }
+                };
+                [
+                    up(sw.ave),
+                    up(sw.ilo[0]),
+                    up(sw.ilo[1]),
+                    up(sw.ilo[2]),
+                    up(sw.ed),
+                ]
+            }
+        }
     }
 
     /// The levels around `noise_var` (deg^2, clamped to the schedule): the last level at or
@@ -294,7 +379,7 @@ impl GainSchedule {
         let Some((b, w)) = upper else {
             return Some(da);
         };
-        let w = self.blend.observer_weight(w);
+        let w = self.observer_weights(a, b, noise_var, w)[0];
         if w <= 0.0 {
             return Some(da);
         }
@@ -801,6 +886,7 @@ mod tests {
             velocity: g,
             acceleration: BankConfig::PAPER.acceleration,
             ave_deltahat: None,
+            switch_up: None,
         }
     }
 
@@ -847,6 +933,69 @@ mod tests {
         );
         assert_eq!(bad(-0.5), Err(ConfigError::Negative("ave_deltahat")));
         assert!(bad(0.0).is_ok());
+    }
+
+    /// Each observer family moves to the next level at its own recorded switch point
+    /// (`ScheduleLevel::switch_up`, clamped to the two levels), the AD and the tracker stay
+    /// interpolated, the AVE's `deltahat` follows the AVE's level; without switch points, the
+    /// geometric midpoint (0.1 for levels 0.01 and 1). Invalid points are refused.
+    #[test]
+    fn observers_switch_at_their_recorded_points() {
+        let lo = with_deltahat(level(0.01, 100.0, ILO1_TABLE2), 0.1, [1.0, 10.0]);
+        let mut hi = with_deltahat(level(1.0, 10_000.0, ILO3_TABLE2), 10.0, [4.0, 40.0]);
+        hi.velocity.ad_t = 0.1;
+        hi.velocity.ed.lambda = 99.0;
+        let sw = ObserverSwitch {
+            ave: 0.5,
+            ilo: [0.02, 0.05, 5.0],
+            ed: 0.001,
+        };
+        let s = GainSchedule::new(&[
+            ScheduleLevel {
+                switch_up: Some(sw),
+                ..lo
+            },
+            hi,
+        ])
+        .unwrap();
+        let midpoint = GainSchedule::new(&[lo, hi]).unwrap();
+        for v in [0.011f32, 0.03, 0.09, 0.11, 0.49, 0.5, 0.9] {
+            let (g, m) = (s.gains_at(v).0, midpoint.gains_at(v).0);
+            let pick = |at: f32| if v >= at { &hi } else { &lo };
+            assert_eq!(g.ave, pick(0.5).velocity.ave, "AVE at {v}");
+            assert_eq!(g.ilo[0], pick(0.02).velocity.ilo[0], "ILO1 at {v}");
+            assert_eq!(g.ilo[1], pick(0.05).velocity.ilo[1], "ILO2 at {v}");
+            // Past the upper level: clamped to it (the ILO3 moves only at 1).
+            assert_eq!(g.ilo[2], lo.velocity.ilo[2], "ILO3 at {v}");
+            // Below the lower level: clamped to it (the ED takes the upper level's at once).
+            assert_eq!(g.ed, hi.velocity.ed, "ED at {v}");
+            assert_eq!(
+                s.ave_deltahat_at(v),
+                pick(0.5).ave_deltahat,
+                "deltahat at {v}"
+            );
+            // The AD and the tracker do not depend on the switch points.
+            assert_eq!((g.ad_t, g.kf), (m.ad_t, m.kf), "{v}");
+            assert_eq!(m.ave, pick(0.1).velocity.ave, "midpoint AVE at {v}");
+            assert_eq!(m.ed, pick(0.1).velocity.ed, "midpoint ED at {v}");
+        }
+        assert_eq!(s.gains_at(1.0).0.ilo[2], hi.velocity.ilo[2]);
+        // Geometric blend: the switch points do not apply.
+        assert_eq!(
+            s.with_blend(Blend::Geometric).gains_at(0.1),
+            midpoint.with_blend(Blend::Geometric).gains_at(0.1)
+        );
+        for (bad, err) in [
+            (f32::NAN, ConfigError::NotFinite("switch_up")),
+            (0.0, ConfigError::NotPositive("switch_up")),
+            (-1.0, ConfigError::NotPositive("switch_up")),
+        ] {
+            let l = ScheduleLevel {
+                switch_up: Some(ObserverSwitch { ed: bad, ..sw }),
+                ..lo
+            };
+            assert_eq!(GainSchedule::new(&[l, hi]), Err(err));
+        }
     }
 
     /// A bumpless retune (no replay, `replay_samples: 0`) that changes the velocity AVE's

@@ -88,7 +88,8 @@ mod unwrap;
 pub use ad::{Ad, AdConfig, AdParams, AdState};
 pub use adapter::{SampleAdapter, SampleClock, Tick};
 pub use adaptive::{
-    AdaptiveBank, AdaptiveConfig, AveDeltahat, Blend, GainSchedule, NoiseEstimator, ScheduleLevel,
+    AdaptiveBank, AdaptiveConfig, AveDeltahat, Blend, GainSchedule, NoiseEstimator, ObserverSwitch,
+    ScheduleLevel,
 };
 pub use ave::{Ave, AveConfig, AveParams, AveState, DeltaLaw, DeltaMode, COARSE_STABILITY_MARGIN};
 pub use bank::{

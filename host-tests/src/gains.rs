@@ -133,6 +133,38 @@ pub struct ScheduleLevelFile {
     /// the AVEs' `deltahat`, as files written before it was recorded do).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ave_deltahat: Option<AveDeltahatFile>,
+    /// Where each observer family moves on to the next level
+    /// (`estimators::ScheduleLevel::switch_up`; optional: without it, at the geometric
+    /// midpoint of the two levels, as files written before it was recorded do).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub switch_up: Option<SwitchUpFile>,
+}
+
+/// The `[level.switch_up]` table of a schedule file (`estimators::ObserverSwitch`): the noise
+/// variance (deg^2) from which each observer family takes the next level's gains.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SwitchUpFile {
+    /// AVE, deg^2.
+    pub ave: f32,
+    /// ILO1, deg^2.
+    pub ilo1: f32,
+    /// ILO2, deg^2.
+    pub ilo2: f32,
+    /// ILO3, deg^2.
+    pub ilo3: f32,
+    /// ED, deg^2.
+    pub ed: f32,
+}
+
+impl From<SwitchUpFile> for estimators::ObserverSwitch {
+    fn from(w: SwitchUpFile) -> Self {
+        estimators::ObserverSwitch {
+            ave: w.ave,
+            ilo: [w.ilo1, w.ilo2, w.ilo3],
+            ed: w.ed,
+        }
+    }
 }
 
 /// The `[level.ave_deltahat]` table of a schedule file (`estimators::AveDeltahat`).
@@ -175,6 +207,12 @@ impl From<estimators::AveDeltahat> for AveDeltahatFile {
 /// [level.ave_deltahat]       # optional: the AVEs' deltahat this level was tuned with
 /// velocity = 0.9             # deg/s
 /// acceleration = [0.9, 12.0] # the AVE-AVE series' stages, deg/s and deg/s^2
+/// [level.switch_up]          # optional: the noise (deg^2) from which each observer family
+/// ave = 0.006                # takes the next level's gains (default: the two levels'
+/// ilo1 = 0.003               # geometric midpoint)
+/// ilo2 = 0.003
+/// ilo3 = 0.003
+/// ed = 0.002
 /// [[level]]
 /// noise_var = 0.01
 /// ...
@@ -215,6 +253,7 @@ impl ScheduleFile {
                 velocity: l.velocity.apply(base.velocity),
                 acceleration: l.acceleration.apply(base.acceleration),
                 ave_deltahat: l.ave_deltahat.map(Into::into),
+                switch_up: l.switch_up.map(Into::into),
             })
             .collect();
         let schedule = estimators::GainSchedule::new(&levels);
@@ -238,9 +277,15 @@ impl ScheduleFile {
             Some(p) => format!("Some({:?})", p as f32),
             None => "None".to_string(),
         };
-        // `AveDeltahat` only when a level records it (an unused import would warn).
+        // `AveDeltahat` and `ObserverSwitch` only when a level records them (an unused import
+        // would warn).
         let deltahat = if self.level.iter().any(|l| l.ave_deltahat.is_some()) {
             "AveDeltahat, "
+        } else {
+            ""
+        };
+        let switch = if self.level.iter().any(|l| l.switch_up.is_some()) {
+            ", ObserverSwitch"
         } else {
             ""
         };
@@ -249,7 +294,7 @@ impl ScheduleFile {
              // `AdaptiveBank::new(&BankConfig {{ hold, ..BankConfig::NAV440 }}, &schedule, &AdaptiveConfig::DEFAULT)`,\n\
              // `schedule` being `GainSchedule::new(&SCHEDULE)?` with `.with_sample_period(p)?` when\n\
              // `SCHEDULE_PERIOD_S` is `Some(p)`.\n\
-             use estimators::{{AveConfig, {deltahat}BankGains, DeltaMode, EdConfig, IloConfig, KalmanNoise, ScheduleLevel}};\n\n\
+             use estimators::{{AveConfig, {deltahat}BankGains, DeltaMode, EdConfig, IloConfig, KalmanNoise{switch}, ScheduleLevel}};\n\n\
              /// The nominal sample period the levels were tuned at, s.\n\
              pub const SCHEDULE_PERIOD_S: Option<f32> = {period};\n\n\
              pub const SCHEDULE: [ScheduleLevel; {}] = [\n",
@@ -264,8 +309,15 @@ impl ScheduleFile {
                 ),
                 None => "None".to_string(),
             };
+            let switch = match l.switch_up {
+                Some(w) => format!(
+                    "Some(ObserverSwitch {{ ave: {:?}, ilo: [{:?}, {:?}, {:?}], ed: {:?} }})",
+                    w.ave, w.ilo1, w.ilo2, w.ilo3, w.ed
+                ),
+                None => "None".to_string(),
+            };
             s.push_str(&format!(
-                "    ScheduleLevel {{\n        noise_var: {:?},\n        velocity: {},\n        acceleration: {},\n        ave_deltahat: {deltahat},\n    }},\n",
+                "    ScheduleLevel {{\n        noise_var: {:?},\n        velocity: {},\n        acceleration: {},\n        ave_deltahat: {deltahat},\n        switch_up: {switch},\n    }},\n",
                 l.noise_var as f32,
                 l.velocity.rust(&base.velocity, "        "),
                 l.acceleration.rust(&base.acceleration, "        ")

@@ -912,9 +912,14 @@ fn tune_both(
 }
 
 /// `nav440 tune --schedule V1,V2,..`: [`tune_with`] at each noise level (`spec.noise_var`
-/// replaced; one hold: `spec.holds[0]`, linear by default); returns the schedule file (with
-/// the nominal sample period the bank ran at, [`EstimateOptions::bank_period_s`]) and the
-/// printed report (each level's report).
+/// replaced; one hold: `spec.holds[0]`, linear by default); then, per velocity observer
+/// family (AVE, ILO1-3, ED), each level takes the best of every level's tuned gains at its own
+/// noise (the velocity MSE through the bank, the tuner's seeds and range: a level's search
+/// can end in a worse basin than a neighbour's gains); records each level's AVE `deltahat`
+/// ([`tuned_ave_deltahat`]) and where each observer family moves on to the next level
+/// ([`switch_points`]). Returns the schedule file (with the nominal sample period the bank ran
+/// at, [`EstimateOptions::bank_period_s`]) and the printed report (each level's report, the
+/// gains taken from another level, the switch points).
 pub fn tune_schedule(
     samples: &[Sample],
     opts: &EstimateOptions,
@@ -946,7 +951,7 @@ pub fn tune_schedule(
         ..opts.clone()
     };
     let mut text = String::new();
-    let mut level = Vec::new();
+    let mut tuned: Vec<GainsFile> = Vec::new();
     for &v in levels {
         let res = tune_with(
             samples,
@@ -960,21 +965,70 @@ pub fn tune_schedule(
         text.push_str(&format!("== schedule level {v} deg^2 ==\n"));
         text.push_str(&res.to_text());
         text.push('\n');
-        let tuned = BankConfig {
-            hold,
-            ..res.gains.apply(opts.bank_config_for(samples))
-        };
-        let deltahat = tuned_ave_deltahat(samples, opts, &tuned, v, spec.seeds, spec.train)?;
+        tuned.push(res.gains);
+    }
+    let config = |g: &GainsFile| BankConfig {
+        hold,
+        ..g.apply(opts.bank_config_for(samples))
+    };
+    // Each level's observers: the best of every level's tuned gains at this level's noise
+    // (the search of one level can end in a worse basin than a neighbour's gains).
+    let acc_ref = ave_on_rate(samples, &REFERENCE_AVE, opts)?;
+    let mut at = vec![vec![[0.0f64; 7]; levels.len()]; levels.len()];
+    for (i, g) in tuned.iter().enumerate() {
+        for (j, &v) in levels.iter().enumerate() {
+            let seeds = 1..=spec.seeds.max(1);
+            at[i][j] = bank_mse_with(samples, opts, &acc_ref, config(g), v, seeds, spec.train)?.0;
+        }
+    }
+    let before = tuned.clone();
+    for (j, &v) in levels.iter().enumerate() {
+        for (col, name) in [(0, "AVE"), (1, "ILO1"), (2, "ILO2"), (3, "ILO3"), (5, "ED")] {
+            let best = (0..levels.len())
+                .min_by(|&a, &b| at[a][j][col].total_cmp(&at[b][j][col]))
+                .unwrap_or(j);
+            if best == j || at[best][j][col] >= at[j][j][col] {
+                continue;
+            }
+            let (from, to) = (&before[best].velocity, &mut tuned[j].velocity);
+            match col {
+                0 => to.ave = from.ave,
+                1 => to.ilo1 = from.ilo1,
+                2 => to.ilo2 = from.ilo2,
+                3 => to.ilo3 = from.ilo3,
+                _ => to.ed = from.ed,
+            }
+            text.push_str(&format!(
+                "level {v} deg^2: {name} velocity gains of level {} deg^2 (MSE {:.4} instead of {:.4} at {v} deg^2)\n",
+                levels[best], at[best][j][col], at[j][j][col]
+            ));
+        }
+    }
+    let mut level = Vec::new();
+    let mut tuned_levels = Vec::new();
+    for (g, &v) in tuned.iter().zip(levels) {
+        let cfg = config(g);
+        let deltahat = tuned_ave_deltahat(samples, opts, &cfg, v, spec.seeds, spec.train)?;
         text.push_str(&format!(
-            "AVE deltahat tuned with (mean over the run): velocity {} deg/s, AVE-AVE {} deg/s, {} deg/s^2\n\n",
+            "level {v} deg^2: AVE deltahat tuned with (mean over the run): velocity {} deg/s, AVE-AVE {} deg/s, {} deg/s^2\n",
             deltahat.velocity, deltahat.acceleration[0], deltahat.acceleration[1]
         ));
         level.push(crate::gains::ScheduleLevelFile {
             noise_var: v,
-            velocity: res.gains.velocity,
-            acceleration: res.gains.acceleration,
+            velocity: g.velocity,
+            acceleration: g.acceleration,
             ave_deltahat: Some(deltahat.into()),
+            switch_up: None,
         });
+        tuned_levels.push((v, cfg));
+    }
+    let switches = switch_points(samples, opts, &tuned_levels, spec.seeds, spec.train)?;
+    for (i, (l, sw)) in level.iter_mut().zip(&switches).enumerate() {
+        l.switch_up = Some(*sw);
+        text.push_str(&format!(
+            "switch up from level {} to {} deg^2 (where each family takes the next level's gains: where the two levels' MSEs cross if they differ by more than {SWITCH_MATTERS}x at the midpoint, else the midpoint): AVE {}, ILO1 {}, ILO2 {}, ILO3 {}, ED {}\n",
+            levels[i], levels[i + 1], sw.ave, sw.ilo1, sw.ilo2, sw.ilo3, sw.ed
+        ));
     }
     Ok((
         crate::gains::ScheduleFile {
@@ -985,6 +1039,68 @@ pub fn tune_schedule(
         },
         text,
     ))
+}
+
+/// [`crossover`] keeps the geometric midpoint unless the two levels' MSE lines differ by more
+/// than this factor there.
+pub const SWITCH_MATTERS: f64 = 1.2;
+
+/// Where each velocity observer family (AVE, ILO1-3, ED) of a schedule moves from one level to
+/// the next (`estimators::ScheduleLevel::switch_up`), from the levels' tuned configurations
+/// `levels` (noise variance, deg^2, and bank configuration, by increasing noise): for each
+/// pair of neighbouring levels `a < b`, the velocity MSE through the bank (noise seeds
+/// `1..=seeds`, over `range`, as the tuner scores) of each level's gains at both noise
+/// levels, then [`crossover`]. One entry per level but the last.
+pub fn switch_points(
+    samples: &[Sample],
+    opts: &EstimateOptions,
+    levels: &[(f64, BankConfig)],
+    seeds: u64,
+    range: (f64, f64),
+) -> Result<Vec<crate::gains::SwitchUpFile>> {
+    let acc_ref = ave_on_rate(samples, &REFERENCE_AVE, opts)?;
+    let mse = |cfg: BankConfig, v: f64| {
+        bank_mse_with(samples, opts, &acc_ref, cfg, v, 1..=seeds.max(1), range).map(|m| m.0)
+    };
+    let mut out = Vec::new();
+    for pair in levels.windows(2) {
+        let ((a, ca), (b, cb)) = (pair[0], pair[1]);
+        let (aa, ab, ba, bb) = (mse(ca, a)?, mse(ca, b)?, mse(cb, a)?, mse(cb, b)?);
+        let at = |i: usize| crossover([aa[i], ab[i], ba[i], bb[i]], a, b) as f32;
+        out.push(crate::gains::SwitchUpFile {
+            ave: at(0),
+            ilo1: at(1),
+            ilo2: at(2),
+            ilo3: at(3),
+            ed: at(5),
+        });
+    }
+    Ok(out)
+}
+
+/// The noise variance (deg^2) between two levels `a < b` at which level `b`'s gains become
+/// the better of the two, from the MSEs `[a's gains at a, a's at b, b's at a, b's at b]`:
+/// each level's log MSE taken as linear in `ln(noise)` between `a` and `b`, where the two
+/// lines cross; `a` if `b`'s gains are already no worse at `a`, `b` if `a`'s are still better
+/// at `b` (or an MSE is not finite and positive). The geometric midpoint when the choice
+/// hardly matters there: the two lines within [`SWITCH_MATTERS`] of each other at the
+/// midpoint (identical gains, or two sets about as good at both levels); moving the switch
+/// then only delays it while the noise estimate follows a change.
+pub fn crossover(m: [f64; 4], a: f64, b: f64) -> f64 {
+    if m.iter().any(|x| !(x.is_finite() && *x > 0.0)) {
+        return b;
+    }
+    let [aa, ab, ba, bb] = m.map(f64::ln);
+    let (d0, d1) = (aa - ba, ab - bb);
+    if ((d0 + d1) / 2.0).abs() < SWITCH_MATTERS.ln() {
+        (a * b).sqrt()
+    } else if d0 >= 0.0 {
+        a
+    } else if d1 <= 0.0 {
+        b
+    } else {
+        a * (b / a).powf(d0 / (d0 - d1))
+    }
 }
 
 /// The AVE row's switching gains `deltahat` (`estimators::PaperBank::ave_deltahat`) that
@@ -1195,6 +1311,38 @@ impl TuneResult {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The crossing of the two levels' log-MSE lines in ln(noise), worked by hand: symmetric
+    /// lines cross at the geometric midpoint; `[1, 2, 8, 1]` gives `d0 = -ln 8`, `d1 = ln 2`,
+    /// so 3/4 of the way; no crossing inside gives the end where the other level already
+    /// wins; a non-finite MSE keeps the lower level up to the upper one.
+    #[test]
+    fn crossover_of_two_levels() {
+        let (a, b) = (0.001, 0.01);
+        let close = |x: f64, y: f64| (x / y - 1.0).abs() < 1e-12;
+        assert!(close(crossover([1.0, 4.0, 4.0, 1.0], a, b), (a * b).sqrt()));
+        assert!(close(
+            crossover([1.0, 2.0, 8.0, 1.0], a, b),
+            a * (b / a).powf(0.75)
+        ));
+        assert_eq!(crossover([2.0, 4.0, 1.0, 1.0], a, b), a);
+        assert_eq!(crossover([1.0, 1.0, 4.0, 2.0], a, b), b);
+        assert_eq!(crossover([1.0, f64::NAN, 4.0, 2.0], a, b), b);
+        assert_eq!(crossover([1.0, 0.0, 4.0, 2.0], a, b), b);
+        // The choice hardly matters (lines within SWITCH_MATTERS = 1.2x at the midpoint:
+        // 0.5 % and 4 % apart; identical gains; 4 % apart at both ends): the
+        // midpoint, though the lines cross elsewhere.
+        assert!(close(
+            crossover([1.0, 1.02, 1.01, 1.0], a, b),
+            (a * b).sqrt()
+        ));
+        assert!(close(crossover([1.0, 1.3, 1.2, 1.0], a, b), (a * b).sqrt()));
+        assert!(close(crossover([1.0, 2.0, 1.0, 2.0], a, b), (a * b).sqrt()));
+        assert!(close(
+            crossover([1.0, 1.0, 1.04, 1.04], a, b),
+            (a * b).sqrt()
+        ));
+    }
 
     #[test]
     fn mse_range_counts_only_the_samples_in_the_range() {

@@ -2,7 +2,7 @@
 // `AdaptiveBank::new(&BankConfig { hold, ..BankConfig::NAV440 }, &schedule, &AdaptiveConfig::DEFAULT)`,
 // `schedule` being `GainSchedule::new(&SCHEDULE)?` with `.with_sample_period(p)?` when
 // `SCHEDULE_PERIOD_S` is `Some(p)`.
-use estimators::{AveConfig, AveDeltahat, BankGains, DeltaMode, EdConfig, IloConfig, KalmanNoise, ScheduleLevel};
+use estimators::{AveConfig, AveDeltahat, BankGains, DeltaMode, EdConfig, IloConfig, KalmanNoise, ObserverSwitch, ScheduleLevel};
 
 /// The nominal sample period the levels were tuned at, s.
 pub const SCHEDULE_PERIOD_S: Option<f32> = Some(0.01);
@@ -33,6 +33,7 @@ pub const SCHEDULE: [ScheduleLevel; 5] = [
             kf: KalmanNoise { q: 1154782.0, r: 0.01 },
         },
         ave_deltahat: Some(AveDeltahat { velocity: 0.014618677, acceleration: [0.97046983, 6.6055694] }),
+        switch_up: Some(ObserverSwitch { ave: 0.006565258, ilo: [0.0031622776, 0.0031622776, 0.0031622776], ed: 0.0010477299 }),
     },
     ScheduleLevel {
         noise_var: 0.01,
@@ -59,6 +60,7 @@ pub const SCHEDULE: [ScheduleLevel; 5] = [
             kf: KalmanNoise { q: 237137.38, r: 0.01 },
         },
         ave_deltahat: Some(AveDeltahat { velocity: 0.12345989, acceleration: [1.8421813, 13.339276] }),
+        switch_up: Some(ObserverSwitch { ave: 0.031622775, ilo: [0.031622775, 0.031622775, 0.031622775], ed: 0.031622775 }),
     },
     ScheduleLevel {
         noise_var: 0.1,
@@ -85,11 +87,12 @@ pub const SCHEDULE: [ScheduleLevel; 5] = [
             kf: KalmanNoise { q: 42169.65, r: 0.01 },
         },
         ave_deltahat: Some(AveDeltahat { velocity: 0.2730495, acceleration: [3.3232386, 25.322184] }),
+        switch_up: Some(ObserverSwitch { ave: 0.2236068, ilo: [0.2236068, 0.2236068, 0.2236068], ed: 0.2236068 }),
     },
     ScheduleLevel {
         noise_var: 0.5,
         velocity: BankGains {
-            ave: AveConfig { k: 3.7827275, gamma1: 497.89053, delta: DeltaMode::Leaky { sigma: 0.1 } },
+            ave: AveConfig { k: 47.390957, gamma1: 425822.44, delta: DeltaMode::Leaky { sigma: 0.1 } },
             ilo: [
                 IloConfig { k1: 0.9992413, l: 0.5064639, k2: 36.988247 },
                 IloConfig { k1: 0.9992413, l: 0.5064639, k2: 36.988247 },
@@ -110,7 +113,8 @@ pub const SCHEDULE: [ScheduleLevel; 5] = [
             ed: EdConfig { lambda: 52.504585, alpha: 10.306895 },
             kf: KalmanNoise { q: 11547.82, r: 0.01 },
         },
-        ave_deltahat: Some(AveDeltahat { velocity: 5.673903, acceleration: [5.208553, 38.979923] }),
+        ave_deltahat: Some(AveDeltahat { velocity: 0.5626439, acceleration: [5.208553, 38.979923] }),
+        switch_up: Some(ObserverSwitch { ave: 0.70710677, ilo: [0.70710677, 0.70710677, 0.70710677], ed: 0.70710677 }),
     },
     ScheduleLevel {
         noise_var: 1.0,
@@ -137,5 +141,6 @@ pub const SCHEDULE: [ScheduleLevel; 5] = [
             kf: KalmanNoise { q: 5623.413, r: 0.01 },
         },
         ave_deltahat: Some(AveDeltahat { velocity: 7.063896, acceleration: [6.6273303, 47.43187] }),
+        switch_up: None,
     },
 ];
