@@ -76,10 +76,11 @@ impl ObserverSwitch {
 /// The switching gains `deltahat` of a bank's AVE rows ([`crate::PaperBank::ave_deltahat`]).
 ///
 /// Why a schedule records them: the tuned AVE gains of different noise levels can be different
-/// kinds of observer. In the bundled schedule (fig5 at 100 Hz) the 0.5 deg^2 level's AVE is
-/// slow (`k` 3.8 1/s, `gamma1` 498 1/s^2) and was tuned with a mean `deltahat` of 5.7 deg/s,
-/// while the 0.01 deg^2 level's is fast (`k` 42 1/s, `gamma1` 3.5e5 1/s^2) and leaves
-/// `deltahat` at 0.12 deg/s. Kept through a gain change, `deltahat` takes the leaky law's
+/// kinds of observer. In the bundled schedule (fig5 at 100 Hz) as first tuned, the 0.5 deg^2
+/// level's AVE was slow (`k` 3.8 1/s, `gamma1` 498 1/s^2) and tuned with a mean `deltahat` of
+/// 5.7 deg/s, while the 0.01 deg^2 level's is fast (`k` 42 1/s, `gamma1` 3.5e5 1/s^2) and
+/// leaves `deltahat` at 0.12 deg/s (the regenerated schedule's 0.5 level shares the 0.1
+/// level's fast AVE, with 0.56 deg/s; the 1 deg^2 level's is still slow, with 7.1). Kept through a gain change, `deltahat` takes the leaky law's
 /// time constant (`1 / sigma`, 10 s) to move from one to the other, and the AVE is worse than
 /// either fixed set in the seconds after the change; set, the scheduled AVE on a
 /// 0.01 -> 0.5 deg^2 noise switch beat every fixed gain set on 26 of 40 noise draws instead of
