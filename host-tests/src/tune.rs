@@ -917,9 +917,9 @@ fn tune_both(
 /// noise (the velocity MSE through the bank, the tuner's seeds and range: a level's search
 /// can end in a worse basin than a neighbour's gains); records each level's AVE `deltahat`
 /// ([`tuned_ave_deltahat`]) and where each observer family moves on to the next level
-/// ([`switch_points`]). Returns the schedule file (with the nominal sample period the bank ran
-/// at, [`EstimateOptions::bank_period_s`]) and the printed report (each level's report, the
-/// gains taken from another level, the switch points).
+/// ([`crossover`] of the MSEs already scored). Returns the schedule file (with the nominal
+/// sample period the bank ran at, [`EstimateOptions::bank_period_s`]) and the printed report
+/// (each level's report, the gains taken from another level, the switch points).
 pub fn tune_schedule(
     samples: &[Sample],
     opts: &EstimateOptions,
@@ -981,15 +981,19 @@ pub fn tune_schedule(
             at[i][j] = bank_mse_with(samples, opts, &acc_ref, config(g), v, seeds, spec.train)?.0;
         }
     }
+    // `source[j][f]`: the level whose tuned gains level `j` runs for observer family `f`.
+    let mut source: Vec<[usize; OBSERVERS.len()]> =
+        (0..levels.len()).map(|j| [j; OBSERVERS.len()]).collect();
     let before = tuned.clone();
     for (j, &v) in levels.iter().enumerate() {
-        for (col, name) in [(0, "AVE"), (1, "ILO1"), (2, "ILO2"), (3, "ILO3"), (5, "ED")] {
+        for (f, &(col, name)) in OBSERVERS.iter().enumerate() {
             let best = (0..levels.len())
                 .min_by(|&a, &b| at[a][j][col].total_cmp(&at[b][j][col]))
                 .unwrap_or(j);
             if best == j || at[best][j][col] >= at[j][j][col] {
                 continue;
             }
+            source[j][f] = best;
             let (from, to) = (&before[best].velocity, &mut tuned[j].velocity);
             match col {
                 0 => to.ave = from.ave,
@@ -1005,10 +1009,8 @@ pub fn tune_schedule(
         }
     }
     let mut level = Vec::new();
-    let mut tuned_levels = Vec::new();
     for (g, &v) in tuned.iter().zip(levels) {
-        let cfg = config(g);
-        let deltahat = tuned_ave_deltahat(samples, opts, &cfg, v, spec.seeds, spec.train)?;
+        let deltahat = tuned_ave_deltahat(samples, opts, &config(g), v, spec.seeds, spec.train)?;
         text.push_str(&format!(
             "level {v} deg^2: AVE deltahat tuned with (mean over the run): velocity {} deg/s, AVE-AVE {} deg/s, {} deg/s^2\n",
             deltahat.velocity, deltahat.acceleration[0], deltahat.acceleration[1]
@@ -1020,14 +1022,32 @@ pub fn tune_schedule(
             ave_deltahat: Some(deltahat.into()),
             switch_up: None,
         });
-        tuned_levels.push((v, cfg));
     }
-    let switches = switch_points(samples, opts, &tuned_levels, spec.seeds, spec.train)?;
-    for (i, (l, sw)) in level.iter_mut().zip(&switches).enumerate() {
-        l.switch_up = Some(*sw);
+    // Where each observer family moves on: from the MSEs already scored (a family's velocity
+    // MSE depends only on its own gains, so level `j`'s is that of its source level's).
+    for i in 0..levels.len().saturating_sub(1) {
+        let (a, b) = (levels[i], levels[i + 1]);
+        let point = |f: usize| {
+            let ((sa, sb), col) = ((source[i][f], source[i + 1][f]), OBSERVERS[f].0);
+            let m = [
+                at[sa][i][col],
+                at[sa][i + 1][col],
+                at[sb][i][col],
+                at[sb][i + 1][col],
+            ];
+            crossover(m, a, b) as f32
+        };
+        let sw = crate::gains::SwitchUpFile {
+            ave: point(0),
+            ilo1: point(1),
+            ilo2: point(2),
+            ilo3: point(3),
+            ed: point(4),
+        };
+        level[i].switch_up = Some(sw);
         text.push_str(&format!(
-            "switch up from level {} to {} deg^2 (where each family takes the next level's gains: where the two levels' MSEs cross if they differ by more than {SWITCH_MATTERS}x at the midpoint, else the midpoint): AVE {}, ILO1 {}, ILO2 {}, ILO3 {}, ED {}\n",
-            levels[i], levels[i + 1], sw.ave, sw.ilo1, sw.ilo2, sw.ilo3, sw.ed
+            "switch up from level {a} to {b} deg^2 (where each family takes the next level's gains: where the two levels' MSEs cross if they differ by more than {SWITCH_MATTERS}x at the midpoint, else the midpoint): AVE {}, ILO1 {}, ILO2 {}, ILO3 {}, ED {}\n",
+            sw.ave, sw.ilo1, sw.ilo2, sw.ilo3, sw.ed
         ));
     }
     Ok((
@@ -1045,38 +1065,10 @@ pub fn tune_schedule(
 /// than this factor there.
 pub const SWITCH_MATTERS: f64 = 1.2;
 
-/// Where each velocity observer family (AVE, ILO1-3, ED) of a schedule moves from one level to
-/// the next (`estimators::ScheduleLevel::switch_up`), from the levels' tuned configurations
-/// `levels` (noise variance, deg^2, and bank configuration, by increasing noise): for each
-/// pair of neighbouring levels `a < b`, the velocity MSE through the bank (noise seeds
-/// `1..=seeds`, over `range`, as the tuner scores) of each level's gains at both noise
-/// levels, then [`crossover`]. One entry per level but the last.
-pub fn switch_points(
-    samples: &[Sample],
-    opts: &EstimateOptions,
-    levels: &[(f64, BankConfig)],
-    seeds: u64,
-    range: (f64, f64),
-) -> Result<Vec<crate::gains::SwitchUpFile>> {
-    let acc_ref = ave_on_rate(samples, &REFERENCE_AVE, opts)?;
-    let mse = |cfg: BankConfig, v: f64| {
-        bank_mse_with(samples, opts, &acc_ref, cfg, v, 1..=seeds.max(1), range).map(|m| m.0)
-    };
-    let mut out = Vec::new();
-    for pair in levels.windows(2) {
-        let ((a, ca), (b, cb)) = (pair[0], pair[1]);
-        let (aa, ab, ba, bb) = (mse(ca, a)?, mse(ca, b)?, mse(cb, a)?, mse(cb, b)?);
-        let at = |i: usize| crossover([aa[i], ab[i], ba[i], bb[i]], a, b) as f32;
-        out.push(crate::gains::SwitchUpFile {
-            ave: at(0),
-            ilo1: at(1),
-            ilo2: at(2),
-            ilo3: at(3),
-            ed: at(5),
-        });
-    }
-    Ok(out)
-}
+/// The velocity observer families a schedule gives per-level gains and switch points:
+/// (column of the bank's velocity MSE, name).
+const OBSERVERS: [(usize, &str); 5] =
+    [(0, "AVE"), (1, "ILO1"), (2, "ILO2"), (3, "ILO3"), (5, "ED")];
 
 /// The noise variance (deg^2) between two levels `a < b` at which level `b`'s gains become
 /// the better of the two, from the MSEs `[a's gains at a, a's at b, b's at a, b's at b]`:

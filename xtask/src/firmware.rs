@@ -1148,13 +1148,24 @@ fn max_abs_diff(a: &str, b: &str) -> Result<Vec<(String, f64)>, String> {
     Ok(header.into_iter().zip(max).collect())
 }
 
-/// Equivalence of the firmware and `nav440 estimate` on one capture, for one board.
+/// Equivalence of the firmware and `nav440 estimate` on one capture, for one board: the
+/// firmware's counters.
 fn equivalence(
     board: &Board,
     elf: &Path,
     capture: &Path,
     host_extra: &[&str],
 ) -> Result<Vec<(String, u64)>, String> {
+    equivalence_csv(board, elf, capture, host_extra).map(|(c, _)| c)
+}
+
+/// [`equivalence`], also returning the CSV both printed.
+fn equivalence_csv(
+    board: &Board,
+    elf: &Path,
+    capture: &Path,
+    host_extra: &[&str],
+) -> Result<(Vec<(String, u64)>, String), String> {
     let bytes = read_file(capture)?;
     let fw = run_capture(board, elf, &bytes, Output::Capture)?;
     let host = host_estimate(capture, host_extra)?;
@@ -1172,7 +1183,7 @@ fn equivalence(
             if counter(&c, "uart_overruns").unwrap_or(0) != 0 {
                 return Err("UART overruns reported under QEMU".into());
             }
-            Ok(c)
+            Ok((c, host))
         }
         Err(diff) => {
             let detail = max_abs_diff(&fw.stdout, &host)
@@ -1720,7 +1731,7 @@ pub fn ci_steps() -> Result<(), String> {
     for (board, elf) in &adaptive_elfs {
         let args = adaptive_host_args(board.target);
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
-        let c = equivalence(board, elf, &switch, &args)?;
+        let (c, csv) = equivalence_csv(board, elf, &switch, &args)?;
         // The gains followed the noise: the initial level, then 0.01 deg^2, then 0.5.
         let retunes = counter(&c, "yaw_retunes").unwrap_or(0);
         if retunes < 2 {
@@ -1736,7 +1747,7 @@ pub fn ci_steps() -> Result<(), String> {
         // Identical is not enough: both sides once printed a fixed-point AVE saturated at
         // 2.1e9 deg/s (docs/CALIBRATION.md, "Gains at the edge of the Euler step"). The
         // capture's peak rate is 265 deg/s.
-        let peak = peak_velocity(&host_estimate(&switch, &args)?, "yaw_")?;
+        let peak = peak_velocity(&csv, "yaw_")?;
         if peak >= 1000.0 {
             return Err(format!(
                 "the adaptive firmware on {} printed a yaw velocity estimate of {peak} deg/s on the noise switch (peak rate 265 deg/s)",
