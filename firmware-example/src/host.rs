@@ -3,7 +3,8 @@
 //!
 //! Under QEMU (`-semihosting-config enable=on,target=native`) the exit status becomes QEMU's
 //! exit code: 0 for [`exit`]`(true)`, 1 for `exit(false)`, a panic or a HardFault.
-//! On a real board the debug probe (probe-rs) services the same calls.
+//! On a chip ([`crate::board::host_present`] false) no semihosting call is made (one without a
+//! debugger faults): an exit parks the core, a fault parks it after probe-rs has seen it.
 
 use core::fmt::Write as _;
 use cortex_m_rt::{exception, ExceptionFrame};
@@ -28,6 +29,9 @@ pub fn stderr(args: core::fmt::Arguments<'_>) {
 /// that lets a 32-bit guest give QEMU a status other than 0/1 (QEMU exits with `code`).
 /// `code` 0 is the same as [`exit`]`(true)`.
 pub fn exit_code(code: u32) -> ! {
+    if !crate::board::host_present() {
+        park()
+    }
     /// `ADP_Stopped_ApplicationExit`: the reason code of a normal application exit.
     const APPLICATION_EXIT: usize = 0x2_0026;
     /// `SYS_EXIT_EXTENDED`.
@@ -61,19 +65,28 @@ pub fn cmdline(buf: &mut [u8]) -> &[u8] {
 
 /// Ends the program: semihosting exit with status 0 (`success`) or 1.
 pub fn exit(success: bool) -> ! {
+    if !crate::board::host_present() {
+        park()
+    }
     debug::exit(if success {
         debug::EXIT_SUCCESS
     } else {
         debug::EXIT_FAILURE
     });
-    // Only reached without a debugger/host that services semihosting: park the core.
+    // Only reached without a debugger/host that services semihosting.
+    park()
+}
+
+/// Stops for good: interrupts masked, the core asleep (a probe can still attach and read).
+pub fn park() -> ! {
+    cortex_m::interrupt::disable();
     loop {
         cortex_m::asm::wfi();
     }
 }
 
-// The real board with RTT output uses panic-probe's handler instead.
-#[cfg(not(all(feature = "board-stm32f405", not(feature = "semihosting-log"))))]
+// The boards with RTT output use panic-probe's handler instead.
+#[cfg(not(feature = "rtt"))]
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo<'_>) -> ! {
     cortex_m::interrupt::disable();
@@ -85,6 +98,9 @@ fn panic(info: &core::panic::PanicInfo<'_>) -> ! {
 unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
     // Integer-only code: safe to run on a core without an FPU (e.g. a hard-float image
     // started on the Cortex-M3 board faults at its first FP instruction and lands here).
+    if !crate::board::host_present() {
+        park()
+    }
     stderr(format_args!(
         "firmware: HardFault at pc={:#010x} lr={:#010x}\n",
         frame.pc(),

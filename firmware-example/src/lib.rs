@@ -1,9 +1,11 @@
 //! Board support and the NAV440 pipeline shared by the firmware binaries.
 //!
+//! * [`board`]: one module per board (clocks, UART pins, output transport, memory map), picked
+//!   by a `board-*` feature; the QEMU `mps2` boards without one. See docs/PORTING.md.
 //! * [`uart`]: the NAV440 UART: interrupt-driven receive into a `heapless` SPSC queue, polled
-//!   transmit, run-time baud change, as `embedded_io` 0.7 and `embedded_hal_nb` traits; the
-//!   CMSDK APB UART0 of the QEMU `mps2-an385/386` boards, or STM32F4 USART1 through
-//!   `stm32f4xx-hal` (`board-stm32f405`); plus the harness's control channel (UART1/USART2).
+//!   transmit, run-time baud change, as `embedded_io` 0.7 and `embedded_hal_nb` traits, on the
+//!   board's hardware; plus the harness's control channel.
+//! * [`log`]: the defmt transport (RTT for a probe, semihosting for QEMU).
 //! * [`time`]: SysTick at 1 kHz, microseconds since start, `embedded_hal::delay::DelayNs`.
 //! * [`host`]: semihosting output, exit codes, the panic handler and the HardFault handler
 //!   (every failure ends the run with a non-zero exit status instead of hanging).
@@ -18,17 +20,15 @@
 //! `VSQRT` instruction, NVIC unmasking); every `unsafe` block carries a `// SAFETY:` comment.
 #![no_std]
 
-// The defmt transport (the `#[defmt::global_logger]`): RTT on the real board, read by probe-rs;
-// semihosting on the emulated boards and with `semihosting-log`.
-#[cfg(all(feature = "board-stm32f405", not(feature = "semihosting-log")))]
-use defmt_rtt as _;
-#[cfg(not(all(feature = "board-stm32f405", not(feature = "semihosting-log"))))]
-use defmt_semihosting as _;
-#[cfg(all(feature = "board-stm32f405", not(feature = "semihosting-log")))]
+// Boards with RTT output use panic-probe's handler (the panic message through defmt, then a
+// fault that probe-rs reports); the others `host`'s (message and exit status to QEMU).
+#[cfg(feature = "rtt")]
 use panic_probe as _;
 
+pub mod board;
 pub mod cycles;
 pub mod host;
+pub mod log;
 pub mod out;
 pub mod pipeline;
 #[cfg(not(any(feature = "fixed-point", not(target_abi = "eabihf"))))]

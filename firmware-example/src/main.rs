@@ -19,7 +19,7 @@
 //!    The rule depends on byte counts only, never on the host's speed.
 //!
 //! Every failure sends one `firmware: ...` message and exits with a documented
-//! status ([`Status`]); with the real-board profile (`board-stm32f405`) a failed boot is
+//! status ([`Status`]); on a real board (`board::RETRY_FOREVER`) a failed boot is
 //! retried forever, one diagnostic line per attempt.
 //!
 //! # Replay mode (`cargo xtask qemu FILE`)
@@ -33,7 +33,7 @@ use core::sync::atomic::{AtomicBool, Ordering};
 use cortex_m_rt::entry;
 use embedded_io::{Read as _, ReadReady as _};
 use firmware_example::uart::{Board, Control, Uart0};
-use firmware_example::{host, out, pipeline, stack, time};
+use firmware_example::{board, host, log, out, pipeline, stack, time};
 use nav440_proto::boot::{self, BootError, Options, Report, Target};
 use nav440_proto::driver::{IoDriver, Timing};
 use nav440_proto::{Baud, PacketType, Parser};
@@ -48,20 +48,6 @@ const _: () = assert!(
 
 /// Local UART rate before the search (the NAV440's factory default; the search tries all).
 const POWER_UP_BAUD: u32 = 38_400;
-
-/// Reply time-out of each request of the boot sequence, ms. The real-board profile waits
-/// longer: under QEMU `netduinoplus2` its SysTick runs 168/16 times fast (see `time`), so
-/// 1000 ms nominal is about 95 ms of wall time there, still well above the emulated round
-/// trip; on a real board a failed search then takes 12 s per attempt.
-const REPLY_TIMEOUT_MS: u32 = if cfg!(feature = "board-stm32f405") {
-    1000
-} else {
-    500
-};
-
-/// Pause between two boot attempts on the real-board profile, ms (nominal; about 95 ms of
-/// wall time under QEMU `netduinoplus2`).
-const RETRY_PAUSE_MS: u32 = 1000;
 
 /// Magic at the start of a finite input (replay mode).
 const LENGTH_MAGIC: [u8; 4] = *b"N4LP";
@@ -108,6 +94,7 @@ fn main() -> ! {
     // First, before any interrupt is enabled: the stack high-water mark then covers the
     // interrupt handlers too.
     stack::paint();
+    log::init();
     let Some(core) = cortex_m::Peripherals::take() else {
         defmt::println!("firmware: core peripherals already taken");
         fail(Status::Internal)
@@ -142,8 +129,8 @@ fn main() -> ! {
 
 /// `replay` is on the semihosting command line (`cargo xtask qemu FILE`).
 fn replay_requested() -> bool {
-    // The real-board profile always talks to a unit (and a probe may not serve the call).
-    if cfg!(feature = "board-stm32f405") {
+    // A real board always talks to a unit (and a probe may not serve the call).
+    if !board::REPLAY {
         return false;
     }
     let mut buf = [0u8; 96];
@@ -161,7 +148,7 @@ type Pending = heapless::Vec<u8, { nav440_proto::MAX_FRAME }>;
 fn configure(uart: Uart0, delay: &mut time::Delay) -> (Uart0, Report, Pending) {
     let mut driver = IoDriver::new(uart);
     driver.set_timing(Timing {
-        reply_timeout_ms: REPLY_TIMEOUT_MS,
+        reply_timeout_ms: board::REPLY_TIMEOUT_MS,
         ..Timing::DEFAULT
     });
     let mut attempt: u32 = 0;
@@ -195,11 +182,11 @@ fn configure(uart: Uart0, delay: &mut time::Delay) -> (Uart0, Report, Pending) {
                     attempt,
                     text.as_str()
                 );
-                if !cfg!(feature = "board-stm32f405") {
+                if !board::RETRY_FOREVER {
                     fail(boot_status(&e))
                 }
                 // Real board: one attempt (and one diagnostic line) per second at most.
-                embedded_hal::delay::DelayNs::delay_ms(delay, RETRY_PAUSE_MS);
+                embedded_hal::delay::DelayNs::delay_ms(delay, board::RETRY_PAUSE_MS);
             }
         }
     }
@@ -292,7 +279,7 @@ fn stream(
                 TARGET.packet.name(),
                 uart_bytes(pipe)
             );
-            if !cfg!(feature = "board-stm32f405") {
+            if !board::RETRY_FOREVER {
                 fail(Status::UnitReset)
             }
             return false;

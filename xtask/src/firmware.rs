@@ -13,8 +13,107 @@ const FW: &str = "firmware-example";
 const FW_BIN: &str = "firmware-example";
 /// Instruction-count benchmark binary.
 const BENCH_BIN: &str = "bench";
-/// Feature of the real-board profile (STM32F405, see the firmware README section).
+/// Feature of the STM32F405 board image (run on QEMU `netduinoplus2` too).
 const STM32_FEATURE: &str = "board-stm32f405";
+
+/// The board images that only build (no emulator runs them): (feature, target, board name in
+/// the ELF).
+const BUILT_ONLY_BOARDS: &[(&str, &str, &str)] = &[
+    (
+        "board-nucleo-f411re",
+        "thumbv7em-none-eabihf",
+        "nucleo-f411re",
+    ),
+    ("board-rp-pico", "thumbv6m-none-eabi", "rp-pico"),
+];
+
+/// The memory-map check of one image (`cargo xtask check-map`), with a line saying so.
+fn check_map(elf: &Path, board: &str) -> Result<(), String> {
+    let r = crate::elf::check_memory_map(elf, Some(board))?;
+    eprintln!(
+        "xtask: OK: memory map of {}: board {}, {} loadable sections inside its chip's memory, vector table at {:#010x}",
+        elf.file_name().map(|n| n.to_string_lossy()).unwrap_or_default(),
+        r.board,
+        r.sections,
+        r.vector_table
+    );
+    Ok(())
+}
+
+/// The memory-map check refuses the STM32F405 image with its vector table moved to address 0
+/// (where a link with the QEMU map put it) and with its loadable bytes loaded at 0, naming the
+/// section or segment and the address.
+fn map_check_catches_an_image_at_0(f405: &Path) -> Result<(), String> {
+    let data = read_file(f405)?;
+    let cases = [
+        (
+            crate::elf::with_section_address(&data, ".vector_table", 0)?,
+            "section .vector_table at 0x00000000",
+        ),
+        (
+            crate::elf::with_load_address(&data, 0)?,
+            "is loaded at 0x00000000",
+        ),
+    ];
+    for (i, (bytes, want)) in cases.iter().enumerate() {
+        let moved = work_dir()?.join(format!("firmware-stm32f405-moved-{i}.elf"));
+        std::fs::write(&moved, bytes)
+            .map_err(|e| format!("cannot write {}: {e}", moved.display()))?;
+        match crate::elf::check_memory_map(&moved, Some("stm32f405")) {
+            Err(e) if e.contains(want) => {
+                eprintln!("xtask: OK: the memory-map check refuses a moved image: {e}")
+            }
+            Err(e) => {
+                return Err(format!(
+                    "the memory-map check failed otherwise on a moved image: {e}"
+                ))
+            }
+            Ok(_) => {
+                return Err(format!(
+                    "the memory-map check accepted a moved image ({want})"
+                ))
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `cargo xtask flash ELF` (the runner of `cargo run`): a board image's memory map is
+/// checked, then `probe-rs run --chip CHIP ELF` flashes it and prints its defmt output.
+pub fn flash(elf: &Path) -> Result<(), String> {
+    let board = crate::elf::board_of(elf)?.ok_or_else(|| {
+        format!(
+            "{} names no board (no NAV440_BOARD symbol): not a firmware image of this repository",
+            elf.display()
+        )
+    })?;
+    let chip = crate::elf::chip(&board)?;
+    let Some(probe_chip) = chip.probe_chip else {
+        return Err(format!(
+            "{} is an image of the emulated board `{board}` ({}), not of a chip: run it with `cargo xtask qemu FILE`, `demo` or `unit`; to flash a board build it with its feature, e.g. `--features board-stm32f405` (docs/PORTING.md)",
+            elf.display(),
+            chip.part
+        ));
+    };
+    crate::elf::check_memory_map(elf, Some(&board))?;
+    eprintln!(
+        "xtask: flashing {} ({}) with probe-rs, chip {probe_chip}",
+        elf.display(),
+        chip.part
+    );
+    let status = Command::new("probe-rs")
+        .args(["run", "--chip", probe_chip])
+        .arg(elf)
+        .status()
+        .map_err(|e| {
+            format!("cannot run probe-rs ({e}): install it (https://probe.rs, `cargo install probe-rs-tools`)")
+        })?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err(format!("probe-rs run ended with {status}"))
+    }
+}
 
 /// Clock of the reference real target for the budget (STM32F405-class Cortex-M4F), Hz.
 const REF_CLOCK_HZ: f64 = 168e6;
@@ -856,6 +955,11 @@ pub fn size_components() -> Result<(), String> {
 }
 
 fn llvm_size() -> Result<PathBuf, String> {
+    llvm_tool("llvm-size")
+}
+
+/// A tool of rustup's `llvm-tools` component (pinned in rust-toolchain.toml).
+fn llvm_tool(name: &str) -> Result<PathBuf, String> {
     let out = |args: &[&str]| -> Result<String, String> {
         let o = Command::new("rustc")
             .args(args)
@@ -871,7 +975,8 @@ fn llvm_size() -> Result<PathBuf, String> {
     let p = Path::new(sysroot.trim())
         .join("lib/rustlib")
         .join(host)
-        .join("bin/llvm-size");
+        .join("bin")
+        .join(name);
     if p.is_file() {
         Ok(p)
     } else {
@@ -1418,11 +1523,14 @@ fn unit_case(
 /// The firmware against `nav440 sim` on every emulated board and the STM32 profile: every
 /// bundled capture (CSV identical to `nav440 estimate` on what the unit streamed after
 /// configuration) and the faults, each with its diagnostic and exit status.
-fn unit_ci(captures: &[PathBuf], short: &Path) -> Result<(), String> {
+fn unit_ci(captures: &[PathBuf], short: &Path, only: Option<Board>) -> Result<(), String> {
     let nav440 = nav440_bin()?;
     let short = short.to_path_buf();
     let mut boards: Vec<Board> = qemu::BOARDS.to_vec();
     boards.push(qemu::STM32_BOARD);
+    if let Some(b) = only {
+        boards.retain(|x| x.name == b.name);
+    }
     for board in &boards {
         let elf = build(board.target, board.features, FW_BIN)?;
         let stm32 = board.features.contains(&STM32_FEATURE);
@@ -1570,11 +1678,11 @@ pub fn embassy() -> Result<(), String> {
 }
 
 /// `cargo xtask ci-unit`: the unit runs of `ci-firmware` (QEMU required).
-pub fn ci_unit() -> Result<(), String> {
+pub fn ci_unit(only: Option<Board>) -> Result<(), String> {
     qemu::ensure_qemu()?;
     let start = std::time::Instant::now();
     let short = root().join("host-tests/data/sin5_a2_25hz_weekwrap.bin");
-    unit_ci(&data_captures(), &short)?;
+    unit_ci(&data_captures(), &short, only)?;
     eprintln!(
         "xtask: firmware against nav440 sim: every case passed in {:.0} s",
         start.elapsed().as_secs_f64()
@@ -1610,22 +1718,35 @@ pub fn ci_steps() -> Result<(), String> {
     }
     let mut elfs = Vec::new();
     for board in qemu::BOARDS {
-        elfs.push((*board, build(board.target, &[], FW_BIN)?));
+        let elf = build(board.target, &[], FW_BIN)?;
+        check_map(&elf, "mps2")?;
+        elfs.push((*board, elf));
     }
-    // The real-board profile: same code, its own memory map (see firmware README section).
+    // The board images: each with its own memory map, checked from the ELF. The STM32F405
+    // image also runs on QEMU netduinoplus2 (`ci_unit`); the others only build.
     clippy_firmware("thumbv7em-none-eabihf", Some(STM32_FEATURE))?;
-    build("thumbv7em-none-eabihf", &[STM32_FEATURE], FW_BIN)?;
+    let f405 = build("thumbv7em-none-eabihf", &[STM32_FEATURE], FW_BIN)?;
+    check_map(&f405, "stm32f405")?;
+    map_check_catches_an_image_at_0(&f405)?;
+    for (feature, target, board) in BUILT_ONLY_BOARDS {
+        clippy_firmware(target, Some(feature))?;
+        check_map(&build(target, &[feature], FW_BIN)?, board)?;
+    }
     // The small-MCU firmware (one axis, profile `small`): lint and build for M4F and thumbv6m.
     let mut small_elfs = Vec::new();
     for (board, label) in small_boards() {
         clippy_firmware(board.target, Some(ONE_AXIS))?;
-        small_elfs.push((board, label, build_small(board.target, FW_BIN)?));
+        let elf = build_small(board.target, FW_BIN)?;
+        check_map(&elf, "mps2")?;
+        small_elfs.push((board, label, elf));
     }
     // The firmware with noise-adaptive gains: lint and build for M4F and thumbv6m.
     let mut adaptive_elfs = Vec::new();
     for board in adaptive_boards() {
         clippy_firmware(board.target, Some(ADAPTIVE))?;
-        adaptive_elfs.push((board, build(board.target, &[ADAPTIVE], FW_BIN)?));
+        let elf = build(board.target, &[ADAPTIVE], FW_BIN)?;
+        check_map(&elf, "mps2")?;
+        adaptive_elfs.push((board, elf));
     }
     if !qemu_ok {
         return Ok(());
@@ -1797,7 +1918,7 @@ pub fn ci_steps() -> Result<(), String> {
         Ok(_) => return Err("input without the length prefix was accepted".into()),
     }
     // The firmware against the simulated unit: boot, configure, stream, estimate, faults.
-    ci_unit()?;
+    ci_unit(None)?;
     // A panic ends the run with exit status 1 and its message.
     let panic_elf = build(m4f_board.target, &[], "panic_check")?;
     match qemu::run_plain(&m4f_board, &panic_elf, &[], Duration::from_secs(60)) {

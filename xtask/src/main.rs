@@ -12,8 +12,13 @@
 //! * `cargo xtask msrv`  - the libraries' declared `rust-version` checked with that toolchain.
 //! * `cargo xtask package` - the libraries' examples run and `cargo publish --dry-run`.
 //! * `cargo xtask embassy` - the embassy example (async driver) under QEMU against `nav440 sim`.
+//! * `cargo xtask flash ELF` - the runner of `cargo run` for the firmware: checks a board
+//!   image's memory map and flashes it with `probe-rs run --chip` of its board; refuses an
+//!   image of the emulated boards.
+//! * `cargo xtask check-map ELF...` - the memory-map check of `ci` on any images.
 
 mod defmt_out;
+mod elf;
 mod firmware;
 mod package;
 mod qemu;
@@ -49,7 +54,11 @@ enum Cmd {
     CiFirmware,
     /// Only the firmware-against-`nav440 sim` runs of `ci-firmware` (every board, captures
     /// and faults).
-    CiUnit,
+    CiUnit {
+        /// Only this board (see `unit --help`).
+        #[arg(long, value_parser = qemu::unit_board)]
+        board: Option<Board>,
+    },
     /// The firmware in QEMU against `nav440 sim` streaming the bundled capture: boot,
     /// configuration, stream, estimates and a summary.
     Demo {
@@ -118,6 +127,25 @@ enum Cmd {
     /// The embassy example (async driver on embassy-executor) built for thumbv7em and run on
     /// QEMU `mps2-an386` against `nav440 sim`.
     Embassy,
+    /// Flashes a board image with probe-rs and prints its defmt output (the runner of `cargo
+    /// run` for the firmware, `.cargo/config.toml`): reads the board from the ELF, checks its
+    /// memory map, then runs `probe-rs run --chip CHIP ELF`. An image of the emulated `mps2`
+    /// boards is refused (run it with `cargo xtask qemu`, `demo` or `unit`).
+    Flash {
+        /// The firmware ELF (cargo passes it).
+        elf: PathBuf,
+        /// Further arguments (passed on to the firmware by cargo; not used).
+        #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
+        rest: Vec<String>,
+    },
+    /// Checks firmware images' memory maps against their boards' chips (what `ci` checks for
+    /// every image it builds): every loadable section inside flash or RAM, the vector table at
+    /// the boot address.
+    CheckMap {
+        /// Firmware ELF files.
+        #[arg(required = true)]
+        elfs: Vec<PathBuf>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -132,8 +160,20 @@ fn main() -> ExitCode {
             }
         }
         Cmd::Ci => ci(),
+        Cmd::Flash { elf, rest: _ } => firmware::flash(&elf),
+        Cmd::CheckMap { elfs } => elfs.iter().try_for_each(|e| {
+            let r = elf::check_memory_map(e, None)?;
+            eprintln!(
+                "xtask: OK: {}: board {}, {} loadable sections inside its chip's memory, vector table at {:#010x}",
+                e.display(),
+                r.board,
+                r.sections,
+                r.vector_table
+            );
+            Ok(())
+        }),
         Cmd::CiFirmware => firmware::ci_steps(),
-        Cmd::CiUnit => firmware::ci_unit(),
+        Cmd::CiUnit { board } => firmware::ci_unit(board),
         Cmd::Demo { board, capture } => firmware::demo(board, capture),
         Cmd::Qemu {
             file,

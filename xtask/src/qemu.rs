@@ -52,16 +52,19 @@ pub const BOARDS: &[Board] = &[
     },
 ];
 
-/// The real-board profile (`board-stm32f405` on stm32f4xx-hal) on QEMU's STM32F405 board;
-/// `cargo xtask unit --board netduinoplus2` (its firmware retries a failed boot forever).
+/// The STM32F405 board image (`board-stm32f405` on stm32f4xx-hal, linked at the chip's flash,
+/// `0x0800_0000`) on QEMU's STM32F405 board: the very ELF `cargo run --features
+/// board-stm32f405` flashes; `cargo xtask unit --board netduinoplus2` (its firmware retries a
+/// failed boot forever).
 pub const STM32_BOARD: Board = Board {
     name: "netduinoplus2",
     machine: "netduinoplus2",
     cpu: "cortex-m4",
     target: "thumbv7em-none-eabihf",
-    about: "STM32F405 (real-board profile board-stm32f405 on stm32f4xx-hal), f32 bank",
-    // `semihosting-log`: defmt over semihosting (QEMU cannot carry the real board's RTT).
-    features: &["board-stm32f405", "semihosting-log"],
+    about: "STM32F405 (board image board-stm32f405 on stm32f4xx-hal), f32 bank",
+    // The image writes its defmt frames to RTT and, when it finds itself emulated, also to the
+    // semihosting stdout (firmware-example/src/log.rs).
+    features: &["board-stm32f405"],
 };
 
 /// Looks a board up by name among [`BOARDS`] and [`STM32_BOARD`] (`cargo xtask unit`).

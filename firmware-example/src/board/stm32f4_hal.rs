@@ -1,5 +1,6 @@
-//! STM32F405/F407 (`board-stm32f405` profile) on `stm32f4xx-hal`: clocks, pins and USARTs
-//! are set up by the HAL, not by register constants of this crate.
+//! The STM32F4 boards on `stm32f4xx-hal` (`stm32f405`, `nucleo_f411re`; the chip is the HAL's
+//! feature, which the board feature selects): clocks, pins and USARTs are set up by the HAL,
+//! not by register constants of this crate.
 //!
 //! * Clocks: `rcc::Config::hsi()`, the internal 16 MHz RC oscillator, no PLL: `freeze` then
 //!   waits on nothing (QEMU 7.2's `netduinoplus2` leaves RCC unimplemented, so a wait for
@@ -29,6 +30,16 @@ static RX: Mutex<RefCell<Option<Rx<Nav>>>> = Mutex::new(RefCell::new(None));
 
 /// NVIC number of the USART1 interrupt.
 pub const RX_IRQ: u16 = 37;
+
+/// True when the image runs under QEMU (`netduinoplus2`), not on a chip: QEMU does not model
+/// the RCC (its registers read 0), while on a chip `RCC_CR` always has HSION and HSIRDY set
+/// once `init` has frozen the clocks on the HSI (reset value `0x0000_xx83`). Decides whether a
+/// semihosting host is there (output, exit status); reading it has no side effect.
+pub fn emulated() -> bool {
+    // SAFETY: a read of RCC_CR, a valid MMIO register of every STM32F4; no side effect.
+    let cr = unsafe { (*pac::RCC::ptr()).cr().read().bits() };
+    cr == 0
+}
 
 /// Baud rate of the control channel (the model ignores it).
 const CONTROL_BAUD: u32 = 115_200;
@@ -104,8 +115,8 @@ impl Tx {
     /// Switches USART1 to `baud` Bd: waits for the byte in flight, then rebuilds the USART
     /// through the HAL with interrupts masked. Fails (and leaves the rate unchanged) for a
     /// rate the APB2 clock cannot produce with 16x oversampling.
-    pub fn set_baud(&mut self, baud: u32) -> Result<(), super::BaudError> {
-        let err = super::BaudError { baud };
+    pub fn set_baud(&mut self, baud: u32) -> Result<(), crate::uart::BaudError> {
+        let err = crate::uart::BaudError { baud };
         let pclk2 = self.rcc.clocks.pclk2().raw();
         if baud == 0 || baud > pclk2 / 16 {
             return Err(err);
@@ -157,16 +168,16 @@ pub fn rx_full() -> bool {
 
 /// Pops the received byte through the HAL; a line error (overrun, framing, noise, parity)
 /// has already cost the byte: `Lost`.
-pub fn poll_rx() -> super::RxPoll {
+pub fn poll_rx() -> crate::uart::RxPoll {
     critical_section::with(|cs| {
         let mut rx = RX.borrow_ref_mut(cs);
         let Some(rx) = rx.as_mut() else {
-            return super::RxPoll::Empty;
+            return crate::uart::RxPoll::Empty;
         };
         match embedded_hal_nb::serial::Read::read(rx) {
-            Ok(b) => super::RxPoll::Byte(b),
-            Err(nb::Error::WouldBlock) => super::RxPoll::Empty,
-            Err(nb::Error::Other(_)) => super::RxPoll::Lost,
+            Ok(b) => crate::uart::RxPoll::Byte(b),
+            Err(nb::Error::WouldBlock) => crate::uart::RxPoll::Empty,
+            Err(nb::Error::Other(_)) => crate::uart::RxPoll::Lost,
         }
     })
 }
@@ -182,12 +193,12 @@ pub fn clear_rx_interrupt() {}
 /// Masks the USART1 line in the NVIC (not RXNEIE: QEMU's USART model keeps its line asserted
 /// while RXNE is set, which livelocks an RXNEIE mask).
 pub fn pause_rx() {
-    cortex_m::peripheral::NVIC::mask(super::Irq(RX_IRQ));
+    cortex_m::peripheral::NVIC::mask(crate::uart::Irq(RX_IRQ));
 }
 
 /// Unmasks the USART1 line in the NVIC.
 pub fn resume_rx() {
     // SAFETY: the handler for this IRQ only touches the receive queue's producer (behind a
     // critical section), atomics and USART1, so unmasking it breaks no critical section.
-    unsafe { cortex_m::peripheral::NVIC::unmask(super::Irq(RX_IRQ)) };
+    unsafe { cortex_m::peripheral::NVIC::unmask(crate::uart::Irq(RX_IRQ)) };
 }

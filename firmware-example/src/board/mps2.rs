@@ -1,3 +1,8 @@
+//! QEMU's `mps2-an385` (Cortex-M3) and `mps2-an386` (Cortex-M4F) boards, emulated only: the
+//! default board of the firmware (no `board-*` feature). Memory map `mps2.x`: 1 MiB of code
+//! memory at 0 and 128 KiB of RAM at `0x2000_0000`, the size of an STM32F405-class part, so an
+//! image that fits here fits there. Output: defmt frames on the semihosting stdout.
+//!
 //! Registers of the CMSDK APB UARTs of the QEMU `mps2-an385`/`mps2-an386` boards: UART0
 //! (base `0x4000_4000`, RX interrupt = IRQ 0) carries the NAV440 link, UART1 (base
 //! `0x4000_5000`, polled) the harness's control channel; APB clock 25 MHz.
@@ -5,6 +10,26 @@
 //! CMSDK APB UART TRM: DATA +0x0, STATE +0x4 (bit0 TX full, bit1 RX full, bit2 TX overrun,
 //! bit3 RX overrun; write 1 to clear an overrun bit), CTRL +0x8 (bit0 TX enable, bit1 RX
 //! enable, bit3 RX interrupt enable), INTSTATUS/INTCLEAR +0xC (bit1 RX), BAUDDIV +0x10.
+
+/// Board name (`NAV440_BOARD` in the ELF).
+pub const NAME: &str = "mps2";
+/// Emulated only: no probe-rs chip.
+pub const PROBE_CHIP: Option<&str> = None;
+/// Reply time-out of each boot request, ms (SysTick follows the host's clock under QEMU).
+pub const REPLY_TIMEOUT_MS: u32 = 500;
+/// A failed boot or a unit reset ends the run with a status (the harness reads it).
+pub const RETRY_FOREVER: bool = false;
+/// Pause between two boot attempts, ms (unused: no retry).
+pub const RETRY_PAUSE_MS: u32 = 1000;
+/// The board runs captures too (`replay` on the semihosting command line).
+pub const REPLAY: bool = true;
+/// No RTT: QEMU has no probe to read it.
+pub const RTT: bool = false;
+
+/// QEMU always services semihosting (`-semihosting-config enable=on`).
+pub fn host_present() -> bool {
+    true
+}
 
 const BASE: usize = 0x4000_4000;
 /// UART1: the control channel (see [`Control`]).
@@ -108,9 +133,9 @@ impl Tx {
 
     /// Sets the baud divider for `baud` Bd (QEMU's model ignores the rate; the API is the
     /// STM32 backend's). Never fails here.
-    pub fn set_baud(&mut self, baud: u32) -> Result<(), super::BaudError> {
+    pub fn set_baud(&mut self, baud: u32) -> Result<(), crate::uart::BaudError> {
         if baud == 0 {
-            return Err(super::BaudError { baud });
+            return Err(crate::uart::BaudError { baud });
         }
         write_reg(BAUDDIV, bauddiv(baud));
         Ok(())
@@ -139,11 +164,11 @@ pub fn rx_full() -> bool {
 }
 
 /// Pops the received byte, if any (never `Lost`: the overrun flag is read by [`take_overrun`]).
-pub fn poll_rx() -> super::RxPoll {
+pub fn poll_rx() -> crate::uart::RxPoll {
     if rx_full() {
-        super::RxPoll::Byte((read_reg(DATA) & 0xFF) as u8)
+        crate::uart::RxPoll::Byte((read_reg(DATA) & 0xFF) as u8)
     } else {
-        super::RxPoll::Empty
+        crate::uart::RxPoll::Empty
     }
 }
 

@@ -1,7 +1,8 @@
 //! The NAV440 UART shared by the boards: interrupt-driven receive, polled transmit, a
 //! run-time baud change, and the harness's control channel. The hardware access lives in
-//! [`hw`] (CMSDK APB UART0/UART1 of the QEMU `mps2-an385`/`mps2-an386` boards by default,
-//! STM32F4 USART1/USART2 through `stm32f4xx-hal` with the `board-stm32f405` feature).
+//! the board module ([`crate::board`]: CMSDK APB UART0/UART1 of the QEMU `mps2` boards, the
+//! STM32F4 USART1/USART2 through `stm32f4xx-hal`, the RP2040's UART0/UART1 through
+//! `rp2040-hal`).
 //!
 //! [`Uart0`] implements `embedded_io::{Read, ReadReady, Write, WriteReady}` (0.7) and
 //! `embedded_hal_nb::serial::{Read, Write}`; [`Uart0::set_baud`] changes the line rate
@@ -24,12 +25,7 @@ use cortex_m::interrupt::InterruptNumber;
 use critical_section::{CriticalSection, Mutex};
 use heapless::spsc::{Consumer, Producer, Queue};
 
-#[cfg(not(feature = "board-stm32f405"))]
-#[path = "cmsdk.rs"]
-pub mod hw;
-#[cfg(feature = "board-stm32f405")]
-#[path = "stm32f4.rs"]
-pub mod hw;
+use crate::board as hw;
 
 pub use hw::Control;
 

@@ -1,0 +1,37 @@
+//! STM32F405/F407 boards (feature `board-stm32f405`; stm32f4xx-hal with `stm32f405`), e.g. the
+//! Netduino Plus 2, an STM32F4DISCOVERY (F407) or any F405RG board.
+//!
+//! * Clocks: the 16 MHz HSI, no PLL (see [`super::stm32f4_hal`]).
+//! * NAV440: USART1, TX PA9, RX PA10 (AF7), IRQ 37, interrupt-driven receive.
+//! * Control channel (test harness only): USART2, TX PA2, RX PA3 (AF7), polled.
+//! * Time base: SysTick on HCLK (16 MHz), [`crate::time`].
+//! * Output: defmt frames into the RTT up-channel `defmt` (probe-rs reads it); under QEMU
+//!   `netduinoplus2` ([`host_present`]) the same frames also go to the semihosting stdout, so
+//!   CI runs the very ELF that is flashed.
+//! * Memory map: `stm32f405.x` (flash at `0x0800_0000`).
+//! * Probe: `probe-rs run --chip STM32F405RGTx` (`cargo run`, through `cargo xtask flash`).
+
+pub use super::stm32f4_hal::*;
+
+/// Board name (`NAV440_BOARD` in the ELF).
+pub const NAME: &str = "stm32f405";
+/// probe-rs chip name.
+pub const PROBE_CHIP: Option<&str> = Some("STM32F405RGTx");
+/// Reply time-out of each boot request, ms. Under QEMU `netduinoplus2` SysTick runs 168/16
+/// times fast (see `crate::time`), so 1000 ms nominal is about 95 ms of wall time there, still
+/// well above the emulated round trip; on a board a failed search takes 12 s per attempt.
+pub const REPLY_TIMEOUT_MS: u32 = 1000;
+/// A failed boot or a unit reset is retried for ever (one diagnostic line per attempt).
+pub const RETRY_FOREVER: bool = true;
+/// Pause between two boot attempts, ms (nominal; about 95 ms of wall time under QEMU).
+pub const RETRY_PAUSE_MS: u32 = 1000;
+/// Always talks to a unit (a probe may not serve the semihosting command line).
+pub const REPLAY: bool = false;
+/// defmt frames go to RTT.
+pub const RTT: bool = true;
+
+/// A semihosting host is there: only under QEMU ([`emulated`]); on a chip a semihosting call
+/// without a debugger faults.
+pub fn host_present() -> bool {
+    emulated()
+}

@@ -1,0 +1,347 @@
+//! What a firmware image is, read from its ELF: the board it was built for (the symbol
+//! `NAV440_BOARD`) and whether every loadable byte lies where that board's chip has memory.
+//!
+//! The chips' memories come from their reference manuals and data sheets, not from the
+//! linker scripts (`firmware-example/src/board/*.x`) the images were linked with: the check
+//! is what catches a wrong map.
+
+use object::{Object, ObjectSection, ObjectSegment, ObjectSymbol, SectionFlags};
+use std::path::Path;
+
+/// An address range, bytes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Region {
+    /// Name for messages.
+    pub name: &'static str,
+    /// First address.
+    pub origin: u64,
+    /// Bytes.
+    pub length: u64,
+}
+
+impl Region {
+    fn contains(&self, start: u64, len: u64) -> bool {
+        start >= self.origin && start.saturating_add(len) <= self.origin + self.length
+    }
+}
+
+/// A board's chip: where code may be stored (flash) and where data may live (RAM).
+#[derive(Clone, Copy, Debug)]
+pub struct Chip {
+    /// The firmware's board name (`NAV440_BOARD`).
+    pub board: &'static str,
+    /// What it is, for messages and docs.
+    pub part: &'static str,
+    /// The probe-rs chip name, `None` for an emulated-only board.
+    pub probe_chip: Option<&'static str>,
+    /// Non-volatile code memory.
+    pub flash: Region,
+    /// Static RAM usable for `.data`, `.bss` and the stack.
+    pub ram: Region,
+    /// Where the vector table must be: the address the core boots from (the flash origin,
+    /// or after a second-stage boot loader).
+    pub vector_table: u64,
+}
+
+/// Every board image the firmware builds.
+pub const CHIPS: &[Chip] = &[
+    Chip {
+        board: "mps2",
+        part: "QEMU mps2-an385/an386 (ARM AN385/AN386: 4 MiB code SSRAM at 0, 4 MiB SSRAM at 0x2000_0000)",
+        probe_chip: None,
+        flash: Region {
+            name: "code memory",
+            origin: 0,
+            length: 4 << 20,
+        },
+        ram: Region {
+            name: "SRAM",
+            origin: 0x2000_0000,
+            length: 4 << 20,
+        },
+        vector_table: 0,
+    },
+    Chip {
+        board: "stm32f405",
+        part: "STM32F405RG (RM0090: 1 MiB flash at 0x0800_0000, SRAM1+SRAM2 128 KiB at 0x2000_0000)",
+        probe_chip: Some("STM32F405RGTx"),
+        flash: Region {
+            name: "flash",
+            origin: 0x0800_0000,
+            length: 1 << 20,
+        },
+        ram: Region {
+            name: "SRAM1+SRAM2",
+            origin: 0x2000_0000,
+            length: 128 << 10,
+        },
+        vector_table: 0x0800_0000,
+    },
+    Chip {
+        board: "nucleo-f411re",
+        part: "STM32F411RE (RM0383: 512 KiB flash at 0x0800_0000, 128 KiB SRAM at 0x2000_0000)",
+        probe_chip: Some("STM32F411RETx"),
+        flash: Region {
+            name: "flash",
+            origin: 0x0800_0000,
+            length: 512 << 10,
+        },
+        ram: Region {
+            name: "SRAM",
+            origin: 0x2000_0000,
+            length: 128 << 10,
+        },
+        vector_table: 0x0800_0000,
+    },
+    Chip {
+        board: "rp-pico",
+        part: "RP2040 on the Raspberry Pi Pico (2 MiB QSPI flash at 0x1000_0000, 264 KiB SRAM at 0x2000_0000; boot2 in the first 256 bytes)",
+        probe_chip: Some("RP2040"),
+        flash: Region {
+            name: "flash (XIP)",
+            origin: 0x1000_0000,
+            length: 2 << 20,
+        },
+        ram: Region {
+            name: "SRAM",
+            origin: 0x2000_0000,
+            length: 264 << 10,
+        },
+        vector_table: 0x1000_0100,
+    },
+];
+
+/// The chip of board `name`.
+pub fn chip(name: &str) -> Result<&'static Chip, String> {
+    CHIPS.iter().find(|c| c.board == name).ok_or_else(|| {
+        let names: Vec<_> = CHIPS.iter().map(|c| c.board).collect();
+        format!(
+            "unknown board `{name}` in the image (known: {})",
+            names.join(", ")
+        )
+    })
+}
+
+fn read(path: &Path) -> Result<Vec<u8>, String> {
+    std::fs::read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))
+}
+
+fn parse<'a>(path: &Path, data: &'a [u8]) -> Result<object::File<'a>, String> {
+    object::File::parse(data).map_err(|e| format!("{} is not an ELF file: {e}", path.display()))
+}
+
+/// The board name the image carries (`NAV440_BOARD`, NUL-terminated), `None` if it has none
+/// (e.g. the bench binary).
+pub fn board_of(path: &Path) -> Result<Option<String>, String> {
+    let data = read(path)?;
+    let elf = parse(path, &data)?;
+    board_in(&elf)
+}
+
+fn board_in(elf: &object::File<'_>) -> Result<Option<String>, String> {
+    let Some(sym) = elf.symbols().find(|s| s.name() == Ok("NAV440_BOARD")) else {
+        return Ok(None);
+    };
+    let section = sym
+        .section_index()
+        .and_then(|i| elf.section_by_index(i).ok())
+        .ok_or("NAV440_BOARD is in no section")?;
+    let bytes = section
+        .data_range(sym.address(), sym.size())
+        .map_err(|e| format!("cannot read NAV440_BOARD: {e}"))?
+        .ok_or("NAV440_BOARD lies outside its section's data")?;
+    let name = bytes.split(|&b| b == 0).next().unwrap_or_default();
+    Ok(Some(String::from_utf8_lossy(name).into_owned()))
+}
+
+/// What the memory-map check found in one image.
+#[derive(Debug)]
+pub struct MapReport {
+    /// The board the image names.
+    pub board: String,
+    /// Loadable sections checked.
+    pub sections: usize,
+    /// Address of `.vector_table`.
+    pub vector_table: u64,
+}
+
+/// Checks `path` against its board's chip: the image names its board (and it is `expect`
+/// when given); every allocated section lies inside the chip's flash or RAM (by its run-time
+/// address), every loadable segment's load address with file bytes inside flash, and
+/// `.vector_table` starts at the chip's boot address. The error names the section or segment
+/// and its addresses.
+pub fn check_memory_map(path: &Path, expect: Option<&str>) -> Result<MapReport, String> {
+    let data = read(path)?;
+    let elf = parse(path, &data)?;
+    let shown = path.display();
+    let board = board_in(&elf)?
+        .ok_or_else(|| format!("{shown}: the image names no board (no NAV440_BOARD symbol)"))?;
+    if let Some(want) = expect {
+        if board != want {
+            return Err(format!(
+                "{shown}: the image is built for board `{board}`, expected `{want}`"
+            ));
+        }
+    }
+    let chip = chip(&board)?;
+    let mut sections = 0;
+    let mut vector_table = None;
+    for s in elf.sections() {
+        let alloc = match s.flags() {
+            SectionFlags::Elf { sh_flags } => sh_flags & u64::from(object::elf::SHF_ALLOC) != 0,
+            _ => false,
+        };
+        if !alloc || s.size() == 0 {
+            continue;
+        }
+        let name = s.name().unwrap_or("?");
+        let (start, len) = (s.address(), s.size());
+        if !chip.flash.contains(start, len) && !chip.ram.contains(start, len) {
+            return Err(format!(
+                "{shown}: section {name} at {start:#010x}..{:#010x} lies outside {}'s {} ({:#010x}, {} KiB) and {} ({:#010x}, {} KiB)",
+                start + len,
+                chip.board,
+                chip.flash.name,
+                chip.flash.origin,
+                chip.flash.length >> 10,
+                chip.ram.name,
+                chip.ram.origin,
+                chip.ram.length >> 10
+            ));
+        }
+        if name == ".vector_table" {
+            vector_table = Some(start);
+        }
+        sections += 1;
+    }
+    for seg in elf.segments() {
+        let (_, file_len) = seg.file_range();
+        if file_len == 0 {
+            continue;
+        }
+        // The load address (what a probe writes): `p_paddr`.
+        let load = match &elf {
+            object::File::Elf32(f) => {
+                let hdrs = f.elf_program_headers();
+                hdrs.iter()
+                    .find(|h| {
+                        u64::from(h.p_vaddr.get(f.endian())) == seg.address()
+                            && u64::from(h.p_filesz.get(f.endian())) == file_len
+                    })
+                    .map(|h| u64::from(h.p_paddr.get(f.endian())))
+            }
+            _ => None,
+        }
+        .unwrap_or(seg.address());
+        if !chip.flash.contains(load, file_len) {
+            return Err(format!(
+                "{shown}: a loadable segment ({file_len} bytes, run address {:#010x}) is loaded at {load:#010x}..{:#010x}, outside {}'s {} ({:#010x}, {} KiB): a probe cannot write it",
+                seg.address(),
+                load + file_len,
+                chip.board,
+                chip.flash.name,
+                chip.flash.origin,
+                chip.flash.length >> 10
+            ));
+        }
+    }
+    let vector_table =
+        vector_table.ok_or_else(|| format!("{shown}: the image has no .vector_table section"))?;
+    if vector_table != chip.vector_table {
+        return Err(format!(
+            "{shown}: section .vector_table is at {vector_table:#010x}, but {} boots from {:#010x}",
+            chip.board, chip.vector_table
+        ));
+    }
+    Ok(MapReport {
+        board,
+        sections,
+        vector_table,
+    })
+}
+
+/// Little-endian `u32` at `at`.
+fn u32_at(data: &[u8], at: usize) -> Result<u32, String> {
+    data.get(at..at + 4)
+        .and_then(|b| b.try_into().ok())
+        .map(u32::from_le_bytes)
+        .ok_or_else(|| format!("ELF too short for a word at {at:#x}"))
+}
+
+/// Little-endian `u16` at `at`.
+fn u16_at(data: &[u8], at: usize) -> Result<usize, String> {
+    data.get(at..at + 2)
+        .map(|b| usize::from(u16::from_le_bytes([b[0], b[1]])))
+        .ok_or_else(|| format!("ELF too short for a half-word at {at:#x}"))
+}
+
+fn put_u32(data: &mut [u8], at: usize, v: u32) -> Result<(), String> {
+    data.get_mut(at..at + 4)
+        .ok_or_else(|| format!("ELF too short for a word at {at:#x}"))?
+        .copy_from_slice(&v.to_le_bytes());
+    Ok(())
+}
+
+/// A copy of the 32-bit little-endian ELF `data` with section `name`'s address (`sh_addr`)
+/// set to `addr`: a wrongly linked image, for testing the check.
+pub fn with_section_address(data: &[u8], name: &str, addr: u32) -> Result<Vec<u8>, String> {
+    let elf = object::File::parse(data).map_err(|e| e.to_string())?;
+    let index = elf
+        .section_by_name(name)
+        .ok_or_else(|| format!("no section {name}"))?
+        .index()
+        .0;
+    // ELF32 header: e_shoff at 0x20, e_shentsize at 0x2E; Elf32_Shdr: sh_addr at +12.
+    let shoff = u32_at(data, 0x20)? as usize;
+    let shentsize = u16_at(data, 0x2E)?;
+    let mut out = data.to_vec();
+    put_u32(&mut out, shoff + index * shentsize + 12, addr)?;
+    Ok(out)
+}
+
+/// A copy of the 32-bit little-endian ELF `data` with the first loadable segment that has file
+/// bytes loaded at `addr` (`p_paddr`): an image a probe would write elsewhere, for testing.
+pub fn with_load_address(data: &[u8], addr: u32) -> Result<Vec<u8>, String> {
+    // ELF32 header: e_phoff at 0x1C, e_phentsize at 0x2A, e_phnum at 0x2C; Elf32_Phdr: p_type
+    // +0 (PT_LOAD = 1), p_paddr +12, p_filesz +16.
+    let phoff = u32_at(data, 0x1C)? as usize;
+    let phentsize = u16_at(data, 0x2A)?;
+    let phnum = u16_at(data, 0x2C)?;
+    let mut out = data.to_vec();
+    for i in 0..phnum {
+        let h = phoff + i * phentsize;
+        if u32_at(data, h)? == 1 && u32_at(data, h + 16)? > 0 {
+            put_u32(&mut out, h + 12, addr)?;
+            return Ok(out);
+        }
+    }
+    Err("no loadable segment with file bytes".into())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn regions_contain_exactly_their_range() {
+        let r = Region {
+            name: "flash",
+            origin: 0x0800_0000,
+            length: 1024,
+        };
+        assert!(r.contains(0x0800_0000, 1024));
+        assert!(!r.contains(0x0800_0000, 1025));
+        assert!(!r.contains(0x07ff_fffc, 8));
+        assert!(r.contains(0x0800_03fc, 4));
+        assert!(!r.contains(0, 4));
+    }
+
+    #[test]
+    fn every_board_is_known_once() {
+        for c in CHIPS {
+            assert_eq!(chip(c.board).map(|x| x.part), Ok(c.part));
+            assert!(c.flash.contains(c.vector_table, 0x40));
+        }
+        assert!(chip("stm32").is_err());
+    }
+}
