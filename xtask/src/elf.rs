@@ -260,6 +260,28 @@ pub fn check_memory_map(path: &Path, expect: Option<&str>) -> Result<MapReport, 
     })
 }
 
+/// Parts of the (mangled) symbol names of `core::fmt`'s float formatting (`Display`, `Debug`
+/// and `LowerExp` of `f32`/`f64` all go through `core::fmt::float` and `core::num::flt2dec`).
+const FLOAT_FMT: &[&str] = &[
+    "flt2dec",
+    "float_to_decimal",
+    "float_to_exponential",
+    "3fmt5float",
+];
+
+/// The symbols of `path` that belong to `core::fmt`'s float formatting (none expected: the
+/// firmware sends raw bits and the host formats them).
+pub fn float_formatting_symbols(path: &Path) -> Result<Vec<String>, String> {
+    let data = read(path)?;
+    let elf = parse(path, &data)?;
+    Ok(elf
+        .symbols()
+        .filter_map(|s| s.name().ok())
+        .filter(|n| FLOAT_FMT.iter().any(|f| n.contains(f)))
+        .map(str::to_owned)
+        .collect())
+}
+
 /// Little-endian `u32` at `at`.
 fn u32_at(data: &[u8], at: usize) -> Result<u32, String> {
     data.get(at..at + 4)
@@ -334,6 +356,17 @@ mod tests {
         assert!(!r.contains(0x07ff_fffc, 8));
         assert!(r.contains(0x0800_03fc, 4));
         assert!(!r.contains(0, 4));
+    }
+
+    /// This test program formats a float, so the detector must find the formatting code in
+    /// its own executable (a host ELF, same symbol names).
+    #[test]
+    fn float_formatting_is_found_where_it_is_linked() {
+        let text = format!("{}", std::hint::black_box(1.5f64));
+        assert_eq!(text, "1.5");
+        let exe = std::env::current_exe().expect("test executable");
+        let found = float_formatting_symbols(&exe).expect("readable");
+        assert!(!found.is_empty(), "no float formatting symbol found");
     }
 
     #[test]

@@ -27,11 +27,21 @@ const BUILT_ONLY_BOARDS: &[(&str, &str, &str)] = &[
     ("board-rp-pico", "thumbv6m-none-eabi", "rp-pico"),
 ];
 
-/// The memory-map check of one image (`cargo xtask check-map`), with a line saying so.
+/// The memory-map check of one image (`cargo xtask check-map`), with a line saying so, and
+/// the check that it links no float formatting of `core::fmt`.
 fn check_map(elf: &Path, board: &str) -> Result<(), String> {
     let r = crate::elf::check_memory_map(elf, Some(board))?;
+    let floats = crate::elf::float_formatting_symbols(elf)?;
+    if !floats.is_empty() {
+        return Err(format!(
+            "{} links core::fmt's float formatting ({} symbols, e.g. {}): the firmware must send raw bits and let the host format them",
+            elf.display(),
+            floats.len(),
+            floats[0]
+        ));
+    }
     eprintln!(
-        "xtask: OK: memory map of {}: board {}, {} loadable sections inside its chip's memory, vector table at {:#010x}",
+        "xtask: OK: memory map of {}: board {}, {} loadable sections inside its chip's memory, vector table at {:#010x}; no float formatting linked",
         elf.file_name().map(|n| n.to_string_lossy()).unwrap_or_default(),
         r.board,
         r.sections,
