@@ -83,6 +83,7 @@ pub mod ram;
 mod rates;
 mod real;
 mod series;
+mod traits;
 mod unwrap;
 
 pub use ad::{Ad, AdConfig, AdParams, AdState};
@@ -109,6 +110,7 @@ pub use pair::{VelAcc, VelAccState};
 pub use rates::RateGains;
 pub use real::{ExactSqrt, Fx, Real, SqrtFn};
 pub use series::{Series, SeriesState};
+pub use traits::{EstimatorBank, EstimatorOutput, FromConfig};
 pub use unwrap::Unwrapper;
 
 /// The examples of the crate README, compiled and run as doc tests.
