@@ -750,6 +750,25 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
     }
 }
 
+/// The noise-adaptive bank as a bank: the paper bank's channels and output
+/// ([`PaperOutput`]); `update` is [`AdaptiveBank::update`] (the gains follow the noise).
+impl<T: Real, S: SqrtFn<T>> crate::EstimatorBank for AdaptiveBank<T, S> {
+    type Output = PaperOutput;
+
+    #[inline]
+    fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<PaperOutput, SampleError> {
+        AdaptiveBank::update(self, t_us, angle_deg)
+    }
+
+    fn new_epoch(&mut self) {
+        AdaptiveBank::new_epoch(self)
+    }
+
+    fn reinit_count(&self) -> u32 {
+        AdaptiveBank::reinit_count(self)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

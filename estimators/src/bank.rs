@@ -528,6 +528,8 @@ macro_rules! estimator_bank {
             pub const COUNT: usize = [ $( $csv ),+ ].len();
             /// The CSV column names, comma-separated, in order.
             pub const CSV_COLUMNS: &'static str = $crate::__bank_columns!($($csv),+);
+            /// The CSV column names, in order.
+            pub const NAMES: [&'static str; $Chan::COUNT] = [ $( $csv ),+ ];
             /// The channel's CSV column name.
             pub const fn name(self) -> &'static str {
                 match self { $( $Chan::$ch => $csv, )+ }
@@ -568,6 +570,27 @@ macro_rules! estimator_bank {
             /// `(channel, value)` pairs in CSV order.
             pub fn iter(&self) -> impl Iterator<Item = ($Chan, f32)> + '_ {
                 $Chan::ALL.iter().copied().zip(self.values.iter().copied())
+            }
+        }
+
+        impl $crate::EstimatorOutput for $Out {
+            const CHANNELS: usize = $Chan::COUNT;
+            const CHANNEL_NAMES: &'static [&'static str] = &$Chan::NAMES;
+            const CSV_COLUMNS: &'static str = $Chan::CSV_COLUMNS;
+
+            #[inline]
+            fn unwrapped_deg(&self) -> f32 {
+                self.yaw_unwrapped_deg
+            }
+
+            #[inline]
+            fn residual_deg(&self) -> f64 {
+                self.yaw_residual_deg
+            }
+
+            #[inline]
+            fn values(&self) -> &[f32] {
+                &self.values
             }
         }
 
@@ -826,6 +849,29 @@ macro_rules! estimator_bank {
             /// The rows' state.
             pub fn state(&self) -> &$State<T, S> {
                 &self.state
+            }
+        }
+
+        impl<T: $crate::Real, S: $crate::SqrtFn<T>> $crate::EstimatorBank for $Bank<T, S> {
+            type Output = $Out;
+
+            #[inline]
+            fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<$Out, $crate::SampleError> {
+                $Bank::update(self, t_us, angle_deg)
+            }
+
+            fn new_epoch(&mut self) {
+                $Bank::new_epoch(self)
+            }
+
+            fn reinit_count(&self) -> u32 {
+                $Bank::reinit_count(self)
+            }
+        }
+
+        impl<T: $crate::Real, S: $crate::SqrtFn<T>> $crate::FromConfig for $Bank<T, S> {
+            fn from_config(cfg: &$crate::BankConfig) -> Result<Self, $crate::ConfigError> {
+                $Bank::new(cfg)
             }
         }
     };

@@ -23,6 +23,11 @@
 //!   [`YawBank`]: the paper's 14 estimators, output indexed by [`Channel`]) and
 //!   [`ProductBank`] (one velocity and one acceleration estimator). [`BankConfig::wrap`] picks
 //!   the unwrapping per axis ([`Wrap`]). See docs/BANK.md.
+//! * [`EstimatorBank`]: the one trait of every bank (the generated ones and [`AdaptiveBank`]):
+//!   `update`, `new_epoch`, `reinit_count`, and its [`EstimatorOutput`] (unwrapped angle and
+//!   channel values) with the channels' count and names as consts
+//!   (`<ProductBank<Fx> as EstimatorBank>::CHANNELS`); [`FromConfig`] builds a generated bank
+//!   from a [`BankConfig`].
 //! * Feature `serde`: `Serialize`/`Deserialize` on the configuration types (no_std, no alloc).
 //! * Units: inputs in deg (any position-like unit works), velocities in unit/s, accelerations
 //!   in unit/s^2, times in s (`h`, `T`, `tau`) or integer microseconds (sample timestamps).
@@ -83,6 +88,7 @@ pub mod ram;
 mod rates;
 mod real;
 mod series;
+mod traits;
 mod unwrap;
 
 pub use ad::{Ad, AdConfig, AdParams, AdState};
@@ -109,6 +115,7 @@ pub use pair::{VelAcc, VelAccState};
 pub use rates::RateGains;
 pub use real::{ExactSqrt, Fx, Real, SqrtFn};
 pub use series::{Series, SeriesState};
+pub use traits::{EstimatorBank, EstimatorOutput, FromConfig};
 pub use unwrap::Unwrapper;
 
 /// The examples of the crate README, compiled and run as doc tests.

@@ -89,6 +89,24 @@ struct BankArgs {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum BankArg {
+    /// `estimators::PaperBank`: the paper's 14 estimators (AVE, ILO1-3, AD, ED, Kalman;
+    /// velocity and acceleration).
+    Paper,
+    /// `estimators::ProductBank`: ILO1 velocity and Kalman acceleration (`ilo1_v`, `kf_a`).
+    Product,
+}
+
+impl From<BankArg> for replay::BankKind {
+    fn from(b: BankArg) -> Self {
+        match b {
+            BankArg::Paper => replay::BankKind::Paper,
+            BankArg::Product => replay::BankKind::Product,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum AxisArg {
     /// Roll (wraps at +-180 deg).
     Roll,
@@ -166,11 +184,21 @@ enum Cmd {
         #[arg(long = "type", value_name = "TYPE")]
         packet_type: Option<String>,
     },
-    /// Run the estimator bank; CSV (t,yaw,yaw_rate,<7 velocities>,<7 accelerations>) on stdout
+    /// Run the estimator bank; CSV (t,yaw,yaw_rate, then the bank's channels: the paper
+    /// bank's 7 velocities and 7 accelerations, or the product bank's ilo1_v,kf_a) on stdout
     /// (`--axis`: roll/pitch columns, or all three axes with prefixed columns).
     Estimate {
         /// Capture file; `-` reads standard input.
         file: PathBuf,
+        /// Estimator bank: paper (the paper's 14 estimators) or product (ILO1 velocity and
+        /// Kalman acceleration, what the product firmware prints).
+        #[arg(
+            long = "bank",
+            value_enum,
+            default_value = "paper",
+            value_name = "BANK"
+        )]
+        bank_kind: BankArg,
         #[command(flatten)]
         bank: BankArgs,
         #[command(flatten)]
@@ -453,6 +481,7 @@ fn bank_options(b: &BankArgs, default_preset: PresetArg) -> Result<replay::Estim
         noise_at: b.noise_at.into(),
         axes: b.axis.into(),
         schedule,
+        bank: replay::BankKind::Paper,
     })
 }
 
@@ -524,6 +553,7 @@ fn run(cli: Cli) -> Result<()> {
         Cmd::Decode { file, packet_type } => decode(&file, packet_type.as_deref()),
         Cmd::Estimate {
             file,
+            bank_kind,
             bank,
             noise: n,
             fixed,
@@ -532,6 +562,8 @@ fn run(cli: Cli) -> Result<()> {
             let mut opts = bank_options(&bank, PresetArg::Nav440)?;
             opts.noise = noise(n.noise_var, n.seed)?;
             opts.fixed = fixed;
+            opts.bank = bank_kind.into();
+            replay::check_bank_options(&opts)?;
             let mut r = replay::open_capture(&file)?;
             let name = r.name().to_string();
             let report = match output {

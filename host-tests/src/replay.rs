@@ -6,7 +6,8 @@
 
 use crate::error::{Error, Result};
 use estimators::{
-    AdaptiveBank, BankConfig, BankOutput, Fx, GainSchedule, Hold, SampleError, YawBank,
+    BankConfig, EstimatorBank, EstimatorOutput, Fx, GainSchedule, Hold, PaperBank, PaperOutput,
+    ProductBank, ProductOutput, SampleError, YawBank,
 };
 pub use nav440_pipeline::bit::BitCounts;
 use nav440_pipeline::period::PeriodEstimator;
@@ -468,8 +469,35 @@ pub struct EstimateOptions {
     pub axes: Axes,
     /// A gain schedule (`--gains schedule.toml`): run the noise-adaptive bank
     /// (`estimators::AdaptiveBank`, `AdaptiveConfig::DEFAULT`) with `config`'s step, hold and
-    /// period instead of fixed gains.
+    /// period instead of fixed gains (paper bank only).
     pub schedule: Option<GainSchedule>,
+    /// The bank `nav440 estimate` runs (`--bank`; default the paper bank). Only
+    /// [`estimate_stream`] (and [`estimate_csv`]) run another than the paper bank; the row
+    /// APIs ([`Estimation`], [`estimate_rows`], ...) are the paper bank's.
+    pub bank: BankKind,
+}
+
+/// Which estimator bank `nav440 estimate` runs (`--bank`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BankKind {
+    /// `estimators::PaperBank` (or `AdaptiveBank` with a gain schedule): the paper's 14
+    /// estimators, CSV `t,yaw,yaw_rate,ave_v,...,kf_a` (the default).
+    #[default]
+    Paper,
+    /// `estimators::ProductBank`: ILO1 velocity (`cfg.velocity.ilo[0]`) and Kalman
+    /// acceleration (`cfg.acceleration.kf`), CSV `t,yaw,yaw_rate,ilo1_v,kf_a`: what the
+    /// product firmware prints.
+    Product,
+}
+
+impl BankKind {
+    /// The `--bank` name.
+    pub fn name(self) -> &'static str {
+        match self {
+            BankKind::Paper => "paper",
+            BankKind::Product => "product",
+        }
+    }
 }
 
 /// Where the added noise enters the estimators.
@@ -499,6 +527,7 @@ impl Default for EstimateOptions {
             noise_at: NoiseAt::Sample,
             axes: Axes::only(Axis::Yaw),
             schedule: None,
+            bank: BankKind::Paper,
         }
     }
 }
@@ -714,83 +743,131 @@ pub fn rejection_warning(r: &Rejections) -> Option<String> {
     ))
 }
 
-/// The f32 or the fixed-point bank, with fixed or scheduled gains.
-enum Bank {
-    F32(Box<YawBank<f32>>),
-    Fx(Box<YawBank<Fx>>),
-    AdaptiveF32(Box<AdaptiveBank<f32>>),
-    AdaptiveFx(Box<AdaptiveBank<Fx>>),
+/// The part of `estimators::EstimatorBank` the host calls per sample, as an object (one
+/// boxed bank per axis whatever its number type).
+pub trait DynBank<O> {
+    /// `EstimatorBank::update`.
+    fn update(&mut self, t_us: u64, angle_deg: f32) -> std::result::Result<O, SampleError>;
+    /// `EstimatorBank::new_epoch`.
+    fn new_epoch(&mut self);
+    /// `EstimatorBank::reinit_count`.
+    fn reinit_count(&self) -> u32;
 }
 
-impl Bank {
-    fn new(
+impl<B: EstimatorBank> DynBank<B::Output> for B {
+    fn update(&mut self, t_us: u64, deg: f32) -> std::result::Result<B::Output, SampleError> {
+        EstimatorBank::update(self, t_us, deg)
+    }
+
+    fn new_epoch(&mut self) {
+        EstimatorBank::new_epoch(self);
+    }
+
+    fn reinit_count(&self) -> u32 {
+        EstimatorBank::reinit_count(self)
+    }
+}
+
+/// A built host bank: the bank, and for a noise-adaptive bank whose schedule was tuned at
+/// another sample period (`AdaptiveBank::period_fits`): (the schedule's period, the bank's), s.
+pub type BuiltBank<O> = (Box<dyn DynBank<O>>, Option<(f32, f32)>);
+
+/// The output of a bank `nav440 estimate` can run: how the host builds that bank (f32 or
+/// fixed point, fixed or scheduled gains) for an axis.
+pub trait HostOutput: EstimatorOutput + 'static {
+    /// The bank of `axis` for `cfg` (already adapted to the axis's unwrapping by
+    /// `nav440_pipeline::axis_bank`): `fixed` selects `Fx`, `schedule` the noise-adaptive
+    /// bank. Errors are the CLI's messages.
+    fn build(
         axis: Axis,
         cfg: &BankConfig,
         fixed: bool,
         schedule: Option<&GainSchedule>,
-    ) -> std::result::Result<Self, String> {
-        let bad = |e: estimators::ConfigError| {
-            let mut m = format!("bad estimator configuration: {e}");
-            if e == estimators::ConfigError::SamplePeriodTooLong {
-                m.push_str(&format!(
-                    " (nominal sample period {} s from the capture's first {WARMUP_SAMPLES} samples, h = {} s; use a larger --step)",
-                    cfg.sample_period_s, cfg.h
-                ));
-            }
-            m
-        };
+    ) -> std::result::Result<BuiltBank<Self>, String>;
+}
+
+/// The CLI's message for a configuration the bank refuses.
+fn bad_config(cfg: &BankConfig, e: estimators::ConfigError) -> String {
+    let mut m = format!("bad estimator configuration: {e}");
+    if e == estimators::ConfigError::SamplePeriodTooLong {
+        m.push_str(&format!(
+            " (nominal sample period {} s from the capture's first {WARMUP_SAMPLES} samples, h = {} s; use a larger --step)",
+            cfg.sample_period_s, cfg.h
+        ));
+    }
+    m
+}
+
+/// `(fits, schedule's period, bank's period)` of an adaptive bank -> the misfit, if any.
+fn misfit(fits: bool, tuned: &GainSchedule, run: f32) -> Option<(f32, f32)> {
+    if fits {
+        return None;
+    }
+    Some((tuned.sample_period_s()?, run))
+}
+
+impl HostOutput for PaperOutput {
+    fn build(
+        axis: Axis,
+        cfg: &BankConfig,
+        fixed: bool,
+        schedule: Option<&GainSchedule>,
+    ) -> std::result::Result<BuiltBank<Self>, String> {
+        let bad = |e| bad_config(cfg, e);
         if let Some(sched) = schedule {
             return Ok(if fixed {
-                Bank::AdaptiveFx(Box::new(adaptive_axis_bank(axis, cfg, sched).map_err(bad)?))
+                let b: estimators::AdaptiveBank<Fx> =
+                    adaptive_axis_bank(axis, cfg, sched).map_err(bad)?;
+                let m = misfit(b.period_fits(), b.schedule(), b.sample_period_s());
+                (Box::new(b), m)
             } else {
-                Bank::AdaptiveF32(Box::new(adaptive_axis_bank(axis, cfg, sched).map_err(bad)?))
+                let b: estimators::AdaptiveBank<f32> =
+                    adaptive_axis_bank(axis, cfg, sched).map_err(bad)?;
+                let m = misfit(b.period_fits(), b.schedule(), b.sample_period_s());
+                (Box::new(b), m)
             });
         }
         Ok(if fixed {
-            Bank::Fx(Box::new(axis_bank(axis, cfg).map_err(bad)?))
+            (
+                Box::new(axis_bank::<PaperBank<Fx>>(axis, cfg).map_err(bad)?),
+                None,
+            )
         } else {
-            Bank::F32(Box::new(axis_bank(axis, cfg).map_err(bad)?))
+            (
+                Box::new(axis_bank::<PaperBank<f32>>(axis, cfg).map_err(bad)?),
+                None,
+            )
         })
     }
+}
 
-    /// For a noise-adaptive bank whose schedule was tuned at another sample period
-    /// (`AdaptiveBank::period_fits`): (the schedule's period, the bank's), s.
-    fn schedule_misfit(&self) -> Option<(f32, f32)> {
-        let (fits, tuned, run) = match self {
-            Bank::AdaptiveF32(b) => (b.period_fits(), b.schedule(), b.sample_period_s()),
-            Bank::AdaptiveFx(b) => (b.period_fits(), b.schedule(), b.sample_period_s()),
-            Bank::F32(_) | Bank::Fx(_) => return None,
-        };
-        (!fits).then_some((tuned.sample_period_s()?, run))
-    }
-
-    fn update(&mut self, t_us: u64, deg: f32) -> std::result::Result<BankOutput, SampleError> {
-        match self {
-            Bank::F32(b) => b.update(t_us, deg),
-            Bank::Fx(b) => b.update(t_us, deg),
-            Bank::AdaptiveF32(b) => b.update(t_us, deg),
-            Bank::AdaptiveFx(b) => b.update(t_us, deg),
+impl HostOutput for ProductOutput {
+    fn build(
+        axis: Axis,
+        cfg: &BankConfig,
+        fixed: bool,
+        schedule: Option<&GainSchedule>,
+    ) -> std::result::Result<BuiltBank<Self>, String> {
+        if schedule.is_some() {
+            return Err(PRODUCT_SCHEDULE.to_string());
         }
-    }
-
-    fn new_epoch(&mut self) {
-        match self {
-            Bank::F32(b) => b.new_epoch(),
-            Bank::Fx(b) => b.new_epoch(),
-            Bank::AdaptiveF32(b) => b.new_epoch(),
-            Bank::AdaptiveFx(b) => b.new_epoch(),
-        }
-    }
-
-    fn reinit_count(&self) -> u32 {
-        match self {
-            Bank::F32(b) => b.reinit_count(),
-            Bank::Fx(b) => b.reinit_count(),
-            Bank::AdaptiveF32(b) => b.reinit_count(),
-            Bank::AdaptiveFx(b) => b.reinit_count(),
-        }
+        let bad = |e| bad_config(cfg, e);
+        Ok(if fixed {
+            (
+                Box::new(axis_bank::<ProductBank<Fx>>(axis, cfg).map_err(bad)?),
+                None,
+            )
+        } else {
+            (
+                Box::new(axis_bank::<ProductBank<f32>>(axis, cfg).map_err(bad)?),
+                None,
+            )
+        })
     }
 }
+
+/// Why `--bank product` refuses a gain schedule.
+const PRODUCT_SCHEDULE: &str = "--bank product runs fixed gains; a gain schedule (a --gains file written by `nav440 tune --schedule`) runs the noise-adaptive paper bank: use --bank paper, or a fixed gains file";
 
 /// The added noise: N(0, var) draws from xoshiro256++ seeded with the seed, in order.
 struct NoiseGen {
@@ -836,21 +913,23 @@ struct StepState {
     prev: Option<(u64, f32)>,
 }
 
-/// The host's bank of one axis: the f32 or fixed-point bank, the added noise and the
-/// per-mode state; `nav440_pipeline` drives it ([`AxisBank`]).
-pub struct HostBank {
-    bank: Bank,
+/// The host's bank of one axis: the f32 or fixed-point bank of output `O` (the paper bank's
+/// by default, [`HostOutput`]), the added noise and the per-mode state; `nav440_pipeline`
+/// drives it ([`AxisBank`]).
+pub struct HostBank<O = PaperOutput> {
+    bank: Box<dyn DynBank<O>>,
+    misfit: Option<(f32, f32)>,
     noise: NoiseGen,
     step: Option<StepState>,
 }
 
-impl std::fmt::Debug for HostBank {
+impl<O> std::fmt::Debug for HostBank<O> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("HostBank").finish_non_exhaustive()
     }
 }
 
-impl HostBank {
+impl<O: HostOutput> HostBank<O> {
     /// The bank of `axis` for the options `opts` and the warm-up's configuration `cfg`.
     fn new(
         axis: Axis,
@@ -875,22 +954,27 @@ impl HostBank {
         } else {
             None
         };
+        let (bank, misfit) = O::build(axis, &cfg, opts.fixed, opts.schedule.as_ref())?;
         Ok(HostBank {
-            bank: Bank::new(axis, &cfg, opts.fixed, opts.schedule.as_ref())?,
+            bank,
+            misfit,
             noise,
             step,
         })
     }
 
-    /// See `Bank::schedule_misfit`.
+    /// For a noise-adaptive bank whose schedule was tuned at another sample period
+    /// (`AdaptiveBank::period_fits`): (the schedule's period, the bank's), s.
     fn schedule_misfit(&self) -> Option<(f32, f32)> {
-        self.bank.schedule_misfit()
+        self.misfit
     }
 }
 
-impl AxisBank for HostBank {
+impl<O: HostOutput> AxisBank for HostBank<O> {
+    type Output = O;
+
     /// The per-sample step of both noise modes.
-    fn step(&mut self, s: &Sample, angle_deg: f32) -> std::result::Result<BankOutput, SampleError> {
+    fn step(&mut self, s: &Sample, angle_deg: f32) -> std::result::Result<O, SampleError> {
         let r = self;
         match r.step.as_mut() {
             None => {
@@ -944,15 +1028,36 @@ impl AxisBank for HostBank {
 }
 
 /// The host's bank constructor (captures the options).
-type BuildFn = Box<dyn FnMut(Axis, &BankConfig) -> std::result::Result<HostBank, String>>;
+type BuildFn<O = PaperOutput> =
+    Box<dyn FnMut(Axis, &BankConfig) -> std::result::Result<HostBank<O>, String>>;
 
-fn build_fn(opts: &EstimateOptions) -> BuildFn {
+fn build_fn<O: HostOutput>(opts: &EstimateOptions) -> BuildFn<O> {
     let opts = opts.clone();
     Box::new(move |axis, cfg| HostBank::new(axis, &opts, cfg))
 }
 
 /// `nav440 estimate`'s pipeline: `nav440_pipeline::Pipeline` with the host's banks.
-type HostPipeline = Pipeline<HostBank, String, BuildFn>;
+type HostPipeline<O> = Pipeline<HostBank<O>, String, BuildFn<O>>;
+
+/// The options' bank is one the row APIs run (the paper bank's).
+fn check_paper_bank(opts: &EstimateOptions) -> Result<()> {
+    match opts.bank {
+        BankKind::Paper => Ok(()),
+        k => Err(Error::Usage(format!(
+            "--bank {} is for `nav440 estimate` only (its CSV); this command runs the paper bank",
+            k.name()
+        ))),
+    }
+}
+
+/// The options' bank accepts the options: a gain schedule needs the paper bank (a usage
+/// error otherwise).
+pub fn check_bank_options(opts: &EstimateOptions) -> Result<()> {
+    if opts.bank == BankKind::Product && opts.schedule.is_some() {
+        return Err(Error::Usage(PRODUCT_SCHEDULE.to_string()));
+    }
+    Ok(())
+}
 
 /// `nav440 estimate` on a stream of samples (`nav440_pipeline::Estimation`, the firmware's
 /// back end, with the host's banks): push samples one by one, get rows as they come. The
@@ -992,6 +1097,7 @@ impl Estimation {
     /// An estimation with `opts` (the noise variance is checked here; the bank configuration
     /// once the period is known).
     pub fn new(opts: &EstimateOptions) -> Result<Self> {
+        check_paper_bank(opts)?;
         NoiseGen::new(opts.noise, Axis::Yaw)?;
         Ok(Estimation {
             inner: nav440_pipeline::Estimation::new(opts.axes, opts.bank_config(), build_fn(opts)),
@@ -1023,19 +1129,32 @@ impl Estimation {
 /// The CSV header of yaw alone (`nav440 estimate`'s default), shared with the firmware.
 pub const CSV_HEADER: &str = nav440_pipeline::csv::HEADER;
 
-/// The CSV header line of `axes` (see `nav440_pipeline::csv`).
+/// The paper bank's CSV header line of `axes` (see `nav440_pipeline::csv`).
 pub fn csv_header(axes: Axes) -> String {
+    csv_header_of::<PaperOutput>(axes)
+}
+
+/// The CSV header line of `axes` for the bank `kind` (`nav440 estimate --bank`).
+pub fn bank_csv_header(kind: BankKind, axes: Axes) -> String {
+    match kind {
+        BankKind::Paper => csv_header_of::<PaperOutput>(axes),
+        BankKind::Product => csv_header_of::<ProductOutput>(axes),
+    }
+}
+
+/// The CSV header line of `axes` for a bank of output `O` (`nav440_pipeline::csv`).
+fn csv_header_of<O: EstimatorOutput>(axes: Axes) -> String {
     let mut s = String::new();
     // Writing into a String cannot fail.
-    let _ = nav440_pipeline::csv::write_header(&mut s, axes);
+    let _ = nav440_pipeline::csv::write_header_of::<O>(&mut s, axes);
     s
 }
 
 /// Writes one CSV line of `r` for `axes`, formatted by `nav440_pipeline::csv` (`line` is
 /// scratch space).
-pub fn write_row<W: std::io::Write + ?Sized>(
+pub fn write_row<W: std::io::Write + ?Sized, O: EstimatorOutput>(
     w: &mut W,
-    r: &Row,
+    r: &Row<O>,
     axes: Axes,
     line: &mut String,
 ) -> std::io::Result<()> {
@@ -1081,14 +1200,30 @@ pub fn estimate_csv(bytes: &[u8], opts: &EstimateOptions) -> Result<(String, usi
 /// Errors: [`Error::NotNav440`] (no frame / no attitude packet; nothing is written then),
 /// [`Error::Usage`] (estimator configuration), [`Error::Output`] (writing failed; a closed pipe
 /// is not an error: the stream stops quietly).
+///
+/// The bank is [`EstimateOptions::bank`]'s (`--bank`); the CSV's columns are its channels.
 pub fn estimate_stream<'a, W: std::io::Write + ?Sized>(
     input: impl IntoChunks<'a>,
     opts: &EstimateOptions,
     w: &mut W,
 ) -> Result<StreamReport> {
+    check_bank_options(opts)?;
+    match opts.bank {
+        BankKind::Paper => stream_bank::<PaperOutput, W>(input, opts, w),
+        BankKind::Product => stream_bank::<ProductOutput, W>(input, opts, w),
+    }
+}
+
+/// [`estimate_stream`] with the banks of output `O`.
+fn stream_bank<'a, O: HostOutput, W: std::io::Write + ?Sized>(
+    input: impl IntoChunks<'a>,
+    opts: &EstimateOptions,
+    w: &mut W,
+) -> Result<StreamReport> {
     NoiseGen::new(opts.noise, Axis::Yaw)?;
-    let mut pipe: HostPipeline = Pipeline::new(opts.axes, opts.bank_config(), build_fn(opts));
-    let mut sink = CsvSink::new(w, opts.axes);
+    let mut pipe: HostPipeline<O> =
+        Pipeline::new(opts.axes, opts.bank_config(), build_fn::<O>(opts));
+    let mut sink = CsvSink::new(w, opts.axes, csv_header_of::<O>(opts.axes));
     input.chunks(&mut |chunk| {
         let res = pipe.feed(chunk, &mut |r| sink.row(r));
         sink.take_error()?;
@@ -1175,6 +1310,8 @@ pub fn output_result(r: std::io::Result<()>, closed: &mut bool) -> Result<()> {
 struct CsvSink<'w, W: std::io::Write + ?Sized> {
     w: &'w mut W,
     axes: Axes,
+    /// The header line (without terminator).
+    header_line: String,
     header: bool,
     closed: bool,
     error: Option<Error>,
@@ -1182,10 +1319,11 @@ struct CsvSink<'w, W: std::io::Write + ?Sized> {
 }
 
 impl<'w, W: std::io::Write + ?Sized> CsvSink<'w, W> {
-    fn new(w: &'w mut W, axes: Axes) -> Self {
+    fn new(w: &'w mut W, axes: Axes, header_line: String) -> Self {
         CsvSink {
             w,
             axes,
+            header_line,
             header: false,
             closed: false,
             error: None,
@@ -1200,14 +1338,14 @@ impl<'w, W: std::io::Write + ?Sized> CsvSink<'w, W> {
     fn head(&mut self) -> Result<()> {
         if !self.header && !self.closed {
             self.header = true;
-            let r = writeln!(self.w, "{}", csv_header(self.axes));
+            let r = writeln!(self.w, "{}", self.header_line);
             self.io(r)?;
         }
         Ok(())
     }
 
     /// Writes a row (nothing after an error or a closed pipe).
-    fn row(&mut self, r: &Row) {
+    fn row<O: EstimatorOutput>(&mut self, r: &Row<O>) {
         if self.error.is_some() || self.closed {
             return;
         }

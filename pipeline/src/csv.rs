@@ -1,31 +1,55 @@
 //! The CSV rows shared by the host CLI (`nav440 estimate`) and the firmware, so the two
 //! outputs compare byte for byte.
 //!
-//! Columns per axis: the angle, its reference rate, then the 7 velocity estimates
-//! (`ave_v, ilo1_v, ilo2_v, ilo3_v, ad_v, ed_v, kf_v`) and the 7 acceleration estimates
-//! (`ave_a, ..., kf_a`). One axis: `t,yaw,yaw_rate,ave_v,...,kf_a` ([`HEADER`]; `roll`,
-//! `roll_rate` or `pitch`, `pitch_rate` in place of `yaw`, `yaw_rate` for those axes). Several
-//! axes: `t`, then for each axis in the order roll, pitch, yaw its 16 columns prefixed with
-//! the axis name (`roll,roll_rate,roll_ave_v,...,roll_kf_a,pitch,...,yaw_kf_a`).
+//! The columns come from the bank: per axis the angle, its reference rate, then one column
+//! per channel of the bank's output ([`EstimatorOutput::CHANNEL_NAMES`], in order). One axis:
+//! `t,yaw,yaw_rate,<channels>` (`roll`, `roll_rate` or `pitch`, `pitch_rate` in place of
+//! `yaw`, `yaw_rate` for those axes). Several axes: `t`, then for each axis in the order
+//! roll, pitch, yaw its columns prefixed with the axis name (`roll,roll_rate,roll_<channel>,
+//! ...,pitch,...`).
+//!
+//! * The paper bank (`estimators::PaperBank`, the default of `nav440 estimate`): the 7
+//!   velocity estimates (`ave_v, ilo1_v, ilo2_v, ilo3_v, ad_v, ed_v, kf_v`) and the 7
+//!   acceleration estimates (`ave_a, ..., kf_a`); yaw alone is [`HEADER`].
+//! * The product bank (`estimators::ProductBank`, `nav440 estimate --bank product`):
+//!   `t,yaw,yaw_rate,ilo1_v,kf_a`; all axes
+//!   `t,roll,roll_rate,roll_ilo1_v,roll_kf_a,pitch,...,yaw_kf_a`.
+//!
+//! ```
+//! use estimators::{Fx, PaperBank, ProductBank};
+//! use nav440_pipeline::{csv, Axes, Axis};
+//!
+//! let mut s = String::new();
+//! csv::write_header::<ProductBank<Fx>>(&mut s, Axes::only(Axis::Yaw)).unwrap();
+//! assert_eq!(s, "t,yaw,yaw_rate,ilo1_v,kf_a");
+//! s.clear();
+//! csv::write_header::<PaperBank<f32>>(&mut s, Axes::only(Axis::Yaw)).unwrap();
+//! assert_eq!(s, csv::HEADER);
+//! ```
 
-use crate::{Axes, AxisRow, Row};
+use crate::{Axes, AxisBank, AxisRow, Row};
 use core::fmt::Write;
-use estimators::{BankOutput, Channel};
+use estimators::EstimatorOutput;
 
-/// The header line of the yaw axis alone (without line terminator): the default of
-/// `nav440 estimate`.
+/// The header line of the paper bank's yaw axis alone (without line terminator): the default
+/// of `nav440 estimate` (`write_header::<PaperBank<_>>(w, Axes::only(Axis::Yaw))`).
 pub const HEADER: &str = "t,yaw,yaw_rate,ave_v,ilo1_v,ilo2_v,ilo3_v,ad_v,ed_v,kf_v,ave_a,ilo1_a,ilo2_a,ilo3_a,ad_a,ed_a,kf_a";
 
-/// Writes the header line (without line terminator) of the rows of `axes`.
-pub fn write_header<W: Write>(w: &mut W, axes: Axes) -> core::fmt::Result {
+/// Writes the header line (without line terminator) of the rows of `axes` from the bank `B`
+/// (any [`AxisBank`], e.g. an `estimators::EstimatorBank`): the column names are its
+/// output's channel names ([`EstimatorOutput::CHANNEL_NAMES`]).
+pub fn write_header<B: AxisBank + ?Sized>(w: &mut impl Write, axes: Axes) -> core::fmt::Result {
+    write_header_of::<B::Output>(w, axes)
+}
+
+/// [`write_header`] named by the bank's output type `O` instead of the bank.
+pub fn write_header_of<O: EstimatorOutput>(w: &mut impl Write, axes: Axes) -> core::fmt::Result {
     w.write_str("t")?;
     let prefixed = axes.len() > 1;
     for axis in axes.iter() {
         let name = axis.name();
         write!(w, ",{name},{name}_rate")?;
-        // The column names come from the bank's table (`estimators::Channel`).
-        for ch in Channel::ALL {
-            let col = ch.name();
+        for col in O::CHANNEL_NAMES {
             if prefixed {
                 write!(w, ",{name}_{col}")?;
             } else {
@@ -43,46 +67,46 @@ pub fn write_time<W: Write>(w: &mut W, t_us: u64) -> core::fmt::Result {
     write!(w, "{}.{:04}", tenths_ms / 10_000, tenths_ms % 10_000)
 }
 
-/// Writes one axis's 16 fields, each preceded by a comma:
+/// Writes one axis's fields (2 + the output's channels), each preceded by a comma:
 ///
-/// * the angle: the exact unwrapped angle, `out.yaw_unwrapped_deg` (f32 Display) when f32
-///   holds it exactly (`yaw_residual_deg == 0`), else the exact f64 value
-///   `yaw_unwrapped_deg + yaw_residual_deg` (f64 Display), so the column stays exact for any
-///   number of turns;
+/// * the angle: the exact unwrapped angle, `out.unwrapped_deg()` (f32 Display) when f32
+///   holds it exactly (`residual_deg() == 0`), else the exact f64 value
+///   `unwrapped_deg + residual_deg` (f64 Display), so the column stays exact for any number
+///   of turns;
 /// * the reference rate (deg/s), empty when there is none (near gimbal lock);
-/// * then `out.values` in channel order (`estimators::Channel`: the 7 velocities, then the 7
-///   accelerations),
+/// * then `out.values()` in channel order ([`EstimatorOutput::CHANNEL_NAMES`]; the paper
+///   bank's: the 7 velocities, then the 7 accelerations),
 ///
 /// every `f32` with Rust's `{}` Display (shortest round-trip form), so identical `f32` bits
 /// give identical text on host and target.
-pub fn write_axis<W: Write>(
+pub fn write_axis<W: Write, O: EstimatorOutput>(
     w: &mut W,
     reference_deg_s: Option<f32>,
-    out: &BankOutput,
+    out: &O,
 ) -> core::fmt::Result {
-    if out.yaw_residual_deg == 0.0 {
-        write!(w, ",{}", out.yaw_unwrapped_deg)?;
+    if out.residual_deg() == 0.0 {
+        write!(w, ",{}", out.unwrapped_deg())?;
     } else {
-        write!(
-            w,
-            ",{}",
-            f64::from(out.yaw_unwrapped_deg) + out.yaw_residual_deg
-        )?;
+        write!(w, ",{}", out.unwrapped_deg_f64())?;
     }
     match reference_deg_s {
         Some(r) => write!(w, ",{r}")?,
         None => w.write_str(",")?,
     }
-    for x in out.values.iter() {
+    for x in out.values() {
         write!(w, ",{x}")?;
     }
     Ok(())
 }
 
 /// Writes one row (without line terminator): the time, then the fields of each axis of
-/// `axes` ([`write_axis`]; 16 empty fields for an axis the row lacks, which the pipeline
-/// never emits).
-pub fn write_row<W: Write>(w: &mut W, row: &Row, axes: Axes) -> core::fmt::Result {
+/// `axes` ([`write_axis`]; `2 + O::CHANNELS` empty fields for an axis the row lacks, which
+/// the pipeline never emits).
+pub fn write_row<W: Write, O: EstimatorOutput>(
+    w: &mut W,
+    row: &Row<O>,
+    axes: Axes,
+) -> core::fmt::Result {
     write_time(w, row.t_us)?;
     for axis in axes.iter() {
         match row.axis(axis) {
@@ -90,7 +114,11 @@ pub fn write_row<W: Write>(w: &mut W, row: &Row, axes: Axes) -> core::fmt::Resul
                 reference_deg_s,
                 out,
             }) => write_axis(w, *reference_deg_s, out)?,
-            None => w.write_str(",,,,,,,,,,,,,,,,")?,
+            None => {
+                for _ in 0..2 + O::CHANNELS {
+                    w.write_str(",")?;
+                }
+            }
         }
     }
     Ok(())
@@ -100,11 +128,64 @@ pub fn write_row<W: Write>(w: &mut W, row: &Row, axes: Axes) -> core::fmt::Resul
 mod tests {
     use super::*;
     use crate::Axis;
+    use estimators::{BankOutput, Fx, PaperBank, ProductBank};
 
     fn header(axes: Axes) -> heapless::String<1024> {
         let mut s = heapless::String::new();
-        write_header(&mut s, axes).unwrap();
+        write_header::<PaperBank<f32>>(&mut s, axes).unwrap();
         s
+    }
+
+    fn product_header(axes: Axes) -> heapless::String<1024> {
+        let mut s = heapless::String::new();
+        write_header::<ProductBank<Fx>>(&mut s, axes).unwrap();
+        s
+    }
+
+    /// The product bank's header: its two channels after the angle and the rate.
+    #[test]
+    fn product_headers() {
+        assert_eq!(
+            product_header(Axes::only(Axis::Yaw)).as_str(),
+            "t,yaw,yaw_rate,ilo1_v,kf_a"
+        );
+        assert_eq!(
+            product_header(Axes::only(Axis::Pitch)).as_str(),
+            "t,pitch,pitch_rate,ilo1_v,kf_a"
+        );
+        assert_eq!(
+            product_header(Axes::ALL).as_str(),
+            "t,roll,roll_rate,roll_ilo1_v,roll_kf_a,pitch,pitch_rate,pitch_ilo1_v,pitch_kf_a,yaw,yaw_rate,yaw_ilo1_v,yaw_kf_a"
+        );
+        // The f32 bank and the output type name the same columns.
+        let mut s = heapless::String::<256>::new();
+        write_header::<ProductBank<f32>>(&mut s, Axes::only(Axis::Yaw)).unwrap();
+        let mut t = heapless::String::<256>::new();
+        write_header_of::<estimators::ProductOutput>(&mut t, Axes::only(Axis::Yaw)).unwrap();
+        assert_eq!(s, t);
+    }
+
+    /// A row of the product bank: time, angle, rate, `ilo1_v`, `kf_a`; an absent axis is
+    /// 4 empty fields.
+    #[test]
+    fn product_row() {
+        let out = estimators::ProductOutput {
+            yaw_unwrapped_deg: -10.5,
+            yaw_residual_deg: 0.0,
+            values: [12.25, -0.5],
+        };
+        let mut axes = [None; 3];
+        axes[Axis::Yaw.index()] = Some(AxisRow {
+            reference_deg_s: Some(3.0),
+            out,
+        });
+        let row = Row { t_us: 20_000, axes };
+        let mut s = heapless::String::<256>::new();
+        write_row(&mut s, &row, Axes::only(Axis::Yaw)).unwrap();
+        assert_eq!(s.as_str(), "0.0200,-10.5,3,12.25,-0.5");
+        s.clear();
+        write_row(&mut s, &row, Axes::ALL).unwrap();
+        assert_eq!(s.as_str(), "0.0200,,,,,,,,,-10.5,3,12.25,-0.5");
     }
 
     /// The header contracts of issue 10 (spelled out there).

@@ -4,8 +4,9 @@
 //! roll, pitch, yaw and the body rates p, q, r) -> BIT check ([`bit`]: a masterFail sample is
 //! not estimated, and counted) -> clock (`nav440_proto::TimeBase`: time faults counted) ->
 //! warm-up and the nominal-period rule ([`period`]) -> one estimator bank per selected
-//! [`Axis`] (`estimators::YawBank`; roll and yaw unwrapped at +-180 deg, pitch not) -> [`Row`]
-//! with each angle's reference rate from the Euler kinematics ([`euler`]) -> CSV ([`csv`]).
+//! [`Axis`] (any `estimators::EstimatorBank`, e.g. `PaperBank` or `ProductBank`; roll and yaw
+//! unwrapped at +-180 deg, pitch not) -> [`Row`] with each angle's reference rate from the
+//! Euler kinematics ([`euler`]) -> CSV ([`csv`], the columns named by the bank).
 //!
 //! Both binaries call [`Pipeline`] (the host with its own bank type for noise and fixed
 //! point), so their rows agree by construction; the CI's byte-for-byte diff
@@ -32,7 +33,7 @@
 //!     let n = encode_frame(PacketType::A2, &p.payload(), &mut frame).unwrap();
 //!     bytes.extend_from_slice(&frame[..n]);
 //! }
-//! let build = |axis: Axis, cfg: &BankConfig| axis_bank::<f32, estimators::ExactSqrt>(axis, cfg);
+//! let build = |axis: Axis, cfg: &BankConfig| axis_bank::<YawBank<f32>>(axis, cfg);
 //! let mut pipe = Pipeline::new(Axes::only(Axis::Yaw), BankConfig::default(), build);
 //! let mut lines = Vec::new();
 //! pipe.feed_csv(&bytes, |l| lines.push(l.to_string())).unwrap();

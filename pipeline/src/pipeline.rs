@@ -19,40 +19,44 @@ use crate::period::{PeriodEstimator, WARMUP_SAMPLES};
 use crate::sample::{Frontend, Sample};
 use crate::{Axes, Axis};
 use estimators::{
-    AdaptiveBank, AdaptiveConfig, BankConfig, BankOutput, GainSchedule, Real, SampleError, SqrtFn,
-    Wrap, YawBank,
+    AdaptiveBank, AdaptiveConfig, BankConfig, EstimatorBank, EstimatorOutput, FromConfig,
+    GainSchedule, PaperOutput, Real, SampleError, SqrtFn, Wrap,
 };
 
-/// One axis's estimator bank as the pipeline drives it.
+/// One axis's estimator bank as the pipeline drives it: one sample (its time and epoch) and
+/// the axis's angle in, one output out.
+///
+/// Every [`EstimatorBank`] is one (blanket implementation: a sample that starts a new epoch
+/// calls [`EstimatorBank::new_epoch`] first, then [`EstimatorBank::update`]; the gaps are
+/// [`EstimatorBank::reinit_count`]). A wrapper that runs a bank its own way (the host CLI's,
+/// with added noise and a per-step mode) implements it directly.
 pub trait AxisBank {
+    /// The bank's output (angle and channel values; the channels' names and count are its
+    /// consts, [`EstimatorOutput::CHANNEL_NAMES`]).
+    type Output: EstimatorOutput;
+
     /// Runs one sample's angle `angle_deg` (deg; the sample gives the time and the epoch).
-    fn step(&mut self, s: &Sample, angle_deg: f32) -> Result<BankOutput, SampleError>;
+    fn step(&mut self, s: &Sample, angle_deg: f32) -> Result<Self::Output, SampleError>;
+
     /// Gaps longer than the gap rule so far, where the bank re-initialised.
     fn gaps(&self) -> u32;
 }
 
-/// [`AxisBank`] for a bank with the paper bank's `new_epoch`, `update` and `reinit_count`.
-macro_rules! impl_axis_bank {
-    ($Bank:ident) => {
-        impl<T: Real, S: SqrtFn<T>> AxisBank for $Bank<T, S> {
-            fn step(&mut self, s: &Sample, angle_deg: f32) -> Result<BankOutput, SampleError> {
-                if s.new_epoch {
-                    self.new_epoch();
-                }
-                self.update(s.t_us, angle_deg)
-            }
+impl<B: EstimatorBank> AxisBank for B {
+    type Output = B::Output;
 
-            fn gaps(&self) -> u32 {
-                self.reinit_count()
-            }
+    #[inline]
+    fn step(&mut self, s: &Sample, angle_deg: f32) -> Result<B::Output, SampleError> {
+        if s.new_epoch {
+            self.new_epoch();
         }
-    };
-}
+        self.update(s.t_us, angle_deg)
+    }
 
-// The paper bank, and the noise-adaptive bank (the paper bank with gains that follow the
-// noise; `nav440 estimate --gains schedule.toml`).
-impl_axis_bank!(YawBank);
-impl_axis_bank!(AdaptiveBank);
+    fn gaps(&self) -> u32 {
+        self.reinit_count()
+    }
+}
 
 /// `cfg` for `axis`: the +-180 deg unwrapping switched off for pitch ([`Axis::wraps`]).
 fn axis_config(axis: Axis, cfg: &BankConfig) -> BankConfig {
@@ -64,13 +68,14 @@ fn axis_config(axis: Axis, cfg: &BankConfig) -> BankConfig {
     BankConfig { wrap, ..*cfg }
 }
 
-/// The bank of one axis: `YawBank::new(cfg)`, with the +-180 deg unwrapping switched off for
-/// pitch ([`Axis::wraps`]).
-pub fn axis_bank<T: Real, S: SqrtFn<T>>(
+/// The bank of one axis: `B::from_config(cfg)` (any bank built from a [`BankConfig`]:
+/// `PaperBank`, `ProductBank`, a custom `estimator_bank!` table), with the +-180 deg
+/// unwrapping switched off for pitch ([`Axis::wraps`]).
+pub fn axis_bank<B: FromConfig>(
     axis: Axis,
     cfg: &BankConfig,
-) -> Result<YawBank<T, S>, estimators::ConfigError> {
-    YawBank::new(&axis_config(axis, cfg))
+) -> Result<B, estimators::ConfigError> {
+    B::from_config(&axis_config(axis, cfg))
 }
 
 /// The noise-adaptive bank of one axis (what `nav440 estimate --gains schedule.toml` runs):
@@ -84,28 +89,31 @@ pub fn adaptive_axis_bank<T: Real, S: SqrtFn<T>>(
     AdaptiveBank::new(&axis_config(axis, cfg), schedule, &AdaptiveConfig::DEFAULT)
 }
 
-/// One axis of a row: the reference rate and the bank's output.
+/// One axis of a row: the reference rate and the bank's output `O` (e.g.
+/// `estimators::PaperOutput`, the default, or `estimators::ProductOutput`).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct AxisRow {
+pub struct AxisRow<O = PaperOutput> {
     /// The angle's reference rate from the Euler kinematics, deg/s (`None` near gimbal lock,
     /// see [`crate::euler`]).
     pub reference_deg_s: Option<f32>,
-    /// Unwrapped angle (deg), velocities (deg/s) and accelerations (deg/s^2).
-    pub out: BankOutput,
+    /// Unwrapped angle (deg) and the bank's channels (velocities in deg/s, accelerations in
+    /// deg/s^2).
+    pub out: O,
 }
 
-/// One output row.
+/// One output row of a bank with output `O` ([`AxisBank::Output`]; default the paper
+/// bank's).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Row {
+pub struct Row<O = PaperOutput> {
     /// Sample time, us since the first sample.
     pub t_us: u64,
     /// Roll, pitch, yaw ([`Axis::index`]); `Some` exactly for the selected axes.
-    pub axes: [Option<AxisRow>; 3],
+    pub axes: [Option<AxisRow<O>>; 3],
 }
 
-impl Row {
+impl<O> Row<O> {
     /// The row's data for `axis` (`None` if the axis is not estimated).
-    pub fn axis(&self, axis: Axis) -> Option<&AxisRow> {
+    pub fn axis(&self, axis: Axis) -> Option<&AxisRow<O>> {
         self.axes[axis.index()].as_ref()
     }
 }
@@ -115,7 +123,8 @@ impl Row {
 pub struct Rejections {
     /// Time stamp not later than the previous sample's.
     pub time_not_increasing: u64,
-    /// Angle (with any added noise) beyond `YawBank::MAX_ABS_YAW_DEG`.
+    /// Angle (with any added noise) beyond the banks' limit (1e6 deg,
+    /// `PaperBank::MAX_ABS_YAW_DEG`).
     pub angle_out_of_range: u64,
     /// Angle (with any added noise) NaN or infinite.
     pub angle_not_finite: u64,
@@ -164,7 +173,7 @@ enum Phase {
 }
 
 /// The back end: timed samples -> warm-up/period rule -> one bank per selected axis ->
-/// [`Row`]s. `build(axis, cfg)` makes an axis's bank once the period is known (e.g.
+/// [`Row`]s of the bank's output (`Row<B::Output>`). `build(axis, cfg)` makes an axis's bank once the period is known (e.g.
 /// [`axis_bank`]); its error is returned by the call that ends the warm-up and by every later
 /// one.
 ///
@@ -247,7 +256,7 @@ where
 
     /// Takes the next sample; `emit` gets every row that is ready (none during the warm-up,
     /// then the held-back ones and one per accepted sample).
-    pub fn push(&mut self, s: Sample, emit: &mut dyn FnMut(&Row)) -> Result<(), E> {
+    pub fn push(&mut self, s: Sample, emit: &mut dyn FnMut(&Row<B::Output>)) -> Result<(), E> {
         if let Some(e) = &self.failed {
             return Err(e.clone());
         }
@@ -270,14 +279,14 @@ where
 
     /// End of a finite stream: a stream shorter than the warm-up runs with the intervals it
     /// has.
-    pub fn finish(&mut self, emit: &mut dyn FnMut(&Row)) -> Result<(), E> {
+    pub fn finish(&mut self, emit: &mut dyn FnMut(&Row<B::Output>)) -> Result<(), E> {
         self.start(emit)
     }
 
     /// Ends the warm-up: builds the banks for the measured period and runs the held samples
     /// (nothing if already running).
     #[inline(never)]
-    fn start(&mut self, emit: &mut dyn FnMut(&Row)) -> Result<(), E> {
+    fn start(&mut self, emit: &mut dyn FnMut(&Row<B::Output>)) -> Result<(), E> {
         if let Some(e) = &self.failed {
             return Err(e.clone());
         }
@@ -327,10 +336,10 @@ fn run_sample<B: AxisBank>(
     axes: Axes,
     counters: &mut Counters,
     s: &Sample,
-    emit: &mut dyn FnMut(&Row),
+    emit: &mut dyn FnMut(&Row<B::Output>),
 ) {
     let refs = s.references();
-    let mut row = Row {
+    let mut row: Row<B::Output> = Row {
         t_us: s.t_us,
         axes: [None; 3],
     };
@@ -361,7 +370,9 @@ fn run_sample<B: AxisBank>(
     }
 }
 
-/// Longest CSV row of three axes: 49 fields of up to ~30 characters plus separators.
+/// Longest CSV row of three axes of the paper bank: 49 fields of up to ~30 characters plus
+/// separators (a bank with more than 14 channels needs a larger line, [`Pipeline::feed`] with
+/// its own formatting).
 pub const ROW_CAPACITY: usize = 1600;
 
 /// One formatted CSV row (with its trailing newline).
@@ -404,7 +415,7 @@ where
 
     /// Feeds received bytes; `emit` gets every row in order. Fails (now and on every later
     /// call) if a bank cannot be built for the measured packet period.
-    pub fn feed(&mut self, bytes: &[u8], emit: &mut dyn FnMut(&Row)) -> Result<(), E> {
+    pub fn feed(&mut self, bytes: &[u8], emit: &mut dyn FnMut(&Row<B::Output>)) -> Result<(), E> {
         let Self { front, est, .. } = self;
         let mut res = Ok(());
         front.feed(bytes, |s| {
@@ -417,7 +428,7 @@ where
 
     /// End of a finite input: the sample the clock holds, and a stream shorter than the
     /// warm-up.
-    pub fn finish(&mut self, emit: &mut dyn FnMut(&Row)) -> Result<(), E> {
+    pub fn finish(&mut self, emit: &mut dyn FnMut(&Row<B::Output>)) -> Result<(), E> {
         let Self { front, est, .. } = self;
         let mut res = Ok(());
         front.finish(|s| res = est.push(s, emit));
@@ -509,7 +520,12 @@ where
 }
 
 /// Formats `row` into a [`CsvLine`] and emits it, or counts a format error.
-fn format_line(row: &Row, axes: Axes, format_errors: &mut u64, emit: &mut impl FnMut(&str)) {
+fn format_line<O: EstimatorOutput>(
+    row: &Row<O>,
+    axes: Axes,
+    format_errors: &mut u64,
+    emit: &mut impl FnMut(&str),
+) {
     let mut line = CsvLine::new();
     let ok = crate::csv::write_row(&mut line, row, axes).is_ok() && line.push('\n').is_ok();
     if ok {

@@ -7,7 +7,7 @@ use estimators::{BankConfig, ConfigError, ExactSqrt, YawBank};
 use nav440_pipeline::{axis_bank, Axes, Axis, Pipeline, Row};
 
 fn build(axis: Axis, cfg: &BankConfig) -> Result<YawBank<f32, ExactSqrt>, ConfigError> {
-    axis_bank::<f32, ExactSqrt>(axis, cfg)
+    axis_bank(axis, cfg)
 }
 
 type Build = fn(Axis, &BankConfig) -> Result<YawBank<f32, ExactSqrt>, ConfigError>;

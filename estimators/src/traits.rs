@@ -1,0 +1,94 @@
+//! The one interface of every estimator bank: [`EstimatorBank`] (one sample in, one output
+//! out), its output [`EstimatorOutput`] (the unwrapped angle and one value per channel, with
+//! the channels' names), and [`FromConfig`] (a bank built from a [`BankConfig`] alone).
+//!
+//! Every bank [`crate::estimator_bank!`] generates implements all three ([`crate::PaperBank`],
+//! [`crate::ProductBank`] and any custom table); [`crate::AdaptiveBank`] implements
+//! [`EstimatorBank`] (it is built from a gain schedule, not from a configuration alone).
+//! Code that drives "a bank" (the `nav440-pipeline` crate, its CSV writer, a firmware) is
+//! generic over [`EstimatorBank`] and takes the channel count and names from it.
+
+use crate::{BankConfig, ConfigError, SampleError};
+
+/// One output of a bank for one sample: the unwrapped input angle and the channels' values.
+///
+/// The channel consts describe the type, so a firmware can size a buffer in a const context:
+/// `[u8; 4 * <ProductOutput as EstimatorOutput>::CHANNELS]` (or through the bank,
+/// `<ProductBank<Fx> as EstimatorBank>::CHANNELS`).
+///
+/// Invariant: `CHANNEL_NAMES.len() == CHANNELS`, `values().len() == CHANNELS`, and
+/// `CSV_COLUMNS` is `CHANNEL_NAMES` joined with `,` (the generated outputs satisfy it by
+/// construction).
+///
+/// [`ProductOutput`]: crate::ProductOutput
+pub trait EstimatorOutput: Copy + core::fmt::Debug + PartialEq {
+    /// The number of channels (values per output).
+    const CHANNELS: usize;
+    /// The channels' names (their CSV column names), in output order: e.g. `"ilo1_v"`
+    /// (a velocity, deg/s) or `"kf_a"` (an acceleration, deg/s^2).
+    const CHANNEL_NAMES: &'static [&'static str];
+    /// [`Self::CHANNEL_NAMES`] joined with `,` (e.g. `"ilo1_v,kf_a"`).
+    const CSV_COLUMNS: &'static str;
+
+    /// The unwrapped input angle rounded to f32, deg.
+    fn unwrapped_deg(&self) -> f32;
+
+    /// What f32 rounding took off the unwrapped angle, deg: the exact unwrapped angle is
+    /// `unwrapped_deg() as f64 + residual_deg()` (0 while f32 holds it exactly).
+    fn residual_deg(&self) -> f64;
+
+    /// The channels' values in [`Self::CHANNEL_NAMES`] order: velocities in deg/s,
+    /// accelerations in deg/s^2 (per input unit when the input is not in degrees).
+    fn values(&self) -> &[f32];
+
+    /// The exact unwrapped angle, deg (`unwrapped_deg() + residual_deg()` in f64).
+    fn unwrapped_deg_f64(&self) -> f64 {
+        f64::from(self.unwrapped_deg()) + self.residual_deg()
+    }
+}
+
+/// An estimator bank for one angle: timed samples in, one [`EstimatorOutput`] per accepted
+/// sample out.
+///
+/// The channel consts default to the output's ([`EstimatorOutput::CHANNELS`], ...) and are
+/// meant to be left so; they name a concrete bank's channels in a const context, e.g.
+/// `<ProductBank<Fx> as EstimatorBank>::CHANNELS` (2) or `<PaperBank<f32> as
+/// EstimatorBank>::CSV_COLUMNS`.
+///
+/// `no_std`, no heap: implementations keep their whole state inline.
+pub trait EstimatorBank {
+    /// What [`Self::update`] returns for an accepted sample.
+    type Output: EstimatorOutput;
+
+    /// The number of channels ([`EstimatorOutput::CHANNELS`] of [`Self::Output`]).
+    const CHANNELS: usize = <Self::Output as EstimatorOutput>::CHANNELS;
+    /// The channels' names, in output order ([`EstimatorOutput::CHANNEL_NAMES`]).
+    const CHANNEL_NAMES: &'static [&'static str] = <Self::Output as EstimatorOutput>::CHANNEL_NAMES;
+    /// The channels' names joined with `,` ([`EstimatorOutput::CSV_COLUMNS`]).
+    const CSV_COLUMNS: &'static str = <Self::Output as EstimatorOutput>::CSV_COLUMNS;
+
+    /// Feeds one sample: `t_us`, its time in µs (increasing); `angle_deg`, the angle in deg
+    /// (within +-180 when the bank unwraps, `BankConfig::wrap`).
+    ///
+    /// The first sample, and the first after a gap longer than the gap rule or after
+    /// [`Self::new_epoch`], initialise every estimator from it and report 0 for every
+    /// channel. Errors (state unchanged): [`SampleError::NotFinite`] for a NaN or infinite
+    /// angle, [`SampleError::OutOfRange`] for `|angle_deg|` above 1e6 deg,
+    /// [`SampleError::NonIncreasingTime`] for a time not later than the previous sample's.
+    fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<Self::Output, SampleError>;
+
+    /// Starts a new epoch (a confirmed time jump): the next sample re-initialises every
+    /// estimator from itself, whatever its time; the unwrapped angle keeps its turns. Not
+    /// counted in [`Self::reinit_count`].
+    fn new_epoch(&mut self);
+
+    /// How many times a gap longer than the gap rule re-initialised the bank.
+    fn reinit_count(&self) -> u32;
+}
+
+/// A bank built from a [`BankConfig`] alone (every bank [`crate::estimator_bank!`]
+/// generates): what a generic constructor such as `nav440_pipeline::axis_bank` calls.
+pub trait FromConfig: EstimatorBank + Sized {
+    /// Builds the bank (validates every parameter of `cfg`).
+    fn from_config(cfg: &BankConfig) -> Result<Self, ConfigError>;
+}
