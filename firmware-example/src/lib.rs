@@ -57,10 +57,20 @@ pub type BankSqrt = sqrt::Vsqrt;
 #[cfg(any(feature = "fixed-point", not(target_abi = "eabihf")))]
 pub type BankSqrt = estimators::ExactSqrt;
 
-/// The estimator bank the firmware runs.
-#[cfg(not(feature = "adaptive-gains"))]
-pub type Bank = estimators::YawBank<Num, BankSqrt>;
-/// The estimator bank the firmware runs: with `adaptive-gains`, the noise-adaptive bank
-/// (`estimators::AdaptiveBank`, gains from [`pipeline::SCHEDULE`]).
+#[cfg(all(feature = "bank-product", feature = "adaptive-gains"))]
+compile_error!("`bank-product` and `adaptive-gains` are two different banks: pick one");
+
+/// The estimator bank the firmware runs on each axis: the paper's 14 estimators (the default).
+#[cfg(not(any(feature = "adaptive-gains", feature = "bank-product")))]
+pub type Bank = estimators::PaperBank<Num, BankSqrt>;
+/// The estimator bank the firmware runs on each axis: with `bank-product`, the product bank
+/// (`estimators::ProductBank`: ILO1 velocity and Kalman acceleration).
+#[cfg(feature = "bank-product")]
+pub type Bank = estimators::ProductBank<Num, BankSqrt>;
+/// The estimator bank the firmware runs on each axis: with `adaptive-gains`, the
+/// noise-adaptive bank (`estimators::AdaptiveBank`, gains from [`pipeline::SCHEDULE`]).
 #[cfg(feature = "adaptive-gains")]
 pub type Bank = estimators::AdaptiveBank<Num, BankSqrt>;
+
+/// What [`Bank`] gives per sample (the channels and their names come from it).
+pub type Output = <Bank as estimators::EstimatorBank>::Output;

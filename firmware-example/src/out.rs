@@ -1,13 +1,14 @@
 //! The firmware's output as defmt messages: no text formatting on the MCU.
 //!
 //! * [`header`]: once per run, the estimated axes (`AXES`, as a bit mask roll=1, pitch=2,
-//!   yaw=4); the host writes the CSV header line of `nav440 estimate --axis ...` from it.
+//!   yaw=4) and the bank's channel names (its CSV columns, e.g. `ilo1_v,kf_a`); the host writes
+//!   the CSV header line of `nav440 estimate --bank ... --axis ...` from them.
 //! * [`row`]: one message per sample, `row {=[u8]}`: one packed byte payload (little-endian),
 //!   the sample time (u64, us since the first sample), then per estimated axis (roll, pitch,
 //!   yaw order) [`AXIS_BYTES`] bytes: a flag byte (bit 0: a reference rate is present), the
 //!   unwrapped angle (deg, f32), its f64 residual (deg, 0 while f32 holds the angle), the
-//!   reference rate (deg/s, f32; 0 when absent) and the 14 channel values
-//!   (`estimators::Channel` order, f32). One argument, so the transport gets one write for the
+//!   reference rate (deg/s, f32; 0 when absent) and the bank's channel values (in the order of
+//!   its names, f32: 14 for the paper bank, 2 for the product bank). One argument, so the transport gets one write for the
 //!   whole payload (one semihosting call instead of one per value).
 //! * diagnostics and counters: `firmware: ...` messages (see `main.rs`).
 //!
@@ -20,7 +21,8 @@
 //! probe-rs.
 
 use crate::pipeline::AXES;
-use estimators::Channel;
+use crate::{Bank, Output};
+use estimators::{EstimatorBank, EstimatorOutput};
 use nav440_pipeline::{AxisRow, Row};
 
 /// Marker of the row message (the host finds it in the ELF's defmt table).
@@ -28,16 +30,11 @@ pub const ROW_TAG: &str = "row";
 
 /// Bytes of one axis in a [`row`] payload: flags (1), angle (f32), residual (f64), reference
 /// rate (f32), the channel values (f32 each).
-pub const AXIS_BYTES: usize = 1 + 4 + 8 + 4 + 4 * Channel::COUNT;
+pub const AXIS_BYTES: usize = 1 + 4 + 8 + 4 + 4 * <Bank as EstimatorBank>::CHANNELS;
 
 /// Bytes of a [`row`] payload with the axes of [`AXES`]: the time (u64) and one
 /// [`AXIS_BYTES`] block per axis.
 pub const ROW_BYTES: usize = 8 + AXIS_BYTES * AXES.len();
-
-const _: () = assert!(
-    Channel::COUNT == 14,
-    "the row payload carries 14 channel values"
-);
 
 /// Copies `v` to `dst[at..]` (constant offsets: no bounds check left after inlining).
 #[inline(always)]
@@ -47,29 +44,34 @@ fn put<const N: usize>(dst: &mut [u8; AXIS_BYTES], at: usize, v: [u8; N]) {
 
 /// Packs one axis (see the module doc for the layout).
 #[inline(always)]
-fn put_axis(dst: &mut [u8; AXIS_BYTES], a: &AxisRow) {
+fn put_axis(dst: &mut [u8; AXIS_BYTES], a: &AxisRow<Output>) {
     let o = &a.out;
     dst[0] = u8::from(a.reference_deg_s.is_some());
-    put(dst, 1, o.yaw_unwrapped_deg.to_le_bytes());
-    put(dst, 5, o.yaw_residual_deg.to_le_bytes());
+    put(dst, 1, o.unwrapped_deg().to_le_bytes());
+    put(dst, 5, o.residual_deg().to_le_bytes());
     put(dst, 13, a.reference_deg_s.unwrap_or(0.0).to_le_bytes());
-    for (i, v) in o.values.iter().enumerate() {
+    for (i, v) in o.values().iter().enumerate() {
         put(dst, 17 + 4 * i, v.to_le_bytes());
     }
 }
 
-/// Sends the header message: the axes of the rows (bit mask roll=1, pitch=2, yaw=4).
+/// Sends the header message: the axes of the rows (bit mask roll=1, pitch=2, yaw=4) and the
+/// bank's channel names (its CSV columns, comma-separated).
 pub fn header() {
     let mut mask = 0u8;
     for a in AXES.iter() {
         mask |= 1 << a.index();
     }
-    defmt::println!("header {=u8}", mask);
+    defmt::println!(
+        "header {=u8} {=str}",
+        mask,
+        <Output as EstimatorOutput>::CSV_COLUMNS
+    );
 }
 
 /// Sends one sample's row message (the axes of `r` that are present, at most those of
 /// [`AXES`]).
-pub fn row(r: &Row) {
+pub fn row(r: &Row<Output>) {
     let mut buf = [0u8; ROW_BYTES];
     let (time, rest) = buf.split_at_mut(8);
     time.copy_from_slice(&r.t_us.to_le_bytes());

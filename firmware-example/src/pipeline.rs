@@ -109,5 +109,5 @@ pub fn new() -> Pipeline {
 
 /// Writes the CSV header line of [`AXES`] (without line terminator).
 pub fn write_header(w: &mut impl core::fmt::Write) -> core::fmt::Result {
-    nav440_pipeline::csv::write_header(w, AXES)
+    nav440_pipeline::csv::write_header::<Bank>(w, AXES)
 }

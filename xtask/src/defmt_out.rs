@@ -10,7 +10,7 @@
 //! they are the exact bits the firmware sent.
 
 use defmt_decoder::{DecodeError, StreamDecoder, Table};
-use estimators::BankOutput;
+use estimators::{EstimatorOutput, PaperOutput, ProductOutput};
 use nav440_pipeline::{csv, Axes, Axis, AxisRow, Row};
 use std::path::Path;
 
@@ -26,10 +26,56 @@ pub fn table(elf: &Path) -> Result<Option<Table>, String> {
     Ok(table.filter(|t| t.raw_symbols().any(|s| s.contains(ROW_FORMAT))))
 }
 
+/// A bank output the host can rebuild from a row payload's values.
+trait FromValues: EstimatorOutput {
+    /// The output with the angle `angle` + `residual` (deg) and the channel values `values`
+    /// (exactly `CHANNELS` of them).
+    fn from_values(angle: f32, residual: f64, values: &[f32]) -> Self;
+}
+
+macro_rules! from_values {
+    ($($Out:ty),+) => {$(
+        impl FromValues for $Out {
+            fn from_values(angle: f32, residual: f64, values: &[f32]) -> Self {
+                let mut out = Self {
+                    yaw_unwrapped_deg: angle,
+                    yaw_residual_deg: residual,
+                    ..Self::default()
+                };
+                out.values.copy_from_slice(values);
+                out
+            }
+        }
+    )+};
+}
+from_values!(PaperOutput, ProductOutput);
+
+/// The banks a firmware may run, known by their channel names (the header message's).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum BankKind {
+    /// The paper bank (also the noise-adaptive bank's output).
+    Paper,
+    /// The product bank.
+    Product,
+}
+
+impl BankKind {
+    fn from_columns(columns: &str) -> Option<Self> {
+        if columns == PaperOutput::CSV_COLUMNS {
+            Some(Self::Paper)
+        } else if columns == ProductOutput::CSV_COLUMNS {
+            Some(Self::Product)
+        } else {
+            None
+        }
+    }
+}
+
 /// Turns decoded messages into CSV text and diagnostic lines.
 #[derive(Default)]
 pub struct Converter {
-    axes: Option<Axes>,
+    /// The rows' axes and bank, from the header message.
+    layout: Option<(Axes, BankKind)>,
 }
 
 /// What a chunk of frames gave.
@@ -45,25 +91,43 @@ impl Converter {
     /// Converts one decoded message (the text of `Frame::display_message`).
     pub fn message(&mut self, msg: &str, out: &mut Text) -> Result<(), String> {
         if let Some(rest) = msg.strip_prefix("header ") {
-            let mask: u8 = rest
-                .trim()
-                .parse()
-                .map_err(|_| format!("bad header message `{msg}`"))?;
+            let bad = || format!("bad header message `{msg}`");
+            let (mask, columns) = rest.trim().split_once(' ').ok_or_else(bad)?;
+            let mask: u8 = mask.parse().map_err(|_| bad())?;
+            let kind = BankKind::from_columns(columns).ok_or_else(|| {
+                format!(
+                    "the firmware runs a bank this decoder does not know (channels `{columns}`)"
+                )
+            })?;
             let mut axes = Axes::NONE;
             for a in Axis::ALL {
                 if mask & (1 << a.index()) != 0 {
                     axes = axes.with(a);
                 }
             }
-            csv::write_header(&mut out.csv, axes).map_err(|_| "header".to_owned())?;
+            match kind {
+                BankKind::Paper => csv::write_header_of::<PaperOutput>(&mut out.csv, axes),
+                BankKind::Product => csv::write_header_of::<ProductOutput>(&mut out.csv, axes),
+            }
+            .map_err(|_| "header".to_owned())?;
             out.csv.push('\n');
-            self.axes = Some(axes);
+            self.layout = Some((axes, kind));
         } else if let Some(rest) = msg.strip_prefix("row ") {
-            let axes = self
-                .axes
+            let (axes, kind) = self
+                .layout
                 .ok_or_else(|| format!("row before the header: `{msg}`"))?;
-            let row = parse_row(rest, axes).ok_or_else(|| format!("bad row message `{msg}`"))?;
-            csv::write_row(&mut out.csv, &row, axes).map_err(|_| "row".to_owned())?;
+            let bad = || format!("bad row message `{msg}`");
+            match kind {
+                BankKind::Paper => {
+                    let row = parse_row::<PaperOutput>(rest, axes).ok_or_else(bad)?;
+                    csv::write_row(&mut out.csv, &row, axes)
+                }
+                BankKind::Product => {
+                    let row = parse_row::<ProductOutput>(rest, axes).ok_or_else(bad)?;
+                    csv::write_row(&mut out.csv, &row, axes)
+                }
+            }
+            .map_err(|_| "row".to_owned())?;
             out.csv.push('\n');
         } else {
             out.diag.push_str(msg);
@@ -73,18 +137,21 @@ impl Converter {
     }
 }
 
-/// Bytes of one axis in a row payload: flags, angle (f32), residual (f64), reference (f32),
-/// the channel values (f32).
-const AXIS_BYTES: usize = 1 + 4 + 8 + 4 + 4 * estimators::Channel::COUNT;
+/// Bytes of one axis in a row payload of a bank with `channels` channels: flags, angle
+/// (f32), residual (f64), reference (f32), the channel values (f32).
+const fn axis_bytes(channels: usize) -> usize {
+    1 + 4 + 8 + 4 + 4 * channels
+}
 
 /// Parses `[B, B, ...]` (the display of a row message's byte payload after `row `).
-fn parse_row(s: &str, axes: Axes) -> Option<Row> {
+fn parse_row<O: FromValues>(s: &str, axes: Axes) -> Option<Row<O>> {
     let list = s.trim().strip_prefix('[')?.strip_suffix(']')?;
     let bytes = list
         .split(", ")
         .map(|b| b.parse::<u8>().ok())
         .collect::<Option<Vec<u8>>>()?;
-    if bytes.len() != 8 + AXIS_BYTES * axes.len() {
+    let per_axis = axis_bytes(O::CHANNELS);
+    if bytes.len() != 8 + per_axis * axes.len() {
         return None;
     }
     let (t, rest) = bytes.split_first_chunk::<8>()?;
@@ -92,38 +159,34 @@ fn parse_row(s: &str, axes: Axes) -> Option<Row> {
         t_us: u64::from_le_bytes(*t),
         axes: [None; 3],
     };
-    let (blocks, tail) = rest.as_chunks::<AXIS_BYTES>();
-    if !tail.is_empty() {
-        return None;
-    }
-    for (axis, b) in axes.iter().zip(blocks) {
-        row.axes[axis.index()] = Some(parse_axis(b));
+    for (axis, b) in axes.iter().zip(rest.chunks_exact(per_axis)) {
+        row.axes[axis.index()] = Some(parse_axis(b)?);
     }
     Some(row)
 }
 
 /// The `N` bytes at `b[at..]`.
-fn take<const N: usize>(b: &[u8; AXIS_BYTES], at: usize) -> [u8; N] {
-    let mut v = [0u8; N];
-    v.copy_from_slice(&b[at..at + N]);
-    v
+fn take<const N: usize>(b: &[u8], at: usize) -> Option<[u8; N]> {
+    b.get(at..at + N)?.try_into().ok()
 }
 
-/// Parses one axis: flags, angle, residual, reference, 14 values.
-fn parse_axis(b: &[u8; AXIS_BYTES]) -> AxisRow {
-    let mut out = BankOutput {
-        yaw_unwrapped_deg: f32::from_le_bytes(take(b, 1)),
-        yaw_residual_deg: f64::from_le_bytes(take(b, 5)),
-        ..BankOutput::default()
-    };
-    let reference = f32::from_le_bytes(take(b, 13));
-    for (i, v) in out.values.iter_mut().enumerate() {
-        *v = f32::from_le_bytes(take(b, 17 + 4 * i));
+/// Parses one axis: flags, angle, residual, reference, the channel values.
+fn parse_axis<O: FromValues>(b: &[u8]) -> Option<AxisRow<O>> {
+    let angle = f32::from_le_bytes(take(b, 1)?);
+    let residual = f64::from_le_bytes(take(b, 5)?);
+    let reference = f32::from_le_bytes(take(b, 13)?);
+    let values = b
+        .get(17..)?
+        .chunks_exact(4)
+        .map(|v| f32::from_le_bytes([v[0], v[1], v[2], v[3]]))
+        .collect::<Vec<f32>>();
+    if values.len() != O::CHANNELS {
+        return None;
     }
-    AxisRow {
+    Some(AxisRow {
         reference_deg_s: (b[0] & 1 != 0).then_some(reference),
-        out,
-    }
+        out: O::from_values(angle, residual, &values),
+    })
 }
 
 /// Decodes a stream of defmt frames chunk by chunk.
@@ -246,7 +309,8 @@ mod tests {
     fn row_message_becomes_csv_line() {
         let mut c = Converter::default();
         let mut t = Text::default();
-        c.message("header 4", &mut t).unwrap();
+        c.message(&format!("header 4 {}", PaperOutput::CSV_COLUMNS), &mut t)
+            .unwrap();
         assert_eq!(t.csv, format!("{}\n", csv::HEADER));
         let vals = [
             0.5, 1e-5, -2.25, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0, 11.0, 12.0, 13.0,
@@ -271,5 +335,35 @@ mod tests {
         assert_eq!(t.diag, "firmware: bytes=3\n");
         // A payload of the wrong length is an error, not a row.
         assert!(c.message("row [1, 2]", &mut t).is_err());
+    }
+
+    /// The product bank's header names its two channels, and its rows carry two values per
+    /// axis (hand-written expected text, the contract of `nav440 estimate --bank product`).
+    #[test]
+    fn product_rows_have_the_product_columns() {
+        let mut c = Converter::default();
+        let mut t = Text::default();
+        c.message("header 7 ilo1_v,kf_a", &mut t).unwrap();
+        assert_eq!(
+            t.csv,
+            "t,roll,roll_rate,roll_ilo1_v,roll_kf_a,pitch,pitch_rate,pitch_ilo1_v,pitch_kf_a,yaw,yaw_rate,yaw_ilo1_v,yaw_kf_a\n"
+        );
+        let mut b = 20_000u64.to_le_bytes().to_vec();
+        b.extend(axis_bytes(1, 1.5, 0.0, 2.0, &[3.0, -4.5]));
+        b.extend(axis_bytes(0, -2.0, 0.0, 0.0, &[0.25, 8.0]));
+        b.extend(axis_bytes(1, 170.0, 0.0, 30.0, &[29.5, 1e-3]));
+        c.message(&format!("row {b:?}"), &mut t).unwrap();
+        assert_eq!(
+            t.csv.lines().nth(1),
+            Some("0.0200,1.5,2,3,-4.5,-2,,0.25,8,170,30,29.5,0.001")
+        );
+        // A paper-sized axis block is not a product row.
+        let mut long = 0u64.to_le_bytes().to_vec();
+        long.extend(axis_bytes(1, 1.5, 0.0, 2.0, &[0.0; 14]));
+        assert!(c.message(&format!("row {long:?}"), &mut t).is_err());
+        // An unknown bank is refused at the header.
+        assert!(Converter::default()
+            .message("header 4 foo_v", &mut Text::default())
+            .is_err());
     }
 }

@@ -166,6 +166,45 @@ fn build(target: &str, features: &[&str], bin: &str) -> Result<PathBuf, String> 
     build_profile(target, features, bin, "release")
 }
 
+/// The bank a firmware image runs (`--bank`): the paper's 14 estimators (default) or the
+/// product bank (feature `bank-product`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum BankChoice {
+    /// The paper bank (14 estimators per axis).
+    Paper,
+    /// The product bank (ILO1 velocity + Kalman acceleration per axis).
+    Product,
+}
+
+/// The firmware feature of the product bank.
+const PRODUCT: &str = "bank-product";
+
+impl BankChoice {
+    /// The firmware features that select this bank.
+    fn features(self) -> &'static [&'static str] {
+        match self {
+            BankChoice::Paper => &[],
+            BankChoice::Product => &[PRODUCT],
+        }
+    }
+
+    /// The `nav440 estimate` arguments that select this bank.
+    fn host_args(self) -> &'static [&'static str] {
+        match self {
+            BankChoice::Paper => &[],
+            BankChoice::Product => &["--bank", "product"],
+        }
+    }
+
+    /// Its name in image names and messages.
+    fn name(self) -> &'static str {
+        match self {
+            BankChoice::Paper => "paper",
+            BankChoice::Product => "product",
+        }
+    }
+}
+
 /// The cargo profile of the small-MCU firmware (`Cargo.toml`: release with `opt-level = "z"`).
 const SMALL_PROFILE: &str = "small";
 
@@ -620,14 +659,23 @@ fn clippy_firmware(target: &str, feature: Option<&str>) -> Result<(), String> {
 }
 
 /// `cargo xtask qemu FILE [--board B] [--small | --adaptive]`.
-pub fn qemu(board: Board, file: &Path, small: bool, adaptive: bool) -> Result<(), String> {
+pub fn qemu(
+    board: Board,
+    file: &Path,
+    small: bool,
+    adaptive: bool,
+    bank: BankChoice,
+) -> Result<(), String> {
     qemu::ensure_qemu()?;
+    let mut features: Vec<&str> = bank.features().to_vec();
+    if adaptive {
+        features.push(ADAPTIVE);
+    }
     let elf = if small {
-        build_small(board.target, FW_BIN)?
-    } else if adaptive {
-        build(board.target, &[ADAPTIVE], FW_BIN)?
+        features.push(ONE_AXIS);
+        build_profile(board.target, &features, FW_BIN, SMALL_PROFILE)?
     } else {
-        build(board.target, &[], FW_BIN)?
+        build(board.target, &features, FW_BIN)?
     };
     let capture = read_file(file)?;
     let r = run_capture(&board, &elf, &capture, Output::Inherit)?;
@@ -1053,24 +1101,24 @@ fn adaptive_boards() -> [qemu::Board; 2] {
 /// `cargo xtask size`.
 pub fn size() -> Result<(), String> {
     let tool = llvm_size()?;
-    // (label, board it runs on, ELF, data + bss)
+    // (image name, board it runs on, ELF, flash, static RAM)
     let mut builds: Vec<(String, qemu::Board, PathBuf, u64, u64)> = Vec::new();
     for board in qemu::BOARDS {
         let elf = build(board.target, &[], FW_BIN)?;
-        builds.push((board.target.to_owned(), *board, elf, 0, 0));
+        builds.push((image_name("paper", board.target, 3, ""), *board, elf, 0, 0));
     }
     // One axis (feature `one-axis`) on the Cortex-M0 ISA, release profile.
     builds.push((
-        "thumbv6m + one-axis".to_owned(),
+        image_name("paper", "thumbv6m-none-eabi", 1, ""),
         qemu::BOARDS[2],
         build("thumbv6m-none-eabi", &[ONE_AXIS], FW_BIN)?,
         0,
         0,
     ));
     // The small-MCU firmware: one axis, cargo profile `small` (opt-level "z").
-    for (board, label) in small_boards() {
+    for (board, _) in small_boards() {
         builds.push((
-            label.to_owned(),
+            image_name("paper", board.target, 1, "-small"),
             board,
             build_small(board.target, FW_BIN)?,
             0,
@@ -1080,7 +1128,7 @@ pub fn size() -> Result<(), String> {
     println!("== firmware size (llvm-size, {FW_BIN}; release profile unless `small`) ==");
     println!(
         "{:<28} {:>9} {:>7} {:>7} {:>13} {:>15}",
-        "build", "text", "data", "bss", "flash (t+d)", "static RAM (d+b)"
+        "image", "text", "data", "bss", "flash (t+d)", "static RAM (d+b)"
     );
     for (label, _, elf, flash, ram) in &mut builds {
         let (t, d, b) = sizes(&tool, elf)?;
@@ -1113,10 +1161,18 @@ pub fn size() -> Result<(), String> {
             }
         }
     }
+    // One line per image (bytes): flash = text + data, ram = data + bss + stack high-water
+    // mark (`?` without QEMU).
+    for ((label, _, _, flash, ram), peak) in builds.iter().zip(&peaks) {
+        match peak {
+            Some(p) => println!("size: {label} flash={flash} ram={} stack={p}", ram + p),
+            None => println!("size: {label} flash={flash} ram=? stack=?"),
+        }
+    }
     println!();
-    println!("== goals (issue 11) ==");
+    println!("== goals of the small-MCU builds ==");
     for ((label, board, _, flash, ram), peak) in builds.iter().zip(&peaks) {
-        if label.starts_with("thumbv7m") {
+        if label.contains("-thumbv7m-") {
             continue;
         }
         println!(
@@ -1155,6 +1211,13 @@ pub fn size() -> Result<(), String> {
         println!("(RAM per estimator needs qemu-system-arm: run `cargo xtask bench` after installing it)");
     }
     Ok(())
+}
+
+/// The name of a firmware image in `cargo xtask size`: bank, target (`thumbv7em`, `thumbv7m`,
+/// `thumbv6m`), axes, e.g. `product-thumbv6m-3axis`; `suffix` marks a profile (`-small`).
+fn image_name(bank: &str, target: &str, axes: usize, suffix: &str) -> String {
+    let isa = target.split('-').next().unwrap_or(target);
+    format!("{bank}-{isa}-{axes}axis{suffix}")
 }
 
 /// The `nav440 estimate --axis` value that prints the firmware's CSV: the firmware estimates
@@ -1991,6 +2054,18 @@ mod tests {
         assert!(compare_csv(a, "t,yaw\n0.0000,1.5\n").is_err());
         let d = max_abs_diff(a, b).unwrap_or_default();
         assert_eq!(d, vec![("t".to_owned(), 0.0), ("yaw".to_owned(), 0.0)]);
+    }
+
+    #[test]
+    fn image_names_say_bank_target_and_axes() {
+        assert_eq!(
+            image_name("product", "thumbv6m-none-eabi", 3, ""),
+            "product-thumbv6m-3axis"
+        );
+        assert_eq!(
+            image_name("paper", "thumbv7em-none-eabihf", 1, "-small"),
+            "paper-thumbv7em-1axis-small"
+        );
     }
 
     #[test]

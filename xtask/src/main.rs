@@ -98,8 +98,13 @@ enum Cmd {
         /// The firmware with noise-adaptive gains (feature `adaptive-gains`): prints the CSV
         /// of `nav440 estimate --gains host-tests/data/gains/schedule_fig5.toml --axis all`
         /// (`--fixed` without FPU).
-        #[arg(long)]
+        #[arg(long, conflicts_with = "bank")]
         adaptive: bool,
+        /// The bank the firmware runs: `paper` (the paper's 14 estimators, the default) or
+        /// `product` (feature `bank-product`: ILO1 velocity + Kalman acceleration), printing
+        /// the CSV of `nav440 estimate --bank ...`.
+        #[arg(long, value_enum, default_value = "paper")]
+        bank: firmware::BankChoice,
     },
     /// Instructions per estimator update, bank update, parsed byte, transmitted byte and boot
     /// sequence (QEMU -icount + SysTick).
@@ -180,7 +185,8 @@ fn main() -> ExitCode {
             board,
             small,
             adaptive,
-        } => firmware::qemu(board, &file, small, adaptive),
+            bank,
+        } => firmware::qemu(board, &file, small, adaptive, bank),
         Cmd::Bench { board, small } => firmware::bench(board, small),
         Cmd::Size { components: false } => firmware::size(),
         Cmd::Size { components: true } => firmware::size_components(),
