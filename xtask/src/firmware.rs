@@ -176,6 +176,9 @@ pub enum BankChoice {
     Product,
 }
 
+/// Instructions per A2 frame of the product firmware's pipeline (three axes) on thumbv6m.
+const PRODUCT_PIPELINE_GOAL: f64 = 20_000.0;
+
 /// The firmware feature of the product bank.
 const PRODUCT: &str = "bank-product";
 
@@ -706,11 +709,13 @@ impl Measure {
 /// Measurements and `size_of` lines (label, bytes) printed by the bench firmware.
 type BenchOutput = (Vec<Measure>, Vec<(String, u64)>);
 
-fn run_bench(board: &Board, small: bool) -> Result<BenchOutput, String> {
+fn run_bench(board: &Board, small: bool, bank: BankChoice) -> Result<BenchOutput, String> {
+    let mut features: Vec<&str> = bank.features().to_vec();
     let elf = if small {
-        build_small(board.target, BENCH_BIN)?
+        features.push(ONE_AXIS);
+        build_profile(board.target, &features, BENCH_BIN, SMALL_PROFILE)?
     } else {
-        build(board.target, &[], BENCH_BIN)?
+        build(board.target, &features, BENCH_BIN)?
     };
     let r = qemu::run_plain(
         board,
@@ -767,13 +772,14 @@ fn run_bench(board: &Board, small: bool) -> Result<BenchOutput, String> {
 }
 
 /// `cargo xtask bench`.
-pub fn bench(board: Board, small: bool) -> Result<(), String> {
+pub fn bench(board: Board, small: bool, bank: BankChoice) -> Result<(), String> {
     qemu::ensure_qemu()?;
-    let (m, _) = run_bench(&board, small)?;
+    let (m, _) = run_bench(&board, small, bank)?;
     println!(
-        "== instructions on QEMU {} ({}{}), counted with -icount shift=6 + SysTick ==",
+        "== instructions on QEMU {} ({}; firmware pipeline with the {} bank{}), counted with -icount shift=6 + SysTick ==",
         board.machine,
         board.about,
+        bank.name(),
         if small {
             "; small-MCU build: one axis, opt-level \"z\""
         } else {
@@ -819,7 +825,18 @@ pub fn bench(board: Board, small: bool) -> Result<(), String> {
             if share < 2.0 { "met" } else { "NOT met (estimate)" }
         );
     }
-    // Issue 12 goals: the fixed-point bank (no FPU), one axis, per 100 Hz sample.
+    // The product firmware's pipeline on a Cortex-M0+: 20,000 instructions per A2 frame for
+    // three axes is 4 % of a 48 MHz core at 100 Hz.
+    if bank == BankChoice::Product && board.target == "thumbv6m-none-eabi" && !small {
+        if let Some(p) = m.iter().find(|x| x.label.starts_with("pipeline, A2 frame")) {
+            println!(
+                "goal: product pipeline per A2 frame, three axes, thumbv6m <= {PRODUCT_PIPELINE_GOAL} instructions -> {:.0}: {}",
+                p.instr,
+                if p.instr <= PRODUCT_PIPELINE_GOAL { "met" } else { "NOT met" }
+            );
+        }
+    }
+    // The fixed-point bank (no FPU), one axis, per 100 Hz sample.
     let fixed_goal = match board.target {
         "thumbv6m-none-eabi" => Some((250_000.0, 2_475_970.0, "Cortex-M0 (thumbv6m)")),
         "thumbv7m-none-eabi" => Some((40_000.0, 384_284.0, "Cortex-M3 (thumbv7m)")),
@@ -953,6 +970,17 @@ pub fn size_components() -> Result<(), String> {
     }
     for (board, label) in small_boards() {
         elfs.push((label.to_owned(), build_small(board.target, FW_BIN)?));
+    }
+    for (board, _) in small_boards() {
+        elfs.push((
+            image_name("product", board.target, 3, "-small"),
+            build_profile(
+                board.target,
+                BankChoice::Product.features(),
+                FW_BIN,
+                SMALL_PROFILE,
+            )?,
+        ));
     }
     for (target, elf) in elfs {
         let (t, d, _) = sizes(&size_tool, &elf)?;
@@ -1125,6 +1153,26 @@ pub fn size() -> Result<(), String> {
             0,
         ));
     }
+    // The product firmware (three axes), release and `small`.
+    for board in qemu::BOARDS {
+        let elf = build(board.target, BankChoice::Product.features(), FW_BIN)?;
+        builds.push((image_name("product", board.target, 3, ""), *board, elf, 0, 0));
+    }
+    for (board, _) in small_boards() {
+        let elf = build_profile(
+            board.target,
+            BankChoice::Product.features(),
+            FW_BIN,
+            SMALL_PROFILE,
+        )?;
+        builds.push((
+            image_name("product", board.target, 3, "-small"),
+            board,
+            elf,
+            0,
+            0,
+        ));
+    }
     println!("== firmware size (llvm-size, {FW_BIN}; release profile unless `small`) ==");
     println!(
         "{:<28} {:>9} {:>7} {:>7} {:>13} {:>15}",
@@ -1195,8 +1243,8 @@ pub fn size() -> Result<(), String> {
         }
     }
     if qemu::qemu_available() {
-        let (_, ram_f32) = run_bench(&qemu::BOARDS[0], false)?;
-        let (_, ram_fx) = run_bench(&qemu::BOARDS[1], false)?;
+        let (_, ram_f32) = run_bench(&qemu::BOARDS[0], false, BankChoice::Paper)?;
+        let (_, ram_fx) = run_bench(&qemu::BOARDS[1], false, BankChoice::Paper)?;
         println!();
         println!("== RAM per estimator (core::mem::size_of of the state) ==");
         println!("{:<40} {:>14} {:>16}", "", "f32 (v7em)", "Fx Q31.32 (v7m)");
@@ -1210,6 +1258,8 @@ pub fn size() -> Result<(), String> {
     } else {
         println!("(RAM per estimator needs qemu-system-arm: run `cargo xtask bench` after installing it)");
     }
+    println!();
+    size_components()?;
     Ok(())
 }
 
@@ -1675,6 +1725,29 @@ fn unit_ci(captures: &[PathBuf], short: &Path, only: Option<Board>) -> Result<()
             let ok = unit_case(board, &elf, &nav440, case, host_extra)?;
             eprintln!("xtask: UNIT OK ({:.1} s): {ok}", t.elapsed().as_secs_f64());
         }
+        // The product firmware of a board that cannot replay captures (its board image):
+        // every capture through the simulated unit, byte-identical to `nav440 estimate --bank
+        // product` (the replay boards are compared on every capture in `ci_steps`).
+        if stm32 {
+            let mut features = board.features.to_vec();
+            features.extend(BankChoice::Product.features());
+            let elf = build(board.target, &features, FW_BIN)?;
+            let mut extra = host_extra.to_vec();
+            extra.extend(BankChoice::Product.host_args());
+            for c in captures {
+                let case = UnitCase {
+                    name: "product-capture",
+                    capture: c.clone(),
+                    sim_args: &["--fast"],
+                    expect: Expect::Csv {
+                        stderr_has: "unit was at 38400 Bd",
+                    },
+                };
+                let t = std::time::Instant::now();
+                let ok = unit_case(board, &elf, &nav440, &case, &extra)?;
+                eprintln!("xtask: UNIT OK ({:.1} s): {ok}", t.elapsed().as_secs_f64());
+            }
+        }
     }
     Ok(())
 }
@@ -1813,6 +1886,14 @@ pub fn ci_steps() -> Result<(), String> {
         check_map(&elf, "mps2")?;
         small_elfs.push((board, label, elf));
     }
+    // The product firmware (feature `bank-product`): lint and build for every QEMU board.
+    let mut product_elfs = Vec::new();
+    for board in qemu::BOARDS {
+        clippy_firmware(board.target, Some(PRODUCT))?;
+        let elf = build(board.target, BankChoice::Product.features(), FW_BIN)?;
+        check_map(&elf, "mps2")?;
+        product_elfs.push((*board, elf));
+    }
     // The firmware with noise-adaptive gains: lint and build for M4F and thumbv6m.
     let mut adaptive_elfs = Vec::new();
     for board in adaptive_boards() {
@@ -1892,6 +1973,20 @@ pub fn ci_steps() -> Result<(), String> {
                     capture.display()
                 ));
             }
+        }
+    }
+    // The product firmware (feature `bank-product`) prints the CSV of `nav440 estimate --bank
+    // product --axis all` (`--fixed` without FPU), byte for byte, on every capture and board.
+    for (board, elf) in &product_elfs {
+        eprintln!("xtask: product firmware on {}", board.name);
+        let mut extra: Vec<&str> = if board.target == "thumbv7em-none-eabihf" {
+            vec!["--axis", FIRMWARE_AXIS]
+        } else {
+            vec!["--fixed", "--axis", FIRMWARE_AXIS]
+        };
+        extra.extend(BankChoice::Product.host_args());
+        for capture in &captures {
+            equivalence(board, elf, capture, &extra)?;
         }
     }
     // The small-MCU firmware prints the CSV of `nav440 estimate --axis yaw` (`--fixed` on
@@ -2013,7 +2108,8 @@ pub fn ci_steps() -> Result<(), String> {
         Err(e) => return Err(format!("unexpected failure of the fault check: {e}")),
         Ok(_) => return Err("hard-float image ran on the FPU-less board without a fault".into()),
     }
-    bench(qemu::BOARDS[0], false)?;
+    bench(qemu::BOARDS[0], false, BankChoice::Paper)?;
+    bench(qemu::BOARDS[2], false, BankChoice::Product)?;
     size()?;
     Ok(())
 }

@@ -116,6 +116,9 @@ enum Cmd {
         /// `small`, opt-level "z"): what optimising for size costs in instructions.
         #[arg(long)]
         small: bool,
+        /// The bank of the firmware pipeline measured (see `qemu --help`).
+        #[arg(long, value_enum, default_value = "paper")]
+        bank: firmware::BankChoice,
     },
     /// Flash/RAM of the firmware (llvm-size) and RAM per estimator.
     Size {
@@ -187,7 +190,7 @@ fn main() -> ExitCode {
             adaptive,
             bank,
         } => firmware::qemu(board, &file, small, adaptive, bank),
-        Cmd::Bench { board, small } => firmware::bench(board, small),
+        Cmd::Bench { board, small, bank } => firmware::bench(board, small, bank),
         Cmd::Size { components: false } => firmware::size(),
         Cmd::Size { components: true } => firmware::size_components(),
         Cmd::Msrv => package::msrv(),
