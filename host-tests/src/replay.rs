@@ -472,8 +472,9 @@ pub struct EstimateOptions {
     /// period instead of fixed gains (paper bank only).
     pub schedule: Option<GainSchedule>,
     /// The bank `nav440 estimate` runs (`--bank`; default the paper bank). Only
-    /// [`estimate_stream`] (and [`estimate_csv`]) run another than the paper bank; the row
-    /// APIs ([`Estimation`], [`estimate_rows`], ...) are the paper bank's.
+    /// [`estimate_stream`] (and [`estimate_csv`]) run a bank other than the paper bank; the
+    /// row APIs ([`Estimation`], [`estimate_rows`], ...) are the paper bank's and refuse
+    /// another (a usage error).
     pub bank: BankKind,
 }
 
@@ -775,9 +776,9 @@ pub type BuiltBank<O> = (Box<dyn DynBank<O>>, Option<(f32, f32)>);
 /// The output of a bank `nav440 estimate` can run: how the host builds that bank (f32 or
 /// fixed point, fixed or scheduled gains) for an axis.
 pub trait HostOutput: EstimatorOutput + 'static {
-    /// The bank of `axis` for `cfg` (already adapted to the axis's unwrapping by
-    /// `nav440_pipeline::axis_bank`): `fixed` selects `Fx`, `schedule` the noise-adaptive
-    /// bank. Errors are the CLI's messages.
+    /// The bank of `axis` for `cfg` (built by `nav440_pipeline::axis_bank` or
+    /// `adaptive_axis_bank`, which set the axis's unwrapping): `fixed` selects `Fx`,
+    /// `schedule` the noise-adaptive bank. Errors are the CLI's messages.
     fn build(
         axis: Axis,
         cfg: &BankConfig,

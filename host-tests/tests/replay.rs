@@ -453,3 +453,48 @@ fn linear_hold_equals_explicit_interpolation_on_the_step_grid() {
         mse(&per_packet)
     );
 }
+
+/// The library's `--bank product`: `estimate_csv` prints the product bank's columns (its
+/// `ilo1_v` and `kf_a` are the paper CSV's columns of the same name, text for text), and the
+/// row APIs, which are the paper bank's, refuse it.
+#[test]
+fn product_bank_from_the_library() {
+    let bytes = data("sin5_a1_50hz.bin");
+    for fixed in [false, true] {
+        let paper_opts = EstimateOptions {
+            fixed,
+            ..Default::default()
+        };
+        let opts = EstimateOptions {
+            bank: replay::BankKind::Product,
+            ..paper_opts.clone()
+        };
+        let (csv, rejected) = replay::estimate_csv(&bytes, &opts).unwrap();
+        let (paper, _) = replay::estimate_csv(&bytes, &paper_opts).unwrap();
+        assert_eq!(rejected, 0);
+        assert_eq!(csv.lines().count(), paper.lines().count());
+        assert_eq!(csv.lines().next().unwrap(), "t,yaw,yaw_rate,ilo1_v,kf_a");
+        for (q, p) in csv.lines().zip(paper.lines()).skip(1) {
+            let p: Vec<&str> = p.split(',').collect();
+            // t, yaw, yaw_rate, ilo1_v (column 5), kf_a (column 17) of the paper CSV.
+            assert_eq!(q, [p[0], p[1], p[2], p[4], p[16]].join(","));
+        }
+    }
+    assert_eq!(
+        replay::bank_csv_header(replay::BankKind::Product, replay::Axes::ALL),
+        "t,roll,roll_rate,roll_ilo1_v,roll_kf_a,pitch,pitch_rate,pitch_ilo1_v,pitch_kf_a,yaw,yaw_rate,yaw_ilo1_v,yaw_kf_a"
+    );
+    assert_eq!(
+        replay::bank_csv_header(replay::BankKind::Paper, replay::Axes::only(Axis::Yaw)),
+        replay::CSV_HEADER
+    );
+    let opts = EstimateOptions {
+        bank: replay::BankKind::Product,
+        ..Default::default()
+    };
+    let samples = replay::samples(&bytes).unwrap();
+    assert!(matches!(
+        replay::estimate_rows(&samples, &opts),
+        Err(host_tests::error::Error::Usage(_))
+    ));
+}
