@@ -33,7 +33,7 @@ pub fn euler_rates_deg(roll_deg: f32, pitch_deg: f32, pqr_deg_s: [f32; 3]) -> [O
         return [None; 3];
     }
     let phi = roll_deg * DEG_TO_RAD;
-    let (sp, cp) = (libm::sinf(phi), libm::cosf(phi));
+    let (sp, cp) = libm::sincosf(phi);
     let q_sin_r_cos = q * sp + r * cp;
     let pitch_rate = q * cp - r * sp;
     let near_lock = !pitch_deg.is_finite() || pitch_deg.abs() >= PITCH_LIMIT_DEG;
@@ -41,7 +41,7 @@ pub fn euler_rates_deg(roll_deg: f32, pitch_deg: f32, pqr_deg_s: [f32; 3]) -> [O
         return [None, Some(pitch_rate), None];
     }
     let theta = pitch_deg * DEG_TO_RAD;
-    let (st, ct) = (libm::sinf(theta), libm::cosf(theta));
+    let (st, ct) = libm::sincosf(theta);
     let roll_rate = p.is_finite().then(|| p + q_sin_r_cos * st / ct);
     let yaw_rate = q_sin_r_cos / ct;
     [roll_rate, Some(pitch_rate), Some(yaw_rate)]
@@ -61,6 +61,21 @@ mod tests {
     }
 
     /// Level: exactly the body rates.
+    /// `sincosf` (one argument reduction for both) returns exactly `sinf` and `cosf`: checked
+    /// here on every 64th f32 of +-4 rad (+-229 deg; every f32 of that range was compared
+    /// once, 2.16e9 values, none differed), so the reference column is the same text as with
+    /// the two calls.
+    #[test]
+    fn sincosf_is_sinf_and_cosf() {
+        for bits in (0u32..=0x4080_0000).step_by(64) {
+            for x in [f32::from_bits(bits), -f32::from_bits(bits)] {
+                let (s, c) = libm::sincosf(x);
+                assert_eq!(s.to_bits(), libm::sinf(x).to_bits(), "sin {x}");
+                assert_eq!(c.to_bits(), libm::cosf(x).to_bits(), "cos {x}");
+            }
+        }
+    }
+
     #[test]
     fn level_gives_the_body_rates_exactly() {
         let r = euler_rates_deg(0.0, 0.0, [1.25, -3.5, 42.0]);

@@ -170,6 +170,48 @@ fn pipeline_per_frame(c: &Counter, overhead: u64) {
         total as f32 / SAMPLES as f32,
         "sample",
     );
+    // Its parts: the front end alone (parser, attitude packet, BIT, clock) and the Euler
+    // reference rates of one sample (soft-float trigonometry without an FPU).
+    let mut front = nav440_pipeline::Frontend::new();
+    let mut front_total = 0u64;
+    for k in 0..(warm + SAMPLES) {
+        let mut buf = [0u8; 64];
+        let n = a2_frame(k, &mut buf);
+        let frame = buf.get(..n).unwrap_or_default();
+        let (m, ()) = c.measure(|| {
+            black_box(&mut front).feed(black_box(frame), |s| {
+                black_box(s);
+            })
+        });
+        if k >= warm {
+            front_total += m.saturating_sub(overhead);
+        }
+    }
+    line(
+        "instr",
+        "pipeline front end, A2 frame: parse+attitude+BIT+clock",
+        front_total as f32 / SAMPLES as f32,
+        "sample",
+    );
+    let mut euler_total = 0u64;
+    for k in 0..SAMPLES {
+        let roll = 10.0 + k as f32 * 0.1;
+        let (m, r) = c.measure(|| {
+            nav440_pipeline::euler::euler_rates_deg(
+                black_box(roll),
+                black_box(20.0),
+                black_box([1.0, 2.0, 3.0]),
+            )
+        });
+        black_box(r);
+        euler_total += m.saturating_sub(overhead);
+    }
+    line(
+        "instr",
+        "Euler reference rates (three axes)",
+        euler_total as f32 / SAMPLES as f32,
+        "sample",
+    );
 }
 
 /// Square roots executed (counted by [`Counting`]).
