@@ -161,7 +161,7 @@ fn work_dir() -> Result<PathBuf, String> {
     Ok(d)
 }
 
-/// Builds the firmware binaries for `target` (release) and returns the path of `bin`.
+/// Builds the firmware binary `bin` for `target` (release) and returns the path of its copy.
 fn build(target: &str, features: &[&str], bin: &str) -> Result<PathBuf, String> {
     build_profile(target, features, bin, "release")
 }
@@ -234,7 +234,7 @@ fn small_boards() -> [(qemu::Board, &'static str); 2] {
     ]
 }
 
-/// Builds the firmware binaries for `target` with the cargo `profile` and returns the path of
+/// Builds the firmware binary `bin` for `target` with the cargo `profile` and returns the path of
 /// `bin`.
 fn build_profile(
     target: &str,
@@ -251,7 +251,10 @@ fn build_profile(
         target,
         "--profile",
         profile,
-        "--bins",
+        // Only the binary asked for: each one is a fat-LTO link, and the lints
+        // (`clippy_firmware`, `--bins`) already check every binary of each configuration.
+        "--bin",
+        bin,
     ];
     if !feats.is_empty() {
         args.extend(["--features", &feats]);
