@@ -212,6 +212,19 @@ fn interp_gains(a: &BankGains, b: &BankGains, w: f32, wo: ObserverWeights) -> Ba
     }
 }
 
+/// `x` limited to `[lo, hi]` (`lo <= hi`), as `f32::clamp` computes it (a NaN stays NaN), but
+/// without its `lo <= hi` assertion, whose message would link `core::fmt`'s float formatting
+/// into every firmware that runs a schedule.
+fn clamp(x: f32, lo: f32, hi: f32) -> f32 {
+    if x < lo {
+        lo
+    } else if x > hi {
+        hi
+    } else {
+        x
+    }
+}
+
 impl GainSchedule {
     /// A schedule of `levels` (1 to [`MAX_LEVELS`], noise variances finite, > 0 and strictly
     /// increasing). The gains themselves are validated when a bank is built from them.
@@ -302,7 +315,7 @@ impl GainSchedule {
         if noise_var.is_nan() {
             lo
         } else {
-            noise_var.clamp(lo, hi)
+            clamp(noise_var, lo, hi)
         }
     }
 
@@ -337,7 +350,7 @@ impl GainSchedule {
             (Blend::NearestObservers, Some(sw)) => {
                 let v = self.clamp(noise_var);
                 let up = |t: f32| {
-                    if v >= t.clamp(a.noise_var, b.noise_var) {
+                    if v >= clamp(t, a.noise_var, b.noise_var) {
                         1.0
                     } else {
                         0.0
