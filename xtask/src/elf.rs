@@ -5,7 +5,7 @@
 //! linker scripts (`firmware-example/src/board/*.x`) the images were linked with: the check
 //! is what catches a wrong map.
 
-use object::{Object, ObjectSection, ObjectSegment, ObjectSymbol, SectionFlags};
+use object::{Object, ObjectSection, ObjectSymbol, SectionFlags};
 use std::path::Path;
 
 /// An address range, bytes.
@@ -163,13 +163,15 @@ pub struct MapReport {
     pub sections: usize,
     /// Address of `.vector_table`.
     pub vector_table: u64,
+    /// Symbols of `core::fmt`'s float formatting the image links (none expected).
+    pub float_symbols: Vec<String>,
 }
 
 /// Checks `path` against its board's chip: the image names its board (and it is `expect`
 /// when given); every allocated section lies inside the chip's flash or RAM (by its run-time
 /// address), every loadable segment's load address with file bytes inside flash, and
 /// `.vector_table` starts at the chip's boot address. The error names the section or segment
-/// and its addresses.
+/// and its addresses. The report lists the float formatting symbols the image links.
 pub fn check_memory_map(path: &Path, expect: Option<&str>) -> Result<MapReport, String> {
     let data = read(path)?;
     let elf = parse(path, &data)?;
@@ -214,29 +216,20 @@ pub fn check_memory_map(path: &Path, expect: Option<&str>) -> Result<MapReport, 
         }
         sections += 1;
     }
-    for seg in elf.segments() {
-        let (_, file_len) = seg.file_range();
-        if file_len == 0 {
+    // The load addresses (what a probe writes) are the program headers' `p_paddr`.
+    let object::File::Elf32(f) = &elf else {
+        return Err(format!("{shown}: not a 32-bit ELF file"));
+    };
+    let e = f.endian();
+    for h in f.elf_program_headers() {
+        let file_len = u64::from(h.p_filesz.get(e));
+        if h.p_type.get(e) != object::elf::PT_LOAD || file_len == 0 {
             continue;
         }
-        // The load address (what a probe writes): `p_paddr`.
-        let load = match &elf {
-            object::File::Elf32(f) => {
-                let hdrs = f.elf_program_headers();
-                hdrs.iter()
-                    .find(|h| {
-                        u64::from(h.p_vaddr.get(f.endian())) == seg.address()
-                            && u64::from(h.p_filesz.get(f.endian())) == file_len
-                    })
-                    .map(|h| u64::from(h.p_paddr.get(f.endian())))
-            }
-            _ => None,
-        }
-        .unwrap_or(seg.address());
+        let (load, run) = (u64::from(h.p_paddr.get(e)), u64::from(h.p_vaddr.get(e)));
         if !chip.flash.contains(load, file_len) {
             return Err(format!(
-                "{shown}: a loadable segment ({file_len} bytes, run address {:#010x}) is loaded at {load:#010x}..{:#010x}, outside {}'s {} ({:#010x}, {} KiB): a probe cannot write it",
-                seg.address(),
+                "{shown}: a loadable segment ({file_len} bytes, run address {run:#010x}) is loaded at {load:#010x}..{:#010x}, outside {}'s {} ({:#010x}, {} KiB): a probe cannot write it",
                 load + file_len,
                 chip.board,
                 chip.flash.name,
@@ -257,6 +250,7 @@ pub fn check_memory_map(path: &Path, expect: Option<&str>) -> Result<MapReport, 
         board,
         sections,
         vector_table,
+        float_symbols: float_symbols_in(&elf),
     })
 }
 
@@ -269,17 +263,14 @@ const FLOAT_FMT: &[&str] = &[
     "3fmt5float",
 ];
 
-/// The symbols of `path` that belong to `core::fmt`'s float formatting (none expected: the
-/// firmware sends raw bits and the host formats them).
-pub fn float_formatting_symbols(path: &Path) -> Result<Vec<String>, String> {
-    let data = read(path)?;
-    let elf = parse(path, &data)?;
-    Ok(elf
-        .symbols()
+/// The symbols of `elf` that belong to `core::fmt`'s float formatting (none expected in a
+/// firmware image: it sends raw bits and the host formats them).
+fn float_symbols_in(elf: &object::File<'_>) -> Vec<String> {
+    elf.symbols()
         .filter_map(|s| s.name().ok())
         .filter(|n| FLOAT_FMT.iter().any(|f| n.contains(f)))
         .map(str::to_owned)
-        .collect())
+        .collect()
 }
 
 /// Little-endian `u32` at `at`.
@@ -365,7 +356,8 @@ mod tests {
         let text = format!("{}", std::hint::black_box(1.5f64));
         assert_eq!(text, "1.5");
         let exe = std::env::current_exe().expect("test executable");
-        let found = float_formatting_symbols(&exe).expect("readable");
+        let data = read(&exe).expect("readable");
+        let found = float_symbols_in(&parse(&exe, &data).expect("an ELF file"));
         assert!(!found.is_empty(), "no float formatting symbol found");
     }
 

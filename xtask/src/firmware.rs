@@ -31,7 +31,7 @@ const BUILT_ONLY_BOARDS: &[(&str, &str, &str)] = &[
 /// the check that it links no float formatting of `core::fmt`.
 fn check_map(elf: &Path, board: &str) -> Result<(), String> {
     let r = crate::elf::check_memory_map(elf, Some(board))?;
-    let floats = crate::elf::float_formatting_symbols(elf)?;
+    let floats = &r.float_symbols;
     if !floats.is_empty() {
         return Err(format!(
             "{} links core::fmt's float formatting ({} symbols, e.g. {}): the firmware must send raw bits and let the host format them",
