@@ -1293,6 +1293,18 @@ fn image_name(bank: &str, target: &str, axes: usize, suffix: &str) -> String {
 /// the axes of `firmware_example::pipeline::AXES` (all three; keep the two in step).
 const FIRMWARE_AXIS: &str = "all";
 
+/// The `nav440 estimate` arguments that print the CSV of the three-axis firmware built for
+/// `target` with `bank`: `--fixed` where the target has no FPU (the fixed-point bank).
+fn firmware_host_args(target: &str, bank: BankChoice) -> Vec<&'static str> {
+    let mut a = if target == "thumbv7em-none-eabihf" {
+        vec!["--axis", FIRMWARE_AXIS]
+    } else {
+        vec!["--fixed", "--axis", FIRMWARE_AXIS]
+    };
+    a.extend(bank.host_args());
+    a
+}
+
 /// `nav440 estimate FILE [extra]` on the host; its CSV.
 fn host_estimate(file: &Path, extra: &[&str]) -> Result<String, String> {
     let f = file.display().to_string();
@@ -1676,11 +1688,7 @@ fn unit_ci(captures: &[PathBuf], short: &Path, only: Option<Board>) -> Result<()
     for board in &boards {
         let elf = build(board.target, board.features, FW_BIN)?;
         let stm32 = board.features.contains(&STM32_FEATURE);
-        let host_extra: &[&str] = if board.target == "thumbv7em-none-eabihf" {
-            &["--axis", FIRMWARE_AXIS]
-        } else {
-            &["--fixed", "--axis", FIRMWARE_AXIS]
-        };
+        let host_extra = &firmware_host_args(board.target, BankChoice::Paper)[..];
         let mut cases: Vec<UnitCase> = captures
             .iter()
             .map(|c| UnitCase {
@@ -1751,8 +1759,7 @@ fn unit_ci(captures: &[PathBuf], short: &Path, only: Option<Board>) -> Result<()
             let mut features = board.features.to_vec();
             features.extend(BankChoice::Product.features());
             let elf = build(board.target, &features, FW_BIN)?;
-            let mut extra = host_extra.to_vec();
-            extra.extend(BankChoice::Product.host_args());
+            let extra = firmware_host_args(board.target, BankChoice::Product);
             for c in captures {
                 let case = UnitCase {
                     name: "product-capture",
@@ -1976,11 +1983,7 @@ pub fn ci_steps() -> Result<(), String> {
     captures.extend([corrupted, short, rate_change, bit_fail.clone()]);
     captures.extend(low_rates);
     for (board, elf) in &elfs {
-        let host_extra: &[&str] = if board.target == "thumbv7em-none-eabihf" {
-            &["--axis", FIRMWARE_AXIS]
-        } else {
-            &["--fixed", "--axis", FIRMWARE_AXIS]
-        };
+        let host_extra = &firmware_host_args(board.target, BankChoice::Paper)[..];
         for capture in &captures {
             let c = equivalence(board, elf, capture, host_extra)?;
             let want = BIT_FAILED_FRAMES.clone().count() as u64;
@@ -1998,12 +2001,7 @@ pub fn ci_steps() -> Result<(), String> {
     // product --axis all` (`--fixed` without FPU), byte for byte, on every capture and board.
     for (board, elf) in &product_elfs {
         eprintln!("xtask: product firmware on {}", board.name);
-        let mut extra: Vec<&str> = if board.target == "thumbv7em-none-eabihf" {
-            vec!["--axis", FIRMWARE_AXIS]
-        } else {
-            vec!["--fixed", "--axis", FIRMWARE_AXIS]
-        };
-        extra.extend(BankChoice::Product.host_args());
+        let extra = firmware_host_args(board.target, BankChoice::Product);
         for capture in &captures {
             equivalence(board, elf, capture, &extra)?;
         }
