@@ -29,9 +29,3 @@ pub const RETRY_PAUSE_MS: u32 = 1000;
 pub const REPLAY: bool = false;
 /// defmt frames go to RTT.
 pub const RTT: bool = true;
-
-/// A semihosting host is there: only under QEMU ([`emulated`]); on a chip a semihosting call
-/// without a debugger faults.
-pub fn host_present() -> bool {
-    emulated()
-}

@@ -41,6 +41,12 @@ pub fn emulated() -> bool {
     cr == 0
 }
 
+/// A semihosting host is there: only under QEMU ([`emulated`]); on a chip a semihosting call
+/// without a debugger faults.
+pub fn host_present() -> bool {
+    emulated()
+}
+
 /// Baud rate of the control channel (the model ignores it).
 const CONTROL_BAUD: u32 = 115_200;
 
