@@ -133,6 +133,29 @@ fn a2_frame(k: u32, out: &mut [u8]) -> usize {
     encode_frame(PacketType::A2, &payload, out).unwrap_or_else(|_| fail("an A2 frame"))
 }
 
+/// Mean instructions of `run` per A2 frame ([`a2_frame`] `k`) over [`SAMPLES`] frames after
+/// `warm` unmeasured ones; `check` gets each run's result, outside the measurement.
+fn frames_mean<R>(
+    c: &Counter,
+    overhead: u64,
+    warm: u32,
+    mut run: impl FnMut(&[u8]) -> R,
+    mut check: impl FnMut(R),
+) -> f32 {
+    let mut total = 0u64;
+    for k in 0..(warm + SAMPLES) {
+        let mut buf = [0u8; 64];
+        let n = a2_frame(k, &mut buf);
+        let frame = buf.get(..n).unwrap_or_default();
+        let (m, res) = c.measure(|| run(frame));
+        check(res);
+        if k >= warm {
+            total += m.saturating_sub(overhead);
+        }
+    }
+    total as f32 / SAMPLES as f32
+}
+
 /// Instructions per A2 frame through the firmware's whole pipeline (`pipeline::new()`:
 /// parser, attitude and BIT, clock, one bank per axis of `pipeline::AXES` with the Euler
 /// reference, the defmt row message), after the period warm-up and [`WARMUP`] more frames.
@@ -142,55 +165,50 @@ fn pipeline_per_frame(c: &Counter, overhead: u64) {
     }
     let mut pipe = firmware_example::pipeline::new();
     let warm = nav440_pipeline::period::WARMUP_SAMPLES as u32 + WARMUP;
-    let mut total = 0u64;
     let mut rows = 0u32;
-    for k in 0..(warm + SAMPLES) {
-        let mut buf = [0u8; 64];
-        let n = a2_frame(k, &mut buf);
-        let frame = buf.get(..n).unwrap_or_default();
-        let (m, res) = c.measure(|| {
+    let per_frame = frames_mean(
+        c,
+        overhead,
+        warm,
+        |frame| {
             black_box(&mut pipe).feed(black_box(frame), &mut |row| {
                 firmware_example::out::row(black_box(row));
                 rows += 1;
             })
-        });
-        if res.is_err() {
-            fail("the pipeline run");
-        }
-        if k >= warm {
-            total += m.saturating_sub(overhead);
-        }
-    }
+        },
+        |res| {
+            if res.is_err() {
+                fail("the pipeline run");
+            }
+        },
+    );
     if rows < SAMPLES {
         fail("a row per pipeline frame");
     }
     line(
         "instr",
         "pipeline, A2 frame: parse+clock+AXES banks+Euler+defmt row",
-        total as f32 / SAMPLES as f32,
+        per_frame,
         "sample",
     );
     // Its parts: the front end alone (parser, attitude packet, BIT, clock) and the Euler
     // reference rates of one sample (soft-float trigonometry without an FPU).
     let mut front = nav440_pipeline::Frontend::new();
-    let mut front_total = 0u64;
-    for k in 0..(warm + SAMPLES) {
-        let mut buf = [0u8; 64];
-        let n = a2_frame(k, &mut buf);
-        let frame = buf.get(..n).unwrap_or_default();
-        let (m, ()) = c.measure(|| {
+    let per_frame = frames_mean(
+        c,
+        overhead,
+        warm,
+        |frame| {
             black_box(&mut front).feed(black_box(frame), |s| {
                 black_box(s);
             })
-        });
-        if k >= warm {
-            front_total += m.saturating_sub(overhead);
-        }
-    }
+        },
+        |()| {},
+    );
     line(
         "instr",
         "pipeline front end, A2 frame: parse+attitude+BIT+clock",
-        front_total as f32 / SAMPLES as f32,
+        per_frame,
         "sample",
     );
     let mut euler_total = 0u64;
