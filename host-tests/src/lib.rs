@@ -1,24 +1,19 @@
-//! Host side of the project: replay of NAV440 captures through the same parser and estimator
-//! bank the firmware runs, capture synthesis, the paper's experiment, gain tuning and plots.
-//! The `nav440` binary (src/main.rs) is a thin command-line layer over these modules, so the
-//! integration tests (and the firmware's equivalence test) can call the pipeline directly.
+//! The recorded NAV440 captures of `host-tests/data/` and the integration tests (`tests/`)
+//! that replay them through the same parser, estimator banks and tuner the firmware and the
+//! `nav440` tool run. `cargo test -p host-tests` runs them; the captures are described in
+//! `data/README.md`.
 
-pub mod corrupt;
-pub mod decode;
-pub mod error;
-pub mod gains;
-pub mod motion;
-pub mod optim;
-pub mod paper;
-pub mod plot;
-pub mod plots;
-pub mod replay;
-pub mod serial;
-pub mod sim;
-pub mod synth;
-pub mod tune;
+#![forbid(unsafe_code)]
 
-/// The Rust examples of the top-level README, compiled and run as doc tests.
-#[cfg(doctest)]
-#[doc = include_str!("../../README.md")]
-pub struct ReadmeDoctests;
+use std::path::PathBuf;
+
+/// The folder of the bundled captures (`host-tests/data`).
+pub fn data_dir() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("data")
+}
+
+/// The path of the bundled file `name` (relative to `host-tests/data`, e.g.
+/// `"fig5_a2_100hz.bin"` or `"gains/schedule_fig5.toml"`).
+pub fn data(name: &str) -> PathBuf {
+    data_dir().join(name)
+}

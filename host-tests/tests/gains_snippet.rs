@@ -2,7 +2,7 @@
 //! the configuration its TOML twin gives `--gains`.
 
 use estimators::BankConfig;
-use host_tests::gains::GainsFile;
+use nav440_cli::gains::GainsFile;
 
 mod tuned {
     include!("../data/gains/fig5_var0.01.rs");

@@ -5,7 +5,7 @@
 //! builds exactly the bank the firmware builds after its warm-up.
 
 use estimators::{BankConfig, YawBank};
-use host_tests::replay::{self, Axis, EstimateOptions};
+use nav440_cli::replay::{self, Axis, EstimateOptions};
 use nav440_pipeline::period::{PeriodEstimator, WARMUP_SAMPLES};
 use nav440_proto::A2Fields;
 

@@ -10,26 +10,20 @@
 //!   captures, at the paper's two noise levels, the MSE of every column (7 velocity, 7
 //!   acceleration) with `BankConfig::NAV440` is below the MSE with `BankConfig::PAPER` (both
 //!   measured as `nav440 tune` measures its "before"/"after": through the whole bank, mean of
-//!   3 noise seeds, `host_tests::tune::bank_mse`), but for the 5 listed cells ([`EXCEPTIONS`]:
+//!   3 noise seeds, `nav440_cli::tune::bank_mse`), but for the 5 listed cells ([`EXCEPTIONS`]:
 //!   4 of them the AD, for which no gain beats the paper's everywhere, shown by
 //!   `no_single_ad_t_beats_the_paper_on_every_bundled_capture`), held to 1.02 x PAPER. The
 //!   references are independent of the code under test: the motion's analytic rate, and the
 //!   paper's AVE on that rate for acceleration.
 
 use estimators::{BankConfig, BankGains, Hold};
-use host_tests::gains::bank_gains_literal;
-use host_tests::motion::ProfileKind;
-use host_tests::optim::Method;
-use host_tests::paper::COLUMNS;
-use host_tests::replay;
-use host_tests::tune::{bank_mse, synth_family, tune_preset, PresetCase};
-use std::path::PathBuf;
-
-fn data(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("data")
-        .join(name)
-}
+use host_tests::data;
+use nav440_cli::gains::bank_gains_literal;
+use nav440_cli::motion::ProfileKind;
+use nav440_cli::optim::Method;
+use nav440_cli::paper::COLUMNS;
+use nav440_cli::replay;
+use nav440_cli::tune::{bank_mse, synth_family, tune_preset, PresetCase};
 
 /// The tuning family: synthetic motions (fig5 shapes of seeds 11-14, none of them a bundled
 /// capture's seed, at 100, 50, 25 and 20 Hz; the closed-form spin and sin5 motions at rates

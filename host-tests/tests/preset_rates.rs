@@ -14,13 +14,13 @@
 //!   each entry is within 2 % of PAPER in every column and better than the 20-100 Hz gains.
 
 use estimators::BankConfig;
-use host_tests::gains::{bank_gains_literal, GainsFile};
-use host_tests::motion::ProfileKind;
-use host_tests::optim::Method;
-use host_tests::paper::COLUMNS;
-use host_tests::replay::Sample;
-use host_tests::synth;
-use host_tests::tune::{bank_mse, synth_family, tune_preset, PresetCase};
+use nav440_cli::gains::{bank_gains_literal, GainsFile};
+use nav440_cli::motion::ProfileKind;
+use nav440_cli::optim::Method;
+use nav440_cli::paper::COLUMNS;
+use nav440_cli::replay::Sample;
+use nav440_cli::synth;
+use nav440_cli::tune::{bank_mse, synth_family, tune_preset, PresetCase};
 
 /// The NAV440 rates below 20 Hz, each with its own entry, Hz (4 Hz runs the 5 Hz entry).
 const RATES: [u32; 3] = [10, 5, 2];

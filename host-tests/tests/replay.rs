@@ -6,19 +6,16 @@
 
 mod common;
 
-use host_tests::corrupt::Corruption;
-use host_tests::motion::{Profile, ProfileKind};
-use host_tests::replay::{self, Axis, EstimateOptions, Noise};
-use host_tests::synth::{self, PacketKind, SynthConfig};
-use std::path::PathBuf;
+use nav440_cli::corrupt::Corruption;
+use nav440_cli::motion::{Profile, ProfileKind};
+use nav440_cli::replay::{self, Axis, EstimateOptions, Noise};
+use nav440_cli::synth::{self, PacketKind, SynthConfig};
 
 const ANGLE_LSB: f64 = 360.0 / 65536.0;
 const RATE_LSB: f64 = 1260.0 / 65536.0;
 
 fn data(name: &str) -> Vec<u8> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("data")
-        .join(name);
+    let p = host_tests::data(name);
     std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
 }
 
@@ -495,6 +492,6 @@ fn product_bank_from_the_library() {
     let samples = replay::samples(&bytes).unwrap();
     assert!(matches!(
         replay::estimate_rows(&samples, &opts),
-        Err(host_tests::error::Error::Usage(_))
+        Err(nav440_cli::error::Error::Usage(_))
     ));
 }

@@ -33,28 +33,22 @@
 //! Release only (tuning): `cargo test --release -p host-tests --test schedule -- --nocapture`.
 
 use estimators::{BankConfig, Hold};
-use host_tests::gains::{self, Loaded};
-use host_tests::motion::{Profile, ProfileKind};
-use host_tests::optim::Method;
-use host_tests::paper::{ave_on_rate, COLUMNS as NAMES, REFERENCE_AVE};
-use host_tests::replay::{self, Axis, EstimateOptions, Sample};
-use host_tests::synth::{angle_raw, ANGLE_LSB_DEG};
-use host_tests::tune::{mse_range, tune_with, tuned_ave_deltahat, TuneSpec};
+use host_tests::data;
+use nav440_cli::gains::{self, Loaded};
+use nav440_cli::motion::{Profile, ProfileKind};
+use nav440_cli::optim::Method;
+use nav440_cli::paper::{ave_on_rate, COLUMNS as NAMES, REFERENCE_AVE};
+use nav440_cli::replay::{self, Axis, EstimateOptions, Sample};
+use nav440_cli::synth::{angle_raw, ANGLE_LSB_DEG};
+use nav440_cli::tune::{mse_range, tune_with, tuned_ave_deltahat, TuneSpec};
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
-use std::path::PathBuf;
 use std::sync::OnceLock;
 
 /// Capture length and switch time, s.
 const END_S: f64 = 20.0;
 const SWITCH_S: f64 = 10.0;
-
-fn data(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("data")
-        .join(name)
-}
 
 fn clean() -> Vec<Sample> {
     let end = (END_S * 1e6) as u64;
@@ -129,7 +123,7 @@ fn mse_over(samples: &[Sample], opts: &EstimateOptions, ranges: &[(f64, f64)]) -
 /// constant N(0, `var_deg2`) yaw noise (noise seed 5): `nav440 synth --profile PROFILE --rate
 /// RATE --duration 30 --seed 21 --yaw-noise VAR --noise-seed 5`.
 fn synth_samples(profile: ProfileKind, rate_hz: u32, var_deg2: f64) -> Vec<Sample> {
-    use host_tests::synth::{self, NoiseStep, PacketKind, SynthConfig};
+    use nav440_cli::synth::{self, NoiseStep, PacketKind, SynthConfig};
     let cap = synth::generate(&SynthConfig {
         profile,
         seed: 21,
@@ -905,7 +899,7 @@ fn rust_snippet_and_toml_hold_the_same_schedule() {
 
 /// Each level of the bundled schedule records the AVEs' switching gains its gains were tuned
 /// with (`ave_deltahat`): the mean of `deltahat` over the tuning run, what
-/// `host_tests::tune::tuned_ave_deltahat` computes for the level's gains on the tuning capture
+/// `nav440_cli::tune::tuned_ave_deltahat` computes for the level's gains on the tuning capture
 /// (fig5, 0-30 s, noise seeds 1-8 at the level's variance). Recomputed here from the file's
 /// gains, it matches the file to f32 rounding. Property: it grows with the noise level (the
 /// AVE's `|e|` does) for every stage.

@@ -5,7 +5,7 @@
 
 mod common;
 
-use host_tests::replay::{self, Axis, EstimateOptions};
+use nav440_cli::replay::{self, Axis, EstimateOptions};
 use nav440_proto::{A0Fields, A2Fields};
 
 const YAW_LSB: f64 = 360.0 / 65536.0;
@@ -241,8 +241,7 @@ fn time_fault_capture() -> Vec<u8> {
 #[test]
 fn committed_time_fault_capture() {
     let bytes = time_fault_capture();
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/time_faults_a2_100hz.bin");
+    let path = host_tests::data("time_faults_a2_100hz.bin");
     if std::env::var_os("NAV440_WRITE_CAPTURE").is_some() {
         std::fs::write(&path, &bytes).unwrap();
     }

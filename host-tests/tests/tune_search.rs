@@ -9,17 +9,11 @@
 //! `cargo test --release -p host-tests --test tune_search` (in `cargo xtask ci`'s release list).
 
 use estimators::Hold;
-use host_tests::optim::Method;
-use host_tests::paper::COLUMNS;
-use host_tests::replay::{self, EstimateOptions};
-use host_tests::tune::{tune_with, TuneSpec};
-use std::path::PathBuf;
-
-fn data(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("data")
-        .join(name)
-}
+use host_tests::data;
+use nav440_cli::optim::Method;
+use nav440_cli::paper::COLUMNS;
+use nav440_cli::replay::{self, EstimateOptions};
+use nav440_cli::tune::{tune_with, TuneSpec};
 
 fn run(file: &str, slice_s: f64, noise_var: f64, hold: Hold, method: Method) -> [[f64; 7]; 2] {
     let samples = replay::read_samples(&data(file)).unwrap();

@@ -8,8 +8,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
-use host_tests::replay;
-use host_tests::serial::StdDelay;
+use nav440_cli::replay;
+use nav440_cli::serial::StdDelay;
 use nav440_proto::boot::{self, BootError, Options, Report, Target};
 use nav440_proto::driver::{IoDriver, Timing};
 use nav440_proto::{Baud, FieldId, PacketRate, PacketType, Parser};
@@ -18,7 +18,7 @@ const BIN: &str = env!("CARGO_BIN_EXE_nav440");
 
 fn data(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("data")
+        .join("../host-tests/data")
         .join(name)
 }
 

@@ -5,10 +5,12 @@
 //! The memory tests are release-only (CI: `cargo test --release -p host-tests --test
 //! streaming`); the first-rows tests run in every build.
 
+// The ILO steady-state gain helper shared with the capture-replay tests.
+#[path = "../../host-tests/tests/common/mod.rs"]
 mod common;
 
-use host_tests::replay::EstimateOptions;
-use host_tests::synth::{encode_packet, PacketKind, ANGLE_LSB_DEG, RATE_LSB_DEG_S};
+use nav440_cli::replay::EstimateOptions;
+use nav440_cli::synth::{encode_packet, PacketKind, ANGLE_LSB_DEG, RATE_LSB_DEG_S};
 use std::io::{BufRead, BufReader, Read, Write};
 use std::process::{Child, Command, Stdio};
 use std::sync::mpsc;

@@ -8,7 +8,7 @@
 //! psi' sin phi cos theta, r = -theta' sin phi + psi' cos phi cos theta), the independent side
 //! of the check of the pipeline's forward kinematics (phi', theta', psi' from p, q, r).
 
-use host_tests::replay::{self, Axes, Axis, EstimateOptions};
+use nav440_cli::replay::{self, Axes, Axis, EstimateOptions};
 use nav440_proto::A2Fields;
 
 const ANGLE_LSB: f64 = 360.0 / 65536.0; // deg

@@ -11,7 +11,6 @@
 //! read-back differs, or the port failed; 5 the output cannot be written.
 
 use std::io::{Read, Write};
-use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use clap::Args;
@@ -20,7 +19,7 @@ use nav440_proto::driver::{IoDriver, Timing};
 use nav440_proto::Baud;
 
 use crate::error::{Error, Result};
-use crate::replay::{self, EstimateOptions};
+
 use crate::sim::{parse_baud, parse_output_type, parse_rate};
 
 /// The serial port and the target configuration, shared by the three commands.
@@ -50,36 +49,6 @@ pub struct PortArgs {
     /// Pings per baud before trying the next.
     #[arg(long, default_value_t = 3, value_name = "N")]
     pub pings: u8,
-}
-
-/// Arguments of `nav440 config`.
-#[derive(Args, Debug, Clone)]
-pub struct ConfigArgs {
-    #[command(flatten)]
-    port: PortArgs,
-}
-
-/// Arguments of `nav440 record`.
-#[derive(Args, Debug, Clone)]
-pub struct RecordArgs {
-    #[command(flatten)]
-    port: PortArgs,
-    /// Capture file to write (the bytes after the read-back reply).
-    #[arg(short, long, value_name = "FILE")]
-    output: PathBuf,
-    /// Stop after this many seconds (default: when the port closes).
-    #[arg(long, value_name = "S")]
-    duration: Option<f64>,
-}
-
-/// Arguments of `nav440 live`.
-#[derive(Args, Debug, Clone)]
-pub struct LiveArgs {
-    #[command(flatten)]
-    port: PortArgs,
-    /// Stop after this many seconds (default: when the port closes).
-    #[arg(long, value_name = "S")]
-    duration: Option<f64>,
 }
 
 /// An I/O error of the serial port.
@@ -179,7 +148,7 @@ fn target(a: &PortArgs) -> Result<Target> {
 }
 
 /// Opens the port and runs the boot sequence; returns the driver (at the target baud).
-fn open_and_boot(a: &PortArgs) -> Result<(IoDriver<SerialIo>, Report, Target)> {
+pub(crate) fn open_and_boot(a: &PortArgs) -> Result<(IoDriver<SerialIo>, Report, Target)> {
     let t = target(a)?;
     let start_baud = a.unit_baud.map(parse_baud).transpose()?;
     let first = start_baud.unwrap_or(Baud::B57600).bits_per_second();
@@ -207,7 +176,7 @@ fn open_and_boot(a: &PortArgs) -> Result<(IoDriver<SerialIo>, Report, Target)> {
     }
 }
 
-fn report_json(port: &str, r: &Report, t: &Target) -> serde_json::Value {
+pub(crate) fn report_json(port: &str, r: &Report, t: &Target) -> serde_json::Value {
     serde_json::json!({
         "port": port,
         "found_at": r.found_at.bits_per_second(),
@@ -225,16 +194,9 @@ fn report_json(port: &str, r: &Report, t: &Target) -> serde_json::Value {
     })
 }
 
-/// `nav440 config`: the boot sequence; the report as one JSON object on stdout.
-pub fn config(a: &ConfigArgs) -> Result<()> {
-    let (_, report, t) = open_and_boot(&a.port)?;
-    println!("{}", report_json(&a.port.port, &report, &t));
-    Ok(())
-}
-
 /// Reads the stream after the boot sequence: `on_bytes` gets the driver's pending bytes, then
 /// everything the port delivers until `duration` or the end of the stream (the port closed).
-fn stream_after_boot(
+pub(crate) fn stream_after_boot(
     d: IoDriver<SerialIo>,
     duration: Option<f64>,
     mut on_bytes: impl FnMut(&[u8]) -> Result<bool>,
@@ -277,46 +239,4 @@ fn stream_after_boot(
             Err(e) => return Err(Error::Other(format!("serial port failed: {e}"))),
         }
     }
-}
-
-/// `nav440 record`: the boot sequence, then the stream after the read-back into a file.
-pub fn record(a: &RecordArgs) -> Result<()> {
-    let out = std::fs::File::create(&a.output)
-        .map_err(|e| Error::Output(format!("cannot create {}: {e}", a.output.display())))?;
-    let mut w = std::io::BufWriter::new(out);
-    let (d, report, t) = open_and_boot(&a.port)?;
-    eprintln!("nav440 record: {}", report_json(&a.port.port, &report, &t));
-    let werr =
-        |e: std::io::Error| Error::Output(format!("cannot write {}: {e}", a.output.display()));
-    let total = stream_after_boot(d, a.duration, |b| {
-        w.write_all(b).map(|()| true).map_err(werr)
-    })?;
-    w.flush().map_err(werr)?;
-    eprintln!(
-        "nav440 record: {total} bytes written to {}",
-        a.output.display()
-    );
-    Ok(())
-}
-
-/// `nav440 live`: the boot sequence, then the estimate CSV on stdout while receiving.
-pub fn live(a: &LiveArgs) -> Result<()> {
-    let (d, report, t) = open_and_boot(&a.port)?;
-    eprintln!("nav440 live: {}", report_json(&a.port.port, &report, &t));
-    let stdout = std::io::stdout();
-    let mut out = stdout.lock();
-    // The same streaming pipeline as `nav440 estimate` (warm-up, bank with the shipped
-    // preset's gains for the unit's packet rate, CSV, warnings).
-    let opts = EstimateOptions {
-        follow_rate: true,
-        ..EstimateOptions::default()
-    };
-    let source = replay::FnChunks(|f: &mut dyn FnMut(&[u8]) -> Result<bool>| {
-        stream_after_boot(d, a.duration, f).map(|_| ())
-    });
-    let report = replay::estimate_stream(source, &opts, &mut out)?;
-    for w in report.warnings() {
-        eprintln!("nav440: warning: {w}");
-    }
-    Ok(())
 }

@@ -10,7 +10,7 @@ const HEADER: &str =
 
 fn data(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("data")
+        .join("../host-tests/data")
         .join(name)
 }
 
@@ -620,8 +620,8 @@ fn contract_cases_of_issue_8() {
     let mut slow = Vec::new();
     for k in 0..20u32 {
         slow.extend(
-            host_tests::synth::encode_packet(
-                host_tests::synth::PacketKind::A2,
+            nav440_cli::synth::encode_packet(
+                nav440_cli::synth::PacketKind::A2,
                 f64::from(k),
                 0.0,
                 k * 200_000,
@@ -862,7 +862,7 @@ fn a_schedule_records_its_rate_and_estimate_warns_off_it() {
 #[test]
 fn estimate_runs_the_preset_of_the_capture_rate() {
     use estimators::BankConfig;
-    use host_tests::gains::GainsFile;
+    use nav440_cli::gains::GainsFile;
     let d = scratch("rate-preset");
     let cap = d.join("10hz.bin");
     ok(&[

@@ -1,0 +1,18 @@
+//! `nav440 config`: configure a unit on a serial port ([`crate::serial`]).
+
+use crate::error::Result;
+use crate::serial::{open_and_boot, report_json, PortArgs};
+
+/// Arguments of `nav440 config`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
+    #[command(flatten)]
+    pub(crate) port: PortArgs,
+}
+
+/// `nav440 config`: the boot sequence; the report as one JSON object on stdout.
+pub fn run(a: &Args) -> Result<()> {
+    let (_, report, t) = open_and_boot(&a.port)?;
+    println!("{}", report_json(&a.port.port, &report, &t));
+    Ok(())
+}

@@ -1,0 +1,43 @@
+//! `nav440 plot`: yaw, measured rate, velocity and acceleration estimates as an SVG.
+
+use std::path::PathBuf;
+
+use super::{bank_options, noise, one_axis, BankArgs, NoiseArgs, PresetArg};
+use crate::error::Result;
+use crate::{plots, replay};
+
+/// Arguments of `nav440 plot`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Capture file; `-` reads standard input.
+    file: PathBuf,
+    /// Output SVG file.
+    #[arg(short, long, value_name = "OUT.svg")]
+    output: PathBuf,
+    #[command(flatten)]
+    bank: BankArgs,
+    #[command(flatten)]
+    noise: NoiseArgs,
+    /// Plot from this time, s.
+    #[arg(long)]
+    from: Option<f64>,
+    /// Plot up to this time, s.
+    #[arg(long)]
+    to: Option<f64>,
+}
+
+/// Runs the bank on the capture and draws the five stacked panels.
+pub fn run(a: &Args) -> Result<()> {
+    let mut opts = bank_options(&a.bank, PresetArg::Nav440)?;
+    one_axis(&opts, "plot")?;
+    opts.noise = noise(a.noise.noise_var, a.noise.seed)?;
+    let samples = replay::read_samples(&a.file)?;
+    plots::plot_capture(
+        &samples,
+        &opts,
+        &replay::capture_name(&a.file),
+        &a.output,
+        a.from,
+        a.to,
+    )
+}

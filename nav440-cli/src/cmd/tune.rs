@@ -1,0 +1,132 @@
+//! `nav440 tune`: per-family gain calibration on a capture, or a noise-level gain schedule.
+
+use std::path::PathBuf;
+
+use super::{noise, one_axis, parse_range, write_file, AxisArg, HoldArg};
+use crate::error::{Error, Result};
+use crate::{optim, paper, replay, tune};
+
+/// Arguments of `nav440 tune`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Capture file; `-` reads standard input.
+    file: PathBuf,
+    /// Noise variance added to yaw, deg^2.
+    #[arg(
+        long,
+        value_name = "V",
+        required_unless_present = "schedule",
+        conflicts_with = "schedule"
+    )]
+    noise_var: Option<f64>,
+    /// Tune a gain schedule: one level per noise variance (deg^2, comma-separated,
+    /// increasing, e.g. 0.001,0.01,0.1,0.5,1); `-o` writes the schedule file that
+    /// `--gains` runs as a noise-adaptive bank, `--rust` its `SCHEDULE` array.
+    #[arg(
+        long,
+        value_name = "V1,V2,...",
+        value_delimiter = ',',
+        conflicts_with = "exhaustive"
+    )]
+    schedule: Option<Vec<f64>>,
+    /// Number of noise seeds averaged per evaluation.
+    #[arg(long, default_value_t = 3)]
+    seeds: u64,
+    /// MSE window end, s (tune and score on 0-WINDOW s).
+    #[arg(long, default_value_t = 30.0, conflicts_with = "train")]
+    window: f64,
+    /// Tune on the MSE over this time range, s (e.g. 0-15).
+    #[arg(long, value_name = "T0-T1", value_parser = parse_range)]
+    train: Option<(f64, f64)>,
+    /// Report the MSE before/after over this time range, s (default: the training range).
+    #[arg(long, value_name = "T2-T3", value_parser = parse_range)]
+    test: Option<(f64, f64)>,
+    /// Reference mode: an exhaustive log grid of N points per gain instead of the search.
+    #[arg(long, value_name = "N", num_args = 0..=1, default_missing_value = "12")]
+    exhaustive: Option<usize>,
+    /// Sample adapter; default: tune both and keep the better.
+    #[arg(long, value_enum)]
+    hold: Option<HoldArg>,
+    /// Observer step h, s.
+    #[arg(long, default_value_t = 1e-4)]
+    step: f32,
+    /// Write the tuned gains (TOML, accepted by `--gains`) here.
+    #[arg(short, long, value_name = "FILE")]
+    output: Option<PathBuf>,
+    /// Also write a Rust snippet (BankConfig literal for the firmware) here.
+    #[arg(long, value_name = "FILE")]
+    rust: Option<PathBuf>,
+    /// Tuned axis: roll, pitch or yaw.
+    #[arg(long, value_enum, default_value = "yaw")]
+    axis: AxisArg,
+}
+
+/// Tunes the gains (or the schedule), prints the report and writes `-o` / `--rust`.
+pub fn run(a: Args) -> Result<()> {
+    if let Some(v) = a.noise_var {
+        noise(Some(v), 0)?;
+    }
+    for &v in a.schedule.iter().flatten() {
+        noise(Some(v), 0)?;
+    }
+    paper::check_window(a.window)?;
+    let samples = replay::read_samples(&a.file)?;
+    let opts = replay::EstimateOptions {
+        hold: a.hold.map_or(estimators::Hold::Linear, Into::into),
+        step_s: a.step,
+        axes: a.axis.into(),
+        ..Default::default()
+    };
+    one_axis(&opts, "tune")?;
+    let spec = tune::TuneSpec {
+        noise_var: a.noise_var.unwrap_or(0.0),
+        seeds: a.seeds.max(1),
+        train: a.train.unwrap_or((0.0, a.window)),
+        test: a.test,
+        method: match a.exhaustive {
+            Some(n) if n < 2 => {
+                return Err(Error::Usage(format!(
+                    "--exhaustive needs at least 2 points per gain, got {n}"
+                )))
+            }
+            Some(points) => optim::Method::Exhaustive { points },
+            None => optim::Method::Search,
+        },
+        holds: match a.hold {
+            Some(h) => vec![h.into()],
+            None => vec![estimators::Hold::Linear, estimators::Hold::ZeroOrder],
+        },
+    };
+    if let Some(levels) = a.schedule {
+        let spec = tune::TuneSpec {
+            holds: vec![a.hold.map_or(estimators::Hold::Linear, Into::into)],
+            ..spec
+        };
+        let (file, text) = tune::tune_schedule(&samples, &opts, &spec, &levels)?;
+        super::stdout_or_file(None, |w| w.write_all(text.as_bytes()))?;
+        if let Some(p) = a.output {
+            write_file(&p, &file.to_toml())?;
+        }
+        if let Some(p) = a.rust {
+            let what = format!(
+                "--schedule {}",
+                levels
+                    .iter()
+                    .map(|v| v.to_string())
+                    .collect::<Vec<_>>()
+                    .join(",")
+            );
+            write_file(&p, &file.to_rust(&what, &estimators::BankConfig::NAV440))?;
+        }
+        return Ok(());
+    }
+    let res = tune::tune_with(&samples, &opts, &spec)?;
+    super::stdout_or_file(None, |w| w.write_all(res.to_text().as_bytes()))?;
+    if let Some(p) = a.output {
+        write_file(&p, &res.to_toml())?;
+    }
+    if let Some(p) = a.rust {
+        write_file(&p, &res.to_rust())?;
+    }
+    Ok(())
+}
