@@ -1,0 +1,319 @@
+//! The banks the host runs per axis: f32 or fixed point, fixed or scheduled gains, paper or product ([`HostBank`]), with the noise added per sample or per observer step.
+
+use super::*;
+
+/// The part of `estimators::EstimatorBank` the host calls per sample, as an object (one
+/// boxed bank per axis whatever its number type).
+pub trait DynBank<O> {
+    /// `EstimatorBank::update`.
+    fn update(&mut self, t_us: u64, angle_deg: f32) -> std::result::Result<O, SampleError>;
+    /// `EstimatorBank::new_epoch`.
+    fn new_epoch(&mut self);
+    /// `EstimatorBank::reinit_count`.
+    fn reinit_count(&self) -> u32;
+}
+
+impl<B: EstimatorBank> DynBank<B::Output> for B {
+    fn update(&mut self, t_us: u64, deg: f32) -> std::result::Result<B::Output, SampleError> {
+        EstimatorBank::update(self, t_us, deg)
+    }
+
+    fn new_epoch(&mut self) {
+        EstimatorBank::new_epoch(self);
+    }
+
+    fn reinit_count(&self) -> u32 {
+        EstimatorBank::reinit_count(self)
+    }
+}
+
+/// A built host bank: the bank, and for a noise-adaptive bank whose schedule was tuned at
+/// another sample period (`AdaptiveBank::period_fits`): (the schedule's period, the bank's), s.
+pub type BuiltBank<O> = (Box<dyn DynBank<O>>, Option<(f32, f32)>);
+
+/// The output of a bank `nav440 estimate` can run: how the host builds that bank (f32 or
+/// fixed point, fixed or scheduled gains) for an axis.
+pub trait HostOutput: EstimatorOutput + 'static {
+    /// The bank of `axis` for `cfg` (built by `nav440_pipeline::axis_bank` or
+    /// `adaptive_axis_bank`, which set the axis's unwrapping): `fixed` selects `Fx`,
+    /// `schedule` the noise-adaptive bank. Errors are the CLI's messages.
+    fn build(
+        axis: Axis,
+        cfg: &BankConfig,
+        fixed: bool,
+        schedule: Option<&GainSchedule>,
+    ) -> std::result::Result<BuiltBank<Self>, String>;
+}
+
+/// The CLI's message for a configuration the bank refuses.
+pub(crate) fn bad_config(cfg: &BankConfig, e: estimators::ConfigError) -> String {
+    let mut m = format!("bad estimator configuration: {e}");
+    if e == estimators::ConfigError::SamplePeriodTooLong {
+        m.push_str(&format!(
+            " (nominal sample period {} s from the capture's first {WARMUP_SAMPLES} samples, h = {} s; use a larger --step)",
+            cfg.sample_period_s, cfg.h
+        ));
+    }
+    m
+}
+
+/// `(fits, schedule's period, bank's period)` of an adaptive bank -> the misfit, if any.
+pub(crate) fn misfit(fits: bool, tuned: &GainSchedule, run: f32) -> Option<(f32, f32)> {
+    if fits {
+        return None;
+    }
+    Some((tuned.sample_period_s()?, run))
+}
+
+impl HostOutput for PaperOutput {
+    fn build(
+        axis: Axis,
+        cfg: &BankConfig,
+        fixed: bool,
+        schedule: Option<&GainSchedule>,
+    ) -> std::result::Result<BuiltBank<Self>, String> {
+        let bad = |e| bad_config(cfg, e);
+        if let Some(sched) = schedule {
+            return Ok(if fixed {
+                let b: estimators::AdaptiveBank<Fx> =
+                    adaptive_axis_bank(axis, cfg, sched).map_err(bad)?;
+                let m = misfit(b.period_fits(), b.schedule(), b.sample_period_s());
+                (Box::new(b), m)
+            } else {
+                let b: estimators::AdaptiveBank<f32> =
+                    adaptive_axis_bank(axis, cfg, sched).map_err(bad)?;
+                let m = misfit(b.period_fits(), b.schedule(), b.sample_period_s());
+                (Box::new(b), m)
+            });
+        }
+        Ok(if fixed {
+            (
+                Box::new(axis_bank::<PaperBank<Fx>>(axis, cfg).map_err(bad)?),
+                None,
+            )
+        } else {
+            (
+                Box::new(axis_bank::<PaperBank<f32>>(axis, cfg).map_err(bad)?),
+                None,
+            )
+        })
+    }
+}
+
+impl HostOutput for ProductOutput {
+    fn build(
+        axis: Axis,
+        cfg: &BankConfig,
+        fixed: bool,
+        schedule: Option<&GainSchedule>,
+    ) -> std::result::Result<BuiltBank<Self>, String> {
+        if schedule.is_some() {
+            return Err(PRODUCT_SCHEDULE.to_string());
+        }
+        let bad = |e| bad_config(cfg, e);
+        Ok(if fixed {
+            (
+                Box::new(axis_bank::<ProductBank<Fx>>(axis, cfg).map_err(bad)?),
+                None,
+            )
+        } else {
+            (
+                Box::new(axis_bank::<ProductBank<f32>>(axis, cfg).map_err(bad)?),
+                None,
+            )
+        })
+    }
+}
+
+/// Why `--bank product` refuses a gain schedule.
+pub(crate) const PRODUCT_SCHEDULE: &str = "--bank product runs fixed gains; a gain schedule (a --gains file written by `nav440 tune --schedule`) runs the noise-adaptive paper bank: use --bank paper, or a fixed gains file";
+
+/// The added noise: N(0, var) draws from xoshiro256++ seeded with the seed, in order.
+pub(crate) struct NoiseGen {
+    normal: Normal<f64>,
+    rng: Xoshiro256PlusPlus,
+    active: bool,
+}
+
+impl NoiseGen {
+    pub(crate) fn new(noise: Option<Noise>, axis: Axis) -> Result<Self> {
+        let (var, seed) = noise.map_or((0.0, 0), |n| (n.var, axis_seed(n.seed, axis)));
+        let normal = Normal::new(0.0, var.max(0.0).sqrt())
+            .map_err(|e| Error::Usage(format!("bad noise variance {var}: {e}")))?;
+        Ok(NoiseGen {
+            normal,
+            rng: Xoshiro256PlusPlus::seed_from_u64(seed),
+            active: var > 0.0,
+        })
+    }
+
+    /// `y` plus the next draw (exactly `y` without noise).
+    fn add(&mut self, y: f64) -> f32 {
+        if self.active {
+            (y + self.normal.sample(&mut self.rng)) as f32
+        } else {
+            y as f32
+        }
+    }
+}
+
+/// What the [`NoiseAt::Step`] mode remembers between samples.
+pub(crate) struct StepState {
+    /// Observer step, us.
+    h_us: u64,
+    /// The gap rule of the packet-rate bank ([`NoiseAt::Sample`]), us: an interval beyond it
+    /// is not interpolated; the bank re-initialises there, as in sample mode.
+    gap_us: u64,
+    /// Restarts at such gaps.
+    gaps: u32,
+    /// Unwrapping (the rule of [`unwrap_deg`]; `None` for pitch, which does not wrap).
+    unwrap: Option<DegUnwrapper>,
+    /// The previous sample's time (us) and unwrapped angle (deg).
+    prev: Option<(u64, f32)>,
+}
+
+/// The host's bank of one axis: the f32 or fixed-point bank of output `O` (the paper bank's
+/// by default, [`HostOutput`]), the added noise and the per-mode state; `nav440_pipeline`
+/// drives it ([`AxisBank`]).
+pub struct HostBank<O = PaperOutput> {
+    bank: Box<dyn DynBank<O>>,
+    misfit: Option<(f32, f32)>,
+    noise: NoiseGen,
+    step: Option<StepState>,
+}
+
+impl<O> std::fmt::Debug for HostBank<O> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("HostBank").finish_non_exhaustive()
+    }
+}
+
+impl<O: HostOutput> HostBank<O> {
+    /// The bank of `axis` for the options `opts` and the warm-up's configuration `cfg`.
+    pub(crate) fn new(
+        axis: Axis,
+        opts: &EstimateOptions,
+        cfg: &BankConfig,
+    ) -> std::result::Result<Self, String> {
+        let mut cfg = opts.at_period(*cfg);
+        let noise = NoiseGen::new(opts.noise, axis).map_err(|e| e.to_string())?;
+        let step = if opts.noise_at == NoiseAt::Step {
+            // The packet-level gap rule (the bank itself sees one sample per step).
+            let gap_us = s_to_us(cfg.max_gap_s());
+            // The bank sees one sample per step: closed-form maps and Kalman gains for that
+            // period.
+            cfg.sample_period_s = opts.step_s;
+            Some(StepState {
+                h_us: (f64::from(opts.step_s) * 1e6).round().max(1.0) as u64,
+                gap_us,
+                gaps: 0,
+                unwrap: axis.wraps().then(DegUnwrapper::default),
+                prev: None,
+            })
+        } else {
+            None
+        };
+        let (bank, misfit) = O::build(axis, &cfg, opts.fixed, opts.schedule.as_ref())?;
+        Ok(HostBank {
+            bank,
+            misfit,
+            noise,
+            step,
+        })
+    }
+
+    /// For a noise-adaptive bank whose schedule was tuned at another sample period
+    /// (`AdaptiveBank::period_fits`): (the schedule's period, the bank's), s.
+    pub(crate) fn schedule_misfit(&self) -> Option<(f32, f32)> {
+        self.misfit
+    }
+}
+
+impl<O: HostOutput> AxisBank for HostBank<O> {
+    type Output = O;
+
+    /// The per-sample step of both noise modes.
+    fn step(&mut self, s: &Sample, angle_deg: f32) -> std::result::Result<O, SampleError> {
+        let r = self;
+        match r.step.as_mut() {
+            None => {
+                if s.new_epoch {
+                    r.bank.new_epoch();
+                }
+                let y = r.noise.add(f64::from(angle_deg));
+                r.bank.update(s.t_us, y)
+            }
+            Some(st) => {
+                let y = match st.unwrap.as_mut() {
+                    Some(u) => u.push(angle_deg),
+                    None => angle_deg,
+                };
+                let prev = st.prev.replace((s.t_us, y));
+                match prev {
+                    None => r.bank.update(s.t_us, r.noise.add(f64::from(y))),
+                    // A new epoch, or a gap the sample-mode bank re-initialises on: no
+                    // interpolation across it; the bank restarts from this sample.
+                    Some((pt, _)) if s.new_epoch || s.t_us.saturating_sub(pt) > st.gap_us => {
+                        if !s.new_epoch {
+                            st.gaps = st.gaps.saturating_add(1);
+                        }
+                        r.bank.new_epoch();
+                        r.bank.update(s.t_us, r.noise.add(f64::from(y)))
+                    }
+                    Some((pt, py)) if s.t_us > pt => {
+                        let h_us = st.h_us;
+                        let n = ((s.t_us - pt + h_us / 2) / h_us).max(1);
+                        let mut last = Err(SampleError::NonIncreasingTime);
+                        for j in 1..=n {
+                            let t = if j == n { s.t_us } else { pt + j * h_us };
+                            let yi = f64::from(py)
+                                + (f64::from(y) - f64::from(py)) * j as f64 / n as f64;
+                            last = r.bank.update(t, r.noise.add(yi));
+                        }
+                        last
+                    }
+                    Some(_) => Err(SampleError::NonIncreasingTime),
+                }
+            }
+        }
+    }
+
+    fn gaps(&self) -> u32 {
+        match &self.step {
+            Some(st) => st.gaps,
+            None => self.bank.reinit_count(),
+        }
+    }
+}
+
+/// The host's bank constructor (captures the options).
+pub(crate) type BuildFn<O = PaperOutput> =
+    Box<dyn FnMut(Axis, &BankConfig) -> std::result::Result<HostBank<O>, String>>;
+
+pub(crate) fn build_fn<O: HostOutput>(opts: &EstimateOptions) -> BuildFn<O> {
+    let opts = opts.clone();
+    Box::new(move |axis, cfg| HostBank::new(axis, &opts, cfg))
+}
+
+/// `nav440 estimate`'s pipeline: `nav440_pipeline::Pipeline` with the host's banks.
+pub(crate) type HostPipeline<O> = Pipeline<HostBank<O>, String, BuildFn<O>>;
+
+/// The options' bank is one the row APIs run (the paper bank's).
+pub(crate) fn check_paper_bank(opts: &EstimateOptions) -> Result<()> {
+    match opts.bank {
+        BankKind::Paper => Ok(()),
+        k => Err(Error::Usage(format!(
+            "--bank {} is for `nav440 estimate` only (its CSV); this command runs the paper bank",
+            k.name()
+        ))),
+    }
+}
+
+/// The options' bank accepts the options: a gain schedule needs the paper bank (a usage
+/// error otherwise).
+pub fn check_bank_options(opts: &EstimateOptions) -> Result<()> {
+    if opts.bank == BankKind::Product && opts.schedule.is_some() {
+        return Err(Error::Usage(PRODUCT_SCHEDULE.to_string()));
+    }
+    Ok(())
+}
