@@ -1,4 +1,4 @@
-//! The shipped preset `BankConfig::NAV440` (issue 13 item 4, docs/CALIBRATION.md "Shipped
+//! The shipped preset `BankConfig::NAV440` (docs/CALIBRATION.md "Shipped
 //! defaults").
 //!
 //! * `print_nav440_preset` (ignored; how the preset was produced):

@@ -1,4 +1,4 @@
-//! Noise-adaptive gains (issue 13 item 3, docs/CALIBRATION.md "Noise-adaptive gains"): a
+//! Noise-adaptive gains (docs/CALIBRATION.md "Noise-adaptive gains"): a
 //! capture whose noise switches from 0.01 to 0.5 deg^2 half-way, run through the scheduled
 //! bank (`nav440 estimate FILE --gains schedule.toml`: `estimators::AdaptiveBank`).
 //!
@@ -945,7 +945,7 @@ fn each_level_records_the_deltahat_it_was_tuned_with() {
     }
 }
 
-/// The schedule runs on the device for hours (issue 13 asks "would it survive 24 h"): every
+/// The schedule runs on the device for hours (checked over 24 h): every
 /// level's AVE uses a bounded `deltahat` law (the leaky one `nav440 tune --schedule` tunes
 /// with), and the adaptive bank with this schedule (`AdaptiveBank<f32>`, the firmware's
 /// `adaptive-gains` bank) does not degrade over 3 h of a spin (rate 200 + 100 sin(0.4 pi t)

@@ -1,5 +1,5 @@
 //! `nav440 tune`'s global search against its reference, the exhaustive log grid
-//! (issue 13 item 1, docs/CALIBRATION.md): on slices of the bundled captures, for every
+//! (docs/CALIBRATION.md): on slices of the bundled captures, for every
 //! family of both bank halves, the MSE the search reaches is within 5 % of the best point of
 //! the grid (it is usually below it: the grid is coarse, the search continues from it).
 //!

@@ -73,7 +73,7 @@ fn stats_on_committed_captures() {
             serde_json::json!({"bytes": n * flen, "frames": {ty: n}, "crc_errors": 0, "skipped_bytes": 0, "pending_bytes": 0})
         );
     }
-    // Key order as the issue writes it, then `pending_bytes` (issue 8).
+    // The documented key order (docs/CLI.md), `pending_bytes` last.
     assert_eq!(
         ok(&["stats", p(&data("fig5_a2_100hz.bin"))]),
         "{\"bytes\":129537,\"frames\":{\"A2\":3501},\"crc_errors\":0,\"skipped_bytes\":0,\"pending_bytes\":0}\n"
@@ -571,7 +571,7 @@ fn stats_and_decode_name_nak_and_unknown_types() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
-/// The CLI contract cases of issue 8 (item 7): each exits with the documented code and an
+/// The CLI contract cases (docs/CLI.md, exit codes): each exits with the documented code and an
 /// accurate one-line message.
 #[test]
 fn contract_cases_of_issue_8() {

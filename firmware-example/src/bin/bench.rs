@@ -352,12 +352,12 @@ fn bank_per_sample<S: estimators::SqrtFn<Num>>(
 }
 
 /// The gain schedule of `nav440 tune host-tests/data/fig5_a2_100hz.bin --schedule
-/// 0.001,0.01,0.1,0.5,1 --rust` (issue 13, docs/CALIBRATION.md).
+/// 0.001,0.01,0.1,0.5,1 --rust` (docs/CALIBRATION.md).
 mod schedule {
     include!("../../../host-tests/data/gains/schedule_fig5.rs");
 }
 
-/// The noise-adaptive bank (`estimators::AdaptiveBank`, issue 13): per-sample instructions of
+/// The noise-adaptive bank (`estimators::AdaptiveBank`): per-sample instructions of
 /// `update` with the gains held (the noise estimate's cost over the whole bank), and per call
 /// of `retune` (interpolating the schedule and rebuilding every law's coefficients), which
 /// the bank does at most once per `AdaptiveConfig::retune_every` samples.
@@ -577,7 +577,7 @@ fn main() -> ! {
     per_sample_stepped(&c, overhead, "ED-ED (Euler x100)", Series::of(&ed, &ed));
     // The bank's two stepped rows as the bank runs them: velocity law and series in one
     // interval loop (`VelAcc`, shared first stage) through `Law::advance` (for `Fx` the
-    // integer kernels of `estimators::fxk`; issue 12), over one 0.01 s sample interval: 100
+    // integer kernels of `estimators::fxk`), over one 0.01 s sample interval: 100
     // steps of h, but for `Fx` the AVE row's 50 steps of 2h (`Real::AVE_STEP_FACTOR`).
     let (pa, pe) = (*ave.law(), *ed.law());
     let ave_row = Stateful::from_law(estimators::VelAcc::new(pa, pa, pa, true));
