@@ -85,6 +85,20 @@ impl IdFields<'_> {
     }
 }
 
+/// Checks that `payload` is a count `n` (U1) followed by `n` items of `width` bytes.
+fn counted(t: PacketType, payload: &[u8], width: usize) -> Result<&[u8], DecodeError> {
+    let expected = payload.first().map_or(1, |&n| 1 + width * n as usize);
+    if payload.len() == expected {
+        Ok(payload)
+    } else {
+        Err(DecodeError::Length {
+            packet_type: t,
+            expected,
+            actual: payload.len(),
+        })
+    }
+}
+
 /// `n` (U1) followed by `n` field IDs (U2): the SF/WF reply and the GF/RF request.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -95,15 +109,7 @@ pub struct FieldIds<'a> {
 impl<'a> FieldIds<'a> {
     /// Checks `payload.len() == 1 + 2 n`; `t` names the type in the error.
     pub fn new(t: PacketType, payload: &'a [u8]) -> Result<Self, DecodeError> {
-        let expected = payload.first().map_or(1, |&n| 1 + 2 * n as usize);
-        if payload.len() != expected {
-            return Err(DecodeError::Length {
-                packet_type: t,
-                expected,
-                actual: payload.len(),
-            });
-        }
-        Ok(Self { payload })
+        counted(t, payload, 2).map(|payload| Self { payload })
     }
 
     /// Number of IDs.
@@ -141,15 +147,7 @@ pub struct FieldValues<'a> {
 impl<'a> FieldValues<'a> {
     /// Checks `payload.len() == 1 + 4 n`; `t` names the type in the error.
     pub fn new(t: PacketType, payload: &'a [u8]) -> Result<Self, DecodeError> {
-        let expected = payload.first().map_or(1, |&n| 1 + 4 * n as usize);
-        if payload.len() != expected {
-            return Err(DecodeError::Length {
-                packet_type: t,
-                expected,
-                actual: payload.len(),
-            });
-        }
-        Ok(Self { payload })
+        counted(t, payload, 4).map(|payload| Self { payload })
     }
 
     /// Number of pairs.
