@@ -11,6 +11,7 @@ use crate::{gains, replay};
 
 pub mod completions;
 pub mod config;
+pub mod count;
 pub mod decode;
 pub mod estimate;
 pub mod live;
@@ -51,6 +52,7 @@ impl Cli {
             Cmd::Record(a) => record::run(&a),
             Cmd::Live(a) => live::run(&a),
             Cmd::Completions(a) => completions::run(&a),
+            Cmd::Count(a) => count::run(&a),
         }
     }
 }
@@ -84,6 +86,8 @@ enum Cmd {
     /// Print the shell completion script for SHELL on stdout (e.g. `nav440 completions bash >
     /// ~/.local/share/bash-completion/completions/nav440`).
     Completions(completions::Args),
+    /// Print the number of attitude samples in a capture.
+    Count(count::Args),
 }
 
 /// `--hold`: the sample adapter between packets.
