@@ -1088,11 +1088,3 @@ fn estimate_product_bank_refuses_a_schedule() {
     assert_eq!(o.status.code(), Some(2));
     assert!(o.stdout.is_empty());
 }
-
-#[test]
-fn count_prints_the_number_of_samples() {
-    // 35 s at 100 Hz, both ends included: the 3,501 A2 frames `nav440 stats` counts.
-    let out = run(&["count", data("fig5_a2_100hz.bin").to_str().unwrap()]);
-    assert!(out.status.success());
-    assert_eq!(String::from_utf8_lossy(&out.stdout).trim(), "3501");
-}

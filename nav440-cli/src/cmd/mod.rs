@@ -11,7 +11,6 @@ use crate::{gains, replay};
 
 pub mod completions;
 pub mod config;
-pub mod count;
 pub mod decode;
 pub mod estimate;
 pub mod live;
@@ -52,7 +51,6 @@ impl Cli {
             Cmd::Record(a) => record::run(&a),
             Cmd::Live(a) => live::run(&a),
             Cmd::Completions(a) => completions::run(&a),
-            Cmd::Count(a) => count::run(&a),
         }
     }
 }
@@ -86,8 +84,6 @@ enum Cmd {
     /// Print the shell completion script for SHELL on stdout (e.g. `nav440 completions bash >
     /// ~/.local/share/bash-completion/completions/nav440`).
     Completions(completions::Args),
-    /// Print the number of attitude samples in a capture.
-    Count(count::Args),
 }
 
 /// `--hold`: the sample adapter between packets.
