@@ -13,12 +13,24 @@
 
 use std::{env, fs, path::PathBuf};
 
-/// `board-*` feature (as cargo's environment spells it) -> board module / memory map name.
-const BOARDS: &[(&str, &str)] = &[
-    ("CARGO_FEATURE_BOARD_STM32F405", "stm32f405"),
-    ("CARGO_FEATURE_BOARD_NUCLEO_F411RE", "nucleo_f411re"),
-    ("CARGO_FEATURE_BOARD_RP_PICO", "rp_pico"),
+/// `board-*` feature (as cargo's environment spells it) -> board module / memory map name,
+/// and the shared backend module the board uses, if any (set as `cfg(board_<backend>)`).
+const BOARDS: &[(&str, &str, Option<&str>)] = &[
+    (
+        "CARGO_FEATURE_BOARD_STM32F405",
+        "stm32f405",
+        Some("stm32f4_hal"),
+    ),
+    (
+        "CARGO_FEATURE_BOARD_NUCLEO_F411RE",
+        "nucleo_f411re",
+        Some("stm32f4_hal"),
+    ),
+    ("CARGO_FEATURE_BOARD_RP_PICO", "rp_pico", None),
 ];
+
+/// The backends of [`BOARDS`], and `mps2` (the QEMU boards, selected by no `board-*`).
+const CFGS: &[&str] = &["mps2", "stm32f4_hal"];
 
 /// The name `memory.x` includes (unique to this crate, never in a working directory).
 const BOARD_MAP: &str = "nav440-board-memory.x";
@@ -27,19 +39,24 @@ fn main() {
     let manifest = PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").expect("set by cargo"));
     let out = PathBuf::from(env::var_os("OUT_DIR").expect("set by cargo"));
     let target = env::var("TARGET").unwrap_or_default();
-    let selected: Vec<&str> = BOARDS
+    let selected: Vec<_> = BOARDS
         .iter()
-        .filter(|(var, _)| env::var_os(var).is_some())
-        .map(|(_, name)| *name)
+        .filter(|(var, _, _)| env::var_os(var).is_some())
         .collect();
-    let board = match selected.as_slice() {
-        [] => "mps2",
-        [one] => one,
+    let (board, cfg) = match selected.as_slice() {
+        [] => ("mps2", Some("mps2")),
+        [(_, name, backend)] => (*name, *backend),
         many => panic!(
             "select at most one board-* feature (got {})",
-            many.join(", ")
+            many.iter().map(|b| b.1).collect::<Vec<_>>().join(", ")
         ),
     };
+    for c in CFGS {
+        println!("cargo::rustc-check-cfg=cfg(board_{c})");
+    }
+    if let Some(c) = cfg {
+        println!("cargo::rustc-cfg=board_{c}");
+    }
     let map = manifest
         .join("src")
         .join("board")

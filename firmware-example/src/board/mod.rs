@@ -17,28 +17,14 @@
 //!
 //! Porting to another board: docs/PORTING.md.
 
-#[cfg(all(feature = "board-stm32f405", feature = "board-nucleo-f411re"))]
-compile_error!("select at most one board-* feature");
-#[cfg(all(
-    feature = "board-rp-pico",
-    any(feature = "board-stm32f405", feature = "board-nucleo-f411re")
-))]
-compile_error!("select at most one board-* feature");
-
-#[cfg(not(any(
-    feature = "board-stm32f405",
-    feature = "board-nucleo-f411re",
-    feature = "board-rp-pico"
-)))]
+// At most one `board-*` feature (build.rs refuses more). build.rs sets `board_mps2` when none
+// is selected, and `board_<backend>` for a board built on a shared backend module.
+#[cfg(board_mps2)]
 mod mps2;
-#[cfg(not(any(
-    feature = "board-stm32f405",
-    feature = "board-nucleo-f411re",
-    feature = "board-rp-pico"
-)))]
+#[cfg(board_mps2)]
 pub use mps2::*;
 
-#[cfg(any(feature = "board-stm32f405", feature = "board-nucleo-f411re"))]
+#[cfg(board_stm32f4_hal)]
 mod stm32f4_hal;
 
 #[cfg(feature = "board-stm32f405")]
