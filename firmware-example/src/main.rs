@@ -68,7 +68,8 @@ pub enum Status {
     NoAnswer = 2,
     /// The unit rejected a configuration request (NAK, or accepted only some fields).
     Rejected = 3,
-    /// The read-back (GF) does not show the configuration that was set.
+    /// The read-back (GF) does not show the configuration that was set, or the unit's first
+    /// GF holds a value the protocol does not define.
     WrongReadBack = 4,
     /// After configuration the unit sent frames of another type: it reset (or was
     /// reconfigured by someone else) mid-stream.
@@ -84,7 +85,7 @@ fn boot_status<E>(e: &BootError<E>) -> Status {
     match e {
         BootError::NoAnswer { .. } => Status::NoAnswer,
         BootError::Nak { .. } | BootError::NotAccepted { .. } => Status::Rejected,
-        BootError::WrongReadBack { .. } => Status::WrongReadBack,
+        BootError::WrongReadBack { .. } | BootError::UndefinedValue { .. } => Status::WrongReadBack,
         BootError::Serial(_) | BootError::WriteZero | BootError::Encode(_) => Status::Internal,
     }
 }

@@ -276,6 +276,11 @@ impl FieldList {
         l
     }
 
+    /// True when the request carried no field (PK).
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
     /// True for the IDs of a GF/RF request (the values are not meaningful).
     pub fn ids_only(&self) -> bool {
         self.ids_only
@@ -381,6 +386,14 @@ pub enum BootError<E> {
         /// The value read (`None`: missing from the reply).
         got: Option<u16>,
     },
+    /// The unit's configuration (the first GF) holds a value the protocol does not define
+    /// for that field (a baud code or a rate divider outside the protocol's table).
+    UndefinedValue {
+        /// The field.
+        field: FieldId,
+        /// The value read.
+        value: u16,
+    },
     /// The serial port failed.
     Serial(E),
     /// The serial port accepted no byte.
@@ -402,6 +415,14 @@ impl<E: fmt::Debug> fmt::Display for BootError<E> {
                 "no answer from the unit: {request} unanswered at {tried} \
                  ({attempts} x {timeout_ms} ms each)"
             ),
+            BootError::Nak { request, fields } if fields.is_empty() => {
+                let what = if *request == PacketType::PK {
+                    "ping"
+                } else {
+                    "request without fields"
+                };
+                write!(f, "unit rejected (NAK) {request} ({what})")
+            }
             BootError::Nak { request, fields } => {
                 write!(f, "unit rejected (NAK) {request}: {fields}")
             }
@@ -422,6 +443,10 @@ impl<E: fmt::Debug> fmt::Display for BootError<E> {
                 write_field(f, *field, Some(*expected))?;
                 f.write_str(", got ")?;
                 write_field(f, *field, *got)
+            }
+            BootError::UndefinedValue { field, value } => {
+                f.write_str("the unit's configuration (GF) holds an undefined value: ")?;
+                write_field(f, *field, Some(*value))
             }
             BootError::Serial(e) => write!(f, "serial port error: {e:?}"),
             BootError::WriteZero => f.write_str("serial port error: it accepted no byte"),
@@ -659,6 +684,20 @@ async fn sequence<L: Link>(
 
     // 2. Read its configuration; its baud field is the truth.
     let [rate0, baud0, type0] = s.read().await?;
+    let undefined = |field: FieldId, value: Option<u16>, defined: bool| match value {
+        Some(value) if !defined => Err(BootError::UndefinedValue { field, value }),
+        _ => Ok(()),
+    };
+    undefined(
+        FieldId::BAUD_RATE,
+        baud0,
+        baud0.is_none_or(|v| Baud::from_code(v).is_some()),
+    )?;
+    undefined(
+        FieldId::PACKET_RATE_DIVIDER,
+        rate0,
+        rate0.is_none_or(|v| PacketRate::from_divider(v).is_some()),
+    )?;
     let unit_baud = baud0.and_then(Baud::from_code).unwrap_or(found_at);
     if unit_baud != found_at {
         s.local_baud(unit_baud)?;

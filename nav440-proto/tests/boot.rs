@@ -730,3 +730,38 @@ fn nak_lines_of_baud_switch_and_read_requests() {
         "wrong read-back (GF): expected packet type 0x0003=0x4132 (A2), got packet type 0x0003=(missing)"
     );
 }
+
+#[test]
+fn undefined_baud_code_in_the_unit_configuration_is_an_error_naming_field_and_value() {
+    // The protocol defines baud codes 0-3 (9600-57600 Bd); 9 is none of them.
+    let eeprom = UnitFields {
+        baud: 9,
+        ..UnitFields::POWER_UP
+    };
+    let (r, _, _, _) = run(
+        Line::new(eeprom, Quirks::default(), true),
+        Target::DEFAULT,
+        Options::DEFAULT,
+    );
+    let e = r.unwrap_err();
+    assert_eq!(
+        e,
+        BootError::UndefinedValue {
+            field: FieldId::BAUD_RATE,
+            value: 9
+        }
+    );
+    assert_eq!(
+        e.to_string(),
+        "the unit's configuration (GF) holds an undefined value: baud 0x0002=9 (undefined)"
+    );
+}
+
+#[test]
+fn nak_of_a_ping_names_the_request() {
+    let e = BootError::<LineError>::Nak {
+        request: PacketType::PK,
+        fields: boot::FieldList::default(),
+    };
+    assert_eq!(e.to_string(), "unit rejected (NAK) PK (ping)");
+}
