@@ -280,9 +280,9 @@ pub fn ci_steps() -> Result<(), String> {
             "xtask: OK: adaptive gains on {}: yaw_retunes={retunes}",
             board.name
         );
-        // Identical is not enough: both sides once printed a fixed-point AVE saturated at
-        // 2.1e9 deg/s (docs/CALIBRATION.md, "Gains at the edge of the Euler step"). The
-        // capture's peak rate is 265 deg/s.
+        // Identical is not enough: gains at the edge of the Euler step saturate the
+        // fixed-point AVE at 2.1e9 deg/s on both sides alike (docs/CALIBRATION.md, "Gains at
+        // the edge of the Euler step"). The capture's peak rate is 265 deg/s.
         let peak = peak_velocity(&csv, "yaw_")?;
         if peak >= 1000.0 {
             return Err(format!(

@@ -7,7 +7,7 @@ use super::read_file;
 use crate::qemu::{Board, Output};
 use std::path::Path;
 
-/// Compares two CSV texts; Ok(description) when identical, Err(first difference) otherwise.
+/// Compares two CSV texts; Ok(number of lines) when identical, Err(first difference) otherwise.
 pub(super) fn compare_csv(fw: &str, host: &str) -> Result<usize, String> {
     let (a, b): (Vec<&str>, Vec<&str>) = (fw.lines().collect(), host.lines().collect());
     for (i, (x, y)) in a.iter().zip(&b).enumerate() {
@@ -25,7 +25,6 @@ pub(super) fn compare_csv(fw: &str, host: &str) -> Result<usize, String> {
     Ok(a.len())
 }
 
-/// Largest absolute difference per column between two CSVs of the same shape.
 /// The largest |value| in the velocity columns (`PREFIX..._v`) of a `nav440 estimate` CSV,
 /// deg/s (NaN counts as infinite).
 pub(super) fn peak_velocity(csv: &str, prefix: &str) -> Result<f64, String> {
@@ -59,6 +58,7 @@ pub(super) fn peak_velocity(csv: &str, prefix: &str) -> Result<f64, String> {
     Ok(peak)
 }
 
+/// Largest absolute difference per column between two CSVs of the same shape.
 fn max_abs_diff(a: &str, b: &str) -> Result<Vec<(String, f64)>, String> {
     let mut la = a.lines();
     let mut lb = b.lines();

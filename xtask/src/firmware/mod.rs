@@ -89,6 +89,7 @@ impl BankChoice {
     }
 }
 
+/// The workspace root.
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .parent()
@@ -96,6 +97,8 @@ fn root() -> PathBuf {
         .to_path_buf()
 }
 
+/// Cargo's target directory: `CARGO_TARGET_DIR` (relative to the workspace root) or
+/// `target`.
 fn target_dir() -> PathBuf {
     match std::env::var_os("CARGO_TARGET_DIR") {
         Some(d) => {
@@ -110,6 +113,7 @@ fn target_dir() -> PathBuf {
     }
 }
 
+/// xtask's scratch directory, `xtask` in the target directory (created if missing).
 fn work_dir() -> Result<PathBuf, String> {
     let d = target_dir().join("xtask");
     std::fs::create_dir_all(&d).map_err(|e| format!("cannot create {}: {e}", d.display()))?;

@@ -8,7 +8,8 @@ use crate::unit;
 use std::path::Path;
 use std::time::Duration;
 
-/// Runs `capture` through the firmware on `board`; returns (CSV, firmware counters line, run).
+/// Runs `capture` through the firmware image `elf` on `board`: the CSV on the run's stdout, the
+/// counters on its stderr.
 pub(super) fn run_capture(
     board: &Board,
     elf: &Path,
@@ -56,7 +57,7 @@ pub(super) fn unit_timeout(capture_bytes: usize) -> Duration {
     qemu::uart_timeout(capture_bytes)
 }
 
-/// Builds the firmware for `board` and runs it against the unit at `addr`.
+/// Runs the firmware image `elf` on `board` against the unit at `addr` (`HOST:PORT`).
 pub(super) fn run_unit(
     board: &Board,
     elf: &Path,

@@ -56,8 +56,8 @@ fn unit_case(
     let bytes = std::fs::metadata(&case.capture).map_or(0, |m| m.len() as usize);
     let limit = match case.expect {
         // About 10 attempts (12 pings x 1000 ms nominal = 1.1 s of wall time each) on an idle
-        // machine; 2 are required. 6 s gave a single attempt on a loaded 2-core machine
-        // (QEMU starved by parallel builds), so the limit leaves room for a 5x slowdown.
+        // machine; 2 are required, so the limit leaves room for a 5x slowdown (QEMU starved by
+        // parallel builds on a loaded 2-core machine).
         Expect::Retries { .. } => Duration::from_secs(12),
         _ => unit_timeout(bytes),
     };
