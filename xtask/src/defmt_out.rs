@@ -1,7 +1,6 @@
-//! Decoding the firmware's defmt output (`firmware-example/src/out.rs`) into the text the
-//! text firmware used to print: the CSV of `nav440 estimate` (formatted here by
-//! `nav440_pipeline::csv`, exactly as the host CLI does) on stdout, the `firmware: ...`
-//! diagnostics and counters on stderr.
+//! Decoding the firmware's defmt output (`firmware-example/src/out.rs`) into text: the CSV of
+//! `nav440 estimate` (formatted here by `nav440_pipeline::csv`, exactly as the host CLI does)
+//! on stdout, the `firmware: ...` diagnostics and counters on stderr.
 //!
 //! The frames are decoded with `defmt-decoder` from the ELF's defmt table. A `row` message
 //! carries one byte payload (little-endian): the sample time (u64, us) and, per estimated axis,

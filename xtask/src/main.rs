@@ -263,7 +263,8 @@ fn ci() -> Result<(), String> {
     // Release-mode tests: 10^6 random parser streams, constant-memory streaming of 200+ MiB,
     // the 24 h run of the whole bank (f32 and fixed point, 8.64 M samples each), and the tuner's
     // search against its exhaustive grid on slices of the bundled captures, the NAV440 preset
-    // against the paper's (at the bundled captures' rates and, its rate table, below 20 Hz), and the noise-adaptive bank on a noise switch (issue 13).
+    // against the paper's (at the bundled captures' rates and, its rate table, below 20 Hz),
+    // and the noise-adaptive bank on a noise switch.
     cargo(&[
         "test",
         "--release",

@@ -1,0 +1,124 @@
+//! The captures the firmware commands run: the bundled ones (`host-tests/data`) and those CI
+//! synthesises or derives from them.
+
+use super::nav440_cli::nav440_synth;
+use super::{read_file, root, work_dir};
+use std::path::{Path, PathBuf};
+
+/// The `.bin` captures of `host-tests/data`, sorted.
+pub(super) fn data_captures() -> Vec<PathBuf> {
+    let data = root().join("host-tests").join("data");
+    let mut bins: Vec<PathBuf> = std::fs::read_dir(&data)
+        .map(|rd| {
+            rd.filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| p.extension().is_some_and(|x| x == "bin"))
+                .collect()
+        })
+        .unwrap_or_default();
+    bins.sort();
+    bins
+}
+
+/// The bundled Fig. 5-like capture: `host-tests/data/*fig5*.bin` (else any `.bin` there);
+/// if the data directory has none, one is synthesised with `nav440 synth --profile fig5`.
+pub(super) fn bundled_capture() -> Result<PathBuf, String> {
+    let data = root().join("host-tests").join("data");
+    let bins = data_captures();
+    if let Some(p) = bins
+        .iter()
+        .find(|p| {
+            p.file_name()
+                .is_some_and(|n| n.to_string_lossy().contains("fig5"))
+        })
+        .or(bins.first())
+    {
+        return Ok(p.clone());
+    }
+    let out = work_dir()?.join("fig5-synth.bin");
+    eprintln!(
+        "xtask: no capture in {}, synthesising one with `nav440 synth`",
+        data.display()
+    );
+    nav440_synth(&out, &["--profile", "fig5"])?;
+    Ok(out)
+}
+
+/// A bundled capture at 20 Hz (the adaptive firmware's schedule is tuned at 100 Hz).
+pub(super) const SPIN_20HZ: &str = "host-tests/data/spin_n1_20hz.bin";
+
+/// Synthesises (with `nav440 synth`) a capture of 20 packets at 100 Hz (0 to 190 ms) followed
+/// by 50 packets at 50 Hz (210 to 1190 ms), and returns its path.
+pub(super) fn rate_change_capture() -> Result<PathBuf, String> {
+    let dir = work_dir()?;
+    let mut bytes = Vec::new();
+    // (file, rate Hz, duration s, timeITOW of the first packet ms)
+    for (name, rate, duration, itow) in [
+        ("ci-rate-100hz.bin", "100", "0.19", "100000"),
+        ("ci-rate-50hz.bin", "50", "0.98", "100210"),
+    ] {
+        let part = dir.join(name);
+        nav440_synth(
+            &part,
+            &[
+                "--profile",
+                "sin5",
+                "--rate",
+                rate,
+                "--duration",
+                duration,
+                "--start-itow",
+                itow,
+            ],
+        )?;
+        bytes.extend(read_file(&part)?);
+    }
+    let out = dir.join("ci-rate-change.bin");
+    std::fs::write(&out, &bytes).map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+    Ok(out)
+}
+
+/// Packets (frame indices) of the bundled A2 capture whose BIT word becomes 0x0009
+/// (masterFail + softwareError) in the BIT-failure capture of `ci-firmware`.
+pub(super) const BIT_FAILED_FRAMES: std::ops::RangeInclusive<usize> = 1000..=1100;
+
+/// Writes `ci-bit-fail.bin`: `bundled` (an A2 capture) with the BIT word of the frames
+/// [`BIT_FAILED_FRAMES`] set to 0x0009, re-encoded (valid CRC). The firmware must drop and
+/// count those samples (`bit_failed=101`) and print the same CSV as `nav440 estimate`.
+pub(super) fn bit_fail_capture(bundled: &Path) -> Result<PathBuf, String> {
+    use nav440_proto::{encode_frame, PacketType, Parser, A2};
+    let bytes = read_file(bundled)?;
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut parser = Parser::new();
+    let (mut k, mut failed) = (0usize, 0usize);
+    let mut err = None;
+    parser.feed(&bytes, |f| {
+        let mut payload = f.payload.to_vec();
+        if BIT_FAILED_FRAMES.contains(&k) && f.packet_type == PacketType::A2 {
+            if let Ok(view) = A2::new(f.payload) {
+                let mut fields = view.fields();
+                fields.bit = 0x0009;
+                payload = fields.payload().to_vec();
+                failed += 1;
+            }
+        }
+        k += 1;
+        let mut buf = [0u8; 512];
+        match encode_frame(f.packet_type, &payload, &mut buf) {
+            Ok(n) => out.extend_from_slice(buf.get(..n).unwrap_or_default()),
+            Err(e) => err = Some(format!("cannot re-encode frame {k}: {e:?}")),
+        }
+    });
+    if let Some(e) = err {
+        return Err(e);
+    }
+    if failed != BIT_FAILED_FRAMES.clone().count() {
+        return Err(format!(
+            "{} is not an A2 capture of at least {} frames",
+            bundled.display(),
+            BIT_FAILED_FRAMES.end() + 1
+        ));
+    }
+    let path = work_dir()?.join("ci-bit-fail.bin");
+    std::fs::write(&path, &out).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    Ok(path)
+}

@@ -1,0 +1,125 @@
+//! Firmware subcommands: demo, unit, qemu, bench, size, and the firmware part of `ci`.
+//!
+//! * [`build`]: cargo builds and lints of the firmware images;
+//! * [`nav440_cli`]: the host CLI `nav440` (estimate, synth, sim) and the arguments that print
+//!   each image's CSV;
+//! * [`captures`]: the bundled captures and the ones CI synthesises;
+//! * [`qemu_run`]: a capture or a unit through the firmware in QEMU (`cargo xtask qemu`,
+//!   `unit`), the firmware's counters;
+//! * [`demo`](mod@demo), [`bench`](mod@bench), [`size`](mod@size), [`flash`](mod@flash): those
+//!   commands;
+//! * [`equivalence`]: firmware CSV against `nav440 estimate`;
+//! * [`unit_cases`]: the firmware against `nav440 sim` with an expected outcome per case
+//!   (`ci-unit`, `embassy`);
+//! * [`ci`]: the firmware part of `cargo xtask ci` (`ci-firmware`).
+
+mod bench;
+mod build;
+mod captures;
+mod ci;
+mod demo;
+mod equivalence;
+mod flash;
+mod nav440_cli;
+mod qemu_run;
+mod size;
+mod unit_cases;
+
+pub use bench::bench;
+pub use ci::ci_steps;
+pub use demo::demo;
+pub use flash::flash;
+pub use qemu_run::{qemu, unit};
+pub use size::{size, size_components};
+pub use unit_cases::{ci_unit, embassy};
+
+use std::path::{Path, PathBuf};
+
+/// The firmware crate.
+const FW: &str = "firmware-example";
+/// Main firmware binary.
+const FW_BIN: &str = "firmware-example";
+/// Instruction-count benchmark binary.
+const BENCH_BIN: &str = "bench";
+/// Feature of the STM32F405 board image (run on QEMU `netduinoplus2` too).
+const STM32_FEATURE: &str = "board-stm32f405";
+
+/// The firmware feature of the product bank.
+const PRODUCT: &str = "bank-product";
+
+/// Feature of the one-axis (yaw) firmware.
+const ONE_AXIS: &str = "one-axis";
+
+/// Feature of the firmware with noise-adaptive gains (`estimators::AdaptiveBank`).
+const ADAPTIVE: &str = "adaptive-gains";
+
+/// The bank a firmware image runs (`--bank`): the paper's 14 estimators (default) or the
+/// product bank (feature `bank-product`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum BankChoice {
+    /// The paper bank (14 estimators per axis).
+    Paper,
+    /// The product bank (ILO1 velocity + Kalman acceleration per axis).
+    Product,
+}
+
+impl BankChoice {
+    /// The firmware features that select this bank.
+    fn features(self) -> &'static [&'static str] {
+        match self {
+            BankChoice::Paper => &[],
+            BankChoice::Product => &[PRODUCT],
+        }
+    }
+
+    /// The `nav440 estimate` arguments that select this bank.
+    fn host_args(self) -> &'static [&'static str] {
+        match self {
+            BankChoice::Paper => &[],
+            BankChoice::Product => &["--bank", "product"],
+        }
+    }
+
+    /// Its name in image names and messages.
+    fn name(self) -> &'static str {
+        match self {
+            BankChoice::Paper => "paper",
+            BankChoice::Product => "product",
+        }
+    }
+}
+
+/// The workspace root.
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("xtask lives in the workspace")
+        .to_path_buf()
+}
+
+/// Cargo's target directory: `CARGO_TARGET_DIR` (relative to the workspace root) or
+/// `target`.
+fn target_dir() -> PathBuf {
+    match std::env::var_os("CARGO_TARGET_DIR") {
+        Some(d) => {
+            let d = PathBuf::from(d);
+            if d.is_absolute() {
+                d
+            } else {
+                root().join(d)
+            }
+        }
+        None => root().join("target"),
+    }
+}
+
+/// xtask's scratch directory, `xtask` in the target directory (created if missing).
+fn work_dir() -> Result<PathBuf, String> {
+    let d = target_dir().join("xtask");
+    std::fs::create_dir_all(&d).map_err(|e| format!("cannot create {}: {e}", d.display()))?;
+    Ok(d)
+}
+
+fn read_file(p: &Path) -> Result<Vec<u8>, String> {
+    std::fs::read(p).map_err(|e| format!("cannot read {}: {e}", p.display()))
+}

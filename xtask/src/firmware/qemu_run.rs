@@ -1,0 +1,125 @@
+//! Running the firmware in QEMU: a capture replayed through its UART (`cargo xtask qemu`),
+//! a unit on TCP (`cargo xtask unit`), and the counters the firmware prints at the end.
+
+use super::build::{build, build_profile, SMALL_PROFILE};
+use super::{read_file, work_dir, BankChoice, ADAPTIVE, FW_BIN, ONE_AXIS};
+use crate::qemu::{self, Board, Output};
+use crate::unit;
+use std::path::Path;
+use std::time::Duration;
+
+/// Runs `capture` through the firmware image `elf` on `board`: the CSV on the run's stdout, the
+/// counters on its stderr.
+pub(super) fn run_capture(
+    board: &Board,
+    elf: &Path,
+    capture: &[u8],
+    output: Output,
+) -> Result<qemu::RunResult, String> {
+    let input = qemu::framed_input(capture)?;
+    let path = qemu::input_path(&work_dir()?, board.name);
+    let r = qemu::run_uart(
+        board,
+        elf,
+        &path,
+        &input,
+        output,
+        qemu::uart_timeout(input.len()),
+    );
+    let _ = std::fs::remove_file(&path);
+    r
+}
+
+/// The `key=value` counters of the firmware's `firmware: ...` stderr lines (the boot line
+/// and the final counters line).
+pub(super) fn counters(stderr: &str) -> Vec<(String, u64)> {
+    stderr
+        .lines()
+        .filter_map(|l| l.strip_prefix("firmware: "))
+        .flat_map(|rest| {
+            rest.split_whitespace()
+                .filter_map(|kv| {
+                    let (k, v) = kv.split_once('=')?;
+                    Some((k.to_owned(), v.parse().ok()?))
+                })
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+pub(super) fn counter(c: &[(String, u64)], key: &str) -> Option<u64> {
+    c.iter().find(|(k, _)| k == key).map(|(_, v)| *v)
+}
+
+/// Time limit of a unit run (the boot's worst case is a few seconds of time-outs; then as a
+/// replay of the same size).
+pub(super) fn unit_timeout(capture_bytes: usize) -> Duration {
+    qemu::uart_timeout(capture_bytes)
+}
+
+/// Runs the firmware image `elf` on `board` against the unit at `addr` (`HOST:PORT`).
+pub(super) fn run_unit(
+    board: &Board,
+    elf: &Path,
+    addr: &str,
+    inherit_stdout: bool,
+    timeout: Duration,
+) -> Result<unit::UnitRun, String> {
+    unit::run(board, elf, addr, &work_dir()?, inherit_stdout, timeout)
+}
+
+/// `cargo xtask unit --connect tcp:HOST:PORT [--board B]`: returns the firmware's exit status.
+pub fn unit(board: Board, addr: &str) -> Result<u8, String> {
+    qemu::ensure_qemu()?;
+    let elf = build(board.target, board.features, FW_BIN)?;
+    let timeout = std::env::var("XTASK_UNIT_TIMEOUT")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .map_or(Duration::from_secs(3600), Duration::from_secs);
+    let r = run_unit(&board, &elf, addr, true, timeout)?;
+    eprint!("{}", r.stderr);
+    match r.code() {
+        Some(c) => Ok(u8::try_from(c).unwrap_or(1)),
+        None => Err(format!("QEMU ended without an exit status ({})", r.status)),
+    }
+}
+
+/// `cargo xtask qemu FILE [--board B] [--small | --adaptive]`.
+pub fn qemu(
+    board: Board,
+    file: &Path,
+    small: bool,
+    adaptive: bool,
+    bank: BankChoice,
+) -> Result<(), String> {
+    qemu::ensure_qemu()?;
+    let mut features: Vec<&str> = bank.features().to_vec();
+    if adaptive {
+        features.push(ADAPTIVE);
+    }
+    let elf = if small {
+        features.push(ONE_AXIS);
+        build_profile(board.target, &features, FW_BIN, SMALL_PROFILE)?
+    } else {
+        build(board.target, &features, FW_BIN)?
+    };
+    let capture = read_file(file)?;
+    let r = run_capture(&board, &elf, &capture, Output::Inherit)?;
+    eprint!("{}", r.stderr);
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counters_line_is_parsed() {
+        let err = "qemu noise\nfirmware: bytes=10 frames=2 crc_errors=1 skipped=3 uart_overruns=0 stack_peak=7000\n";
+        let c = counters(err);
+        assert_eq!(counter(&c, "bytes"), Some(10));
+        assert_eq!(counter(&c, "crc_errors"), Some(1));
+        assert_eq!(counter(&c, "stack_peak"), Some(7000));
+        assert_eq!(counter(&c, "missing"), None);
+    }
+}

@@ -1,0 +1,337 @@
+//! The firmware against `nav440 sim`, each run with the outcome it must end with: every
+//! bundled capture and the unit's faults on every board (`cargo xtask ci-unit`), and the
+//! embassy example (`cargo xtask embassy`).
+
+use super::build::build;
+use super::captures::data_captures;
+use super::equivalence::compare_csv;
+use super::nav440_cli::{firmware_host_args, host_estimate, nav440_bin, Sim, FIRMWARE_AXIS};
+use super::qemu_run::{counter, counters, run_unit, unit_timeout};
+use super::{root, work_dir, BankChoice, FW, FW_BIN, STM32_FEATURE};
+use crate::cargo;
+use crate::qemu::{self, Board};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+/// What a unit run in CI must end with.
+enum Expect {
+    /// Exit 0, and the CSV equals `nav440 estimate` on the simulator's record; `stderr_has`
+    /// must appear in the firmware's stderr.
+    Csv { stderr_has: &'static str },
+    /// This exit status and diagnostic (emulated mps2 boards: a failure ends the run).
+    Fails {
+        status: i32,
+        diagnostic: &'static str,
+    },
+    /// The real-board profile retries forever: within the time limit at least two attempts,
+    /// each with `diagnostic` (the run is then stopped).
+    Retries { diagnostic: &'static str },
+    /// The real-board profile re-configures a unit that reset, then finishes with exit 0.
+    Reconfigures,
+}
+
+/// One firmware run against `nav440 sim` (CI).
+struct UnitCase {
+    name: &'static str,
+    capture: PathBuf,
+    sim_args: &'static [&'static str],
+    expect: Expect,
+}
+
+/// The simulator's session limit in CI (it exits 1 if a session lasts longer).
+const SIM_TIMEOUT: &str = "120";
+
+/// Runs one case on `board`; Ok(description) or Err(what went wrong).
+fn unit_case(
+    board: &Board,
+    elf: &Path,
+    nav440: &Path,
+    case: &UnitCase,
+    host_extra: &[&str],
+) -> Result<String, String> {
+    let record = work_dir()?.join(format!("ci-unit-{}-{}.bin", board.name, case.name));
+    let mut sim_args = case.sim_args.to_vec();
+    sim_args.extend(["--timeout", SIM_TIMEOUT]);
+    let sim = Sim::start(nav440, &case.capture, Some(&record), &sim_args)?;
+    let bytes = std::fs::metadata(&case.capture).map_or(0, |m| m.len() as usize);
+    let limit = match case.expect {
+        // About 10 attempts (12 pings x 1000 ms nominal = 1.1 s of wall time each) on an idle
+        // machine; 2 are required, so the limit leaves room for a 5x slowdown (QEMU starved by
+        // parallel builds on a loaded 2-core machine).
+        Expect::Retries { .. } => Duration::from_secs(12),
+        _ => unit_timeout(bytes),
+    };
+    let run = run_unit(board, elf, &sim.addr, false, limit);
+    let sim_status = sim.wait(Duration::from_secs(30));
+    let what = format!("{} on {}", case.name, board.name);
+    match (&case.expect, run) {
+        (Expect::Retries { diagnostic }, Err(e)) => {
+            let attempts = e
+                .lines()
+                .filter(|l| l.starts_with("firmware: boot attempt") && l.contains(diagnostic))
+                .count();
+            if attempts >= 2 {
+                Ok(format!("{what}: {attempts} boot attempts in {} s, each `{diagnostic}...`, still retrying (stopped)", limit.as_secs()))
+            } else {
+                Err(format!(
+                    "{what}: expected repeated `{diagnostic}` attempts, got:\n{e}"
+                ))
+            }
+        }
+        (_, Err(e)) => Err(format!("{what}: {e}")),
+        (Expect::Retries { .. }, Ok(r)) => Err(format!(
+            "{what}: the real-board profile ended (status {:?}) instead of retrying:\n{}",
+            r.code(),
+            r.stderr
+        )),
+        (Expect::Fails { status, diagnostic }, Ok(r)) => {
+            let line = r
+                .stderr
+                .lines()
+                .find(|l| l.starts_with("firmware: ") && l.contains(diagnostic));
+            match (r.code() == Some(*status), line) {
+                (true, Some(l)) => Ok(format!("{what}: exit status {status}, `{l}`")),
+                _ => Err(format!(
+                    "{what}: expected exit status {status} and `{diagnostic}`, got status {:?}:\n{}",
+                    r.code(),
+                    r.stderr
+                )),
+            }
+        }
+        (Expect::Reconfigures, Ok(r)) => {
+            let configured = r.stderr.matches("firmware: unit configured").count();
+            let resets = r.stderr.matches("firmware: unit reset mid-stream").count();
+            if r.code() == Some(0) && configured == 2 && resets == 1 {
+                Ok(format!(
+                    "{what}: unit reset detected, configured again, run completed (exit 0)"
+                ))
+            } else {
+                Err(format!(
+                    "{what}: expected one reset, two configurations and exit 0, got status {:?}:\n{}",
+                    r.code(),
+                    r.stderr
+                ))
+            }
+        }
+        (Expect::Csv { stderr_has }, Ok(r)) => {
+            if r.code() != Some(0) {
+                return Err(format!(
+                    "{what}: firmware exit status {:?}:\n{}",
+                    r.code(),
+                    r.stderr
+                ));
+            }
+            if !r.stderr.contains(stderr_has) {
+                return Err(format!(
+                    "{what}: `{stderr_has}` missing from:\n{}",
+                    r.stderr
+                ));
+            }
+            match sim_status {
+                Ok(s) if s.success() => {}
+                other => return Err(format!("{what}: nav440 sim ended with {other:?}")),
+            }
+            if counter(&counters(&r.stderr), "uart_overruns").unwrap_or(0) != 0 {
+                return Err(format!("{what}: UART overruns reported under QEMU"));
+            }
+            let host = host_estimate(&record, host_extra)?;
+            let lines = compare_csv(&r.stdout, &host).map_err(|d| {
+                format!("{what}: firmware CSV differs from `nav440 estimate` on the record: {d}")
+            })?;
+            Ok(format!(
+                "{what}: IDENTICAL to `nav440 estimate{}` on the {} bytes streamed after configuration ({lines} lines; the unit sent {} bytes in all)",
+                host_extra.iter().map(|a| format!(" {a}")).collect::<String>(),
+                std::fs::metadata(&record).map_or(0, |m| m.len()),
+                r.unit_bytes
+            ))
+        }
+    }
+}
+
+/// The firmware against `nav440 sim` on every emulated board and the STM32 profile: every
+/// bundled capture (CSV identical to `nav440 estimate` on what the unit streamed after
+/// configuration) and the faults, each with its diagnostic and exit status.
+fn unit_ci(captures: &[PathBuf], short: &Path, only: Option<Board>) -> Result<(), String> {
+    let nav440 = nav440_bin()?;
+    let short = short.to_path_buf();
+    let mut boards: Vec<Board> = qemu::BOARDS.to_vec();
+    boards.push(qemu::STM32_BOARD);
+    if let Some(b) = only {
+        boards.retain(|x| x.name == b.name);
+    }
+    for board in &boards {
+        let elf = build(board.target, board.features, FW_BIN)?;
+        let stm32 = board.features.contains(&STM32_FEATURE);
+        let host_extra = &firmware_host_args(board.target, BankChoice::Paper)[..];
+        let mut cases: Vec<UnitCase> = captures
+            .iter()
+            .map(|c| UnitCase {
+                name: "capture",
+                capture: c.clone(),
+                sim_args: &["--fast"],
+                expect: Expect::Csv {
+                    stderr_has: "unit was at 38400 Bd",
+                },
+            })
+            .collect();
+        cases.push(UnitCase {
+            name: "already-57600",
+            capture: short.clone(),
+            sim_args: &["--fast", "--baud", "57600"],
+            expect: Expect::Csv {
+                stderr_has: "found at 57600 Bd, unit was at 57600 Bd",
+            },
+        });
+        let faults: [(&'static str, &'static [&'static str], i32, &'static str); 4] = [
+            (
+                "no-answer",
+                &["--fault", "no-answer"],
+                2,
+                "no answer from the unit",
+            ),
+            (
+                "nak",
+                &["--fault", "nak-config"],
+                3,
+                "unit rejected (NAK) SF",
+            ),
+            (
+                "wrong-readback",
+                &["--fault", "wrong-readback"],
+                4,
+                "wrong read-back (GF)",
+            ),
+            (
+                "reset",
+                &["--fast", "--fault", "reset", "--reset-after", "20"],
+                5,
+                "unit reset mid-stream",
+            ),
+        ];
+        for (name, sim_args, status, diagnostic) in faults {
+            let expect = match (stm32, name) {
+                (true, "reset") => Expect::Reconfigures,
+                (true, _) => Expect::Retries { diagnostic },
+                (false, _) => Expect::Fails { status, diagnostic },
+            };
+            cases.push(UnitCase {
+                name,
+                capture: short.clone(),
+                sim_args,
+                expect,
+            });
+        }
+        for case in &cases {
+            let t = std::time::Instant::now();
+            let ok = unit_case(board, &elf, &nav440, case, host_extra)?;
+            eprintln!("xtask: UNIT OK ({:.1} s): {ok}", t.elapsed().as_secs_f64());
+        }
+        // The product firmware of a board that cannot replay captures (its board image):
+        // every capture through the simulated unit, byte-identical to `nav440 estimate --bank
+        // product` (the replay boards are compared on every capture in `ci_steps`).
+        if stm32 {
+            let mut features = board.features.to_vec();
+            features.extend(BankChoice::Product.features());
+            let elf = build(board.target, &features, FW_BIN)?;
+            let extra = firmware_host_args(board.target, BankChoice::Product);
+            for c in captures {
+                let case = UnitCase {
+                    name: "product-capture",
+                    capture: c.clone(),
+                    sim_args: &["--fast"],
+                    expect: Expect::Csv {
+                        stderr_has: "unit was at 38400 Bd",
+                    },
+                };
+                let t = std::time::Instant::now();
+                let ok = unit_case(board, &elf, &nav440, &case, &extra)?;
+                eprintln!("xtask: UNIT OK ({:.1} s): {ok}", t.elapsed().as_secs_f64());
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `cargo xtask embassy`: the embassy example (`firmware-example/src/bin/embassy.rs`, an
+/// embassy-executor task with nav440-proto's async driver) linted, built for thumbv7em and run
+/// on QEMU `mps2-an386` against `nav440 sim`: every bundled capture (CSV identical to `nav440
+/// estimate` on what the unit streamed after configuration) and a unit that never answers.
+pub fn embassy() -> Result<(), String> {
+    let start = std::time::Instant::now();
+    let board = qemu::BOARDS
+        .iter()
+        .find(|b| b.name == "an386")
+        .ok_or("board an386 missing")?;
+    cargo(&[
+        "clippy",
+        "-p",
+        FW,
+        "--target",
+        board.target,
+        "--features",
+        "embassy",
+        "--bin",
+        "embassy",
+        "--",
+        "-D",
+        "warnings",
+    ])?;
+    let elf = build(board.target, &["embassy"], "embassy")?;
+    // As in `ci-firmware`: without QEMU, XTASK_SKIP_QEMU=1 skips the runs, loudly.
+    match qemu::ensure_qemu() {
+        Ok(()) => {}
+        Err(e) if std::env::var("XTASK_SKIP_QEMU").is_ok_and(|v| v == "1") => {
+            eprintln!("xtask: XTASK_SKIP_QEMU=1: SKIPPING the embassy example's QEMU runs: {e}");
+            return Ok(());
+        }
+        Err(e) => return Err(e),
+    }
+    let nav440 = nav440_bin()?;
+    let mut cases: Vec<UnitCase> = data_captures()
+        .into_iter()
+        .map(|capture| UnitCase {
+            name: "embassy",
+            capture,
+            sim_args: &["--fast"],
+            expect: Expect::Csv {
+                stderr_has: "unit configured (embassy, async driver): A2 at 57600 Bd (unit was at 38400 Bd)",
+            },
+        })
+        .collect();
+    cases.push(UnitCase {
+        name: "embassy-no-answer",
+        capture: root().join("host-tests/data/sin5_a2_25hz_weekwrap.bin"),
+        sim_args: &["--fault", "no-answer"],
+        expect: Expect::Fails {
+            status: 2,
+            diagnostic: "boot failed: no answer from the unit",
+        },
+    });
+    for case in &cases {
+        let t = std::time::Instant::now();
+        // The embassy example runs the firmware's pipeline (`pipeline::AXES`) and defmt rows.
+        let ok = unit_case(board, &elf, &nav440, case, &["--axis", FIRMWARE_AXIS])?;
+        eprintln!(
+            "xtask: EMBASSY OK ({:.1} s): {ok}",
+            t.elapsed().as_secs_f64()
+        );
+    }
+    eprintln!(
+        "xtask: embassy example against nav440 sim: every case passed in {:.0} s",
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// `cargo xtask ci-unit`: the unit runs of `ci-firmware` (QEMU required).
+pub fn ci_unit(only: Option<Board>) -> Result<(), String> {
+    qemu::ensure_qemu()?;
+    let start = std::time::Instant::now();
+    let short = root().join("host-tests/data/sin5_a2_25hz_weekwrap.bin");
+    unit_ci(&data_captures(), &short, only)?;
+    eprintln!(
+        "xtask: firmware against nav440 sim: every case passed in {:.0} s",
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
