@@ -271,6 +271,8 @@ fn ci() -> Result<(), String> {
         "-p",
         "nav440-proto",
         "-p",
+        "nav440-cli",
+        "-p",
         "host-tests",
         "-p",
         "velocity-estimators",

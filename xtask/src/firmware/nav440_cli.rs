@@ -9,7 +9,7 @@ use std::process::Command;
 use std::time::Duration;
 
 /// Cargo arguments that run the host CLI `nav440`; its own arguments follow.
-const NAV440_RUN: &[&str] = &["run", "-q", "-p", "host-tests", "--bin", "nav440", "--"];
+const NAV440_RUN: &[&str] = &["run", "-q", "-p", "nav440-cli", "--bin", "nav440", "--"];
 
 /// `nav440 synth ARGS -o OUT` (the host CLI's capture generator).
 pub(super) fn nav440_synth(out: &Path, args: &[&str]) -> Result<(), String> {
@@ -23,7 +23,7 @@ pub(super) fn nav440_synth(out: &Path, args: &[&str]) -> Result<(), String> {
 
 /// The `nav440` binary of the host CLI, built once (debug profile, as `NAV440_RUN`).
 pub(super) fn nav440_bin() -> Result<PathBuf, String> {
-    cargo(&["build", "-q", "-p", "host-tests", "--bin", "nav440"])?;
+    cargo(&["build", "-q", "-p", "nav440-cli", "--bin", "nav440"])?;
     let p = target_dir().join("debug").join("nav440");
     if p.is_file() {
         Ok(p)
