@@ -26,11 +26,6 @@ const BOARDS: &[(&str, &str, Option<&str>)] = &[
         "nucleo_f411re",
         Some("stm32f4_hal"),
     ),
-    (
-        "CARGO_FEATURE_BOARD_NUCLEO_F446RE",
-        "nucleo_f446re",
-        Some("stm32f4_hal"),
-    ),
     ("CARGO_FEATURE_BOARD_RP_PICO", "rp_pico", None),
 ];
 

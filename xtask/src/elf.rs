@@ -94,22 +94,6 @@ pub const CHIPS: &[Chip] = &[
         vector_table: 0x0800_0000,
     },
     Chip {
-        board: "nucleo-f446re",
-        part: "STM32F446RE (RM0390: 512 KiB flash at 0x0800_0000, 128 KiB SRAM at 0x2000_0000)",
-        probe_chip: Some("STM32F446RETx"),
-        flash: Region {
-            name: "flash",
-            origin: 0x0800_0000,
-            length: 512 << 10,
-        },
-        ram: Region {
-            name: "SRAM",
-            origin: 0x2000_0000,
-            length: 128 << 10,
-        },
-        vector_table: 0x0800_0000,
-    },
-    Chip {
         board: "rp-pico",
         part: "RP2040 on the Raspberry Pi Pico (2 MiB QSPI flash at 0x1000_0000, 264 KiB SRAM at 0x2000_0000; boot2 in the first 256 bytes)",
         probe_chip: Some("RP2040"),

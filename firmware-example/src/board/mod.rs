@@ -37,11 +37,6 @@ mod nucleo_f411re;
 #[cfg(feature = "board-nucleo-f411re")]
 pub use nucleo_f411re::*;
 
-#[cfg(feature = "board-nucleo-f446re")]
-mod nucleo_f446re;
-#[cfg(feature = "board-nucleo-f446re")]
-pub use nucleo_f446re::*;
-
 #[cfg(feature = "board-rp-pico")]
 mod rp_pico;
 #[cfg(feature = "board-rp-pico")]

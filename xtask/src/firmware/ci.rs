@@ -28,11 +28,6 @@ const BUILT_ONLY_BOARDS: &[(&str, &str, &str)] = &[
         "thumbv7em-none-eabihf",
         "nucleo-f411re",
     ),
-    (
-        "board-nucleo-f446re",
-        "thumbv7em-none-eabihf",
-        "nucleo-f446re",
-    ),
     ("board-rp-pico", "thumbv6m-none-eabi", "rp-pico"),
 ];
 
