@@ -1,5 +1,4 @@
-//! The shipped preset `BankConfig::NAV440` (docs/CALIBRATION.md "Shipped
-//! defaults").
+//! The shipped preset `BankConfig::NAV440` (docs/PRESETS.md).
 //!
 //! * `print_nav440_preset` (ignored; how the preset was produced):
 //!   `cargo test --release -p host-tests --test preset -- --ignored --nocapture print_nav440_preset`

@@ -1,5 +1,5 @@
 //! The shipped preset's packet-rate table `BankConfig::NAV440_RATES`
-//! (docs/CALIBRATION.md, "Shipped defaults"): the gains of `BankConfig::NAV440`
+//! (docs/PRESETS.md, "Below 20 Hz"): the gains of `BankConfig::NAV440`
 //! (tuned on 20-100 Hz captures) lose to the paper's presets at lower packet rates (at 10 Hz
 //! the ILO1 has about 6x the paper's velocity MSE), so each NAV440 rate below 20 Hz has gains
 //! tuned at that rate.

@@ -1,4 +1,4 @@
-//! Noise-adaptive gains (docs/CALIBRATION.md "Noise-adaptive gains"): a
+//! Noise-adaptive gains (docs/ADAPTIVE-GAINS.md): a
 //! capture whose noise switches from 0.01 to 0.5 deg^2 half-way, run through the scheduled
 //! bank (`nav440 estimate FILE --gains schedule.toml`: `estimators::AdaptiveBank`).
 //!
@@ -262,7 +262,7 @@ fn scheduled_bank_follows_a_noise_switch() {
             // level's gains (282.7, below the half's own tuning, 321.2); in 0-10 s the 0.01
             // level's (72.7), where the 0.5 level's ED gains happen to do better on this noise
             // draw (about 69): the ED's MSE is rugged in its gains and depends on the noise
-            // draw (docs/CALIBRATION.md), by more than any ED schedule could gain
+            // draw (docs/ADAPTIVE-RESULTS.md), by more than any ED schedule could gain
             // (`one_draw_margins_of_the_ave_and_ed_are_inside_their_gain_sensitivity`). Held
             // to 1.02 x the best fixed set. (The AVE was held so too, at 69.063 against
             // 68.966, until the schedule took each level's best observer gains and recorded
@@ -310,7 +310,7 @@ fn scheduled_bank_follows_a_noise_switch() {
 /// 1.23x); each level's observers the best of every level's tuned gains at its noise (the
 /// 0.5 level's AVE is now the 0.1 level's) and switch points where two levels' MSEs cross
 /// (`ScheduleLevel::switch_up`, recorded by `nav440 tune --schedule`): AVE and ED within
-/// 1.04x (docs/CALIBRATION.md, "Between the levels").
+/// 1.04x (docs/ADAPTIVE-RESULTS.md, "Between the levels").
 ///
 /// Independent of the code under test: MSE against the motion's analytic rate.
 #[test]
@@ -438,7 +438,7 @@ fn the_fixed_point_schedule_follows_f32_on_the_noise_switch() {
 ///   The two differ in kind. The AVE's MSE is smooth but steep in `gamma1` (about +1.2 % per
 ///   +0.05 %): the tuned 0.1 level sits at 0.90 of the Euler step's stability bound
 ///   (`h gamma1 < k`), where the step keeps a tenth of the continuous law's damping
-///   (docs/CALIBRATION.md, "Gains at the edge of the Euler step"). The ED's is rugged: its
+///   (docs/ADAPTIVE-GAINS.md, "Gains at the edge of the Euler step"). The ED's is rugged: its
 ///   switching law's MSE changes by percents between gain sets 0.1 % apart.
 /// * An estimate of what any ED schedule can gain over fixed ED gains on this switch: on a
 ///   log grid of (`lambda`, `alpha`) (14 x 14 points, 3-60 x 100-4000), the grid's best pair
@@ -596,13 +596,13 @@ fn scheduled_bank_does_not_ring_on_other_noise_draws() {
 /// scheduled bank's 0-20 s velocity MSE is below every fixed set of [`fixed_sets`], and the
 /// geometric mean over the draws of its ratio to the best fixed set of that draw.
 ///
-/// Measured (docs/CALIBRATION.md "Forty noise draws"): ILO1-3, the AD and the tracker below
+/// Measured (docs/ADAPTIVE-RESULTS.md "Forty noise draws"): ILO1-3, the AD and the tracker below
 /// every fixed set on 40 of 40 draws (geometric mean ratios 0.776, 0.790, 0.790); the AVE on
 /// 32 (0.949; the best fixed set is the 0.1 level, whose AVE gains the 0.5 level now shares,
 /// on all 40), **the ED on 5 (1.034)**. With bumpless gain changes instead of the warm start
 /// (`replay_samples` 0): ILO 38 (0.819), AVE 24 (1.006). Before the schedule took each
 /// level's best observer gains and recorded its switch points (`nav440 tune --schedule`,
-/// docs/CALIBRATION.md "Between the levels"): AVE 25 (0.951).
+/// docs/ADAPTIVE-RESULTS.md "Between the levels"): AVE 25 (0.951).
 ///
 /// The AVE's figure depends on the switching gains the schedule records
 /// (`ScheduleLevel::ave_deltahat`: a gain change sets `deltahat` to the new level's). The same

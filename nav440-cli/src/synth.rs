@@ -1,7 +1,7 @@
 //! Capture generator: a motion profile -> the byte stream a NAV440 sends.
 //!
 //! Each packet holds the motion at its time stamp, quantised to the protocol's LSBs
-//! (`../shared/NAV440-PROTOCOL.md`): yaw wrapped to [-180, 180) deg in 360/2^16 deg steps, the
+//! (docs/NAV440-PROTOCOL.md): yaw wrapped to [-180, 180) deg in 360/2^16 deg steps, the
 //! body z rate (the analytic derivative of the motion) in 1260/2^16 deg/s steps (saturating),
 //! timeITOW in ms (wrapping at the end of the GPS week), and the BIT word. The unit is level
 //! (roll = pitch = 0, x/y rates 0, accelerometers read (0, 0, 1) g as in the protocol's example

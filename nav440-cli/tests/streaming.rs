@@ -23,7 +23,7 @@ const LIMIT_KIB: u64 = 64 * 1024;
 const STUCK: Duration = Duration::from_secs(120);
 
 /// Multiplies the number of frames of the memory tests (default 1): e.g.
-/// `NAV440_STREAM_SCALE=16` for the multi-GB figures of docs/RELIABILITY.md.
+/// `NAV440_STREAM_SCALE=16` for the multi-GB figures of docs/CLI.md (Streaming).
 fn scale() -> u64 {
     std::env::var("NAV440_STREAM_SCALE")
         .ok()

@@ -1,7 +1,7 @@
 //! The packet table: kinds, units, layouts, and the role-based readers (attitude, body rates,
 //! time, BIT) generated from it.
 //!
-//! Expected values come from shared/NAV440-PROTOCOL.md (scales, payload lengths, the
+//! Expected values come from docs/NAV440-PROTOCOL.md (scales, payload lengths, the
 //! synthetic A2 vector) or are a property against the per-type accessors.
 
 use nav440_proto::*;

@@ -1,4 +1,4 @@
-//! Every test vector of shared/NAV440-PROTOCOL.md, byte for byte and value for value.
+//! Every test vector of docs/NAV440-PROTOCOL.md, byte for byte and value for value.
 
 use nav440_proto::*;
 

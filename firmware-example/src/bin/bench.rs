@@ -352,7 +352,7 @@ fn bank_per_sample<S: estimators::SqrtFn<Num>>(
 }
 
 /// The gain schedule of `nav440 tune host-tests/data/fig5_a2_100hz.bin --schedule
-/// 0.001,0.01,0.1,0.5,1 --rust` (docs/CALIBRATION.md).
+/// 0.001,0.01,0.1,0.5,1 --rust` (docs/ADAPTIVE-GAINS.md).
 mod schedule {
     include!("../../../host-tests/data/gains/schedule_fig5.rs");
 }

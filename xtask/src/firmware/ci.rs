@@ -281,7 +281,7 @@ pub fn ci_steps() -> Result<(), String> {
             board.name
         );
         // Identical is not enough: gains at the edge of the Euler step saturate the
-        // fixed-point AVE at 2.1e9 deg/s on both sides alike (docs/CALIBRATION.md, "Gains at
+        // fixed-point AVE at 2.1e9 deg/s on both sides alike (docs/ADAPTIVE-GAINS.md, "Gains at
         // the edge of the Euler step"). The capture's peak rate is 265 deg/s.
         let peak = peak_velocity(&csv, "yaw_")?;
         if peak >= 1000.0 {
