@@ -40,8 +40,8 @@ pub const ESTIMATOR_COLORS: [RGBColor; 7] = [
     RGBColor(0xe3, 0x77, 0xc2),
 ];
 
-/// Renders `panels` stacked vertically into an SVG file of `width` px; each panel is
-/// `panel_height` px high.
+/// Renders `panels` stacked vertically into an SVG of `width` px, each panel `panel_height`
+/// px high, written to the file `path`, or to standard output when `path` is `-`.
 pub fn render_svg(
     path: &Path,
     title: &str,
@@ -50,11 +50,25 @@ pub fn render_svg(
     panel_height: u32,
 ) -> Result<(), String> {
     let height = 40 + panel_height * panels.len().max(1) as u32;
-    let root = SVGBackend::new(path, (width, height)).into_drawing_area();
-    draw(&root, title, panels).map_err(|e| format!("cannot draw {}: {e}", path.display()))?;
-    root.present()
-        .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-    Ok(())
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (width, height)).into_drawing_area();
+        draw(&root, title, panels).map_err(|e| format!("cannot draw {}: {e}", path.display()))?;
+        root.present()
+            .map_err(|e| format!("cannot draw {}: {e}", path.display()))?;
+    }
+    if crate::replay::is_stdin(path) {
+        use std::io::Write;
+        let mut out = std::io::stdout().lock();
+        match out.write_all(svg.as_bytes()).and_then(|()| out.flush()) {
+            Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+                Err(format!("cannot write output: {e}"))
+            }
+            _ => Ok(()),
+        }
+    } else {
+        std::fs::write(path, svg).map_err(|e| format!("cannot write {}: {e}", path.display()))
+    }
 }
 
 fn draw<DB: DrawingBackend>(

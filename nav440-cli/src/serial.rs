@@ -124,6 +124,29 @@ impl embedded_hal::delay::DelayNs for StdDelay {
     }
 }
 
+/// The longest reply time-out of a request, ms.
+const MAX_REPLY_TIMEOUT_MS: u32 = 60_000;
+
+impl PortArgs {
+    /// Checks every number of the port arguments before anything touches the port: the
+    /// target (type, rate, baud, budget), the unit's baud, the reply time-out (1 to 60,000 ms)
+    /// and the pings per baud (at least 1). Returns the target.
+    pub(crate) fn check(&self) -> Result<Target> {
+        let t = target(self)?;
+        self.unit_baud.map(parse_baud).transpose()?;
+        if !(1..=MAX_REPLY_TIMEOUT_MS).contains(&self.reply_timeout) {
+            return Err(Error::Usage(format!(
+                "--reply-timeout must be 1 to {MAX_REPLY_TIMEOUT_MS} ms, got {}",
+                self.reply_timeout
+            )));
+        }
+        if self.pings == 0 {
+            return Err(Error::Usage("--pings must be at least 1".into()));
+        }
+        Ok(t)
+    }
+}
+
 fn target(a: &PortArgs) -> Result<Target> {
     let t = Target {
         packet: parse_output_type(&a.packet)?,
@@ -149,7 +172,7 @@ fn target(a: &PortArgs) -> Result<Target> {
 
 /// Opens the port and runs the boot sequence; returns the driver (at the target baud).
 pub(crate) fn open_and_boot(a: &PortArgs) -> Result<(IoDriver<SerialIo>, Report, Target)> {
-    let t = target(a)?;
+    let t = a.check()?;
     let start_baud = a.unit_baud.map(parse_baud).transpose()?;
     let first = start_baud.unwrap_or(Baud::B57600).bits_per_second();
     let port = serialport::new(&a.port, first)
@@ -158,12 +181,12 @@ pub(crate) fn open_and_boot(a: &PortArgs) -> Result<(IoDriver<SerialIo>, Report,
         .map_err(|e| Error::Input(format!("cannot open serial port {}: {e}", a.port)))?;
     let mut d = IoDriver::new(SerialIo(port));
     d.set_timing(Timing {
-        reply_timeout_ms: a.reply_timeout.max(1),
+        reply_timeout_ms: a.reply_timeout,
         poll_step_us: 500,
     });
     let options = Options {
         start_baud,
-        ping_attempts: a.pings.max(1),
+        ping_attempts: a.pings,
     };
     let r = boot::boot(&mut d, &t, &options, &mut StdDelay, |s, b| {
         s.0.set_baud_rate(b.bits_per_second())
@@ -201,11 +224,9 @@ pub(crate) fn stream_after_boot(
     duration: Option<f64>,
     mut on_bytes: impl FnMut(&[u8]) -> Result<bool>,
 ) -> Result<u64> {
-    if let Some(s) = duration {
-        if !(s.is_finite() && s > 0.0) {
-            return Err(Error::Usage(format!("--duration must be > 0 s, got {s}")));
-        }
-    }
+    let duration = duration
+        .map(|s| crate::cmd::seconds("--duration", s, false))
+        .transpose()?;
     let pending = d.pending_bytes().to_vec();
     let SerialIo(mut port) = d.release();
     let end = duration.map(|s| Instant::now() + Duration::from_secs_f64(s));

@@ -677,12 +677,7 @@ pub fn run(args: &SimArgs) -> Result<Summary> {
     let baud = parse_baud(args.baud)?;
     let packet = parse_output_type(&args.power_up_packet)?;
     let rate = parse_rate(args.power_up_rate)?;
-    if !(args.timeout.is_finite() && args.timeout >= 0.0) {
-        return Err(Error::Usage(format!(
-            "--timeout must be >= 0 s, got {}",
-            args.timeout
-        )));
-    }
+    crate::cmd::seconds("--timeout", args.timeout, true)?;
     let eeprom = UnitFields {
         rate_divider: rate.divider(),
         baud: baud.code(),

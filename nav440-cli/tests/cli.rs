@@ -1088,3 +1088,69 @@ fn estimate_product_bank_refuses_a_schedule() {
     assert_eq!(o.status.code(), Some(2));
     assert!(o.stdout.is_empty());
 }
+
+#[test]
+fn plot_to_stdout_writes_the_svg_the_file_would_hold() {
+    let d = scratch("plot_stdout");
+    let file = d.join("p.svg");
+    let cap = data("fig5_a2_100hz.bin");
+    let cap = cap.to_str().unwrap();
+    ok(&["plot", cap, "-o", file.to_str().unwrap(), "--to", "5"]);
+    let o = run(&["plot", cap, "-o", "-", "--to", "5"]);
+    assert!(o.status.success());
+    assert!(o.stdout.starts_with(b"<svg"), "not an SVG on stdout");
+    assert_eq!(o.stdout, std::fs::read(&file).unwrap());
+    assert!(
+        !std::path::Path::new("-").exists(),
+        "a file named - was written"
+    );
+}
+
+/// Every duration and time-out is refused before any side effect when it is not a finite
+/// number of seconds within 30 days (a one-line usage error, exit 2): `record` leaves its
+/// output uncreated and touches no port (the port does not exist, and the error is not the
+/// port's).
+#[test]
+fn durations_and_time_outs_are_checked_before_any_side_effect() {
+    let d = scratch("durations");
+    let out = d.join("rec.bin");
+    let cap = data("fig5_a2_100hz.bin");
+    for v in ["nan", "inf", "-1", "0", "1e20", "1.7976931348623157e308"] {
+        for cmd in ["record", "live"] {
+            let duration = format!("--duration={v}");
+            let mut args = vec![cmd, "--port", "/dev/nav440-no-such-port", duration.as_str()];
+            if cmd == "record" {
+                args.extend(["-o", out.to_str().unwrap()]);
+            }
+            let o = run(&args);
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+            assert!(err.contains("--duration"), "{args:?}: {err}");
+            assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+            assert!(!out.exists(), "{args:?} created its output");
+        }
+        if v == "0" {
+            continue; // --timeout 0: no time-out
+        }
+        let o = run(&[
+            "sim",
+            cap.to_str().unwrap(),
+            "--listen",
+            "tcp:127.0.0.1:0",
+            &format!("--timeout={v}"),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "sim --timeout {v}: {err}");
+        assert!(err.contains("--timeout"), "sim --timeout {v}: {err}");
+    }
+    for (flag, v) in [
+        ("--reply-timeout", "0"),
+        ("--reply-timeout", "4294967295"),
+        ("--pings", "0"),
+    ] {
+        let o = run(&["config", "--port", "/dev/nav440-no-such-port", flag, v]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{flag} {v}: {err}");
+        assert!(err.contains(flag), "{flag} {v}: {err}");
+    }
+}

@@ -17,6 +17,10 @@ pub struct Args {
 
 /// `nav440 live`: the boot sequence, then the estimate CSV on stdout while receiving.
 pub fn run(a: &Args) -> Result<()> {
+    a.port.check()?;
+    if let Some(s) = a.duration {
+        super::seconds("--duration", s, false)?;
+    }
     let (d, report, t) = open_and_boot(&a.port)?;
     eprintln!("nav440 live: {}", report_json(&a.port.port, &report, &t));
     let stdout = std::io::stdout();

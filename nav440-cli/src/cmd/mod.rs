@@ -346,3 +346,20 @@ pub(crate) fn stdout_or_file(
 pub(crate) fn write_file(p: &Path, text: &str) -> Result<()> {
     std::fs::write(p, text).map_err(|e| Error::Output(format!("cannot write {}: {e}", p.display())))
 }
+
+/// The longest duration or time-out any command accepts, s (30 days).
+pub(crate) const MAX_SECONDS: f64 = 30.0 * 86_400.0;
+
+/// `v` s of the flag `flag` if it is a finite number of seconds in (0, [`MAX_SECONDS`]] (0
+/// also with `zero_ok`); a usage error otherwise.
+pub(crate) fn seconds(flag: &str, v: f64, zero_ok: bool) -> Result<f64> {
+    let low_ok = if zero_ok { v >= 0.0 } else { v > 0.0 };
+    if v.is_finite() && low_ok && v <= MAX_SECONDS {
+        Ok(v)
+    } else {
+        let low = if zero_ok { ">= 0" } else { "> 0" };
+        Err(Error::Usage(format!(
+            "{flag} must be a number of seconds {low} and <= {MAX_SECONDS} (30 days), got {v}"
+        )))
+    }
+}

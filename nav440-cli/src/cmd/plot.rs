@@ -11,7 +11,7 @@ use crate::{plots, replay};
 pub struct Args {
     /// Capture file; `-` reads standard input.
     file: PathBuf,
-    /// Output SVG file.
+    /// Output SVG file; `-` writes the SVG to standard output.
     #[arg(short, long, value_name = "OUT.svg")]
     output: PathBuf,
     #[command(flatten)]

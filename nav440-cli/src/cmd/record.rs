@@ -21,6 +21,10 @@ pub struct Args {
 
 /// `nav440 record`: the boot sequence, then the stream after the read-back into a file.
 pub fn run(a: &Args) -> Result<()> {
+    a.port.check()?;
+    if let Some(s) = a.duration {
+        super::seconds("--duration", s, false)?;
+    }
     let out = std::fs::File::create(&a.output)
         .map_err(|e| Error::Output(format!("cannot create {}: {e}", a.output.display())))?;
     let mut w = std::io::BufWriter::new(out);
