@@ -375,22 +375,36 @@ pub enum Listen {
     Pty,
 }
 
-/// Parses `tcp:HOST:PORT` or `pty`.
-pub fn parse_listen(s: &str) -> Result<Listen> {
+/// Parses `tcp:HOST:PORT` or `pty`. A TCP address must resolve to loopback addresses only,
+/// unless `any_address` (`--listen-any`): the simulated unit then answers anyone who can reach
+/// the port.
+pub fn parse_listen(s: &str, any_address: bool) -> Result<Listen> {
     if s == "pty" {
         return Ok(Listen::Pty);
     }
-    match s.strip_prefix("tcp:") {
-        Some(a)
-            if a.rsplit_once(':')
-                .is_some_and(|(_, p)| p.parse::<u16>().is_ok()) =>
-        {
-            Ok(Listen::Tcp(a.to_string()))
-        }
-        _ => Err(Error::Usage(format!(
+    let bad = || {
+        Error::Usage(format!(
             "--listen `{s}`: expected tcp:HOST:PORT (e.g. tcp:127.0.0.1:4440) or pty"
-        ))),
+        ))
+    };
+    let a = s.strip_prefix("tcp:").ok_or_else(bad)?;
+    if !a
+        .rsplit_once(':')
+        .is_some_and(|(_, p)| p.parse::<u16>().is_ok())
+    {
+        return Err(bad());
     }
+    if !any_address {
+        let addrs: Vec<std::net::SocketAddr> = std::net::ToSocketAddrs::to_socket_addrs(a)
+            .map_err(|e| Error::Usage(format!("--listen `{s}`: {e}")))?
+            .collect();
+        if addrs.is_empty() || addrs.iter().any(|x| !x.ip().is_loopback()) {
+            return Err(Error::Usage(format!(
+                "--listen `{s}` is not a loopback address: the simulated unit would answer the network; use 127.0.0.1 or [::1], or add --listen-any"
+            )));
+        }
+    }
+    Ok(Listen::Tcp(a.to_string()))
 }
 
 /// A byte stream to the host: a TCP connection or a pty master.
@@ -673,7 +687,7 @@ impl Session<'_> {
 /// Runs one session of `nav440 sim`: listens, serves one host until the capture was streamed
 /// or the host went away, then writes the record.
 pub fn run(args: &SimArgs) -> Result<Summary> {
-    let listen = parse_listen(&args.listen)?;
+    let listen = parse_listen(&args.listen, args.listen_any)?;
     let baud = parse_baud(args.baud)?;
     let packet = parse_output_type(&args.power_up_packet)?;
     let rate = parse_rate(args.power_up_rate)?;

@@ -1154,3 +1154,27 @@ fn durations_and_time_outs_are_checked_before_any_side_effect() {
         assert!(err.contains(flag), "{flag} {v}: {err}");
     }
 }
+
+#[test]
+fn sim_refuses_a_non_loopback_listen_address_unless_told() {
+    let cap = data("fig5_a2_100hz.bin");
+    let cap = cap.to_str().unwrap();
+    for addr in ["tcp:0.0.0.0:0", "tcp:[::]:0"] {
+        let o = run(&["sim", cap, "--listen", addr, "--timeout", "0.2"]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{addr}: {err}");
+        assert!(err.contains("not a loopback address"), "{addr}: {err}");
+    }
+    // With --listen-any it listens (and gives up at the time-out: nobody connects).
+    let o = run(&[
+        "sim",
+        cap,
+        "--listen",
+        "tcp:0.0.0.0:0",
+        "--listen-any",
+        "--timeout",
+        "0.2",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("no host connected before --timeout"), "{err}");
+}

@@ -31,6 +31,10 @@ pub struct Args {
     /// (a pseudo-terminal pair). The address or the pty's path is printed on stdout.
     #[arg(long, value_name = "ADDR")]
     pub listen: String,
+    /// Allow a --listen address that is not loopback (the unit then answers anyone who can
+    /// reach the port).
+    #[arg(long)]
+    pub listen_any: bool,
     /// Write exactly the bytes streamed after configuration (after the read-back reply) here.
     #[arg(long, value_name = "FILE")]
     pub record: Option<PathBuf>,
