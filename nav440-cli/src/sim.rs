@@ -388,10 +388,10 @@ pub fn parse_listen(s: &str, any_address: bool) -> Result<Listen> {
         ))
     };
     let a = s.strip_prefix("tcp:").ok_or_else(bad)?;
-    if !a
+    let port_ok = a
         .rsplit_once(':')
-        .is_some_and(|(_, p)| p.parse::<u16>().is_ok())
-    {
+        .is_some_and(|(_, p)| p.parse::<u16>().is_ok());
+    if !port_ok {
         return Err(bad());
     }
     if !any_address {
