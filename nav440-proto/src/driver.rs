@@ -1,8 +1,8 @@
 //! Drivers over `embedded-io` (blocking) and `embedded-hal-nb` (non-blocking) serial ports.
 //!
 //! Both are the one [`Driver`] over a thin [`Port`] adapter ([`IoPort`], [`NbPort`]; with the
-//! `embedded-io-06` feature also `Io06Port` for `embedded-io` 0.6 ports), so the protocol
-//! logic below exists once; only reading and writing bytes differ. Any other serial port can
+//! `embedded-io-06` feature, an `embedded-io` 0.6 port goes through [`IoPort`] wrapped in
+//! `Compat06`), so the protocol logic below exists once; only reading and writing bytes differ. Any other serial port can
 //! implement [`Port`] itself (see "Bring your own port" there) and use
 //! [`Driver::from_port`].
 //!
@@ -234,8 +234,9 @@ fn count_accepted(fields: &[(FieldId, u16)], ids: FieldIds<'_>) -> u8 {
 
 /// A serial port as the driver sees it: byte reads and whole-frame writes.
 ///
-/// Implemented here for [`embedded_io`] 0.7 ports ([`IoPort`]), [`embedded_hal_nb`] ports
-/// ([`NbPort`]) and, with the `embedded-io-06` feature, `embedded-io` 0.6 ports (`Io06Port`).
+/// Implemented here for [`embedded_io`] 0.7 ports ([`IoPort`]; with the `embedded-io-06`
+/// feature also `embedded-io` 0.6 ports wrapped in `Compat06`) and [`embedded_hal_nb`] ports
+/// ([`NbPort`]).
 ///
 /// # Bring your own port
 /// Any other serial port works too: implement this trait for a wrapper around it and build
@@ -436,7 +437,7 @@ pub type NbDriver<S> = Driver<NbPort<S>>;
 #[cfg(feature = "embedded-io-06")]
 mod io06;
 #[cfg(feature = "embedded-io-06")]
-pub use io06::{Compat06, Compat06Error, Io06Driver, Io06Port};
+pub use io06::{Compat06, Compat06Error, Io06Driver};
 
 mod asynch;
 pub use asynch::AsyncDriver;

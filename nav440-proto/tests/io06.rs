@@ -1,13 +1,13 @@
-//! The driver over an `embedded-io` 0.6 port (feature `embedded-io-06`): the boot sequence
-//! configures the unit model exactly as over a 0.7 port. Run by CI with
-//! `cargo test -p nav440-proto --features embedded-io-06 --test io06`.
+//! The drivers over an `embedded-io` 0.6 port wrapped in `Compat06` (feature
+//! `embedded-io-06`): the boot sequence configures the unit model exactly as over a 0.7
+//! port. Run by CI with `cargo test -p nav440-proto --features embedded-io-06 --test io06`.
 #![cfg(feature = "embedded-io-06")]
 
 use std::collections::VecDeque;
 
 use embedded_io_06 as eio;
 use nav440_proto::boot::{self, Options, Target};
-use nav440_proto::driver::{Io06Driver, Timing};
+use nav440_proto::driver::{Compat06, Io06Driver, Timing};
 use nav440_proto::unit::{Quirks, Unit, UnitFields};
 use nav440_proto::{Baud, PacketRate, PacketType};
 
@@ -84,7 +84,7 @@ fn line(quirks: Quirks) -> Line {
 
 #[test]
 fn boot_over_an_embedded_io_06_port() {
-    let mut driver = Io06Driver::new(line(Quirks::default()));
+    let mut driver = Io06Driver::new(Compat06(line(Quirks::default())));
     let mut clock = Clock(0);
     let report = boot::boot(
         &mut driver,
@@ -92,14 +92,14 @@ fn boot_over_an_embedded_io_06_port() {
         &Options::DEFAULT,
         &mut clock,
         |l, b| {
-            l.baud = b;
+            l.0.baud = b;
             Ok(())
         },
     )
     .expect("boot");
     assert_eq!(report.unit_baud, Baud::B38400);
     assert_eq!(report.baud, Baud::B57600);
-    let l = driver.release();
+    let l = driver.release().0;
     assert_eq!(
         l.written.get(..7),
         Some(&PING[..]),
@@ -116,10 +116,10 @@ fn boot_over_an_embedded_io_06_port() {
 
 #[test]
 fn silent_unit_times_out_in_time() {
-    let mut driver = Io06Driver::new(line(Quirks {
+    let mut driver = Io06Driver::new(Compat06(line(Quirks {
         ignore_requests: true,
         ..Quirks::default()
-    }));
+    })));
     driver.set_timing(Timing {
         reply_timeout_ms: 50,
         poll_step_us: 1000,
@@ -161,7 +161,7 @@ impl embedded_hal_async::delay::DelayNs for Clock {
 
 #[test]
 fn compat06_port_under_the_async_and_the_blocking_driver() {
-    use nav440_proto::driver::{AsyncDriver, Compat06, IoDriver};
+    use nav440_proto::driver::{AsyncDriver, IoDriver};
     let set_baud = |l: &mut Compat06<Line>, b: Baud| {
         l.0.baud = b;
         Ok(())
