@@ -4,7 +4,8 @@
 //!   by a `board-*` feature; the QEMU `mps2` boards without one. See docs/PORTING.md.
 //! * [`uart`]: the NAV440 UART: interrupt-driven receive into a `heapless` SPSC queue, polled
 //!   transmit, run-time baud change, as `embedded_io` 0.7 and `embedded_hal_nb` traits, on the
-//!   board's hardware; plus the harness's control channel.
+//!   board's hardware; plus the harness's control channel and its end message
+//!   ([`uart::EndMessage`]).
 //! * [`log`]: the defmt transport (RTT for a probe, semihosting for QEMU).
 //! * [`time`]: SysTick at 1 kHz, microseconds since start, `embedded_hal::delay::DelayNs`.
 //! * [`host`]: semihosting output, exit codes, the panic handler and the HardFault handler

@@ -32,7 +32,7 @@
 use core::sync::atomic::{AtomicBool, Ordering};
 use cortex_m_rt::entry;
 use embedded_io::{Read as _, ReadReady as _};
-use firmware_example::uart::{Board, Control, Uart0};
+use firmware_example::uart::{Board, Control, EndMessage, Uart0};
 use firmware_example::{board, host, log, out, pipeline, stack, time};
 use nav440_proto::boot::{self, BootError, Options, Report, Target};
 use nav440_proto::driver::{IoDriver, Timing};
@@ -51,8 +51,6 @@ const POWER_UP_BAUD: u32 = 38_400;
 
 /// Magic at the start of a finite input (replay mode).
 const LENGTH_MAGIC: [u8; 4] = *b"N4LP";
-/// Magic of the control channel's end message.
-const END_MAGIC: [u8; 4] = *b"N4EN";
 
 /// Exit statuses under QEMU (the firmware's semihosting exit code becomes QEMU's and
 /// `cargo xtask unit`'s).
@@ -193,32 +191,6 @@ fn configure(uart: Uart0, delay: &mut time::Delay) -> (Uart0, Report, Pending) {
     }
 }
 
-/// The control channel's end message: `N4EN` + u32 LE.
-struct EndMessage {
-    buf: [u8; 8],
-    len: usize,
-}
-
-impl EndMessage {
-    /// Takes the bytes the control channel has; `Some(total)` once the message is complete.
-    fn poll(&mut self, control: &mut Control) -> Option<u64> {
-        while self.len < self.buf.len() {
-            let b = control.try_read()?;
-            self.buf[self.len] = b;
-            self.len += 1;
-        }
-        let (magic, n) = self.buf.split_at(4);
-        if magic != END_MAGIC {
-            defmt::println!(
-                "firmware: bad control message {=[u8]:02x} (expected N4EN + u32 LE byte count)",
-                self.buf
-            );
-            fail(Status::Internal)
-        }
-        Some(u64::from(u32::from_le_bytes([n[0], n[1], n[2], n[3]])))
-    }
-}
-
 /// Frames after the configuration that are not [`TARGET`]'s packet type.
 struct ResetWatch {
     parser: Parser,
@@ -293,10 +265,7 @@ fn stream(
     if !process(pipe, pending) {
         return uart;
     }
-    let mut end = EndMessage {
-        buf: [0; 8],
-        len: 0,
-    };
+    let mut end = EndMessage::default();
     let mut total: Option<u64> = None;
     let mut buf = [0u8; 64];
     loop {
@@ -319,7 +288,14 @@ fn stream(
             if !process(pipe, &buf[..n]) {
                 return uart;
             }
-        } else if let Some(n) = total.is_none().then(|| end.poll(control)).flatten() {
+        } else if let Some(message) = total.is_none().then(|| end.poll(control)).flatten() {
+            let n = message.unwrap_or_else(|bytes| {
+                defmt::println!(
+                    "firmware: bad control message {=[u8]:02x} (expected N4EN + u32 LE byte count)",
+                    bytes
+                );
+                fail(Status::Internal)
+            });
             if n < read {
                 defmt::println!(
                     "firmware: control channel says the unit sent {=u64} bytes, but {=u64} were received",

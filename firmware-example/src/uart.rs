@@ -159,6 +159,35 @@ fn service_rx(cs: CriticalSection<'_>) {
     }
 }
 
+/// The harness's end message on the control channel: `N4EN` + the number of bytes the unit
+/// sent (u32 LE), taken byte by byte as it arrives (the end of a run under QEMU: see the
+/// firmware's `src/main.rs`).
+#[derive(Default)]
+pub struct EndMessage {
+    buf: [u8; 8],
+    len: usize,
+}
+
+impl EndMessage {
+    /// The first four bytes of an end message.
+    pub const MAGIC: [u8; 4] = *b"N4EN";
+
+    /// Takes the bytes the control channel has. `None` until all 8 bytes have arrived; then
+    /// `Ok(count)`, or `Err(bytes)` when they do not start with [`Self::MAGIC`].
+    pub fn poll(&mut self, control: &mut Control) -> Option<Result<u64, [u8; 8]>> {
+        while self.len < self.buf.len() {
+            self.buf[self.len] = control.try_read()?;
+            self.len += 1;
+        }
+        let [m0, m1, m2, m3, n0, n1, n2, n3] = self.buf;
+        Some(if [m0, m1, m2, m3] == Self::MAGIC {
+            Ok(u64::from(u32::from_le_bytes([n0, n1, n2, n3])))
+        } else {
+            Err(self.buf)
+        })
+    }
+}
+
 /// Body of the RX interrupt (dispatched from `DefaultHandler`, IRQ [`RX_IRQ`]).
 pub fn on_rx_interrupt() {
     hw::clear_rx_interrupt();

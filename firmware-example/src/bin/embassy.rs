@@ -31,7 +31,7 @@ use core::future::poll_fn;
 use core::task::Poll;
 
 use embassy_executor::Spawner;
-use firmware_example::uart::{Board, Control, Uart0};
+use firmware_example::uart::{Board, EndMessage, Uart0};
 use firmware_example::{host, out, pipeline, stack, time};
 use nav440_proto::boot::{self, Options, Target};
 use nav440_proto::driver::{AsyncDriver, Timing};
@@ -103,28 +103,6 @@ impl embedded_hal_async::delay::DelayNs for TickDelay {
 fn fail(status: u32, what: core::fmt::Arguments<'_>) -> ! {
     host::stderr(format_args!("firmware: {what}\n"));
     host::exit_code(status)
-}
-
-/// The harness's end message on the control channel, `N4EN` + u32 LE: the number of bytes
-/// the unit sent (see `src/main.rs`), taken byte by byte as it arrives.
-struct EndMessage {
-    buf: [u8; 8],
-    len: usize,
-}
-
-impl EndMessage {
-    /// `Some(count)` once the whole message has arrived.
-    fn poll(&mut self, control: &mut Control) -> Option<u64> {
-        while self.len < self.buf.len() {
-            self.buf[self.len] = control.try_read()?;
-            self.len += 1;
-        }
-        let m = self.buf;
-        if &m[..4] != b"N4EN" {
-            fail(1, format_args!("bad control message {m:02x?}"))
-        }
-        Some(u64::from(u32::from_le_bytes([m[4], m[5], m[6], m[7]])))
-    }
 }
 
 /// Lets the executor run other tasks once.
@@ -201,10 +179,7 @@ async fn main(_spawner: Spawner) {
         fail(1, format_args!("bank: {e:?}"))
     }
     let mut uart = driver.release();
-    let mut end = EndMessage {
-        buf: [0; 8],
-        len: 0,
-    };
+    let mut end = EndMessage::default();
     let mut total: Option<u64> = None;
     let mut buf = [0u8; 64];
     loop {
@@ -222,8 +197,10 @@ async fn main(_spawner: Spawner) {
             if let Err(e) = pipe.feed(&buf[..n], &mut emit) {
                 fail(1, format_args!("bank: {e:?}"))
             }
-        } else if let Some(n) = total.is_none().then(|| end.poll(&mut control)).flatten() {
-            total = Some(n);
+        } else if let Some(message) = total.is_none().then(|| end.poll(&mut control)).flatten() {
+            total = Some(
+                message.unwrap_or_else(|m| fail(1, format_args!("bad control message {m:02x?}"))),
+            );
         } else {
             yield_now().await;
         }
