@@ -30,8 +30,8 @@ use std::time::{Duration, Instant};
 
 use nav440_proto::unit::{Quirks, Unit, UnitFields};
 use nav440_proto::{
-    A0Fields, A1Fields, A2Fields, B1Fields, Baud, N0Fields, N1Fields, Packet, PacketRate,
-    PacketType, Parser, S0Fields, S1Fields, S2Fields, T0Fields, TimeStamp, MAX_FRAME,
+    encode_frame, Baud, FieldInfo, Kind, Packet, PacketRate, PacketType, Parser, Role, TimeStamp,
+    MAX_FRAME,
 };
 
 pub use crate::cmd::sim::{Args as SimArgs, Fault};
@@ -82,71 +82,132 @@ impl RawSample {
     };
 }
 
-/// The samples of every packet of `bytes` that carries yaw and a time stamp, in order.
+/// Where a field of the packet table lives in a [`RawSample`]: from its role, else its kind
+/// and the axis its name gives (`accel_x`, `rate_temp_y`, `x_rate_temp`, `vel_d`, ...).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Slot {
+    Angle(usize),
+    Rate(usize),
+    Accel(usize),
+    Mag(usize),
+    RateTemp(usize),
+    BoardTemp,
+    Vel(usize),
+    LonLat(usize),
+    Altitude,
+    Time,
+    Bit,
+    Counter,
+    /// Not simulated: sent as 0 (S2's delta velocities and angles, T0's detail words).
+    Zero,
+}
+
+impl Slot {
+    fn of(f: &FieldInfo) -> Slot {
+        let axis = |names: [&str; 3]| {
+            f.name
+                .split('_')
+                .find_map(|part| names.iter().position(|n| *n == part))
+        };
+        let xyz = axis(["x", "y", "z"]);
+        match (f.role, f.kind) {
+            (Some(Role::Roll), _) => Slot::Angle(0),
+            (Some(Role::Pitch), _) => Slot::Angle(1),
+            (Some(Role::Yaw), _) => Slot::Angle(2),
+            (Some(Role::P), _) => Slot::Rate(0),
+            (Some(Role::Q), _) => Slot::Rate(1),
+            (Some(Role::R), _) => Slot::Rate(2),
+            (Some(Role::Time), _) => Slot::Time,
+            (Some(Role::Bit), _) => Slot::Bit,
+            (None, Kind::Rate) => xyz.map_or(Slot::Zero, Slot::Rate),
+            (None, Kind::Accel) => xyz.map_or(Slot::Zero, Slot::Accel),
+            (None, Kind::Mag) => xyz.map_or(Slot::Zero, Slot::Mag),
+            (None, Kind::Temp) if f.name == "board_temp" => Slot::BoardTemp,
+            (None, Kind::Temp) => xyz.map_or(Slot::Zero, Slot::RateTemp),
+            (None, Kind::Velocity) => axis(["n", "e", "d"]).map_or(Slot::Zero, Slot::Vel),
+            (None, Kind::LatLon) => match f.name {
+                "longitude" => Slot::LonLat(0),
+                "latitude" => Slot::LonLat(1),
+                _ => Slot::Zero,
+            },
+            (None, Kind::Altitude) => Slot::Altitude,
+            (None, Kind::Counter) => Slot::Counter,
+            _ => Slot::Zero,
+        }
+    }
+}
+
+impl RawSample {
+    /// The wire value of `slot` (sign-extended; the encoder keeps the field's low bytes, so a
+    /// GPSITOW field gets the low 16 bits of [`Self::itow`]).
+    fn get(&self, slot: Slot, counter: u16) -> i64 {
+        match slot {
+            Slot::Angle(i) => self.angles[i].into(),
+            Slot::Rate(i) => self.rates[i].into(),
+            Slot::Accel(i) => self.accels[i].into(),
+            Slot::Mag(i) => self.mags[i].into(),
+            Slot::RateTemp(i) => self.temps[i].into(),
+            Slot::BoardTemp => self.board_temp.into(),
+            Slot::Vel(i) => self.vel[i].into(),
+            Slot::LonLat(i) => self.lon_lat[i].into(),
+            Slot::Altitude => self.altitude.into(),
+            Slot::Time => self.itow.into(),
+            Slot::Bit => self.bit.into(),
+            Slot::Counter => counter.into(),
+            Slot::Zero => 0,
+        }
+    }
+
+    /// Stores the wire bits `raw` of a field into `slot` (time and counter are not stored:
+    /// the time comes unwrapped from [`Packet::time`], the counter from the session).
+    fn set(&mut self, slot: Slot, raw: u64) {
+        match slot {
+            Slot::Angle(i) => self.angles[i] = raw as i16,
+            Slot::Rate(i) => self.rates[i] = raw as i16,
+            Slot::Accel(i) => self.accels[i] = raw as i16,
+            Slot::Mag(i) => self.mags[i] = raw as i16,
+            Slot::RateTemp(i) => self.temps[i] = raw as i16,
+            Slot::BoardTemp => self.board_temp = raw as i16,
+            Slot::Vel(i) => self.vel[i] = raw as i16,
+            Slot::LonLat(i) => self.lon_lat[i] = raw as i32,
+            Slot::Altitude => self.altitude = raw as i16,
+            Slot::Bit => self.bit = raw as u16,
+            Slot::Time | Slot::Counter | Slot::Zero => {}
+        }
+    }
+}
+
+/// The samples of every packet of `bytes` that carries yaw and a time stamp, in order, read
+/// through the packet table. A packet with the X rate-sensor temperature only (A0, A1, N1)
+/// gives it to all three sensors.
 pub fn capture_samples(bytes: &[u8]) -> Result<Vec<RawSample>> {
     let mut parser = Parser::new();
     let mut out = Vec::new();
     let mut gps: Option<(u16, u32)> = None;
     let mut frames = 0u64;
-    parser.feed(bytes, |f| {
+    parser.feed(bytes, |frame| {
         frames += 1;
-        let Ok(p) = Packet::decode(f) else { return };
+        let Ok(p) = Packet::decode(frame) else { return };
+        let Some(fields) = frame.packet_type.payload_fields() else {
+            return;
+        };
+        if !fields.iter().any(|f| f.role == Some(Role::Yaw)) {
+            return;
+        }
         let mut s = RawSample::default();
-        match p {
-            Packet::A0(v) => {
-                let f = A0Fields::from(v);
-                s.angles = [f.roll, f.pitch, f.yaw_mag];
-                s.rates = [f.rate_x, f.rate_y, f.rate_z];
-                s.accels = [f.accel_x, f.accel_y, f.accel_z];
-                s.mags = [f.mag_x, f.mag_y, f.mag_z];
-                s.temps = [f.x_rate_temp; 3];
-                s.bit = f.bit;
+        let mut temps = [false; 3];
+        for f in fields {
+            let Some(wire) = frame.payload.get(f.offset..f.offset + f.size) else {
+                return;
+            };
+            let slot = Slot::of(f);
+            if let Slot::RateTemp(i) = slot {
+                temps[i] = true;
             }
-            Packet::A1(v) => {
-                let f = A1Fields::from(v);
-                s.angles = [f.roll, f.pitch, f.yaw_mag];
-                s.rates = [f.rate_x, f.rate_y, f.rate_z];
-                s.accels = [f.accel_x, f.accel_y, f.accel_z];
-                s.mags = [f.mag_x, f.mag_y, f.mag_z];
-                s.temps = [f.x_rate_temp; 3];
-                s.bit = f.bit;
-            }
-            Packet::A2(v) => {
-                let f = A2Fields::from(v);
-                s.angles = [f.roll, f.pitch, f.yaw_true];
-                s.rates = [f.rate_x, f.rate_y, f.rate_z];
-                s.accels = [f.accel_x, f.accel_y, f.accel_z];
-                s.temps = [f.rate_temp_x, f.rate_temp_y, f.rate_temp_z];
-                s.bit = f.bit;
-            }
-            Packet::N0(v) => {
-                let f = N0Fields::from(v);
-                s.angles = [f.roll, f.pitch, f.yaw_true];
-                s.rates = [f.rate_x, f.rate_y, f.rate_z];
-                s.vel = [f.vel_n, f.vel_e, f.vel_d];
-                s.lon_lat = [f.longitude, f.latitude];
-                s.altitude = f.altitude;
-                s.bit = f.bit;
-            }
-            Packet::N1(v) => {
-                let f = N1Fields::from(v);
-                s.angles = [f.roll, f.pitch, f.yaw_true];
-                s.rates = [f.rate_x, f.rate_y, f.rate_z];
-                s.accels = [f.accel_x, f.accel_y, f.accel_z];
-                s.vel = [f.vel_n, f.vel_e, f.vel_d];
-                s.lon_lat = [f.longitude, f.latitude];
-                s.altitude = f.altitude;
-                s.temps = [f.x_rate_temp; 3];
-                s.bit = f.bit;
-            }
-            Packet::B1(v) => {
-                let f = B1Fields::from(v);
-                s.angles = [f.roll, f.pitch, f.yaw];
-                s.rates = [0, 0, f.rate_z];
-                s.accels = [f.accel_x, f.accel_y, 0];
-                s.bit = f.bit;
-            }
-            _ => return,
+            s.set(slot, wire.iter().fold(0, |v, &b| v << 8 | u64::from(b)));
+        }
+        if temps == [true, false, false] {
+            s.temps = [s.temps[0]; 3];
         }
         s.itow = match p.time() {
             TimeStamp::Itow(t) => t,
@@ -166,167 +227,18 @@ pub fn capture_samples(bytes: &[u8]) -> Result<Vec<RawSample>> {
     Ok(out)
 }
 
-/// Encodes `s` as one frame of the continuous output type `t` (`counter` for S1/S2).
+/// Encodes `s` as one frame of the continuous output type `t` (`counter` for S1/S2), field by
+/// field from the packet table; `None` for a type the unit does not stream.
 pub fn encode_sample(t: PacketType, s: &RawSample, counter: u16) -> Option<Vec<u8>> {
-    let [roll, pitch, yaw] = s.angles;
-    let [rx, ry, rz] = s.rates;
-    let [ax, ay, az] = s.accels;
-    let [mx, my, mz] = s.mags;
-    let [tx, ty, tz] = s.temps;
-    let [vn, ve, vd] = s.vel;
-    let [lon, lat] = s.lon_lat;
-    let gps = s.itow as u16;
-    let mut buf = [0u8; MAX_FRAME];
-    let n = match t {
-        PacketType::S0 => S0Fields {
-            accel_x: ax,
-            accel_y: ay,
-            accel_z: az,
-            rate_x: rx,
-            rate_y: ry,
-            rate_z: rz,
-            mag_x: mx,
-            mag_y: my,
-            mag_z: mz,
-            rate_temp_x: tx,
-            rate_temp_y: ty,
-            rate_temp_z: tz,
-            board_temp: s.board_temp,
-            gps_itow: gps,
-            bit: s.bit,
-        }
-        .encode(&mut buf),
-        PacketType::S1 => S1Fields {
-            accel_x: ax,
-            accel_y: ay,
-            accel_z: az,
-            rate_x: rx,
-            rate_y: ry,
-            rate_z: rz,
-            rate_temp_x: tx,
-            rate_temp_y: ty,
-            rate_temp_z: tz,
-            board_temp: s.board_temp,
-            counter,
-            bit: s.bit,
-        }
-        .encode(&mut buf),
-        PacketType::S2 => S2Fields {
-            counter,
-            bit: s.bit,
-            ..Default::default()
-        }
-        .encode(&mut buf),
-        PacketType::A0 => A0Fields {
-            roll,
-            pitch,
-            yaw_mag: yaw,
-            rate_x: rx,
-            rate_y: ry,
-            rate_z: rz,
-            accel_x: ax,
-            accel_y: ay,
-            accel_z: az,
-            mag_x: mx,
-            mag_y: my,
-            mag_z: mz,
-            x_rate_temp: tx,
-            gps_itow: gps,
-            bit: s.bit,
-        }
-        .encode(&mut buf),
-        PacketType::A1 => A1Fields {
-            roll,
-            pitch,
-            yaw_mag: yaw,
-            rate_x: rx,
-            rate_y: ry,
-            rate_z: rz,
-            accel_x: ax,
-            accel_y: ay,
-            accel_z: az,
-            mag_x: mx,
-            mag_y: my,
-            mag_z: mz,
-            x_rate_temp: tx,
-            time_itow: s.itow,
-            bit: s.bit,
-        }
-        .encode(&mut buf),
-        PacketType::A2 => A2Fields {
-            roll,
-            pitch,
-            yaw_true: yaw,
-            rate_x: rx,
-            rate_y: ry,
-            rate_z: rz,
-            accel_x: ax,
-            accel_y: ay,
-            accel_z: az,
-            rate_temp_x: tx,
-            rate_temp_y: ty,
-            rate_temp_z: tz,
-            time_itow: s.itow,
-            bit: s.bit,
-        }
-        .encode(&mut buf),
-        PacketType::N0 => N0Fields {
-            roll,
-            pitch,
-            yaw_true: yaw,
-            rate_x: rx,
-            rate_y: ry,
-            rate_z: rz,
-            vel_n: vn,
-            vel_e: ve,
-            vel_d: vd,
-            longitude: lon,
-            latitude: lat,
-            altitude: s.altitude,
-            gps_itow: gps,
-            bit: s.bit,
-        }
-        .encode(&mut buf),
-        PacketType::N1 => N1Fields {
-            roll,
-            pitch,
-            yaw_true: yaw,
-            rate_x: rx,
-            rate_y: ry,
-            rate_z: rz,
-            accel_x: ax,
-            accel_y: ay,
-            accel_z: az,
-            vel_n: vn,
-            vel_e: ve,
-            vel_d: vd,
-            longitude: lon,
-            latitude: lat,
-            altitude: s.altitude,
-            x_rate_temp: tx,
-            time_itow: s.itow,
-            bit: s.bit,
-        }
-        .encode(&mut buf),
-        PacketType::B1 => B1Fields {
-            roll,
-            pitch,
-            yaw,
-            rate_z: rz,
-            accel_x: ax,
-            accel_y: ay,
-            time_itow: s.itow,
-            bit: s.bit,
-        }
-        .encode(&mut buf),
-        PacketType::T0 => T0Fields {
-            bit: s.bit,
-            ..Default::default()
-        }
-        .encode(&mut buf),
-        _ => return None,
+    let mut payload = vec![0u8; t.output_payload_len()?];
+    for f in t.payload_fields()? {
+        let wire = s.get(Slot::of(f), counter).to_be_bytes();
+        payload
+            .get_mut(f.offset..f.offset + f.size)?
+            .copy_from_slice(wire.get(wire.len().checked_sub(f.size)?..)?);
     }
-    .ok()?;
+    let mut buf = [0u8; MAX_FRAME];
+    let n = encode_frame(t, &payload, &mut buf).ok()?;
     buf.get(..n).map(<[u8]>::to_vec)
 }
 

@@ -132,6 +132,8 @@ fn table_layouts_tile_the_documented_lengths() {
         // Streamable output types are exactly S0..T0, with their lengths.
         let stream = !matches!(t, PacketType::VR | PacketType::NAK);
         assert_eq!(t.output_payload_len(), stream.then_some(len), "{t}");
+        // The table's line, by type.
+        assert_eq!(t.payload_fields(), Some(fields), "{t}");
         // At most one field per role; roles only on fields of the matching kind.
         for f in fields {
             if let Some(r) = f.role {
@@ -148,6 +150,14 @@ fn table_layouts_tile_the_documented_lengths() {
     }
     assert_eq!(PacketType::ID.output_payload_len(), None);
     assert_eq!(PacketType::PK.output_payload_len(), None);
+    for t in [
+        PacketType::ID,
+        PacketType::PK,
+        PacketType::GF,
+        PacketType(*b"zz"),
+    ] {
+        assert_eq!(t.payload_fields(), None, "{t}");
+    }
 }
 
 #[test]

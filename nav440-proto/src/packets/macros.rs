@@ -216,6 +216,23 @@ macro_rules! packet_table {
             $( (PacketType::$ptype, $len, stream_flag!($stream)), )*
         ];
 
+        impl PacketType {
+            /// The packet table's line of a fixed-layout type: every field of its payload in
+            /// order, as the view's `FIELDS` ([`A2::FIELDS`](crate::A2::FIELDS), ...); `None`
+            /// for the other types (commands, ID, unknown). With
+            /// [`encode_frame`](crate::encode_frame) this writes any packet of the table from
+            /// its field values, with no code per type.
+            pub const fn payload_fields(self) -> Option<&'static [FieldInfo]> {
+                let c = self.code();
+                $(
+                    if c == PacketType::$ptype.code() {
+                        return Some($view::FIELDS);
+                    }
+                )*
+                None
+            }
+        }
+
         impl<'a> Packet<'a> {
             /// Decodes a CRC-checked frame (unit -> host direction: SF/WF/GF/RF are replies).
             /// A known type with the wrong payload length is a [`DecodeError`].
