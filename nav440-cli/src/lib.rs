@@ -13,6 +13,7 @@ pub mod optim;
 pub mod paper;
 pub mod plot;
 pub mod plots;
+pub mod progress;
 pub mod replay;
 pub mod serial;
 pub mod sim;

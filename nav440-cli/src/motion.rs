@@ -11,6 +11,8 @@ use std::f64::consts::PI;
 use std::fmt;
 use std::str::FromStr;
 
+use crate::progress::Progress;
+
 /// One point of a motion: unwrapped yaw (deg), yaw rate (deg/s), yaw acceleration (deg/s^2).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MotionPoint {
@@ -85,6 +87,12 @@ pub const SPIN_MOD_DEG_S: f64 = 100.0;
 /// Spin rate modulation frequency, Hz.
 pub const SPIN_MOD_HZ: f64 = 0.2;
 
+/// Motion samples of a sweep every `dt` s over `duration_s` s, both ends included (what
+/// [`Profile::peaks`] and [`Profile::rms_acc`] evaluate).
+pub fn sample_count(duration_s: f64, dt: f64) -> u64 {
+    (duration_s / dt).ceil() as u64 + 1
+}
+
 /// A motion profile, ready to evaluate at any time.
 #[derive(Clone, Debug)]
 pub struct Profile {
@@ -92,15 +100,29 @@ pub struct Profile {
     /// Fig5 only: (amplitude deg, angular frequency rad/s, phase rad) per component.
     components: Vec<(f64, f64, f64)>,
     duration_s: f64,
+    /// Advanced by every motion sample of the set-up, [`Self::peaks`] and [`Self::rms_acc`].
+    progress: Progress,
 }
 
 impl Profile {
     /// Builds a profile of `duration_s` seconds. `seed` only matters for `Fig5` (its shape).
     pub fn new(kind: ProfileKind, duration_s: f64, seed: u64) -> Self {
+        Self::with_progress(kind, duration_s, seed, &Progress::hidden())
+    }
+
+    /// [`Self::new`], advancing `progress` by every motion sample it evaluates, here (see
+    /// [`Self::setup_samples`]) and in [`Self::peaks`] and [`Self::rms_acc`].
+    pub fn with_progress(
+        kind: ProfileKind,
+        duration_s: f64,
+        seed: u64,
+        progress: &Progress,
+    ) -> Self {
         let mut p = Profile {
             kind,
             components: Vec::new(),
             duration_s,
+            progress: progress.clone(),
         };
         if kind == ProfileKind::Fig5 {
             let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
@@ -123,6 +145,15 @@ impl Profile {
         p
     }
 
+    /// Motion samples [`Self::new`] evaluates for a profile of `kind` (fig5 scales itself to
+    /// its peaks every 1 ms; the others evaluate none).
+    pub fn setup_samples(kind: ProfileKind, duration_s: f64) -> u64 {
+        match kind {
+            ProfileKind::Fig5 => sample_count(duration_s, 0.001),
+            _ => 0,
+        }
+    }
+
     /// The profile kind.
     pub fn kind(&self) -> ProfileKind {
         self.kind
@@ -138,6 +169,7 @@ impl Profile {
         let n = (self.duration_s / dt).ceil() as usize;
         let mut m = (0.0f64, 0.0f64, 0.0f64);
         for i in 0..=n {
+            self.tick(i, n);
             let q = self.at(i as f64 * dt);
             m.0 = m.0.max(q.yaw_deg.abs());
             m.1 = m.1.max(q.rate_deg_s.abs());
@@ -150,9 +182,20 @@ impl Profile {
     pub fn rms_acc(&self, dt: f64) -> f64 {
         let n = (self.duration_s / dt).ceil() as usize;
         let sum: f64 = (0..=n)
-            .map(|i| self.at(i as f64 * dt).acc_deg_s2.powi(2))
+            .map(|i| {
+                self.tick(i, n);
+                self.at(i as f64 * dt).acc_deg_s2.powi(2)
+            })
             .sum();
         (sum / (n + 1) as f64).sqrt()
+    }
+
+    /// Advances the progress by the samples `i..=n` of a sweep, 4096 at a time.
+    fn tick(&self, i: usize, n: usize) {
+        const CHUNK: usize = 4096;
+        if i.is_multiple_of(CHUNK) {
+            self.progress.inc(CHUNK.min(n + 1 - i) as u64);
+        }
     }
 
     /// Evaluates the motion at time `t` (s since the start).

@@ -10,6 +10,7 @@
 use crate::corrupt::{self, Corruption, CorruptionReport};
 use crate::error::{Error, Result};
 use crate::motion::{Profile, ProfileKind};
+use crate::progress::Progress;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
@@ -225,6 +226,11 @@ pub fn sat_i16(value: f64, lsb: f64) -> i16 {
 
 /// Generates the frames (uncorrupted) of `cfg`, one `Vec<u8>` per frame.
 pub fn frames(cfg: &SynthConfig) -> Result<Vec<Vec<u8>>> {
+    frames_with(cfg, &Progress::hidden())
+}
+
+/// [`frames`], advancing `progress` by every packet and motion sample.
+fn frames_with(cfg: &SynthConfig, progress: &Progress) -> Result<Vec<Vec<u8>>> {
     if cfg.start_itow_ms >= MS_PER_WEEK {
         return Err(Error::Usage(format!(
             "--start-itow must be a time of week in ms, below {MS_PER_WEEK}, got {}",
@@ -233,7 +239,7 @@ pub fn frames(cfg: &SynthConfig) -> Result<Vec<Vec<u8>>> {
     }
     let period = period_ms(cfg.rate_hz)?;
     let n = packet_count(cfg.duration_s, cfg.rate_hz)?;
-    let profile = Profile::new(cfg.profile, cfg.duration_s, cfg.seed);
+    let profile = Profile::with_progress(cfg.profile, cfg.duration_s, cfg.seed, progress);
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(cfg.noise_seed);
     let mut out = Vec::with_capacity(n);
     for k in 0..n {
@@ -256,13 +262,20 @@ pub fn frames(cfg: &SynthConfig) -> Result<Vec<Vec<u8>>> {
             itow,
             cfg.bit,
         )?);
+        progress.inc(1);
     }
     Ok(out)
 }
 
 /// Generates the capture of `cfg` (frames, then corruption).
 pub fn generate(cfg: &SynthConfig) -> Result<Capture> {
-    let f = frames(cfg)?;
+    generate_with(cfg, &Progress::hidden())
+}
+
+/// [`generate`], advancing `progress` by every packet and motion sample (the profile's
+/// set-up, [`Profile::setup_samples`], then one per packet).
+pub fn generate_with(cfg: &SynthConfig, progress: &Progress) -> Result<Capture> {
+    let f = frames_with(cfg, progress)?;
     let (bytes, report) = corrupt::apply(&f, &cfg.corruption);
     Ok(Capture {
         bytes,

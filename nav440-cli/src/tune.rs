@@ -19,6 +19,7 @@ use crate::error::{Error, Result};
 use crate::gains::{FamilyGains, GainsFile};
 use crate::optim::{self, Method};
 use crate::paper::{ave_on_rate, row_mse, steps_between, REFERENCE_AVE};
+use crate::progress::Progress;
 use crate::replay::{self, EstimateOptions, Noise, Sample};
 use estimators::{
     Ad, Ave, AveConfig, BankConfig, DeltaMode, Ed, EdConfig, Estimator, Hold, Ilo, IloConfig,
@@ -111,6 +112,8 @@ struct Problem<'a> {
     sample_period_s: f32,
     /// MSE range, s.
     range: (f64, f64),
+    /// Told of every evaluation and family fit (`nav440 tune`'s progress bar).
+    progress: Option<&'a Progress>,
 }
 
 /// MSE of `est` against `reference` over the samples with `from <= t <= to` (s); NaN if none.
@@ -147,6 +150,8 @@ trait Eval: Sync {
     /// The objective of a Kalman tracker with noise `q`, `r` (its `dt`: each problem's
     /// nominal sample period); column 6.
     fn kf(&self, q: f32, r: f32, acc: bool) -> f64;
+    /// A family's fit is done.
+    fn fitted(&self) {}
 }
 
 impl Eval for Problem<'_> {
@@ -159,11 +164,22 @@ impl Eval for Problem<'_> {
         make: impl Fn() -> Option<Stateful<L>>,
         acc: bool,
     ) -> f64 {
+        if let Some(p) = self.progress {
+            p.evaluation();
+        }
         self.eval_family(make, acc)
     }
     fn kf(&self, q: f32, r: f32, acc: bool) -> f64 {
+        if let Some(p) = self.progress {
+            p.evaluation();
+        }
         let dt = self.sample_period_s;
         self.eval_kf(&KalmanConfig { dt, q, r }, acc)
+    }
+    fn fitted(&self) {
+        if let Some(p) = self.progress {
+            p.fitted();
+        }
     }
 }
 
@@ -385,7 +401,10 @@ fn tune_family(
     let hs = f64::from(h);
     let mut out = *start;
     let mut stats = [(f64::INFINITY, 0, 0.0); 7];
-    let mut note = |i: usize, r: &Fit| stats[i] = (r.cost, r.evals, r.secs);
+    let mut note = |i: usize, r: &Fit| {
+        stats[i] = (r.cost, r.evals, r.secs);
+        p.fitted();
+    };
     if let Some(a) = start.ave {
         let f = |g: &[f64]| p.family(0, || Ave::<f32>::new(&ave(g, a.delta), h).ok(), acc);
         let r = fit(method, 0, hs, &[f64::from(a.k), f64::from(a.gamma1)], &f);
@@ -481,6 +500,16 @@ pub fn tune_with(
     opts: &EstimateOptions,
     spec: &TuneSpec,
 ) -> Result<TuneResult> {
+    tune_with_progress(samples, opts, spec, &Progress::hidden())
+}
+
+/// [`tune_with`], telling `progress` of every objective evaluation and family fit.
+pub fn tune_with_progress(
+    samples: &[Sample],
+    opts: &EstimateOptions,
+    spec: &TuneSpec,
+    progress: &Progress,
+) -> Result<TuneResult> {
     let started = Instant::now();
     check_range("--train", spec.train)?;
     let test = spec.test.unwrap_or(spec.train);
@@ -523,6 +552,7 @@ pub fn tune_with(
             max_gap_s: base.max_gap_s(),
             sample_period_s: base.sample_period_s,
             range: spec.train,
+            progress: Some(progress),
         };
         let (velocity, acceleration) = std::thread::scope(|s| {
             let v = s.spawn(|| tune_family(&problem, &paper.velocity, false, spec.method));
@@ -788,6 +818,7 @@ pub fn tune_preset(
             max_gap_s: cfg.max_gap_s(),
             sample_period_s: cfg.sample_period_s,
             range: c.range,
+            progress: None,
         });
     }
     let start = GainsFile::from_bank(base);
@@ -919,12 +950,14 @@ fn tune_both(
 /// ([`tuned_ave_deltahat`]) and where each observer family moves on to the next level
 /// ([`crossover`] of the MSEs already scored). Returns the schedule file (with the nominal
 /// sample period the bank ran at, [`EstimateOptions::bank_period_s`]) and the printed report
-/// (each level's report, the gains taken from another level, the switch points).
+/// (each level's report, the gains taken from another level, the switch points). `progress`
+/// is told of every objective evaluation and family fit.
 pub fn tune_schedule(
     samples: &[Sample],
     opts: &EstimateOptions,
     spec: &TuneSpec,
     levels: &[f64],
+    progress: &Progress,
 ) -> Result<(crate::gains::ScheduleFile, String)> {
     if levels.is_empty()
         || levels.len() > estimators::adaptive::MAX_LEVELS
@@ -953,7 +986,7 @@ pub fn tune_schedule(
     let mut text = String::new();
     let mut tuned: Vec<GainsFile> = Vec::new();
     for &v in levels {
-        let res = tune_with(
+        let res = tune_with_progress(
             samples,
             opts,
             &TuneSpec {
@@ -961,6 +994,7 @@ pub fn tune_schedule(
                 holds: vec![hold],
                 ..spec.clone()
             },
+            progress,
         )?;
         text.push_str(&format!("== schedule level {v} deg^2 ==\n"));
         text.push_str(&res.to_text());

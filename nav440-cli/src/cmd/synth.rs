@@ -4,7 +4,8 @@ use std::path::PathBuf;
 
 use crate::corrupt::Corruption;
 use crate::error::{Error, Result};
-use crate::motion::{Profile, ProfileKind};
+use crate::motion::{self, Profile, ProfileKind};
+use crate::progress::Progress;
 use crate::synth;
 
 /// Arguments of `nav440 synth`.
@@ -91,10 +92,22 @@ pub fn run(a: Args) -> Result<()> {
         yaw_noise: a.yaw_noise,
         noise_seed: a.noise_seed,
     };
-    let cap = synth::generate(&cfg)?;
-    let motion = Profile::new(a.profile, a.duration, a.seed);
-    let peaks = motion.peaks(1e-3);
-    let rms_acc = motion.rms_acc(1e-3);
+    // On a terminal: every motion sample and packet, of the capture then of the summary
+    // (the profile's set-up again, peaks and RMS acceleration every 1 ms).
+    let progress = match synth::packet_count(a.duration, a.rate) {
+        Ok(packets) => {
+            let setup = Profile::setup_samples(a.profile, a.duration);
+            let sweep = motion::sample_count(a.duration, 1e-3);
+            Progress::items("synth", packets as u64 + 2 * (setup + sweep), "samples")
+        }
+        Err(_) => Progress::hidden(),
+    };
+    let made = synth::generate_with(&cfg, &progress).map(|cap| {
+        let motion = Profile::with_progress(a.profile, a.duration, a.seed, &progress);
+        (cap, motion.peaks(1e-3), motion.rms_acc(1e-3))
+    });
+    progress.finish();
+    let (cap, peaks, rms_acc) = made?;
     let output = a.output;
     std::fs::write(&output, &cap.bytes)
         .map_err(|e| Error::Output(format!("cannot write {}: {e}", output.display())))?;

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use super::{noise, one_axis, parse_range, write_file, AxisArg, HoldArg};
 use crate::error::{Error, Result};
+use crate::progress::Progress;
 use crate::{optim, paper, replay, tune};
 
 /// Arguments of `nav440 tune`.
@@ -102,7 +103,10 @@ pub fn run(a: Args) -> Result<()> {
             holds: vec![a.hold.map_or(estimators::Hold::Linear, Into::into)],
             ..spec
         };
-        let (file, text) = tune::tune_schedule(&samples, &opts, &spec, &levels)?;
+        let progress = progress(&spec, levels.len() as u64);
+        let tuned = tune::tune_schedule(&samples, &opts, &spec, &levels, &progress);
+        progress.finish();
+        let (file, text) = tuned?;
         super::stdout_or_file(None, |w| w.write_all(text.as_bytes()))?;
         if let Some(p) = a.output {
             write_file(&p, &file.to_toml())?;
@@ -120,7 +124,10 @@ pub fn run(a: Args) -> Result<()> {
         }
         return Ok(());
     }
-    let res = tune::tune_with(&samples, &opts, &spec)?;
+    let progress = progress(&spec, 1);
+    let res = tune::tune_with_progress(&samples, &opts, &spec, &progress);
+    progress.finish();
+    let res = res?;
     super::stdout_or_file(None, |w| w.write_all(res.to_text().as_bytes()))?;
     if let Some(p) = a.output {
         write_file(&p, &res.to_toml())?;
@@ -129,4 +136,21 @@ pub fn run(a: Args) -> Result<()> {
         write_file(&p, &res.to_rust())?;
     }
     Ok(())
+}
+
+/// The progress bar of `runs` tuner runs of `spec` (on stderr when it is a terminal): each
+/// run fits every family of both halves for each hold; an exhaustive grid evaluates
+/// `points^gains` times per family, a search an unknown number of times (the bar then counts
+/// the fits).
+fn progress(spec: &tune::TuneSpec, runs: u64) -> Progress {
+    let halves = runs * 2 * spec.holds.len().max(1) as u64;
+    let families = 0..paper::COLUMNS.len();
+    match spec.method {
+        optim::Method::Exhaustive { points } => {
+            let grid = |i| (points.max(2) as u64).pow(tune::ranges(i, 1.0).0.len() as u32);
+            let per_half: u64 = families.map(grid).sum();
+            Progress::items("tune", halves * per_half, "evaluations")
+        }
+        optim::Method::Search => Progress::fits("tune", halves * families.len() as u64),
+    }
 }
