@@ -1,6 +1,9 @@
 //! Adaptive velocity estimator, AVE (paper eq. 4).
 
+use crate::adaptive::ObserverSwitch;
+use crate::bank::{BankGains, Channel};
 use crate::error::{non_negative, positive};
+use crate::family::{coordinate, geometric, Family, Gains, Scheduling, Scorer, SearchPoint};
 use crate::fxk::{
     advance_one, advance_two, frac, mag, mulf, mulf32, run, smul, Coef, Kernel, Stage,
 };
@@ -607,5 +610,73 @@ impl<const D: u8> Stage for AveStage<D> {
     #[inline(always)]
     fn mag(s: &AveFxState) -> u32 {
         mag(s.x) | mag(s.th) | mag(s.d)
+    }
+}
+
+/// The AVE family of the paper bank: AVE velocity, AVE-AVE acceleration (one
+/// [`crate::VelAcc`] row, sharing its first stage when both halves have the same gains);
+/// gains [`BankGains::ave`].
+#[derive(Clone, Copy, Debug)]
+pub struct AveFamily;
+
+impl Family for AveFamily {
+    type Gains = AveConfig;
+    const NAME: &'static str = "ave";
+    const LABEL: &'static str = "AVE";
+    const VELOCITY: Channel = Channel::AveV;
+    const ACCELERATION: Channel = Channel::AveA;
+    const SCHEDULING: Scheduling = Scheduling::Observer;
+
+    fn get(half: &BankGains) -> AveConfig {
+        half.ave
+    }
+
+    fn set(half: &mut BankGains, gains: AveConfig) {
+        half.ave = gains;
+    }
+
+    fn switch_up_mut(switch: &mut ObserverSwitch) -> Option<&mut f32> {
+        Some(&mut switch.ave)
+    }
+}
+
+impl Gains for AveConfig {
+    /// `k` and `gamma1` geometrically; the `deltahat` law of the nearer one.
+    fn interpolate(&self, other: &Self, w: f32) -> Self {
+        AveConfig {
+            k: geometric(self.k, other.k, w),
+            gamma1: geometric(self.gamma1, other.gamma1, w),
+            delta: if w < 0.5 { self.delta } else { other.delta },
+        }
+    }
+
+    /// `(k, gamma1)`; the `deltahat` law is not searched.
+    fn search_point(&self) -> SearchPoint {
+        SearchPoint::from_array([f64::from(self.k), f64::from(self.gamma1)])
+    }
+
+    fn with_search_point(&self, x: &[f64]) -> Self {
+        AveConfig {
+            k: coordinate(x, 0, self.k),
+            gamma1: coordinate(x, 1, self.gamma1),
+            delta: self.delta,
+        }
+    }
+
+    /// `k` in `[0.1, 1e5]` 1/s (tuned at low noise it reaches 10), `gamma1` in `[10, 1e8]`
+    /// 1/s^2; [`AveParams::new`] refuses what the step does not resolve.
+    fn search_box(_h_s: f64) -> (SearchPoint, SearchPoint) {
+        (
+            SearchPoint::from_array([0.1, 10.0]),
+            SearchPoint::from_array([1e5, 1e8]),
+        )
+    }
+
+    fn score<S: Scorer>(&self, h: f32, scorer: &S) -> Result<S::Score, ConfigError> {
+        Ok(scorer.law(AveParams::<f32>::new(self, h)?))
+    }
+
+    fn describe(&self, w: &mut dyn core::fmt::Write) -> core::fmt::Result {
+        write!(w, "k={} gamma1={}", self.k, self.gamma1)
     }
 }

@@ -1,6 +1,9 @@
 //! Levant's robust exact differentiator, ED (paper eqs. 5-7; Levant 1998).
 
+use crate::adaptive::ObserverSwitch;
+use crate::bank::{BankGains, Channel};
 use crate::error::positive;
+use crate::family::{coordinate, geometric, Family, Gains, Scheduling, Scorer, SearchPoint};
 use crate::fxk::{advance_one, advance_two, frac, mag, mulf, run, sqrt_fast, Coef, Kernel, Stage};
 use crate::law::{step_n, Law, Stateful};
 use crate::{ConfigError, ExactSqrt, Hold, Real, SqrtFn};
@@ -436,5 +439,70 @@ impl Stage for EdFx {
     #[inline(always)]
     fn mag(s: &EdFxState) -> u32 {
         mag(s.z) | mag(s.u1) | mag(s.u)
+    }
+}
+
+/// The ED family of the paper bank: Levant ED velocity, ED-ED acceleration (one
+/// [`crate::VelAcc`] row); gains [`BankGains::ed`].
+#[derive(Clone, Copy, Debug)]
+pub struct EdFamily;
+
+impl Family for EdFamily {
+    type Gains = EdConfig;
+    const NAME: &'static str = "ed";
+    const LABEL: &'static str = "ED";
+    const VELOCITY: Channel = Channel::EdV;
+    const ACCELERATION: Channel = Channel::EdA;
+    const SCHEDULING: Scheduling = Scheduling::Observer;
+
+    fn get(half: &BankGains) -> EdConfig {
+        half.ed
+    }
+
+    fn set(half: &mut BankGains, gains: EdConfig) {
+        half.ed = gains;
+    }
+
+    fn switch_up_mut(switch: &mut ObserverSwitch) -> Option<&mut f32> {
+        Some(&mut switch.ed)
+    }
+}
+
+impl Gains for EdConfig {
+    /// `lambda` and `alpha` geometrically.
+    fn interpolate(&self, other: &Self, w: f32) -> Self {
+        EdConfig {
+            lambda: geometric(self.lambda, other.lambda, w),
+            alpha: geometric(self.alpha, other.alpha, w),
+        }
+    }
+
+    /// `(lambda, alpha)`.
+    fn search_point(&self) -> SearchPoint {
+        SearchPoint::from_array([f64::from(self.lambda), f64::from(self.alpha)])
+    }
+
+    fn with_search_point(&self, x: &[f64]) -> Self {
+        EdConfig {
+            lambda: coordinate(x, 0, self.lambda),
+            alpha: coordinate(x, 1, self.alpha),
+        }
+    }
+
+    /// `lambda` in `[0.1, 1e5]` (tuned at low noise it reaches 10), `alpha` in `[10, 1e6]`.
+    fn search_box(_h_s: f64) -> (SearchPoint, SearchPoint) {
+        (
+            SearchPoint::from_array([0.1, 10.0]),
+            SearchPoint::from_array([1e5, 1e6]),
+        )
+    }
+
+    /// The ED with the paper's explicit Euler scheme.
+    fn score<Sc: Scorer>(&self, h: f32, scorer: &Sc) -> Result<Sc::Score, ConfigError> {
+        Ok(scorer.law(EdParams::<f32>::new(self, h, EdScheme::Euler)?))
+    }
+
+    fn describe(&self, w: &mut dyn core::fmt::Write) -> core::fmt::Result {
+        write!(w, "lambda={} alpha={}", self.lambda, self.alpha)
     }
 }

@@ -1,7 +1,9 @@
 //! Steady-state constant-acceleration Kalman tracker (alpha-beta-gamma filter): the reference
 //! an engineer would otherwise use. Not from the paper.
 
+use crate::bank::{BankGains, Channel};
 use crate::error::positive;
+use crate::family::{coordinate, geometric, Family, Gains, Scheduling, Scorer, SearchPoint};
 use crate::law::Law;
 use crate::{ConfigError, Hold, Real};
 
@@ -309,4 +311,80 @@ pub fn steady_state_gain(dt: f64, q: f64, r: f64) -> [f64; 3] {
         }
     }
     k
+}
+
+/// Noise model of the Kalman tracker in a bank half ([`BankGains::kf`]): with the nominal
+/// sample period as `dt` it is the [`KalmanConfig`] of the half's tracker.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
+pub struct KalmanNoise {
+    /// White-jerk power spectral density `q`, deg^2/s^5 (see [`KalmanConfig::q`]).
+    pub q: f32,
+    /// Angle measurement variance `r`, deg^2.
+    pub r: f32,
+}
+
+/// The Kalman tracker family of the paper bank: a tracker with the velocity half's noise
+/// reports the velocity, one with the acceleration half's noise the acceleration (not a
+/// series); gains [`BankGains::kf`].
+#[derive(Clone, Copy, Debug)]
+pub struct KfFamily;
+
+impl Family for KfFamily {
+    type Gains = KalmanNoise;
+    const NAME: &'static str = "kf";
+    const LABEL: &'static str = "KF";
+    const VELOCITY: Channel = Channel::KfV;
+    const ACCELERATION: Channel = Channel::KfA;
+    const SCHEDULING: Scheduling = Scheduling::Smooth;
+
+    fn get(half: &BankGains) -> KalmanNoise {
+        half.kf
+    }
+
+    fn set(half: &mut BankGains, gains: KalmanNoise) {
+        half.kf = gains;
+    }
+}
+
+impl Gains for KalmanNoise {
+    /// `q` and `r` geometrically.
+    fn interpolate(&self, other: &Self, w: f32) -> Self {
+        KalmanNoise {
+            q: geometric(self.q, other.q, w),
+            r: geometric(self.r, other.r, w),
+        }
+    }
+
+    /// `(q)`: only `q / r` matters for the steady-state gain, so `r` is kept.
+    fn search_point(&self) -> SearchPoint {
+        SearchPoint::from_array([f64::from(self.q)])
+    }
+
+    fn with_search_point(&self, x: &[f64]) -> Self {
+        KalmanNoise {
+            q: coordinate(x, 0, self.q),
+            r: self.r,
+        }
+    }
+
+    /// `q` in `[1, 1e12]` deg^2/s^5.
+    fn search_box(_h_s: f64) -> (SearchPoint, SearchPoint) {
+        (
+            SearchPoint::from_array([1.0]),
+            SearchPoint::from_array([1e12]),
+        )
+    }
+
+    /// The tracker (it needs the nominal sample period, which the scorer knows: it checks
+    /// the noise when it builds the tracker).
+    fn score<S: Scorer>(&self, _h: f32, scorer: &S) -> Result<S::Score, ConfigError> {
+        Ok(scorer.tracker(*self))
+    }
+
+    fn describe(&self, w: &mut dyn core::fmt::Write) -> core::fmt::Result {
+        write!(w, "q={} r={}", self.q, self.r)
+    }
 }

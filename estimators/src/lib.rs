@@ -76,6 +76,7 @@ mod bank;
 mod ed;
 mod error;
 mod estimator;
+pub mod family;
 mod fxk;
 pub mod gilo;
 mod ilo;
@@ -91,24 +92,31 @@ mod series;
 mod traits;
 mod unwrap;
 
-pub use ad::{Ad, AdConfig, AdParams, AdState};
+pub use ad::{Ad, AdConfig, AdFamily, AdParams, AdState};
 pub use adapter::{SampleAdapter, SampleClock, Tick};
 pub use adaptive::{
     AdaptiveBank, AdaptiveConfig, AveDeltahat, Blend, GainSchedule, NoiseEstimator, ObserverSwitch,
     ScheduleLevel,
 };
-pub use ave::{Ave, AveConfig, AveParams, AveState, DeltaLaw, DeltaMode, COARSE_STABILITY_MARGIN};
-pub use bank::{
-    Accepted, AdAdMap, BankConfig, BankGains, BankInput, BankOutput, Channel, Fed, Feed,
-    KalmanNoise, PaperBank, PaperOutput, PaperParams, PaperState, ProductBank, ProductChannel,
-    ProductOutput, ProductParams, ProductState, Wrap, YawBank, GAP_PERIODS, KF_DEFAULT,
-    VELOCITY_NAMES,
+pub use ave::{
+    Ave, AveConfig, AveFamily, AveParams, AveState, DeltaLaw, DeltaMode, COARSE_STABILITY_MARGIN,
 };
-pub use ed::{Ed, EdConfig, EdParams, EdScheme, EdState};
+pub use bank::{
+    Accepted, AdAdMap, BankConfig, BankGains, BankInput, BankOutput, Channel, Fed, Feed, PaperBank,
+    PaperOutput, PaperParams, PaperState, ProductBank, ProductChannel, ProductOutput,
+    ProductParams, ProductState, Wrap, YawBank, GAP_PERIODS, KF_DEFAULT, VELOCITY_NAMES,
+};
+pub use ed::{Ed, EdConfig, EdFamily, EdParams, EdScheme, EdState};
 pub use error::{ConfigError, SampleError};
 pub use estimator::{advance_by_steps, Estimator, Hold};
-pub use ilo::{Ilo, IloConfig, IloParams, IloState};
-pub use kalman::{Kalman, KalmanConfig, KalmanOutput, KalmanParams, KalmanState};
+pub use family::{
+    for_each_family, Family, FamilyInfo, FamilyVisitor, Gains, Scheduling, Scorer, SearchPoint,
+    FAMILIES, FAMILY_COUNT,
+};
+pub use ilo::{Ilo, IloConfig, IloFamily, IloParams, IloState};
+pub use kalman::{
+    Kalman, KalmanConfig, KalmanNoise, KalmanOutput, KalmanParams, KalmanState, KfFamily,
+};
 pub use law::{Law, Stateful};
 pub use linear::{ClosedForm, LinearLaw};
 pub use pair::{VelAcc, VelAccState};

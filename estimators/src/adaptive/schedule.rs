@@ -1,7 +1,9 @@
 //! [`GainSchedule`]: noise level -> gains.
 
-use crate::bank::{BankConfig, BankGains, KalmanNoise};
-use crate::{AveConfig, ConfigError, EdConfig, IloConfig};
+use crate::bank::{BankConfig, BankGains};
+use crate::family::{for_each_family, geometric, Family, FamilyVisitor, Gains, Scheduling};
+use crate::FAMILY_COUNT;
+use crate::{AveFamily, ConfigError};
 
 /// Most levels a [`GainSchedule`] holds.
 pub const MAX_LEVELS: usize = 8;
@@ -52,14 +54,47 @@ pub struct ObserverSwitch {
 impl ObserverSwitch {
     /// `Ok` if every value is finite and > 0.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        let all = [self.ave, self.ilo[0], self.ilo[1], self.ilo[2], self.ed];
-        if all.iter().any(|x| !x.is_finite()) {
+        let all = self.points();
+        if all.iter().any(|(_, x)| !x.is_finite()) {
             return Err(ConfigError::NotFinite("switch_up"));
         }
-        if all.iter().any(|&x| x <= 0.0) {
+        if all.iter().any(|&(_, x)| x <= 0.0) {
             return Err(ConfigError::NotPositive("switch_up"));
         }
         Ok(())
+    }
+
+    /// Writes the Rust expression `ObserverSwitch { .. }` that builds these switch points
+    /// (each in its shortest round-trip form, `{:?}`), for generated firmware code
+    /// (`nav440 tune --schedule --rust`).
+    pub fn write_rust(&self, w: &mut dyn core::fmt::Write) -> core::fmt::Result {
+        let [i1, i2, i3] = self.ilo;
+        write!(
+            w,
+            "ObserverSwitch {{ ave: {:?}, ilo: [{i1:?}, {i2:?}, {i3:?}], ed: {:?} }}",
+            self.ave, self.ed
+        )
+    }
+
+    /// The switch points, deg^2, as `(column, value)` for each family that records one
+    /// ([`Family::switch_up_mut`]), in column order ([`crate::FAMILIES`]).
+    pub fn points(&self) -> heapless::Vec<(usize, f32), FAMILY_COUNT> {
+        /// Collects the families' switch points.
+        struct Points<'a>(
+            &'a ObserverSwitch,
+            heapless::Vec<(usize, f32), FAMILY_COUNT>,
+        );
+        impl FamilyVisitor for Points<'_> {
+            fn family<F: Family>(&mut self, column: usize) {
+                if let Some(x) = F::switch_up(self.0) {
+                    // One entry per family: never full.
+                    let _ = self.1.push((column, x));
+                }
+            }
+        }
+        let mut points = Points(self, heapless::Vec::new());
+        for_each_family(&mut points);
+        points.1
     }
 }
 
@@ -124,19 +159,6 @@ pub struct GainSchedule {
 /// no other.
 pub const PERIOD_TOLERANCE: f32 = 1.2;
 
-/// `a^(1-w) b^w` for positive `a`, `b`; linear otherwise. `w` in `[0, 1]`.
-fn interp(a: f32, b: f32, w: f32) -> f32 {
-    if a == b || w <= 0.0 {
-        a
-    } else if w >= 1.0 {
-        b
-    } else if a > 0.0 && b > 0.0 {
-        a * libm::expf(w * libm::logf(b / a))
-    } else {
-        a + (b - a) * w
-    }
-}
-
 /// How a [`GainSchedule`] blends two levels' gains between them.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -152,54 +174,6 @@ pub enum Blend {
     /// noise-switch test, docs/CALIBRATION.md). The AD and the tracker have one smooth gain.
     #[default]
     NearestObservers,
-}
-
-impl Blend {
-    /// The weight of the upper level for the observers (AVE, ILO, ED) between two levels,
-    /// given the geometric weight `w` in `[0, 1]`: `w`, or 0 or 1 for the nearer level.
-    fn observer_weight(self, w: f32) -> f32 {
-        match self {
-            Blend::Geometric => w,
-            Blend::NearestObservers if w < 0.5 => 0.0,
-            Blend::NearestObservers => 1.0,
-        }
-    }
-}
-
-/// The observers' weights of the upper level: AVE, ILO1, ILO2, ILO3, ED.
-type ObserverWeights = [f32; 5];
-
-fn interp_gains(a: &BankGains, b: &BankGains, w: f32, wo: ObserverWeights) -> BankGains {
-    let ilo = |x: &IloConfig, y: &IloConfig, wo: f32| IloConfig {
-        k1: 1.0 - interp(1.0 - x.k1, 1.0 - y.k1, wo),
-        l: interp(x.l, y.l, wo),
-        k2: interp(x.k2, y.k2, wo),
-    };
-    BankGains {
-        ave: AveConfig {
-            k: interp(a.ave.k, b.ave.k, wo[0]),
-            gamma1: interp(a.ave.gamma1, b.ave.gamma1, wo[0]),
-            delta: if wo[0] < 0.5 {
-                a.ave.delta
-            } else {
-                b.ave.delta
-            },
-        },
-        ilo: [
-            ilo(&a.ilo[0], &b.ilo[0], wo[1]),
-            ilo(&a.ilo[1], &b.ilo[1], wo[2]),
-            ilo(&a.ilo[2], &b.ilo[2], wo[3]),
-        ],
-        ad_t: interp(a.ad_t, b.ad_t, w),
-        ed: EdConfig {
-            lambda: interp(a.ed.lambda, b.ed.lambda, wo[4]),
-            alpha: interp(a.ed.alpha, b.ed.alpha, wo[4]),
-        },
-        kf: KalmanNoise {
-            q: interp(a.kf.q, b.kf.q, w),
-            r: interp(a.kf.r, b.kf.r, w),
-        },
-    }
 }
 
 /// `x` limited to `[lo, hi]` (`lo <= hi`), as `f32::clamp` computes it (a NaN stays NaN), but
@@ -309,51 +283,70 @@ impl GainSchedule {
         }
     }
 
-    /// The interpolated gains (velocity, acceleration) for `noise_var`, deg^2.
+    /// The interpolated gains (velocity, acceleration) for `noise_var`, deg^2: each family's
+    /// gains between the two levels around it ([`Gains::interpolate`]) with the family's
+    /// weight ([`Self::family_weight`]).
     pub fn gains_at(&self, noise_var: f32) -> (BankGains, BankGains) {
         let (a, upper) = self.bracket(noise_var);
         let Some((b, w)) = upper else {
             return (a.velocity, a.acceleration);
         };
-        let wo = self.observer_weights(a, b, noise_var, w);
-        (
-            interp_gains(&a.velocity, &b.velocity, w, wo),
-            interp_gains(&a.acceleration, &b.acceleration, w, wo),
-        )
+        /// Interpolates each family's gains into `out` (velocity, acceleration).
+        struct Blended<'a> {
+            schedule: &'a GainSchedule,
+            a: &'a ScheduleLevel,
+            b: &'a ScheduleLevel,
+            noise_var: f32,
+            w: f32,
+            out: (BankGains, BankGains),
+        }
+        impl FamilyVisitor for Blended<'_> {
+            fn family<F: Family>(&mut self, _column: usize) {
+                let (a, b) = (self.a, self.b);
+                let w = self
+                    .schedule
+                    .family_weight::<F>(a, b, self.noise_var, self.w);
+                let blend = |x: &BankGains, y: &BankGains| F::get(x).interpolate(&F::get(y), w);
+                F::set(&mut self.out.0, blend(&a.velocity, &b.velocity));
+                F::set(&mut self.out.1, blend(&a.acceleration, &b.acceleration));
+            }
+        }
+        let mut blended = Blended {
+            schedule: self,
+            a,
+            b,
+            noise_var,
+            w,
+            out: (a.velocity, a.acceleration),
+        };
+        for_each_family(&mut blended);
+        blended.out
     }
 
-    /// The weight of the upper level `b` for each observer family between the levels `a` and
-    /// `b` at `noise_var` (deg^2), whose geometric weight is `w`: `w` with
-    /// [`Blend::Geometric`]; with [`Blend::NearestObservers`] 1 at or past the family's switch
-    /// point (`a`'s [`ScheduleLevel::switch_up`], clamped to `[a, b]`; without one, the
-    /// geometric midpoint), else 0.
-    fn observer_weights(
+    /// The weight of the upper level `b` for the family `F` between the levels `a` and `b`
+    /// at `noise_var` (deg^2), whose geometric weight is `w` (in `[0, 1]`): `w` for a
+    /// [`Scheduling::Smooth`] family and with [`Blend::Geometric`]; for an observer with
+    /// [`Blend::NearestObservers`], 1 at or past the family's switch point (`a`'s
+    /// [`ScheduleLevel::switch_up`], clamped to `[a, b]`; without one, the geometric
+    /// midpoint), else 0.
+    pub fn family_weight<F: Family>(
         &self,
         a: &ScheduleLevel,
         b: &ScheduleLevel,
         noise_var: f32,
         w: f32,
-    ) -> ObserverWeights {
-        match (self.blend, a.switch_up) {
-            (Blend::Geometric, _) => [w; 5],
-            (Blend::NearestObservers, None) => [self.blend.observer_weight(w); 5],
-            (Blend::NearestObservers, Some(sw)) => {
-                let v = self.clamp(noise_var);
-                let up = |t: f32| {
-                    if v >= clamp(t, a.noise_var, b.noise_var) {
-                        1.0
-                    } else {
-                        0.0
-                    }
-                };
-                [
-                    up(sw.ave),
-                    up(sw.ilo[0]),
-                    up(sw.ilo[1]),
-                    up(sw.ilo[2]),
-                    up(sw.ed),
-                ]
-            }
+    ) -> f32 {
+        if F::SCHEDULING == Scheduling::Smooth || self.blend == Blend::Geometric {
+            return w;
+        }
+        let up = match a.switch_up.as_ref().and_then(F::switch_up) {
+            Some(t) => self.clamp(noise_var) >= clamp(t, a.noise_var, b.noise_var),
+            None => w >= 0.5,
+        };
+        if up {
+            1.0
+        } else {
+            0.0
         }
     }
 
@@ -383,16 +376,16 @@ impl GainSchedule {
         let Some((b, w)) = upper else {
             return Some(da);
         };
-        let w = self.observer_weights(a, b, noise_var, w)[0];
+        let w = self.family_weight::<AveFamily>(a, b, noise_var, w);
         if w <= 0.0 {
             return Some(da);
         }
         let db = b.ave_deltahat?;
         Some(AveDeltahat {
-            velocity: interp(da.velocity, db.velocity, w),
+            velocity: geometric(da.velocity, db.velocity, w),
             acceleration: [
-                interp(da.acceleration[0], db.acceleration[0], w),
-                interp(da.acceleration[1], db.acceleration[1], w),
+                geometric(da.acceleration[0], db.acceleration[0], w),
+                geometric(da.acceleration[1], db.acceleration[1], w),
             ],
         })
     }

@@ -1,22 +1,11 @@
 //! The configuration of a bank: [`BankConfig`] and the gains of its halves, [`BankGains`].
 
 use crate::presets::*;
-use crate::{AveConfig, EdConfig, EdScheme, Hold, IloConfig};
-
-/// Noise model of the Kalman tracker (see [`crate::Kalman`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
-pub struct KalmanNoise {
-    /// White-jerk power spectral density `q`, deg^2/s^5.
-    pub q: f32,
-    /// Yaw measurement variance `r`, deg^2.
-    pub r: f32,
-}
+use crate::{AveConfig, EdConfig, EdScheme, Hold, IloConfig, KalmanNoise};
 
 /// Gains of one half of the bank: the velocity estimators, or the acceleration series (where
-/// both stages of a series get the same gains).
+/// both stages of a series get the same gains). One field per family of the paper bank
+/// ([`crate::FAMILIES`]; [`crate::Family::get`] reads a family's gains from here).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -134,6 +123,50 @@ impl BankGains {
         ed: ED_PAPER,
         kf: KF_DEFAULT,
     };
+}
+
+impl BankGains {
+    /// The names [`Self::write_rust`] uses, for a `use estimators::{..}` line.
+    pub const RUST_TYPES: [&'static str; 5] = [
+        "AveConfig",
+        "DeltaMode",
+        "EdConfig",
+        "IloConfig",
+        "KalmanNoise",
+    ];
+
+    /// Writes the Rust expression `BankGains { .. }` that builds these gains: every field
+    /// spelled out, each gain in its shortest round-trip form (`{:?}`), one field per line,
+    /// each line after the first indented by `indent`. What `nav440 tune --rust` writes for a
+    /// firmware, and how the shipped presets above are regenerated (see
+    /// [`BankConfig::NAV440`]).
+    pub fn write_rust(&self, w: &mut dyn core::fmt::Write, indent: &str) -> core::fmt::Result {
+        let ilo = |c: &IloConfig| (c.k1, c.l, c.k2);
+        let [(a1, b1, c1), (a2, b2, c2), (a3, b3, c3)] = self.ilo.each_ref().map(ilo);
+        let i = indent;
+        write!(
+            w,
+            "BankGains {{\n\
+             {i}    ave: AveConfig {{ k: {:?}, gamma1: {:?}, delta: DeltaMode::{:?} }},\n\
+             {i}    ilo: [\n\
+             {i}        IloConfig {{ k1: {a1:?}, l: {b1:?}, k2: {c1:?} }},\n\
+             {i}        IloConfig {{ k1: {a2:?}, l: {b2:?}, k2: {c2:?} }},\n\
+             {i}        IloConfig {{ k1: {a3:?}, l: {b3:?}, k2: {c3:?} }},\n\
+             {i}    ],\n\
+             {i}    ad_t: {:?},\n\
+             {i}    ed: EdConfig {{ lambda: {:?}, alpha: {:?} }},\n\
+             {i}    kf: KalmanNoise {{ q: {:?}, r: {:?} }},\n\
+             {i}}}",
+            self.ave.k,
+            self.ave.gamma1,
+            self.ave.delta,
+            self.ad_t,
+            self.ed.lambda,
+            self.ed.alpha,
+            self.kf.q,
+            self.kf.r,
+        )
+    }
 }
 
 /// Default tracker noise (our choice, not the paper's): `r = 0.01 deg^2` (the paper's smaller

@@ -1,16 +1,39 @@
 //! [`PaperBank`]: the paper's 14 estimators.
 
-use super::{BankConfig, BankGains, BankInput, Fed};
+use super::{BankConfig, BankGains, Fed};
 use crate::kalman::{KalmanConfig, KalmanOutput, KalmanParams};
 use crate::presets::*;
 use crate::{
-    AdParams, AveConfig, AveParams, ClosedForm, ConfigError, EdConfig, EdParams, ExactSqrt,
-    IloConfig, IloParams, Real, Series, SqrtFn, VelAcc,
+    AdFamily, AdParams, AveConfig, AveFamily, AveParams, ClosedForm, ConfigError, EdConfig,
+    EdFamily, EdParams, ExactSqrt, IloConfig, IloFamily, IloParams, KfFamily, Real, Series, SqrtFn,
+    VelAcc,
 };
 
-/// Names of the seven estimator families of the paper bank, in column order (the velocity
-/// channels are these with `_v`, the acceleration channels with `_a`, see [`Channel`]).
-pub const VELOCITY_NAMES: [&str; 7] = ["ave", "ilo1", "ilo2", "ilo3", "ad", "ed", "kf"];
+// The paper bank is defined by two tables: its families (the columns of the paper's
+// tables, each a `Family` next to its law) and, below, its rows (the laws it runs, each with
+// the channels it reports and how it takes a warm gain change). A family added to the list
+// needs its two channels and its rows in the table, and its gains in `BankGains`.
+crate::family::families! {
+    AveFamily,
+    IloFamily<0>,
+    IloFamily<1>,
+    IloFamily<2>,
+    AdFamily,
+    EdFamily,
+    KfFamily,
+}
+
+/// The names of the paper bank's families ([`FAMILIES`]), in column order: the velocity
+/// channels are these with `_v`, the acceleration channels with `_a` (see [`Channel`]).
+pub const VELOCITY_NAMES: [&str; FAMILY_COUNT] = {
+    let mut names = [""; FAMILY_COUNT];
+    let mut i = 0;
+    while i < FAMILY_COUNT {
+        names[i] = FAMILIES[i].name;
+        i += 1;
+    }
+    names
+};
 
 /// ILO-ILO (both stages `D = 1`) through its closed-form map: the paper bank's ILO
 /// acceleration row.
@@ -151,41 +174,58 @@ crate::estimator_bank! {
         KfA = "kf_a",
     }
     rows {
+        // `warm replay(..)`: on a warm gain change the row is replayed over the recent
+        // samples; `warm bumpless(..)`: moved bumplessly, for the rows that, replayed from
+        // rest, take longer than the replayed history (`REPLAY_CAPACITY` samples) to settle:
+        // the ED, whose velocity state moves at most `alpha` deg/s per second, and the
+        // closed-form series, whose second stage starts from zero acceleration.
         /// AVE and AVE-AVE.
-        ave: VelAcc<AveParams<T>> = ave_pair(cfg) => [AveV = velocity, AveA = acceleration];
+        ave: VelAcc<AveParams<T>> = ave_pair(cfg) => [AveV = velocity, AveA = acceleration]
+            warm replay((cfg.velocity.ave, cfg.acceleration.ave));
         /// ILO1, Table 2 gains.
-        ilo1_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 0, n0, prev) => [Ilo1V = output];
+        ilo1_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 0, n0, prev) => [Ilo1V = output]
+            warm replay(cfg.velocity.ilo[0]);
         /// ILO2, Table 2 gains.
-        ilo2_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 1, n0, prev) => [Ilo2V = output];
+        ilo2_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 1, n0, prev) => [Ilo2V = output]
+            warm replay(cfg.velocity.ilo[1]);
         /// ILO3, Table 2 gains.
-        ilo3_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 2, n0, prev) => [Ilo3V = output];
+        ilo3_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 2, n0, prev) => [Ilo3V = output]
+            warm replay(cfg.velocity.ilo[2]);
         /// AD.
-        ad_v: ClosedForm<AdParams<T>> = ad_v(cfg, n0, prev) => [AdV = output];
+        ad_v: ClosedForm<AdParams<T>> = ad_v(cfg, n0, prev) => [AdV = output]
+            warm replay(cfg.velocity.ad_t);
         /// ED and ED-ED.
-        ed: VelAcc<EdParams<T, S>> = ed_pair(cfg) => [EdV = velocity, EdA = acceleration];
+        ed: VelAcc<EdParams<T, S>> = ed_pair(cfg) => [EdV = velocity, EdA = acceleration]
+            warm bumpless((cfg.velocity.ed, cfg.acceleration.ed));
         /// Kalman tracker with the velocity noise.
-        kf_v: KalmanParams<T> = kalman(cfg, &cfg.velocity, KalmanOutput::Velocity) => [KfV = velocity];
+        kf_v: KalmanParams<T> = kalman(cfg, &cfg.velocity, KalmanOutput::Velocity) => [KfV = velocity]
+            warm replay(cfg.velocity.kf);
         /// ILO1-ILO1, Table 4 gains.
-        ilo1_a: IloIloMap<T> = ilo_a(cfg, 0, n0, prev) => [Ilo1A = output];
+        ilo1_a: IloIloMap<T> = ilo_a(cfg, 0, n0, prev) => [Ilo1A = output]
+            warm bumpless(cfg.acceleration.ilo[0]);
         /// ILO2-ILO2, Table 4 gains.
-        ilo2_a: IloIloMap<T> = ilo_a(cfg, 1, n0, prev) => [Ilo2A = output];
+        ilo2_a: IloIloMap<T> = ilo_a(cfg, 1, n0, prev) => [Ilo2A = output]
+            warm bumpless(cfg.acceleration.ilo[1]);
         /// ILO3-ILO3, Table 4 gains.
-        ilo3_a: IloIloMap<T> = ilo_a(cfg, 2, n0, prev) => [Ilo3A = output];
+        ilo3_a: IloIloMap<T> = ilo_a(cfg, 2, n0, prev) => [Ilo3A = output]
+            warm bumpless(cfg.acceleration.ilo[2]);
         /// AD-AD.
-        ad_a: AdAdMap<T> = ad_a(cfg, n0, prev) => [AdA = output];
+        ad_a: AdAdMap<T> = ad_a(cfg, n0, prev) => [AdA = output]
+            warm bumpless(cfg.acceleration.ad_t);
         /// Kalman tracker with the acceleration noise.
-        kf_a: KalmanParams<T> = kalman(cfg, &cfg.acceleration, KalmanOutput::Acceleration) => [KfA = acceleration];
+        kf_a: KalmanParams<T> = kalman(cfg, &cfg.acceleration, KalmanOutput::Acceleration) => [KfA = acceleration]
+            warm replay(cfg.acceleration.kf);
     }
 }
 
 impl PaperOutput {
-    /// The seven velocities, deg/s, in [`Channel::VELOCITY`] order.
-    pub fn velocities(&self) -> [f32; 7] {
+    /// The velocities, deg/s, one per family in [`Channel::VELOCITY`] order.
+    pub fn velocities(&self) -> [f32; FAMILY_COUNT] {
         Channel::VELOCITY.map(|c| self[c])
     }
 
-    /// The seven accelerations, deg/s^2, in [`Channel::ACCELERATION`] order.
-    pub fn accelerations(&self) -> [f32; 7] {
+    /// The accelerations, deg/s^2, one per family in [`Channel::ACCELERATION`] order.
+    pub fn accelerations(&self) -> [f32; FAMILY_COUNT] {
         Channel::ACCELERATION.map(|c| self[c])
     }
 }
@@ -196,26 +236,26 @@ pub type YawBank<T, S = ExactSqrt> = PaperBank<T, S>;
 pub type BankOutput = PaperOutput;
 
 impl Channel {
-    /// The seven velocity channels (ave, ilo1, ilo2, ilo3, ad, ed, kf).
-    pub const VELOCITY: [Channel; 7] = [
-        Channel::AveV,
-        Channel::Ilo1V,
-        Channel::Ilo2V,
-        Channel::Ilo3V,
-        Channel::AdV,
-        Channel::EdV,
-        Channel::KfV,
-    ];
-    /// The seven acceleration channels, same order.
-    pub const ACCELERATION: [Channel; 7] = [
-        Channel::AveA,
-        Channel::Ilo1A,
-        Channel::Ilo2A,
-        Channel::Ilo3A,
-        Channel::AdA,
-        Channel::EdA,
-        Channel::KfA,
-    ];
+    /// The velocity channels, one per family in column order ([`FAMILIES`]: ave, ilo1,
+    /// ilo2, ilo3, ad, ed, kf).
+    pub const VELOCITY: [Channel; FAMILY_COUNT] = family_channels(false);
+    /// The acceleration channels, same order.
+    pub const ACCELERATION: [Channel; FAMILY_COUNT] = family_channels(true);
+}
+
+/// The velocity (or acceleration) channel of each family, in column order.
+const fn family_channels(acceleration: bool) -> [Channel; FAMILY_COUNT] {
+    let mut out = [Channel::AveV; FAMILY_COUNT];
+    let mut i = 0;
+    while i < FAMILY_COUNT {
+        out[i] = if acceleration {
+            FAMILIES[i].acceleration
+        } else {
+            FAMILIES[i].velocity
+        };
+        i += 1;
+    }
+    out
 }
 
 impl<T: Real, S: SqrtFn<T>> PaperBank<T, S> {
@@ -246,27 +286,16 @@ impl<T: Real, S: SqrtFn<T>> PaperBank<T, S> {
 
 impl<T: Real, S: SqrtFn<T>> PaperBank<T, S> {
     /// The gain change of [`crate::AdaptiveBank`] (warm start) from the gains of `old` (what
-    /// the bank runs now; only its gains are read) to those of `new`:
+    /// the bank runs now; only its gains are read) to those of `new`: the generated
+    /// [`Self::set_gains_warm_with`], row by row as the table's `warm` clauses say (the AVE /
+    /// AVE-AVE row, the velocity ILOs and AD and both trackers replayed over `history` when
+    /// their gains changed; the ED / ED-ED row and the ILO-ILO and AD-AD series moved
+    /// bumplessly; unchanged rows kept), where the AVE row starts its replay with the
+    /// switching gains `deltahat` (deg/s, deg/s^2), or, when `None`, with those it has now.
     ///
-    /// * the AVE / AVE-AVE row, the velocity ILOs and AD and both trackers, when their gains
-    ///   changed, are rebuilt by replaying `history` (what the laws were fed for the last
-    ///   samples, oldest first, ending with the last one; see [`Self::update_fed`] and
-    ///   [`PaperParams::replay`]) through their new gains, started at rest at the history's
-    ///   first sample, so that they continue as if they had run with them over the history;
-    ///   the AVE row starts its replay with the switching gains `deltahat` (deg/s, deg/s^2),
-    ///   or, when `None`, with those it has now;
-    /// * the ED / ED-ED row and the ILO-ILO and AD-AD series, when their gains changed, keep
-    ///   their state, moved bumplessly ([`crate::Law::retune_state`]): replayed from rest they
-    ///   take longer than a 64-sample history to settle. The ED's velocity state moves at most
-    ///   `alpha` deg/s per second and a tuned `lambda` is small (replayed, the scheduled ED's
-    ///   velocity MSE in the second after the first gain change of the noise-switch capture
-    ///   was 1049 (deg/s)^2 instead of 206); a series' second stage starts from zero
-    ///   acceleration (replayed, the ILO-ILO's acceleration MSE over the noise switch was 7 %
-    ///   above the bumpless change's, the AD-AD's 0.3 %; docs/CALIBRATION.md);
-    /// * a row whose gains did not change keeps its state exactly.
-    ///
-    /// An empty history is [`Self::set_gains`] (every row bumpless). On error nothing changes.
-    /// Cost: [`Self::set_gains`] plus one sample of the whole bank per history entry.
+    /// `history`: what the laws were fed for the last samples, oldest first, ending with the
+    /// last one ([`Self::update_fed`]). An empty history is [`Self::set_gains`] (every row
+    /// bumpless). On error nothing changes.
     pub fn set_gains_warm<'h, I>(
         &mut self,
         old: &BankConfig,
@@ -278,51 +307,8 @@ impl<T: Real, S: SqrtFn<T>> PaperBank<T, S> {
         I: IntoIterator<Item = &'h Fed<T>>,
         T: 'h,
     {
-        use crate::Law as _;
-        let (_, n0) = BankInput::<T>::new(new)?;
-        let params = PaperParams::<T, S>::new_reusing(new, n0, Some(&self.params))?;
         let deltahat = deltahat.unwrap_or_else(|| self.ave_deltahat());
-        let Some(replayed) = params.replay(history, |s| set_ave_deltahat(s, &deltahat)) else {
-            params.retune_state(&self.params, &mut self.state, self.input.last());
-            self.params = params;
-            return Ok(());
-        };
-        let (ov, oa, nv, na) = (
-            &old.velocity,
-            &old.acceleration,
-            &new.velocity,
-            &new.acceleration,
-        );
-        let (s, y) = (&mut self.state, self.input.last());
-        // `$row: $changed;`: the row's gains changed.
-        macro_rules! replayed_if {
-            ($($row:ident: $changed:expr;)+) => {$( if $changed { s.$row = replayed.$row; } )+};
-        }
-        macro_rules! bumpless_if {
-            ($($row:ident: $changed:expr;)+) => {$(
-                if $changed {
-                    params.$row.retune_state(&self.params.$row, &mut s.$row, y);
-                }
-            )+};
-        }
-        replayed_if! {
-            ave: (ov.ave, oa.ave) != (nv.ave, na.ave);
-            ilo1_v: ov.ilo[0] != nv.ilo[0];
-            ilo2_v: ov.ilo[1] != nv.ilo[1];
-            ilo3_v: ov.ilo[2] != nv.ilo[2];
-            ad_v: ov.ad_t != nv.ad_t;
-            kf_v: ov.kf != nv.kf;
-            kf_a: oa.kf != na.kf;
-        }
-        bumpless_if! {
-            ed: (ov.ed, oa.ed) != (nv.ed, na.ed);
-            ilo1_a: oa.ilo[0] != na.ilo[0];
-            ilo2_a: oa.ilo[1] != na.ilo[1];
-            ilo3_a: oa.ilo[2] != na.ilo[2];
-            ad_a: oa.ad_t != na.ad_t;
-        }
-        self.params = params;
-        Ok(())
+        self.set_gains_warm_with(old, new, history, |s| set_ave_deltahat(s, &deltahat))
     }
 }
 

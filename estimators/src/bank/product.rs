@@ -21,8 +21,10 @@ crate::estimator_bank! {
     }
     rows {
         /// ILO1, Table 2 gains.
-        ilo1_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 0, n0, prev) => [Ilo1V = output];
+        ilo1_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 0, n0, prev) => [Ilo1V = output]
+            warm replay(cfg.velocity.ilo[0]);
         /// Kalman tracker with the acceleration noise.
-        kf_a: KalmanParams<T> = kalman(cfg, &cfg.acceleration, KalmanOutput::Acceleration) => [KfA = acceleration];
+        kf_a: KalmanParams<T> = kalman(cfg, &cfg.acceleration, KalmanOutput::Acceleration) => [KfA = acceleration]
+            warm replay(cfg.acceleration.kf);
     }
 }

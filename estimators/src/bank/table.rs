@@ -17,6 +17,12 @@
 /// keep what did not change ([`ClosedForm::new_reusing`]: a gain change that leaves a row's
 /// gains alone then costs nothing for that row).
 ///
+/// A row may end with a warm-start clause, `warm replay(gains)` or `warm bumpless(gains)`,
+/// where `gains` is an expression of `cfg` naming what the row is built from (e.g.
+/// `cfg.velocity.ilo[0]`): on a warm gain change (the generated `set_gains_warm_with`, what
+/// [`crate::AdaptiveBank`] runs) the row, if `gains` changed, is replayed over the recent
+/// samples or moved bumplessly; a row whose `gains` did not change keeps its state.
+///
 /// ```
 /// use estimators::{estimator_bank, AdAdMap, AdParams, BankConfig, ClosedForm, Law, Series};
 ///
@@ -32,12 +38,13 @@
 ///     }
 ///     rows {
 ///         /// AD, closed form.
-///         ad_v: ClosedForm<AdParams<T>> = Ok(ClosedForm::new(AdParams::new(cfg.velocity.ad_t, cfg.h)?, n0, cfg.hold)) => [AdV = output];
+///         ad_v: ClosedForm<AdParams<T>> = Ok(ClosedForm::new(AdParams::new(cfg.velocity.ad_t, cfg.h)?, n0, cfg.hold))
+///             => [AdV = output] warm replay(cfg.velocity.ad_t);
 ///         /// AD-AD, closed form.
 ///         ad_a: AdAdMap<T> = {
 ///             let ad = AdParams::new(cfg.acceleration.ad_t, cfg.h)?;
 ///             Ok(ClosedForm::new(Series::new(ad, ad), n0, cfg.hold))
-///         } => [AdA = output];
+///         } => [AdA = output] warm bumpless(cfg.acceleration.ad_t);
 ///     }
 /// }
 ///
@@ -72,7 +79,7 @@ macro_rules! estimator_bank {
         bank $Bank:ident, params $Params:ident, state $State:ident, output $Out:ident, channel $Chan:ident;
         build($cfg:ident, $n0:ident, $prev:ident);
         channels { $( $(#[$cm:meta])* $ch:ident = $csv:literal ),+ $(,)? }
-        rows { $( $(#[$rm:meta])* $field:ident : $Law:ty = $build:expr => [ $( $rch:ident = $get:ident ),+ ] ; )+ }
+        rows { $( $(#[$rm:meta])* $field:ident : $Law:ty = $build:expr => [ $( $rch:ident = $get:ident ),+ ] $( warm $warm:ident ( $key:expr ) )? ; )+ }
     ) => {
         /// The channels (output columns) of the bank, in CSV order.
         #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -400,6 +407,54 @@ macro_rules! estimator_bank {
                 Ok(())
             }
 
+            /// The warm gain change (what a gain schedule does on a warm start,
+            /// `AdaptiveBank`) from the gains of `old` (the configuration the bank runs now;
+            /// only its gains are read) to those of `new`, row by row as the table says:
+            ///
+            /// * a row with `warm replay(gains)` whose `gains` differ between `old` and `new`
+            ///   is rebuilt by replaying `history` (see [`Self::set_gains_replaying`]; `on_init`
+            ///   is applied to the replay's initial states);
+            /// * a row with `warm bumpless(gains)` whose `gains` differ moves bumplessly
+            ///   (`Law::retune_state`);
+            /// * a row with a `warm` clause whose `gains` did not change keeps its state
+            ///   exactly;
+            /// * a row without a `warm` clause moves bumplessly, as in [`Self::set_gains`].
+            ///
+            /// An empty history is [`Self::set_gains`] (every row bumpless). On error nothing
+            /// changes. Cost: [`Self::set_gains`] plus one advance of every row per history
+            /// entry.
+            pub fn set_gains_warm_with<'h, I, F>(
+                &mut self,
+                old: &$crate::BankConfig,
+                new: &$crate::BankConfig,
+                history: I,
+                on_init: F,
+            ) -> Result<(), $crate::ConfigError>
+            where
+                I: IntoIterator<Item = &'h $crate::Fed<T>>,
+                F: FnMut(&mut $State<T, S>),
+                T: 'h,
+            {
+                let (_, n0) = $crate::BankInput::<T>::new(new)?;
+                let params = $Params::new_reusing(new, n0, Some(&self.params))?;
+                let Some(replayed) = params.replay(history, on_init) else {
+                    params.retune_state(&self.params, &mut self.state, self.input.last());
+                    self.params = params;
+                    return Ok(());
+                };
+                let (before, state, y) = (&self.params, &mut self.state, self.input.last());
+                // Read only by rows with a `warm` clause.
+                let _ = (old, new, &replayed, &before, y);
+                $(
+                    $crate::__bank_warm_row!(
+                        params, before, state, replayed, y, old, new, $cfg;
+                        $field $(, $warm($key))?
+                    );
+                )+
+                self.params = params;
+                Ok(())
+            }
+
             /// The rows' validated parameters.
             pub fn params(&self) -> &$Params<T, S> {
                 &self.params
@@ -441,4 +496,36 @@ macro_rules! estimator_bank {
 #[macro_export]
 macro_rules! __bank_columns {
     ($first:literal $(, $rest:literal)*) => { concat!($first $(, ",", $rest)*) };
+}
+
+/// One row of a generated bank's `set_gains_warm_with` (see [`estimator_bank!`]): `params`
+/// are the new parameters, `before` the old ones, `state` the bank's state, `replayed` the
+/// state replayed through `params`, `y` the last input, `cfg` the table's configuration name.
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __bank_warm_row {
+    ($params:ident, $before:ident, $state:ident, $replayed:ident, $y:ident, $old:ident, $new:ident, $cfg:ident; $field:ident) => {
+        $crate::Law::retune_state(&$params.$field, &$before.$field, &mut $state.$field, $y);
+    };
+    ($params:ident, $before:ident, $state:ident, $replayed:ident, $y:ident, $old:ident, $new:ident, $cfg:ident; $field:ident, replay($key:expr)) => {
+        if $crate::__bank_warm_row!(@changed $old, $new, $cfg, $key) {
+            $state.$field = $replayed.$field;
+        }
+    };
+    ($params:ident, $before:ident, $state:ident, $replayed:ident, $y:ident, $old:ident, $new:ident, $cfg:ident; $field:ident, bumpless($key:expr)) => {
+        if $crate::__bank_warm_row!(@changed $old, $new, $cfg, $key) {
+            $crate::Law::retune_state(&$params.$field, &$before.$field, &mut $state.$field, $y);
+        }
+    };
+    (@changed $old:ident, $new:ident, $cfg:ident, $key:expr) => {{
+        let old_gains = {
+            let $cfg: &$crate::BankConfig = $old;
+            $key
+        };
+        let new_gains = {
+            let $cfg: &$crate::BankConfig = $new;
+            $key
+        };
+        old_gains != new_gains
+    }};
 }
