@@ -227,14 +227,13 @@ impl<T: Real, S: SqrtFn<T>> Law for EdParams<T, S> {
     /// Bumpless gain change: `z = y + h u`, `u1 = u`, the equilibrium of any gains at the
     /// present output (the state holds the next step's position, so the next error is
     /// `h (u - rate)`, about 0, and the integrator carries the rate): the next output
-    /// continues from `u` whatever `lambda` becomes. Leaving the state as it was is bumpless only while
-    /// the ED slides (`e` near 0). A set tuned for low noise can work away from sliding
-    /// (the bundled schedule's 0.001 deg^2 level: `alpha` 11.5 deg/s^2, `lambda` 167, where
-    /// the root term carries the rate on a `|e|` of tenths of a degree); changing `lambda`
-    /// there made the output jump by `(lambda_new - lambda_old) |e|^(1/2)`, about 100 deg/s,
-    /// for as long as `alpha` took to catch up: a scheduled ED 9.6x the best fixed set at a
-    /// steady 0.003 deg^2 (docs/CALIBRATION.md, "Bumpless ED gain changes"). Gains
-    /// unchanged: the state is kept.
+    /// continues from `u` whatever `lambda` becomes. Leaving the state as it was would be
+    /// bumpless only while the ED slides (`e` near 0). A set tuned for low noise can work away
+    /// from sliding (a small `alpha`, where the root term carries the rate on a `|e|` of
+    /// tenths of a degree); changing `lambda` there would make the output jump by
+    /// `(lambda_new - lambda_old) |e|^(1/2)` for as long as `alpha` takes to catch up
+    /// (docs/ADAPTIVE-GAINS.md, "How a gain change keeps the estimates"). Gains unchanged: the
+    /// state is kept.
     fn retune_state(&self, old: &Self, s: &mut EdState<T>, y: T) {
         let same = self.h == old.h
             && self.lambda == old.lambda

@@ -23,6 +23,12 @@
 //!   [`YawBank`]: the paper's 14 estimators, output indexed by [`Channel`]) and
 //!   [`ProductBank`] (one velocity and one acceleration estimator). [`BankConfig::wrap`] picks
 //!   the unwrapping per axis ([`Wrap`]). See docs/BANK.md.
+//! * [`family`]: the paper bank's estimator families (one per column of the paper's tables),
+//!   listed once ([`FAMILIES`], [`for_each_family`]): the channel lists, the gain schedule's
+//!   interpolation and the host tools' gains file and tuner iterate them.
+//! * Another sensor: [`ProductBank`] with [`BankConfig::sample_period_s`] set to the sensor's
+//!   period (the default is 100 Hz) and [`Wrap::None`] for a signal that does not wrap
+//!   (`examples/other_imu_200hz.rs`, docs/OTHER-IMU.md).
 //! * [`EstimatorBank`]: the one trait of every bank (the generated ones and [`AdaptiveBank`]):
 //!   `update`, `new_epoch`, `reinit_count`, and its [`EstimatorOutput`] (unwrapped angle and
 //!   channel values) with the channels' count and names as consts
@@ -37,7 +43,9 @@
 //!   the host CLI and the firmware.)
 //! * Fixed point: [`Fx`] (Q31.32, saturating) matches `f32` on a paper-like experiment (yaw
 //!   within +-90 deg, rate +-300 deg/s, 100 Hz) within 1 % in every MSE (ED 5 %, ED-ED 20 %) and
-//!   0.05 deg/s / 1 deg/s^2 sample by sample (see `tests/bank.rs`); its update path is integer
+//!   0.05 deg/s / 1 deg/s^2 sample by sample (the bounds `tests/bank.rs` asserts; `cargo test
+//!   --release -p velocity-estimators --test bank fixed_point -- --nocapture` prints the
+//!   figures); its update path is integer
 //!   only and panic-free (no FPU needed on Cortex-M0/M3).
 //! * Bad input: NaN/infinite samples and non-increasing timestamps return [`SampleError`] and
 //!   leave the state unchanged; invalid parameters return [`ConfigError`] at construction.

@@ -421,8 +421,8 @@ const ACCURACY_SEEDS: [u64; 10] = [42, 1, 2, 3, 4, 5, 6, 7, 8, 9];
 
 /// Fixed point against f32 (and f64) on the paper-like experiment: yaw within +-90 deg, rate
 /// within +-300 deg/s, acceleration within +-2000 deg/s^2, 100 Hz samples, noise sigma^2 =
-/// 0.01 deg^2, 10 s, over the 10 noise seeds of [`ACCURACY_SEEDS`] (issue 12: seed-robust,
-/// not seed-lucky). The MSE is against the true rate / acceleration of `profile` (an
+/// 0.01 deg^2, 10 s, over the 10 noise seeds of [`ACCURACY_SEEDS`] (seed-robust, not
+/// seed-lucky). The MSE is against the true rate / acceleration of `profile` (an
 /// independent computation), pooled over the 10 runs (a single run's ED / ED-ED MSE depends
 /// on its chatter, which a tiny difference changes: the per-seed ratios are printed, not
 /// asserted).
@@ -436,8 +436,8 @@ const ACCURACY_SEEDS: [u64; 10] = [42, 1, 2, 3, 4, 5, 6, 7, 8, 9];
 /// laws' and the Kalman tracker's outputs agree with f32 sample by sample within 0.05 deg/s
 /// and 1 deg/s^2 on every seed.
 ///
-/// The AVE row: the fixed-point AVE / AVE-AVE run Euler steps of `2 h` (issue 12 part 4,
-/// `Real::AVE_STEP_FACTOR`, docs/FIXED-POINT.md), the f32 and f64 banks steps of `h`, so
+/// The AVE row: the fixed-point AVE / AVE-AVE run Euler steps of `2 h`
+/// (`Real::AVE_STEP_FACTOR`, docs/FIXED-POINT.md, "The AVE row at `2 h`"), the f32 and f64 banks steps of `h`, so
 /// sample by sample they differ by the discretisation, not only by the arithmetic. Checked
 /// apart, every sample of every seed: (a) the arithmetic: Fx against the f64 bank run at
 /// `h = 2e-4` (its AVE row is the same recursion at `2 h`, 50 steps per sample at the same

@@ -188,7 +188,8 @@ mod tests {
         assert_eq!(s.as_str(), "0.0200,,,,,,,,,-10.5,3,12.25,-0.5");
     }
 
-    /// The header contracts of issue 10 (spelled out there).
+    /// The header contracts: the paper bank's yaw header is [`HEADER`]; one other axis renames
+    /// its two columns; all axes prefix every channel with the axis name.
     #[test]
     fn headers() {
         assert_eq!(header(Axes::only(Axis::Yaw)).as_str(), HEADER);

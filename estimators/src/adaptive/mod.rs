@@ -1,4 +1,4 @@
-//! Noise-adaptive gains (docs/CALIBRATION.md, "Noise-adaptive gains"): the bank estimates the
+//! Noise-adaptive gains (docs/ADAPTIVE-GAINS.md): the bank estimates the
 //! measurement-noise variance of its angle online ([`NoiseEstimator`]) and interpolates its
 //! gains from a [`GainSchedule`] (noise level -> gains, written by
 //! `nav440 tune --schedule ... [-o FILE.toml] [--rust FILE.rs]`); [`AdaptiveBank`] is the
@@ -34,10 +34,10 @@ pub struct AdaptiveConfig {
     /// 100 Hz).
     pub retune_every: u32,
     /// ... and changed only when the estimate (clamped to the schedule) differs from the level
-    /// of the current gains by more than this factor either way (default 1.5: at a steady
-    /// 0.1 deg^2 the estimate, time constant 0.5 s, jitters by about 25 %; with 1.25 the bank
-    /// retuned 12,637 times in 3 h of a spin, with 1.5 4,122 times, with 2 469 times;
-    /// docs/CALIBRATION.md).
+    /// of the current gains by more than this factor either way (default 1.5, above the
+    /// jitter of the estimate at a steady noise level with the default time constant, so that
+    /// a steady level does not retune at every chance; a smaller ratio follows the noise more
+    /// closely with more gain changes: docs/ADAPTIVE-RESULTS.md, "Gain-change rate").
     pub retune_ratio: f32,
     /// A gain change replays the last this many samples (at most [`REPLAY_CAPACITY`]) through
     /// the new gains (warm start, [`PaperBank::set_gains_replaying`]); 0: the states are moved
@@ -79,12 +79,12 @@ impl Default for AdaptiveConfig {
 /// and a gain change replays them through the rows whose gains changed
 /// ([`PaperBank::set_gains_warm`]; the ED and the ILO-ILO and AD-AD series change
 /// bumplessly): those rows then continue as if they had run the new gains over that history,
-/// which also covers most of the noise estimate's delay in noticing a change. On a 0.01 -> 0.5 deg^2 noise switch (docs/CALIBRATION.md, "Warm-start gain
-/// changes") the scheduled AVE's velocity MSE in the second after a perfect switch went from
-/// 123.6 (deg/s)^2 (bumpless change) to 88.8 (0.5 level's gains throughout: 89.0), and over
-/// 40 noise draws the AVE and the ILOs went from 0.972 and 0.819 of the best fixed gain set
-/// (geometric mean) to 0.951 and 0.776. Cost: one sample of the whole bank per replayed sample
-/// on top of the coefficients' rebuild (`cargo xtask bench`).
+/// which also covers most of the noise estimate's delay in noticing a change. The replayed
+/// rows start the new gains from where those gains would be, not from the old gains' states,
+/// so the estimates settle faster after a change than with a bumpless one (measured on a
+/// noise switch and over many noise draws: docs/ADAPTIVE-RESULTS.md, printed by
+/// `cargo test --release -p host-tests --test schedule -- --nocapture`). Cost: one sample of the whole bank per replayed sample on top of the
+/// coefficients' rebuild (`cargo xtask bench`).
 #[derive(Clone, Debug)]
 pub struct AdaptiveBank<T: Real, S: SqrtFn<T> = ExactSqrt> {
     bank: PaperBank<T, S>,

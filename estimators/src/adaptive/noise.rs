@@ -17,9 +17,8 @@ use crate::ConfigError;
 /// sample interval that differs from the previous one by more than a quarter (a lost packet,
 /// a gap, a new epoch) restarts the differences (the estimate is kept). Limitation: at low
 /// packet rates the motion term grows as `dt^6` (20 Hz: 1.6e4 times larger than at 100 Hz),
-/// so fast motion then reads as noise: the noise-free synthetic fig5 hand motion reads
-/// 2.4e-6 deg^2 at 100 Hz, 6.6e-4 at 20 Hz and 0.041 at 10 Hz (a steady spin: 1.2e-5 at
-/// 20 Hz, 6.2e-4 at 10 Hz).
+/// so fast motion then reads as noise (at 10 Hz a hand's motion alone reads of the order of
+/// the paper's small noise level, 0.01 deg^2).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NoiseEstimator {
     /// Weight of a new term once started, `dt / tau`.
@@ -40,8 +39,8 @@ pub struct NoiseEstimator {
 impl NoiseEstimator {
     /// The time constant is at least this many sample periods (the weight of a new term at
     /// most `1 / 50`): the estimate's jitter depends on how many terms it averages, not on
-    /// seconds. At 100 Hz the default 0.5 s is exactly 50 periods; at 20 Hz the time constant
-    /// becomes 2.5 s (with 0.5 s, 10 terms, a steady 0.01 deg^2 read between 0.003 and 0.035).
+    /// seconds (its relative spread falls as `1 / sqrt(terms)`). At 100 Hz the default 0.5 s
+    /// is exactly 50 periods; at 20 Hz the time constant becomes 2.5 s.
     pub const MIN_TAU_SAMPLES: f32 = 50.0;
 
     /// An estimator with time constant `tau_s` (s), or [`Self::MIN_TAU_SAMPLES`] periods if

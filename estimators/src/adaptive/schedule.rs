@@ -32,14 +32,14 @@ pub struct ScheduleLevel {
 /// The noise variances (deg^2) at which each observer family (velocity and acceleration
 /// gains alike) leaves a level for the next one: the noise at which the next level's gains
 /// become the better of the two. `nav440 tune --schedule` records it from each level's MSE at
-/// its neighbour's noise (`[level.switch_up]`; docs/CALIBRATION.md, "Between the levels").
+/// its neighbour's noise (`[level.switch_up]`).
 ///
 /// Why not the geometric midpoint: two neighbouring levels' tuned observers can be different
-/// kinds of observer, and one of them stays the better one well past the midpoint. In the
-/// bundled schedule, at a steady 0.003 deg^2 (below the 0.001/0.01 midpoint, 0.0032) the
-/// 0.01 level's AVE is 1.48x the 0.001 level's; switched at the midpoint, the scheduled AVE
-/// was 1.28x the best level run as a fixed set there, and 1.18-1.28x at 0.2-0.3 deg^2.
-/// A value outside `[this level, next level]` is clamped into it.
+/// kinds of observer, and one of them can stay the better one well past the midpoint; a
+/// switch at the midpoint then runs the worse set over part of the range
+/// (docs/ADAPTIVE-RESULTS.md, "Between the levels", printed by `cargo test --release -p host-tests --test schedule -- --nocapture`).
+/// A value outside `[this level, next level]` is clamped into it. Each family finds its own
+/// value here through [`crate::Family::switch_up_mut`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ObserverSwitch {
@@ -101,17 +101,13 @@ impl ObserverSwitch {
 /// The switching gains `deltahat` of a bank's AVE rows ([`crate::PaperBank::ave_deltahat`]).
 ///
 /// Why a schedule records them: the tuned AVE gains of different noise levels can be different
-/// kinds of observer. In the bundled schedule (fig5 at 100 Hz) as first tuned, the 0.5 deg^2
-/// level's AVE was slow (`k` 3.8 1/s, `gamma1` 498 1/s^2) and tuned with a mean `deltahat` of
-/// 5.7 deg/s, while the 0.01 deg^2 level's is fast (`k` 42 1/s, `gamma1` 3.5e5 1/s^2) and
-/// leaves `deltahat` at 0.12 deg/s (the regenerated schedule's 0.5 level shares the 0.1
-/// level's fast AVE, with 0.56 deg/s; the 1 deg^2 level's is still slow, with 7.1). Kept through a gain change, `deltahat` takes the leaky law's
-/// time constant (`1 / sigma`, 10 s) to move from one to the other, and the AVE is worse than
-/// either fixed set in the seconds after the change; set, the scheduled AVE on a
-/// 0.01 -> 0.5 deg^2 noise switch beat every fixed gain set on 26 of 40 noise draws instead of
-/// 14 with bumpless gain changes, and 25 instead of 21 with the warm start (geometric mean
-/// ratio to the best fixed set 0.951 instead of 1.001; docs/CALIBRATION.md, "Forty noise
-/// draws"): a warm start replays with these values.
+/// kinds of observer (a slow AVE tuned at high noise runs with a `deltahat` of several deg/s,
+/// a fast one tuned at low noise with a fraction of one). Kept through a gain change,
+/// `deltahat` takes the leaky law's time constant (`1 / sigma`, 10 s) to move from the one to
+/// the other, and the AVE is worse than either fixed set in the seconds after the change; set
+/// to the value the new gains were tuned with, it is not (docs/ADAPTIVE-RESULTS.md, "Forty
+/// noise draws", printed by `cargo test --release -p host-tests --test schedule -- --nocapture`). A warm start replays with these
+/// values.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct AveDeltahat {
@@ -168,10 +164,9 @@ pub enum Blend {
     /// The AD's `T` and the tracker's `q`, `r` geometrically; the AVE, ILO and ED take the
     /// gains of the nearer level (in `ln(noise_var)`). Default: the tuned AVE, ILO and ED
     /// gains are often lightly damped observers whose ringing is tuned to the sample period
-    /// (an ILO tuned at 0.01 deg^2 on the fig5 capture rings at 1913 rad/s, about 3 periods
-    /// per 10 ms sample, so the samples do not see it); a blend of two such sets is no longer
-    /// in tune and rings in the output (ILO1 velocity MSE 780 (deg/s)^2 instead of 10 on the
-    /// noise-switch test, docs/CALIBRATION.md). The AD and the tracker have one smooth gain.
+    /// (a whole number of ringing periods per sample, so the samples do not see it); a blend
+    /// of two such sets is no longer in tune and rings in the output. The AD and the tracker
+    /// have one smooth gain. Which families are which: [`crate::Family::SCHEDULING`].
     #[default]
     NearestObservers,
 }
@@ -236,8 +231,8 @@ impl GainSchedule {
     /// positive; `nav440 tune --schedule` records the capture's). The observers' tuned gains
     /// are tied to the sample period they were tuned at (a tuned ILO can ring at a frequency
     /// the samples at that rate do not see, see [`Blend`]): run at another rate, a schedule's
-    /// gains can be worse than the fixed `BankConfig::NAV440` preset's (a 100 Hz schedule at
-    /// 10 Hz with 0.5 deg^2 noise: up to 2x, docs/CALIBRATION.md "Low packet rates"). The
+    /// gains can be worse than the fixed `BankConfig::NAV440` preset's
+    /// (docs/ADAPTIVE-RESULTS.md, "Low packet rates"). The
     /// schedule still runs at any rate; [`AdaptiveBank::period_fits`] tells whether it was
     /// tuned for its bank's.
     pub fn with_sample_period(self, period_s: f32) -> Result<Self, ConfigError> {

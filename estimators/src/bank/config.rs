@@ -187,17 +187,23 @@ pub struct BankConfig {
     /// ([`BankConfig::sample_period_s`]); a longer gap re-initialises the bank from the new
     /// sample. Default [`GAP_PERIODS`] (25: 0.25 s at 100 Hz, 12.5 s at 2 Hz).
     pub max_gap_periods: f32,
-    /// Nominal sample period, s (default 0.01 = 100 Hz): the closed-form maps are precomputed
-    /// for `round(sample_period_s / h)` steps and the Kalman gains for this period.
-    /// `nav440_pipeline::period` (the pipeline crate) sets it from a stream's first samples (host CLI and firmware).
+    /// Nominal sample period, s: **set it to the sensor's** (e.g. 0.005 at 200 Hz). Default
+    /// 0.01 (100 Hz, the NAV440's), and nothing warns when it is wrong: the bank runs any
+    /// interval (`round(dt / h)` steps per sample), but the closed-form maps are precomputed
+    /// for `round(sample_period_s / h)` steps, the Kalman tracker's steady-state gains are
+    /// computed for this period, and the gap rule is a multiple of it.
+    /// `nav440_pipeline::period` measures it from a stream's first samples (what the host CLI
+    /// and the firmware do).
     pub sample_period_s: f32,
     /// Use the exact closed-form multi-step maps for the linear laws (default `true`); `false`
     /// steps every law `n` times (same results to rounding).
     pub closed_form: bool,
     /// Discretisation of the ED and ED-ED (default [`EdScheme::Euler`], the paper's).
     pub ed_scheme: EdScheme,
-    /// How the input angle is unwrapped (default [`Wrap::Deg180`]: yaw and roll; pitch,
-    /// within +-90 deg, takes [`Wrap::None`]).
+    /// How the input angle is unwrapped (default [`Wrap::Deg180`]: yaw and roll, reported
+    /// within +-180 deg; pitch, within +-90 deg, and any signal that does not wrap take
+    /// [`Wrap::None`]: with the default, a jump of more than 180 between two samples is taken
+    /// as a wrap).
     pub wrap: Wrap,
     /// Velocity estimators' gains.
     pub velocity: BankGains,
@@ -218,7 +224,7 @@ impl BankConfig {
     /// (linear) and gap rule with every family's gains tuned on a family of synthetic motions
     /// at 100, 50, 25 and 20 Hz and noise levels (not the bundled test captures). Produced by
     /// `cargo test --release -p host-tests --test preset -- --ignored --nocapture`
-    /// (docs/CALIBRATION.md, "Shipped defaults"). These gains are for 20-100 Hz: at a lower
+    /// (docs/PRESETS.md). These gains are for 20-100 Hz: at a lower
     /// packet rate `nav440 estimate` and the firmware run the rate's entry of
     /// [`BankConfig::NAV440_RATES`] ([`BankConfig::with_nav440_gains`] once the period is
     /// measured).
@@ -248,8 +254,8 @@ impl BankConfig {
     }
 }
 
-/// Default gap rule, in nominal sample periods: 25 (the former fixed 0.25 s at 100 Hz). The
-/// bank integrates across up to 24 lost packets at any packet rate.
+/// Default gap rule, in nominal sample periods: 25 (0.25 s at 100 Hz). The bank integrates
+/// across up to 24 lost packets at any packet rate.
 pub const GAP_PERIODS: f32 = 25.0;
 
 /// How a bank unwraps its input angle.
