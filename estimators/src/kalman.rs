@@ -16,10 +16,14 @@ pub struct KalmanConfig {
     /// Nominal sample period `dt0`, s (NAV440 at 100 Hz: 0.01). The steady-state gains are for
     /// this period; the prediction uses each sample's actual `dt`.
     pub dt: f32,
-    /// Power spectral density `q` of the white jerk driving the model, unit^2/s^5
-    /// (deg^2/s^5 for yaw).
+    /// Power spectral density `q` of the white jerk driving the model, unit^2/s^5 (deg^2/s^5
+    /// for an angle in deg): how fast the acceleration may change. Only `q / r` sets the
+    /// steady-state gain; the three closed-loop poles lie near `|s| = (q / (r dt))^(1/6)`
+    /// rad/s, so `q = r dt w0^6` gives the bandwidth `w0` (each factor 10 in `q / r` moves it
+    /// by 1.47). Larger follows faster motion with more noise.
     pub q: f32,
-    /// Measurement noise variance `r`, unit^2 (deg^2).
+    /// Measurement noise variance `r` of the input, unit^2 (deg^2): e.g. 0.01 for 0.1 deg RMS
+    /// noise ([`crate::NoiseEstimator`] measures it on a moving signal).
     pub r: f32,
 }
 
@@ -76,7 +80,14 @@ impl<T: Real> Kalman<T> {
         self.a = T::ZERO;
     }
 
-    /// One predict + update with measurement `y` taken `dt` (s, as `T`) after the previous one.
+    /// One predict + update with the measurement `y` (input unit) taken `dt` seconds (as `T`)
+    /// after the previous one.
+    ///
+    /// Convention: the measurement first, then the *interval* in seconds; the first
+    /// measurement goes to [`Self::reset`] instead. The banks and [`crate::SampleAdapter`]
+    /// take the other order and an absolute time: `update(t_us, y)`, the sample's time stamp
+    /// in integer microseconds first, and compute the interval themselves (as
+    /// [`KalmanParams`], the bank's tracker, does: `dt = round(interval / h) h`).
     #[inline]
     pub fn update(&mut self, y: T, dt: T) {
         let xp = self.x + dt * (self.v + (self.a * dt).div_int(2));
