@@ -129,7 +129,7 @@ fn gap_handling() {
         BankOutput {
             yaw_unwrapped_deg: 12.5,
             yaw_residual_deg: 0.0,
-            values: [0.0; 14]
+            values: [0.0; estimators::Channel::COUNT]
         }
     );
     bank.restart();
@@ -184,8 +184,8 @@ fn gap_handling() {
     t_us += 490_000;
     yaw += 120.0;
     let out = bank.update(t_us, yaw as f32).unwrap();
-    assert_eq!(out.velocities(), [0.0; 7]);
-    assert_eq!(out.accelerations(), [0.0; 7]);
+    assert_eq!(out.velocities(), [0.0; estimators::FAMILY_COUNT]);
+    assert_eq!(out.accelerations(), [0.0; estimators::FAMILY_COUNT]);
     assert_eq!(bank.reinit_count(), 1);
     for _ in 0..100 {
         t_us += 10_000;
@@ -456,7 +456,7 @@ const ACCURACY_SEEDS: [u64; 10] = [42, 1, 2, 3, 4, 5, 6, 7, 8, 9];
 #[allow(clippy::needless_range_loop)] // `i` indexes the channels and three MSE tables
 fn fixed_point_matches_f32_on_paper_experiment() {
     let cfg = BankConfig::default();
-    let mut sum = [[[0.0f64; 7]; 2]; 3]; // [f32, Fx, f64][vel, acc][estimator]
+    let mut sum = [[[0.0f64; estimators::FAMILY_COUNT]; 2]; 3]; // [f32, Fx, f64][vel, acc][estimator]
     let (mut dv, mut da) = (0.0f32, 0.0f32);
     // The AVE row: [vel, acc] maxima over all samples and seeds of |Fx - f64 at 2h| (the
     // arithmetic), |f64 at 2h - f64 at h| (the discretisation), |f32 - f64| at h (f32's

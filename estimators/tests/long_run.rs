@@ -43,8 +43,8 @@ fn skip_in_debug() -> bool {
 /// Hourly RMS velocity error of each bank column vs the true rate, plus the velocity rows of
 /// every sample (for the f32 vs fixed-point comparison), over `hours` hours.
 struct Run {
-    hourly_rms: Vec<[f64; 7]>,
-    vel: Vec<[f32; 7]>,
+    hourly_rms: Vec<[f64; estimators::FAMILY_COUNT]>,
+    vel: Vec<[f32; estimators::FAMILY_COUNT]>,
 }
 
 fn run_bank<T: Real>(hours: usize) -> Run {
@@ -52,7 +52,7 @@ fn run_bank<T: Real>(hours: usize) -> Run {
     let mut hourly_rms = Vec::with_capacity(hours);
     let mut vel = Vec::with_capacity(hours * HOUR);
     for h in 0..hours {
-        let mut sum = [0.0f64; 7];
+        let mut sum = [0.0f64; estimators::FAMILY_COUNT];
         for k in h * HOUR..(h + 1) * HOUR {
             let t_us = k as u64 * (1_000_000 / RATE_HZ);
             let (yaw, rate) = spin(t_us as f64 * 1e-6);
