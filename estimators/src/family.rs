@@ -33,6 +33,32 @@
 //! assert_eq!(names.0[4], "4 ad AdConfig { t: 0.01 }");
 //! assert_eq!(names.0.len(), estimators::FAMILY_COUNT);
 //! ```
+//!
+//! # Adding an estimator to the paper bank
+//!
+//! 1. Its module, next to the others (`src/foo.rs`; `mod foo;` and `pub use foo::{..}` in
+//!    `lib.rs`): the law (`FooParams`, a [`Law`]), its configuration `FooConfig` (with the
+//!    `serde` and `defmt` derives of the others), `impl Gains for FooConfig` and the family
+//!    marker `FooFamily` (`impl Family`: name, label, channels, scheduling, where its gains
+//!    are in [`BankGains`]).
+//! 2. `bank/paper.rs`: `FooFamily` in the family list; its two channels
+//!    (`FooV = "foo_v"`, `FooA = "foo_a"`) and its row or rows, each with a `warm` clause, in
+//!    the `estimator_bank!` table below the list.
+//! 3. `bank/config.rs`: the field `foo: FooConfig` of [`BankGains`], its paper values in
+//!    `BankGains::PAPER_VELOCITY` and `BankGains::PAPER_ACCELERATION`, its line in
+//!    [`BankGains::write_rust`] and its type in [`BankGains::RUST_TYPES`].
+//! 4. What the compiler and the tests then ask for: a value in each tuned preset
+//!    (`BankGains::NAV440_*`, and `BankConfig::NAV440_RATES` in `rates.rs`; the paper's until
+//!    it is tuned); the sizes in `ram.rs` (compile-time checked); the paper bank's CSV
+//!    contract (`nav440_pipeline::csv::HEADER` and the tests that spell out its columns);
+//!    the committed `nav440 tune --rust` snippets `host-tests/data/gains/*.rs`,
+//!    regenerated.
+//!
+//! The channel lists, the warm gain change, the gain schedule, the gains file, the tuner and
+//! the `nav440 paper` tables then follow. Optional: an observer that should record its own
+//! switch point per schedule level needs a field in [`ObserverSwitch`] (with its line in
+//! `ObserverSwitch::write_rust` and [`ObserverSwitch::all`]) returned by
+//! [`Family::switch_up_mut`]; `nav440 plot` draws the families its panels list.
 
 use crate::adaptive::ObserverSwitch;
 use crate::bank::{BankGains, Channel};

@@ -193,11 +193,7 @@ const SWITCH_UP: &str = "SwitchUpFile";
 fn switch_up_names() -> &'static [&'static str] {
     static NAMES: std::sync::OnceLock<Vec<&'static str>> = std::sync::OnceLock::new();
     NAMES.get_or_init(|| {
-        let any = ObserverSwitch {
-            ave: 1.0,
-            ilo: [1.0; 3],
-            ed: 1.0,
-        };
+        let any = ObserverSwitch::all(1.0);
         any.points()
             .iter()
             .map(|&(c, _)| FAMILIES[c].name)
@@ -286,11 +282,7 @@ impl<'de> Deserialize<'de> for SwitchUpFile {
                     }
                     values[i] = Some(map.next_value()?);
                 }
-                let mut sw = ObserverSwitch {
-                    ave: 0.0,
-                    ilo: [0.0; 3],
-                    ed: 0.0,
-                };
+                let mut sw = ObserverSwitch::all(0.0);
                 for (i, v) in values.into_iter().enumerate() {
                     match v {
                         Some(x) => set(&mut sw, i, x),
@@ -304,11 +296,7 @@ impl<'de> Deserialize<'de> for SwitchUpFile {
                 mut seq: A,
             ) -> std::result::Result<SwitchUpFile, A::Error> {
                 let names = switch_up_names();
-                let mut sw = ObserverSwitch {
-                    ave: 0.0,
-                    ilo: [0.0; 3],
-                    ed: 0.0,
-                };
+                let mut sw = ObserverSwitch::all(0.0);
                 for i in 0..names.len() {
                     match seq.next_element()? {
                         Some(x) => set(&mut sw, i, x),

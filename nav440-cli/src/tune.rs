@@ -1020,11 +1020,7 @@ fn switch_points(point: impl Fn(usize) -> f32) -> estimators::ObserverSwitch {
             }
         }
     }
-    let none = estimators::ObserverSwitch {
-        ave: 0.0,
-        ilo: [0.0; 3],
-        ed: 0.0,
-    };
+    let none = estimators::ObserverSwitch::all(0.0);
     let mut set = Set(none, point);
     for_each_family(&mut set);
     set.0

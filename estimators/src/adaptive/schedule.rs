@@ -52,6 +52,16 @@ pub struct ObserverSwitch {
 }
 
 impl ObserverSwitch {
+    /// Every family's switch point at `x` deg^2 (a starting value to fill family by family,
+    /// [`crate::Family::switch_up_mut`]).
+    pub const fn all(x: f32) -> Self {
+        Self {
+            ave: x,
+            ilo: [x; 3],
+            ed: x,
+        }
+    }
+
     /// `Ok` if every value is finite and > 0.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let all = self.points();
