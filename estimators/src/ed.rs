@@ -6,7 +6,7 @@ use crate::error::positive;
 use crate::family::{coordinate, geometric, Family, Gains, Scheduling, Scorer, SearchPoint};
 use crate::fxk::{advance_one, advance_two, frac, mag, mulf, run, sqrt_fast, Coef, Kernel, Stage};
 use crate::law::{step_n, Law, Stateful};
-use crate::{ConfigError, ExactSqrt, Hold, Real, SqrtFn};
+use crate::{ConfigError, Hold, NativeSqrt, Real, SqrtFn};
 use core::marker::PhantomData;
 
 /// Parameters of the exact differentiator.
@@ -51,13 +51,13 @@ pub enum EdScheme {
 /// finite time on noise-free inputs with `|y''| <= C < alpha` and `lambda` large enough; with
 /// noise of amplitude `eps` the error is of order `sqrt(eps)`.
 ///
-/// `|e|^(1/2)` uses the exact square root `S` (default [`ExactSqrt`] = [`Real::sqrt`]; a
+/// `|e|^(1/2)` uses the exact square root `S` (default [`NativeSqrt`] = [`Real::sqrt`]; a
 /// firmware may plug in its FPU instruction, see [`SqrtFn`]); `micromath`'s fast approximation
 /// would bias it (measured in the tests, see the crate README).
 ///
 /// The validated coefficients ([`crate::Law`]); the state is [`EdState`].
 #[derive(Clone, Copy, Debug)]
-pub struct EdParams<T: Real, S: SqrtFn<T> = ExactSqrt> {
+pub struct EdParams<T: Real, S: SqrtFn<T> = NativeSqrt> {
     h: T,
     halpha: T,
     lambda: T,
@@ -82,7 +82,7 @@ pub struct EdState<T: Real> {
 
 /// The ED as one object (parameters and state, [`crate::Estimator`]).
 /// RAM: see [`crate::ram`].
-pub type Ed<T, S = ExactSqrt> = Stateful<EdParams<T, S>>;
+pub type Ed<T, S = NativeSqrt> = Stateful<EdParams<T, S>>;
 
 impl<T: Real, S: SqrtFn<T>> EdParams<T, S> {
     /// Validates `cfg` for step `h` (s) and the discretisation `scheme`. Errors:

@@ -11,7 +11,7 @@
 //!
 //! Laws are continuous-time and stepped with explicit Euler at a step `h` (paper: 1e-4 s);
 //! samples arriving at the sensor rate are fed through the [`SampleAdapter`] (or the
-//! [`YawBank`]), which runs `n = round(dt / h)` steps per sample with linear interpolation
+//! [`PaperBank`]), which runs `n = round(dt / h)` steps per sample with linear interpolation
 //! ([`Hold::Linear`], default) or a zero-order hold. Linear laws (ILO, AD and their series)
 //! can use their exact multi-step map ([`ClosedForm`]) instead of `n` steps.
 //!
@@ -20,7 +20,7 @@
 //!   steps with `step(&self, &mut State, y)`; [`Stateful`] (aliases [`Ave`], [`Ilo`], [`Ad`],
 //!   [`Ed`]) binds the two into the classic [`Estimator`] object.
 //! * Banks are generated from one table by [`estimator_bank!`]: [`PaperBank`] (alias
-//!   [`YawBank`]: the paper's 14 estimators, output indexed by [`Channel`]) and
+//!   [`PaperBank`]: the paper's 14 estimators, output indexed by [`Channel`]) and
 //!   [`ProductBank`] (one velocity and one acceleration estimator). [`BankConfig::wrap`] picks
 //!   the unwrapping per axis ([`Wrap`]). See docs/BANK.md.
 //! * [`family`]: the paper bank's estimator families (one per column of the paper's tables),
@@ -51,11 +51,11 @@
 //!   leave the state unchanged; invalid parameters return [`ConfigError`] at construction.
 //!
 //! ```
-//! use estimators::{BankConfig, Channel, Fx, YawBank};
+//! use estimators::{BankConfig, Channel, Fx, PaperBank};
 //!
 //! // The paper's bank: AVE, ILO1-3, AD, ED, Kalman; acceleration by series connections.
-//! let mut bank = YawBank::<f32>::new(&BankConfig::default()).unwrap();
-//! let mut fixed = YawBank::<Fx>::new(&BankConfig::default()).unwrap();
+//! let mut bank = PaperBank::<f32>::new(&BankConfig::default()).unwrap();
+//! let mut fixed = PaperBank::<Fx>::new(&BankConfig::default()).unwrap();
 //! // yaw = 30 deg/s * t, wrapping at +-180, sampled at 100 Hz
 //! for k in 0..200u64 {
 //!     let t_us = k * 10_000;
@@ -66,7 +66,7 @@
 //!         assert!((out[Channel::AveV] - 30.0).abs() < 0.1); // AVE velocity, deg/s
 //!         assert!((out_fx[Channel::AveV] - 30.0).abs() < 0.1);
 //!         assert!(out[Channel::AveA].abs() < 1.0); // AVE-AVE acceleration, deg/s^2
-//!         assert!((out.yaw_unwrapped_deg - 59.7).abs() < 1e-3); // unwrapped yaw, deg
+//!         assert!((out.unwrapped_deg - 59.7).abs() < 1e-3); // unwrapped yaw, deg
 //!     }
 //! }
 //! // Bad input leaves the state unchanged and is reported.
@@ -110,9 +110,9 @@ pub use ave::{
     Ave, AveConfig, AveFamily, AveParams, AveState, DeltaLaw, DeltaMode, COARSE_STABILITY_MARGIN,
 };
 pub use bank::{
-    Accepted, AdAdMap, BankConfig, BankGains, BankInput, BankOutput, Channel, Fed, Feed, PaperBank,
+    Accepted, AdAdMap, BankConfig, BankGains, BankInput, Channel, Fed, Feed, PaperBank,
     PaperOutput, PaperParams, PaperState, ProductBank, ProductChannel, ProductOutput,
-    ProductParams, ProductState, Wrap, YawBank, GAP_PERIODS, KF_DEFAULT, VELOCITY_NAMES,
+    ProductParams, ProductState, Wrap, GAP_PERIODS, KF_DEFAULT, VELOCITY_NAMES,
 };
 pub use ed::{Ed, EdConfig, EdFamily, EdParams, EdScheme, EdState};
 pub use error::{ConfigError, SampleError};
@@ -129,7 +129,7 @@ pub use law::{Law, Stateful};
 pub use linear::{ClosedForm, LinearLaw};
 pub use pair::{VelAcc, VelAccState};
 pub use rates::RateGains;
-pub use real::{ExactSqrt, Fx, Real, SqrtFn};
+pub use real::{Fx, NativeSqrt, Real, SqrtFn};
 pub use series::{Series, SeriesState};
 pub use traits::{EstimatorBank, EstimatorOutput, FromConfig};
 pub use unwrap::Unwrapper;

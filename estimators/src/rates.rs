@@ -292,7 +292,7 @@ impl BankConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::YawBank;
+    use crate::PaperBank;
 
     /// Every NAV440 packet rate (divider 1, 2, 4, 5, 10, 20, 25, 50: NAV440-PROTOCOL.md) runs
     /// the entry tuned at it or, for 25 and 20 Hz, on it (the first entry's family), and 4 Hz
@@ -340,7 +340,7 @@ mod tests {
                 }
                 .with_nav440_gains();
                 assert_eq!(cfg.velocity, r.velocity);
-                assert!(YawBank::<f32>::new(&cfg).is_ok(), "{p} s");
+                assert!(PaperBank::<f32>::new(&cfg).is_ok(), "{p} s");
             }
         }
         assert_eq!(below, f32::INFINITY);

@@ -377,7 +377,7 @@ pub fn fx_sqrt(r: i64) -> i64 {
 ///
 /// Where `f32` runs out: its resolution is relative (ulp(100 deg) = 7.6e-6 deg). On an
 /// unwrapped yaw after 11 turns (4000 deg, ulp 4.9e-4) the AVE's per-step increments of
-/// `0.04 deg` at 400 deg/s rounded to a 0.5 % velocity bias; the [`crate::YawBank`] therefore
+/// `0.04 deg` at 400 deg/s rounded to a 0.5 % velocity bias; the [`crate::PaperBank`] therefore
 /// runs every law on the wrapped yaw in a translated frame ([`crate::Estimator::translate`]).
 /// The implicit ED's sliding band `h^2 alpha = 7.7e-6` is below f32's resolution of a
 /// 300 deg/s input, so ED-ED differs between `f32` and [`Fx`] (tests/bank.rs).
@@ -444,7 +444,7 @@ pub trait Real:
     /// host and MCU agree bit for bit), the `fixed` crate's integer square root for [`Fx`].
     /// Negative arguments give 0.
     fn sqrt(self) -> Self;
-    /// The square root of the ED's `|e|^(1/2)` term ([`ExactSqrt`], the banks' default):
+    /// The square root of the ED's `|e|^(1/2)` term ([`NativeSqrt`], the banks' default):
     /// [`Real::sqrt`] for the float types (exact, IEEE correctly rounded); for [`Fx`] a
     /// cheaper root within a relative `2^-27` of the exact one (`fxk::sqrt_fast`: Newton
     /// iteration in 32-bit words without the final correction; docs/FIXED-POINT.md, "The
@@ -709,13 +709,13 @@ pub trait SqrtFn<T: Real>: Copy + Default + Debug {
 /// banks' default `S`). For the float types that is the exact, IEEE correctly rounded
 /// [`Real::sqrt`] (`libm::sqrtf` for `f32`: about 45 instructions on a Cortex-M4F, which has
 /// no stable Rust path to `VSQRT` without `unsafe`); for [`Fx`] it is a cheaper root within a
-/// relative `2^-27` of the exact one (`fxk::sqrt_fast`), so it is not exact for every type:
-/// it is the type's native choice. A [`SqrtFn`] of one's own (an FPU instruction) replaces
-/// it.
+/// relative `2^-27` of the exact one (`fxk::sqrt_fast`). Hence the name: the type's native
+/// root, exact for the float types but not for [`Fx`]. A [`SqrtFn`] of one's own (an FPU
+/// instruction) replaces it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct ExactSqrt;
+pub struct NativeSqrt;
 
-impl<T: Real> SqrtFn<T> for ExactSqrt {
+impl<T: Real> SqrtFn<T> for NativeSqrt {
     #[inline]
     fn sqrt(x: T) -> T {
         x.ed_sqrt()

@@ -11,7 +11,7 @@
 //! MSE. Every hold asked for (both by default) is tuned; the one with the smaller geometric
 //! mean of the tuned MSEs over the 14 families is kept (the hold is one bank-wide option). The single estimators run behind
 //! `estimators::SampleAdapter` (unwrapped noisy yaw, same hold and step as the bank); the
-//! "before" and "after" MSE printed are then measured through the whole `YawBank` with the
+//! "before" and "after" MSE printed are then measured through the whole `PaperBank` with the
 //! paper presets and with the tuned gains file, i.e. exactly what `nav440 estimate --gains`
 //! computes.
 
@@ -1091,7 +1091,7 @@ pub fn tuned_ave_deltahat(
                 seed,
             }),
         )?;
-        let mut bank: estimators::YawBank<f32> = nav440_pipeline::axis_bank(axis, cfg)
+        let mut bank: estimators::PaperBank<f32> = nav440_pipeline::axis_bank(axis, cfg)
             .map_err(|e| Error::Usage(format!("bad estimator configuration: {e}")))?;
         let (mut acc, mut n) = ([0.0f64; 3], 0u32);
         for (s, &y) in samples.iter().zip(&y) {
@@ -1155,6 +1155,8 @@ fn fmt_gains(f: &FamilyGains, i: usize) -> String {
 impl TuneResult {
     /// The printed report.
     pub fn to_text(&self) -> String {
+        // "YawBank" (the type is `PaperBank`): the report is kept byte for byte; changing it is
+        // a change of the output of its own.
         let mut s = format!(
             "tuned for noise variance {} deg^2, trained on {}-{} s, scored on {}-{} s, mean of {} seeds (MSE measured through YawBank)\n",
             self.noise_var, self.train.0, self.train.1, self.test.0, self.test.1, self.seeds

@@ -19,7 +19,7 @@ pub use noise::*;
 pub use schedule::*;
 
 use crate::bank::{BankConfig, PaperBank, PaperOutput};
-use crate::{ConfigError, ExactSqrt, Real, SampleError, SqrtFn};
+use crate::{ConfigError, NativeSqrt, Real, SampleError, SqrtFn};
 
 /// How an [`AdaptiveBank`] follows the noise.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -86,7 +86,7 @@ impl Default for AdaptiveConfig {
 /// `cargo test --release -p host-tests --test schedule -- --nocapture`). Cost: one sample of the whole bank per replayed sample on top of the
 /// coefficients' rebuild (`cargo xtask bench`).
 #[derive(Clone, Debug)]
-pub struct AdaptiveBank<T: Real, S: SqrtFn<T> = ExactSqrt> {
+pub struct AdaptiveBank<T: Real, S: SqrtFn<T> = NativeSqrt> {
     bank: PaperBank<T, S>,
     base: BankConfig,
     schedule: GainSchedule,

@@ -5,8 +5,7 @@ use crate::kalman::{KalmanConfig, KalmanOutput, KalmanParams};
 use crate::presets::*;
 use crate::{
     AdFamily, AdParams, AveConfig, AveFamily, AveParams, ClosedForm, ConfigError, EdConfig,
-    EdFamily, EdParams, ExactSqrt, IloConfig, IloFamily, IloParams, KfFamily, Real, Series, SqrtFn,
-    VelAcc,
+    EdFamily, EdParams, IloConfig, IloFamily, IloParams, KfFamily, Real, Series, SqrtFn, VelAcc,
 };
 
 // The paper bank is defined by two tables: its families (the columns of the paper's
@@ -139,7 +138,7 @@ crate::estimator_bank! {
     /// Generic over [`Real`]: `PaperBank<f32>` for FPU targets, `PaperBank<Fx>` for
     /// Cortex-M0/M3 (the `f32` inputs and outputs are only converted; all arithmetic is
     /// integer). No heap; the whole state is inline (see [`crate::ram`] for its size). `S` is
-    /// the ED's square root (default [`ExactSqrt`]; see [`SqrtFn`] for plugging in an FPU
+    /// the ED's square root (default [`NativeSqrt`]; see [`SqrtFn`] for plugging in an FPU
     /// instruction with identical results).
     bank PaperBank, params PaperParams, state PaperState, output PaperOutput, channel Channel;
     build(cfg, n0, prev);
@@ -229,11 +228,6 @@ impl PaperOutput {
         Channel::ACCELERATION.map(|c| self[c])
     }
 }
-
-/// The paper bank under its former name (one axis: unwrapping, `new_epoch`, `set_turns`).
-pub type YawBank<T, S = ExactSqrt> = PaperBank<T, S>;
-/// The paper bank's output under its former name.
-pub type BankOutput = PaperOutput;
 
 impl Channel {
     /// The velocity channels, one per family in column order ([`FAMILIES`]: ave, ilo1,

@@ -110,18 +110,18 @@ macro_rules! estimator_bank {
         /// (velocities in deg/s, accelerations in deg/s^2).
         #[derive(Clone, Copy, Debug, PartialEq)]
         pub struct $Out {
-            /// The unwrapped angle, deg, rounded to f32 (see `yaw_residual_deg`).
-            pub yaw_unwrapped_deg: f32,
+            /// The unwrapped angle, deg, rounded to f32 (see `residual_deg`).
+            pub unwrapped_deg: f32,
             /// What f32 rounding took off the unwrapped angle, deg: the exact unwrapped angle
-            /// is `yaw_unwrapped_deg as f64 + yaw_residual_deg` (0 while f32 holds it).
-            pub yaw_residual_deg: f64,
+            /// is `unwrapped_deg as f64 + residual_deg` (0 while f32 holds it).
+            pub residual_deg: f64,
             /// The channels' values, indexed by the channel (`out[channel]`).
             pub values: [f32; $Chan::COUNT],
         }
 
         impl Default for $Out {
             fn default() -> Self {
-                Self { yaw_unwrapped_deg: 0.0, yaw_residual_deg: 0.0, values: [0.0; $Chan::COUNT] }
+                Self { unwrapped_deg: 0.0, residual_deg: 0.0, values: [0.0; $Chan::COUNT] }
             }
         }
 
@@ -146,12 +146,12 @@ macro_rules! estimator_bank {
 
             #[inline]
             fn unwrapped_deg(&self) -> f32 {
-                self.yaw_unwrapped_deg
+                self.unwrapped_deg
             }
 
             #[inline]
             fn residual_deg(&self) -> f64 {
-                self.yaw_residual_deg
+                self.residual_deg
             }
 
             #[inline]
@@ -162,21 +162,21 @@ macro_rules! estimator_bank {
 
         /// The validated parameters of every row (computed once; shareable between axes).
         #[derive(Clone, Copy, Debug)]
-        pub struct $Params<T: $crate::Real, S: $crate::SqrtFn<T> = $crate::ExactSqrt> {
+        pub struct $Params<T: $crate::Real, S: $crate::SqrtFn<T> = $crate::NativeSqrt> {
             $( $(#[$rm])* pub $field: $Law, )+
             _sqrt: core::marker::PhantomData<(T, S)>,
         }
 
         /// The state of every row.
         #[derive(Clone, Copy, Debug)]
-        pub struct $State<T: $crate::Real, S: $crate::SqrtFn<T> = $crate::ExactSqrt> {
+        pub struct $State<T: $crate::Real, S: $crate::SqrtFn<T> = $crate::NativeSqrt> {
             $( $(#[$rm])* pub $field: <$Law as $crate::Law>::State, )+
             _sqrt: core::marker::PhantomData<(T, S)>,
         }
 
         $(#[$bm])*
         #[derive(Clone, Copy, Debug)]
-        pub struct $Bank<T: $crate::Real, S: $crate::SqrtFn<T> = $crate::ExactSqrt> {
+        pub struct $Bank<T: $crate::Real, S: $crate::SqrtFn<T> = $crate::NativeSqrt> {
             input: $crate::BankInput<T>,
             params: $Params<T, S>,
             state: $State<T, S>,
@@ -287,7 +287,7 @@ macro_rules! estimator_bank {
 
         impl<T: $crate::Real, S: $crate::SqrtFn<T>> $Bank<T, S> {
             /// Largest accepted `|angle_deg|`, deg (`BankInput::MAX_ABS_DEG`, 1e6).
-            pub const MAX_ABS_YAW_DEG: f32 = $crate::BankInput::<T>::MAX_ABS_DEG;
+            pub const MAX_ABS_DEG: f32 = $crate::BankInput::<T>::MAX_ABS_DEG;
 
             /// Builds the bank (validates every parameter; computes the closed-form maps and
             /// the Kalman gains).
@@ -307,7 +307,7 @@ macro_rules! estimator_bank {
             ///
             /// Errors (state unchanged): `SampleError::NotFinite` for NaN/infinite
             /// input, `SampleError::OutOfRange` for `|angle_deg|` above
-            /// `MAX_ABS_YAW_DEG`, `SampleError::NonIncreasingTime` for `t_us` not
+            /// `MAX_ABS_DEG`, `SampleError::NonIncreasingTime` for `t_us` not
             /// later than the previous sample.
             #[inline]
             pub fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<$Out, $crate::SampleError> {
@@ -332,7 +332,7 @@ macro_rules! estimator_bank {
                         self.params.values(&self.state)
                     }
                 };
-                let out = $Out { yaw_unwrapped_deg: a.angle.0, yaw_residual_deg: a.angle.1, values };
+                let out = $Out { unwrapped_deg: a.angle.0, residual_deg: a.angle.1, values };
                 Ok((out, $crate::Fed { shift: a.shift, feed: a.feed }))
             }
 
