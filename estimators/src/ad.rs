@@ -1,6 +1,8 @@
 //! Approximate differentiator, AD: `s / (T s + 1)`.
 
+use crate::bank::{BankGains, Channel};
 use crate::error::positive;
+use crate::family::{coordinate, geometric, Family, Gains, Scheduling, Scorer, SearchPoint};
 use crate::law::{Law, Stateful};
 use crate::linear::{LinearLaw, LIN_MAX};
 use crate::{ConfigError, Real};
@@ -129,4 +131,62 @@ impl<T: Real> LinearLaw for AdParams<T> {
 pub struct AdConfig {
     /// Time constant `T`, s (paper: 0.01 for velocity, 0.1 for each acceleration stage).
     pub t: f32,
+}
+
+/// The AD family of the paper bank: AD velocity, AD-AD acceleration; gains
+/// [`BankGains::ad_t`] (the time constant, as an [`AdConfig`]).
+#[derive(Clone, Copy, Debug)]
+pub struct AdFamily;
+
+impl Family for AdFamily {
+    type Gains = AdConfig;
+    const NAME: &'static str = "ad";
+    const LABEL: &'static str = "AD";
+    const VELOCITY: Channel = Channel::AdV;
+    const ACCELERATION: Channel = Channel::AdA;
+    const SCHEDULING: Scheduling = Scheduling::Smooth;
+
+    fn get(half: &BankGains) -> AdConfig {
+        AdConfig { t: half.ad_t }
+    }
+
+    fn set(half: &mut BankGains, gains: AdConfig) {
+        half.ad_t = gains.t;
+    }
+}
+
+impl Gains for AdConfig {
+    /// `T` geometrically.
+    fn interpolate(&self, other: &Self, w: f32) -> Self {
+        AdConfig {
+            t: geometric(self.t, other.t, w),
+        }
+    }
+
+    /// `(T)`.
+    fn search_point(&self) -> SearchPoint {
+        SearchPoint::from_array([f64::from(self.t)])
+    }
+
+    fn with_search_point(&self, x: &[f64]) -> Self {
+        AdConfig {
+            t: coordinate(x, 0, self.t),
+        }
+    }
+
+    /// `T` in `[1e-4, 1]` s.
+    fn search_box(_h_s: f64) -> (SearchPoint, SearchPoint) {
+        (
+            SearchPoint::from_array([1e-4]),
+            SearchPoint::from_array([1.0]),
+        )
+    }
+
+    fn score<S: Scorer>(&self, h: f32, scorer: &S) -> Result<S::Score, ConfigError> {
+        Ok(scorer.law(AdParams::<f32>::new(self.t, h)?))
+    }
+
+    fn describe(&self, w: &mut dyn core::fmt::Write) -> core::fmt::Result {
+        write!(w, "T={}", self.t)
+    }
 }

@@ -145,7 +145,13 @@ impl<T: Real, E: Estimator<T>> SampleAdapter<T, E> {
         })
     }
 
-    /// Feeds one sample: `t_us` in µs, `y` in the estimator's input unit.
+    /// Feeds one sample: `t_us`, its time stamp in integer microseconds (absolute, increasing),
+    /// then `y`, the sample in the estimator's input unit; returns the estimate.
+    ///
+    /// Convention: the time stamp first, as the banks' `update(t_us, angle_deg)`; the
+    /// adapter computes the interval from the previous sample. [`crate::Kalman::update`]
+    /// takes the other order and a relative time: `update(y, dt)`, the measurement first and
+    /// the interval in seconds.
     pub fn update(&mut self, t_us: u64, y: f32) -> Result<T, SampleError> {
         if !y.is_finite() {
             return Err(SampleError::NotFinite);

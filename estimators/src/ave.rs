@@ -1,6 +1,9 @@
 //! Adaptive velocity estimator, AVE (paper eq. 4).
 
+use crate::adaptive::ObserverSwitch;
+use crate::bank::{BankGains, Channel};
 use crate::error::{non_negative, positive};
+use crate::family::{coordinate, geometric, Family, Gains, Scheduling, Scorer, SearchPoint};
 use crate::fxk::{
     advance_one, advance_two, frac, mag, mulf, mulf32, run, smul, Coef, Kernel, Stage,
 };
@@ -67,7 +70,7 @@ pub enum DeltaLaw<T: Real> {
 /// this many times shorter than the longest stable Euler step `k / gamma1`: the Euler map
 /// keeps the fraction `1 - m h gamma1 / k` of the linear part's damping per unit time, so at
 /// least 90 % here. Gains tuned close to the step `h`'s own limit (a lightly damped observer
-/// at `h gamma1 / k` of 0.8-0.98, as some tuned schedule levels are: docs/CALIBRATION.md,
+/// at `h gamma1 / k` close to 1, as tuned schedule levels can be: docs/ADAPTIVE-GAINS.md,
 /// "Gains at the edge of the Euler step") would be unstable at `2 h`; they step at `h`.
 pub const COARSE_STABILITY_MARGIN: f64 = 10.0;
 
@@ -87,7 +90,8 @@ pub const COARSE_STABILITY_MARGIN: f64 = 10.0;
 /// For [`crate::Fx`] ([`Real::AVE_STEP_FACTOR`] = 2) the parameters also hold the
 /// coefficients of one Euler step of `2 h` (`2 h k`, `2 h gamma1`, `2 h`, `2 h sigma`,
 /// computed in `f64` from the configuration like those of `h`), used by [`Law::advance`] for
-/// whole pairs of steps ([`Law::coarse`], docs/FIXED-POINT.md part 4); they exist when the
+/// whole pairs of steps ([`Law::coarse`], docs/FIXED-POINT.md, "The AVE row at `2 h`"); they
+/// exist when the
 /// `deltahat` law is bounded ([`DeltaMode::Leaky`], the banks' default, or
 /// [`DeltaMode::Bounded`]; not [`DeltaMode::Paper`], whose `deltahat` grows without bound),
 /// `2 h` passes the same validation as `h` (`2 h k < 1`, `2 h gamma1 < k`, `2 h sigma < 1`)
@@ -151,8 +155,8 @@ impl<T: Real> AveParams<T> {
         let m = T::AVE_STEP_FACTOR;
         // The coarse step needs a bounded deltahat (Leaky, Bounded): with the paper's law
         // deltahat, and with it the switching term's jump `m h deltahat` per step, grows
-        // without bound, and so does the effect of the step size (docs/FIXED-POINT.md part 4:
-        // over a 6 h spin the paper's law at 2 h no longer behaves as at h).
+        // without bound, and so does the effect of the step size (docs/FIXED-POINT.md, "The
+        // AVE row at `2 h`": over a long spin the paper's law at 2 h no longer behaves as at h).
         let resolved =
             |step: f64| step * f64::from(cfg.gamma1) * COARSE_STABILITY_MARGIN <= f64::from(cfg.k);
         let coarse = if m > 1 && cfg.delta != DeltaMode::Paper && resolved(h * f64::from(m)) {
@@ -277,12 +281,11 @@ impl<T: Real> Law for AveParams<T> {
     /// `PaperBank::set_ave_deltahat`), and start from `xhat = y` (the last input) when the new
     /// `gamma1` is at least the old one: the position error a slower gain set left (at 20 Hz,
     /// a noise-sized fraction of a degree) would otherwise meet the new, larger `gamma1` and
-    /// swing the velocity by hundreds of deg/s (docs/CALIBRATION.md). To a smaller `gamma1`
-    /// (slower gains) `xhat` is kept: the faster gains left it close to the input, and the last
-    /// input itself carries a full noise sample, which the slow, lightly damped AVE turns into
-    /// ringing (about `sqrt(gamma1)` times the offset in deg/s; measured on the noise-switch
-    /// test's 40 draws: 26 draws below every fixed gain set instead of 22). Nothing when the
-    /// gains did not change.
+    /// swing the velocity by hundreds of deg/s. To a smaller `gamma1` (slower gains) `xhat`
+    /// is kept: the faster gains left it close to the input, and the last input itself
+    /// carries a full noise sample, which the slow, lightly damped AVE turns into ringing
+    /// (about `sqrt(gamma1)` times the offset in deg/s). Nothing when the gains did not
+    /// change (docs/ADAPTIVE-GAINS.md, "How a gain change keeps the estimates").
     fn retune_state(&self, old: &Self, s: &mut AveState<T>, y: T) {
         if self == old || self.c.hg < old.c.hg {
             return;
@@ -607,5 +610,73 @@ impl<const D: u8> Stage for AveStage<D> {
     #[inline(always)]
     fn mag(s: &AveFxState) -> u32 {
         mag(s.x) | mag(s.th) | mag(s.d)
+    }
+}
+
+/// The AVE family of the paper bank: AVE velocity, AVE-AVE acceleration (one
+/// [`crate::VelAcc`] row, sharing its first stage when both halves have the same gains);
+/// gains [`BankGains::ave`].
+#[derive(Clone, Copy, Debug)]
+pub struct AveFamily;
+
+impl Family for AveFamily {
+    type Gains = AveConfig;
+    const NAME: &'static str = "ave";
+    const LABEL: &'static str = "AVE";
+    const VELOCITY: Channel = Channel::AveV;
+    const ACCELERATION: Channel = Channel::AveA;
+    const SCHEDULING: Scheduling = Scheduling::Observer;
+
+    fn get(half: &BankGains) -> AveConfig {
+        half.ave
+    }
+
+    fn set(half: &mut BankGains, gains: AveConfig) {
+        half.ave = gains;
+    }
+
+    fn switch_up_mut(switch: &mut ObserverSwitch) -> Option<&mut f32> {
+        Some(&mut switch.ave)
+    }
+}
+
+impl Gains for AveConfig {
+    /// `k` and `gamma1` geometrically; the `deltahat` law of the nearer one.
+    fn interpolate(&self, other: &Self, w: f32) -> Self {
+        AveConfig {
+            k: geometric(self.k, other.k, w),
+            gamma1: geometric(self.gamma1, other.gamma1, w),
+            delta: if w < 0.5 { self.delta } else { other.delta },
+        }
+    }
+
+    /// `(k, gamma1)`; the `deltahat` law is not searched.
+    fn search_point(&self) -> SearchPoint {
+        SearchPoint::from_array([f64::from(self.k), f64::from(self.gamma1)])
+    }
+
+    fn with_search_point(&self, x: &[f64]) -> Self {
+        AveConfig {
+            k: coordinate(x, 0, self.k),
+            gamma1: coordinate(x, 1, self.gamma1),
+            delta: self.delta,
+        }
+    }
+
+    /// `k` in `[0.1, 1e5]` 1/s (tuned at low noise it reaches 10), `gamma1` in `[10, 1e8]`
+    /// 1/s^2; [`AveParams::new`] refuses what the step does not resolve.
+    fn search_box(_h_s: f64) -> (SearchPoint, SearchPoint) {
+        (
+            SearchPoint::from_array([0.1, 10.0]),
+            SearchPoint::from_array([1e5, 1e8]),
+        )
+    }
+
+    fn score<S: Scorer>(&self, h: f32, scorer: &S) -> Result<S::Score, ConfigError> {
+        Ok(scorer.law(AveParams::<f32>::new(self, h)?))
+    }
+
+    fn describe(&self, w: &mut dyn core::fmt::Write) -> core::fmt::Result {
+        write!(w, "k={} gamma1={}", self.k, self.gamma1)
     }
 }

@@ -1,9 +1,12 @@
 //! Levant's robust exact differentiator, ED (paper eqs. 5-7; Levant 1998).
 
+use crate::adaptive::ObserverSwitch;
+use crate::bank::{BankGains, Channel};
 use crate::error::positive;
+use crate::family::{coordinate, geometric, Family, Gains, Scheduling, Scorer, SearchPoint};
 use crate::fxk::{advance_one, advance_two, frac, mag, mulf, run, sqrt_fast, Coef, Kernel, Stage};
 use crate::law::{step_n, Law, Stateful};
-use crate::{ConfigError, ExactSqrt, Hold, Real, SqrtFn};
+use crate::{ConfigError, Hold, NativeSqrt, Real, SqrtFn};
 use core::marker::PhantomData;
 
 /// Parameters of the exact differentiator.
@@ -48,13 +51,13 @@ pub enum EdScheme {
 /// finite time on noise-free inputs with `|y''| <= C < alpha` and `lambda` large enough; with
 /// noise of amplitude `eps` the error is of order `sqrt(eps)`.
 ///
-/// `|e|^(1/2)` uses the exact square root `S` (default [`ExactSqrt`] = [`Real::sqrt`]; a
+/// `|e|^(1/2)` uses the exact square root `S` (default [`NativeSqrt`] = [`Real::sqrt`]; a
 /// firmware may plug in its FPU instruction, see [`SqrtFn`]); `micromath`'s fast approximation
 /// would bias it (measured in the tests, see the crate README).
 ///
 /// The validated coefficients ([`crate::Law`]); the state is [`EdState`].
 #[derive(Clone, Copy, Debug)]
-pub struct EdParams<T: Real, S: SqrtFn<T> = ExactSqrt> {
+pub struct EdParams<T: Real, S: SqrtFn<T> = NativeSqrt> {
     h: T,
     halpha: T,
     lambda: T,
@@ -79,7 +82,7 @@ pub struct EdState<T: Real> {
 
 /// The ED as one object (parameters and state, [`crate::Estimator`]).
 /// RAM: see [`crate::ram`].
-pub type Ed<T, S = ExactSqrt> = Stateful<EdParams<T, S>>;
+pub type Ed<T, S = NativeSqrt> = Stateful<EdParams<T, S>>;
 
 impl<T: Real, S: SqrtFn<T>> EdParams<T, S> {
     /// Validates `cfg` for step `h` (s) and the discretisation `scheme`. Errors:
@@ -224,14 +227,13 @@ impl<T: Real, S: SqrtFn<T>> Law for EdParams<T, S> {
     /// Bumpless gain change: `z = y + h u`, `u1 = u`, the equilibrium of any gains at the
     /// present output (the state holds the next step's position, so the next error is
     /// `h (u - rate)`, about 0, and the integrator carries the rate): the next output
-    /// continues from `u` whatever `lambda` becomes. Leaving the state as it was is bumpless only while
-    /// the ED slides (`e` near 0). A set tuned for low noise can work away from sliding
-    /// (the bundled schedule's 0.001 deg^2 level: `alpha` 11.5 deg/s^2, `lambda` 167, where
-    /// the root term carries the rate on a `|e|` of tenths of a degree); changing `lambda`
-    /// there made the output jump by `(lambda_new - lambda_old) |e|^(1/2)`, about 100 deg/s,
-    /// for as long as `alpha` took to catch up: a scheduled ED 9.6x the best fixed set at a
-    /// steady 0.003 deg^2 (docs/CALIBRATION.md, "Bumpless ED gain changes"). Gains
-    /// unchanged: the state is kept.
+    /// continues from `u` whatever `lambda` becomes. Leaving the state as it was would be
+    /// bumpless only while the ED slides (`e` near 0). A set tuned for low noise can work away
+    /// from sliding (a small `alpha`, where the root term carries the rate on a `|e|` of
+    /// tenths of a degree); changing `lambda` there would make the output jump by
+    /// `(lambda_new - lambda_old) |e|^(1/2)` for as long as `alpha` takes to catch up
+    /// (docs/ADAPTIVE-GAINS.md, "How a gain change keeps the estimates"). Gains unchanged: the
+    /// state is kept.
     fn retune_state(&self, old: &Self, s: &mut EdState<T>, y: T) {
         let same = self.h == old.h
             && self.lambda == old.lambda
@@ -436,5 +438,70 @@ impl Stage for EdFx {
     #[inline(always)]
     fn mag(s: &EdFxState) -> u32 {
         mag(s.z) | mag(s.u1) | mag(s.u)
+    }
+}
+
+/// The ED family of the paper bank: Levant ED velocity, ED-ED acceleration (one
+/// [`crate::VelAcc`] row); gains [`BankGains::ed`].
+#[derive(Clone, Copy, Debug)]
+pub struct EdFamily;
+
+impl Family for EdFamily {
+    type Gains = EdConfig;
+    const NAME: &'static str = "ed";
+    const LABEL: &'static str = "ED";
+    const VELOCITY: Channel = Channel::EdV;
+    const ACCELERATION: Channel = Channel::EdA;
+    const SCHEDULING: Scheduling = Scheduling::Observer;
+
+    fn get(half: &BankGains) -> EdConfig {
+        half.ed
+    }
+
+    fn set(half: &mut BankGains, gains: EdConfig) {
+        half.ed = gains;
+    }
+
+    fn switch_up_mut(switch: &mut ObserverSwitch) -> Option<&mut f32> {
+        Some(&mut switch.ed)
+    }
+}
+
+impl Gains for EdConfig {
+    /// `lambda` and `alpha` geometrically.
+    fn interpolate(&self, other: &Self, w: f32) -> Self {
+        EdConfig {
+            lambda: geometric(self.lambda, other.lambda, w),
+            alpha: geometric(self.alpha, other.alpha, w),
+        }
+    }
+
+    /// `(lambda, alpha)`.
+    fn search_point(&self) -> SearchPoint {
+        SearchPoint::from_array([f64::from(self.lambda), f64::from(self.alpha)])
+    }
+
+    fn with_search_point(&self, x: &[f64]) -> Self {
+        EdConfig {
+            lambda: coordinate(x, 0, self.lambda),
+            alpha: coordinate(x, 1, self.alpha),
+        }
+    }
+
+    /// `lambda` in `[0.1, 1e5]` (tuned at low noise it reaches 10), `alpha` in `[10, 1e6]`.
+    fn search_box(_h_s: f64) -> (SearchPoint, SearchPoint) {
+        (
+            SearchPoint::from_array([0.1, 10.0]),
+            SearchPoint::from_array([1e5, 1e6]),
+        )
+    }
+
+    /// The ED with the paper's explicit Euler scheme.
+    fn score<Sc: Scorer>(&self, h: f32, scorer: &Sc) -> Result<Sc::Score, ConfigError> {
+        Ok(scorer.law(EdParams::<f32>::new(self, h, EdScheme::Euler)?))
+    }
+
+    fn describe(&self, w: &mut dyn core::fmt::Write) -> core::fmt::Result {
+        write!(w, "lambda={} alpha={}", self.lambda, self.alpha)
     }
 }

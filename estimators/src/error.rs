@@ -31,7 +31,7 @@ pub enum ConfigError {
     ScheduleLevels,
 }
 
-/// A sample that [`crate::YawBank::update`] (or [`crate::SampleAdapter`]) refuses. The state is
+/// A sample that [`crate::PaperBank::update`] (or [`crate::SampleAdapter`]) refuses. The state is
 /// left exactly as it was before the call.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -40,8 +40,8 @@ pub enum SampleError {
     NotFinite,
     /// The timestamp is not later than the previous accepted one.
     NonIncreasingTime,
-    /// `|yaw| >` [`crate::YawBank::MAX_ABS_YAW_DEG`] (only the bank checks this): far beyond
-    /// any yaw, wrapped or already unwrapped, that f32 laws still resolve, and a value near
+    /// `|angle| >` [`crate::PaperBank::MAX_ABS_DEG`] (only the banks check this): far beyond
+    /// any angle, wrapped or already unwrapped, that f32 laws still resolve, and a value near
     /// `f32::MAX` would overflow the f32 states to NaN for good.
     OutOfRange,
 }
@@ -74,7 +74,7 @@ impl core::fmt::Display for SampleError {
         match self {
             Self::NotFinite => f.write_str("sample is NaN or infinite"),
             Self::NonIncreasingTime => f.write_str("timestamp not later than the previous one"),
-            Self::OutOfRange => f.write_str("|yaw| above YawBank::MAX_ABS_YAW_DEG (1e6 deg)"),
+            Self::OutOfRange => f.write_str("|angle| above MAX_ABS_DEG (1e6 deg)"),
         }
     }
 }

@@ -38,7 +38,7 @@ pub trait Estimator<T: Real> {
     /// Adds `d` (unit of the input) to every position state. Every law here is invariant to a
     /// constant input offset (`y -> y + d` with positions `+ d` gives the same velocities),
     /// so this moves the estimator to a shifted input frame without any transient; the
-    /// [`crate::YawBank`] uses it to keep its `f32` states near the wrapped yaw (+-180 deg)
+    /// [`crate::PaperBank`] uses it to keep its `f32` states near the wrapped angle (+-180 deg)
     /// instead of an unwrapped angle that grows by 360 deg per turn and loses `f32` precision.
     fn translate(&mut self, d: T);
 

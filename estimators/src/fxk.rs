@@ -171,7 +171,7 @@ fn sqrt_newton(x: u32) -> u32 {
 /// `q ~ sqrt(m)` to about 29 bits, and the root is `q 2^(16 - k)` (shifted right for `k > 16`,
 /// which truncates). Relative error below `2^-27` (a few units of 2^-32 of the root, tested
 /// against the exact `fx_sqrt`); 0 for `r <= 0`. About a third of the exact root's cost: no
-/// correction by whole units, no remainder digits (docs/FIXED-POINT.md, "ED square root").
+/// correction by whole units, no remainder digits (docs/FIXED-POINT.md, "The ED's square root and the AVE's `h gamma1`").
 #[inline(always)]
 pub(crate) fn sqrt_fast(r: i64) -> u64 {
     if r <= 0 {

@@ -1,7 +1,10 @@
 //! Iterative learning observer (Chen & Chowdhury 2007, paper eq. 9) as a velocity estimator
 //! (paper eq. 13).
 
+use crate::adaptive::ObserverSwitch;
+use crate::bank::{BankGains, Channel};
 use crate::error::positive;
+use crate::family::{coordinate, geometric, Family, Gains, Scheduling, Scorer, SearchPoint};
 use crate::law::{Law, Stateful};
 use crate::linear::{LinearLaw, LIN_MAX};
 use crate::{ConfigError, Real};
@@ -221,5 +224,80 @@ impl<T: Real, const D: usize> LinearLaw for IloParams<T, D> {
         }
         s[1] = v;
         v
+    }
+}
+
+/// The ILO families of the paper bank: `IloFamily<0>` is ILO1 (velocity, Table 2 preset 1)
+/// and ILO1-ILO1 (acceleration, Table 4 preset 1), `IloFamily<1>` ILO2, `IloFamily<2>` ILO3;
+/// gains [`BankGains::ilo`]`[I]`.
+#[derive(Clone, Copy, Debug)]
+pub struct IloFamily<const I: usize>;
+
+impl<const I: usize> Family for IloFamily<I> {
+    type Gains = IloConfig;
+    const NAME: &'static str = ["ilo1", "ilo2", "ilo3"][I];
+    const LABEL: &'static str = ["ILO1", "ILO2", "ILO3"][I];
+    const VELOCITY: Channel = [Channel::Ilo1V, Channel::Ilo2V, Channel::Ilo3V][I];
+    const ACCELERATION: Channel = [Channel::Ilo1A, Channel::Ilo2A, Channel::Ilo3A][I];
+    const SCHEDULING: Scheduling = Scheduling::Observer;
+
+    fn get(half: &BankGains) -> IloConfig {
+        half.ilo[I]
+    }
+
+    fn set(half: &mut BankGains, gains: IloConfig) {
+        half.ilo[I] = gains;
+    }
+
+    fn switch_up_mut(switch: &mut ObserverSwitch) -> Option<&mut f32> {
+        Some(&mut switch.ilo[I])
+    }
+}
+
+impl Gains for IloConfig {
+    /// `L` and `K2` geometrically, `K1` through its leak `1 - K1` (linearly where a leak is
+    /// 0).
+    fn interpolate(&self, other: &Self, w: f32) -> Self {
+        IloConfig {
+            k1: 1.0 - geometric(1.0 - self.k1, 1.0 - other.k1, w),
+            l: geometric(self.l, other.l, w),
+            k2: geometric(self.k2, other.k2, w),
+        }
+    }
+
+    /// `(1 - K1, L, K2)`: `K1` is searched as its leak on a log scale, because the best
+    /// `K1` lie within 1e-3 of 1 (a leak of a few 1/s at `tau = h`).
+    fn search_point(&self) -> SearchPoint {
+        SearchPoint::from_array([
+            1.0 - f64::from(self.k1),
+            f64::from(self.l),
+            f64::from(self.k2),
+        ])
+    }
+
+    fn with_search_point(&self, x: &[f64]) -> Self {
+        IloConfig {
+            k1: x.first().map_or(self.k1, |&leak| (1.0 - leak) as f32),
+            l: coordinate(x, 1, self.l),
+            k2: coordinate(x, 2, self.k2),
+        }
+    }
+
+    /// The leak `1 - K1` in `[1e-7, 0.95]` (`K1 = 1` to f32 precision, to `K1 = 0.05`), `L`
+    /// in `[0.1, 0.99 / h]` 1/s (`h L < 1`, as [`IloParams::new`] demands), `K2` in
+    /// `[1e-3, 1e4]`.
+    fn search_box(h_s: f64) -> (SearchPoint, SearchPoint) {
+        (
+            SearchPoint::from_array([1e-7, 0.1, 1e-3]),
+            SearchPoint::from_array([0.95, 0.99 / h_s, 1e4]),
+        )
+    }
+
+    fn score<S: Scorer>(&self, h: f32, scorer: &S) -> Result<S::Score, ConfigError> {
+        Ok(scorer.law(IloParams::<f32, 1>::new(self, h)?))
+    }
+
+    fn describe(&self, w: &mut dyn core::fmt::Write) -> core::fmt::Result {
+        write!(w, "K1={} L={} K2={}", self.k1, self.l, self.k2)
     }
 }

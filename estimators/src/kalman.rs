@@ -1,7 +1,9 @@
 //! Steady-state constant-acceleration Kalman tracker (alpha-beta-gamma filter): the reference
 //! an engineer would otherwise use. Not from the paper.
 
+use crate::bank::{BankGains, Channel};
 use crate::error::positive;
+use crate::family::{coordinate, geometric, Family, Gains, Scheduling, Scorer, SearchPoint};
 use crate::law::Law;
 use crate::{ConfigError, Hold, Real};
 
@@ -14,10 +16,14 @@ pub struct KalmanConfig {
     /// Nominal sample period `dt0`, s (NAV440 at 100 Hz: 0.01). The steady-state gains are for
     /// this period; the prediction uses each sample's actual `dt`.
     pub dt: f32,
-    /// Power spectral density `q` of the white jerk driving the model, unit^2/s^5
-    /// (deg^2/s^5 for yaw).
+    /// Power spectral density `q` of the white jerk driving the model, unit^2/s^5 (deg^2/s^5
+    /// for an angle in deg): how fast the acceleration may change. Only `q / r` sets the
+    /// steady-state gain; the three closed-loop poles lie near `|s| = (q / (r dt))^(1/6)`
+    /// rad/s, so `q = r dt w0^6` gives the bandwidth `w0` (each factor 10 in `q / r` moves it
+    /// by 1.47). Larger follows faster motion with more noise.
     pub q: f32,
-    /// Measurement noise variance `r`, unit^2 (deg^2).
+    /// Measurement noise variance `r` of the input, unit^2 (deg^2): e.g. 0.01 for 0.1 deg RMS
+    /// noise ([`crate::NoiseEstimator`] measures it on a moving signal).
     pub r: f32,
 }
 
@@ -74,7 +80,14 @@ impl<T: Real> Kalman<T> {
         self.a = T::ZERO;
     }
 
-    /// One predict + update with measurement `y` taken `dt` (s, as `T`) after the previous one.
+    /// One predict + update with the measurement `y` (input unit) taken `dt` seconds (as `T`)
+    /// after the previous one.
+    ///
+    /// Convention: the measurement first, then the *interval* in seconds; the first
+    /// measurement goes to [`Self::reset`] instead. The banks and [`crate::SampleAdapter`]
+    /// take the other order and an absolute time: `update(t_us, y)`, the sample's time stamp
+    /// in integer microseconds first, and compute the interval themselves (as
+    /// [`KalmanParams`], the bank's tracker, does: `dt = round(interval / h) h`).
     #[inline]
     pub fn update(&mut self, y: T, dt: T) {
         let xp = self.x + dt * (self.v + (self.a * dt).div_int(2));
@@ -309,4 +322,80 @@ pub fn steady_state_gain(dt: f64, q: f64, r: f64) -> [f64; 3] {
         }
     }
     k
+}
+
+/// Noise model of the Kalman tracker in a bank half ([`BankGains::kf`]): with the nominal
+/// sample period as `dt` it is the [`KalmanConfig`] of the half's tracker.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
+pub struct KalmanNoise {
+    /// White-jerk power spectral density `q`, deg^2/s^5 (see [`KalmanConfig::q`]).
+    pub q: f32,
+    /// Angle measurement variance `r`, deg^2.
+    pub r: f32,
+}
+
+/// The Kalman tracker family of the paper bank: a tracker with the velocity half's noise
+/// reports the velocity, one with the acceleration half's noise the acceleration (not a
+/// series); gains [`BankGains::kf`].
+#[derive(Clone, Copy, Debug)]
+pub struct KfFamily;
+
+impl Family for KfFamily {
+    type Gains = KalmanNoise;
+    const NAME: &'static str = "kf";
+    const LABEL: &'static str = "KF";
+    const VELOCITY: Channel = Channel::KfV;
+    const ACCELERATION: Channel = Channel::KfA;
+    const SCHEDULING: Scheduling = Scheduling::Smooth;
+
+    fn get(half: &BankGains) -> KalmanNoise {
+        half.kf
+    }
+
+    fn set(half: &mut BankGains, gains: KalmanNoise) {
+        half.kf = gains;
+    }
+}
+
+impl Gains for KalmanNoise {
+    /// `q` and `r` geometrically.
+    fn interpolate(&self, other: &Self, w: f32) -> Self {
+        KalmanNoise {
+            q: geometric(self.q, other.q, w),
+            r: geometric(self.r, other.r, w),
+        }
+    }
+
+    /// `(q)`: only `q / r` matters for the steady-state gain, so `r` is kept.
+    fn search_point(&self) -> SearchPoint {
+        SearchPoint::from_array([f64::from(self.q)])
+    }
+
+    fn with_search_point(&self, x: &[f64]) -> Self {
+        KalmanNoise {
+            q: coordinate(x, 0, self.q),
+            r: self.r,
+        }
+    }
+
+    /// `q` in `[1, 1e12]` deg^2/s^5.
+    fn search_box(_h_s: f64) -> (SearchPoint, SearchPoint) {
+        (
+            SearchPoint::from_array([1.0]),
+            SearchPoint::from_array([1e12]),
+        )
+    }
+
+    /// The tracker (it needs the nominal sample period, which the scorer knows: it checks
+    /// the noise when it builds the tracker).
+    fn score<S: Scorer>(&self, _h: f32, scorer: &S) -> Result<S::Score, ConfigError> {
+        Ok(scorer.tracker(*self))
+    }
+
+    fn describe(&self, w: &mut dyn core::fmt::Write) -> core::fmt::Result {
+        write!(w, "q={} r={}", self.q, self.r)
+    }
 }

@@ -61,7 +61,7 @@ pub trait Law: Copy + core::fmt::Debug {
     /// and the remaining `n mod m` steps `h`, each coarse step seeing the input at the end of
     /// its span ([`stepped_inputs`]). `None` (the default, and every law of the float banks):
     /// every step is a step `h`. [`Law::step`] is always one step `h`. Used by the fixed-point
-    /// AVE ([`crate::Real::AVE_STEP_FACTOR`], docs/FIXED-POINT.md part 4).
+    /// AVE ([`crate::Real::AVE_STEP_FACTOR`], docs/FIXED-POINT.md, "The AVE row at `2 h`").
     #[inline(always)]
     fn coarse(&self) -> Option<(Self, u32)> {
         None
@@ -75,11 +75,13 @@ pub trait Law: Copy + core::fmt::Debug {
     /// whose equilibrium does not depend on their gains and whose state is on it (the Kalman
     /// tracker's physical states). The ED's equilibrium (`z = y`, `u1` = the rate) does not
     /// depend on its gains either, but a low-`alpha` set runs away from it, so its
-    /// `retune_state` puts the state there (`z = y + h u`, `u1 = u`, `u` the output). The AVE's equilibrium (`xhat = y`, `theta` = the
-    /// rate) does not depend on its gains either, but its state is off it by the position
-    /// error the old gains left, so its `retune_state` sets `xhat = y`. Without it a
-    /// retune of a tuned, lightly damped ILO rang with a swing of 1600 deg/s
-    /// (docs/CALIBRATION.md, "Bumpless gain changes").
+    /// `retune_state` puts the state there (`z = y + h u`, `u1 = u`, `u` the output). The
+    /// AVE's equilibrium (`xhat = y`, `theta` = the rate) does not depend on its gains either,
+    /// but its state is off it by the position error the old gains left, so its
+    /// `retune_state` sets `xhat = y`. The ILO's and the AD's equilibrium does depend on their
+    /// gains: kept as it is, the state of a lightly damped ILO meets the new gains with the old
+    /// steady error and rings (docs/ADAPTIVE-GAINS.md, "How a gain change keeps the
+    /// estimates").
     #[inline]
     fn retune_state(&self, old: &Self, s: &mut Self::State, y: Self::Num) {
         let _ = (old, s, y);

@@ -11,7 +11,7 @@
 //!
 //! Laws are continuous-time and stepped with explicit Euler at a step `h` (paper: 1e-4 s);
 //! samples arriving at the sensor rate are fed through the [`SampleAdapter`] (or the
-//! [`YawBank`]), which runs `n = round(dt / h)` steps per sample with linear interpolation
+//! [`PaperBank`]), which runs `n = round(dt / h)` steps per sample with linear interpolation
 //! ([`Hold::Linear`], default) or a zero-order hold. Linear laws (ILO, AD and their series)
 //! can use their exact multi-step map ([`ClosedForm`]) instead of `n` steps.
 //!
@@ -20,9 +20,15 @@
 //!   steps with `step(&self, &mut State, y)`; [`Stateful`] (aliases [`Ave`], [`Ilo`], [`Ad`],
 //!   [`Ed`]) binds the two into the classic [`Estimator`] object.
 //! * Banks are generated from one table by [`estimator_bank!`]: [`PaperBank`] (alias
-//!   [`YawBank`]: the paper's 14 estimators, output indexed by [`Channel`]) and
+//!   [`PaperBank`]: the paper's 14 estimators, output indexed by [`Channel`]) and
 //!   [`ProductBank`] (one velocity and one acceleration estimator). [`BankConfig::wrap`] picks
 //!   the unwrapping per axis ([`Wrap`]). See docs/BANK.md.
+//! * [`family`]: the paper bank's estimator families (one per column of the paper's tables),
+//!   listed once ([`FAMILIES`], [`for_each_family`]): the channel lists, the gain schedule's
+//!   interpolation and the host tools' gains file and tuner iterate them.
+//! * Another sensor: [`ProductBank`] with [`BankConfig::sample_period_s`] set to the sensor's
+//!   period (the default is 100 Hz) and [`Wrap::None`] for a signal that does not wrap
+//!   (`examples/other_imu_200hz.rs`, docs/OTHER-IMU.md).
 //! * [`EstimatorBank`]: the one trait of every bank (the generated ones and [`AdaptiveBank`]):
 //!   `update`, `new_epoch`, `reinit_count`, and its [`EstimatorOutput`] (unwrapped angle and
 //!   channel values) with the channels' count and names as consts
@@ -37,17 +43,19 @@
 //!   the host CLI and the firmware.)
 //! * Fixed point: [`Fx`] (Q31.32, saturating) matches `f32` on a paper-like experiment (yaw
 //!   within +-90 deg, rate +-300 deg/s, 100 Hz) within 1 % in every MSE (ED 5 %, ED-ED 20 %) and
-//!   0.05 deg/s / 1 deg/s^2 sample by sample (see `tests/bank.rs`); its update path is integer
+//!   0.05 deg/s / 1 deg/s^2 sample by sample (the bounds `tests/bank.rs` asserts; `cargo test
+//!   --release -p velocity-estimators --test bank fixed_point -- --nocapture` prints the
+//!   figures); its update path is integer
 //!   only and panic-free (no FPU needed on Cortex-M0/M3).
 //! * Bad input: NaN/infinite samples and non-increasing timestamps return [`SampleError`] and
 //!   leave the state unchanged; invalid parameters return [`ConfigError`] at construction.
 //!
 //! ```
-//! use estimators::{BankConfig, Channel, Fx, YawBank};
+//! use estimators::{BankConfig, Channel, Fx, PaperBank};
 //!
 //! // The paper's bank: AVE, ILO1-3, AD, ED, Kalman; acceleration by series connections.
-//! let mut bank = YawBank::<f32>::new(&BankConfig::default()).unwrap();
-//! let mut fixed = YawBank::<Fx>::new(&BankConfig::default()).unwrap();
+//! let mut bank = PaperBank::<f32>::new(&BankConfig::default()).unwrap();
+//! let mut fixed = PaperBank::<Fx>::new(&BankConfig::default()).unwrap();
 //! // yaw = 30 deg/s * t, wrapping at +-180, sampled at 100 Hz
 //! for k in 0..200u64 {
 //!     let t_us = k * 10_000;
@@ -58,7 +66,7 @@
 //!         assert!((out[Channel::AveV] - 30.0).abs() < 0.1); // AVE velocity, deg/s
 //!         assert!((out_fx[Channel::AveV] - 30.0).abs() < 0.1);
 //!         assert!(out[Channel::AveA].abs() < 1.0); // AVE-AVE acceleration, deg/s^2
-//!         assert!((out.yaw_unwrapped_deg - 59.7).abs() < 1e-3); // unwrapped yaw, deg
+//!         assert!((out.unwrapped_deg - 59.7).abs() < 1e-3); // unwrapped yaw, deg
 //!     }
 //! }
 //! // Bad input leaves the state unchanged and is reported.
@@ -76,6 +84,7 @@ mod bank;
 mod ed;
 mod error;
 mod estimator;
+pub mod family;
 mod fxk;
 pub mod gilo;
 mod ilo;
@@ -91,29 +100,36 @@ mod series;
 mod traits;
 mod unwrap;
 
-pub use ad::{Ad, AdConfig, AdParams, AdState};
+pub use ad::{Ad, AdConfig, AdFamily, AdParams, AdState};
 pub use adapter::{SampleAdapter, SampleClock, Tick};
 pub use adaptive::{
     AdaptiveBank, AdaptiveConfig, AveDeltahat, Blend, GainSchedule, NoiseEstimator, ObserverSwitch,
     ScheduleLevel,
 };
-pub use ave::{Ave, AveConfig, AveParams, AveState, DeltaLaw, DeltaMode, COARSE_STABILITY_MARGIN};
-pub use bank::{
-    Accepted, AdAdMap, BankConfig, BankGains, BankInput, BankOutput, Channel, Fed, Feed,
-    KalmanNoise, PaperBank, PaperOutput, PaperParams, PaperState, ProductBank, ProductChannel,
-    ProductOutput, ProductParams, ProductState, Wrap, YawBank, GAP_PERIODS, KF_DEFAULT,
-    VELOCITY_NAMES,
+pub use ave::{
+    Ave, AveConfig, AveFamily, AveParams, AveState, DeltaLaw, DeltaMode, COARSE_STABILITY_MARGIN,
 };
-pub use ed::{Ed, EdConfig, EdParams, EdScheme, EdState};
+pub use bank::{
+    Accepted, AdAdMap, BankConfig, BankGains, BankInput, Channel, Fed, Feed, PaperBank,
+    PaperOutput, PaperParams, PaperState, ProductBank, ProductChannel, ProductOutput,
+    ProductParams, ProductState, Wrap, GAP_PERIODS, KF_DEFAULT, VELOCITY_NAMES,
+};
+pub use ed::{Ed, EdConfig, EdFamily, EdParams, EdScheme, EdState};
 pub use error::{ConfigError, SampleError};
 pub use estimator::{advance_by_steps, Estimator, Hold};
-pub use ilo::{Ilo, IloConfig, IloParams, IloState};
-pub use kalman::{Kalman, KalmanConfig, KalmanOutput, KalmanParams, KalmanState};
+pub use family::{
+    for_each_family, Family, FamilyInfo, FamilyVisitor, Gains, Scheduling, Scorer, SearchPoint,
+    FAMILIES, FAMILY_COUNT,
+};
+pub use ilo::{Ilo, IloConfig, IloFamily, IloParams, IloState};
+pub use kalman::{
+    Kalman, KalmanConfig, KalmanNoise, KalmanOutput, KalmanParams, KalmanState, KfFamily,
+};
 pub use law::{Law, Stateful};
 pub use linear::{ClosedForm, LinearLaw};
 pub use pair::{VelAcc, VelAccState};
 pub use rates::RateGains;
-pub use real::{ExactSqrt, Fx, Real, SqrtFn};
+pub use real::{Fx, NativeSqrt, Real, SqrtFn};
 pub use series::{Series, SeriesState};
 pub use traits::{EstimatorBank, EstimatorOutput, FromConfig};
 pub use unwrap::Unwrapper;

@@ -22,7 +22,7 @@
 //! | [`ClosedForm`]`<Series<IloParams<T, 1>, IloParams<T, 1>>>` (params) | 120 | 232 |
 //! | [`PaperParams`] (all 12 rows' parameters) | 1092 | 2224 |
 //! | [`PaperState`] (all 12 rows' state, one axis) | 264 | 528 |
-//! | [`YawBank`] = [`PaperBank`] (whole bank, one axis) | 1440 | 2840 |
+//! | [`PaperBank`] (whole bank, one axis) | 1440 | 2840 |
 //! | [`ProductBank`] (ILO1 + Kalman, one axis) | 240 | 392 |
 //!
 //! A [`Series`] is the sum of its stages; an `Ilo<T, D>` adds `D - 1` words of `T`; a closed
@@ -53,8 +53,8 @@ pub const CLOSED_ILO_ILO: (usize, usize) = (120, 232);
 pub const PAPER_PARAMS: (usize, usize) = (1092, 2224);
 /// `(f32, Fx)` of [`PaperState`].
 pub const PAPER_STATE: (usize, usize) = (264, 528);
-/// `(f32, Fx)` of the whole [`YawBank`].
-pub const YAW_BANK: (usize, usize) = (1440, 2840);
+/// `(f32, Fx)` of the whole [`PaperBank`].
+pub const PAPER_BANK: (usize, usize) = (1440, 2840);
 /// `(f32, Fx)` of the [`ProductBank`].
 pub const PRODUCT_BANK: (usize, usize) = (240, 392);
 
@@ -86,7 +86,7 @@ check!(
 );
 check!(PAPER_PARAMS, PaperParams<f32>, PaperParams<Fx>);
 check!(PAPER_STATE, PaperState<f32>, PaperState<Fx>);
-check!(YAW_BANK, YawBank<f32>, YawBank<Fx>);
+check!(PAPER_BANK, PaperBank<f32>, PaperBank<Fx>);
 check!(PRODUCT_BANK, ProductBank<f32>, ProductBank<Fx>);
 
 #[cfg(test)]
@@ -99,8 +99,8 @@ mod tests {
     fn documented_sizes() {
         assert_eq!((size_of::<Ave<f32>>(), size_of::<Ave<Fx>>()), AVE);
         assert_eq!(
-            (size_of::<YawBank<f32>>(), size_of::<YawBank<Fx>>()),
-            YAW_BANK
+            (size_of::<PaperBank<f32>>(), size_of::<PaperBank<Fx>>()),
+            PAPER_BANK
         );
         assert_eq!(
             (

@@ -2,9 +2,9 @@
 //! output rate ([`BankConfig::with_nav440_gains`]).
 //!
 //! Gains tuned at some packet rates do not travel to others: [`BankConfig::NAV440`]'s own
-//! gains, tuned on 100, 50, 25 and 20 Hz captures, run at 10 Hz give the ILO1 about 6x the
-//! paper's velocity MSE, and at 5 Hz the ILO1-3 1.3-8x (docs/CALIBRATION.md, "Shipped
-//! defaults"). The NAV440 sends at 100, 50, 25, 20, 10, 5, 4 or 2 Hz (packet rate divider 1,
+//! gains, tuned on 100, 50, 25 and 20 Hz captures, are worse than the paper's at 10 Hz and
+//! below (docs/PRESETS.md, "Below 20 Hz", printed by
+//! `cargo test --release -p host-tests --test preset_rates -- --nocapture`). The NAV440 sends at 100, 50, 25, 20, 10, 5, 4 or 2 Hz (packet rate divider 1,
 //! 2, 4, 5, 10, 20, 25 or 50), so the preset is a table of [`RateGains`], one band of sample
 //! periods each: 100-20 Hz run [`BankConfig::NAV440`]'s gains, 10 Hz, 5 Hz (and 4 Hz) and
 //! 2 Hz each run gains tuned on synthetic motions and noise levels at that rate (not the
@@ -34,7 +34,7 @@ impl BankConfig {
     /// [`BankConfig::with_nav440_gains`]. The first entry is [`BankConfig::NAV440`]'s gains;
     /// the others were printed by
     /// `cargo test --release -p host-tests --test preset_rates -- --ignored --nocapture`
-    /// (docs/CALIBRATION.md, "Shipped defaults").
+    /// (docs/PRESETS.md, "Below 20 Hz").
     pub const NAV440_RATES: [RateGains; 4] = [
         RateGains {
             tuned_period_s: [0.01, 0.05],
@@ -292,7 +292,7 @@ impl BankConfig {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::YawBank;
+    use crate::PaperBank;
 
     /// Every NAV440 packet rate (divider 1, 2, 4, 5, 10, 20, 25, 50: NAV440-PROTOCOL.md) runs
     /// the entry tuned at it or, for 25 and 20 Hz, on it (the first entry's family), and 4 Hz
@@ -340,7 +340,7 @@ mod tests {
                 }
                 .with_nav440_gains();
                 assert_eq!(cfg.velocity, r.velocity);
-                assert!(YawBank::<f32>::new(&cfg).is_ok(), "{p} s");
+                assert!(PaperBank::<f32>::new(&cfg).is_ok(), "{p} s");
             }
         }
         assert_eq!(below, f32::INFINITY);

@@ -377,7 +377,7 @@ pub fn fx_sqrt(r: i64) -> i64 {
 ///
 /// Where `f32` runs out: its resolution is relative (ulp(100 deg) = 7.6e-6 deg). On an
 /// unwrapped yaw after 11 turns (4000 deg, ulp 4.9e-4) the AVE's per-step increments of
-/// `0.04 deg` at 400 deg/s rounded to a 0.5 % velocity bias; the [`crate::YawBank`] therefore
+/// `0.04 deg` at 400 deg/s rounded to a 0.5 % velocity bias; the [`crate::PaperBank`] therefore
 /// runs every law on the wrapped yaw in a translated frame ([`crate::Estimator::translate`]).
 /// The implicit ED's sliding band `h^2 alpha = 7.7e-6` is below f32's resolution of a
 /// 300 deg/s input, so ED-ED differs between `f32` and [`Fx`] (tests/bank.rs).
@@ -400,12 +400,14 @@ pub trait Real:
     const ZERO: Self;
     /// 1.
     const ONE: Self;
-    /// How many steps `h` the AVE advances in one Euler step inside an interval (issue 12,
-    /// docs/FIXED-POINT.md part 4): 1 for `f32` and `f64` (every step is a step `h`); 2 for
+    /// How many steps `h` the AVE advances in one Euler step inside an interval
+    /// (docs/FIXED-POINT.md, "The AVE row at `2 h`"): 1 for `f32` and `f64` (every step is a step `h`); 2 for
     /// [`Fx`], whose AVE and AVE-AVE run `floor(n / 2)` Euler steps of `2 h` per interval of
     /// `n` steps and the remainder (`n` odd) as one step `h`, with coefficients computed for
     /// `2 h` (`AveParams` keeps both sets; see `Law::coarse`). Halves the fixed-point AVE row's
-    /// cost on the no-FPU targets; accuracy loss measured in `tests/bank.rs`.
+    /// cost on the no-FPU targets; the accuracy bound is the test `fixed_point` of
+    /// `tests/bank.rs` (`cargo test --release -p velocity-estimators --test bank fixed_point --
+    /// --nocapture` prints the figures).
     const AVE_STEP_FACTOR: u32;
     /// Storage of a law's coarse-step parameters (`Law::coarse`): zero-sized
     /// (`PhantomData`) for the float types, which never use it, so their parameters keep their
@@ -425,7 +427,7 @@ pub trait Real:
     /// Converts a coefficient from `f64` for a 32-bit product: [`Real::from_f64`] for the
     /// float types; for [`Fx`], a value below 8 in magnitude is rounded to a multiple of
     /// 2^-28 (Q3.28, its raw bits / 16 fit an `i32`), others as [`Real::from_f64`]. The
-    /// fixed-point AVE's `h gamma1` (issue 12: `h gamma1 e` is then one 32 x 32-bit product
+    /// fixed-point AVE's `h gamma1` (so that `h gamma1 e` is one 32 x 32-bit product
     /// in the kernel; relative change of the coefficient below 2^-29 for `h gamma1 >= 1/2`).
     fn from_f64_q28(x: f64) -> Self {
         Self::from_f64(x)
@@ -442,11 +444,11 @@ pub trait Real:
     /// host and MCU agree bit for bit), the `fixed` crate's integer square root for [`Fx`].
     /// Negative arguments give 0.
     fn sqrt(self) -> Self;
-    /// The square root of the ED's `|e|^(1/2)` term ([`ExactSqrt`], the banks' default):
+    /// The square root of the ED's `|e|^(1/2)` term ([`NativeSqrt`], the banks' default):
     /// [`Real::sqrt`] for the float types (exact, IEEE correctly rounded); for [`Fx`] a
     /// cheaper root within a relative `2^-27` of the exact one (`fxk::sqrt_fast`: Newton
-    /// iteration in 32-bit words without the final correction; issue 12, accuracy loss
-    /// measured in docs/FIXED-POINT.md). Negative arguments give 0.
+    /// iteration in 32-bit words without the final correction; docs/FIXED-POINT.md, "The
+    /// ED's square root and the AVE's `h gamma1`"). Negative arguments give 0.
     #[inline(always)]
     fn ed_sqrt(self) -> Self {
         self.sqrt()
@@ -703,14 +705,17 @@ pub trait SqrtFn<T: Real>: Copy + Default + Debug {
     fn sqrt(x: T) -> T;
 }
 
-/// The portable default square root of the ED, [`Real::ed_sqrt`]: for the float types the
-/// exact [`Real::sqrt`] (`libm::sqrtf` for `f32`: about 45 instructions on a Cortex-M4F, which
-/// has no stable Rust path to `VSQRT` without `unsafe`); for [`Fx`] the cheaper root within a
-/// relative `2^-27` of the exact one (issue 12; the name is kept for the float types' sake).
+/// The ED's default square root: the number type's own ED root, [`Real::ed_sqrt`] (the
+/// banks' default `S`). For the float types that is the exact, IEEE correctly rounded
+/// [`Real::sqrt`] (`libm::sqrtf` for `f32`: about 45 instructions on a Cortex-M4F, which has
+/// no stable Rust path to `VSQRT` without `unsafe`); for [`Fx`] it is a cheaper root within a
+/// relative `2^-27` of the exact one (`fxk::sqrt_fast`). Hence the name: the type's native
+/// root, exact for the float types but not for [`Fx`]. A [`SqrtFn`] of one's own (an FPU
+/// instruction) replaces it.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct ExactSqrt;
+pub struct NativeSqrt;
 
-impl<T: Real> SqrtFn<T> for ExactSqrt {
+impl<T: Real> SqrtFn<T> for NativeSqrt {
     #[inline]
     fn sqrt(x: T) -> T {
         x.ed_sqrt()

@@ -35,15 +35,15 @@ impl<T: Real> Unwrapper<T> {
         self.turns = turns;
     }
 
-    /// Takes the next wrapped angle `yaw` (deg) and returns the turn count to add to it.
+    /// Takes the next wrapped angle `angle` (deg) and returns the turn count to add to it.
     #[inline]
-    pub fn update(&mut self, yaw: T) -> i64 {
+    pub fn update(&mut self, angle: T) -> i64 {
         if self.started {
             let half = T::from_i32(180);
-            let d = yaw - self.prev;
+            let d = angle - self.prev;
             if d.abs() <= half {
                 // The common case: no turn (same result as the two tests below).
-                self.prev = yaw;
+                self.prev = angle;
                 return self.turns;
             }
             if d > half {
@@ -54,17 +54,17 @@ impl<T: Real> Unwrapper<T> {
         } else {
             self.started = true;
         }
-        self.prev = yaw;
+        self.prev = angle;
         self.turns
     }
 
-    /// Returns the unwrapped angle (deg) for the wrapped angle `yaw` (deg), in `T`: exact
+    /// Returns the unwrapped angle (deg) for the wrapped angle `angle` (deg), in `T`: exact
     /// while `360 * turns` is exact in `T` (f32: 2^27 deg; Fx: saturates at 2^31 deg); use
     /// [`Unwrapper::update`] and [`Unwrapper::turns`] for an exact angle at any turn count.
     #[inline]
-    pub fn unwrap(&mut self, yaw: T) -> T {
-        self.update(yaw);
-        yaw + self.offset()
+    pub fn unwrap(&mut self, angle: T) -> T {
+        self.update(angle);
+        angle + self.offset()
     }
 
     /// Whole turns currently added to the wrapped input.

@@ -1,10 +1,10 @@
-//! The YawBank and the sample adapter: unwrap, gaps, bad samples, hold modes, closed-form maps,
+//! The PaperBank and the sample adapter: unwrap, gaps, bad samples, hold modes, closed-form maps,
 //! fixed point vs f32, the CSV row.
 
 use estimators::presets::*;
 use estimators::{
-    Ad, BankConfig, BankOutput, ClosedForm, Estimator, Fx, Hold, Ilo, IloConfig, Real,
-    SampleAdapter, SampleError, Series, Unwrapper, YawBank,
+    Ad, BankConfig, ClosedForm, Estimator, Fx, Hold, Ilo, IloConfig, PaperBank, PaperOutput, Real,
+    SampleAdapter, SampleError, Series, Unwrapper,
 };
 
 /// A smooth hand-rotation-like yaw profile like the paper's experiment (Fig. 5):
@@ -52,18 +52,18 @@ fn ilo_ramp_gain(c: &IloConfig) -> f64 {
 }
 
 fn ramp_check<T: Real>(rate: f64) {
-    let mut bank = YawBank::<T>::new(&BankConfig::default()).unwrap();
+    let mut bank = PaperBank::<T>::new(&BankConfig::default()).unwrap();
     let y0 = 170.0;
-    let mut out = BankOutput::default();
+    let mut out = PaperOutput::default();
     for k in 0..=1000u64 {
         let t = k as f64 * 0.01;
         let yaw = wrap180(y0 + rate * t);
         out = bank.update(k * 10_000, yaw as f32).unwrap();
         let unwrapped = y0 + rate * t;
         assert!(
-            (f64::from(out.yaw_unwrapped_deg) - unwrapped).abs() < 1e-3 * unwrapped.abs().max(1.0),
+            (f64::from(out.unwrapped_deg) - unwrapped).abs() < 1e-3 * unwrapped.abs().max(1.0),
             "{} vs {unwrapped}",
-            out.yaw_unwrapped_deg
+            out.unwrapped_deg
         );
     }
     let v = out.velocities().map(f64::from);
@@ -121,15 +121,15 @@ fn unwrap_across_many_turns() {
 /// (zeros, counter), shorter gaps are integrated across without a spike.
 #[test]
 fn gap_handling() {
-    let mut bank = YawBank::<f32>::new(&BankConfig::default()).unwrap();
+    let mut bank = PaperBank::<f32>::new(&BankConfig::default()).unwrap();
     let rate = 100.0;
     let first = bank.update(0, 12.5).unwrap();
     assert_eq!(
         first,
-        BankOutput {
-            yaw_unwrapped_deg: 12.5,
-            yaw_residual_deg: 0.0,
-            values: [0.0; 14]
+        PaperOutput {
+            unwrapped_deg: 12.5,
+            residual_deg: 0.0,
+            values: [0.0; estimators::Channel::COUNT]
         }
     );
     bank.restart();
@@ -161,7 +161,7 @@ fn gap_handling() {
     // afterwards the estimates rise from 0 to the rate with at most the overshoot of a
     // second-order loop (< 2 r); a bank that integrated across the gap (gap rule 100 periods = 1 s) reports a
     // spike from the 120 deg "ramp" instead.
-    let mut integrating = YawBank::<f32>::new(&BankConfig {
+    let mut integrating = PaperBank::<f32>::new(&BankConfig {
         max_gap_periods: 100.0,
         ..BankConfig::default()
     })
@@ -184,8 +184,8 @@ fn gap_handling() {
     t_us += 490_000;
     yaw += 120.0;
     let out = bank.update(t_us, yaw as f32).unwrap();
-    assert_eq!(out.velocities(), [0.0; 7]);
-    assert_eq!(out.accelerations(), [0.0; 7]);
+    assert_eq!(out.velocities(), [0.0; estimators::FAMILY_COUNT]);
+    assert_eq!(out.accelerations(), [0.0; estimators::FAMILY_COUNT]);
     assert_eq!(bank.reinit_count(), 1);
     for _ in 0..100 {
         t_us += 10_000;
@@ -200,7 +200,7 @@ fn gap_handling() {
 }
 
 fn bad_samples<T: Real>() {
-    let mut bank = YawBank::<T>::new(&BankConfig::default()).unwrap();
+    let mut bank = PaperBank::<T>::new(&BankConfig::default()).unwrap();
     for k in 0..100u64 {
         bank.update(k * 10_000, profile(k as f64 * 0.01).0 as f32)
             .unwrap();
@@ -265,8 +265,8 @@ fn zoh_bias_vs_linear() {
             hold,
             ..BankConfig::default()
         };
-        let mut bank = YawBank::<f64>::new(&cfg).unwrap();
-        let mut out = BankOutput::default();
+        let mut bank = PaperBank::<f64>::new(&cfg).unwrap();
+        let mut out = PaperOutput::default();
         for k in 0..=300u64 {
             out = bank
                 .update(k * 10_000, (rate * k as f64 * 0.01) as f32)
@@ -376,7 +376,7 @@ fn closed_form_equals_stepping() {
 }
 
 /// Runs a bank on the paper-like experiment (noise seed 42); returns the outputs per sample.
-fn experiment<T: Real>(cfg: &BankConfig, noise_var: f64, seconds: f64) -> Vec<BankOutput> {
+fn experiment<T: Real>(cfg: &BankConfig, noise_var: f64, seconds: f64) -> Vec<PaperOutput> {
     experiment_seed::<T>(cfg, noise_var, seconds, 42)
 }
 
@@ -386,8 +386,8 @@ fn experiment_seed<T: Real>(
     noise_var: f64,
     seconds: f64,
     seed: u64,
-) -> Vec<BankOutput> {
-    let mut bank = YawBank::<T>::new(cfg).unwrap();
+) -> Vec<PaperOutput> {
+    let mut bank = PaperBank::<T>::new(cfg).unwrap();
     let mut g = Gauss(seed);
     let n = (seconds * 100.0) as u64;
     (0..=n)
@@ -398,7 +398,7 @@ fn experiment_seed<T: Real>(
         .collect()
 }
 
-fn mse(outs: &[BankOutput], acc: bool, i: usize, from_s: f64) -> f64 {
+fn mse(outs: &[PaperOutput], acc: bool, i: usize, from_s: f64) -> f64 {
     let (mut s, mut c) = (0.0, 0.0);
     for (k, o) in outs.iter().enumerate() {
         let t = k as f64 * 0.01;
@@ -421,8 +421,8 @@ const ACCURACY_SEEDS: [u64; 10] = [42, 1, 2, 3, 4, 5, 6, 7, 8, 9];
 
 /// Fixed point against f32 (and f64) on the paper-like experiment: yaw within +-90 deg, rate
 /// within +-300 deg/s, acceleration within +-2000 deg/s^2, 100 Hz samples, noise sigma^2 =
-/// 0.01 deg^2, 10 s, over the 10 noise seeds of [`ACCURACY_SEEDS`] (issue 12: seed-robust,
-/// not seed-lucky). The MSE is against the true rate / acceleration of `profile` (an
+/// 0.01 deg^2, 10 s, over the 10 noise seeds of [`ACCURACY_SEEDS`] (seed-robust, not
+/// seed-lucky). The MSE is against the true rate / acceleration of `profile` (an
 /// independent computation), pooled over the 10 runs (a single run's ED / ED-ED MSE depends
 /// on its chatter, which a tiny difference changes: the per-seed ratios are printed, not
 /// asserted).
@@ -436,8 +436,8 @@ const ACCURACY_SEEDS: [u64; 10] = [42, 1, 2, 3, 4, 5, 6, 7, 8, 9];
 /// laws' and the Kalman tracker's outputs agree with f32 sample by sample within 0.05 deg/s
 /// and 1 deg/s^2 on every seed.
 ///
-/// The AVE row: the fixed-point AVE / AVE-AVE run Euler steps of `2 h` (issue 12 part 4,
-/// `Real::AVE_STEP_FACTOR`, docs/FIXED-POINT.md), the f32 and f64 banks steps of `h`, so
+/// The AVE row: the fixed-point AVE / AVE-AVE run Euler steps of `2 h`
+/// (`Real::AVE_STEP_FACTOR`, docs/FIXED-POINT.md, "The AVE row at `2 h`"), the f32 and f64 banks steps of `h`, so
 /// sample by sample they differ by the discretisation, not only by the arithmetic. Checked
 /// apart, every sample of every seed: (a) the arithmetic: Fx against the f64 bank run at
 /// `h = 2e-4` (its AVE row is the same recursion at `2 h`, 50 steps per sample at the same
@@ -456,7 +456,7 @@ const ACCURACY_SEEDS: [u64; 10] = [42, 1, 2, 3, 4, 5, 6, 7, 8, 9];
 #[allow(clippy::needless_range_loop)] // `i` indexes the channels and three MSE tables
 fn fixed_point_matches_f32_on_paper_experiment() {
     let cfg = BankConfig::default();
-    let mut sum = [[[0.0f64; 7]; 2]; 3]; // [f32, Fx, f64][vel, acc][estimator]
+    let mut sum = [[[0.0f64; estimators::FAMILY_COUNT]; 2]; 3]; // [f32, Fx, f64][vel, acc][estimator]
     let (mut dv, mut da) = (0.0f32, 0.0f32);
     // The AVE row: [vel, acc] maxima over all samples and seeds of |Fx - f64 at 2h| (the
     // arithmetic), |f64 at 2h - f64 at h| (the discretisation), |f32 - f64| at h (f32's
@@ -662,7 +662,7 @@ fn bank_closed_form_matches_stepping() {
 fn invalid_bank_config_is_refused() {
     use estimators::ConfigError;
     let d = BankConfig::default();
-    let err = |c: BankConfig| YawBank::<f32>::new(&c).err();
+    let err = |c: BankConfig| PaperBank::<f32>::new(&c).err();
     assert_eq!(
         err(BankConfig { h: 1.25e-5, ..d }),
         Some(ConfigError::StepNotWholeMicroseconds)
@@ -712,7 +712,7 @@ fn invalid_bank_config_is_refused() {
         }),
         Some(ConfigError::StepTooLarge("1/T"))
     );
-    assert!(YawBank::<Fx>::new(&BankConfig { h: 1e-5, ..d }).is_ok());
+    assert!(PaperBank::<Fx>::new(&BankConfig { h: 1e-5, ..d }).is_ok());
 }
 
 /// The ED/ED-ED with the implicit scheme in the bank, on the paper-like experiment

@@ -196,7 +196,7 @@ fn micromath_sqrt_bias() {
 /// bit-identical ED and bank outputs.
 #[test]
 fn pluggable_sqrt_gives_identical_results() {
-    use estimators::{BankConfig, SqrtFn, YawBank};
+    use estimators::{BankConfig, PaperBank, SqrtFn};
     #[derive(Clone, Copy, Debug, Default)]
     struct ViaF64;
     impl SqrtFn<f32> for ViaF64 {
@@ -204,8 +204,8 @@ fn pluggable_sqrt_gives_identical_results() {
             f64::from(x).sqrt() as f32
         }
     }
-    let mut a = YawBank::<f32>::new(&BankConfig::default()).unwrap();
-    let mut b = YawBank::<f32, ViaF64>::new(&BankConfig::default()).unwrap();
+    let mut a = PaperBank::<f32>::new(&BankConfig::default()).unwrap();
+    let mut b = PaperBank::<f32, ViaF64>::new(&BankConfig::default()).unwrap();
     for k in 0..300u64 {
         let y = (50.0 * (k as f64 * 0.02).sin() + 0.1 * ((k * 7919) % 13) as f64) as f32;
         let (oa, ob) = (

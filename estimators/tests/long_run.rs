@@ -1,4 +1,4 @@
-//! Long runs: 24 h at 100 Hz (8.64 M samples) through the whole `YawBank`, f32 and Q31.32, on
+//! Long runs: 24 h at 100 Hz (8.64 M samples) through the whole `PaperBank`, f32 and Q31.32, on
 //! a spin whose rate is known in closed form; and the AVE's deltahat laws over 6 h.
 //!
 //! Release mode only (a debug build would take an hour):
@@ -7,7 +7,7 @@
 
 use estimators::presets::{AVE_DEFAULT, AVE_PAPER};
 use estimators::{
-    Ave, AveConfig, BankConfig, DeltaMode, Estimator, Fx, Hold, Real, Unwrapper, YawBank,
+    Ave, AveConfig, BankConfig, DeltaMode, Estimator, Fx, Hold, PaperBank, Real, Unwrapper,
     VELOCITY_NAMES,
 };
 
@@ -43,16 +43,16 @@ fn skip_in_debug() -> bool {
 /// Hourly RMS velocity error of each bank column vs the true rate, plus the velocity rows of
 /// every sample (for the f32 vs fixed-point comparison), over `hours` hours.
 struct Run {
-    hourly_rms: Vec<[f64; 7]>,
-    vel: Vec<[f32; 7]>,
+    hourly_rms: Vec<[f64; estimators::FAMILY_COUNT]>,
+    vel: Vec<[f32; estimators::FAMILY_COUNT]>,
 }
 
 fn run_bank<T: Real>(hours: usize) -> Run {
-    let mut bank = YawBank::<T>::new(&BankConfig::default()).unwrap();
+    let mut bank = PaperBank::<T>::new(&BankConfig::default()).unwrap();
     let mut hourly_rms = Vec::with_capacity(hours);
     let mut vel = Vec::with_capacity(hours * HOUR);
     for h in 0..hours {
-        let mut sum = [0.0f64; 7];
+        let mut sum = [0.0f64; estimators::FAMILY_COUNT];
         for k in h * HOUR..(h + 1) * HOUR {
             let t_us = k as u64 * (1_000_000 / RATE_HZ);
             let (yaw, rate) = spin(t_us as f64 * 1e-6);

@@ -4,7 +4,7 @@
 //! finite (Q31.32, which saturates). Before the range check a finite 3.4e38 deg yaw turned the
 //! f32 bank's states to NaN for good; this test found it.
 
-use estimators::{BankConfig, Fx, SampleError, YawBank};
+use estimators::{BankConfig, Fx, PaperBank, SampleError};
 use proptest::prelude::*;
 
 fn yaw_value() -> impl Strategy<Value = f32> {
@@ -32,15 +32,15 @@ proptest! {
 
     #[test]
     fn any_sequence_is_handled(seq in prop::collection::vec((step_us(), yaw_value()), 1..120)) {
-        let mut f = YawBank::<f32>::new(&BankConfig::default()).unwrap();
-        let mut x = YawBank::<Fx>::new(&BankConfig::default()).unwrap();
+        let mut f = PaperBank::<f32>::new(&BankConfig::default()).unwrap();
+        let mut x = PaperBank::<Fx>::new(&BankConfig::default()).unwrap();
         let mut t = 0u64;
         let mut last_t: Option<u64> = None;
         for (dt, yaw) in seq {
             t = t.saturating_add(dt);
             let expected = if !yaw.is_finite() {
                 Some(SampleError::NotFinite)
-            } else if yaw.abs() > YawBank::<f32>::MAX_ABS_YAW_DEG {
+            } else if yaw.abs() > PaperBank::<f32>::MAX_ABS_DEG {
                 Some(SampleError::OutOfRange)
             } else if last_t.is_some_and(|l| t <= l) {
                 Some(SampleError::NonIncreasingTime)

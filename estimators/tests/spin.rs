@@ -1,7 +1,7 @@
 //! Unbounded spin: the unwrapped yaw stays exact, and the estimates unaffected, at any number
 //! of turns (10^7 turns here), in f32 and Q31.32.
 
-use estimators::{BankConfig, Fx, Real, Unwrapper, YawBank};
+use estimators::{BankConfig, Fx, PaperBank, Real, Unwrapper};
 
 /// NAV440 yaw LSB = 360/2^16 deg = 45/8192 deg (exact in f32 for any 16-bit count).
 fn lsb_to_deg(counts: i64) -> f64 {
@@ -41,8 +41,8 @@ fn unwrapper_exact_over_ten_million_turns_fixed() {
 /// samples (a 500 deg/s spin for 20 s, 28 turns), and its yaw column is the exact decimal of
 /// 3.6e9 deg + the angle (f64 Display of the exact sum, checked by parsing it back).
 fn bank_at_ten_million_turns<T: Real>() {
-    let mut a = YawBank::<T>::new(&BankConfig::default()).unwrap();
-    let mut b = YawBank::<T>::new(&BankConfig::default()).unwrap();
+    let mut a = PaperBank::<T>::new(&BankConfig::default()).unwrap();
+    let mut b = PaperBank::<T>::new(&BankConfig::default()).unwrap();
     let turns = 10_000_000i64;
     b.set_turns(turns);
     let step = 910i64; // LSB per 10 ms: 5.0 deg, 500 deg/s
@@ -76,15 +76,12 @@ fn bank_at_ten_million_turns<T: Real>() {
         let exact = turns as f64 * 360.0 + lsb_to_deg(counts);
         // The exact unwrapped yaw (f32 rounding + f64 residual; the CSV's yaw column, whose
         // text is checked in nav440-pipeline's csv tests).
-        let got = f64::from(ob.yaw_unwrapped_deg) + ob.yaw_residual_deg;
+        let got = f64::from(ob.unwrapped_deg) + ob.residual_deg;
         assert_eq!(got, exact, "row {k}");
         let exact_a = lsb_to_deg(counts);
-        assert_eq!(
-            f64::from(oa.yaw_unwrapped_deg) + oa.yaw_residual_deg,
-            exact_a
-        );
+        assert_eq!(f64::from(oa.unwrapped_deg) + oa.residual_deg, exact_a);
         if f64::from(exact_a as f32) == exact_a {
-            assert_eq!(oa.yaw_residual_deg, 0.0);
+            assert_eq!(oa.residual_deg, 0.0);
         }
     }
 }

@@ -155,7 +155,7 @@ fn product_bank_equals_the_paper_bank_channels() {
                 a[Channel::Ilo1V].to_bits()
             );
             assert_eq!(b[ProductChannel::KfA].to_bits(), a[Channel::KfA].to_bits());
-            assert_eq!(b.yaw_unwrapped_deg.to_bits(), a.yaw_unwrapped_deg.to_bits());
+            assert_eq!(b.unwrapped_deg.to_bits(), a.unwrapped_deg.to_bits());
         }
         assert_eq!(paper.reinit_count(), 1);
         assert_eq!(product.reinit_count(), 1);
@@ -283,9 +283,9 @@ fn wrap_is_a_per_axis_choice() {
         let t = k as u64 * 10_000;
         let op = p.update(t, *a).unwrap();
         let oy = y.update(t, *a).unwrap();
-        assert_eq!(op.yaw_unwrapped_deg, *a);
+        assert_eq!(op.unwrapped_deg, *a);
         if k >= 2 {
-            assert_eq!(oy.yaw_unwrapped_deg, a + 360.0);
+            assert_eq!(oy.unwrapped_deg, a + 360.0);
             // the unwrapped stream moves at 800-900 deg/s; the raw one jumps by -358 deg
             assert!(oy[Channel::Ilo1V] > 0.0 && op[Channel::Ilo1V] < 0.0);
         }

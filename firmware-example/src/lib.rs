@@ -13,7 +13,7 @@
 //! * [`out`]: the output as defmt messages (header, one row per sample, counters).
 //! * [`cycles`]: instruction counting with SysTick under `qemu -icount` (see the bench binary).
 //! * [`pipeline`]: the firmware's `nav440_pipeline::Pipeline` (parser -> attitude -> BIT ->
-//!   `TimeBase` -> one `YawBank` per axis -> CSV rows).
+//!   `TimeBase` -> one `PaperBank` per axis -> CSV rows).
 //! * [`stack`]: stack high-water mark (painted stack).
 //! * `sqrt`: the ED's square root as the `VSQRT.F32` instruction (FPU builds).
 //!
@@ -56,7 +56,7 @@ pub type BankSqrt = sqrt::Vsqrt;
 /// Square root used by the bank's ED: `VSQRT.F32` on an FPU target (bit-identical to the
 /// host's `libm::sqrtf`), the portable exact root otherwise.
 #[cfg(any(feature = "fixed-point", not(target_abi = "eabihf")))]
-pub type BankSqrt = estimators::ExactSqrt;
+pub type BankSqrt = estimators::NativeSqrt;
 
 #[cfg(all(feature = "bank-product", feature = "adaptive-gains"))]
 compile_error!("`bank-product` and `adaptive-gains` are two different banks: pick one");

@@ -7,7 +7,7 @@
 
 use estimators::SqrtFn;
 
-/// `VSQRT.F32` (FPv4-SP), for `YawBank<f32, Vsqrt>`.
+/// `VSQRT.F32` (FPv4-SP), for `PaperBank<f32, Vsqrt>`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Vsqrt;
 

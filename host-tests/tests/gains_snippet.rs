@@ -20,5 +20,5 @@ fn committed_snippet_equals_its_toml() {
         include_str!("../data/gains/fig5_var0.01.rs")
     );
     // And the bank accepts it.
-    assert!(estimators::YawBank::<f32>::new(&tuned::TUNED).is_ok());
+    assert!(estimators::PaperBank::<f32>::new(&tuned::TUNED).is_ok());
 }

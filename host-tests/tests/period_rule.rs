@@ -4,7 +4,7 @@
 //! after its first 16 packets (20 packets at 100 Hz, then 50 at 50 Hz) shows the host replay
 //! builds exactly the bank the firmware builds after its warm-up.
 
-use estimators::{BankConfig, YawBank};
+use estimators::{BankConfig, PaperBank};
 use nav440_cli::replay::{self, Axis, EstimateOptions};
 use nav440_pipeline::period::{PeriodEstimator, WARMUP_SAMPLES};
 use nav440_proto::A2Fields;
@@ -73,7 +73,7 @@ fn rate_change_after_the_warm_up_keeps_the_warm_up_period() {
     // `nav440 estimate`: one row per packet, from a bank built for 0.01 s.
     let (rows, rejected) = replay::estimate(&samples, &opts).unwrap();
     assert_eq!((rows.len(), rejected), (70, 0));
-    let mut bank = YawBank::<f32>::new(&firmware).unwrap();
+    let mut bank = PaperBank::<f32>::new(&firmware).unwrap();
     for (row, s) in rows.iter().zip(&samples) {
         assert_eq!(row.t_us, s.t_us);
         assert_eq!(
@@ -82,7 +82,7 @@ fn rate_change_after_the_warm_up_keeps_the_warm_up_period() {
         );
     }
     // ... which matters: a bank built for the whole capture's 20 ms gives other rows.
-    let mut slow = YawBank::<f32>::new(&BankConfig {
+    let mut slow = PaperBank::<f32>::new(&BankConfig {
         sample_period_s: 0.02,
         ..firmware
     })

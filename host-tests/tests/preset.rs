@@ -90,7 +90,12 @@ const BUNDLED: [(&str, f64); 4] = [
 ];
 
 /// Capture, noise variance, MSE per column with PAPER, with NAV440.
-type Scores = (String, f64, [[f64; 7]; 2], [[f64; 7]; 2]);
+type Scores = (
+    String,
+    f64,
+    [[f64; estimators::FAMILY_COUNT]; 2],
+    [[f64; estimators::FAMILY_COUNT]; 2],
+);
 
 /// An MSE as the tables of docs/CALIBRATION.md print it: 4 significant digits below 1e5,
 /// else 3 in exponent form.
@@ -158,7 +163,7 @@ fn nav440_beats_paper_on_the_bundled_captures_but_for_the_listed_cells() {
     let scores = nav440_vs_paper();
     for (file, var, paper, nav) in scores.clone() {
         for half in 0..2 {
-            let row: Vec<String> = (0..7)
+            let row: Vec<String> = (0..estimators::FAMILY_COUNT)
                 .map(|i| format!("{} {:.4} -> {:.4}", names[i], paper[half][i], nav[half][i]))
                 .collect();
             println!(
@@ -166,7 +171,7 @@ fn nav440_beats_paper_on_the_bundled_captures_but_for_the_listed_cells() {
                 ["velocity", "acceleration"][half],
                 row.join(", ")
             );
-            for i in 0..7 {
+            for i in 0..estimators::FAMILY_COUNT {
                 let (n, p) = (nav[half][i], paper[half][i]);
                 cells += 1;
                 log_ratio += (n / p).ln();
@@ -195,7 +200,7 @@ fn nav440_beats_paper_on_the_bundled_captures_but_for_the_listed_cells() {
     {
         println!("\n{unit}, PAPER -> NAV440 (markdown):");
         for (file, var, paper, nav) in &scores {
-            let cells: Vec<String> = (0..7)
+            let cells: Vec<String> = (0..estimators::FAMILY_COUNT)
                 .map(|i| {
                     let c = format!("{} -> {}", fmt(paper[half][i]), fmt(nav[half][i]));
                     if nav[half][i] < paper[half][i] {
@@ -238,7 +243,10 @@ fn no_single_ad_t_beats_the_paper_on_every_bundled_capture() {
         .iter()
         .map(|(f, w)| (replay::read_samples(&data(f)).unwrap(), *w))
         .collect();
-    let score = |cfg: BankConfig| -> Vec<([f64; 7], [f64; 7])> {
+    let score = |cfg: BankConfig| -> Vec<(
+        [f64; estimators::FAMILY_COUNT],
+        [f64; estimators::FAMILY_COUNT],
+    )> {
         let mut out = Vec::new();
         for (s, w) in &caps {
             for noise_var in [0.01, 0.5] {

@@ -60,8 +60,12 @@ fn family(rate_hz: u32) -> Vec<PresetCase> {
 
 /// Per column (half, family), the geometric mean over `cases` of `a`'s MSE over `b`'s (noise
 /// seeds 1-3).
-fn gm_ratios(cases: &[PresetCase], a: BankConfig, b: BankConfig) -> [[f64; 7]; 2] {
-    let mut sum = [[0.0; 7]; 2];
+fn gm_ratios(
+    cases: &[PresetCase],
+    a: BankConfig,
+    b: BankConfig,
+) -> [[f64; estimators::FAMILY_COUNT]; 2] {
+    let mut sum = [[0.0; estimators::FAMILY_COUNT]; 2];
     for c in cases {
         let ma = bank_mse(&c.samples, a, c.noise_var, 3, c.range).unwrap();
         let mb = bank_mse(&c.samples, b, c.noise_var, 3, c.range).unwrap();
@@ -193,7 +197,7 @@ fn rate_presets_beat_the_100_hz_gains_below_20_hz() {
                     .iter()
                     .enumerate()
                 {
-                    let row: Vec<String> = (0..7)
+                    let row: Vec<String> = (0..estimators::FAMILY_COUNT)
                         .map(|i| format!("{} {:.3} {:.3}", names[i], oo[i] / pp[i], nn[i] / pp[i]))
                         .collect();
                     println!(
@@ -201,7 +205,7 @@ fn rate_presets_beat_the_100_hz_gains_below_20_hz() {
                         ["velocity", "acceleration"][half],
                         row.join(", ")
                     );
-                    for i in 0..7 {
+                    for i in 0..estimators::FAMILY_COUNT {
                         let (ro, rn) = (oo[i] / pp[i], nn[i] / pp[i]);
                         worst = [worst[0].max(rn), worst[1].max(ro)];
                         log_sum = [log_sum[0] + rn.ln(), log_sum[1] + ro.ln()];

@@ -177,7 +177,7 @@ fn spin_is_unwrapped_through_many_turns() {
     for r in &rows {
         let m = motion.at(r.t_us as f64 * 1e-6);
         assert!(
-            (f64::from(r.axis(Axis::Yaw).unwrap().out.yaw_unwrapped_deg) - m.yaw_deg).abs() < 0.01,
+            (f64::from(r.axis(Axis::Yaw).unwrap().out.unwrapped_deg) - m.yaw_deg).abs() < 0.01,
             "t={}",
             r.t_us
         );

@@ -86,7 +86,7 @@ fn with_noise(samples: &[Sample], seed: u64, var_at: impl Fn(f64) -> f64) -> Vec
 }
 
 /// Velocity MSE per family over the first half, the second half and the whole capture.
-fn mse(samples: &[Sample], opts: &EstimateOptions) -> [[f64; 7]; 3] {
+fn mse(samples: &[Sample], opts: &EstimateOptions) -> [[f64; estimators::FAMILY_COUNT]; 3] {
     // Halves: [0, 10 s) and [10 s, 20 s] (mse_range includes both ends: 9.99 s ends the first).
     let ranges = [(0.0, SWITCH_S - 0.005), (SWITCH_S, END_S), (0.0, END_S)];
     let m = mse_over(samples, opts, &ranges);
@@ -94,7 +94,11 @@ fn mse(samples: &[Sample], opts: &EstimateOptions) -> [[f64; 7]; 3] {
 }
 
 /// Velocity MSE per family over each range (s), against the motion's analytic rate.
-fn mse_over(samples: &[Sample], opts: &EstimateOptions, ranges: &[(f64, f64)]) -> Vec<[f64; 7]> {
+fn mse_over(
+    samples: &[Sample],
+    opts: &EstimateOptions,
+    ranges: &[(f64, f64)],
+) -> Vec<[f64; estimators::FAMILY_COUNT]> {
     let (rows, rejected) = replay::estimate(samples, opts).unwrap();
     assert_eq!(rejected, 0);
     let t: Vec<u64> = rows.iter().map(|r| r.t_us).collect();
@@ -102,14 +106,14 @@ fn mse_over(samples: &[Sample], opts: &EstimateOptions, ranges: &[(f64, f64)]) -
         .iter()
         .map(|r| r.axis(Axis::Yaw).unwrap().reference_deg_s.unwrap())
         .collect();
-    let velocities: Vec<[f32; 7]> = rows
+    let velocities: Vec<[f32; estimators::FAMILY_COUNT]> = rows
         .iter()
         .map(|r| r.axis(Axis::Yaw).unwrap().out.velocities())
         .collect();
     ranges
         .iter()
         .map(|range| {
-            let mut o = [0.0; 7];
+            let mut o = [0.0; estimators::FAMILY_COUNT];
             for (i, o) in o.iter_mut().enumerate() {
                 let est: Vec<f32> = velocities.iter().map(|v| v[i]).collect();
                 *o = mse_range(&t, &est, &reference, *range);
@@ -237,7 +241,7 @@ fn scheduled_bank_follows_a_noise_switch() {
     let t_second = mse(&noisy, &fixed(second));
     let mut failures = Vec::new();
     println!("velocity MSE (deg/s)^2: scheduled / tuned for the half (ratio)");
-    for i in 0..7 {
+    for i in 0..estimators::FAMILY_COUNT {
         let r1 = sched[0][i] / t_first[0][i];
         let r2 = sched[1][i] / t_second[1][i];
         println!(
@@ -248,15 +252,17 @@ fn scheduled_bank_follows_a_noise_switch() {
             failures.push(format!("{}: ratios {r1:.3} {r2:.3} > 1.2", NAMES[i]));
         }
     }
-    let sets: Vec<(String, [[f64; 7]; 3])> = fixed_sets(&clean, &file)
+    let sets: Vec<(String, [[f64; estimators::FAMILY_COUNT]; 3])> = fixed_sets(&clean, &file)
         .into_iter()
         .map(|(name, cfg)| (name, mse(&noisy, &fixed(cfg))))
         .collect();
     println!("whole capture, 0-20 s:");
     for (name, m) in &sets {
-        let row: Vec<String> = (0..7).map(|i| format!("{:.3}", m[2][i])).collect();
+        let row: Vec<String> = (0..estimators::FAMILY_COUNT)
+            .map(|i| format!("{:.3}", m[2][i]))
+            .collect();
         println!("  {name:<18} {}", row.join(" "));
-        for i in 0..7 {
+        for i in 0..estimators::FAMILY_COUNT {
             // Not met for the ED (measured: scheduled 177.7 against 175.7 for the 0.5 level as
             // a fixed set, below every other set). In 10-20 s the scheduled ED runs the 0.5
             // level's gains (282.7, below the half's own tuning, 321.2); in 0-10 s the 0.01
@@ -286,7 +292,9 @@ fn scheduled_bank_follows_a_noise_switch() {
             }
         }
     }
-    let row: Vec<String> = (0..7).map(|i| format!("{:.3}", sched[2][i])).collect();
+    let row: Vec<String> = (0..estimators::FAMILY_COUNT)
+        .map(|i| format!("{:.3}", sched[2][i]))
+        .collect();
     println!("  {:<18} {}", "scheduled", row.join(" "));
     assert!(failures.is_empty(), "{failures:#?}");
 }
@@ -344,16 +352,20 @@ fn the_schedule_between_its_levels() {
             .unwrap();
         let seeds = 201..=205u64;
         let n = seeds.clone().count() as f64;
-        let (mut gm, mut worst, mut gm_nearer) = ([0.0f64; 7], [0.0f64; 7], [0.0f64; 7]);
+        let (mut gm, mut worst, mut gm_nearer) = (
+            [0.0f64; estimators::FAMILY_COUNT],
+            [0.0f64; estimators::FAMILY_COUNT],
+            [0.0f64; estimators::FAMILY_COUNT],
+        );
         for seed in seeds {
             let noisy = with_noise(&clean, seed, |_| v);
             let sched = mse_over(&noisy, &scheduled, &window)[0];
-            let fixed_mse: Vec<[f64; 7]> = levels
+            let fixed_mse: Vec<[f64; estimators::FAMILY_COUNT]> = levels
                 .iter()
                 .map(|l| mse_over(&noisy, &fixed(level_cfg(l)), &window)[0])
                 .collect();
             let near = mse_over(&noisy, &fixed(level_cfg(nearer)), &window)[0];
-            for i in 0..7 {
+            for i in 0..estimators::FAMILY_COUNT {
                 let best = fixed_mse.iter().map(|m| m[i]).fold(f64::MAX, f64::min);
                 gm[i] += (sched[i] / best).ln() / n;
                 gm_nearer[i] += (near[i] / best).ln() / n;
@@ -411,7 +423,9 @@ fn the_fixed_point_schedule_follows_f32_on_the_noise_switch() {
     };
     let (f, x) = (mse(&noisy, &scheduled), mse(&noisy, &fx));
     for half in 0..2 {
-        let r: Vec<f64> = (0..7).map(|i| x[half][i] / f[half][i]).collect();
+        let r: Vec<f64> = (0..estimators::FAMILY_COUNT)
+            .map(|i| x[half][i] / f[half][i])
+            .collect();
         println!("half {half}: fixed point / f32 velocity MSE {r:.4?}");
         for (i, r) in r.iter().enumerate() {
             assert!(*r < 1.05, "{} half {half}: {r}", NAMES[i]);
@@ -570,13 +584,13 @@ fn scheduled_bank_does_not_ring_on_other_noise_draws() {
     let clean = clean();
     let (_, scheduled) = schedule_fig5();
     let (first, second) = tuned_for_the_halves(&clean);
-    let mut worst = [0.0f64; 7];
+    let mut worst = [0.0f64; estimators::FAMILY_COUNT];
     for seed in 101..=106 {
         let noisy = switching(&clean, seed);
         let sched = mse(&noisy, &scheduled);
         let t1 = mse(&noisy, &fixed(first));
         let t2 = mse(&noisy, &fixed(second));
-        let ratios: Vec<String> = (0..7)
+        let ratios: Vec<String> = (0..estimators::FAMILY_COUNT)
             .map(|i| {
                 let r = (sched[0][i] / t1[0][i]).max(sched[1][i] / t2[1][i]);
                 worst[i] = worst[i].max(r);
@@ -585,7 +599,7 @@ fn scheduled_bank_does_not_ring_on_other_noise_draws() {
             .collect();
         println!("draw {seed}: worst half ratio {}", ratios.join(", "));
     }
-    for i in 0..7 {
+    for i in 0..estimators::FAMILY_COUNT {
         assert!(worst[i] <= 1.2, "{}: {}", NAMES[i], worst[i]);
     }
 }
@@ -641,10 +655,11 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
     let sets = fixed_sets(&clean, &file);
     let draws = 101..=140u64;
     let n = draws.clone().count() as f64;
-    let mut wins = [0u32; 7];
-    let mut log_ratio = [0.0f64; 7];
+    let mut wins = [0u32; estimators::FAMILY_COUNT];
+    let mut log_ratio = [0.0f64; estimators::FAMILY_COUNT];
     let (mut kept_wins, mut kept_log_ratio) = (0u32, 0.0f64);
-    let mut best_count: Vec<[u32; 7]> = vec![[0; 7]; sets.len()];
+    let mut best_count: Vec<[u32; estimators::FAMILY_COUNT]> =
+        vec![[0; estimators::FAMILY_COUNT]; sets.len()];
     // The switch made exactly at 10 s: the AVE's transient after a gain change, with the
     // recorded switching gains and without, against the 0.5 level's gains throughout.
     let base = BankConfig {
@@ -663,21 +678,24 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
         replay_samples: 0,
         ..estimators::AdaptiveConfig::DEFAULT
     };
-    let (mut bumpless_wins, mut bumpless_log_ratio) = ([0u32; 7], [0.0f64; 7]);
+    let (mut bumpless_wins, mut bumpless_log_ratio) = (
+        [0u32; estimators::FAMILY_COUNT],
+        [0.0f64; estimators::FAMILY_COUNT],
+    );
     // Acceleration: the series against the paper's AVE on the motion's rate (as `nav440
     // tune`), warm start over bumpless.
     let acc_ref = ave_on_rate(&clean, &REFERENCE_AVE, &scheduled).unwrap();
-    let mut acc_log_ratio = [0.0f64; 7];
+    let mut acc_log_ratio = [0.0f64; estimators::FAMILY_COUNT];
     for seed in draws {
         let noisy = switching(&clean, seed);
         let sched = mse(&noisy, &scheduled)[2];
         let sched_kept = mse(&noisy, &kept)[2][0];
-        let fixed_mse: Vec<[f64; 7]> = sets
+        let fixed_mse: Vec<[f64; estimators::FAMILY_COUNT]> = sets
             .iter()
             .map(|(_, cfg)| mse(&noisy, &fixed(*cfg))[2])
             .collect();
-        let mut best_of = [0.0f64; 7];
-        for i in 0..7 {
+        let mut best_of = [0.0f64; estimators::FAMILY_COUNT];
+        for i in 0..estimators::FAMILY_COUNT {
             let (k, best) = fixed_mse
                 .iter()
                 .map(|m| m[i])
@@ -717,13 +735,13 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
         // The same schedule with bumpless gain changes (no replay) and with the warm start,
         // run directly: velocity against the best fixed set, acceleration warm / bumpless.
         let levels = scheduled.schedule.as_ref().unwrap();
-        let mut acc = [[0.0f64; 7]; 2];
+        let mut acc = [[0.0f64; estimators::FAMILY_COUNT]; 2];
         for (j, cfg) in [bumpless, estimators::AdaptiveConfig::DEFAULT]
             .iter()
             .enumerate()
         {
             let out = run_adaptive(&noisy, &base, levels, cfg, None);
-            for i in 0..7 {
+            for i in 0..estimators::FAMILY_COUNT {
                 let a: Vec<f32> = out.iter().map(|o| o.accelerations()[i]).collect();
                 acc[j][i] = mse_range(&t, &a, &acc_ref, (0.0, END_S));
                 if j == 0 {
@@ -734,14 +752,14 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
                 }
             }
         }
-        for i in 0..7 {
+        for i in 0..estimators::FAMILY_COUNT {
             acc_log_ratio[i] += (acc[1][i] / acc[0][i]).ln();
         }
     }
     let gm = log_ratio.map(|l| (l / n).exp());
     let kept_gm = (kept_log_ratio / n).exp();
     println!("0-20 s velocity MSE, draws 101-140: scheduled below every fixed set / geometric mean ratio to the best fixed set");
-    for i in 0..7 {
+    for i in 0..estimators::FAMILY_COUNT {
         let most = (0..sets.len()).max_by_key(|&k| best_count[k][i]).unwrap();
         println!(
             "  {:<4} {:>2} of {n} draws, {:.3} (best fixed set most often: {}, {} draws)",
@@ -751,7 +769,7 @@ fn scheduled_bank_against_every_fixed_set_on_forty_draws() {
     println!("  AVE without recorded switching gains: {kept_wins} of {n} draws, {kept_gm:.3}");
     let bumpless_gm = bumpless_log_ratio.map(|l| (l / n).exp());
     println!("bumpless gain changes instead of the warm start (replay_samples 0):");
-    for i in 0..7 {
+    for i in 0..estimators::FAMILY_COUNT {
         println!(
             "  {:<4} {:>2} of {n} draws, {:.3}",
             NAMES[i], bumpless_wins[i], bumpless_gm[i]
@@ -989,7 +1007,7 @@ fn the_schedule_runs_for_hours_without_degrading() {
     let hour = 360_000u64;
     let mut hourly = Vec::new();
     for h in 0..3 {
-        let (mut sum, mut n) = ([0.0f64; 7], 0u32);
+        let (mut sum, mut n) = ([0.0f64; estimators::FAMILY_COUNT], 0u32);
         for k in h * hour..(h + 1) * hour {
             let t = k as f64 * 0.01;
             let m = spin.at(t);
@@ -1021,7 +1039,7 @@ fn the_schedule_runs_for_hours_without_degrading() {
     for h in &hourly {
         assert!(h[0] <= 1.1 * h[1], "AVE {} vs ILO1 {} deg/s", h[0], h[1]);
     }
-    for i in 0..7 {
+    for i in 0..estimators::FAMILY_COUNT {
         assert!(
             hourly[2][i] <= 1.05 * hourly[0][i],
             "{}: {:?}",

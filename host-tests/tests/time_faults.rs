@@ -87,7 +87,7 @@ fn stitched_recordings_do_not_spike() {
         // The new epoch re-initialised the bank: its first row reports 0.
         assert_eq!(
             est.rows[1000].axis(Axis::Yaw).unwrap().out.velocities(),
-            [0.0; 7]
+            [0.0; estimators::FAMILY_COUNT]
         );
     });
     let w = replay::fault_warning(&faults, 0).unwrap();

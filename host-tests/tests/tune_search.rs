@@ -15,7 +15,13 @@ use nav440_cli::paper::COLUMNS;
 use nav440_cli::replay::{self, EstimateOptions};
 use nav440_cli::tune::{tune_with, TuneSpec};
 
-fn run(file: &str, slice_s: f64, noise_var: f64, hold: Hold, method: Method) -> [[f64; 7]; 2] {
+fn run(
+    file: &str,
+    slice_s: f64,
+    noise_var: f64,
+    hold: Hold,
+    method: Method,
+) -> [[f64; estimators::FAMILY_COUNT]; 2] {
     let samples = replay::read_samples(&data(file)).unwrap();
     let end = (slice_s * 1e6) as u64;
     let samples: Vec<_> = samples.into_iter().filter(|s| s.t_us <= end).collect();
@@ -47,7 +53,7 @@ fn check(file: &str, slice_s: f64, noise_var: f64, hold: Hold) {
     );
     let names = COLUMNS;
     for half in 0..2 {
-        for i in 0..7 {
+        for i in 0..estimators::FAMILY_COUNT {
             let (s, g) = (search[half][i], grid[half][i]);
             assert!(
                 g.is_finite() && s.is_finite() && s <= 1.05 * g,

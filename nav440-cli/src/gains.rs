@@ -27,34 +27,66 @@
 //! configuration types (its `serde` feature).
 
 use crate::error::{Error, Result};
-use estimators::{AdConfig, AveConfig, BankConfig, BankGains, EdConfig, IloConfig, KalmanNoise};
+use estimators::{
+    for_each_family, AveFamily, BankConfig, BankGains, Family, FamilyVisitor, ObserverSwitch,
+    FAMILIES, FAMILY_COUNT,
+};
+use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
+use serde::ser::{SerializeStruct, Serializer};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// Gains of one bank half (velocity estimators or acceleration series): the estimators
-/// crate's own configuration types (its `serde` feature), one optional TOML table each.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// Gains of one bank half (velocity estimators or acceleration series) as a gains file holds
+/// them: for each family of the paper bank ([`estimators::FAMILIES`], in column order) its
+/// gains or nothing, one optional TOML table `[half.NAME]` each, in the estimators crate's
+/// own configuration type ([`Family::Gains`], its `serde` feature).
+#[derive(Clone, Copy, Debug)]
 pub struct FamilyGains {
-    /// AVE (series: both stages). A table without `delta` keeps the base's `deltahat` law
-    /// (see [`FamilyGains::ave_delta_from_base`]).
-    pub ave: Option<AveConfig>,
-    /// ILO preset 1 (`tau = h`).
-    pub ilo1: Option<IloConfig>,
-    /// ILO preset 2.
-    pub ilo2: Option<IloConfig>,
-    /// ILO preset 3.
-    pub ilo3: Option<IloConfig>,
-    /// AD time constant.
-    pub ad: Option<AdConfig>,
-    /// ED.
-    pub ed: Option<EdConfig>,
-    /// Kalman tracker noise (`dt` = nominal sample period).
-    pub kf: Option<KalmanNoise>,
+    /// The gains of the families present (the other families' entries are not read).
+    gains: BankGains,
+    /// Which families have gains here, by column.
+    present: [bool; FAMILY_COUNT],
     /// The `[*.ave]` table had no `delta` key (files written before it existed): applying
     /// keeps the base configuration's `deltahat` law.
-    #[serde(skip)]
     pub ave_delta_from_base: bool,
+}
+
+impl Default for FamilyGains {
+    /// No family's gains.
+    fn default() -> Self {
+        FamilyGains {
+            gains: BankGains::PAPER_VELOCITY,
+            present: [false; FAMILY_COUNT],
+            ave_delta_from_base: false,
+        }
+    }
+}
+
+/// The column of the family `F` in [`FAMILIES`].
+fn column<F: Family>() -> usize {
+    FAMILIES
+        .iter()
+        .position(|f| f.name == F::NAME)
+        .unwrap_or(usize::MAX)
+}
+
+impl PartialEq for FamilyGains {
+    /// The same families present with the same gains.
+    fn eq(&self, other: &Self) -> bool {
+        struct Same<'a>(&'a FamilyGains, &'a FamilyGains, bool);
+        impl FamilyVisitor for Same<'_> {
+            fn family<F: Family>(&mut self, column: usize) {
+                self.2 &= self.0.get_at::<F>(column) == self.1.get_at::<F>(column);
+            }
+        }
+        let mut same = Same(
+            self,
+            other,
+            self.ave_delta_from_base == other.ave_delta_from_base,
+        );
+        for_each_family(&mut same);
+        same.2
+    }
 }
 
 /// A whole gains file.
@@ -85,7 +117,7 @@ impl GainsFile {
             if let Some(toml::Value::Table(ave)) = table
                 .get_mut(*half)
                 .and_then(|h| h.as_table_mut())
-                .and_then(|h| h.get_mut("ave"))
+                .and_then(|h| h.get_mut(AveFamily::NAME))
             {
                 if !ave.contains_key("delta") {
                     ave.insert("delta".into(), toml::Value::String("paper".into()));
@@ -140,30 +172,147 @@ pub struct ScheduleLevelFile {
     pub switch_up: Option<SwitchUpFile>,
 }
 
-/// The `[level.switch_up]` table of a schedule file (`estimators::ObserverSwitch`): the noise
-/// variance (deg^2) from which each observer family takes the next level's gains.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SwitchUpFile {
-    /// AVE, deg^2.
-    pub ave: f32,
-    /// ILO1, deg^2.
-    pub ilo1: f32,
-    /// ILO2, deg^2.
-    pub ilo2: f32,
-    /// ILO3, deg^2.
-    pub ilo3: f32,
-    /// ED, deg^2.
-    pub ed: f32,
+/// The `[level.switch_up]` table of a schedule file ([`estimators::ObserverSwitch`]): the
+/// noise variance (deg^2) from which each observer family takes the next level's gains, one
+/// key per family that records one (`ave`, `ilo1`, `ilo2`, `ilo3`, `ed`: see
+/// [`Family::switch_up_mut`]), every key required.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SwitchUpFile(pub ObserverSwitch);
+
+impl From<SwitchUpFile> for ObserverSwitch {
+    fn from(w: SwitchUpFile) -> Self {
+        w.0
+    }
 }
 
-impl From<SwitchUpFile> for estimators::ObserverSwitch {
-    fn from(w: SwitchUpFile) -> Self {
-        estimators::ObserverSwitch {
-            ave: w.ave,
-            ilo: [w.ilo1, w.ilo2, w.ilo3],
-            ed: w.ed,
+/// The `SwitchUpFile` struct of the file, for serde.
+const SWITCH_UP: &str = "SwitchUpFile";
+
+/// The names of the families that record a switch point, in column order (the keys of
+/// [`SwitchUpFile`]).
+fn switch_up_names() -> &'static [&'static str] {
+    static NAMES: std::sync::OnceLock<Vec<&'static str>> = std::sync::OnceLock::new();
+    NAMES.get_or_init(|| {
+        let any = ObserverSwitch::all(1.0);
+        any.points()
+            .iter()
+            .map(|&(c, _)| FAMILIES[c].name)
+            .collect()
+    })
+}
+
+impl Serialize for SwitchUpFile {
+    fn serialize<S: Serializer>(&self, serializer: S) -> std::result::Result<S::Ok, S::Error> {
+        let points = self.0.points();
+        let mut s = serializer.serialize_struct(SWITCH_UP, points.len())?;
+        for &(c, x) in &points {
+            s.serialize_field(FAMILIES[c].name, &x)?;
         }
+        s.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for SwitchUpFile {
+    /// As a derived struct of one required f32 field per family that records a switch point
+    /// would (`deny_unknown_fields`).
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        /// A key: its index in [`switch_up_names`].
+        struct Key(usize);
+        impl<'de> Deserialize<'de> for Key {
+            fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+                struct K;
+                impl Visitor<'_> for K {
+                    type Value = Key;
+                    fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                        f.write_str("field identifier")
+                    }
+                    fn visit_u64<E: de::Error>(self, i: u64) -> std::result::Result<Key, E> {
+                        let n = switch_up_names().len();
+                        match usize::try_from(i) {
+                            Ok(i) if i < n => Ok(Key(i)),
+                            _ => Err(E::invalid_value(
+                                de::Unexpected::Unsigned(i),
+                                &format!("field index 0 <= i < {n}").as_str(),
+                            )),
+                        }
+                    }
+                    fn visit_str<E: de::Error>(self, name: &str) -> std::result::Result<Key, E> {
+                        let names = switch_up_names();
+                        match names.iter().position(|n| *n == name) {
+                            Some(i) => Ok(Key(i)),
+                            None => Err(E::unknown_field(name, names)),
+                        }
+                    }
+                    fn visit_bytes<E: de::Error>(self, b: &[u8]) -> std::result::Result<Key, E> {
+                        self.visit_str(&String::from_utf8_lossy(b))
+                    }
+                }
+                d.deserialize_identifier(K)
+            }
+        }
+        /// Sets the switch point of the family named `names[i]`.
+        fn set(sw: &mut ObserverSwitch, i: usize, x: f32) {
+            struct Set<'a>(&'a mut ObserverSwitch, &'static str, f32);
+            impl FamilyVisitor for Set<'_> {
+                fn family<F: Family>(&mut self, _: usize) {
+                    if F::NAME == self.1 {
+                        if let Some(p) = F::switch_up_mut(self.0) {
+                            *p = self.2;
+                        }
+                    }
+                }
+            }
+            for_each_family(&mut Set(sw, switch_up_names()[i], x));
+        }
+        struct V;
+        impl<'de> Visitor<'de> for V {
+            type Value = SwitchUpFile;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                write!(f, "struct {SWITCH_UP}")
+            }
+            fn visit_map<A: MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> std::result::Result<SwitchUpFile, A::Error> {
+                let names = switch_up_names();
+                let mut values: Vec<Option<f32>> = vec![None; names.len()];
+                while let Some(Key(i)) = map.next_key()? {
+                    if values[i].is_some() {
+                        return Err(de::Error::duplicate_field(names[i]));
+                    }
+                    values[i] = Some(map.next_value()?);
+                }
+                let mut sw = ObserverSwitch::all(0.0);
+                for (i, v) in values.into_iter().enumerate() {
+                    match v {
+                        Some(x) => set(&mut sw, i, x),
+                        None => return Err(de::Error::missing_field(names[i])),
+                    }
+                }
+                Ok(SwitchUpFile(sw))
+            }
+            fn visit_seq<A: SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> std::result::Result<SwitchUpFile, A::Error> {
+                let names = switch_up_names();
+                let mut sw = ObserverSwitch::all(0.0);
+                for i in 0..names.len() {
+                    match seq.next_element()? {
+                        Some(x) => set(&mut sw, i, x),
+                        None => {
+                            return Err(de::Error::invalid_length(
+                                i,
+                                &format!("struct {SWITCH_UP} with {} elements", names.len())
+                                    .as_str(),
+                            ))
+                        }
+                    }
+                }
+                Ok(SwitchUpFile(sw))
+            }
+        }
+        d.deserialize_struct(SWITCH_UP, switch_up_names(), V)
     }
 }
 
@@ -279,26 +428,24 @@ impl ScheduleFile {
         };
         // `AveDeltahat` and `ObserverSwitch` only when a level records them (an unused import
         // would warn).
-        let deltahat = if self.level.iter().any(|l| l.ave_deltahat.is_some()) {
-            "AveDeltahat, "
-        } else {
-            ""
-        };
-        let switch = if self.level.iter().any(|l| l.switch_up.is_some()) {
-            ", ObserverSwitch"
-        } else {
-            ""
-        };
+        let mut names = vec!["BankGains", "ScheduleLevel"];
+        if self.level.iter().any(|l| l.ave_deltahat.is_some()) {
+            names.push("AveDeltahat");
+        }
+        if self.level.iter().any(|l| l.switch_up.is_some()) {
+            names.push("ObserverSwitch");
+        }
         let mut s = format!(
             "// Generated by `nav440 tune` ({what}), hold {}. Build the bank with\n\
              // `AdaptiveBank::new(&BankConfig {{ hold, ..BankConfig::NAV440 }}, &schedule, &AdaptiveConfig::DEFAULT)`,\n\
              // `schedule` being `GainSchedule::new(&SCHEDULE)?` with `.with_sample_period(p)?` when\n\
              // `SCHEDULE_PERIOD_S` is `Some(p)`.\n\
-             use estimators::{{AveConfig, {deltahat}BankGains, DeltaMode, EdConfig, IloConfig, KalmanNoise{switch}, ScheduleLevel}};\n\n\
+             {}\n\n\
              /// The nominal sample period the levels were tuned at, s.\n\
              pub const SCHEDULE_PERIOD_S: Option<f32> = {period};\n\n\
              pub const SCHEDULE: [ScheduleLevel; {}] = [\n",
             self.hold,
+            use_line(&names),
             self.level.len()
         );
         for l in &self.level {
@@ -310,10 +457,11 @@ impl ScheduleFile {
                 None => "None".to_string(),
             };
             let switch = match l.switch_up {
-                Some(w) => format!(
-                    "Some(ObserverSwitch {{ ave: {:?}, ilo: [{:?}, {:?}, {:?}], ed: {:?} }})",
-                    w.ave, w.ilo1, w.ilo2, w.ilo3, w.ed
-                ),
+                Some(SwitchUpFile(w)) => {
+                    let mut s = String::new();
+                    let _ = w.write_rust(&mut s);
+                    format!("Some({s})")
+                }
                 None => "None".to_string(),
             };
             s.push_str(&format!(
@@ -383,72 +531,78 @@ pub fn load(path: &Path) -> Result<estimators::BankConfig> {
 }
 
 impl FamilyGains {
-    /// The gains of one bank half, all present.
+    /// The gains of one bank half, every family present.
     pub fn from_bank(g: &BankGains) -> Self {
-        let [ilo1, ilo2, ilo3] = g.ilo.map(Some);
         FamilyGains {
-            ave: Some(g.ave),
-            ilo1,
-            ilo2,
-            ilo3,
-            ad: Some(AdConfig { t: g.ad_t }),
-            ed: Some(g.ed),
-            kf: Some(g.kf),
+            gains: *g,
+            present: [true; FAMILY_COUNT],
             ave_delta_from_base: false,
         }
     }
 
-    /// These gains with only the columns `keep(i)` is true for (bank column order: AVE,
-    /// ILO1, ILO2, ILO3, AD, ED, KF); the others `None`.
+    /// The family `F`'s gains, if present.
+    pub fn get<F: Family>(&self) -> Option<F::Gains> {
+        self.get_at::<F>(column::<F>())
+    }
+
+    /// Sets (or, with `None`, removes) the family `F`'s gains.
+    pub fn set<F: Family>(&mut self, gains: Option<F::Gains>) {
+        self.set_at::<F>(column::<F>(), gains);
+    }
+
+    /// [`Self::get`] for `F` at `column`.
+    fn get_at<F: Family>(&self, column: usize) -> Option<F::Gains> {
+        let present = self.present.get(column).copied().unwrap_or(false);
+        present.then(|| F::get(&self.gains))
+    }
+
+    /// [`Self::set`] for `F` at `column`.
+    fn set_at<F: Family>(&mut self, column: usize, gains: Option<F::Gains>) {
+        if let Some(p) = self.present.get_mut(column) {
+            *p = gains.is_some();
+        }
+        if let Some(g) = gains {
+            F::set(&mut self.gains, g);
+        }
+    }
+
+    /// These gains with only the columns `keep(i)` is true for (bank column order,
+    /// [`estimators::FAMILIES`]); the others absent.
     pub fn only(&self, keep: impl Fn(usize) -> bool) -> Self {
         let mut out = *self;
-        for i in 0..7 {
-            if !keep(i) {
-                out.clear_column(i);
-            }
+        for (i, p) in out.present.iter_mut().enumerate() {
+            *p &= keep(i);
         }
         out
     }
 
-    /// Sets column `i` (bank column order) to `src`'s.
+    /// Sets column `i` (bank column order) to `src`'s (absent if absent there).
     pub fn set_column(&mut self, i: usize, src: &Self) {
-        match i {
-            0 => self.ave = src.ave,
-            1 => self.ilo1 = src.ilo1,
-            2 => self.ilo2 = src.ilo2,
-            3 => self.ilo3 = src.ilo3,
-            4 => self.ad = src.ad,
-            5 => self.ed = src.ed,
-            _ => self.kf = src.kf,
+        struct Copy<'a>(&'a mut FamilyGains, &'a FamilyGains, usize);
+        impl FamilyVisitor for Copy<'_> {
+            fn family<F: Family>(&mut self, column: usize) {
+                if column == self.2 {
+                    self.0.set_at::<F>(column, self.1.get_at::<F>(column));
+                }
+            }
         }
-    }
-
-    fn clear_column(&mut self, i: usize) {
-        self.set_column(i, &Self::default());
+        for_each_family(&mut Copy(self, src, i));
     }
 
     /// `base` with every gain present here replaced.
     pub fn apply(&self, mut base: BankGains) -> BankGains {
-        if let Some(a) = self.ave {
-            let delta = base.ave.delta;
-            base.ave = a;
-            if self.ave_delta_from_base {
-                base.ave.delta = delta;
+        struct Apply<'a>(&'a FamilyGains, &'a mut BankGains);
+        impl FamilyVisitor for Apply<'_> {
+            fn family<F: Family>(&mut self, column: usize) {
+                if let Some(g) = self.0.get_at::<F>(column) {
+                    F::set(self.1, g);
+                }
             }
         }
-        for (slot, g) in base.ilo.iter_mut().zip([self.ilo1, self.ilo2, self.ilo3]) {
-            if let Some(g) = g {
-                *slot = g;
-            }
-        }
-        if let Some(a) = self.ad {
-            base.ad_t = a.t;
-        }
-        if let Some(e) = self.ed {
-            base.ed = e;
-        }
-        if let Some(k) = self.kf {
-            base.kf = k;
+        let delta = base.ave.delta;
+        for_each_family(&mut Apply(self, &mut base));
+        if self.ave_delta_from_base && self.get::<AveFamily>().is_some() {
+            base.ave.delta = delta;
         }
         base
     }
@@ -458,32 +612,184 @@ impl FamilyGains {
     }
 }
 
+/// The `FamilyGains` struct of the file, for serde: its fields are the families' names.
+const FAMILY_GAINS: &str = "FamilyGains";
+
+impl Serialize for FamilyGains {
+    /// One field per family, `None` for an absent one (TOML leaves it out), in column order.
+    fn serialize<S: Serializer>(&self, serializer: S) -> std::result::Result<S::Ok, S::Error> {
+        struct Fields<'a, M: SerializeStruct>(&'a FamilyGains, M, Option<M::Error>);
+        impl<M: SerializeStruct> FamilyVisitor for Fields<'_, M> {
+            fn family<F: Family>(&mut self, column: usize) {
+                if self.2.is_none() {
+                    let g = self.0.get_at::<F>(column);
+                    if let Err(e) = self.1.serialize_field(F::NAME, &g) {
+                        self.2 = Some(e);
+                    }
+                }
+            }
+        }
+        let s = serializer.serialize_struct(FAMILY_GAINS, FAMILY_COUNT)?;
+        let mut fields = Fields(self, s, None);
+        for_each_family(&mut fields);
+        match fields.2 {
+            Some(e) => Err(e),
+            None => fields.1.end(),
+        }
+    }
+}
+
+/// A key of the gains file's `[half]` table: the column of the family it names.
+struct FamilyKey(usize);
+
+impl<'de> Deserialize<'de> for FamilyKey {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct Key;
+        impl Visitor<'_> for Key {
+            type Value = FamilyKey;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("field identifier")
+            }
+            fn visit_u64<E: de::Error>(self, i: u64) -> std::result::Result<FamilyKey, E> {
+                match usize::try_from(i) {
+                    Ok(i) if i < FAMILY_COUNT => Ok(FamilyKey(i)),
+                    _ => Err(E::invalid_value(
+                        de::Unexpected::Unsigned(i),
+                        &format!("field index 0 <= i < {FAMILY_COUNT}").as_str(),
+                    )),
+                }
+            }
+            fn visit_str<E: de::Error>(self, name: &str) -> std::result::Result<FamilyKey, E> {
+                match FAMILIES.iter().position(|f| f.name == name) {
+                    Some(i) => Ok(FamilyKey(i)),
+                    None => Err(E::unknown_field(name, &estimators::VELOCITY_NAMES)),
+                }
+            }
+            fn visit_bytes<E: de::Error>(self, b: &[u8]) -> std::result::Result<FamilyKey, E> {
+                self.visit_str(&String::from_utf8_lossy(b))
+            }
+        }
+        d.deserialize_identifier(Key)
+    }
+}
+
+/// Reads the next value of a map or the next element of a sequence.
+trait ReadNext<E> {
+    /// The next value as a `T`; `Ok(None)` at the end of a sequence.
+    fn next<T: de::DeserializeOwned>(&mut self) -> std::result::Result<Option<T>, E>;
+}
+
+/// The next value of a map ([`MapAccess::next_value`]).
+struct ValueOf<'a, A>(&'a mut A);
+impl<'de, A: MapAccess<'de>> ReadNext<A::Error> for ValueOf<'_, A> {
+    fn next<T: de::DeserializeOwned>(&mut self) -> std::result::Result<Option<T>, A::Error> {
+        self.0.next_value().map(Some)
+    }
+}
+
+/// The next element of a sequence ([`SeqAccess::next_element`]).
+struct ElementOf<'a, A>(&'a mut A);
+impl<'de, A: SeqAccess<'de>> ReadNext<A::Error> for ElementOf<'_, A> {
+    fn next<T: de::DeserializeOwned>(&mut self) -> std::result::Result<Option<T>, A::Error> {
+        self.0.next_element()
+    }
+}
+
+/// Reads the family at `column` (its `Option<Gains>`, as a derived struct's field) with
+/// `read` into `out`; `Ok(false)` if there was nothing to read.
+fn read_one<E, R: ReadNext<E>>(
+    column: usize,
+    out: &mut FamilyGains,
+    read: R,
+) -> std::result::Result<bool, E> {
+    struct Read<'a, E, R> {
+        column: usize,
+        out: &'a mut FamilyGains,
+        read: R,
+        result: std::result::Result<bool, E>,
+    }
+    impl<E, R: ReadNext<E>> FamilyVisitor for Read<'_, E, R> {
+        fn family<F: Family>(&mut self, column: usize) {
+            if column == self.column {
+                self.result = self.read.next::<Option<F::Gains>>().map(|g| match g {
+                    Some(g) => {
+                        self.out.set_at::<F>(column, g);
+                        true
+                    }
+                    None => false,
+                });
+            }
+        }
+    }
+    let mut r = Read {
+        column,
+        out,
+        read,
+        result: Ok(false),
+    };
+    for_each_family(&mut r);
+    r.result
+}
+
+impl<'de> Deserialize<'de> for FamilyGains {
+    /// As a derived struct of one `Option` field per family would (`deny_unknown_fields`).
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct Gains;
+        impl<'de> Visitor<'de> for Gains {
+            type Value = FamilyGains;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                write!(f, "struct {FAMILY_GAINS}")
+            }
+            fn visit_map<A: MapAccess<'de>>(
+                self,
+                mut map: A,
+            ) -> std::result::Result<FamilyGains, A::Error> {
+                let mut out = FamilyGains::default();
+                let mut seen = [false; FAMILY_COUNT];
+                while let Some(FamilyKey(i)) = map.next_key()? {
+                    if std::mem::replace(&mut seen[i], true) {
+                        return Err(de::Error::duplicate_field(FAMILIES[i].name));
+                    }
+                    read_one(i, &mut out, ValueOf(&mut map))?;
+                }
+                Ok(out)
+            }
+            fn visit_seq<A: SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> std::result::Result<FamilyGains, A::Error> {
+                let mut out = FamilyGains::default();
+                for i in 0..FAMILY_COUNT {
+                    if !read_one(i, &mut out, ElementOf(&mut seq))? {
+                        return Err(de::Error::invalid_length(
+                            i,
+                            &format!("struct {FAMILY_GAINS} with {FAMILY_COUNT} elements").as_str(),
+                        ));
+                    }
+                }
+                Ok(out)
+            }
+        }
+        d.deserialize_struct(FAMILY_GAINS, &estimators::VELOCITY_NAMES, Gains)
+    }
+}
 /// A Rust expression `BankGains { .. }` that builds `g` (every field spelled out; gains printed
 /// with `{:?}`, which round-trips f32 exactly), each line after the first indented by `indent`.
 /// Used by `nav440 tune --rust` and by the test that prints `BankGains::NAV440_*`
 /// (host-tests/tests/preset.rs).
 pub fn bank_gains_literal(g: &BankGains, indent: &str) -> String {
-    let ilo = |c: &IloConfig| {
-        format!(
-            "IloConfig {{ k1: {:?}, l: {:?}, k2: {:?} }}",
-            c.k1, c.l, c.k2
-        )
-    };
-    format!(
-        "BankGains {{\n{i}    ave: AveConfig {{ k: {:?}, gamma1: {:?}, delta: DeltaMode::{:?} }},\n{i}    ilo: [\n{i}        {},\n{i}        {},\n{i}        {},\n{i}    ],\n{i}    ad_t: {:?},\n{i}    ed: EdConfig {{ lambda: {:?}, alpha: {:?} }},\n{i}    kf: KalmanNoise {{ q: {:?}, r: {:?} }},\n{i}}}",
-        g.ave.k,
-        g.ave.gamma1,
-        g.ave.delta,
-        ilo(&g.ilo[0]),
-        ilo(&g.ilo[1]),
-        ilo(&g.ilo[2]),
-        g.ad_t,
-        g.ed.lambda,
-        g.ed.alpha,
-        g.kf.q,
-        g.kf.r,
-        i = indent
-    )
+    let mut s = String::new();
+    let _ = g.write_rust(&mut s, indent);
+    s
+}
+
+/// `use estimators::{..};` importing `names` and every name [`BankGains::write_rust`] uses,
+/// sorted.
+fn use_line(names: &[&str]) -> String {
+    let mut all: Vec<&str> = BankGains::RUST_TYPES.iter().chain(names).copied().collect();
+    all.sort_unstable();
+    all.dedup();
+    format!("use estimators::{{{}}};", all.join(", "))
 }
 
 impl GainsFile {
@@ -505,10 +811,13 @@ impl GainsFile {
     /// A Rust snippet that builds the same configuration (for the firmware's `BankConfig`).
     pub fn to_rust(&self, what: &str) -> String {
         let base = BankConfig::PAPER;
+        // The text still says `YawBank` (the type is `PaperBank`): `nav440 tune --rust`'s
+        // output is kept byte for byte; changing it is a change of the output of its own.
         format!(
             "// Generated by `nav440 tune` ({what}). Paste into the firmware and pass to `YawBank::new`.\n\
-             use estimators::{{AveConfig, BankConfig, BankGains, DeltaMode, EdConfig, IloConfig, KalmanNoise}};\n\n\
+             {}\n\n\
              pub const TUNED: BankConfig = BankConfig {{\n    velocity: {},\n    acceleration: {},\n    ..BankConfig::PAPER\n}};\n",
+            use_line(&["BankConfig", "BankGains"]),
             self.velocity.rust(&base.velocity, "    "),
             self.acceleration.rust(&base.acceleration, "    ")
         )
@@ -518,7 +827,7 @@ impl GainsFile {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use estimators::DeltaMode;
+    use estimators::{DeltaMode, IloConfig, IloFamily};
 
     #[test]
     fn paper_gains_round_trip_through_toml() {
@@ -528,7 +837,7 @@ mod tests {
         assert_eq!(back.apply(BankConfig::PAPER), BankConfig::PAPER);
         // Table 2, ILO3 and Table 4, ILO2 as the paper gives them.
         assert_eq!(
-            paper.velocity.ilo3,
+            paper.velocity.get::<IloFamily<2>>(),
             Some(IloConfig {
                 k1: 0.7,
                 l: 1.0,
@@ -536,7 +845,7 @@ mod tests {
             })
         );
         assert_eq!(
-            paper.acceleration.ilo2,
+            paper.acceleration.get::<IloFamily<1>>(),
             Some(IloConfig {
                 k1: 0.9,
                 l: 3.0,

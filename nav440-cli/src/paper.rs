@@ -9,14 +9,25 @@
 
 use crate::error::{Error, Result};
 use crate::replay::{self, Axis, EstimateOptions, Noise, Row, Sample};
-use estimators::{Ave, AveConfig, BankConfig, Channel, DeltaMode, SampleAdapter};
+use estimators::{
+    Ave, AveConfig, BankConfig, Channel, DeltaMode, SampleAdapter, FAMILIES, FAMILY_COUNT,
+};
 
 /// Noise variances of the paper's Tables 1 and 3, deg^2.
 pub const NOISE_VARS: [f64; 2] = [0.01, 0.5];
 /// Noise seeds averaged (the paper: "mean of 3 runs").
 pub const SEEDS: [u64; 3] = [1, 2, 3];
-/// Column names: the six estimators of the paper, then our Kalman filter.
-pub const COLUMNS: [&str; 7] = ["AVE", "ILO1", "ILO2", "ILO3", "AD", "ED", "KF"];
+/// Column names, one per family of the paper bank ([`estimators::FAMILIES`]' labels): the six
+/// estimators of the paper, then our Kalman filter.
+pub const COLUMNS: [&str; FAMILY_COUNT] = {
+    let mut names = [""; FAMILY_COUNT];
+    let mut i = 0;
+    while i < FAMILY_COUNT {
+        names[i] = FAMILIES[i].label;
+        i += 1;
+    }
+    names
+};
 /// Paper Table 1: velocity MSE, (deg/s)^2, rows sigma^2 = 0.01, 0.5; columns AVE..ED.
 pub const PAPER_VEL_MSE: [[f64; 6]; 2] = [
     [11.1, 18.1, 11.0, 10.9, 18.7, 14.7],
@@ -93,7 +104,7 @@ pub fn row_mse(
     samples: &[Sample],
     acc_ref: &[f32],
     window_s: f64,
-) -> ([f64; 7], [f64; 7]) {
+) -> ([f64; FAMILY_COUNT], [f64; FAMILY_COUNT]) {
     // Rows are a subsequence of samples (rejected samples are missing): match by time.
     let mut accr = Vec::with_capacity(rows.len());
     let mut j = 0;
@@ -113,9 +124,9 @@ pub fn row_mse(
         })
         .collect();
     let out = |r: &Row| r.axis(axis).map(|a| a.out);
-    let mut v = [0.0; 7];
-    let mut a = [0.0; 7];
-    for i in 0..7 {
+    let mut v = [0.0; FAMILY_COUNT];
+    let mut a = [0.0; FAMILY_COUNT];
+    for i in 0..FAMILY_COUNT {
         let ev: Vec<f32> = rows
             .iter()
             .map(|r| out(r).map_or(f32::NAN, |o| o[Channel::VELOCITY[i]]))
@@ -131,7 +142,7 @@ pub fn row_mse(
 }
 
 /// (noise variance index, velocity MSE, acceleration MSE) of one run.
-type RunMse = (usize, [f64; 7], [f64; 7]);
+type RunMse = (usize, [f64; FAMILY_COUNT], [f64; FAMILY_COUNT]);
 
 /// Result of the paper protocol.
 #[derive(Clone, Debug)]
@@ -155,13 +166,13 @@ pub struct PaperResult {
     /// Where the noise entered.
     pub noise_at: crate::replay::NoiseAt,
     /// Velocity MSE per noise variance and column, (deg/s)^2.
-    pub vel: [[f64; 7]; 2],
+    pub vel: [[f64; FAMILY_COUNT]; 2],
     /// Acceleration MSE per noise variance and column, (deg/s^2)^2.
-    pub acc: [[f64; 7]; 2],
+    pub acc: [[f64; FAMILY_COUNT]; 2],
     /// Velocity MSE without added noise (the tracking-error floor), (deg/s)^2.
-    pub vel_clean: [f64; 7],
+    pub vel_clean: [f64; FAMILY_COUNT],
     /// Acceleration MSE without added noise, (deg/s^2)^2.
-    pub acc_clean: [f64; 7],
+    pub acc_clean: [f64; FAMILY_COUNT],
 }
 
 /// Checks an MSE window end (`--window` of `paper` and `tune`): a positive finite number of
@@ -234,11 +245,11 @@ pub fn run(
             })
             .collect()
     });
-    let mut vel = [[0.0; 7]; 2];
-    let mut acc = [[0.0; 7]; 2];
+    let mut vel = [[0.0; FAMILY_COUNT]; 2];
+    let mut acc = [[0.0; FAMILY_COUNT]; 2];
     for r in results {
         let (i, v, a) = r?;
-        for c in 0..7 {
+        for c in 0..FAMILY_COUNT {
             vel[i][c] += v[c] / SEEDS.len() as f64;
             acc[i][c] += a[c] / SEEDS.len() as f64;
         }
@@ -308,9 +319,9 @@ impl PaperResult {
         &self,
     ) -> [(
         &'static str,
-        &[[f64; 7]; 2],
+        &[[f64; FAMILY_COUNT]; 2],
         &'static [[f64; 6]; 2],
-        &[f64; 7],
+        &[f64; FAMILY_COUNT],
     ); 2] {
         [
             (
@@ -367,7 +378,11 @@ impl PaperResult {
                 for v in paper[i] {
                     s.push_str(&format!("{:>10}", fmt_val(v)));
                 }
-                s.push_str(&format!("{:>10}\n", "-"));
+                // The columns the paper has no figure for (our Kalman filter).
+                for _ in paper[i].len()..FAMILY_COUNT {
+                    s.push_str(&format!("{:>10}", "-"));
+                }
+                s.push('\n');
             }
             s.push_str(&format!("{:<14}", "0 (no noise)"));
             for v in clean {
@@ -385,13 +400,14 @@ impl PaperResult {
             s.push_str(&format!(
                 "\n{title}\n\n| sigma^2 | | {} |\n|---|---|{}\n",
                 COLUMNS.join(" | "),
-                "---|".repeat(7)
+                "---|".repeat(FAMILY_COUNT)
             ));
             for (i, var) in NOISE_VARS.iter().enumerate() {
                 let o: Vec<String> = ours[i].iter().map(|&v| fmt_val(v)).collect();
                 let p: Vec<String> = paper[i].iter().map(|&v| fmt_val(v)).collect();
                 s.push_str(&format!("| {var} | ours | {} |\n", o.join(" | ")));
-                s.push_str(&format!("| {var} | paper | {} | - |\n", p.join(" | ")));
+                let none = vec!["-"; FAMILY_COUNT - p.len()].join(" | ");
+                s.push_str(&format!("| {var} | paper | {} | {none} |\n", p.join(" | ")));
             }
             let c: Vec<String> = clean.iter().map(|&v| fmt_val(v)).collect();
             s.push_str(&format!("| 0 | ours, no noise | {} |\n", c.join(" | ")));
@@ -408,7 +424,9 @@ impl PaperResult {
                 .map(|(c, v)| (c.to_string(), json_num(*v)))
                 .collect()
         };
-        let table = |ours: &[[f64; 7]; 2], paper: &[[f64; 6]; 2], clean: &[f64; 7]| {
+        let table = |ours: &[[f64; FAMILY_COUNT]; 2],
+                     paper: &[[f64; 6]; 2],
+                     clean: &[f64; FAMILY_COUNT]| {
             let mut m = serde_json::Map::new();
             for (i, var) in NOISE_VARS.iter().enumerate() {
                 m.insert(

@@ -50,7 +50,7 @@ pub fn panels(
         },
         y_label: format!("{name} (deg)"),
         series: vec![line(name, BLACK, 1, &|r| {
-            out(r).map_or(f64::NAN, |o| f64::from(o.yaw_unwrapped_deg))
+            out(r).map_or(f64::NAN, |o| f64::from(o.unwrapped_deg))
         })],
         y_range: None,
     };

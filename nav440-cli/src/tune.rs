@@ -11,7 +11,7 @@
 //! MSE. Every hold asked for (both by default) is tuned; the one with the smaller geometric
 //! mean of the tuned MSEs over the 14 families is kept (the hold is one bank-wide option). The single estimators run behind
 //! `estimators::SampleAdapter` (unwrapped noisy yaw, same hold and step as the bank); the
-//! "before" and "after" MSE printed are then measured through the whole `YawBank` with the
+//! "before" and "after" MSE printed are then measured through the whole `PaperBank` with the
 //! paper presets and with the tuned gains file, i.e. exactly what `nav440 estimate --gains`
 //! computes.
 
@@ -22,13 +22,17 @@ use crate::paper::{ave_on_rate, row_mse, steps_between, REFERENCE_AVE};
 use crate::progress::Progress;
 use crate::replay::{self, EstimateOptions, Noise, Sample};
 use estimators::{
-    Ad, Ave, AveConfig, BankConfig, DeltaMode, Ed, EdConfig, Estimator, Hold, Ilo, IloConfig,
-    Kalman, KalmanConfig, Law, SampleAdapter, Series, Stateful,
+    for_each_family, BankConfig, Estimator, Family, FamilyVisitor, Gains, Hold, Kalman,
+    KalmanConfig, KalmanNoise, Law, SampleAdapter, Scheduling, Scorer, Series, Stateful, FAMILIES,
+    FAMILY_COUNT,
 };
 use std::time::Instant;
 
 // Column names in bank order.
 use crate::paper::COLUMNS as NAMES;
+
+/// The number of tuned MSEs (every family, velocity and acceleration).
+const TUNED_MSES: usize = 2 * FAMILY_COUNT;
 
 /// What to tune and how.
 #[derive(Clone, Debug)]
@@ -56,11 +60,11 @@ pub struct HoldRun {
     /// mean): the score the hold is chosen by.
     pub score: f64,
     /// Tuned (training) MSE per family: velocity then acceleration.
-    pub cost: [[f64; 7]; 2],
+    pub cost: [[f64; FAMILY_COUNT]; 2],
     /// Objective evaluations per family.
-    pub evals: [[usize; 7]; 2],
+    pub evals: [[usize; FAMILY_COUNT]; 2],
     /// Wall time per family, s (the two halves run in parallel).
-    pub secs: [[f64; 7]; 2],
+    pub secs: [[f64; FAMILY_COUNT]; 2],
 }
 
 /// What the tuner found.
@@ -91,13 +95,13 @@ pub struct TuneResult {
     /// Paper gains written in the same form (for the "before" column).
     pub paper: GainsFile,
     /// Velocity MSE per column with the paper presets, (deg/s)^2 (through the bank).
-    pub vel_before: [f64; 7],
+    pub vel_before: [f64; FAMILY_COUNT],
     /// Velocity MSE with the tuned gains.
-    pub vel_after: [f64; 7],
+    pub vel_after: [f64; FAMILY_COUNT],
     /// Acceleration MSE with the paper presets, (deg/s^2)^2.
-    pub acc_before: [f64; 7],
+    pub acc_before: [f64; FAMILY_COUNT],
     /// Acceleration MSE with the tuned gains.
-    pub acc_after: [f64; 7],
+    pub acc_after: [f64; FAMILY_COUNT],
 }
 
 /// Precomputed inputs of one tuning problem.
@@ -139,17 +143,12 @@ pub fn mse_range(t_us: &[u64], est: &[f32], reference: &[f32], (from, to): (f64,
 trait Eval: Sync {
     /// Observer step h, s.
     fn step_s(&self) -> f32;
-    /// The objective of the estimator `make` builds (velocity half) or of two of them in
-    /// series (acceleration half); `i`: the family's column (bank order, 0 to 5).
-    fn family<L: Law<Num = f32>>(
-        &self,
-        i: usize,
-        make: impl Fn() -> Option<Stateful<L>>,
-        acc: bool,
-    ) -> f64;
+    /// The objective of the estimator `law` (velocity half) or of two of it in series
+    /// (acceleration half); `i`: the family's column (bank order).
+    fn family<L: Law<Num = f32>>(&self, i: usize, law: L, acc: bool) -> f64;
     /// The objective of a Kalman tracker with noise `q`, `r` (its `dt`: each problem's
-    /// nominal sample period); column 6.
-    fn kf(&self, q: f32, r: f32, acc: bool) -> f64;
+    /// nominal sample period); `i`: the family's column.
+    fn kf(&self, i: usize, q: f32, r: f32, acc: bool) -> f64;
     /// A family's fit is done.
     fn fitted(&self) {}
 }
@@ -158,18 +157,13 @@ impl Eval for Problem<'_> {
     fn step_s(&self) -> f32 {
         self.opts.step_s
     }
-    fn family<L: Law<Num = f32>>(
-        &self,
-        _i: usize,
-        make: impl Fn() -> Option<Stateful<L>>,
-        acc: bool,
-    ) -> f64 {
+    fn family<L: Law<Num = f32>>(&self, _i: usize, law: L, acc: bool) -> f64 {
         if let Some(p) = self.progress {
             p.evaluation();
         }
-        self.eval_family(make, acc)
+        self.eval_family(law, acc)
     }
-    fn kf(&self, q: f32, r: f32, acc: bool) -> f64 {
+    fn kf(&self, _i: usize, q: f32, r: f32, acc: bool) -> f64 {
         if let Some(p) = self.progress {
             p.evaluation();
         }
@@ -180,6 +174,23 @@ impl Eval for Problem<'_> {
         if let Some(p) = self.progress {
             p.fitted();
         }
+    }
+}
+
+/// One family's objective in one half ([`Gains::score`] hands it the estimator to score).
+struct Objective<'a, E> {
+    eval: &'a E,
+    column: usize,
+    acc: bool,
+}
+
+impl<E: Eval> Scorer for Objective<'_, E> {
+    type Score = f64;
+    fn law<L: Law<Num = f32>>(&self, law: L) -> f64 {
+        self.eval.family(self.column, law, self.acc)
+    }
+    fn tracker(&self, noise: KalmanNoise) -> f64 {
+        self.eval.kf(self.column, noise.q, noise.r, self.acc)
     }
 }
 
@@ -195,7 +206,7 @@ impl Eval for Problem<'_> {
 /// 1 % counts, not only the worst: see [`tune_preset`]). Infinite if any problem is.
 struct Problems<'a> {
     problems: &'a [Problem<'a>],
-    baselines: Option<&'a [[[f64; 7]; 2]]>,
+    baselines: Option<&'a [[[f64; FAMILY_COUNT]; 2]]>,
     hinge: bool,
 }
 
@@ -236,16 +247,11 @@ impl Eval for Problems<'_> {
     fn step_s(&self) -> f32 {
         self.problems.first().map_or(1e-4, |p| p.opts.step_s)
     }
-    fn family<L: Law<Num = f32>>(
-        &self,
-        i: usize,
-        make: impl Fn() -> Option<Stateful<L>>,
-        acc: bool,
-    ) -> f64 {
-        self.combine(i, acc, |p| p.eval_family(&make, acc))
+    fn family<L: Law<Num = f32>>(&self, i: usize, law: L, acc: bool) -> f64 {
+        self.combine(i, acc, |p| p.eval_family(law, acc))
     }
-    fn kf(&self, q: f32, r: f32, acc: bool) -> f64 {
-        self.combine(6, acc, |p| p.kf(q, r, acc))
+    fn kf(&self, i: usize, q: f32, r: f32, acc: bool) -> f64 {
+        self.combine(i, acc, |p| p.kf(i, q, r, acc))
     }
 }
 
@@ -277,17 +283,13 @@ impl Problem<'_> {
         total / self.ys.len() as f64
     }
 
-    /// [`Self::eval`] of what `make` builds (velocity half) or, for the acceleration half,
-    /// of two of them in series (both stages with the same gains, as in the bank).
-    fn eval_family<L: Law<Num = f32>>(
-        &self,
-        make: impl Fn() -> Option<Stateful<L>>,
-        acc: bool,
-    ) -> f64 {
+    /// [`Self::eval`] of `law` (velocity half) or, for the acceleration half, of two of it
+    /// in series (both stages with the same gains, as in the bank).
+    fn eval_family<L: Law<Num = f32>>(&self, law: L, acc: bool) -> f64 {
         if acc {
-            self.eval(&|| Some(Series::of(&make()?, &make()?)), true)
+            self.eval(&|| Some(Stateful::from_law(Series::new(law, law))), true)
         } else {
-            self.eval(&make, false)
+            self.eval(&|| Some(Stateful::from_law(law)), false)
         }
     }
 
@@ -327,24 +329,6 @@ impl Problem<'_> {
     }
 }
 
-/// Valid search range `(lo, hi)` of each gain of family `i` (bank order: AVE, ILO1-3, AD, ED,
-/// KF) for the step `h_s`, s: AVE (k, gamma1); ILO (`1 - K1`, L, K2): `K1` is searched as its
-/// leak `1 - K1` on a log scale, from 1e-7 (`K1 = 1` to f32 precision) to 0.95 (`K1 = 0.05`),
-/// because the best `K1` lie within 1e-3 of 1 (a leak of a few 1/s at `tau = h`), and
-/// `h L < 1` as the constructor demands; AD (T); ED (lambda, alpha); KF (q, with r kept: only
-/// q/r matters for the steady-state gain). The bounds span the paper's presets by two
-/// decades or more each side (AVE k and ED lambda down to 0.1: the tuned values at low noise
-/// reach 10).
-pub fn ranges(i: usize, h_s: f64) -> (Vec<f64>, Vec<f64>) {
-    match i {
-        0 => (vec![0.1, 10.0], vec![1e5, 1e8]),
-        1..=3 => (vec![1e-7, 0.1, 1e-3], vec![0.95, 0.99 / h_s, 1e4]),
-        4 => (vec![1e-4], vec![1.0]),
-        5 => (vec![0.1, 10.0], vec![1e5, 1e6]),
-        _ => (vec![1.0], vec![1e12]),
-    }
-}
-
 /// One family's minimisation: result and its cost.
 struct Fit {
     x: Vec<f64>,
@@ -353,9 +337,11 @@ struct Fit {
     secs: f64,
 }
 
-fn fit(method: Method, i: usize, h_s: f64, x0: &[f64], f: &dyn Fn(&[f64]) -> f64) -> Fit {
+/// Minimises `f` from `x0` within the family's search box ([`Gains::search_box`]) at the
+/// step `h_s` (s).
+fn fit<G: Gains>(method: Method, h_s: f64, x0: &[f64], f: &dyn Fn(&[f64]) -> f64) -> Fit {
     let t = Instant::now();
-    let (lo, hi) = ranges(i, h_s);
+    let (lo, hi) = G::search_box(h_s);
     let o = optim::minimise(method, x0, &lo, &hi, f);
     Fit {
         x: o.x,
@@ -365,99 +351,56 @@ fn fit(method: Method, i: usize, h_s: f64, x0: &[f64], f: &dyn Fn(&[f64]) -> f64
     }
 }
 
-/// AVE gains `(k, gamma1)` with the `deltahat` law `delta` (the start's: the paper's for
-/// `nav440 tune`, the leaky one for the shipped preset).
-fn ave(g: &[f64], delta: DeltaMode) -> AveConfig {
-    AveConfig {
-        k: g[0] as f32,
-        gamma1: g[1] as f32,
-        delta,
-    }
-}
-/// ILO gains from the search coordinates `(1 - K1, L, K2)`.
-fn ilo(g: &[f64]) -> IloConfig {
-    IloConfig {
-        k1: (1.0 - g[0]) as f32,
-        l: g[1] as f32,
-        k2: g[2] as f32,
-    }
-}
-fn ed(g: &[f64]) -> EdConfig {
-    EdConfig {
-        lambda: g[0] as f32,
-        alpha: g[1] as f32,
-    }
-}
-
-/// Tunes one half of the bank (velocity or acceleration) starting from `start`; returns the
-/// gains and, per family, (tuned MSE, evaluations, seconds).
+/// Tunes one half of the bank (velocity or acceleration) starting from `start`: each family
+/// present there, over every gain it searches ([`Gains::search_point`], within
+/// [`Gains::search_box`]; candidates its law refuses cost infinity). Returns the gains and,
+/// per family, (tuned MSE, evaluations, seconds).
 fn tune_family(
     p: &impl Eval,
     start: &FamilyGains,
     acc: bool,
     method: Method,
-) -> (FamilyGains, [(f64, usize, f64); 7]) {
-    let h = p.step_s();
-    let hs = f64::from(h);
-    let mut out = *start;
-    let mut stats = [(f64::INFINITY, 0, 0.0); 7];
-    let mut note = |i: usize, r: &Fit| {
-        stats[i] = (r.cost, r.evals, r.secs);
-        p.fitted();
+) -> (FamilyGains, [(f64, usize, f64); FAMILY_COUNT]) {
+    /// Tunes each family in turn.
+    struct Tune<'a, E> {
+        p: &'a E,
+        start: &'a FamilyGains,
+        acc: bool,
+        method: Method,
+        out: FamilyGains,
+        stats: [(f64, usize, f64); FAMILY_COUNT],
+    }
+    impl<E: Eval> FamilyVisitor for Tune<'_, E> {
+        fn family<F: Family>(&mut self, column: usize) {
+            let Some(g0) = self.start.get::<F>() else {
+                return;
+            };
+            let h = self.p.step_s();
+            let objective = Objective {
+                eval: self.p,
+                column,
+                acc: self.acc,
+            };
+            let f = |x: &[f64]| {
+                let g = g0.with_search_point(x);
+                g.score(h, &objective).unwrap_or(f64::INFINITY)
+            };
+            let r = fit::<F::Gains>(self.method, f64::from(h), &g0.search_point(), &f);
+            self.stats[column] = (r.cost, r.evals, r.secs);
+            self.p.fitted();
+            self.out.set::<F>(Some(g0.with_search_point(&r.x)));
+        }
+    }
+    let mut tune = Tune {
+        p,
+        start,
+        acc,
+        method,
+        out: *start,
+        stats: [(f64::INFINITY, 0, 0.0); FAMILY_COUNT],
     };
-    if let Some(a) = start.ave {
-        let f = |g: &[f64]| p.family(0, || Ave::<f32>::new(&ave(g, a.delta), h).ok(), acc);
-        let r = fit(method, 0, hs, &[f64::from(a.k), f64::from(a.gamma1)], &f);
-        note(0, &r);
-        out.ave = Some(AveConfig {
-            k: r.x[0] as f32,
-            gamma1: r.x[1] as f32,
-            delta: a.delta,
-        });
-    }
-    let ilos = [start.ilo1, start.ilo2, start.ilo3];
-    let mut tuned = [None; 3];
-    for (j, (slot, g0)) in tuned.iter_mut().zip(ilos).enumerate() {
-        let Some(g0) = g0 else { continue };
-        let f = |g: &[f64]| p.family(1 + j, || Ilo::<f32, 1>::new(&ilo(g), h).ok(), acc);
-        let x0 = [1.0 - f64::from(g0.k1), f64::from(g0.l), f64::from(g0.k2)];
-        let r = fit(method, 1 + j, hs, &x0, &f);
-        note(1 + j, &r);
-        *slot = Some(ilo(&r.x));
-    }
-    [out.ilo1, out.ilo2, out.ilo3] = tuned;
-    if let Some(a) = start.ad {
-        let f = |g: &[f64]| {
-            let t = g[0] as f32;
-            p.family(4, || Ad::<f32>::new(t, h).ok(), acc)
-        };
-        let r = fit(method, 4, hs, &[f64::from(a.t)], &f);
-        note(4, &r);
-        out.ad = Some(estimators::AdConfig { t: r.x[0] as f32 });
-    }
-    if let Some(e) = start.ed {
-        let f = |g: &[f64]| p.family(5, || Ed::<f32>::new(&ed(g), h).ok(), acc);
-        let r = fit(
-            method,
-            5,
-            hs,
-            &[f64::from(e.lambda), f64::from(e.alpha)],
-            &f,
-        );
-        note(5, &r);
-        out.ed = Some(ed(&r.x));
-    }
-    if let Some(k) = start.kf {
-        // Only q/r matters for the steady-state gain: r is kept, q is searched.
-        let f = |g: &[f64]| p.kf(g[0] as f32, k.r, acc);
-        let r = fit(method, 6, hs, &[f64::from(k.q)], &f);
-        note(6, &r);
-        out.kf = Some(estimators::KalmanNoise {
-            q: r.x[0] as f32,
-            r: k.r,
-        });
-    }
-    (out, stats)
+    for_each_family(&mut tune);
+    (tune.out, tune.stats)
 }
 
 /// Runs the tuner with the defaults of `nav440 tune`: global search, both holds, MSE over
@@ -563,9 +506,9 @@ pub fn tune_with_progress(
         let mut run = HoldRun {
             hold,
             score: 0.0,
-            cost: [[0.0; 7]; 2],
-            evals: [[0; 7]; 2],
-            secs: [[0.0; 7]; 2],
+            cost: [[0.0; FAMILY_COUNT]; 2],
+            evals: [[0; FAMILY_COUNT]; 2],
+            secs: [[0.0; FAMILY_COUNT]; 2],
         };
         let mut log_sum = 0.0;
         for (half, stats) in [&velocity.1, &acceleration.1].into_iter().enumerate() {
@@ -576,7 +519,7 @@ pub fn tune_with_progress(
                 log_sum += c.ln();
             }
         }
-        run.score = (log_sum / 14.0).exp();
+        run.score = (log_sum / TUNED_MSES as f64).exp();
         let gains = GainsFile {
             velocity: velocity.0,
             acceleration: acceleration.0,
@@ -654,10 +597,10 @@ fn bank_mse_with(
     noise_var: f64,
     seeds: std::ops::RangeInclusive<u64>,
     range: (f64, f64),
-) -> Result<([f64; 7], [f64; 7])> {
+) -> Result<([f64; FAMILY_COUNT], [f64; FAMILY_COUNT])> {
     let axis = opts.axis();
-    let mut v = [0.0; 7];
-    let mut a = [0.0; 7];
+    let mut v = [0.0; FAMILY_COUNT];
+    let mut a = [0.0; FAMILY_COUNT];
     let n = seeds.clone().count() as f64;
     for seed in seeds {
         let mut o = opts.clone();
@@ -671,7 +614,7 @@ fn bank_mse_with(
         let from = (range.0 * 1e6).round() as u64;
         let rows: Vec<_> = rows.into_iter().filter(|r| r.t_us >= from).collect();
         let (vv, aa) = row_mse(axis, &rows, samples, acc_ref, range.1);
-        for i in 0..7 {
+        for i in 0..FAMILY_COUNT {
             v[i] += vv[i] / n;
             a[i] += aa[i] / n;
         }
@@ -690,7 +633,7 @@ pub fn bank_mse(
     noise_var: f64,
     seeds: u64,
     range: (f64, f64),
-) -> Result<([f64; 7], [f64; 7])> {
+) -> Result<([f64; FAMILY_COUNT], [f64; FAMILY_COUNT])> {
     let opts = EstimateOptions::default().paper_law();
     let acc_ref = ave_on_rate(samples, &REFERENCE_AVE, &opts)?;
     bank_mse_with(
@@ -775,7 +718,7 @@ pub fn tune_preset(
     base: &BankConfig,
     beat: Option<&BankConfig>,
     method: Method,
-) -> Result<(GainsFile, [[f64; 7]; 2], String)> {
+) -> Result<(GainsFile, [[f64; FAMILY_COUNT]; 2], String)> {
     let opts = EstimateOptions {
         hold: base.hold,
         step_s: base.h,
@@ -844,9 +787,9 @@ pub fn tune_preset(
         |acc, i| infeasible[usize::from(acc)][i] >= 1.0,
         method,
     )?;
-    let score = |g: &GainsFile| -> Result<[[(usize, f64); 7]; 2]> {
+    let score = |g: &GainsFile| -> Result<[[(usize, f64); FAMILY_COUNT]; 2]> {
         let cfg = g.apply(*base);
-        let mut out = [[(0usize, 0.0f64); 7]; 2];
+        let mut out = [[(0usize, 0.0f64); FAMILY_COUNT]; 2];
         for ((c, acc_ref), base_mse) in cases.iter().zip(&acc_refs).zip(&baselines) {
             let (v, a) = bank_mse_with(
                 &c.samples,
@@ -858,7 +801,7 @@ pub fn tune_preset(
                 c.range,
             )?;
             for (half, m) in [v, a].iter().enumerate() {
-                for i in 0..7 {
+                for i in 0..FAMILY_COUNT {
                     let r = m[i] / base_mse[half][i];
                     out[half][i].0 += usize::from(r >= 1.0);
                     out[half][i].1 += r.ln() / cases.len() as f64;
@@ -876,14 +819,14 @@ pub fn tune_preset(
     .into_iter()
     .enumerate()
     {
-        for i in (0..7).filter(|&i| infeasible[half][i] >= 1.0) {
+        for i in (0..FAMILY_COUNT).filter(|&i| infeasible[half][i] >= 1.0) {
             m.set_column(i, h);
         }
     }
     let (s1, s2) = (score(&gains)?, score(&merged)?);
     let mut report = String::new();
     for half in 0..2 {
-        for i in (0..7).filter(|&i| infeasible[half][i] >= 1.0) {
+        for i in (0..FAMILY_COUNT).filter(|&i| infeasible[half][i] >= 1.0) {
             let (l1, g1) = s1[half][i];
             let (l2, g2) = s2[half][i];
             let keep = l2 < l1 && g2 <= g1;
@@ -918,7 +861,7 @@ fn tune_both(
     start: &GainsFile,
     which: impl Fn(bool, usize) -> bool,
     method: Method,
-) -> Result<(GainsFile, [[f64; 7]; 2])> {
+) -> Result<(GainsFile, [[f64; FAMILY_COUNT]; 2])> {
     let v0 = start.velocity.only(|i| which(false, i));
     let a0 = start.acceleration.only(|i| which(true, i));
     let (velocity, acceleration) = std::thread::scope(|s| {
@@ -927,7 +870,7 @@ fn tune_both(
         (v.join(), a)
     });
     let velocity = velocity.map_err(|_| Error::Other("tuning thread panicked".into()))?;
-    let mut cost = [[0.0; 7]; 2];
+    let mut cost = [[0.0; FAMILY_COUNT]; 2];
     for (half, stats) in [&velocity.1, &acceleration.1].into_iter().enumerate() {
         for (i, st) in stats.iter().enumerate() {
             cost[half][i] = st.0;
@@ -1008,37 +951,31 @@ pub fn tune_schedule(
     // Each level's observers: the best of every level's tuned gains at this level's noise
     // (the search of one level can end in a worse basin than a neighbour's gains).
     let acc_ref = ave_on_rate(samples, &REFERENCE_AVE, opts)?;
-    let mut at = vec![vec![[0.0f64; 7]; levels.len()]; levels.len()];
+    let mut at = vec![vec![[0.0f64; FAMILY_COUNT]; levels.len()]; levels.len()];
     for (i, g) in tuned.iter().enumerate() {
         for (j, &v) in levels.iter().enumerate() {
             let seeds = 1..=spec.seeds.max(1);
             at[i][j] = bank_mse_with(samples, opts, &acc_ref, config(g), v, seeds, spec.train)?.0;
         }
     }
-    // `source[j][f]`: the level whose tuned gains level `j` runs for observer family `f`.
-    let mut source: Vec<[usize; OBSERVERS.len()]> =
-        (0..levels.len()).map(|j| [j; OBSERVERS.len()]).collect();
+    // `source[j][c]`: the level whose tuned gains level `j` runs for the observer family of
+    // column `c`.
+    let mut source: Vec<[usize; FAMILY_COUNT]> =
+        (0..levels.len()).map(|j| [j; FAMILY_COUNT]).collect();
     let before = tuned.clone();
     for (j, &v) in levels.iter().enumerate() {
-        for (f, &(col, name)) in OBSERVERS.iter().enumerate() {
+        for col in observer_columns() {
             let best = (0..levels.len())
                 .min_by(|&a, &b| at[a][j][col].total_cmp(&at[b][j][col]))
                 .unwrap_or(j);
             if best == j || at[best][j][col] >= at[j][j][col] {
                 continue;
             }
-            source[j][f] = best;
-            let (from, to) = (&before[best].velocity, &mut tuned[j].velocity);
-            match col {
-                0 => to.ave = from.ave,
-                1 => to.ilo1 = from.ilo1,
-                2 => to.ilo2 = from.ilo2,
-                3 => to.ilo3 = from.ilo3,
-                _ => to.ed = from.ed,
-            }
+            source[j][col] = best;
+            tuned[j].velocity.set_column(col, &before[best].velocity);
             text.push_str(&format!(
-                "level {v} deg^2: {name} velocity gains of level {} deg^2 (MSE {:.4} instead of {:.4} at {v} deg^2)\n",
-                levels[best], at[best][j][col], at[j][j][col]
+                "level {v} deg^2: {} velocity gains of level {} deg^2 (MSE {:.4} instead of {:.4} at {v} deg^2)\n",
+                NAMES[col], levels[best], at[best][j][col], at[j][j][col]
             ));
         }
     }
@@ -1061,8 +998,8 @@ pub fn tune_schedule(
     // MSE depends only on its own gains, so level `j`'s is that of its source level's).
     for i in 0..levels.len().saturating_sub(1) {
         let (a, b) = (levels[i], levels[i + 1]);
-        let point = |f: usize| {
-            let ((sa, sb), col) = ((source[i][f], source[i + 1][f]), OBSERVERS[f].0);
+        let point = |col: usize| {
+            let (sa, sb) = (source[i][col], source[i + 1][col]);
             let m = [
                 at[sa][i][col],
                 at[sa][i + 1][col],
@@ -1071,17 +1008,16 @@ pub fn tune_schedule(
             ];
             crossover(m, a, b) as f32
         };
-        let sw = crate::gains::SwitchUpFile {
-            ave: point(0),
-            ilo1: point(1),
-            ilo2: point(2),
-            ilo3: point(3),
-            ed: point(4),
-        };
-        level[i].switch_up = Some(sw);
+        let sw = switch_points(point);
+        level[i].switch_up = Some(crate::gains::SwitchUpFile(sw));
+        let points: Vec<String> = sw
+            .points()
+            .iter()
+            .map(|&(col, x)| format!("{} {x}", NAMES[col]))
+            .collect();
         text.push_str(&format!(
-            "switch up from level {a} to {b} deg^2 (where each family takes the next level's gains: where the two levels' MSEs cross if they differ by more than {SWITCH_MATTERS}x at the midpoint, else the midpoint): AVE {}, ILO1 {}, ILO2 {}, ILO3 {}, ED {}\n",
-            sw.ave, sw.ilo1, sw.ilo2, sw.ilo3, sw.ed
+            "switch up from level {a} to {b} deg^2 (where each family takes the next level's gains: where the two levels' MSEs cross if they differ by more than {SWITCH_MATTERS}x at the midpoint, else the midpoint): {}\n",
+            points.join(", ")
         ));
     }
     Ok((
@@ -1099,10 +1035,28 @@ pub fn tune_schedule(
 /// than this factor there.
 pub const SWITCH_MATTERS: f64 = 1.2;
 
-/// The velocity observer families a schedule gives per-level gains and switch points:
-/// (column of the bank's velocity MSE, name).
-const OBSERVERS: [(usize, &str); 5] =
-    [(0, "AVE"), (1, "ILO1"), (2, "ILO2"), (3, "ILO3"), (5, "ED")];
+/// The columns of the observer families ([`Scheduling::Observer`]): those a schedule gives
+/// per-level gains and switch points.
+fn observer_columns() -> impl Iterator<Item = usize> {
+    (0..FAMILY_COUNT).filter(|&c| FAMILIES[c].scheduling == Scheduling::Observer)
+}
+
+/// The switch points `point(column)` of every family that records one
+/// ([`Family::switch_up_mut`]).
+fn switch_points(point: impl Fn(usize) -> f32) -> estimators::ObserverSwitch {
+    struct Set<P>(estimators::ObserverSwitch, P);
+    impl<P: Fn(usize) -> f32> FamilyVisitor for Set<P> {
+        fn family<F: Family>(&mut self, column: usize) {
+            if let Some(x) = F::switch_up_mut(&mut self.0) {
+                *x = (self.1)(column);
+            }
+        }
+    }
+    let none = estimators::ObserverSwitch::all(0.0);
+    let mut set = Set(none, point);
+    for_each_family(&mut set);
+    set.0
+}
 
 /// The noise variance (deg^2) between two levels `a < b` at which level `b`'s gains become
 /// the better of the two, from the MSEs `[a's gains at a, a's at b, b's at a, b's at b]`:
@@ -1169,7 +1123,7 @@ pub fn tuned_ave_deltahat(
                 seed,
             }),
         )?;
-        let mut bank: estimators::YawBank<f32> = nav440_pipeline::axis_bank(axis, cfg)
+        let mut bank: estimators::PaperBank<f32> = nav440_pipeline::axis_bank(axis, cfg)
             .map_err(|e| Error::Usage(format!("bad estimator configuration: {e}")))?;
         let (mut acc, mut n) = ([0.0f64; 3], 0u32);
         for (s, &y) in samples.iter().zip(&y) {
@@ -1209,24 +1163,32 @@ fn hold_name(h: Hold) -> &'static str {
     }
 }
 
+/// The gains of column `i` in `f` on one line ([`Gains::describe`]), `-` if absent.
 fn fmt_gains(f: &FamilyGains, i: usize) -> String {
-    match i {
-        0 => f.ave.map(|g| format!("k={} gamma1={}", g.k, g.gamma1)),
-        1..=3 => {
-            [f.ilo1, f.ilo2, f.ilo3][i - 1].map(|g| format!("K1={} L={} K2={}", g.k1, g.l, g.k2))
+    struct Describe<'a>(&'a FamilyGains, usize, String);
+    impl FamilyVisitor for Describe<'_> {
+        fn family<F: Family>(&mut self, column: usize) {
+            if column == self.1 {
+                if let Some(g) = self.0.get::<F>() {
+                    let _ = g.describe(&mut self.2);
+                }
+            }
         }
-        4 => f.ad.map(|g| format!("T={}", g.t)),
-        5 => {
-            f.ed.map(|g| format!("lambda={} alpha={}", g.lambda, g.alpha))
-        }
-        _ => f.kf.map(|g| format!("q={} r={}", g.q, g.r)),
     }
-    .unwrap_or_else(|| "-".into())
+    let mut d = Describe(f, i, String::new());
+    for_each_family(&mut d);
+    if d.2.is_empty() {
+        "-".into()
+    } else {
+        d.2
+    }
 }
 
 impl TuneResult {
     /// The printed report.
     pub fn to_text(&self) -> String {
+        // "YawBank" (the type is `PaperBank`): the report is kept byte for byte; changing it is
+        // a change of the output of its own.
         let mut s = format!(
             "tuned for noise variance {} deg^2, trained on {}-{} s, scored on {}-{} s, mean of {} seeds (MSE measured through YawBank)\n",
             self.noise_var, self.train.0, self.train.1, self.test.0, self.test.1, self.seeds
@@ -1246,7 +1208,7 @@ impl TuneResult {
         ));
         for r in &self.runs {
             s.push_str(&format!(
-                "  hold {:<6} score (geometric mean of the 14 tuned training MSEs) {:.4}\n",
+                "  hold {:<6} score (geometric mean of the {TUNED_MSES} tuned training MSEs) {:.4}\n",
                 hold_name(r.hold),
                 r.score
             ));
@@ -1282,7 +1244,7 @@ impl TuneResult {
                 "{:<5} {:>12} {:>12}  {:<40} {}\n",
                 "", "before", "after", "paper gains", "tuned gains"
             ));
-            for i in 0..7 {
+            for i in 0..FAMILY_COUNT {
                 s.push_str(&format!(
                     "{:<5} {:>12.3} {:>12.3}  {:<40} {}\n",
                     NAMES[i],
@@ -1384,40 +1346,18 @@ mod tests {
         assert!(check_range("--train", (0.0, 0.5)).is_ok());
     }
 
+    /// The ILO's `L` bound keeps `h L < 1` (the constructor's condition); both ends of the
+    /// leak map to valid `K1` (`K1 = 1 - 1e-7` rounds to `1 - 2^-23` in f32). (That every
+    /// family's paper gains lie in its search box is the estimators crate's test.)
     #[test]
-    fn every_preset_lies_inside_its_search_range() {
-        let g = GainsFile::from_bank(&BankConfig::PAPER);
-        for half in [g.velocity, g.acceleration] {
-            let ave = half.ave.unwrap();
-            let kf = half.kf.unwrap();
-            let ed = half.ed.unwrap();
-            let mut pts = vec![
-                (0, vec![ave.k, ave.gamma1]),
-                (4, vec![half.ad.unwrap().t]),
-                (5, vec![ed.lambda, ed.alpha]),
-                (6, vec![kf.q]),
-            ];
-            for (j, i) in [half.ilo1, half.ilo2, half.ilo3].into_iter().enumerate() {
-                let i = i.unwrap();
-                // Searched as 1 - K1; K1 = 1 is the range's end (1e-7) to f32 precision.
-                pts.push((1 + j, vec![(1.0 - i.k1).max(1e-7), i.l, i.k2]));
-            }
-            for (i, x) in pts {
-                let (lo, hi) = ranges(i, 1e-4);
-                for ((v, l), h) in x.iter().zip(&lo).zip(&hi) {
-                    let v = f64::from(*v);
-                    assert!(v >= *l && v <= *h, "family {i}: {v} not in [{l}, {h}]");
-                }
-            }
-        }
-        // The ILO's L bound keeps h L < 1 (the constructor's condition); both ends of the
-        // leak map to valid K1 (K1 = 1 - 1e-7 rounds to 1 - 2^-23 in f32).
-        let (lo, hi) = ranges(1, 1e-4);
+    fn the_ilo_search_box_builds_valid_ilos() {
+        let (lo, hi) = estimators::IloConfig::search_box(1e-4);
         assert!(hi[1] * 1e-4 < 1.0);
+        let g = estimators::presets::ILO1_TABLE2;
         for c in [lo[0], hi[0]] {
-            let k1 = (1.0 - c) as f32;
-            assert!(k1 > 0.0 && k1 < 1.0, "{k1}");
-            assert!(estimators::Ilo::<f32, 1>::new(&ilo(&[c, 1.0, 1.0]), 1e-4).is_ok());
+            let i = g.with_search_point(&[c, 1.0, 1.0]);
+            assert!(i.k1 > 0.0 && i.k1 < 1.0, "{}", i.k1);
+            assert!(estimators::Ilo::<f32, 1>::new(&i, 1e-4).is_ok());
         }
     }
 }

@@ -128,7 +128,7 @@ pub fn write_row<W: Write, O: EstimatorOutput>(
 mod tests {
     use super::*;
     use crate::Axis;
-    use estimators::{BankOutput, Fx, PaperBank, ProductBank};
+    use estimators::{Fx, PaperBank, PaperOutput, ProductBank};
 
     fn header(axes: Axes) -> heapless::String<1024> {
         let mut s = heapless::String::new();
@@ -170,8 +170,8 @@ mod tests {
     #[test]
     fn product_row() {
         let out = estimators::ProductOutput {
-            yaw_unwrapped_deg: -10.5,
-            yaw_residual_deg: 0.0,
+            unwrapped_deg: -10.5,
+            residual_deg: 0.0,
             values: [12.25, -0.5],
         };
         let mut axes = [None; 3];
@@ -188,7 +188,8 @@ mod tests {
         assert_eq!(s.as_str(), "0.0200,,,,,,,,,-10.5,3,12.25,-0.5");
     }
 
-    /// The header contracts of issue 10 (spelled out there).
+    /// The header contracts: the paper bank's yaw header is [`HEADER`]; one other axis renames
+    /// its two columns; all axes prefix every channel with the axis name.
     #[test]
     fn headers() {
         assert_eq!(header(Axes::only(Axis::Yaw)).as_str(), HEADER);
@@ -212,9 +213,9 @@ mod tests {
 
     #[test]
     fn time_and_empty_reference() {
-        let out = BankOutput {
-            yaw_unwrapped_deg: 1.5,
-            yaw_residual_deg: 0.0,
+        let out = PaperOutput {
+            unwrapped_deg: 1.5,
+            residual_deg: 0.0,
             values: [
                 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.25, 0.25, 0.25, 0.25, 0.25, 0.25, 0.25,
             ],
@@ -232,13 +233,15 @@ mod tests {
     /// 3600000170 deg, which f32 cannot hold: the f64 text of the exact value.
     #[test]
     fn exact_angle_text_at_many_turns() {
-        let mut bank = estimators::YawBank::<f32>::new(&estimators::BankConfig::default()).unwrap();
+        let mut bank =
+            estimators::PaperBank::<f32>::new(&estimators::BankConfig::default()).unwrap();
         bank.set_turns(10_000_000);
         let out = bank.update(0, 170.0).unwrap();
         let mut s = heapless::String::<512>::new();
         write_axis(&mut s, Some(0.0), &out).unwrap();
         assert!(s.starts_with(",3600000170,0,"), "{s}");
-        let mut bank = estimators::YawBank::<f32>::new(&estimators::BankConfig::default()).unwrap();
+        let mut bank =
+            estimators::PaperBank::<f32>::new(&estimators::BankConfig::default()).unwrap();
         let out = bank.update(0, 170.0).unwrap();
         s.clear();
         write_axis(&mut s, Some(0.0), &out).unwrap();

@@ -16,7 +16,7 @@
 //!
 //! ```
 //! use nav440_pipeline::{axis_bank, Axes, Axis, Pipeline};
-//! use estimators::{BankConfig, YawBank};
+//! use estimators::{BankConfig, PaperBank};
 //! use nav440_proto::{encode_frame, A2Fields, PacketType};
 //!
 //! // 1 s of A2 packets at 100 Hz, yaw turning at 30 deg/s with r = 30 deg/s, level.
@@ -33,7 +33,7 @@
 //!     let n = encode_frame(PacketType::A2, &p.payload(), &mut frame).unwrap();
 //!     bytes.extend_from_slice(&frame[..n]);
 //! }
-//! let build = |axis: Axis, cfg: &BankConfig| axis_bank::<YawBank<f32>>(axis, cfg);
+//! let build = |axis: Axis, cfg: &BankConfig| axis_bank::<PaperBank<f32>>(axis, cfg);
 //! let mut pipe = Pipeline::new(Axes::only(Axis::Yaw), BankConfig::default(), build);
 //! let mut lines = Vec::new();
 //! pipe.feed_csv(&bytes, |l| lines.push(l.to_string())).unwrap();

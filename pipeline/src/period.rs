@@ -1,6 +1,6 @@
 //! The nominal sample period of a sample stream, decided causally from its first samples.
 //!
-//! An `estimators::YawBank` precomputes its closed-form multi-step maps and its Kalman
+//! An `estimators::PaperBank` precomputes its closed-form multi-step maps and its Kalman
 //! gains for one nominal sample period ([`BankConfig::sample_period_s`]). This module is the
 //! one rule that sets it, shared by the host replay (`nav440 estimate`) and the firmware so
 //! that both build the same bank by construction:

@@ -124,7 +124,7 @@ pub struct Rejections {
     /// Time stamp not later than the previous sample's.
     pub time_not_increasing: u64,
     /// Angle (with any added noise) beyond the banks' limit (1e6 deg,
-    /// `PaperBank::MAX_ABS_YAW_DEG`).
+    /// `PaperBank::MAX_ABS_DEG`).
     pub angle_out_of_range: u64,
     /// Angle (with any added noise) NaN or infinite.
     pub angle_not_finite: u64,

@@ -2,10 +2,10 @@
 //! CONTRACT.md, `t` with 4 decimals from integer microseconds, every other value Display of
 //! its f32; the expected texts are written by hand.
 
-use estimators::BankOutput;
+use estimators::PaperOutput;
 use nav440_pipeline::{csv, Axes, Axis, AxisRow, Row};
 
-fn row(t_us: u64, reference: Option<f32>, out: BankOutput) -> Row {
+fn row(t_us: u64, reference: Option<f32>, out: PaperOutput) -> Row {
     let mut axes = [None; 3];
     axes[Axis::Yaw.index()] = Some(AxisRow {
         reference_deg_s: reference,
@@ -20,9 +20,9 @@ fn csv_row_format() {
         csv::HEADER,
         "t,yaw,yaw_rate,ave_v,ilo1_v,ilo2_v,ilo3_v,ad_v,ed_v,kf_v,ave_a,ilo1_a,ilo2_a,ilo3_a,ad_a,ed_a,kf_a"
     );
-    let out = BankOutput {
-        yaw_unwrapped_deg: -361.5,
-        yaw_residual_deg: 0.0,
+    let out = PaperOutput {
+        unwrapped_deg: -361.5,
+        residual_deg: 0.0,
         values: [
             1.0,
             0.1,
@@ -50,7 +50,7 @@ fn csv_row_format() {
     let mut s = String::new();
     csv::write_row(
         &mut s,
-        &row(35_000_000_049, Some(0.0), BankOutput::default()),
+        &row(35_000_000_049, Some(0.0), PaperOutput::default()),
         yaw,
     )
     .unwrap();
@@ -58,11 +58,16 @@ fn csv_row_format() {
     assert_eq!(s.matches(',').count(), 16);
     // No reference (near gimbal lock): an empty field.
     let mut s = String::new();
-    csv::write_row(&mut s, &row(0, None, BankOutput::default()), yaw).unwrap();
+    csv::write_row(&mut s, &row(0, None, PaperOutput::default()), yaw).unwrap();
     assert!(s.starts_with("0.0000,0,,0,"), "{s}");
     // All axes: t + 3 x 16 fields; an axis the row lacks gives 16 empty fields.
     let mut s = String::new();
-    csv::write_row(&mut s, &row(0, Some(1.0), BankOutput::default()), Axes::ALL).unwrap();
+    csv::write_row(
+        &mut s,
+        &row(0, Some(1.0), PaperOutput::default()),
+        Axes::ALL,
+    )
+    .unwrap();
     assert_eq!(s.matches(',').count(), 48);
     // roll and pitch: 2 x 16 empty fields, then yaw's angle 0 and reference 1.
     let want = format!("0.0000{},0,1,0,", ",".repeat(32));

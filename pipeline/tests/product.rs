@@ -74,7 +74,7 @@ fn product_bank_tracks_a_constant_rate() {
     assert!(mean.abs() < 2.0, "mean kf_a {mean}");
     // The unwrapped angle crosses +-180 deg without a jump: 299 * 0.3 = 89.7 deg at the end
     // (the A2 yaw is quantised to 360/65536 deg).
-    let last = rows[299].axis(Axis::Yaw).unwrap().out.yaw_unwrapped_deg;
+    let last = rows[299].axis(Axis::Yaw).unwrap().out.unwrapped_deg;
     assert!((last - 89.7).abs() < 0.01, "{last}");
 }
 
@@ -99,8 +99,8 @@ where
                 continue;
             };
             assert_eq!(a.reference_deg_s, b.reference_deg_s);
-            assert_eq!(a.out.yaw_unwrapped_deg, b.out.yaw_unwrapped_deg);
-            assert_eq!(a.out.yaw_residual_deg, b.out.yaw_residual_deg);
+            assert_eq!(a.out.unwrapped_deg, b.out.unwrapped_deg);
+            assert_eq!(a.out.residual_deg, b.out.residual_deg);
             let v = (a.out[Channel::Ilo1V], b.out[ProductChannel::Ilo1V]);
             let acc = (a.out[Channel::KfA], b.out[ProductChannel::KfA]);
             assert_eq!(v.0.to_bits(), v.1.to_bits(), "{axis:?} t={} ilo1_v", p.t_us);

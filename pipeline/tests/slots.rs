@@ -3,14 +3,14 @@
 //! three-slot pipeline (`Pipeline::new`) on yaw, and one slot for all axes keeps the first axis
 //! in CSV order (roll).
 
-use estimators::{BankConfig, ConfigError, ExactSqrt, YawBank};
+use estimators::{BankConfig, ConfigError, NativeSqrt, PaperBank};
 use nav440_pipeline::{axis_bank, Axes, Axis, Pipeline, Row};
 
-fn build(axis: Axis, cfg: &BankConfig) -> Result<YawBank<f32, ExactSqrt>, ConfigError> {
+fn build(axis: Axis, cfg: &BankConfig) -> Result<PaperBank<f32, NativeSqrt>, ConfigError> {
     axis_bank(axis, cfg)
 }
 
-type Build = fn(Axis, &BankConfig) -> Result<YawBank<f32, ExactSqrt>, ConfigError>;
+type Build = fn(Axis, &BankConfig) -> Result<PaperBank<f32, NativeSqrt>, ConfigError>;
 
 fn capture() -> Vec<u8> {
     let p = concat!(
@@ -22,7 +22,7 @@ fn capture() -> Vec<u8> {
 
 /// Every row of `bytes` through `pipe`.
 fn rows<const N: usize>(
-    pipe: &mut Pipeline<YawBank<f32, ExactSqrt>, ConfigError, Build, N>,
+    pipe: &mut Pipeline<PaperBank<f32, NativeSqrt>, ConfigError, Build, N>,
     bytes: &[u8],
 ) -> Vec<Row> {
     let mut out = Vec::new();

@@ -37,8 +37,8 @@ macro_rules! from_values {
         impl FromValues for $Out {
             fn from_values(angle: f32, residual: f64, values: &[f32]) -> Self {
                 let mut out = Self {
-                    yaw_unwrapped_deg: angle,
-                    yaw_residual_deg: residual,
+                    unwrapped_deg: angle,
+                    residual_deg: residual,
                     ..Self::default()
                 };
                 out.values.copy_from_slice(values);

@@ -144,13 +144,26 @@ pub fn run(a: Args) -> Result<()> {
 /// the fits).
 fn progress(spec: &tune::TuneSpec, runs: u64) -> Progress {
     let halves = runs * 2 * spec.holds.len().max(1) as u64;
-    let families = 0..paper::COLUMNS.len();
+    let dims = search_dims();
     match spec.method {
         optim::Method::Exhaustive { points } => {
-            let grid = |i| (points.max(2) as u64).pow(tune::ranges(i, 1.0).0.len() as u32);
-            let per_half: u64 = families.map(grid).sum();
+            let per_half: u64 = dims.iter().map(|&d| (points.max(2) as u64).pow(d)).sum();
             Progress::items("tune", halves * per_half, "evaluations")
         }
-        optim::Method::Search => Progress::fits("tune", halves * families.len() as u64),
+        optim::Method::Search => Progress::fits("tune", halves * dims.len() as u64),
     }
+}
+
+/// The number of gains each family's search covers, in column order.
+fn search_dims() -> Vec<u32> {
+    struct Dims(Vec<u32>);
+    impl estimators::FamilyVisitor for Dims {
+        fn family<F: estimators::Family>(&mut self, _column: usize) {
+            let (lo, _) = <F::Gains as estimators::Gains>::search_box(1.0);
+            self.0.push(lo.len() as u32);
+        }
+    }
+    let mut d = Dims(Vec::new());
+    estimators::for_each_family(&mut d);
+    d.0
 }

@@ -22,7 +22,7 @@ pub use csv::*;
 use crate::error::{Error, Result};
 use estimators::{
     BankConfig, EstimatorBank, EstimatorOutput, Fx, GainSchedule, Hold, PaperBank, PaperOutput,
-    ProductBank, ProductOutput, SampleError, YawBank,
+    ProductBank, ProductOutput, SampleError,
 };
 pub use nav440_pipeline::bit::BitCounts;
 use nav440_pipeline::period::PeriodEstimator;
@@ -46,7 +46,7 @@ pub struct Estimate {
     /// Samples the bank rejected (non-finite or out-of-range angle).
     pub rejected: usize,
     /// Gaps longer than the gap rule (`BankConfig::max_gap_periods` nominal periods): the bank
-    /// re-initialised there (`YawBank::reinit_count`).
+    /// re-initialised there (`PaperBank::reinit_count`).
     pub gaps: u32,
 }
 
@@ -171,7 +171,7 @@ pub fn rejection_warning(r: &Rejections) -> Option<String> {
         parts.push(format!(
             "{} with |yaw| above {} deg",
             r.angle_out_of_range,
-            YawBank::<f32>::MAX_ABS_YAW_DEG
+            PaperBank::<f32>::MAX_ABS_DEG
         ));
     }
     if r.angle_not_finite > 0 {

@@ -11,7 +11,7 @@ pub struct EstimateOptions {
     pub step_s: f32,
     /// Noise added to each estimated angle.
     pub noise: Option<Noise>,
-    /// Run the fixed-point bank (`YawBank<Fx>`) instead of f32.
+    /// Run the fixed-point bank (`PaperBank<Fx>`) instead of f32.
     pub fixed: bool,
     /// Bank configuration with gains (from `--preset`, `--gains`); `None` =
     /// `BankConfig::NAV440` (with [`EstimateOptions::paper_law`]: `BankConfig::PAPER`).

@@ -1,0 +1,280 @@
+//! Noise-adaptive gains (docs/ADAPTIVE-GAINS.md): the bank estimates the
+//! measurement-noise variance of its angle online ([`NoiseEstimator`]) and interpolates its
+//! gains from a [`GainSchedule`] (noise level -> gains, written by
+//! `nav440 tune --schedule ... [-o FILE.toml] [--rust FILE.rs]`); [`AdaptiveBank`] is the
+//! paper bank driven that way.
+//!
+//! Everything here is `no_std`, heap-free and bounded: the noise estimate costs a few f32
+//! operations per sample (in f32 for every [`Real`]: the input angle is an f32 anyway); the
+//! gains are re-interpolated and the laws' coefficients rebuilt at most once every
+//! [`AdaptiveConfig::retune_every`] samples, and only when the estimate moved by more than
+//! the factor [`AdaptiveConfig::retune_ratio`] from the level the current gains were made for.
+
+mod noise;
+mod schedule;
+#[cfg(test)]
+mod tests;
+
+pub use noise::*;
+pub use schedule::*;
+
+use crate::bank::{BankConfig, PaperBank, PaperOutput};
+use crate::{ConfigError, NativeSqrt, Real, SampleError, SqrtFn};
+
+/// How an [`AdaptiveBank`] follows the noise.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct AdaptiveConfig {
+    /// Time constant of the noise estimate, s (default 0.5; at least
+    /// [`NoiseEstimator::MIN_TAU_SAMPLES`] sample periods: 2.5 s at 20 Hz).
+    pub tau_s: f32,
+    /// Noise variance the gains start at, deg^2 (default 0.01, the paper's small noise).
+    pub initial_noise_var: f32,
+    /// The gains are reconsidered every this many samples at most (default 20: 0.2 s at
+    /// 100 Hz).
+    pub retune_every: u32,
+    /// ... and changed only when the estimate (clamped to the schedule) differs from the level
+    /// of the current gains by more than this factor either way (default 1.5, above the
+    /// jitter of the estimate at a steady noise level with the default time constant, so that
+    /// a steady level does not retune at every chance; a smaller ratio follows the noise more
+    /// closely with more gain changes: docs/ADAPTIVE-RESULTS.md, "Gain-change rate").
+    pub retune_ratio: f32,
+    /// A gain change replays the last this many samples (at most [`REPLAY_CAPACITY`]) through
+    /// the new gains (warm start, [`PaperBank::set_gains_replaying`]); 0: the states are moved
+    /// to the new gains' equilibrium instead (bumpless, [`PaperBank::set_gains`]).
+    pub replay_samples: u32,
+}
+
+/// Most samples an [`AdaptiveBank`] keeps for a warm-start gain change.
+pub const REPLAY_CAPACITY: usize = 64;
+
+impl AdaptiveConfig {
+    /// The defaults (see the fields).
+    pub const DEFAULT: Self = Self {
+        tau_s: 0.5,
+        initial_noise_var: 0.01,
+        retune_every: 20,
+        retune_ratio: 1.5,
+        replay_samples: REPLAY_CAPACITY as u32,
+    };
+}
+
+impl Default for AdaptiveConfig {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// The paper bank ([`PaperBank`]) with noise-adaptive gains: every sample also updates a
+/// [`NoiseEstimator`]; at most every [`AdaptiveConfig::retune_every`] samples, if the
+/// estimate left the band `[level / ratio, level * ratio]` around the level the current
+/// gains were interpolated for, the gains for the estimate are interpolated from the
+/// schedule and the laws' coefficients rebuilt (see [`AdaptiveBank::retune`]). Generic over
+/// [`Real`] like the bank (`AdaptiveBank<Fx>` for FPU-less cores; the noise estimate and the
+/// interpolation are f32 there too).
+///
+/// **Warm start.** The bank keeps what its laws were fed for the last
+/// [`AdaptiveConfig::replay_samples`] samples (at most [`REPLAY_CAPACITY`], 64: 0.64 s at
+/// 100 Hz, 3.2 s at 20 Hz; `64 * size_of::<Fed<T>>()` bytes: 1,536 for f32, 2,560 for `Fx`),
+/// and a gain change replays them through the rows whose gains changed
+/// ([`PaperBank::set_gains_warm`]; the ED and the ILO-ILO and AD-AD series change
+/// bumplessly): those rows then continue as if they had run the new gains over that history,
+/// which also covers most of the noise estimate's delay in noticing a change. The replayed
+/// rows start the new gains from where those gains would be, not from the old gains' states,
+/// so the estimates settle faster after a change than with a bumpless one (measured on a
+/// noise switch and over many noise draws: docs/ADAPTIVE-RESULTS.md, printed by
+/// `cargo test --release -p host-tests --test schedule -- --nocapture`). Cost: one sample of the whole bank per replayed sample on top of the
+/// coefficients' rebuild (`cargo xtask bench`).
+#[derive(Clone, Debug)]
+pub struct AdaptiveBank<T: Real, S: SqrtFn<T> = NativeSqrt> {
+    bank: PaperBank<T, S>,
+    base: BankConfig,
+    schedule: GainSchedule,
+    noise: NoiseEstimator,
+    cfg: AdaptiveConfig,
+    level: f32,
+    since: u32,
+    retunes: u32,
+    history: heapless::HistoryBuf<crate::Fed<T>, REPLAY_CAPACITY>,
+}
+
+impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
+    /// A bank with `base`'s step, hold, period, gap rule and unwrapping, and the gains of
+    /// `schedule` at `cfg.initial_noise_var`.
+    pub fn new(
+        base: &BankConfig,
+        schedule: &GainSchedule,
+        cfg: &AdaptiveConfig,
+    ) -> Result<Self, ConfigError> {
+        if !(cfg.retune_ratio.is_finite() && cfg.initial_noise_var.is_finite()) {
+            return Err(ConfigError::NotFinite("retune_ratio"));
+        }
+        if cfg.retune_ratio < 1.0 || cfg.initial_noise_var <= 0.0 {
+            return Err(ConfigError::NotPositive("retune_ratio"));
+        }
+        let level = schedule.clamp(cfg.initial_noise_var);
+        let bank = PaperBank::new(&schedule.config_at(base, level))?;
+        // Every level must build (so that a retune never fails half-way).
+        for l in schedule.levels() {
+            crate::bank::PaperParams::<T, S>::new(&schedule.config_at(base, l.noise_var), 0)?;
+        }
+        Ok(AdaptiveBank {
+            bank,
+            base: *base,
+            schedule: *schedule,
+            noise: NoiseEstimator::new(cfg.tau_s, base.sample_period_s)?,
+            cfg: *cfg,
+            level,
+            since: 0,
+            retunes: 0,
+            history: heapless::HistoryBuf::new(),
+        })
+    }
+
+    /// Feeds one sample (as [`PaperBank::update`]); the noise estimate is updated with it and
+    /// the gains follow it (see the type).
+    pub fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<PaperOutput, SampleError> {
+        let (out, fed) = self.bank.update_fed(t_us, angle_deg)?;
+        if self.cfg.replay_samples > 0 {
+            self.history.write(fed);
+        }
+        self.noise.update(t_us, angle_deg);
+        self.since = self.since.saturating_add(1);
+        if self.since >= self.cfg.retune_every {
+            self.since = 0;
+            if let Some(v) = self.noise.variance() {
+                let v = self.schedule.clamp(v);
+                let r = self.cfg.retune_ratio;
+                if v > self.level * r || v * r < self.level {
+                    self.retune(v);
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// Sets the gains for the noise variance `noise_var` (deg^2, clamped to the schedule) now.
+    ///
+    /// With a history (the default, see the type's warm start): the rows whose gains changed
+    /// are replayed over it ([`PaperBank::set_gains_warm`]), the AVEs starting with the
+    /// switching gains `deltahat` the schedule records for `noise_var`
+    /// ([`ScheduleLevel::ave_deltahat`], [`GainSchedule::ave_deltahat_at`]) or, when it
+    /// records none, with their present ones; the ED row and the ILO-ILO and AD-AD series are
+    /// moved bumplessly.
+    ///
+    /// Without one ([`AdaptiveConfig::replay_samples`] 0, or before the first sample): the
+    /// laws continue from their states moved bumplessly ([`PaperBank::set_gains`]), and when
+    /// the AVE gains change and the schedule records switching gains, the AVEs' `deltahat` are
+    /// set to those for `noise_var`; otherwise they are kept.
+    pub fn retune(&mut self, noise_var: f32) {
+        let v = self.schedule.clamp(noise_var);
+        let old = self.schedule.gains_at(self.level);
+        let new = self.schedule.config_at(&self.base, v);
+        let keep = (self.cfg.replay_samples as usize).min(self.history.len());
+        // Interpolated between levels that all build: a gain change cannot fail but for
+        // rounding at a constraint's edge; then the current gains are kept.
+        let changed = if keep > 0 {
+            let old = BankConfig {
+                velocity: old.0,
+                acceleration: old.1,
+                ..new
+            };
+            let d = self.schedule.ave_deltahat_at(v);
+            let history = self
+                .history
+                .oldest_ordered()
+                .skip(self.history.len() - keep);
+            self.bank.set_gains_warm(&old, &new, history, d).is_ok()
+        } else if self.bank.set_gains(&new).is_ok() {
+            if let Some(d) = self.schedule.ave_deltahat_at(v) {
+                let mut now = self.bank.ave_deltahat();
+                if new.velocity.ave != old.0.ave {
+                    now.velocity = d.velocity;
+                }
+                if new.acceleration.ave != old.1.ave {
+                    now.acceleration = d.acceleration;
+                }
+                self.bank.set_ave_deltahat(&now);
+            }
+            true
+        } else {
+            false
+        };
+        if changed {
+            self.level = v;
+            self.retunes = self.retunes.saturating_add(1);
+        }
+    }
+
+    /// The current noise estimate, deg^2 (`None` before the first one).
+    pub fn noise_var(&self) -> Option<f32> {
+        self.noise.variance()
+    }
+
+    /// The noise variance the current gains were interpolated for, deg^2.
+    pub fn gain_level(&self) -> f32 {
+        self.level
+    }
+
+    /// How many times the gains changed.
+    pub fn retune_count(&self) -> u32 {
+        self.retunes
+    }
+
+    /// See [`PaperBank::new_epoch`] (the noise estimator restarts its differences too).
+    pub fn new_epoch(&mut self) {
+        self.bank.new_epoch();
+        self.noise.restart();
+    }
+
+    /// See [`PaperBank::reinit_count`].
+    pub fn reinit_count(&self) -> u32 {
+        self.bank.reinit_count()
+    }
+
+    /// See [`PaperBank::set_turns`].
+    pub fn set_turns(&mut self, turns: i64) {
+        self.bank.set_turns(turns);
+    }
+
+    /// The bank.
+    pub fn bank(&self) -> &PaperBank<T, S> {
+        &self.bank
+    }
+
+    /// The gain schedule.
+    pub fn schedule(&self) -> &GainSchedule {
+        &self.schedule
+    }
+
+    /// The bank's nominal sample period, s (`BankConfig::sample_period_s`).
+    pub fn sample_period_s(&self) -> f32 {
+        self.base.sample_period_s
+    }
+
+    /// `true` unless the schedule records a tuning period that this bank's nominal sample
+    /// period does not fit ([`GainSchedule::fits_period`]). The bank runs the schedule either
+    /// way; `nav440 estimate` and the firmware warn when this is `false`.
+    pub fn period_fits(&self) -> bool {
+        self.schedule.fits_period(self.base.sample_period_s)
+    }
+}
+
+/// The noise-adaptive bank as a bank: the paper bank's channels and output
+/// ([`PaperOutput`]); `update` is [`AdaptiveBank::update`] (the gains follow the noise).
+impl<T: Real, S: SqrtFn<T>> crate::EstimatorBank for AdaptiveBank<T, S> {
+    type Output = PaperOutput;
+
+    #[inline]
+    fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<PaperOutput, SampleError> {
+        AdaptiveBank::update(self, t_us, angle_deg)
+    }
+
+    fn new_epoch(&mut self) {
+        AdaptiveBank::new_epoch(self)
+    }
+
+    fn reinit_count(&self) -> u32 {
+        AdaptiveBank::reinit_count(self)
+    }
+}

@@ -1,0 +1,196 @@
+//! The input stage every generated bank shares ([`BankInput`]): checks, sample clock, unwrapping.
+
+use super::{BankConfig, Wrap};
+use crate::adapter::{SampleClock, Tick};
+use crate::{ConfigError, Hold, Real, SampleError, Unwrapper};
+
+/// The unwrapped input `360 turns + wrapped` (deg) as (f32 rounding, exact residual in f64).
+#[inline]
+fn exact_angle<T: Real>(turns: i64, wrapped: T) -> (f32, f64) {
+    if turns == 0 {
+        // Fast path (no soft-float f64 on an FPU-less or single-precision core): the wrapped
+        // value is exactly an f32 (checked by the round trip), so the residual is 0. `+ 0.0`
+        // maps -0 to +0 as the f64 sum below does.
+        let r = wrapped.to_f32() + 0.0;
+        if T::from_f32(r) == wrapped {
+            return (r, 0.0);
+        }
+    }
+    exact_angle_f64(turns, wrapped)
+}
+
+/// [`exact_angle`] in f64 (soft-float on Cortex-M: out of line, taken only after a turn).
+#[cold]
+#[inline(never)]
+fn exact_angle_f64<T: Real>(turns: i64, wrapped: T) -> (f32, f64) {
+    let exact = turns as f64 * 360.0 + wrapped.to_f64();
+    let rounded = exact as f32;
+    (rounded, exact - f64::from(rounded))
+}
+
+/// What [`BankInput::accept`] decided for one accepted sample.
+#[derive(Clone, Copy, Debug)]
+pub enum Feed<T: Real> {
+    /// Initialise every law at `y` (first sample, after a gap or a new epoch) and report 0.
+    Reset(T),
+    /// Run every law over `n` steps from `y_prev` to `y` with `hold`.
+    Advance {
+        /// The previous sample (in the current frame).
+        y_prev: T,
+        /// This sample.
+        y: T,
+        /// Steps of `h`.
+        n: u32,
+        /// Input between the samples.
+        hold: Hold,
+    },
+}
+
+/// What a bank's laws were fed for one sample ([`PaperBank::update_fed`]): a frame shift
+/// (deg, applied to every law first) and the feed.
+#[derive(Clone, Copy, Debug)]
+pub struct Fed<T: Real> {
+    /// Every law was translated by this (deg) before the feed.
+    pub shift: Option<T>,
+    /// What the laws were fed.
+    pub feed: Feed<T>,
+}
+
+/// A sample accepted by [`BankInput::accept`].
+#[derive(Clone, Copy, Debug)]
+pub struct Accepted<T: Real> {
+    /// Translate every law by this (deg) before feeding: the frame moved by one turn.
+    pub shift: Option<T>,
+    /// What to do with the laws.
+    pub feed: Feed<T>,
+    /// The unwrapped angle, deg: (f32 rounding, exact residual), see [`PaperOutput`].
+    pub angle: (f32, f64),
+}
+
+/// The input stage every generated bank shares: input checks, sample clock (gap rule),
+/// unwrapping into a local frame (per [`Wrap`]), the previous sample and the re-init count.
+#[derive(Clone, Copy, Debug)]
+pub struct BankInput<T: Real> {
+    clock: SampleClock,
+    hold: Hold,
+    wrap: Wrap,
+    unwrap: Unwrapper<T>,
+    y_prev: T,
+    reinits: u32,
+}
+
+impl<T: Real> BankInput<T> {
+    /// Largest accepted `|angle|`, deg (2778 turns). Beyond it f32 resolves the angle to no
+    /// better than 0.06 deg, and values near `f32::MAX` would overflow the states.
+    pub const MAX_ABS_DEG: f32 = 1.0e6;
+
+    /// Validates the step, period and gap rule of `cfg`; returns the input stage and the
+    /// number of steps per nominal sample period the closed-form maps are built for (0 when
+    /// `cfg.closed_form` is false).
+    pub fn new(cfg: &BankConfig) -> Result<(Self, u32), ConfigError> {
+        let h = cfg.h;
+        // The period first: the gap rule is a multiple of it, so a bad period would otherwise
+        // be reported as a bad gap rule.
+        let h_us = crate::adapter::step_us(h)?;
+        let period = f64::from(cfg.sample_period_s);
+        if !period.is_finite() {
+            return Err(ConfigError::NotFinite("sample_period_s"));
+        }
+        let n0f = libm::round(period * 1e6 / h_us as f64);
+        if n0f < 1.0 {
+            return Err(ConfigError::SamplePeriodTooShort);
+        }
+        if n0f > 1e6 {
+            return Err(ConfigError::SamplePeriodTooLong);
+        }
+        let clock = SampleClock::new(h, cfg.max_gap_s())?;
+        let n0 = if cfg.closed_form { n0f as u32 } else { 0 };
+        Ok((
+            Self {
+                clock,
+                hold: cfg.hold,
+                wrap: cfg.wrap,
+                unwrap: Unwrapper::new(),
+                y_prev: T::ZERO,
+                reinits: 0,
+            },
+            n0,
+        ))
+    }
+
+    /// Checks and classifies one sample (`t_us` µs, `angle_deg` deg); see [`PaperBank::update`].
+    #[inline(always)]
+    pub fn accept(&mut self, t_us: u64, angle_deg: f32) -> Result<Accepted<T>, SampleError> {
+        if !angle_deg.is_finite() {
+            return Err(SampleError::NotFinite);
+        }
+        if !(-Self::MAX_ABS_DEG..=Self::MAX_ABS_DEG).contains(&angle_deg) {
+            return Err(SampleError::OutOfRange);
+        }
+        let tick = self.clock.tick(t_us)?;
+        // The laws run in a local frame whose origin is the unwrapper's current multiple of
+        // 360 deg: they see the wrapped angle, so f32 states stay within about +-180 deg (full
+        // f32 resolution) however many turns the unwrapped angle makes. When the offset
+        // changes, every law is translated into the new frame (exact: the laws are invariant
+        // to input offsets, see `Estimator::translate`).
+        let y = T::from_f32(angle_deg);
+        let mut shift = None;
+        let turns = match self.wrap {
+            Wrap::None => 0,
+            Wrap::Deg180 => {
+                let before = self.unwrap.turns();
+                let turns = self.unwrap.update(y);
+                if turns != before && tick != Tick::Init && tick != Tick::Gap {
+                    // One turn per sample at most: the shift is exactly +-360 deg in `T`.
+                    let d = -T::from_i32(if turns > before { 360 } else { -360 });
+                    self.y_prev = self.y_prev + d;
+                    shift = Some(d);
+                }
+                turns
+            }
+        };
+        let angle = exact_angle(turns, y);
+        let feed = match tick {
+            Tick::Init => Feed::Reset(y),
+            Tick::Gap => {
+                self.reinits = self.reinits.saturating_add(1);
+                Feed::Reset(y)
+            }
+            Tick::Steps(n) => Feed::Advance {
+                y_prev: self.y_prev,
+                y,
+                n,
+                hold: self.hold,
+            },
+        };
+        self.y_prev = y;
+        Ok(Accepted { shift, feed, angle })
+    }
+
+    /// The last accepted sample in the laws' (local) frame, deg (0 before the first).
+    pub fn last(&self) -> T {
+        self.y_prev
+    }
+
+    /// Gaps longer than the gap rule that re-initialised the laws.
+    pub fn reinit_count(&self) -> u32 {
+        self.reinits
+    }
+
+    /// The next sample re-initialises the laws, whatever its time; turns are kept.
+    pub fn new_epoch(&mut self) {
+        self.clock.clear();
+    }
+
+    /// Sets the unwrapper's turn count (only the reported angle moves).
+    pub fn set_turns(&mut self, turns: i64) {
+        self.unwrap.set_turns(turns);
+    }
+
+    /// Forgets everything but the configuration and the re-init count.
+    pub fn restart(&mut self) {
+        self.clock.clear();
+        self.unwrap = Unwrapper::new();
+        self.y_prev = T::ZERO;
+    }
+}

@@ -1,0 +1,323 @@
+//! [`PaperBank`]: the paper's 14 estimators.
+
+use super::{BankConfig, BankGains, Fed};
+use crate::kalman::{KalmanConfig, KalmanOutput, KalmanParams};
+use crate::presets::*;
+use crate::{
+    AdFamily, AdParams, AveConfig, AveFamily, AveParams, ClosedForm, ConfigError, EdConfig,
+    EdFamily, EdParams, IloConfig, IloFamily, IloParams, KfFamily, Real, Series, SqrtFn, VelAcc,
+};
+
+// The paper bank is defined by two tables: its families (the columns of the paper's
+// tables, each a `Family` next to its law) and, below, its rows (the laws it runs, each with
+// the channels it reports and how it takes a warm gain change). A family added to the list
+// needs its two channels and its rows in the table, and its gains in `BankGains`.
+crate::family::families! {
+    AveFamily,
+    IloFamily<0>,
+    IloFamily<1>,
+    IloFamily<2>,
+    AdFamily,
+    EdFamily,
+    KfFamily,
+}
+
+/// The names of the paper bank's families ([`FAMILIES`]), in column order: the velocity
+/// channels are these with `_v`, the acceleration channels with `_a` (see [`Channel`]).
+pub const VELOCITY_NAMES: [&str; FAMILY_COUNT] = {
+    let mut names = [""; FAMILY_COUNT];
+    let mut i = 0;
+    while i < FAMILY_COUNT {
+        names[i] = FAMILIES[i].name;
+        i += 1;
+    }
+    names
+};
+
+/// ILO-ILO (both stages `D = 1`) through its closed-form map: the paper bank's ILO
+/// acceleration row.
+pub type IloIloMap<T> = ClosedForm<Series<IloParams<T, 1>, IloParams<T, 1>>>;
+/// AD-AD through its closed-form map: the paper bank's AD acceleration row.
+pub type AdAdMap<T> = ClosedForm<Series<AdParams<T>, AdParams<T>>>;
+
+/// The Kalman tracker row of a gains half.
+pub(super) fn kalman<T: Real>(
+    cfg: &BankConfig,
+    g: &BankGains,
+    out: KalmanOutput,
+) -> Result<KalmanParams<T>, ConfigError> {
+    KalmanParams::new(
+        &KalmanConfig {
+            dt: cfg.sample_period_s,
+            q: g.kf.q,
+            r: g.kf.r,
+        },
+        cfg.h,
+        out,
+    )
+}
+
+/// ILO row `i` of the velocity half, closed form.
+pub(super) fn ilo_v<T: Real>(
+    cfg: &BankConfig,
+    i: usize,
+    n0: u32,
+    prev: Option<&ClosedForm<IloParams<T, 1>>>,
+) -> Result<ClosedForm<IloParams<T, 1>>, ConfigError> {
+    let c: &IloConfig = cfg.velocity.ilo.get(i).unwrap_or(&ILO1_TABLE2);
+    let p = IloParams::new(c, cfg.h)?;
+    Ok(ClosedForm::new_reusing(p, n0, cfg.hold, prev))
+}
+
+/// ILO-ILO row `i` of the acceleration half (both stages the same gains), closed form.
+fn ilo_a<T: Real>(
+    cfg: &BankConfig,
+    i: usize,
+    n0: u32,
+    prev: Option<&IloIloMap<T>>,
+) -> Result<IloIloMap<T>, ConfigError> {
+    let c: &IloConfig = cfg.acceleration.ilo.get(i).unwrap_or(&ILO1_TABLE4);
+    let p = IloParams::new(c, cfg.h)?;
+    Ok(ClosedForm::new_reusing(
+        Series::new(p, p),
+        n0,
+        cfg.hold,
+        prev,
+    ))
+}
+
+/// AVE and AVE-AVE (shared first stage when the velocity and acceleration AVE are equal).
+fn ave_pair<T: Real>(cfg: &BankConfig) -> Result<VelAcc<AveParams<T>>, ConfigError> {
+    let (v, a): (&AveConfig, &AveConfig) = (&cfg.velocity.ave, &cfg.acceleration.ave);
+    let pa = AveParams::new(a, cfg.h)?;
+    Ok(VelAcc::new(AveParams::new(v, cfg.h)?, pa, pa, v == a))
+}
+
+/// ED and ED-ED (shared first stage when the velocity and acceleration ED are equal).
+fn ed_pair<T: Real, S: SqrtFn<T>>(cfg: &BankConfig) -> Result<VelAcc<EdParams<T, S>>, ConfigError> {
+    let (v, a): (&EdConfig, &EdConfig) = (&cfg.velocity.ed, &cfg.acceleration.ed);
+    let pa = EdParams::new(a, cfg.h, cfg.ed_scheme)?;
+    Ok(VelAcc::new(
+        EdParams::new(v, cfg.h, cfg.ed_scheme)?,
+        pa,
+        pa,
+        v == a,
+    ))
+}
+
+/// AD velocity, closed form.
+fn ad_v<T: Real>(
+    cfg: &BankConfig,
+    n0: u32,
+    prev: Option<&ClosedForm<AdParams<T>>>,
+) -> Result<ClosedForm<AdParams<T>>, ConfigError> {
+    let p = AdParams::new(cfg.velocity.ad_t, cfg.h)?;
+    Ok(ClosedForm::new_reusing(p, n0, cfg.hold, prev))
+}
+
+/// AD-AD acceleration, closed form.
+fn ad_a<T: Real>(
+    cfg: &BankConfig,
+    n0: u32,
+    prev: Option<&AdAdMap<T>>,
+) -> Result<AdAdMap<T>, ConfigError> {
+    let p = AdParams::new(cfg.acceleration.ad_t, cfg.h)?;
+    Ok(ClosedForm::new_reusing(
+        Series::new(p, p),
+        n0,
+        cfg.hold,
+        prev,
+    ))
+}
+
+crate::estimator_bank! {
+    /// The paper's bank for one angle: unwrap -> sample adapter -> AVE, ILO1-3 (Table 2),
+    /// AD (T = 0.01), ED (700/770), Kalman for velocity, and AVE-AVE, ILO1-3-ILO1-3
+    /// (Table 4), AD-AD (T = 0.1), ED-ED, Kalman for acceleration.
+    ///
+    /// Generic over [`Real`]: `PaperBank<f32>` for FPU targets, `PaperBank<Fx>` for
+    /// Cortex-M0/M3 (the `f32` inputs and outputs are only converted; all arithmetic is
+    /// integer). No heap; the whole state is inline (see [`crate::ram`] for its size). `S` is
+    /// the ED's square root (default [`NativeSqrt`]; see [`SqrtFn`] for plugging in an FPU
+    /// instruction with identical results).
+    bank PaperBank, params PaperParams, state PaperState, output PaperOutput, channel Channel;
+    build(cfg, n0, prev);
+    channels {
+        /// AVE velocity, deg/s.
+        AveV = "ave_v",
+        /// ILO1 (Table 2) velocity, deg/s.
+        Ilo1V = "ilo1_v",
+        /// ILO2 (Table 2) velocity, deg/s.
+        Ilo2V = "ilo2_v",
+        /// ILO3 (Table 2) velocity, deg/s.
+        Ilo3V = "ilo3_v",
+        /// AD (T = 0.01 s) velocity, deg/s.
+        AdV = "ad_v",
+        /// Levant ED velocity, deg/s.
+        EdV = "ed_v",
+        /// Kalman tracker velocity, deg/s.
+        KfV = "kf_v",
+        /// AVE-AVE acceleration, deg/s^2.
+        AveA = "ave_a",
+        /// ILO1-ILO1 (Table 4) acceleration, deg/s^2.
+        Ilo1A = "ilo1_a",
+        /// ILO2-ILO2 (Table 4) acceleration, deg/s^2.
+        Ilo2A = "ilo2_a",
+        /// ILO3-ILO3 (Table 4) acceleration, deg/s^2.
+        Ilo3A = "ilo3_a",
+        /// AD-AD (T = 0.1 s) acceleration, deg/s^2.
+        AdA = "ad_a",
+        /// ED-ED acceleration, deg/s^2.
+        EdA = "ed_a",
+        /// Kalman tracker acceleration, deg/s^2.
+        KfA = "kf_a",
+    }
+    rows {
+        // `warm replay(..)`: on a warm gain change the row is replayed over the recent
+        // samples; `warm bumpless(..)`: moved bumplessly, for the rows that, replayed from
+        // rest, take longer than the replayed history (`REPLAY_CAPACITY` samples) to settle:
+        // the ED, whose velocity state moves at most `alpha` deg/s per second, and the
+        // closed-form series, whose second stage starts from zero acceleration.
+        /// AVE and AVE-AVE.
+        ave: VelAcc<AveParams<T>> = ave_pair(cfg) => [AveV = velocity, AveA = acceleration]
+            warm replay((cfg.velocity.ave, cfg.acceleration.ave));
+        /// ILO1, Table 2 gains.
+        ilo1_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 0, n0, prev) => [Ilo1V = output]
+            warm replay(cfg.velocity.ilo[0]);
+        /// ILO2, Table 2 gains.
+        ilo2_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 1, n0, prev) => [Ilo2V = output]
+            warm replay(cfg.velocity.ilo[1]);
+        /// ILO3, Table 2 gains.
+        ilo3_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 2, n0, prev) => [Ilo3V = output]
+            warm replay(cfg.velocity.ilo[2]);
+        /// AD.
+        ad_v: ClosedForm<AdParams<T>> = ad_v(cfg, n0, prev) => [AdV = output]
+            warm replay(cfg.velocity.ad_t);
+        /// ED and ED-ED.
+        ed: VelAcc<EdParams<T, S>> = ed_pair(cfg) => [EdV = velocity, EdA = acceleration]
+            warm bumpless((cfg.velocity.ed, cfg.acceleration.ed));
+        /// Kalman tracker with the velocity noise.
+        kf_v: KalmanParams<T> = kalman(cfg, &cfg.velocity, KalmanOutput::Velocity) => [KfV = velocity]
+            warm replay(cfg.velocity.kf);
+        /// ILO1-ILO1, Table 4 gains.
+        ilo1_a: IloIloMap<T> = ilo_a(cfg, 0, n0, prev) => [Ilo1A = output]
+            warm bumpless(cfg.acceleration.ilo[0]);
+        /// ILO2-ILO2, Table 4 gains.
+        ilo2_a: IloIloMap<T> = ilo_a(cfg, 1, n0, prev) => [Ilo2A = output]
+            warm bumpless(cfg.acceleration.ilo[1]);
+        /// ILO3-ILO3, Table 4 gains.
+        ilo3_a: IloIloMap<T> = ilo_a(cfg, 2, n0, prev) => [Ilo3A = output]
+            warm bumpless(cfg.acceleration.ilo[2]);
+        /// AD-AD.
+        ad_a: AdAdMap<T> = ad_a(cfg, n0, prev) => [AdA = output]
+            warm bumpless(cfg.acceleration.ad_t);
+        /// Kalman tracker with the acceleration noise.
+        kf_a: KalmanParams<T> = kalman(cfg, &cfg.acceleration, KalmanOutput::Acceleration) => [KfA = acceleration]
+            warm replay(cfg.acceleration.kf);
+    }
+}
+
+impl PaperOutput {
+    /// The velocities, deg/s, one per family in [`Channel::VELOCITY`] order.
+    pub fn velocities(&self) -> [f32; FAMILY_COUNT] {
+        Channel::VELOCITY.map(|c| self[c])
+    }
+
+    /// The accelerations, deg/s^2, one per family in [`Channel::ACCELERATION`] order.
+    pub fn accelerations(&self) -> [f32; FAMILY_COUNT] {
+        Channel::ACCELERATION.map(|c| self[c])
+    }
+}
+
+impl Channel {
+    /// The velocity channels, one per family in column order ([`FAMILIES`]: ave, ilo1,
+    /// ilo2, ilo3, ad, ed, kf).
+    pub const VELOCITY: [Channel; FAMILY_COUNT] = family_channels(false);
+    /// The acceleration channels, same order.
+    pub const ACCELERATION: [Channel; FAMILY_COUNT] = family_channels(true);
+}
+
+/// The velocity (or acceleration) channel of each family, in column order.
+const fn family_channels(acceleration: bool) -> [Channel; FAMILY_COUNT] {
+    let mut out = [Channel::AveV; FAMILY_COUNT];
+    let mut i = 0;
+    while i < FAMILY_COUNT {
+        out[i] = if acceleration {
+            FAMILIES[i].acceleration
+        } else {
+            FAMILIES[i].velocity
+        };
+        i += 1;
+    }
+    out
+}
+
+impl<T: Real, S: SqrtFn<T>> PaperBank<T, S> {
+    /// The switching gains `deltahat` of the AVE row: the velocity AVE's (deg/s) and the
+    /// AVE-AVE series' stages' (deg/s, deg/s^2; the first stage's is the velocity AVE's when
+    /// the row shares it, [`VelAcc::is_shared`]).
+    pub fn ave_deltahat(&self) -> crate::AveDeltahat {
+        let s = &self.state.ave;
+        let a1 = if self.params.ave.is_shared() {
+            s.v.delta
+        } else {
+            s.a1.delta
+        };
+        crate::AveDeltahat {
+            velocity: s.v.delta.to_f32(),
+            acceleration: [a1.to_f32(), s.a2.delta.to_f32()],
+        }
+    }
+
+    /// Sets the AVE row's switching gains (see [`Self::ave_deltahat`]; a negative or
+    /// non-finite value leaves its `deltahat` as it is). What [`crate::AdaptiveBank`] does
+    /// when it changes the AVE gains and its schedule records the `deltahat` they were tuned
+    /// with.
+    pub fn set_ave_deltahat(&mut self, d: &crate::AveDeltahat) {
+        set_ave_deltahat(&mut self.state, d);
+    }
+}
+
+impl<T: Real, S: SqrtFn<T>> PaperBank<T, S> {
+    /// The gain change of [`crate::AdaptiveBank`] (warm start) from the gains of `old` (what
+    /// the bank runs now; only its gains are read) to those of `new`: the generated
+    /// [`Self::set_gains_warm_with`], row by row as the table's `warm` clauses say (the AVE /
+    /// AVE-AVE row, the velocity ILOs and AD and both trackers replayed over `history` when
+    /// their gains changed; the ED / ED-ED row and the ILO-ILO and AD-AD series moved
+    /// bumplessly; unchanged rows kept), where the AVE row starts its replay with the
+    /// switching gains `deltahat` (deg/s, deg/s^2), or, when `None`, with those it has now.
+    ///
+    /// `history`: what the laws were fed for the last samples, oldest first, ending with the
+    /// last one ([`Self::update_fed`]). An empty history is [`Self::set_gains`] (every row
+    /// bumpless). On error nothing changes.
+    pub fn set_gains_warm<'h, I>(
+        &mut self,
+        old: &BankConfig,
+        new: &BankConfig,
+        history: I,
+        deltahat: Option<crate::AveDeltahat>,
+    ) -> Result<(), ConfigError>
+    where
+        I: IntoIterator<Item = &'h Fed<T>>,
+        T: 'h,
+    {
+        let deltahat = deltahat.unwrap_or_else(|| self.ave_deltahat());
+        self.set_gains_warm_with(old, new, history, |s| set_ave_deltahat(s, &deltahat))
+    }
+}
+
+/// Sets the AVE row's switching gains in `state` (see [`PaperBank::set_ave_deltahat`]).
+pub(crate) fn set_ave_deltahat<T: Real, S: SqrtFn<T>>(
+    state: &mut PaperState<T, S>,
+    d: &crate::AveDeltahat,
+) {
+    let set = |x: &mut T, v: f32| {
+        if v.is_finite() && v >= 0.0 {
+            *x = T::from_f32(v);
+        }
+    };
+    let s = &mut state.ave;
+    set(&mut s.v.delta, d.velocity);
+    set(&mut s.a1.delta, d.acceleration[0]);
+    set(&mut s.a2.delta, d.acceleration[1]);
+}

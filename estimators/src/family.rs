@@ -1,0 +1,338 @@
+//! The estimator families of the paper bank: one [`Family`] per column of the paper's tables
+//! (a velocity estimator and its acceleration series), listed once in `bank/paper.rs`.
+//!
+//! A family says what the rest of the workspace needs to know about a column, so that code
+//! which handles "every family" iterates the list instead of naming the columns:
+//!
+//! * its name (`ilo1`: the channels `ilo1_v`, `ilo1_a` and the gains file's `[velocity.ilo1]`
+//!   table), its label in reports (`ILO1`) and its two [`Channel`]s;
+//! * where its gains are in one half of a [`BankGains`] ([`Family::get`], [`Family::set`]),
+//!   and what those gains can do ([`Gains`]): be interpolated between two levels of a gain
+//!   schedule, be searched by a tuner, build the estimator a tuner scores;
+//! * how a gain schedule blends it ([`Scheduling`]) and, for an observer, where its switch
+//!   point is recorded ([`Family::switch_up_mut`]).
+//!
+//! [`FAMILIES`] lists the plain facts ([`FamilyInfo`]) in column order, for const contexts
+//! ([`Channel::VELOCITY`], [`crate::VELOCITY_NAMES`]); [`for_each_family`] calls a
+//! [`FamilyVisitor`] with each family's type, for code that needs the gains' types (the
+//! noise-adaptive interpolation, the gains file, the tuner):
+//!
+//! ```
+//! use estimators::{for_each_family, BankGains, Family, FamilyVisitor};
+//!
+//! /// Collects each family's name and gains, in column order.
+//! struct Names(Vec<String>);
+//! impl FamilyVisitor for Names {
+//!     fn family<F: Family>(&mut self, column: usize) {
+//!         let g = F::get(&BankGains::PAPER_VELOCITY);
+//!         self.0.push(format!("{column} {} {g:?}", F::NAME));
+//!     }
+//! }
+//! let mut names = Names(Vec::new());
+//! for_each_family(&mut names);
+//! assert_eq!(names.0[4], "4 ad AdConfig { t: 0.01 }");
+//! assert_eq!(names.0.len(), estimators::FAMILY_COUNT);
+//! ```
+//!
+//! # Adding an estimator to the paper bank
+//!
+//! 1. Its module, next to the others (`src/foo.rs`; `mod foo;` and `pub use foo::{..}` in
+//!    `lib.rs`): the law (`FooParams`, a [`Law`]), its configuration `FooConfig` (with the
+//!    `serde` and `defmt` derives of the others), `impl Gains for FooConfig` and the family
+//!    marker `FooFamily` (`impl Family`: name, label, channels, scheduling, where its gains
+//!    are in [`BankGains`]).
+//! 2. `bank/paper.rs`: `FooFamily` in the family list; its two channels
+//!    (`FooV = "foo_v"`, `FooA = "foo_a"`) and its row or rows, each with a `warm` clause, in
+//!    the `estimator_bank!` table below the list.
+//! 3. `bank/config.rs`: the field `foo: FooConfig` of [`BankGains`], its paper values in
+//!    `BankGains::PAPER_VELOCITY` and `BankGains::PAPER_ACCELERATION`, its line in
+//!    [`BankGains::write_rust`] and its type in [`BankGains::RUST_TYPES`].
+//! 4. What the compiler and the tests then ask for: a value in each tuned preset
+//!    (`BankGains::NAV440_*`, and `BankConfig::NAV440_RATES` in `rates.rs`; the paper's until
+//!    it is tuned); the sizes in `ram.rs` (compile-time checked); the paper bank's CSV
+//!    contract (`nav440_pipeline::csv::HEADER` and the tests that spell out its columns);
+//!    the committed `nav440 tune --rust` snippets `host-tests/data/gains/*.rs`,
+//!    regenerated.
+//!
+//! The channel lists, the warm gain change, the gain schedule, the gains file, the tuner and
+//! the `nav440 paper` tables then follow. Optional: an observer that should record its own
+//! switch point per schedule level needs a field in [`ObserverSwitch`] (with its line in
+//! `ObserverSwitch::write_rust` and [`ObserverSwitch::all`]) returned by
+//! [`Family::switch_up_mut`]; `nav440 plot` draws the families its panels list.
+
+use crate::adaptive::ObserverSwitch;
+use crate::bank::{BankGains, Channel};
+use crate::{ConfigError, KalmanNoise, Law};
+
+/// A family of the paper bank: one column of the paper's tables, a velocity estimator and
+/// the acceleration series of the same law (both stages with the acceleration half's gains).
+///
+/// Implemented by a marker type next to the law (`AveFamily` in `ave.rs`, `IloFamily<I>` in
+/// `ilo.rs`, ...) and listed once, in column order, in `bank/paper.rs`.
+pub trait Family {
+    /// The family's gains in one half of the bank (velocity or acceleration): the law's
+    /// configuration, one table of the gains file.
+    type Gains: Gains;
+    /// Lower-case name: the channels are `NAME_v` and `NAME_a`, the gains file's tables
+    /// `[velocity.NAME]` and `[acceleration.NAME]`.
+    const NAME: &'static str;
+    /// Upper-case label in reports and tables (`nav440 paper`, `nav440 tune`).
+    const LABEL: &'static str;
+    /// The velocity channel (deg/s).
+    const VELOCITY: Channel;
+    /// The acceleration channel (deg/s^2).
+    const ACCELERATION: Channel;
+    /// How a gain schedule blends this family's gains between two levels.
+    const SCHEDULING: Scheduling;
+
+    /// The family's gains in the bank half `half`.
+    fn get(half: &BankGains) -> Self::Gains;
+
+    /// Sets the family's gains in the bank half `half`.
+    fn set(half: &mut BankGains, gains: Self::Gains);
+
+    /// Where a schedule level records the noise variance (deg^2) at which this family moves
+    /// on to the next level's gains ([`ObserverSwitch`]); `None` (the default): not recorded,
+    /// the family switches at the two levels' geometric midpoint.
+    fn switch_up_mut(_switch: &mut ObserverSwitch) -> Option<&mut f32> {
+        None
+    }
+
+    /// The recorded switch point of [`Self::switch_up_mut`], deg^2.
+    fn switch_up(switch: &ObserverSwitch) -> Option<f32> {
+        let mut s = *switch;
+        Self::switch_up_mut(&mut s).map(|x| *x)
+    }
+}
+
+/// How a gain schedule ([`crate::GainSchedule`]) blends a family's gains between two levels.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Scheduling {
+    /// An observer whose tuned gains are lightly damped and tuned to the sample period (the
+    /// AVE, the ILOs, the ED): a blend of two such sets rings, so with
+    /// [`crate::Blend::NearestObservers`] it takes the nearer level's gains (or moves on at
+    /// its recorded switch point).
+    Observer,
+    /// One smooth gain (the AD's time constant, the tracker's noise): interpolated
+    /// geometrically between the levels.
+    Smooth,
+}
+
+/// The plain facts of a [`Family`] (its consts), for const contexts: see [`FAMILIES`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FamilyInfo {
+    /// [`Family::NAME`].
+    pub name: &'static str,
+    /// [`Family::LABEL`].
+    pub label: &'static str,
+    /// [`Family::VELOCITY`].
+    pub velocity: Channel,
+    /// [`Family::ACCELERATION`].
+    pub acceleration: Channel,
+    /// [`Family::SCHEDULING`].
+    pub scheduling: Scheduling,
+}
+
+impl FamilyInfo {
+    /// The facts of `F`.
+    pub const fn of<F: Family>() -> Self {
+        Self {
+            name: F::NAME,
+            label: F::LABEL,
+            velocity: F::VELOCITY,
+            acceleration: F::ACCELERATION,
+            scheduling: F::SCHEDULING,
+        }
+    }
+}
+
+/// Something done for every family: [`for_each_family`] calls [`FamilyVisitor::family`] once
+/// per family, in column order.
+pub trait FamilyVisitor {
+    /// Called with the family `F` and its column (0-based, the order of [`FAMILIES`]).
+    fn family<F: Family>(&mut self, column: usize);
+}
+
+/// The gains of one family in one half of the bank (the law's configuration, e.g.
+/// [`crate::IloConfig`]): what a gain schedule, a tuner and a gains file do with them.
+pub trait Gains: Copy + PartialEq + core::fmt::Debug + SerdeIfEnabled {
+    /// The gains between `self` (weight `1 - w`) and `other` (weight `w`, in `[0, 1]`), for a
+    /// gain schedule: each gain geometrically ([`geometric`]: gains span decades); settings
+    /// that are not numbers (the AVE's `deltahat` law) from the nearer one.
+    fn interpolate(&self, other: &Self, w: f32) -> Self;
+
+    /// The gains a tuner searches, as coordinates (at most 4, in the order of
+    /// [`Self::search_box`]).
+    fn search_point(&self) -> SearchPoint;
+
+    /// These gains with the searched ones set from the coordinates `x` (the others, e.g. the
+    /// AVE's `deltahat` law, kept).
+    fn with_search_point(&self, x: &[f64]) -> Self;
+
+    /// The search range `(lowest, highest)` of each coordinate of [`Self::search_point`] at
+    /// the step `h_s` (s): the gains the law accepts at that step, spanning the paper's by
+    /// two decades or more each side.
+    fn search_box(h_s: f64) -> (SearchPoint, SearchPoint);
+
+    /// Hands the estimator these gains build at the step `h` (s) to `scorer`, which scores it
+    /// (a tuner's objective); the error of the law's constructor if they do not build one.
+    fn score<S: Scorer>(&self, h: f32, scorer: &S) -> Result<S::Score, ConfigError>;
+
+    /// Writes the gains on one line, `name=value` separated by spaces (e.g. `k=500
+    /// gamma1=20000`), as reports print them.
+    fn describe(&self, w: &mut dyn core::fmt::Write) -> core::fmt::Result;
+}
+
+/// The coordinates of a tuner's search ([`Gains::search_point`]).
+pub type SearchPoint = heapless::Vec<f64, 4>;
+
+/// What scores a family's candidate gains ([`Gains::score`]): a tuner's objective, given the
+/// estimator the gains build.
+pub trait Scorer {
+    /// The score (e.g. a mean square error).
+    type Score;
+
+    /// Scores a law stepped at `h` between samples: its output is the velocity estimate; the
+    /// scorer may run two of it in series for the acceleration (as the bank does).
+    fn law<L: Law<Num = f32>>(&self, law: L) -> Self::Score;
+
+    /// Scores a Kalman tracker with the noise `noise` (run once per sample, the bank's
+    /// [`crate::KalmanParams`]; velocity or acceleration output as the scorer needs).
+    fn tracker(&self, noise: KalmanNoise) -> Self::Score;
+}
+
+/// `a^(1-w) b^w` for positive `a`, `b` (linear in `ln`); `a + (b - a) w` otherwise; `a` for
+/// `w <= 0`, `b` for `w >= 1`. How a gain schedule interpolates one gain.
+pub fn geometric(a: f32, b: f32, w: f32) -> f32 {
+    if a == b || w <= 0.0 {
+        a
+    } else if w >= 1.0 {
+        b
+    } else if a > 0.0 && b > 0.0 {
+        a * libm::expf(w * libm::logf(b / a))
+    } else {
+        a + (b - a) * w
+    }
+}
+
+/// `Serialize + DeserializeOwned` with the `serde` feature (so that a gains file can read and
+/// write every family's gains), nothing without it.
+#[cfg(feature = "serde")]
+pub trait SerdeIfEnabled: serde::Serialize + serde::de::DeserializeOwned {}
+#[cfg(feature = "serde")]
+impl<T: serde::Serialize + serde::de::DeserializeOwned> SerdeIfEnabled for T {}
+/// `Serialize + DeserializeOwned` with the `serde` feature (so that a gains file can read and
+/// write every family's gains), nothing without it.
+#[cfg(not(feature = "serde"))]
+pub trait SerdeIfEnabled {}
+#[cfg(not(feature = "serde"))]
+impl<T> SerdeIfEnabled for T {}
+
+/// Defines the family list: [`FAMILIES`] and [`for_each_family`] from one list of types.
+macro_rules! families {
+    ($($(#[$m:meta])* $F:ty),+ $(,)?) => {
+        /// The families of the paper bank, in column order (the order of
+        /// [`crate::Channel::VELOCITY`] and of every per-family table and report).
+        pub const FAMILIES: [$crate::FamilyInfo; [$(stringify!($F)),+].len()] =
+            [$($crate::FamilyInfo::of::<$F>()),+];
+
+        /// The number of families ([`FAMILIES`]`.len()`).
+        pub const FAMILY_COUNT: usize = FAMILIES.len();
+
+        /// Calls `visitor.family::<F>(column)` for each family `F` of [`FAMILIES`], in order.
+        pub fn for_each_family<V: $crate::FamilyVisitor>(visitor: &mut V) {
+            let mut column = 0;
+            $(
+                $(#[$m])*
+                visitor.family::<$F>(column);
+                column += 1;
+            )+
+            let _ = column;
+        }
+    };
+}
+pub(crate) use families;
+
+/// Coordinate `i` of `x` as f32, or `current` if `x` is shorter.
+pub(crate) fn coordinate(x: &[f64], i: usize, current: f32) -> f32 {
+    x.get(i).map_or(current, |&v| v as f32)
+}
+
+pub use crate::bank::{for_each_family, FAMILIES, FAMILY_COUNT};
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+    use super::*;
+    use crate::BankConfig;
+    use std::{format, vec::Vec};
+
+    /// The families' facts as the visitor sees them.
+    struct Collect(Vec<(usize, FamilyInfo)>);
+    impl FamilyVisitor for Collect {
+        fn family<F: Family>(&mut self, column: usize) {
+            self.0.push((column, FamilyInfo::of::<F>()));
+        }
+    }
+
+    /// The list is consistent: the visitor sees [`FAMILIES`] in order; each family's channels
+    /// are its name with `_v` and `_a`, and every channel of the paper bank belongs to
+    /// exactly one family.
+    #[test]
+    fn the_families_cover_the_channels_once() {
+        let mut seen = Collect(Vec::new());
+        for_each_family(&mut seen);
+        let want: Vec<_> = FAMILIES.iter().copied().enumerate().collect();
+        assert_eq!(seen.0, want);
+        for f in FAMILIES {
+            assert_eq!(f.velocity.name(), format!("{}_v", f.name));
+            assert_eq!(f.acceleration.name(), format!("{}_a", f.name));
+        }
+        for c in Channel::ALL {
+            let owners = FAMILIES
+                .iter()
+                .filter(|f| f.velocity == *c || f.acceleration == *c)
+                .count();
+            assert_eq!(owners, 1, "{}", c.name());
+        }
+    }
+
+    /// `set` writes what `get` reads, and only there: setting every family's gains of one
+    /// half into the other gives the first half.
+    #[test]
+    fn get_and_set_cover_the_bank_gains() {
+        struct Copy(BankGains, BankGains);
+        impl FamilyVisitor for Copy {
+            fn family<F: Family>(&mut self, _: usize) {
+                F::set(&mut self.1, F::get(&self.0));
+                assert_eq!(F::get(&self.1), F::get(&self.0));
+            }
+        }
+        let mut c = Copy(BankConfig::NAV440.velocity, BankConfig::PAPER.acceleration);
+        for_each_family(&mut c);
+        assert_eq!(c.1, c.0);
+    }
+
+    /// Each family's search point round-trips, and its paper gains lie in its search box.
+    #[test]
+    fn paper_gains_lie_in_the_search_box() {
+        struct Check;
+        impl FamilyVisitor for Check {
+            fn family<F: Family>(&mut self, _: usize) {
+                for half in [BankConfig::PAPER.velocity, BankConfig::PAPER.acceleration] {
+                    let g = F::get(&half);
+                    let x = g.search_point();
+                    assert_eq!(g.with_search_point(&x), g, "{}", F::NAME);
+                    let (lo, hi) = F::Gains::search_box(1e-4);
+                    assert_eq!((lo.len(), hi.len()), (x.len(), x.len()));
+                    for ((v, l), h) in x.iter().zip(&lo).zip(&hi) {
+                        // `K1 = 1` is the leak's lower end (1e-7) to f32 precision.
+                        let v = v.max(1e-7);
+                        assert!(v >= *l && v <= *h, "{}: {v} not in [{l}, {h}]", F::NAME);
+                    }
+                }
+            }
+        }
+        for_each_family(&mut Check);
+    }
+}
