@@ -250,8 +250,14 @@ pub fn parse_output_type(name: &str) -> Result<PacketType> {
             return Ok(t);
         }
     }
+    let streamed: Vec<&str> = PacketType::KNOWN
+        .iter()
+        .filter(|t| t.output_payload_len().is_some())
+        .map(PacketType::name)
+        .collect();
     Err(Error::Usage(format!(
-        "`{name}` is not a packet type the unit streams (S0, S1, S2, A0, A1, A2, N0, N1, B1, T0)"
+        "`{name}` is not a packet type the unit streams ({})",
+        streamed.join(", ")
     )))
 }
 
