@@ -84,7 +84,7 @@ pub use packets::{
     scale, A0Fields, A1Fields, A2Fields, Attitude, B1Fields, Bit, BodyRates, DecodeError, Field,
     FieldIds, FieldInfo, FieldValues, Id, IdFields, Kind, N0Fields, N1Fields, Nak, NakFields,
     Packet, Quantity, Role, S0Fields, S1Fields, S2Fields, SiValue, T0Fields, TimeStamp, Unit, Vr,
-    VrFields, X2Fields, YawSample, A0, A1, A2, B1, N0, N1, S0, S1, S2, T0, X2,
+    VrFields, YawSample, A0, A1, A2, B1, N0, N1, S0, S1, S2, T0,
 };
 pub use parser::{Frame, Parser, Stats};
 pub use types::{Baud, FieldId, PacketRate, PacketType};

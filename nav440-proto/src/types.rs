@@ -24,8 +24,6 @@ impl PacketType {
     pub const N1: Self = Self(*b"N1");
     /// Short angle packet, 18-byte payload.
     pub const B1: Self = Self(*b"B1");
-    /// Compact attitude and body rates with timeITOW, 18-byte payload.
-    pub const X2: Self = Self(*b"X2");
     /// Built-in-test status words, 28-byte payload.
     pub const T0: Self = Self(*b"T0");
     /// Serial number and model string.

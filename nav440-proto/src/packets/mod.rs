@@ -36,8 +36,7 @@ pub use roles::{Attitude, BodyRates, TimeStamp, YawSample};
 pub use status::Bit;
 pub use table::{
     A0Fields, A1Fields, A2Fields, B1Fields, N0Fields, N1Fields, Nak, NakFields, Packet, S0Fields,
-    S1Fields, S2Fields, T0Fields, Vr, VrFields, X2Fields, A0, A1, A2, B1, N0, N1, S0, S1, S2, T0,
-    X2,
+    S1Fields, S2Fields, T0Fields, Vr, VrFields, A0, A1, A2, B1, N0, N1, S0, S1, S2, T0,
 };
 pub use variable::{FieldIds, FieldValues, Id, IdFields};
 

@@ -293,26 +293,6 @@ packet_table! {
         bit: status @ 16 => bit;
     }
 
-    /// X2: compact attitude and body rates, timeITOW time (18-byte payload).
-    X2(X2Fields, X2, 18, stream) {
-        /// Roll angle.
-        roll: angle[roll_rad, roll_deg] @ 0 => roll;
-        /// Pitch angle.
-        pitch: angle[pitch_rad, pitch_deg] @ 2 => pitch;
-        /// Yaw angle.
-        yaw: angle[yaw_rad, yaw_deg] @ 4 => yaw;
-        /// X angular rate.
-        rate_x: rate[rate_x_rad_s, rate_x_deg_s] @ 6 => p;
-        /// Y angular rate.
-        rate_y: rate[rate_y_rad_s, rate_y_deg_s] @ 8 => q;
-        /// Z angular rate.
-        rate_z: rate[rate_z_rad_s, rate_z_deg_s] @ 10 => r;
-        /// timeITOW: GPS time of week.
-        time_itow: itow @ 12 => time;
-        /// BIT status word (see [`Bit`]).
-        bit: status @ 16 => bit;
-    }
-
     /// T0: built-in-test detail, 14 status words (28-byte payload).
     T0(T0Fields, T0, 28, stream) {
         /// BITstatus (same layout as [`Bit`]).
