@@ -20,7 +20,7 @@ pub struct ScheduleLevel {
     pub acceleration: BankGains,
     /// The AVEs' switching gains `deltahat` these gains were tuned with: their mean over the
     /// tuning run (`nav440 tune --schedule` records them); `None`: not recorded. When an
-    /// [`AdaptiveBank`] changes its AVE gains, it sets the AVEs' `deltahat` to these, so that
+    /// [`AdaptiveBank`](crate::AdaptiveBank) changes its AVE gains, it sets the AVEs' `deltahat` to these, so that
     /// the new gains do not start from the `deltahat` the old ones left (see [`AveDeltahat`]).
     pub ave_deltahat: Option<AveDeltahat>,
     /// Where each observer family moves on to the next level's gains (with
@@ -243,7 +243,7 @@ impl GainSchedule {
     /// the samples at that rate do not see, see [`Blend`]): run at another rate, a schedule's
     /// gains can be worse than the fixed `BankConfig::NAV440` preset's
     /// (docs/ADAPTIVE-RESULTS.md, "Low packet rates"). The
-    /// schedule still runs at any rate; [`AdaptiveBank::period_fits`] tells whether it was
+    /// schedule still runs at any rate; [`AdaptiveBank::period_fits`](crate::AdaptiveBank::period_fits) tells whether it was
     /// tuned for its bank's.
     pub fn with_sample_period(self, period_s: f32) -> Result<Self, ConfigError> {
         if !period_s.is_finite() {

@@ -1,4 +1,4 @@
-//! The configuration of a bank: [`BankConfig`] and the gains of its halves, [`BankGains`].
+//! The configuration of a bank: [`BankConfig`](crate::BankConfig) and the gains of its halves, [`BankGains`].
 
 use crate::presets::*;
 use crate::{AveConfig, EdConfig, EdScheme, Hold, IloConfig, KalmanNoise};
@@ -173,7 +173,7 @@ impl BankGains {
 /// noise level), `q = 1e6 deg^2/s^5` (hand rotation: jerk of order 1e4 deg/s^3 over 0.1 s).
 pub const KF_DEFAULT: KalmanNoise = KalmanNoise { q: 1.0e6, r: 0.01 };
 
-/// Configuration of a [`PaperBank`].
+/// Configuration of a [`PaperBank`](crate::PaperBank).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]

@@ -46,7 +46,7 @@ pub enum Feed<T: Real> {
     },
 }
 
-/// What a bank's laws were fed for one sample ([`PaperBank::update_fed`]): a frame shift
+/// What a bank's laws were fed for one sample ([`PaperBank::update_fed`](crate::PaperBank::update_fed)): a frame shift
 /// (deg, applied to every law first) and the feed.
 #[derive(Clone, Copy, Debug)]
 pub struct Fed<T: Real> {
@@ -63,7 +63,7 @@ pub struct Accepted<T: Real> {
     pub shift: Option<T>,
     /// What to do with the laws.
     pub feed: Feed<T>,
-    /// The unwrapped angle, deg: (f32 rounding, exact residual), see [`PaperOutput`].
+    /// The unwrapped angle, deg: (f32 rounding, exact residual), see [`PaperOutput`](crate::PaperOutput).
     pub angle: (f32, f64),
 }
 
@@ -118,7 +118,7 @@ impl<T: Real> BankInput<T> {
         ))
     }
 
-    /// Checks and classifies one sample (`t_us` µs, `angle_deg` deg); see [`PaperBank::update`].
+    /// Checks and classifies one sample (`t_us` µs, `angle_deg` deg); see [`PaperBank::update`](crate::PaperBank::update).
     #[inline(always)]
     pub fn accept(&mut self, t_us: u64, angle_deg: f32) -> Result<Accepted<T>, SampleError> {
         if !angle_deg.is_finite() {

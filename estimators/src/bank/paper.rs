@@ -1,4 +1,4 @@
-//! [`PaperBank`]: the paper's 14 estimators.
+//! [`PaperBank`](crate::PaperBank): the paper's 14 estimators.
 
 use super::{BankConfig, BankGains, Fed};
 use crate::kalman::{KalmanConfig, KalmanOutput, KalmanParams};
@@ -138,7 +138,7 @@ crate::estimator_bank! {
     /// Generic over [`Real`]: `PaperBank<f32>` for FPU targets, `PaperBank<Fx>` for
     /// Cortex-M0/M3 (the `f32` inputs and outputs are only converted; all arithmetic is
     /// integer). No heap; the whole state is inline (see [`crate::ram`] for its size). `S` is
-    /// the ED's square root (default [`NativeSqrt`]; see [`SqrtFn`] for plugging in an FPU
+    /// the ED's square root (default [`NativeSqrt`](crate::NativeSqrt); see [`SqrtFn`] for plugging in an FPU
     /// instruction with identical results).
     bank PaperBank, params PaperParams, state PaperState, output PaperOutput, channel Channel;
     build(cfg, n0, prev);

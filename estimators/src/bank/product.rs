@@ -9,7 +9,7 @@ crate::estimator_bank! {
     /// cheapest good ones of the paper bank: ILO1 (Table 2 gains of `cfg.velocity.ilo[0]`,
     /// through its exact closed-form map; the best ILO without noise) for velocity and the
     /// Kalman tracker (`cfg.acceleration.kf`) for acceleration, each a few dozen operations per
-    /// sample. Same input stage, API and output conventions as [`PaperBank`]; a firmware that
+    /// sample. Same input stage, API and output conventions as [`PaperBank`](crate::PaperBank); a firmware that
     /// wants other estimators writes its own table with [`crate::estimator_bank!`].
     bank ProductBank, params ProductParams, state ProductState, output ProductOutput, channel ProductChannel;
     build(cfg, n0, prev);

@@ -1,7 +1,7 @@
 //! [`crate::estimator_bank!`]: a bank generated from one table of rows.
 
 /// Generates an estimator bank from one table: one row per estimator (a [`crate::Law`] and
-/// how to build it from a [`BankConfig`]), and the channels (CSV columns) the rows report.
+/// how to build it from a [`BankConfig`](crate::BankConfig)), and the channels (CSV columns) the rows report.
 ///
 /// Generated: the bank `$Bank<T, S>` (`new(&BankConfig)`, `update(t_us, angle_deg)`,
 /// `new_epoch`, `set_turns`, `reinit_count`, `restart`, `params`, `state`), its parameters
@@ -9,12 +9,12 @@
 /// `$State<T, S>` (one field per row), the channel enum `$Chan` (`ALL`, `COUNT`, `name`,
 /// `CSV_COLUMNS`) and the output `$Out` (indexed by `$Chan`). Adding an estimator is one row
 /// (and its channel). In a row, `cfg` (the `&BankConfig`) and `n0` (steps per
-/// nominal period, for [`ClosedForm`]), named by `build(cfg, n0)`, are in scope of the
+/// nominal period, for [`ClosedForm`](crate::ClosedForm)), named by `build(cfg, n0)`, are in scope of the
 /// builder, which returns
 /// `Result<Law, ConfigError>`; each `Channel = method` takes the row's output from
 /// `law.method(&state)`. With `build(cfg, n0, prev)` the builder also sees `prev:
 /// Option<&Law>`, the row being replaced by `set_gains` (`None` in `new`), so that it can
-/// keep what did not change ([`ClosedForm::new_reusing`]: a gain change that leaves a row's
+/// keep what did not change ([`ClosedForm::new_reusing`](crate::ClosedForm::new_reusing): a gain change that leaves a row's
 /// gains alone then costs nothing for that row).
 ///
 /// A row may end with a warm-start clause, `warm replay(gains)` or `warm bumpless(gains)`,

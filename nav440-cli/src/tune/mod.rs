@@ -4,7 +4,7 @@
 //! Method: for each family (AVE; ILO1, ILO2, ILO3 from their presets; AD; ED; KF) and each half
 //! of the bank (velocity against the measured rate; series acceleration against the AVE on the
 //! measured rate), [`crate::optim::minimise`] over every gain of the family within its valid
-//! range ([`ranges`]: K1 included) of the MSE over the training time range averaged over
+//! range ([`estimators::Gains::search_box`]: K1 included) of the MSE over the training time range averaged over
 //! `seeds` noise seeds: a global search (coarse log grid, then Nelder-Mead of the `argmin`
 //! crate from several starts and from the paper preset) or, with `--exhaustive`, a log grid.
 //! Candidates the constructors reject (e.g. `h * L >= 1`) or that diverge count as infinite
