@@ -77,6 +77,7 @@ impl BankConfig {
                     q: 865964.3,
                     r: 0.01,
                 },
+                dd: crate::DdConfig { t: 0.05 },
             },
             acceleration: BankGains {
                 ave: AveConfig {
@@ -110,6 +111,7 @@ impl BankConfig {
                     q: 562341.3,
                     r: 0.01,
                 },
+                dd: crate::DdConfig { t: 0.05 },
             },
         },
         RateGains {
@@ -147,6 +149,7 @@ impl BankConfig {
                     q: 1000000.0,
                     r: 0.01,
                 },
+                dd: crate::DdConfig { t: 0.05 },
             },
             acceleration: BankGains {
                 ave: AveConfig {
@@ -180,6 +183,7 @@ impl BankConfig {
                     q: 1000000.0,
                     r: 0.01,
                 },
+                dd: crate::DdConfig { t: 0.05 },
             },
         },
         RateGains {
@@ -217,6 +221,7 @@ impl BankConfig {
                     q: 1000000.0,
                     r: 0.01,
                 },
+                dd: crate::DdConfig { t: 0.05 },
             },
             acceleration: BankGains {
                 ave: AveConfig {
@@ -250,6 +255,7 @@ impl BankConfig {
                     q: 1000000.0,
                     r: 0.01,
                 },
+                dd: crate::DdConfig { t: 0.05 },
             },
         },
     ];

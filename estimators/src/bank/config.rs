@@ -22,6 +22,8 @@ pub struct BankGains {
     /// Kalman tracker noise (the velocity column uses the velocity half's tracker, the
     /// acceleration column the acceleration half's).
     pub kf: KalmanNoise,
+    /// DD.
+    pub dd: crate::DdConfig,
 }
 
 impl BankGains {
@@ -33,6 +35,7 @@ impl BankGains {
         ad_t: AD_VELOCITY_T,
         ed: ED_PAPER,
         kf: KF_DEFAULT,
+        dd: crate::DdConfig { t: 0.01 },
     };
     /// [`Self::PAPER_VELOCITY`] with the product's AVE law ([`AVE_DEFAULT`], leaky deltahat).
     pub const DEFAULT_VELOCITY: Self = Self {
@@ -80,6 +83,7 @@ impl BankGains {
             q: 421696.5,
             r: 0.01,
         },
+        dd: crate::DdConfig { t: 0.05 },
     };
     /// Acceleration gains of [`BankConfig::NAV440`] (both stages of each series).
     pub const NAV440_ACCELERATION: Self = Self {
@@ -114,6 +118,7 @@ impl BankGains {
             q: 316227.78,
             r: 0.01,
         },
+        dd: crate::DdConfig { t: 0.05 },
     };
     /// The paper's acceleration set: AVE-AVE, Table 4 ILO-ILO, AD-AD `T = 0.1`, ED-ED.
     pub const PAPER_ACCELERATION: Self = Self {
@@ -122,13 +127,15 @@ impl BankGains {
         ad_t: AD_ACCELERATION_T,
         ed: ED_PAPER,
         kf: KF_DEFAULT,
+        dd: crate::DdConfig { t: 0.1 },
     };
 }
 
 impl BankGains {
     /// The names [`Self::write_rust`] uses, for a `use estimators::{..}` line.
-    pub const RUST_TYPES: [&'static str; 5] = [
+    pub const RUST_TYPES: [&'static str; 6] = [
         "AveConfig",
+        "DdConfig",
         "DeltaMode",
         "EdConfig",
         "IloConfig",
@@ -156,6 +163,7 @@ impl BankGains {
              {i}    ad_t: {:?},\n\
              {i}    ed: EdConfig {{ lambda: {:?}, alpha: {:?} }},\n\
              {i}    kf: KalmanNoise {{ q: {:?}, r: {:?} }},\n\
+             {i}    dd: DdConfig {{ t: {:?} }},\n\
              {i}}}",
             self.ave.k,
             self.ave.gamma1,
@@ -165,6 +173,7 @@ impl BankGains {
             self.ed.alpha,
             self.kf.q,
             self.kf.r,
+            self.dd.t,
         )
     }
 }
