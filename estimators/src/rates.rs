@@ -77,7 +77,6 @@ impl BankConfig {
                     q: 865964.3,
                     r: 0.01,
                 },
-                dd: crate::DdConfig { t: 0.05 },
             },
             acceleration: BankGains {
                 ave: AveConfig {
@@ -111,7 +110,6 @@ impl BankConfig {
                     q: 562341.3,
                     r: 0.01,
                 },
-                dd: crate::DdConfig { t: 0.05 },
             },
         },
         RateGains {
@@ -149,7 +147,6 @@ impl BankConfig {
                     q: 1000000.0,
                     r: 0.01,
                 },
-                dd: crate::DdConfig { t: 0.05 },
             },
             acceleration: BankGains {
                 ave: AveConfig {
@@ -183,7 +180,6 @@ impl BankConfig {
                     q: 1000000.0,
                     r: 0.01,
                 },
-                dd: crate::DdConfig { t: 0.05 },
             },
         },
         RateGains {
@@ -221,7 +217,6 @@ impl BankConfig {
                     q: 1000000.0,
                     r: 0.01,
                 },
-                dd: crate::DdConfig { t: 0.05 },
             },
             acceleration: BankGains {
                 ave: AveConfig {
@@ -255,7 +250,6 @@ impl BankConfig {
                     q: 1000000.0,
                     r: 0.01,
                 },
-                dd: crate::DdConfig { t: 0.05 },
             },
         },
     ];

@@ -22,8 +22,6 @@ pub struct BankGains {
     /// Kalman tracker noise (the velocity column uses the velocity half's tracker, the
     /// acceleration column the acceleration half's).
     pub kf: KalmanNoise,
-    /// DD.
-    pub dd: crate::DdConfig,
 }
 
 impl BankGains {
@@ -35,7 +33,6 @@ impl BankGains {
         ad_t: AD_VELOCITY_T,
         ed: ED_PAPER,
         kf: KF_DEFAULT,
-        dd: crate::DdConfig { t: 0.01 },
     };
     /// [`Self::PAPER_VELOCITY`] with the product's AVE law ([`AVE_DEFAULT`], leaky deltahat).
     pub const DEFAULT_VELOCITY: Self = Self {
@@ -83,7 +80,6 @@ impl BankGains {
             q: 421696.5,
             r: 0.01,
         },
-        dd: crate::DdConfig { t: 0.05 },
     };
     /// Acceleration gains of [`BankConfig::NAV440`] (both stages of each series).
     pub const NAV440_ACCELERATION: Self = Self {
@@ -118,7 +114,6 @@ impl BankGains {
             q: 316227.78,
             r: 0.01,
         },
-        dd: crate::DdConfig { t: 0.05 },
     };
     /// The paper's acceleration set: AVE-AVE, Table 4 ILO-ILO, AD-AD `T = 0.1`, ED-ED.
     pub const PAPER_ACCELERATION: Self = Self {
@@ -127,15 +122,13 @@ impl BankGains {
         ad_t: AD_ACCELERATION_T,
         ed: ED_PAPER,
         kf: KF_DEFAULT,
-        dd: crate::DdConfig { t: 0.1 },
     };
 }
 
 impl BankGains {
     /// The names [`Self::write_rust`] uses, for a `use estimators::{..}` line.
-    pub const RUST_TYPES: [&'static str; 6] = [
+    pub const RUST_TYPES: [&'static str; 5] = [
         "AveConfig",
-        "DdConfig",
         "DeltaMode",
         "EdConfig",
         "IloConfig",
@@ -163,7 +156,6 @@ impl BankGains {
              {i}    ad_t: {:?},\n\
              {i}    ed: EdConfig {{ lambda: {:?}, alpha: {:?} }},\n\
              {i}    kf: KalmanNoise {{ q: {:?}, r: {:?} }},\n\
-             {i}    dd: DdConfig {{ t: {:?} }},\n\
              {i}}}",
             self.ave.k,
             self.ave.gamma1,
@@ -173,7 +165,6 @@ impl BankGains {
             self.ed.alpha,
             self.kf.q,
             self.kf.r,
-            self.dd.t,
         )
     }
 }

@@ -4,9 +4,8 @@ use super::{BankConfig, BankGains, Fed};
 use crate::kalman::{KalmanConfig, KalmanOutput, KalmanParams};
 use crate::presets::*;
 use crate::{
-    AdFamily, AdParams, AveConfig, AveFamily, AveParams, ClosedForm, ConfigError, DdFamily,
-    DdParams, EdConfig, EdFamily, EdParams, IloConfig, IloFamily, IloParams, KfFamily, Real,
-    Series, SqrtFn, VelAcc,
+    AdFamily, AdParams, AveConfig, AveFamily, AveParams, ClosedForm, ConfigError, EdConfig,
+    EdFamily, EdParams, IloConfig, IloFamily, IloParams, KfFamily, Real, Series, SqrtFn, VelAcc,
 };
 
 // The paper bank is defined by two tables: its families (the columns of the paper's
@@ -21,7 +20,6 @@ crate::family::families! {
     AdFamily,
     EdFamily,
     KfFamily,
-    DdFamily,
 }
 
 /// The names of the paper bank's families ([`FAMILIES`]), in column order: the velocity
@@ -159,8 +157,6 @@ crate::estimator_bank! {
         EdV = "ed_v",
         /// Kalman tracker velocity, deg/s.
         KfV = "kf_v",
-        /// DD velocity.
-        DdV = "dd_v",
         /// AVE-AVE acceleration, deg/s^2.
         AveA = "ave_a",
         /// ILO1-ILO1 (Table 4) acceleration, deg/s^2.
@@ -175,8 +171,6 @@ crate::estimator_bank! {
         EdA = "ed_a",
         /// Kalman tracker acceleration, deg/s^2.
         KfA = "kf_a",
-        /// DD-DD acceleration.
-        DdA = "dd_a",
     }
     rows {
         // `warm replay(..)`: on a warm gain change the row is replayed over the recent
@@ -220,14 +214,6 @@ crate::estimator_bank! {
         /// Kalman tracker with the acceleration noise.
         kf_a: KalmanParams<T> = kalman(cfg, &cfg.acceleration, KalmanOutput::Acceleration) => [KfA = acceleration]
             warm replay(cfg.acceleration.kf);
-        /// DD.
-        dd_v: DdParams<T> = DdParams::new(&cfg.velocity.dd, cfg.h) => [DdV = output]
-            warm replay(cfg.velocity.dd);
-        /// DD-DD.
-        dd_a: Series<DdParams<T>, DdParams<T>> = {
-            let p = DdParams::new(&cfg.acceleration.dd, cfg.h)?;
-            Ok(Series::new(p, p))
-        } => [DdA = output] warm replay(cfg.acceleration.dd);
     }
 }
 
