@@ -337,6 +337,13 @@ fn finish(pipe: &mut pipeline::Pipeline, uart: &Uart0, unit_bytes: u64) -> ! {
     if let Err(e) = pipe.finish(&mut out::row) {
         bank_failed(&e);
     }
+    let dropped = pipe.front().counters().end_dropped_bytes;
+    if dropped > 0 {
+        defmt::println!(
+            "firmware: the input ends inside a frame: end_dropped={=u64} bytes did not complete a frame and are dropped",
+            dropped
+        );
+    }
     #[cfg(feature = "adaptive-gains")]
     adaptive_summary(pipe);
     out::summary(

@@ -195,27 +195,43 @@ impl FrameDecoder {
     /// Feeds the next bytes; `on_row` gets each decoded frame that passes the type filter.
     pub fn push(&mut self, bytes: &[u8], mut on_row: impl FnMut(DecodedRow)) {
         let (frames, only) = (&mut self.frames, self.only.as_deref());
-        self.parser.feed(bytes, |f| {
-            let index = *frames;
-            *frames += 1;
-            if type_matches(&f, only) {
-                on_row(DecodedRow {
-                    index,
-                    name: f.packet_type.name().to_string(),
-                    cols: frame_cols(f),
-                });
-            }
-        });
+        self.parser
+            .feed(bytes, |f| decoded_row(f, frames, only, &mut on_row));
     }
 
-    /// Checks the end of the stream: no valid frame at all is an [`Error::NotNav440`].
-    pub fn finish(&self) -> Result<()> {
+    /// Ends the stream: `on_row` gets the frames the parser still holds (complete frames
+    /// behind a false header at the end of the input). Returns the number of bytes at the end
+    /// that did not complete a frame; no valid frame at all is an [`Error::NotNav440`].
+    pub fn finish(&mut self, mut on_row: impl FnMut(DecodedRow)) -> Result<u64> {
+        let (frames, only) = (&mut self.frames, self.only.as_deref());
+        let dropped = self
+            .parser
+            .finish(|f| decoded_row(f, frames, only, &mut on_row));
         if self.frames == 0 {
             return Err(Error::NotNav440(
                 "no NAV440 frame found (not a NAV440 capture?)".into(),
             ));
         }
-        Ok(())
+        Ok(dropped as u64)
+    }
+}
+
+/// Numbers frame `f` (`frames` counts all types) and passes its row to `on_row` if its type
+/// passes the filter `only`.
+fn decoded_row(
+    f: Frame<'_>,
+    frames: &mut u64,
+    only: Option<&str>,
+    on_row: &mut impl FnMut(DecodedRow),
+) {
+    let index = *frames;
+    *frames += 1;
+    if type_matches(&f, only) {
+        on_row(DecodedRow {
+            index,
+            name: f.packet_type.name().to_string(),
+            cols: frame_cols(f),
+        });
     }
 }
 
@@ -249,24 +265,34 @@ impl Header {
     /// frames (all types).
     pub fn scan(&mut self, parser: &mut Parser, bytes: &[u8], only: Option<&str>) -> u64 {
         let mut frames = 0;
-        parser.feed(bytes, |f| {
-            frames += 1;
-            if !type_matches(&f, only) {
-                return;
-            }
-            let key = (f.packet_type.0, f.payload.len(), Packet::decode(f).is_ok());
-            if self.seen.contains(&key) {
-                return;
-            }
-            self.seen.push(key);
-            let row = DecodedRow {
-                index: 0,
-                name: String::new(),
-                cols: frame_cols(f),
-            };
-            self.add_row(&row);
-        });
+        parser.feed(bytes, |f| self.scan_frame(f, only, &mut frames));
         frames
+    }
+
+    /// [`Header::scan`] of the frames `parser` still holds at the end of the input (see
+    /// [`Parser::finish`]).
+    pub fn scan_end(&mut self, parser: &mut Parser, only: Option<&str>) -> u64 {
+        let mut frames = 0;
+        parser.finish(|f| self.scan_frame(f, only, &mut frames));
+        frames
+    }
+
+    fn scan_frame(&mut self, f: Frame<'_>, only: Option<&str>, frames: &mut u64) {
+        *frames += 1;
+        if !type_matches(&f, only) {
+            return;
+        }
+        let key = (f.packet_type.0, f.payload.len(), Packet::decode(f).is_ok());
+        if self.seen.contains(&key) {
+            return;
+        }
+        self.seen.push(key);
+        let row = DecodedRow {
+            index: 0,
+            name: String::new(),
+            cols: frame_cols(f),
+        };
+        self.add_row(&row);
     }
 
     /// The header line (with its newline).
@@ -303,13 +329,17 @@ impl Header {
 /// case-insensitively, e.g. "A2", "NAK") into CSV text.
 pub fn decode_csv(bytes: &[u8], only: Option<&str>) -> Result<String> {
     let mut header = Header::new();
-    header.scan(&mut Parser::new(), bytes, only);
+    let mut parser = Parser::new();
+    header.scan(&mut parser, bytes, only);
+    header.scan_end(&mut parser, only);
     let mut dec = FrameDecoder::new(only);
     let mut out = header.line();
     dec.push(bytes, |row| {
         header.row_line(&row, &mut out);
     });
-    dec.finish()?;
+    dec.finish(|row| {
+        header.row_line(&row, &mut out);
+    })?;
     Ok(out)
 }
 

@@ -291,6 +291,37 @@ impl<C: Crc16Table> Parser<C> {
         self.buf.get(..self.len).unwrap_or(&[])
     }
 
+    /// Ends a finite input: resolves the bytes still buffered ([`pending_bytes`](Self::pending_bytes)).
+    /// A buffered candidate can no longer complete, so it is rejected the way a failed CRC is
+    /// (its first byte dropped) and the bytes behind it are scanned again; `on_frame` gets
+    /// every complete frame found among them, in stream order. Returns the number of bytes
+    /// that did not complete a frame (0..[`MAX_FRAME`]), now counted as skipped; the buffer is
+    /// empty afterwards and the parser can take a new stream.
+    pub fn finish(&mut self, mut on_frame: impl FnMut(Frame<'_>)) -> usize {
+        let skipped_before = self.stats.skipped_bytes;
+        let mut on_frame = |f: Frame<'_>| {
+            on_frame(f);
+            ControlFlow::Continue(())
+        };
+        while self.len > 0 {
+            let (consumed, _) = scan::<C>(
+                self.buf.get(..self.len).unwrap_or(&[]),
+                &mut self.stats,
+                &mut on_frame,
+            );
+            let consumed = consumed.min(self.len);
+            self.buf.copy_within(consumed..self.len, 0);
+            self.len -= consumed;
+            if self.len > 0 {
+                // An incomplete candidate at the end: drop its first byte, rescan the rest.
+                self.stats.skipped_bytes += 1;
+                self.buf.copy_within(1..self.len, 0);
+                self.len -= 1;
+            }
+        }
+        (self.stats.skipped_bytes - skipped_before) as usize
+    }
+
     /// Feeds any number of bytes (any chunking); calls `on_frame` for every CRC-checked frame,
     /// in stream order. Frames borrow either `bytes` or the parser's buffer.
     #[inline]

@@ -98,6 +98,48 @@ proptest! {
         prop_assert_eq!(s_whole.bytes, stream.len() as u64);
     }
 
+    /// `finish` emits the frames that zero filler after the stream would let the parser find
+    /// (the filler completes, and fails, every pending candidate), and counts the bytes that
+    /// did not complete a frame as skipped.
+    #[test]
+    fn finish_resolves_what_filler_would(
+        parts in proptest::collection::vec((garbage(12), any_type(), any_payload()), 1..8),
+        fake_len in any::<u8>(),
+        tail in garbage(20),
+        cuts in proptest::collection::vec(1usize..300, 1..20),
+    ) {
+        let mut stream = Vec::new();
+        for (i, (g, t, p)) in parts.iter().enumerate() {
+            stream.extend_from_slice(g);
+            if i + 2 == parts.len() {
+                // A false header before the last frame.
+                stream.extend_from_slice(&[0x55, 0x55, b'A', b'2', fake_len]);
+            }
+            stream.extend(encode(*t, p));
+        }
+        stream.extend_from_slice(&tail);
+        let mut flushed = stream.clone();
+        flushed.extend_from_slice(&FLUSH);
+        let (want, s_flushed) = parse_chunked(&flushed, &[flushed.len()]);
+        let mut p = Parser::new();
+        let mut got = Vec::new();
+        let mut rest = &stream[..];
+        let mut cut = cuts.iter().cycle();
+        while !rest.is_empty() {
+            let n = (*cut.next().unwrap()).clamp(1, rest.len());
+            let (a, b) = rest.split_at(n);
+            p.feed(a, |f| got.push((f.packet_type, f.payload.to_vec())));
+            rest = b;
+        }
+        let dropped = p.finish(|f| got.push((f.packet_type, f.payload.to_vec())));
+        prop_assert_eq!(&got, &want);
+        let s = *p.stats();
+        prop_assert_eq!(p.pending(), 0);
+        prop_assert_eq!(s.bytes, s.frame_bytes + s.skipped_bytes);
+        prop_assert_eq!(s.skipped_bytes + FLUSH.len() as u64, s_flushed.skipped_bytes);
+        prop_assert!(dropped < MAX_FRAME);
+    }
+
     /// `feed_until` stopping after every frame, with the untaken input fed again, gives the
     /// frames and counters of `feed`; at every stop, the pending bytes followed by the untaken
     /// input give a fresh parser exactly the frames still to come.

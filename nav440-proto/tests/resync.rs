@@ -83,3 +83,55 @@ fn a_corrupted_frame_followed_by_a_good_one() {
         assert_eq!(st.skipped_bytes, n as u64);
     }
 }
+
+/// Feeds `bytes` in chunks of `chunk`, then ends the input with [`Parser::finish`].
+fn frames_finished(bytes: &[u8], chunk: usize) -> (Vec<(PacketType, Vec<u8>)>, Stats, usize) {
+    let mut p = Parser::new();
+    let mut out = Vec::new();
+    for c in bytes.chunks(chunk) {
+        p.feed(c, |f| out.push((f.packet_type, f.payload.to_vec())));
+    }
+    let dropped = p.finish(|f| out.push((f.packet_type, f.payload.to_vec())));
+    assert_eq!(p.pending(), 0);
+    (out, *p.stats(), dropped)
+}
+
+#[test]
+fn frames_behind_a_false_header_at_the_end_of_input_are_recovered() {
+    // A false header announcing 200 payload bytes, then two pings and nothing more: fed alone,
+    // the pings wait behind the candidate for ever; `finish` rejects the candidate and finds
+    // them.
+    let mut s = vec![0x55, 0x55, b'A', b'2', 200];
+    s.extend_from_slice(&PING);
+    s.extend_from_slice(&PING);
+    for chunk in [1, 2, 3, 5, 7, 64, 1000] {
+        let (fed, _) = frames_fed(&s, chunk);
+        assert!(
+            fed.is_empty(),
+            "chunk {chunk}: held while the input may go on"
+        );
+        let (f, st, dropped) = frames_finished(&s, chunk);
+        assert_eq!(f, vec![(PacketType::PK, vec![]); 2], "chunk {chunk}");
+        // The 5 bytes of the false header did not complete a frame.
+        assert_eq!(dropped, 5, "chunk {chunk}");
+        assert_eq!(st.skipped_bytes, 5);
+        assert_eq!(st.frame_bytes, 14);
+        assert_eq!(st.bytes, st.frame_bytes + st.skipped_bytes);
+    }
+}
+
+#[test]
+fn a_truncated_last_frame_is_reported_as_dropped_bytes() {
+    // One ping, then the first 5 bytes of another (its CRC is missing).
+    let mut s = PING.to_vec();
+    s.extend_from_slice(&PING[..5]);
+    for chunk in [1, 4, 100] {
+        let (f, st, dropped) = frames_finished(&s, chunk);
+        assert_eq!(f.len(), 1, "chunk {chunk}");
+        assert_eq!(dropped, 5, "chunk {chunk}");
+        assert_eq!(st.pending_bytes(), 0);
+        assert_eq!(st.bytes, 12);
+    }
+    // A clean end drops nothing.
+    assert_eq!(frames_finished(&PING, 3).2, 0);
+}

@@ -4,7 +4,7 @@
 use crate::bit::BitCounts;
 use crate::euler::euler_rates_deg;
 use crate::Axis;
-use nav440_proto::{Bit, Packet, Parser, TimeBase, TimeFaults, TimeStamp, Timed};
+use nav440_proto::{Bit, Frame, Packet, Parser, TimeBase, TimeFaults, TimeStamp, Timed};
 
 /// What the pipeline takes from a packet that carries the attitude.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -117,6 +117,37 @@ pub struct FrontCounters {
     pub bit: BitCounts,
     /// Samples released by the time base.
     pub samples: u64,
+    /// Bytes at the end of a finite input that did not complete a frame (after every complete
+    /// frame among them was recovered; see [`Frontend::finish`]).
+    pub end_dropped_bytes: u64,
+}
+
+/// One CRC-valid frame through the decoder, the BIT check and the time base.
+fn on_frame(
+    frame: Frame<'_>,
+    clock: &mut TimeBase<Payload>,
+    counters: &mut FrontCounters,
+    out: &mut impl FnMut(Sample),
+) {
+    counters.frames = counters.frames.saturating_add(1);
+    let packet = match Packet::decode(frame) {
+        Ok(p) => p,
+        Err(_) => {
+            counters.decode_errors = counters.decode_errors.saturating_add(1);
+            return;
+        }
+    };
+    let Some(a) = attitude(&packet) else {
+        return;
+    };
+    counters.attitude_packets = counters.attitude_packets.saturating_add(1);
+    if counters.bit.check(a.bit) {
+        return;
+    }
+    for t in clock.update(a.time, (a.angles_deg, a.rates_deg_s)) {
+        counters.samples = counters.samples.saturating_add(1);
+        out(Sample::from_timed(t));
+    }
 }
 
 /// bytes -> parser -> attitude packets -> BIT check -> time base -> [`Sample`]s, in any
@@ -142,33 +173,23 @@ impl Frontend {
             clock,
             counters,
         } = self;
-        parser.feed(bytes, |frame| {
-            counters.frames = counters.frames.saturating_add(1);
-            let packet = match Packet::decode(frame) {
-                Ok(p) => p,
-                Err(_) => {
-                    counters.decode_errors = counters.decode_errors.saturating_add(1);
-                    return;
-                }
-            };
-            let Some(a) = attitude(&packet) else {
-                return;
-            };
-            counters.attitude_packets = counters.attitude_packets.saturating_add(1);
-            if counters.bit.check(a.bit) {
-                return;
-            }
-            for t in clock.update(a.time, (a.angles_deg, a.rates_deg_s)) {
-                counters.samples = counters.samples.saturating_add(1);
-                out(Sample::from_timed(t));
-            }
-        });
+        parser.feed(bytes, |frame| on_frame(frame, clock, counters, &mut out));
     }
 
-    /// End of input: releases a held sample if the time rules allow it.
+    /// End of input: resolves a frame the parser still holds (complete frames behind a false
+    /// header are recovered, the bytes of an incomplete one are counted in
+    /// [`FrontCounters::end_dropped_bytes`]), then releases a held sample if the time rules
+    /// allow it.
     pub fn finish(&mut self, mut out: impl FnMut(Sample)) {
-        if let Some(t) = self.clock.finish() {
-            self.counters.samples = self.counters.samples.saturating_add(1);
+        let Self {
+            parser,
+            clock,
+            counters,
+        } = self;
+        let dropped = parser.finish(|frame| on_frame(frame, clock, counters, &mut out));
+        counters.end_dropped_bytes = counters.end_dropped_bytes.saturating_add(dropped as u64);
+        if let Some(t) = clock.finish() {
+            counters.samples = counters.samples.saturating_add(1);
             out(Sample::from_timed(t));
         }
     }

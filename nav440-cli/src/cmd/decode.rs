@@ -77,8 +77,9 @@ fn decode(file: &Path, only: Option<&str>) -> Result<()> {
             frames += header.scan(&mut parser, b, only);
             Ok(true)
         })?;
+        frames += header.scan_end(&mut parser, only);
         if frames == 0 {
-            return with_name(&name, dec.finish());
+            return with_name(&name, dec.finish(|_| {}).map(drop));
         }
         out.send(&header.line())?;
         let mut r = replay::open_capture(file)?;
@@ -90,33 +91,34 @@ fn decode(file: &Path, only: Option<&str>) -> Result<()> {
             out.send(&line)?;
             Ok(!out.closed)
         })?;
+        if out.closed {
+            return Ok(());
+        }
+        line.clear();
+        let dropped = with_name(
+            &name,
+            dec.finish(|row| {
+                header.row_line(&row, &mut line);
+            }),
+        )?;
+        out.send(&line)?;
+        warn_end_of_input(dropped);
         return Ok(());
     }
-    let mut held: Vec<DecodedRow> = Vec::new();
-    let mut started = false;
-    let mut outside = 0u64;
-    let mut outside_types: std::collections::BTreeSet<String> = Default::default();
+    let mut pipe = PipeRows {
+        header,
+        held: Vec::new(),
+        started: false,
+        outside: 0,
+        outside_types: Default::default(),
+    };
     let mut read = 0u64;
     r.for_each_chunk(|b| {
         line.clear();
         read += b.len() as u64;
-        dec.push(b, |row| {
-            if started {
-                if !header.row_line(&row, &mut line) {
-                    outside += 1;
-                    outside_types.insert(row.name.clone());
-                }
-            } else {
-                header.add_row(&row);
-                held.push(row);
-            }
-        });
-        if !started && read >= DECODE_LOOKAHEAD && !held.is_empty() {
-            started = true;
-            line.push_str(&header.line());
-            for row in held.drain(..) {
-                header.row_line(&row, &mut line);
-            }
+        dec.push(b, |row| pipe.row(row, &mut line));
+        if !pipe.started && read >= DECODE_LOOKAHEAD && !pipe.held.is_empty() {
+            pipe.start(&mut line);
         }
         out.send(&line)?;
         Ok(!out.closed)
@@ -124,15 +126,17 @@ fn decode(file: &Path, only: Option<&str>) -> Result<()> {
     if out.closed {
         return Ok(());
     }
-    with_name(&name, dec.finish())?;
-    if !started {
-        line.clear();
-        line.push_str(&header.line());
-        for row in held.drain(..) {
-            header.row_line(&row, &mut line);
-        }
-        out.send(&line)?;
+    line.clear();
+    let dropped = with_name(&name, dec.finish(|row| pipe.row(row, &mut line)))?;
+    if !pipe.started {
+        pipe.start(&mut line);
     }
+    out.send(&line)?;
+    let PipeRows {
+        outside,
+        outside_types,
+        ..
+    } = pipe;
     if outside > 0 {
         eprintln!(
             "nav440: warning: {outside} frames after the first {} KiB of {name} have columns outside the CSV header (types {}); those cells are left out (decode the capture from a file to get every column)",
@@ -140,5 +144,48 @@ fn decode(file: &Path, only: Option<&str>) -> Result<()> {
             outside_types.into_iter().collect::<Vec<_>>().join(", ")
         );
     }
+    warn_end_of_input(dropped);
     Ok(())
+}
+
+/// The end-of-input warning on stderr, if the input ends inside a frame.
+fn warn_end_of_input(dropped: u64) {
+    if let Some(w) = replay::end_of_input_warning(dropped) {
+        eprintln!("nav440: warning: {w}");
+    }
+}
+
+/// The rows of a piped input: held (and the header grown) until the look-ahead is read, then
+/// written as they come.
+struct PipeRows {
+    header: Header,
+    held: Vec<DecodedRow>,
+    started: bool,
+    /// Rows written after the header was fixed with a column outside it.
+    outside: u64,
+    outside_types: std::collections::BTreeSet<String>,
+}
+
+impl PipeRows {
+    /// Writes `row` to `line` (or holds it before the header is fixed).
+    fn row(&mut self, row: DecodedRow, line: &mut String) {
+        if self.started {
+            if !self.header.row_line(&row, line) {
+                self.outside += 1;
+                self.outside_types.insert(row.name.clone());
+            }
+        } else {
+            self.header.add_row(&row);
+            self.held.push(row);
+        }
+    }
+
+    /// Fixes the header: writes it and the held rows to `line`.
+    fn start(&mut self, line: &mut String) {
+        self.started = true;
+        line.push_str(&self.header.line());
+        for row in self.held.drain(..) {
+            self.header.row_line(&row, line);
+        }
+    }
 }

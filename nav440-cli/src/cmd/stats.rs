@@ -20,6 +20,7 @@ pub fn run(a: &Args) -> Result<()> {
         counter.push(b);
         Ok(true)
     })?;
+    counter.finish();
     let stats = counter.stats();
     if stats.total_frames() == 0 {
         return Err(Error::NotNav440(format!(

@@ -195,6 +195,7 @@ pub(crate) fn stream_bank<'a, O: HostOutput, W: std::io::Write + ?Sized>(
             .iter()
             .find_map(|a| pipe.estimation().bank(a)?.schedule_misfit())
             .map(|(t, p)| (s_to_us(t), s_to_us(p))),
+        end_dropped_bytes: pipe.front().counters().end_dropped_bytes,
     })
 }
 

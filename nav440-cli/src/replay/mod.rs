@@ -125,6 +125,9 @@ pub struct StreamReport {
     /// With a gain schedule tuned at another sample period than the capture's
     /// (`estimators::GainSchedule::fits_period`): (the schedule's period, the bank's), us.
     pub schedule_misfit_us: Option<(u64, u64)>,
+    /// Bytes at the end of the input that did not complete a frame
+    /// (`FrontCounters::end_dropped_bytes`).
+    pub end_dropped_bytes: u64,
 }
 
 impl StreamReport {
@@ -136,7 +139,16 @@ impl StreamReport {
             .chain(rejection_warning(&self.summary.rejected))
             .chain(fault_warning(&self.faults, self.summary.gaps))
             .chain(self.schedule_misfit_us.map(schedule_warning))
+            .chain(end_of_input_warning(self.end_dropped_bytes))
     }
+}
+
+/// The one-line warning for bytes at the end of the input that did not complete a frame
+/// (`None` for a clean end).
+pub fn end_of_input_warning(bytes: u64) -> Option<String> {
+    (bytes > 0).then(|| {
+        format!("the input ends inside a frame: its last {bytes} bytes did not complete a frame and are dropped")
+    })
 }
 
 /// The CLI's warning for a gain schedule run at another sample period than it was tuned at

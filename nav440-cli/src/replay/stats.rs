@@ -13,9 +13,10 @@ pub struct StreamStats {
     pub crc_errors: u64,
     /// Bytes that were not part of any valid frame (not counting `pending_bytes`).
     pub skipped_bytes: u64,
-    /// Bytes at the end of the stream held by the parser as the start of a frame that the
-    /// stream cut off (a truncated final frame, or a lone `55` that might start one): neither
-    /// in a frame nor skipped. `bytes = frame bytes + skipped_bytes + pending_bytes`.
+    /// Bytes at the end of the stream that did not complete a frame once every complete frame
+    /// among them was found (a truncated final frame, a false header with nothing valid behind
+    /// it, or a lone `55` that might start one): neither in a frame nor skipped.
+    /// `bytes = frame bytes + skipped_bytes + pending_bytes`.
     pub pending_bytes: u64,
     /// Attitude packets whose BIT word flags a failure (masterFail; not estimated).
     pub bit: BitCounts,
@@ -64,6 +65,29 @@ pub struct StatsCounter {
     parser: Parser,
     frames: BTreeMap<String, u64>,
     bit: BitCounts,
+    /// Bytes [`StatsCounter::finish`] found not to complete a frame (reported as pending).
+    end_dropped: u64,
+}
+
+/// Counts frame `f` by type name, and the BIT word of an attitude packet.
+fn count_frame(
+    f: nav440_proto::Frame<'_>,
+    frames: &mut BTreeMap<String, u64>,
+    bit: &mut BitCounts,
+) {
+    if let Some(a) = nav440_proto::Packet::decode(f)
+        .ok()
+        .and_then(|p| nav440_pipeline::attitude(&p))
+    {
+        bit.check(a.bit);
+    }
+    let name = f.packet_type.name();
+    match frames.get_mut(name) {
+        Some(n) => *n += 1,
+        None => {
+            frames.insert(name.to_string(), 1);
+        }
+    }
 }
 
 impl std::fmt::Debug for StatsCounter {
@@ -82,23 +106,17 @@ impl StatsCounter {
 
     /// Feeds the next bytes of the stream.
     pub fn push(&mut self, bytes: &[u8]) {
-        let frames = &mut self.frames;
-        let bit = &mut self.bit;
-        self.parser.feed(bytes, |f| {
-            if let Some(a) = nav440_proto::Packet::decode(f)
-                .ok()
-                .and_then(|p| nav440_pipeline::attitude(&p))
-            {
-                bit.check(a.bit);
-            }
-            let name = f.packet_type.name();
-            match frames.get_mut(name) {
-                Some(n) => *n += 1,
-                None => {
-                    frames.insert(name.to_string(), 1);
-                }
-            }
-        });
+        let (frames, bit) = (&mut self.frames, &mut self.bit);
+        self.parser.feed(bytes, |f| count_frame(f, frames, bit));
+    }
+
+    /// Ends the stream: counts the complete frames the parser still holds (behind a false
+    /// header at the end of the input); the bytes that did not complete a frame stay
+    /// `pending_bytes`.
+    pub fn finish(&mut self) {
+        let (frames, bit) = (&mut self.frames, &mut self.bit);
+        let dropped = self.parser.finish(|f| count_frame(f, frames, bit));
+        self.end_dropped = dropped as u64;
     }
 
     /// The statistics of everything fed so far.
@@ -108,8 +126,8 @@ impl StatsCounter {
             bytes: s.bytes,
             frames: self.frames.clone(),
             crc_errors: s.crc_errors,
-            skipped_bytes: s.skipped_bytes,
-            pending_bytes: s.pending_bytes(),
+            skipped_bytes: s.skipped_bytes - self.end_dropped,
+            pending_bytes: s.pending_bytes() + self.end_dropped,
             bit: self.bit,
         }
     }
@@ -119,5 +137,6 @@ impl StatsCounter {
 pub fn stream_stats(bytes: &[u8]) -> StreamStats {
     let mut c = StatsCounter::new();
     c.push(bytes);
+    c.finish();
     c.stats()
 }

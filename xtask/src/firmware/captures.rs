@@ -122,3 +122,37 @@ pub(super) fn bit_fail_capture(bundled: &Path) -> Result<PathBuf, String> {
     std::fs::write(&path, &out).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     Ok(path)
 }
+
+/// The false frame header that [`false_header_capture`] inserts: `55 55 'A' '2'` announcing
+/// 200 payload bytes.
+pub(super) const FALSE_HEADER: [u8; 5] = [0x55, 0x55, b'A', b'2', 200];
+
+/// Writes `ci-false-header.bin`: `bundled` with [`FALSE_HEADER`] inserted before its last two
+/// frames. At the end of the input the parser resolves the held candidate: both frames are
+/// recovered (the CSV equals the bundled capture's) and the 5 bytes are reported
+/// (`end_dropped=5`).
+pub(super) fn false_header_capture(bundled: &Path) -> Result<PathBuf, String> {
+    use nav440_proto::Parser;
+    let bytes = read_file(bundled)?;
+    let mut ends = Vec::new();
+    let mut parser = Parser::new();
+    let base = bytes.as_ptr() as usize;
+    parser.feed(&bytes, |f| {
+        ends.push(f.payload.as_ptr() as usize - base + f.payload.len() + 2);
+    });
+    let at = match ends.len().checked_sub(3).and_then(|i| ends.get(i)) {
+        Some(&at) if ends.last() == Some(&bytes.len()) => at,
+        _ => {
+            return Err(format!(
+                "{} does not end on a frame boundary after at least 3 frames",
+                bundled.display()
+            ))
+        }
+    };
+    let mut out = bytes.get(..at).unwrap_or_default().to_vec();
+    out.extend_from_slice(&FALSE_HEADER);
+    out.extend_from_slice(bytes.get(at..).unwrap_or_default());
+    let path = work_dir()?.join("ci-false-header.bin");
+    std::fs::write(&path, &out).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    Ok(path)
+}

@@ -5,8 +5,8 @@
 use super::bench::bench;
 use super::build::{adaptive_boards, build, build_small, clippy_firmware, small_boards};
 use super::captures::{
-    bit_fail_capture, bundled_capture, data_captures, rate_change_capture, BIT_FAILED_FRAMES,
-    SPIN_20HZ,
+    bit_fail_capture, bundled_capture, data_captures, false_header_capture, rate_change_capture,
+    BIT_FAILED_FRAMES, FALSE_HEADER, SPIN_20HZ,
 };
 use super::equivalence::{equivalence, equivalence_csv, peak_velocity};
 use super::nav440_cli::{adaptive_host_args, firmware_host_args, nav440_synth, small_host_args};
@@ -196,6 +196,9 @@ pub fn ci_steps() -> Result<(), String> {
     // The bundled capture with 101 packets flagging a BIT failure (masterFail): not estimated,
     // counted in the firmware's summary (`bit_failed`) and dropped alike by `nav440 estimate`.
     let bit_fail = bit_fail_capture(&bundled)?;
+    // The bundled capture with a false frame header before its last two frames: at the end of
+    // the input both are recovered and the header's bytes reported, by host and firmware alike.
+    let false_header = false_header_capture(&bundled)?;
     // Packet rates below the bundled captures' (20-100 Hz), where the shipped preset runs
     // other gains (`BankConfig::NAV440_RATES`: one entry for 10 Hz, one for 2 Hz): the
     // firmware picks the same entry as `nav440 estimate`.
@@ -208,15 +211,30 @@ pub fn ci_steps() -> Result<(), String> {
         )?;
         low_rates.push(path);
     }
-    // Every bundled capture (all packet types and rates, the week wrap) plus those six.
+    // Every bundled capture (all packet types and rates, the week wrap) plus those seven.
     let mut captures = data_captures();
-    captures.extend([corrupted, short, rate_change, bit_fail.clone()]);
+    captures.extend([
+        corrupted,
+        short,
+        rate_change,
+        bit_fail.clone(),
+        false_header.clone(),
+    ]);
     captures.extend(low_rates);
     for (board, elf) in &elfs {
         let host_extra = &firmware_host_args(board.target, BankChoice::Paper)[..];
         for capture in &captures {
             let c = equivalence(board, elf, capture, host_extra)?;
             let want = BIT_FAILED_FRAMES.clone().count() as u64;
+            let dropped = FALSE_HEADER.len() as u64;
+            if *capture == false_header && counter(&c, "end_dropped") != Some(dropped) {
+                return Err(format!(
+                    "the firmware on {} reported end_dropped={:?} for {}, expected {dropped}",
+                    board.name,
+                    counter(&c, "end_dropped"),
+                    capture.display()
+                ));
+            }
             if *capture == bit_fail && counter(&c, "bit_failed") != Some(want) {
                 return Err(format!(
                     "the firmware on {} reported bit_failed={:?} for {}, expected {want}",
