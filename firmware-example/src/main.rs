@@ -34,9 +34,10 @@ use cortex_m_rt::entry;
 use embedded_io::{Read as _, ReadReady as _};
 use firmware_example::uart::{Board, Control, EndMessage, Uart0};
 use firmware_example::{board, host, log, out, pipeline, stack, time};
+use nav440_pipeline::watch::{Event, StreamWatch};
 use nav440_proto::boot::{self, BootError, Options, Report, Target};
 use nav440_proto::driver::{IoDriver, Timing};
-use nav440_proto::{Baud, PacketType, Parser};
+use nav440_proto::Baud;
 
 /// The configuration the firmware gives the unit: A2 at 100 Hz at 57600 Bd.
 pub const TARGET: Target = Target::DEFAULT;
@@ -191,23 +192,6 @@ fn configure(uart: Uart0, delay: &mut time::Delay) -> (Uart0, Report, Pending) {
     }
 }
 
-/// Frames after the configuration that are not [`TARGET`]'s packet type.
-struct ResetWatch {
-    parser: Parser,
-    foreign: Option<PacketType>,
-}
-
-impl ResetWatch {
-    fn feed(&mut self, bytes: &[u8]) {
-        let foreign = &mut self.foreign;
-        self.parser.feed(bytes, |frame| {
-            if frame.packet_type != TARGET.packet && foreign.is_none() {
-                *foreign = Some(frame.packet_type);
-            }
-        });
-    }
-}
-
 /// Estimation from the first byte after the read-back until the end message's count (then
 /// exits). Returns the UART only when the unit reset mid-stream on the real-board profile
 /// (under QEMU's mps2 boards a reset ends the run with [`Status::UnitReset`]).
@@ -238,31 +222,54 @@ fn stream(
         HEADER_PRINTED.store(true, Ordering::Relaxed);
         print_header();
     }
-    let mut watch = ResetWatch {
-        parser: Parser::new(),
-        foreign: None,
-    };
-    // Feeds the pipeline unless the bytes show a unit reset; `false` on a reset.
-    let mut process = |pipe: &mut pipeline::Pipeline, bytes: &[u8]| -> bool {
-        watch.feed(bytes);
-        if let Some(t) = watch.foreign {
-            defmt::println!(
-                "firmware: unit reset mid-stream: {=str} frame received after configuring {=str} ({=u64} bytes estimated)",
-                t.name(),
-                TARGET.packet.name(),
-                uart_bytes(pipe)
-            );
+    let mut watch = StreamWatch::new(TARGET.packet, TARGET.rate, time::now_ms());
+    // Feeds the pipeline unless the bytes show a unit reset (`Flow::Reset`).
+    let process = |watch: &mut StreamWatch, pipe: &mut pipeline::Pipeline, bytes: &[u8]| -> Flow {
+        let mut flow = Flow::Go;
+        watch.feed(bytes, time::now_ms(), |e| match e {
+            Event::ForeignType { got, configured } => {
+                defmt::println!(
+                    "firmware: unit reset mid-stream: {=str} frame received after configuring {=str} ({=u64} bytes estimated)",
+                    got.name(),
+                    configured.name(),
+                    uart_bytes(pipe)
+                );
+                flow = Flow::Reset;
+            }
+            Event::Periodic { stream_s } => flow = flow.max(Flow::Counters(stream_s)),
+            other => report_fault(&other),
+        });
+        if flow == Flow::Reset {
             if !board::RETRY_FOREVER {
                 fail(Status::UnitReset)
             }
-            return false;
+            return flow;
         }
         if let Err(e) = pipe.feed(bytes, &mut out::row) {
             bank_failed(&e);
         }
-        true
+        flow
     };
-    if !process(pipe, pending) {
+    // Ends `stream` (re-configuration) or prints the periodic counters.
+    let after = |pipe: &pipeline::Pipeline, uart: &Uart0, flow: Flow| -> bool {
+        match flow {
+            Flow::Go => true,
+            Flow::Reset => false,
+            Flow::Counters(stream_s) => {
+                defmt::println!("firmware: counters after {=u32} s of stream:", stream_s);
+                out::summary(
+                    pipe,
+                    uart.overruns(),
+                    uart.stalls(),
+                    uart.bytes_read(),
+                    stack::peak(),
+                );
+                true
+            }
+        }
+    };
+    let flow = process(&mut watch, pipe, pending);
+    if !after(pipe, &uart, flow) {
         return uart;
     }
     let mut end = EndMessage::default();
@@ -285,7 +292,8 @@ fn stream(
                     fail(Status::Internal)
                 }
             };
-            if !process(pipe, &buf[..n]) {
+            let flow = process(&mut watch, pipe, &buf[..n]);
+            if !after(pipe, &uart, flow) {
                 return uart;
             }
         } else if let Some(message) = total.is_none().then(|| end.poll(control)).flatten() {
@@ -310,12 +318,71 @@ fn stream(
                 read
             );
             total = Some(n);
+        } else if let Some(silence) = total
+            .is_none()
+            .then(|| watch.poll(time::now_ms()))
+            .flatten()
+        {
+            // The unit went silent with the link open: configure it again (a boot that fails
+            // ends the run under QEMU and is retried with a pause on a real board).
+            report_fault(&silence);
+            return uart;
         } else {
             // Woken by the next received byte or the 1 ms tick.
             cortex_m::asm::wfi();
         }
     }
     finish(pipe, &uart, total.unwrap_or(0))
+}
+
+/// What `stream` does after a chunk of bytes.
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+enum Flow {
+    /// Go on reading.
+    Go,
+    /// Print the counters (another 10 s of stream), then go on.
+    Counters(u32),
+    /// The unit reset: configure it again.
+    Reset,
+}
+
+/// The one-line diagnostic of a stream fault, at the moment it is seen.
+fn report_fault(e: &Event) {
+    match *e {
+        Event::Silence {
+            silent_ms,
+            limit_ms,
+        } => defmt::println!(
+            "firmware: stream silent: no complete frame for {=u32} ms (limit {=u32} ms); configuring the unit again",
+            silent_ms,
+            limit_ms
+        ),
+        Event::Frozen { frames, stamp_ms } => defmt::println!(
+            "firmware: time stamps frozen: {=u32} frames in a row stamped {=u32} ms",
+            frames,
+            stamp_ms
+        ),
+        Event::Thawed { frames } => defmt::println!(
+            "firmware: time stamps advance again after {=u32} frames with one stamp",
+            frames
+        ),
+        Event::RateMismatch {
+            measured_hz,
+            configured_hz,
+        } => defmt::println!(
+            "firmware: packet rate differs from the configuration: {=f32} Hz measured, {=f32} Hz configured",
+            measured_hz,
+            configured_hz
+        ),
+        Event::ForeignType { got, configured } => defmt::println!(
+            "firmware: {=str} frame received, {=str} configured",
+            got.name(),
+            configured.name()
+        ),
+        Event::Periodic { stream_s } => {
+            defmt::println!("firmware: {=u32} s of stream", stream_s)
+        }
+    }
 }
 
 /// Sends the header message (the estimated axes, `pipeline::AXES`): the host writes the CSV

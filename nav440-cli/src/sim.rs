@@ -388,6 +388,8 @@ enum Phase {
     Commanded,
     Configured,
     Resetting(Instant),
+    /// `--fault silence`: deaf and mute until then (`None`: for ever).
+    Silent(Option<Instant>),
 }
 
 /// What happened in a session.
@@ -420,6 +422,10 @@ struct Session<'a> {
     record: Vec<u8>,
     summary: Summary,
     dead: bool,
+    /// `--fault freeze`: the stamp repeated.
+    frozen_itow: Option<u32>,
+    /// `--fault double-rate`: the first stamp sent.
+    first_itow: Option<u32>,
 }
 
 impl Session<'_> {
@@ -466,8 +472,8 @@ impl Session<'_> {
                 frames.len(),
                 self.phase
             ));
-            if matches!(self.phase, Phase::Resetting(_)) {
-                continue; // rebooting: deaf
+            if matches!(self.phase, Phase::Resetting(_) | Phase::Silent(_)) {
+                continue; // rebooting or silent: deaf
             }
             self.send(conn, &frames)?;
             if let Some(t) = get_packet {
@@ -515,6 +521,30 @@ impl Session<'_> {
         self.log(format_args!("power-up behaviour ({why})"));
     }
 
+    /// The time stamp sent for the capture's `itow` (ms) under `--fault freeze` (the 50
+    /// packets after the first `--reset-after` repeat the stamp of the last one before) and
+    /// `--fault double-rate` (stamps half a period apart from the first one); else `itow`.
+    fn faulty_itow(&mut self, itow: u32, period_ms: u32) -> u32 {
+        let k = self.summary.packets;
+        match self.args.fault {
+            Some(Fault::Freeze) => {
+                if k + 1 == self.args.reset_after {
+                    self.frozen_itow = Some(itow);
+                }
+                match self.frozen_itow {
+                    Some(f) if k >= self.args.reset_after && k < self.args.reset_after + 50 => f,
+                    _ => itow,
+                }
+            }
+            Some(Fault::DoubleRate) => {
+                let first = *self.first_itow.get_or_insert(itow);
+                let step = u64::from(period_ms / 2);
+                first.wrapping_add(u32::try_from(k.saturating_mul(step)).unwrap_or(u32::MAX))
+            }
+            _ => itow,
+        }
+    }
+
     /// Sends what is due now; `Ok(false)` when the capture is done.
     fn stream(&mut self, conn: &mut dyn Conn) -> std::io::Result<bool> {
         let now = Instant::now();
@@ -522,6 +552,13 @@ impl Session<'_> {
             Phase::Resetting(until) => {
                 if now >= until {
                     self.power_up("after the mid-stream reset");
+                }
+            }
+            Phase::Silent(until) => {
+                if until.is_some_and(|u| now >= u) {
+                    self.phase = Phase::Configured;
+                    self.next_due = now;
+                    self.log(format_args!("silence over: streaming on"));
                 }
             }
             Phase::Commanded => {}
@@ -558,16 +595,31 @@ impl Session<'_> {
                     }
                     self.next_sample += 1;
                 }
-                let Some(s) = self.samples.get(self.next_sample).copied() else {
+                let Some(mut s) = self.samples.get(self.next_sample).copied() else {
                     return Ok(false);
                 };
                 self.next_sample += 1;
                 self.last_sent_itow = Some(s.itow);
+                s.itow = self.faulty_itow(s.itow, period_ms);
                 self.counter = self.counter.wrapping_add(1);
-                self.next_due += period;
+                self.next_due += match self.args.fault {
+                    Some(Fault::DoubleRate) => period / 2,
+                    _ => period,
+                };
                 if let Some(f) = encode_sample(t, &s, self.counter) {
                     self.send(conn, &f)?;
                     self.summary.packets += 1;
+                }
+                if self.args.fault == Some(Fault::Silence)
+                    && self.summary.packets == self.args.reset_after
+                {
+                    let until = (self.args.silence > 0.0)
+                        .then(|| now + Duration::from_secs_f64(self.args.silence));
+                    self.phase = Phase::Silent(until);
+                    self.log(format_args!(
+                        "silent after {} capture packets",
+                        self.summary.packets
+                    ));
                 }
                 if self.args.fault == Some(Fault::Reset)
                     && self.summary.packets == self.args.reset_after
@@ -589,8 +641,8 @@ impl Session<'_> {
     fn wait_time(&self) -> Duration {
         let now = Instant::now();
         let due = match self.phase {
-            Phase::Resetting(until) => until,
-            Phase::Commanded => return Duration::from_millis(200),
+            Phase::Resetting(until) | Phase::Silent(Some(until)) => until,
+            Phase::Commanded | Phase::Silent(None) => return Duration::from_millis(200),
             Phase::PowerUp if !self.started || self.dead || self.period().is_none() => {
                 return Duration::from_millis(200)
             }
@@ -610,6 +662,7 @@ pub fn run(args: &SimArgs) -> Result<Summary> {
     let packet = parse_output_type(&args.power_up_packet)?;
     let rate = parse_rate(args.power_up_rate)?;
     crate::cmd::seconds("--timeout", args.timeout, true)?;
+    crate::cmd::seconds("--silence", args.silence, true)?;
     let eeprom = UnitFields {
         rate_divider: rate.divider(),
         baud: baud.code(),
@@ -645,6 +698,8 @@ pub fn run(args: &SimArgs) -> Result<Summary> {
         record: Vec::new(),
         summary: Summary::default(),
         dead: args.fault == Some(Fault::Dead),
+        frozen_itow: None,
+        first_itow: None,
     };
 
     // Our handle on the pty's slave end: keeps the pty alive until the host has opened it,

@@ -53,6 +53,7 @@ pub mod euler;
 pub mod period;
 mod pipeline;
 mod sample;
+pub mod watch;
 
 pub use axis::{Axes, Axis};
 pub use pipeline::{

@@ -20,6 +20,15 @@ pub enum Fault {
     /// Resets mid-stream (after `--reset-after` packets): 100 ms of silence, then power-up
     /// behaviour again (EEPROM configuration, power-up stream).
     Reset,
+    /// Goes silent mid-stream (after `--reset-after` packets) with the link open: sends
+    /// nothing and ignores every request for `--silence` seconds (0: until the host leaves),
+    /// then streams on with its configuration kept.
+    Silence,
+    /// Freezes its time stamps mid-stream: the 50 packets after the first `--reset-after`
+    /// repeat the last time stamp (the samples go on).
+    Freeze,
+    /// Streams at twice the configured rate: time stamps half a period apart.
+    DoubleRate,
 }
 
 /// Arguments of `nav440 sim`.
@@ -59,9 +68,12 @@ pub struct Args {
     /// Misbehave on purpose.
     #[arg(long, value_enum)]
     pub fault: Option<Fault>,
-    /// With --fault reset: capture packets streamed before the reset.
+    /// With --fault reset, silence or freeze: capture packets streamed before the fault.
     #[arg(long, default_value_t = 50, value_name = "N")]
     pub reset_after: u64,
+    /// With --fault silence: how long the unit stays silent, s (0: until the host leaves).
+    #[arg(long, default_value_t = 0.0, value_name = "S")]
+    pub silence: f64,
     /// Give up (exit 1) when the session has not ended after this many seconds (0: never).
     #[arg(long, default_value_t = 0.0, value_name = "S")]
     pub timeout: f64,

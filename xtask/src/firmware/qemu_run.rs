@@ -31,7 +31,7 @@ pub(super) fn run_capture(
 }
 
 /// The `key=value` counters of the firmware's `firmware: ...` stderr lines (the boot line
-/// and the final counters line).
+/// line, the periodic counter lines and the final counters line).
 pub(super) fn counters(stderr: &str) -> Vec<(String, u64)> {
     stderr
         .lines()
@@ -48,7 +48,8 @@ pub(super) fn counters(stderr: &str) -> Vec<(String, u64)> {
 }
 
 pub(super) fn counter(c: &[(String, u64)], key: &str) -> Option<u64> {
-    c.iter().find(|(k, _)| k == key).map(|(_, v)| *v)
+    // The last: the end-of-run summary comes after the periodic counter lines.
+    c.iter().rev().find(|(k, _)| k == key).map(|(_, v)| *v)
 }
 
 /// Time limit of a unit run (the boot's worst case is a few seconds of time-outs; then as a

@@ -26,8 +26,9 @@ enum Expect {
     /// The real-board profile retries forever: within the time limit at least two attempts,
     /// each with `diagnostic` (the run is then stopped).
     Retries { diagnostic: &'static str },
-    /// The real-board profile re-configures a unit that reset, then finishes with exit 0.
-    Reconfigures,
+    /// The firmware reports `report` once, configures the unit again and finishes with
+    /// exit 0 (a unit that reset, on the real-board profile; a unit silent for a while).
+    Reconfigures { report: &'static str },
 }
 
 /// One firmware run against `nav440 sim` (CI).
@@ -98,16 +99,16 @@ fn unit_case(
                 )),
             }
         }
-        (Expect::Reconfigures, Ok(r)) => {
+        (Expect::Reconfigures { report }, Ok(r)) => {
             let configured = r.stderr.matches("firmware: unit configured").count();
-            let resets = r.stderr.matches("firmware: unit reset mid-stream").count();
-            if r.code() == Some(0) && configured == 2 && resets == 1 {
+            let reports = r.stderr.matches(report).count();
+            if r.code() == Some(0) && configured == 2 && reports == 1 {
                 Ok(format!(
-                    "{what}: unit reset detected, configured again, run completed (exit 0)"
+                    "{what}: `{report}` reported, configured again, run completed (exit 0)"
                 ))
             } else {
                 Err(format!(
-                    "{what}: expected one reset, two configurations and exit 0, got status {:?}:\n{}",
+                    "{what}: expected one `{report}`, two configurations and exit 0, got status {:?}:\n{}",
                     r.code(),
                     r.stderr
                 ))
@@ -182,7 +183,7 @@ fn unit_ci(captures: &[PathBuf], short: &Path, only: Option<Board>) -> Result<()
                 stderr_has: "found at 57600 Bd, unit was at 57600 Bd",
             },
         });
-        let faults: [(&'static str, &'static [&'static str], i32, &'static str); 4] = [
+        let faults: [(&'static str, &'static [&'static str], i32, &'static str); 5] = [
             (
                 "no-answer",
                 &["--fault", "no-answer"],
@@ -207,10 +208,23 @@ fn unit_ci(captures: &[PathBuf], short: &Path, only: Option<Board>) -> Result<()
                 5,
                 "unit reset mid-stream",
             ),
+            // Silent for ever with the link open: reported within 0.5 s, then the boot
+            // finds no unit (the run ends by itself, not by the harness's time limit).
+            (
+                "silence",
+                &["--fast", "--fault", "silence", "--reset-after", "20"],
+                2,
+                "stream silent: no complete frame for",
+            ),
         ];
         for (name, sim_args, status, diagnostic) in faults {
             let expect = match (stm32, name) {
-                (true, "reset") => Expect::Reconfigures,
+                (true, "reset") => Expect::Reconfigures {
+                    report: "firmware: unit reset mid-stream",
+                },
+                (true, "silence") => Expect::Retries {
+                    diagnostic: "no answer",
+                },
                 (true, _) => Expect::Retries { diagnostic },
                 (false, _) => Expect::Fails { status, diagnostic },
             };
@@ -221,6 +235,46 @@ fn unit_ci(captures: &[PathBuf], short: &Path, only: Option<Board>) -> Result<()
                 expect,
             });
         }
+        // Stream faults the firmware reports while it happens and survives: time stamps
+        // frozen for 50 packets, a stream at twice the configured rate (CSV identical to
+        // `nav440 estimate` on the record), a silence of 1 s (configured again, exit 0).
+        for (name, sim_args, stderr_has) in [
+            (
+                "freeze",
+                &["--fast", "--fault", "freeze", "--reset-after", "20"][..],
+                "firmware: time stamps frozen: 25 frames in a row",
+            ),
+            (
+                "double-rate",
+                &["--fast", "--fault", "double-rate"][..],
+                "firmware: packet rate differs from the configuration: 200.0 Hz measured, 100.0 Hz configured",
+            ),
+        ] {
+            cases.push(UnitCase {
+                name,
+                capture: short.clone(),
+                sim_args,
+                expect: Expect::Csv { stderr_has },
+            });
+        }
+        // At the commanded rate in wall time (with --fast the unit would stream the rest of
+        // the capture and close while the firmware still pings it): silent 1 s, reported at
+        // 0.5 s; the boot's first ping baud (3 x 500 ms) then finds the unit again.
+        cases.push(UnitCase {
+            name: "silence-1s",
+            capture: short.clone(),
+            sim_args: &[
+                "--fault",
+                "silence",
+                "--reset-after",
+                "20",
+                "--silence",
+                "1",
+            ],
+            expect: Expect::Reconfigures {
+                report: "firmware: stream silent: no complete frame for",
+            },
+        });
         for case in &cases {
             let t = std::time::Instant::now();
             let ok = unit_case(board, &elf, &nav440, case, host_extra)?;

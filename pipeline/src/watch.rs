@@ -1,0 +1,230 @@
+//! Stream watchdog: what a device notices about a configured unit's stream while it runs.
+//!
+//! [`StreamWatch`] parses the bytes the pipeline gets (its own parser, so it sees every frame
+//! whatever the pipeline does with it) and reports, each at the moment it is seen:
+//!
+//! * **silence**: no complete frame for [`StreamWatch::silence_limit_ms`] =
+//!   max([`MIN_SILENCE_MS`], [`PERIODS`] nominal periods) ([`StreamWatch::poll`]);
+//! * **frozen time stamps**: [`PERIODS`] frames in a row of the configured type repeating
+//!   one time stamp, and the first new stamp after such a run;
+//! * **another packet rate**: the period of the first [`WARMUP_SAMPLES`](crate::period::WARMUP_SAMPLES) time stamps differs
+//!   from the configured one by more than [`RATE_TOLERANCE`] (once);
+//! * **another packet type**: a frame of a type other than the configured one (once; after a
+//!   configuration this means the unit reset or was reconfigured);
+//! * **periodic counters**: every [`COUNTER_INTERVAL_S`] s of stream time (counted in frames
+//!   of the configured type at the nominal rate).
+//!
+//! Time comes from the caller as a free-running millisecond counter (`now_ms`, wrapping).
+
+use crate::period::PeriodEstimator;
+use nav440_proto::{Packet, PacketRate, PacketType, Parser, TimeStamp};
+
+/// The shortest silence reported, ms.
+pub const MIN_SILENCE_MS: u32 = 500;
+/// Nominal periods of silence, or of frames with a frozen time stamp, before a report.
+pub const PERIODS: u32 = 25;
+/// Relative difference between the measured and the configured packet period above which
+/// the rate is reported as different (0.2: 20 %).
+pub const RATE_TOLERANCE: f32 = 0.2;
+/// Stream time between two periodic counter reports, s.
+pub const COUNTER_INTERVAL_S: u32 = 10;
+
+/// Something [`StreamWatch`] noticed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Event {
+    /// No complete frame for `silent_ms` ms (>= `limit_ms`).
+    Silence {
+        /// Time since the last complete frame (or since the watch started), ms.
+        silent_ms: u32,
+        /// The silence limit, ms.
+        limit_ms: u32,
+    },
+    /// [`PERIODS`] frames in a row carry the same time stamp `stamp_ms` (reported once per
+    /// run, when the run reaches that length).
+    Frozen {
+        /// Frames in the run so far.
+        frames: u32,
+        /// The repeated time stamp, ms (timeITOW or GPSITOW).
+        stamp_ms: u32,
+    },
+    /// The time stamps advance again after a reported run of `frames` frozen frames.
+    Thawed {
+        /// Frames of the run (the first of the repeated stamp included).
+        frames: u32,
+    },
+    /// The measured packet rate differs from the configured one.
+    RateMismatch {
+        /// Rate from the first [`WARMUP_SAMPLES`](crate::period::WARMUP_SAMPLES) time stamps, Hz.
+        measured_hz: f32,
+        /// The configured rate, Hz.
+        configured_hz: f32,
+    },
+    /// A frame of another type than the configured one.
+    ForeignType {
+        /// The type received.
+        got: PacketType,
+        /// The configured type.
+        configured: PacketType,
+    },
+    /// Another [`COUNTER_INTERVAL_S`] s of stream time: time to report the counters.
+    Periodic {
+        /// Stream time so far (frames of the configured type x nominal period), s.
+        stream_s: u32,
+    },
+}
+
+/// The stream watchdog of one configured stream (see the [module](self) doc).
+#[derive(Debug)]
+pub struct StreamWatch {
+    parser: Parser,
+    packet: PacketType,
+    rate: PacketRate,
+    last_frame_ms: u32,
+    silence_reported: bool,
+    last_stamp: Option<TimeStamp>,
+    frozen_run: u32,
+    period: PeriodEstimator,
+    rate_checked: bool,
+    foreign_reported: bool,
+    frames: u64,
+}
+
+impl StreamWatch {
+    /// A watch of a stream of `packet` at `rate`, started at `now_ms`.
+    pub fn new(packet: PacketType, rate: PacketRate, now_ms: u32) -> Self {
+        Self {
+            parser: Parser::new(),
+            packet,
+            rate,
+            last_frame_ms: now_ms,
+            silence_reported: false,
+            last_stamp: None,
+            frozen_run: 0,
+            period: PeriodEstimator::new(),
+            rate_checked: false,
+            foreign_reported: false,
+            frames: 0,
+        }
+    }
+
+    /// The nominal packet period, ms (100 Hz / divider: 10 ms x divider; 10 ms for a quiet
+    /// rate, which a configured stream does not use).
+    pub fn period_ms(&self) -> u32 {
+        10 * u32::from(self.rate.divider().max(1))
+    }
+
+    /// The silence limit: max([`MIN_SILENCE_MS`], [`PERIODS`] nominal periods), ms (500 ms
+    /// at 100 Hz, 12.5 s at 2 Hz).
+    pub fn silence_limit_ms(&self) -> u32 {
+        (PERIODS * self.period_ms()).max(MIN_SILENCE_MS)
+    }
+
+    /// Feeds received bytes at time `now_ms`; `on_event` gets what they show, in order.
+    pub fn feed(&mut self, bytes: &[u8], now_ms: u32, mut on_event: impl FnMut(Event)) {
+        let Self {
+            parser,
+            packet,
+            rate,
+            last_frame_ms,
+            silence_reported,
+            last_stamp,
+            frozen_run,
+            period,
+            rate_checked,
+            foreign_reported,
+            frames,
+        } = self;
+        let period_ms = 10 * u32::from(rate.divider().max(1));
+        parser.feed(bytes, |frame| {
+            *last_frame_ms = now_ms;
+            *silence_reported = false;
+            if frame.packet_type != *packet {
+                if !*foreign_reported {
+                    *foreign_reported = true;
+                    on_event(Event::ForeignType {
+                        got: frame.packet_type,
+                        configured: *packet,
+                    });
+                }
+                return;
+            }
+            *frames = frames.saturating_add(1);
+            let every = u64::from(COUNTER_INTERVAL_S * 1000 / period_ms).max(1);
+            if *frames % every == 0 {
+                let stream_s = (*frames / every).saturating_mul(u64::from(COUNTER_INTERVAL_S));
+                on_event(Event::Periodic {
+                    stream_s: u32::try_from(stream_s).unwrap_or(u32::MAX),
+                });
+            }
+            let stamp = Packet::decode(frame)
+                .ok()
+                .and_then(|p| crate::attitude(&p))
+                .map(|a| a.time);
+            let Some(stamp) = stamp.filter(|s| *s != TimeStamp::None) else {
+                return;
+            };
+            if *last_stamp == Some(stamp) {
+                *frozen_run = frozen_run.saturating_add(1);
+                if *frozen_run == PERIODS {
+                    on_event(Event::Frozen {
+                        frames: *frozen_run,
+                        stamp_ms: stamp_ms(stamp),
+                    });
+                }
+                return;
+            }
+            if *frozen_run >= PERIODS {
+                on_event(Event::Thawed {
+                    frames: *frozen_run,
+                });
+            }
+            *frozen_run = 1;
+            *last_stamp = Some(stamp);
+            if !*rate_checked {
+                period.push(u64::from(stamp_ms(stamp)) * 1000);
+                if period.is_complete() {
+                    *rate_checked = true;
+                    if let Some(p) = period.period_s().filter(|p| *p > 0.0) {
+                        let configured_s = period_ms as f32 * 1e-3;
+                        if ((p - configured_s) / configured_s).abs() > RATE_TOLERANCE {
+                            on_event(Event::RateMismatch {
+                                measured_hz: 1.0 / p,
+                                configured_hz: rate.hz(),
+                            });
+                        }
+                    }
+                }
+            }
+        });
+    }
+
+    /// Checks for silence at time `now_ms`: [`Event::Silence`] once per silence (a frame ends
+    /// it), when no frame has been complete for [`StreamWatch::silence_limit_ms`].
+    pub fn poll(&mut self, now_ms: u32) -> Option<Event> {
+        let silent_ms = now_ms.wrapping_sub(self.last_frame_ms);
+        let limit_ms = self.silence_limit_ms();
+        if self.silence_reported || silent_ms < limit_ms {
+            return None;
+        }
+        self.silence_reported = true;
+        Some(Event::Silence {
+            silent_ms,
+            limit_ms,
+        })
+    }
+
+    /// Frames of the configured type seen so far.
+    pub fn frames(&self) -> u64 {
+        self.frames
+    }
+}
+
+/// A time stamp's value, ms.
+fn stamp_ms(s: TimeStamp) -> u32 {
+    match s {
+        TimeStamp::Itow(ms) => ms,
+        TimeStamp::GpsItow(ms) => u32::from(ms),
+        TimeStamp::None => 0,
+    }
+}
