@@ -120,10 +120,20 @@ fn main() -> ! {
     let mut delay = time::start(core.SYST, core_clock_hz);
     let mut uart = uart;
     let mut control = control;
+    // Frames streamed so far, across re-configurations (the periodic counters' stream time).
+    let mut frames = 0u64;
     loop {
         let (configured, report, pending) = configure(uart, &mut delay);
-        // Returns only after a unit reset on the real-board profile: configure it again.
-        uart = stream(configured, &mut control, &mut pipe, &report, &pending);
+        // Returns after a silence, or a unit reset on the real-board profile: configure the
+        // unit again.
+        uart = stream(
+            configured,
+            &mut control,
+            &mut pipe,
+            &report,
+            &pending,
+            &mut frames,
+        );
     }
 }
 
@@ -202,6 +212,7 @@ fn stream(
     pipe: &mut pipeline::Pipeline,
     report: &Report,
     pending: &[u8],
+    frames: &mut u64,
 ) -> Uart0 {
     defmt::println!(
         "firmware: unit configured: {=str} at {} Hz at {} Bd (found at {} Bd, unit was at {} Bd streaming {=str} with rate divider {}, {} ping retries); boot_frames={} boot_skipped={} boot_ms={}",
@@ -222,7 +233,8 @@ fn stream(
         HEADER_PRINTED.store(true, Ordering::Relaxed);
         print_header();
     }
-    let mut watch = StreamWatch::new(TARGET.packet, TARGET.rate, time::now_ms());
+    let mut watch =
+        StreamWatch::new(TARGET.packet, TARGET.rate, time::now_ms()).continuing(*frames);
     // Feeds the pipeline unless the bytes show a unit reset (`Flow::Reset`).
     let process = |watch: &mut StreamWatch, pipe: &mut pipeline::Pipeline, bytes: &[u8]| -> Flow {
         let mut flow = Flow::Go;
@@ -239,12 +251,11 @@ fn stream(
             Event::Periodic { stream_s } => flow = flow.max(Flow::Counters(stream_s)),
             other => report_fault(&other),
         });
-        if flow == Flow::Reset {
-            if !board::RETRY_FOREVER {
-                fail(Status::UnitReset)
-            }
-            return flow;
+        if flow == Flow::Reset && !board::RETRY_FOREVER {
+            fail(Status::UnitReset)
         }
+        // All of it, the frames before the reset included (the rest is the new power-up
+        // stream: frames the pipeline does not estimate, or a cut frame it skips).
         if let Err(e) = pipe.feed(bytes, &mut out::row) {
             bank_failed(&e);
         }
@@ -269,6 +280,7 @@ fn stream(
         }
     };
     let flow = process(&mut watch, pipe, pending);
+    *frames = watch.frames();
     if !after(pipe, &uart, flow) {
         return uart;
     }
@@ -293,6 +305,7 @@ fn stream(
                 }
             };
             let flow = process(&mut watch, pipe, &buf[..n]);
+            *frames = watch.frames();
             if !after(pipe, &uart, flow) {
                 return uart;
             }

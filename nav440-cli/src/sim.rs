@@ -388,8 +388,10 @@ enum Phase {
     Commanded,
     Configured,
     Resetting(Instant),
-    /// `--fault silence`: deaf and mute until then (`None`: for ever).
+    /// `--fault silence`: deaf and mute until then (`None`: for ever), then stalled.
     Silent(Option<Instant>),
+    /// After a silence: answers requests but streams nothing until it is configured again.
+    Stalled,
 }
 
 /// What happened in a session.
@@ -407,6 +409,92 @@ pub struct Summary {
     pub completed: bool,
     /// Resets done.
     pub resets: u64,
+    /// Faults injected (`--fault reset|silence|freeze` and every `--inject`).
+    pub injected: u64,
+}
+
+/// A fault `nav440 sim` injects mid-stream (`--inject KIND@N`, or `--fault` at
+/// `--reset-after`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Inject {
+    /// Silent and deaf for `--silence` s, then stalled until configured again.
+    Silence,
+    /// A reset: 100 ms deaf, then power-up behaviour.
+    Reset,
+    /// [`FREEZE_PACKETS`] packets repeating the last time stamp.
+    Freeze,
+    /// [`GARBAGE_BYTES`] bytes of garbage with false frame headers (recorded).
+    Garbage,
+}
+
+impl Inject {
+    /// The name used in `--inject`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Inject::Silence => "silence",
+            Inject::Reset => "reset",
+            Inject::Freeze => "freeze",
+            Inject::Garbage => "garbage",
+        }
+    }
+}
+
+/// Packets of a frozen-stamp run.
+pub const FREEZE_PACKETS: u64 = 50;
+/// Bytes of an injected garbage burst.
+pub const GARBAGE_BYTES: usize = 256;
+/// The most `--inject` faults one session takes.
+pub const MAX_INJECTIONS: usize = 10_000;
+
+/// The garbage burst injected after packet `k`: pseudo-random bytes (seeded by `k`) with a
+/// false frame header (`55 55 'A' '2'` and a length) every 32 bytes; no valid frame.
+pub fn garbage_burst(k: u64) -> Vec<u8> {
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(k ^ 0x4741_5242);
+    let mut out: Vec<u8> = (0..GARBAGE_BYTES).map(|_| rng.random()).collect();
+    for (i, chunk) in out.chunks_mut(32).enumerate() {
+        if let Some(h) = chunk.get_mut(..5) {
+            h.copy_from_slice(&[0x55, 0x55, b'A', b'2', (i * 37) as u8]);
+        }
+    }
+    out
+}
+
+/// The session's injections, sorted: `--fault reset|silence|freeze` at `--reset-after`, then
+/// every `--inject KIND@N` (N: capture packets streamed before it).
+fn injections(args: &SimArgs) -> Result<Vec<(u64, Inject)>> {
+    let mut out = Vec::new();
+    match args.fault {
+        Some(Fault::Reset) => out.push((args.reset_after, Inject::Reset)),
+        Some(Fault::Silence) => out.push((args.reset_after, Inject::Silence)),
+        Some(Fault::Freeze) => out.push((args.reset_after, Inject::Freeze)),
+        _ => {}
+    }
+    if args.inject.len() > MAX_INJECTIONS {
+        return Err(Error::Usage(format!(
+            "--inject given {} times; at most {MAX_INJECTIONS}",
+            args.inject.len()
+        )));
+    }
+    for spec in &args.inject {
+        let bad = || {
+            Error::Usage(format!(
+                "--inject {spec}: expected KIND@N with KIND silence, reset, freeze or garbage and N a packet count"
+            ))
+        };
+        let (kind, n) = spec.split_once('@').ok_or_else(bad)?;
+        let what = match kind {
+            "silence" => Inject::Silence,
+            "reset" => Inject::Reset,
+            "freeze" => Inject::Freeze,
+            "garbage" => Inject::Garbage,
+            _ => return Err(bad()),
+        };
+        let n: u64 = n.parse().map_err(|_| bad())?;
+        out.push((n, what));
+    }
+    out.sort_by_key(|&(n, _)| n);
+    Ok(out)
 }
 
 struct Session<'a> {
@@ -422,10 +510,14 @@ struct Session<'a> {
     record: Vec<u8>,
     summary: Summary,
     dead: bool,
-    /// `--fault freeze`: the stamp repeated.
-    frozen_itow: Option<u32>,
+    /// A freeze in progress: (the packet count where it ends, the stamp repeated).
+    freeze: Option<(u64, u32)>,
+    /// The last capture stamp sent unchanged.
+    last_itow: Option<u32>,
     /// `--fault double-rate`: the first stamp sent.
     first_itow: Option<u32>,
+    /// Faults still to inject: (after this many capture packets, what), sorted.
+    injections: Vec<(u64, Inject)>,
 }
 
 impl Session<'_> {
@@ -484,7 +576,7 @@ impl Session<'_> {
             }
             if reset {
                 self.power_up("software reset (SR)");
-            } else if output_changed && self.phase == Phase::PowerUp {
+            } else if output_changed && matches!(self.phase, Phase::PowerUp | Phase::Stalled) {
                 self.phase = Phase::Commanded;
                 self.log(format_args!("output commanded: silent until the read-back"));
             } else if request == PacketType::GF
@@ -521,28 +613,51 @@ impl Session<'_> {
         self.log(format_args!("power-up behaviour ({why})"));
     }
 
-    /// The time stamp sent for the capture's `itow` (ms) under `--fault freeze` (the 50
-    /// packets after the first `--reset-after` repeat the stamp of the last one before) and
-    /// `--fault double-rate` (stamps half a period apart from the first one); else `itow`.
+    /// The time stamp sent for the capture's `itow` (ms): during a freeze (the 50 packets
+    /// after a `freeze` injection) the stamp of the last packet before it; with `--fault
+    /// double-rate` stamps half a period apart from the first one; else `itow`.
     fn faulty_itow(&mut self, itow: u32, period_ms: u32) -> u32 {
         let k = self.summary.packets;
-        match self.args.fault {
-            Some(Fault::Freeze) => {
-                if k + 1 == self.args.reset_after {
-                    self.frozen_itow = Some(itow);
-                }
-                match self.frozen_itow {
-                    Some(f) if k >= self.args.reset_after && k < self.args.reset_after + 50 => f,
-                    _ => itow,
-                }
+        if let Some((until, frozen)) = self.freeze {
+            if k < until {
+                return frozen;
             }
-            Some(Fault::DoubleRate) => {
-                let first = *self.first_itow.get_or_insert(itow);
-                let step = u64::from(period_ms / 2);
-                first.wrapping_add(u32::try_from(k.saturating_mul(step)).unwrap_or(u32::MAX))
-            }
-            _ => itow,
         }
+        if self.args.fault == Some(Fault::DoubleRate) {
+            let first = *self.first_itow.get_or_insert(itow);
+            let step = u64::from(period_ms / 2);
+            return first.wrapping_add(u32::try_from(k.saturating_mul(step)).unwrap_or(u32::MAX));
+        }
+        self.last_itow = Some(itow);
+        itow
+    }
+
+    /// Injects `what` after the packet just sent.
+    fn inject(&mut self, conn: &mut dyn Conn, what: Inject, now: Instant) -> std::io::Result<()> {
+        let k = self.summary.packets;
+        self.summary.injected += 1;
+        self.log(format_args!("{} after {k} capture packets", what.name()));
+        match what {
+            Inject::Silence => {
+                let until = (self.args.silence > 0.0)
+                    .then(|| now + Duration::from_secs_f64(self.args.silence));
+                self.phase = Phase::Silent(until);
+            }
+            Inject::Reset => {
+                self.summary.resets += 1;
+                self.phase = Phase::Resetting(now + Duration::from_millis(100));
+            }
+            Inject::Freeze => {
+                if let Some(last) = self.last_itow {
+                    self.freeze = Some((k + FREEZE_PACKETS, last));
+                }
+            }
+            Inject::Garbage => {
+                let burst = garbage_burst(k);
+                self.send(conn, &burst)?;
+            }
+        }
+        Ok(())
     }
 
     /// Sends what is due now; `Ok(false)` when the capture is done.
@@ -556,12 +671,13 @@ impl Session<'_> {
             }
             Phase::Silent(until) => {
                 if until.is_some_and(|u| now >= u) {
-                    self.phase = Phase::Configured;
-                    self.next_due = now;
-                    self.log(format_args!("silence over: streaming on"));
+                    self.phase = Phase::Stalled;
+                    self.log(format_args!(
+                        "silence over: answering, streaming again once configured"
+                    ));
                 }
             }
-            Phase::Commanded => {}
+            Phase::Commanded | Phase::Stalled => {}
             Phase::PowerUp => {
                 if !self.started || self.dead || now < self.next_due {
                     return Ok(true);
@@ -610,27 +726,12 @@ impl Session<'_> {
                     self.send(conn, &f)?;
                     self.summary.packets += 1;
                 }
-                if self.args.fault == Some(Fault::Silence)
-                    && self.summary.packets == self.args.reset_after
-                {
-                    let until = (self.args.silence > 0.0)
-                        .then(|| now + Duration::from_secs_f64(self.args.silence));
-                    self.phase = Phase::Silent(until);
-                    self.log(format_args!(
-                        "silent after {} capture packets",
-                        self.summary.packets
-                    ));
-                }
-                if self.args.fault == Some(Fault::Reset)
-                    && self.summary.packets == self.args.reset_after
-                    && self.summary.resets == 0
-                {
-                    self.summary.resets += 1;
-                    self.phase = Phase::Resetting(now + Duration::from_millis(100));
-                    self.log(format_args!(
-                        "reset after {} capture packets",
-                        self.summary.packets
-                    ));
+                while let Some(&(at, what)) = self.injections.first() {
+                    if at > self.summary.packets {
+                        break;
+                    }
+                    self.injections.remove(0);
+                    self.inject(conn, what, now)?;
                 }
             }
         }
@@ -642,7 +743,9 @@ impl Session<'_> {
         let now = Instant::now();
         let due = match self.phase {
             Phase::Resetting(until) | Phase::Silent(Some(until)) => until,
-            Phase::Commanded | Phase::Silent(None) => return Duration::from_millis(200),
+            Phase::Commanded | Phase::Stalled | Phase::Silent(None) => {
+                return Duration::from_millis(200)
+            }
             Phase::PowerUp if !self.started || self.dead || self.period().is_none() => {
                 return Duration::from_millis(200)
             }
@@ -698,8 +801,10 @@ pub fn run(args: &SimArgs) -> Result<Summary> {
         record: Vec::new(),
         summary: Summary::default(),
         dead: args.fault == Some(Fault::Dead),
-        frozen_itow: None,
+        freeze: None,
+        last_itow: None,
         first_itow: None,
+        injections: injections(args)?,
     };
 
     // Our handle on the pty's slave end: keeps the pty alive until the host has opened it,
@@ -752,6 +857,7 @@ pub fn run(args: &SimArgs) -> Result<Summary> {
             "recorded_bytes": s.recorded_bytes,
             "completed": s.completed,
             "resets": s.resets,
+            "injected": s.injected,
             "error": result.as_ref().err().map(ToString::to_string),
         });
         std::fs::write(p, format!("{json}\n"))

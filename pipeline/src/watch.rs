@@ -214,9 +214,16 @@ impl StreamWatch {
         })
     }
 
-    /// Frames of the configured type seen so far.
+    /// Frames of the configured type seen so far (with [`StreamWatch::continuing`]'s start).
     pub fn frames(&self) -> u64 {
         self.frames
+    }
+
+    /// This watch with its stream time continuing from `frames` frames of an earlier watch of
+    /// the same stream (e.g. before a re-configuration): the periodic reports keep counting.
+    pub fn continuing(mut self, frames: u64) -> Self {
+        self.frames = frames;
+        self
     }
 }
 

@@ -59,6 +59,18 @@ enum Cmd {
         #[arg(long, value_parser = qemu::unit_board)]
         board: Option<Board>,
     },
+    /// The product firmware (STM32F405 image on QEMU netduinoplus2) against `nav440 sim`
+    /// streaming at full speed for H hours of stream time, with a silence, a reset, a
+    /// frozen-stamp run and a garbage burst injected in every hour: CSV equal to the host's,
+    /// every fault reported, stack high-water mark unchanged.
+    Soak {
+        /// Hours of stream time at 100 Hz (10 minutes to 48 hours).
+        #[arg(long, default_value_t = 1.0, value_name = "H")]
+        hours: f64,
+        /// Seed of the motion and of the injection points.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
     /// The firmware in QEMU against `nav440 sim` streaming the bundled capture: boot,
     /// configuration, stream, estimates and a summary.
     Demo {
@@ -182,6 +194,7 @@ fn main() -> ExitCode {
         }),
         Cmd::CiFirmware => firmware::ci_steps(),
         Cmd::CiUnit { board } => firmware::ci_unit(board),
+        Cmd::Soak { hours, seed } => firmware::soak(hours, seed),
         Cmd::Demo { board, capture } => firmware::demo(board, capture),
         Cmd::Qemu {
             file,

@@ -22,7 +22,7 @@ pub enum Fault {
     Reset,
     /// Goes silent mid-stream (after `--reset-after` packets) with the link open: sends
     /// nothing and ignores every request for `--silence` seconds (0: until the host leaves),
-    /// then streams on with its configuration kept.
+    /// then answers requests again but streams only once configured again.
     Silence,
     /// Freezes its time stamps mid-stream: the 50 packets after the first `--reset-after`
     /// repeat the last time stamp (the samples go on).
@@ -71,14 +71,20 @@ pub struct Args {
     /// With --fault reset, silence or freeze: capture packets streamed before the fault.
     #[arg(long, default_value_t = 50, value_name = "N")]
     pub reset_after: u64,
-    /// With --fault silence: how long the unit stays silent, s (0: until the host leaves).
+    /// With --fault silence or --inject silence@N: how long the unit stays silent, s (0: until
+    /// the host leaves); it then answers requests but streams only once configured again.
     #[arg(long, default_value_t = 0.0, value_name = "S")]
     pub silence: f64,
+    /// Inject a fault after N capture packets (repeatable): silence@N, reset@N, freeze@N
+    /// (50 packets repeat the last time stamp) or garbage@N (256 bytes with false frame
+    /// headers, recorded).
+    #[arg(long, value_name = "KIND@N")]
+    pub inject: Vec<String>,
     /// Give up (exit 1) when the session has not ended after this many seconds (0: never).
     #[arg(long, default_value_t = 0.0, value_name = "S")]
     pub timeout: f64,
     /// Write the session's summary (JSON: requests, power_up_packets, packets, recorded_bytes,
-    /// completed, resets) here at the end.
+    /// completed, resets, injected) here at the end.
     #[arg(long, value_name = "FILE")]
     pub summary: Option<PathBuf>,
     /// Log every request and state change on stderr.

@@ -23,6 +23,7 @@ mod flash;
 mod nav440_cli;
 mod qemu_run;
 mod size;
+mod soak;
 mod unit_cases;
 
 pub use bench::bench;
@@ -31,6 +32,7 @@ pub use demo::demo;
 pub use flash::flash;
 pub use qemu_run::{qemu, unit};
 pub use size::{size, size_components};
+pub use soak::soak;
 pub use unit_cases::{ci_unit, embassy};
 
 use std::path::{Path, PathBuf};

@@ -1,0 +1,221 @@
+//! `cargo xtask soak [--hours H]`: the product firmware of the real-board profile (STM32F405
+//! image on QEMU `netduinoplus2`, which reconfigures a unit after a reset or a silence instead
+//! of exiting) against `nav440 sim` streaming as fast as it is read, for H hours of stream
+//! time at 100 Hz, with a silence (1 s), a reset, a frozen-stamp run (50 packets) and a burst
+//! of garbage (256 bytes) injected at random packets in every hour. It checks that
+//! * the firmware's CSV equals `nav440 estimate` on the bytes the unit streamed while
+//!   configured (the simulator's record: what the firmware's pipeline got);
+//! * every injected fault is reported (`stream silent`, `unit reset mid-stream`, `time stamps
+//!   frozen`, and the garbage in the `skipped` counter);
+//! * the periodic counters come every 10 s of stream;
+//! * the stack high-water mark equals that of a short run of the same image with one fault
+//!   of each kind.
+
+use super::build::build;
+use super::equivalence::compare_csv;
+use super::nav440_cli::{firmware_host_args, host_estimate, nav440_bin, nav440_synth, Sim};
+use super::qemu_run::{counter, counters, run_unit};
+use super::{work_dir, BankChoice, FW_BIN};
+use crate::qemu;
+use std::time::{Duration, Instant};
+
+/// Packets per hour of stream at 100 Hz.
+const PACKETS_PER_HOUR: u64 = 360_000;
+
+/// The faults injected once per hour, and the firmware's line that reports each.
+const FAULTS: [(&str, &str); 3] = [
+    ("silence", "firmware: stream silent: no complete frame for"),
+    ("reset", "firmware: unit reset mid-stream"),
+    ("freeze", "firmware: time stamps frozen"),
+];
+
+/// A small deterministic generator (splitmix64) for the injection points.
+fn splitmix(state: &mut u64) -> u64 {
+    *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    let mut z = *state;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// The `--inject` arguments: in every hour, each fault once at a random packet, at least
+/// 2,000 packets (20 s) from any other, so each is reported on its own.
+fn injections(hours: f64, seed: u64) -> Vec<String> {
+    let total = (hours * PACKETS_PER_HOUR as f64) as u64;
+    let hour = PACKETS_PER_HOUR.min(total);
+    let mut state = seed;
+    let mut points: Vec<u64> = Vec::new();
+    let mut out = Vec::new();
+    let mut start = 0;
+    while start + 2_000 < total {
+        let span = hour.min(total - start);
+        for kind in FAULTS.iter().map(|f| f.0).chain(["garbage"]) {
+            let at = loop {
+                let at = start + 1_000 + splitmix(&mut state) % span.saturating_sub(2_000).max(1);
+                if points.iter().all(|p| p.abs_diff(at) >= 2_000) {
+                    break at;
+                }
+            };
+            points.push(at);
+            out.push(format!("{kind}@{at}"));
+        }
+        start += hour;
+    }
+    out
+}
+
+/// `cargo xtask soak --hours H --seed S`.
+pub fn soak(hours: f64, seed: u64) -> Result<(), String> {
+    if !(hours.is_finite() && hours > 0.0 && hours <= 48.0) {
+        return Err(format!("--hours must be > 0 and <= 48, got {hours}"));
+    }
+    // Four faults an hour need room: at least 10 minutes of stream.
+    if hours * 60.0 < 10.0 {
+        return Err(format!(
+            "--hours must be at least 0.17 (10 minutes), got {hours}"
+        ));
+    }
+    qemu::ensure_qemu()?;
+    let start = Instant::now();
+    let board = qemu::STM32_BOARD;
+    let mut features = board.features.to_vec();
+    features.extend(BankChoice::Product.features());
+    let elf = build(board.target, &features, FW_BIN)?;
+    let host_extra = firmware_host_args(board.target, BankChoice::Product);
+    let nav440 = nav440_bin()?;
+    let dir = work_dir()?;
+    // The stack baseline: a short run of the same image with one fault of each kind.
+    let short = super::root().join("host-tests/data/fig5_a2_100hz.bin");
+    let base = {
+        let sim = Sim::start(
+            &nav440,
+            &short,
+            None,
+            &[
+                "--fast",
+                "--silence",
+                "1",
+                "--timeout",
+                "300",
+                "--inject",
+                "silence@500",
+                "--inject",
+                "reset@1200",
+                "--inject",
+                "freeze@2000",
+                "--inject",
+                "garbage@2800",
+            ],
+        )?;
+        let r = run_unit(&board, &elf, &sim.addr, false, Duration::from_secs(300))?;
+        let _ = sim.wait(Duration::from_secs(30));
+        write_log(&dir.join("soak-baseline.log"), &r.stderr)?;
+        counter(&counters(&r.stderr), "stack_peak")
+            .ok_or_else(|| format!("no stack_peak in the baseline run:\n{}", r.stderr))?
+    };
+    // The stream: `nav440 synth` at 100 Hz for H hours (generated, not stored).
+    let capture = dir.join("soak.bin");
+    let secs = format!("{}", hours * 3600.0);
+    let seed_s = seed.to_string();
+    nav440_synth(
+        &capture,
+        &["--duration", &secs, "--seed", &seed_s, "--profile", "sin5"],
+    )?;
+    let inject = injections(hours, seed);
+    let record = dir.join("soak-record.bin");
+    let mut args: Vec<&str> = vec!["--fast", "--silence", "1", "--timeout", "0"];
+    for i in &inject {
+        args.extend(["--inject", i]);
+    }
+    let sim = Sim::start(&nav440, &capture, Some(&record), &args)?;
+    let limit = Duration::from_secs_f64(hours * 3600.0);
+    let run_start = Instant::now();
+    let r = run_unit(&board, &elf, &sim.addr, false, limit)?;
+    let run_s = run_start.elapsed().as_secs_f64();
+    let _ = sim.wait(Duration::from_secs(60));
+    let log = dir.join("soak-firmware.log");
+    write_log(&log, &r.stderr)?;
+    let c = counters(&r.stderr);
+    let mut problems = Vec::new();
+    if r.code() != Some(0) {
+        problems.push(format!("firmware exit status {:?}", r.code()));
+    }
+    // Every fault reported, once per injection.
+    let per_hour = inject.len() / 4;
+    for (kind, line) in FAULTS {
+        let want = inject.iter().filter(|i| i.starts_with(kind)).count();
+        let got = r.stderr.matches(line).count();
+        if got < want {
+            problems.push(format!("{want} {kind} injected, {got} `{line}` reported"));
+        }
+    }
+    let garbage = inject.iter().filter(|i| i.starts_with("garbage")).count() as u64;
+    let skipped = counter(&c, "skipped").unwrap_or(0);
+    if skipped < garbage * 256 {
+        problems.push(format!(
+            "{garbage} garbage bursts of 256 bytes injected, skipped={skipped}"
+        ));
+    }
+    let periodic = r.stderr.matches("firmware: counters after").count() as u64;
+    let want_periodic = (hours * 360.0) as u64 * 9 / 10;
+    if periodic < want_periodic {
+        problems.push(format!(
+            "{periodic} periodic counter reports, expected about {}",
+            (hours * 360.0) as u64
+        ));
+    }
+    let peak = counter(&c, "stack_peak");
+    if peak != Some(base) {
+        problems.push(format!(
+            "stack high-water mark {peak:?} B, {base} B on the short run with the same faults"
+        ));
+    }
+    let host = host_estimate(&record, &host_extra)?;
+    let lines = match compare_csv(&r.stdout, &host) {
+        Ok(n) => n,
+        Err(d) => {
+            problems.push(format!(
+                "firmware CSV differs from `nav440 estimate` on the record: {d}"
+            ));
+            0
+        }
+    };
+    if !problems.is_empty() {
+        return Err(format!(
+            "soak of {hours} h failed:\n  {}\n(the firmware's stderr: {})",
+            problems.join("\n  "),
+            log.display()
+        ));
+    }
+    let bytes = std::fs::metadata(&record).map_or(0, |m| m.len());
+    eprintln!(
+        "xtask: SOAK OK: {hours} h of stream ({} faults injected: {per_hour} each of silence, reset, freeze, garbage per hour) through the product firmware on {} in {run_s:.0} s ({:.0} s in all): CSV identical to `nav440 estimate` on the {bytes} bytes streamed while configured ({lines} lines), every fault reported, {periodic} periodic counter reports, stack high-water {base} B as on a short run with the same faults",
+        inject.len(),
+        board.machine,
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// Writes a run's stderr to `path`.
+fn write_log(path: &std::path::Path, text: &str) -> Result<(), String> {
+    std::fs::write(path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn injections_are_spread_and_apart() {
+        let i = injections(2.0, 1);
+        assert_eq!(i.len(), 8);
+        let mut at: Vec<u64> = i
+            .iter()
+            .map(|s| s.split_once('@').unwrap().1.parse().unwrap())
+            .collect();
+        at.sort();
+        assert!(at.windows(2).all(|w| w[1] - w[0] >= 2_000));
+        assert!(*at.last().unwrap() < 2 * PACKETS_PER_HOUR);
+    }
+}
