@@ -601,7 +601,7 @@ fn contract_cases_of_issue_8() {
     ] {
         let (code, err) = fails(&cmd);
         assert_eq!(code, 2, "{cmd:?}: {err}");
-        assert!(err.contains("--window must be a positive number"), "{err}");
+        assert!(err.contains("--window must be a number of seconds > 0"), "{err}");
     }
     // A gains file that is not text is a bad gains file: exit 2 as the README says (was 3).
     let bad = d.join("bad.toml");
