@@ -584,8 +584,13 @@ fn check_finite(path: &Path, text: &str) -> Result<()> {
     match toml::from_str::<toml::Table>(text) {
         Ok(t) => match walk(&t, "", None) {
             Some(m) => Err(Error::Usage(format!(
-                "{}: bad gains file: {m}: every number must be finite",
-                path.display()
+                "{}: bad {} file: {m}: every number must be finite",
+                path.display(),
+                if t.contains_key("level") {
+                    "schedule"
+                } else {
+                    "gains"
+                }
             ))),
             None => Ok(()),
         },

@@ -591,8 +591,12 @@ fn a_non_finite_gain_names_the_file_table_and_key() {
     broken.replace_range(pos..pos + "k2 = 168.8898".len(), "k2 = -inf");
     std::fs::write(&sched, broken).unwrap();
     for (file, table, key) in [
-        (&fixed, "[velocity.ilo1]", "key l is NaN"),
-        (&sched, "[level.velocity.ilo1] of level 1", "key k2 is -inf"),
+        (&fixed, "bad gains file: [velocity.ilo1]", "key l is NaN"),
+        (
+            &sched,
+            "bad schedule file: [level.velocity.ilo1] of level 1",
+            "key k2 is -inf",
+        ),
     ] {
         for cmd in ["estimate", "plot"] {
             let out_svg = d.join("x.svg");
