@@ -146,12 +146,7 @@ const VALID: &[(&str, &str, &str, &str)] = &[
     ("plot", "--seed", "0", "any seed"),
     ("plot", "--seed", "MAX", "any seed"),
     ("plot", "--from", "0", "the start of the capture"),
-    (
-        "plot",
-        "--to",
-        "0",
-        "the first instant (no sample: a usage error after the run)",
-    ),
+    ("plot", "--to", "0", "the first instant"),
     ("synth", "--duration", "0", "one packet"),
     ("synth", "--seed", "0", "any seed"),
     ("synth", "--seed", "MAX", "any seed"),
