@@ -261,7 +261,7 @@ pub fn parse_output_type(name: &str) -> Result<PacketType> {
     )))
 }
 
-/// The rate for `hz` (0 = quiet).
+/// The rate for `hz` (0 = quiet); the usage error names the flag `flag`.
 pub fn parse_rate(flag: &str, hz: u32) -> Result<PacketRate> {
     let r = match hz {
         0 => Some(PacketRate::Quiet),
@@ -275,7 +275,7 @@ pub fn parse_rate(flag: &str, hz: u32) -> Result<PacketRate> {
     })
 }
 
-/// The baud for `bps`.
+/// The baud for `bps`; the usage error names the flag `flag`.
 pub fn parse_baud(flag: &str, bps: u32) -> Result<Baud> {
     Baud::from_bits_per_second(bps).ok_or_else(|| {
         Error::Usage(format!(
