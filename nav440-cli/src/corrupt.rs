@@ -72,8 +72,9 @@ pub fn apply(frames: &[Vec<u8>], c: &Corruption) -> (Vec<u8>, CorruptionReport) 
         .map(|(i, f)| (i, f.clone()))
         .collect();
     if !kept.is_empty() {
+        let mut lens = Lengths::new(kept.iter().map(|(_, f)| f.len()));
         for _ in 0..c.bit_flips {
-            let (k, pos) = random_byte(&mut rng, &kept);
+            let (k, pos) = lens.random_byte(&mut rng);
             let bit = rng.random_range(0..8u32);
             if let Some(b) = kept[k].1.get_mut(pos) {
                 *b ^= 1 << bit;
@@ -81,9 +82,10 @@ pub fn apply(frames: &[Vec<u8>], c: &Corruption) -> (Vec<u8>, CorruptionReport) 
             }
         }
         for _ in 0..c.dropped_bytes {
-            let (k, pos) = random_byte(&mut rng, &kept);
+            let (k, pos) = lens.random_byte(&mut rng);
             if pos < kept[k].1.len() {
                 kept[k].1.remove(pos);
+                lens.remove_one(k);
                 report.damaged.insert(kept[k].0);
             }
         }
@@ -110,17 +112,72 @@ pub fn apply(frames: &[Vec<u8>], c: &Corruption) -> (Vec<u8>, CorruptionReport) 
     (out, report)
 }
 
-/// A uniformly random byte position over all bytes of `kept`: (frame index in kept, offset).
-fn random_byte(rng: &mut Xoshiro256PlusPlus, kept: &[(usize, Vec<u8>)]) -> (usize, usize) {
-    let total: usize = kept.iter().map(|(_, f)| f.len()).sum();
-    let mut pos = rng.random_range(0..total.max(1));
-    for (k, (_, f)) in kept.iter().enumerate() {
-        if pos < f.len() {
-            return (k, pos);
+/// The lengths of the kept frames as a Fenwick tree (binary indexed tree): a random byte
+/// position and a deleted byte cost O(log frames) each, so the corruption's time grows with
+/// its counts times the logarithm of the capture, not with their product.
+struct Lengths {
+    /// `tree[i]` (1-based) sums the lengths of frames `i - (i & -i) .. i`.
+    tree: Vec<usize>,
+    total: usize,
+}
+
+impl Lengths {
+    fn new(lens: impl Iterator<Item = usize>) -> Self {
+        let mut tree = vec![0];
+        tree.extend(lens);
+        let n = tree.len() - 1;
+        for i in 1..=n {
+            let parent = i + (i & i.wrapping_neg());
+            if parent <= n {
+                tree[parent] += tree[i];
+            }
         }
-        pos -= f.len();
+        let mut t = Lengths { tree, total: 0 };
+        t.total = t.prefix(n);
+        t
     }
-    (0, 0)
+
+    /// The sum of the lengths of frames `0..i`.
+    fn prefix(&self, mut i: usize) -> usize {
+        let mut s = 0;
+        while i > 0 {
+            s += self.tree[i];
+            i &= i - 1;
+        }
+        s
+    }
+
+    /// Frame `k` lost one byte.
+    fn remove_one(&mut self, k: usize) {
+        let mut i = k + 1;
+        while i < self.tree.len() {
+            self.tree[i] -= 1;
+            i += i & i.wrapping_neg();
+        }
+        self.total -= 1;
+    }
+
+    /// A uniformly random byte position over all bytes: (frame index, offset in the frame),
+    /// the first frame whose bytes reach past the drawn position; (0, 0) when no byte is left.
+    fn random_byte(&self, rng: &mut Xoshiro256PlusPlus) -> (usize, usize) {
+        let mut pos = rng.random_range(0..self.total.max(1));
+        if self.total == 0 {
+            return (0, 0);
+        }
+        // Descend: the largest `idx` with prefix(idx) <= pos; frame `idx` (0-based) holds pos.
+        let n = self.tree.len() - 1;
+        let mut idx = 0;
+        let mut bit = n.checked_next_power_of_two().unwrap_or(0);
+        while bit > 0 {
+            let next = idx + bit;
+            if next <= n && self.tree[next] <= pos {
+                idx = next;
+                pos -= self.tree[next];
+            }
+            bit >>= 1;
+        }
+        (idx, pos)
+    }
 }
 
 #[cfg(test)]
@@ -129,6 +186,35 @@ mod tests {
 
     fn frames(n: usize) -> Vec<Vec<u8>> {
         (0..n).map(|i| vec![i as u8; 10]).collect()
+    }
+
+    /// The linear scan the Fenwick tree replaces: the same draws give the same positions.
+    #[test]
+    fn lengths_pick_the_byte_a_linear_scan_picks() {
+        let lens = [3usize, 0, 5, 1, 0, 0, 7, 2];
+        let mut t = Lengths::new(lens.iter().copied());
+        let mut now = lens.to_vec();
+        let mut a = Xoshiro256PlusPlus::seed_from_u64(5);
+        let mut b = Xoshiro256PlusPlus::seed_from_u64(5);
+        for _ in 0..18 {
+            let total: usize = now.iter().sum();
+            let mut pos = a.random_range(0..total.max(1));
+            let mut want = (0, 0);
+            for (k, &l) in now.iter().enumerate() {
+                if pos < l {
+                    want = (k, pos);
+                    break;
+                }
+                pos -= l;
+            }
+            let got = t.random_byte(&mut b);
+            assert_eq!(got, want);
+            if now[got.0] > 0 {
+                now[got.0] -= 1;
+                t.remove_one(got.0);
+            }
+        }
+        assert_eq!(t.random_byte(&mut b), (0, 0));
     }
 
     #[test]

@@ -479,6 +479,7 @@ impl ScheduleFile {
 /// Reads a gains file or a schedule file (told apart by its `[[level]]` tables).
 pub fn load_any(path: &Path) -> Result<Loaded> {
     let text = read_text(path)?;
+    check_finite(path, &text)?;
     let is_schedule = toml::from_str::<toml::Table>(&text)
         .map(|t| t.contains_key("level"))
         .unwrap_or(false);
@@ -525,9 +526,76 @@ pub fn load(path: &Path) -> Result<estimators::BankConfig> {
             e.utf8_error().valid_up_to()
         ))
     })?;
+    check_finite(path, &text)?;
     let g = GainsFile::from_toml(&text)
         .map_err(|e| Error::Usage(format!("{}: {e}", path.display())))?;
     Ok(g.apply(BankConfig::default()))
+}
+
+/// TOML allows `nan` and `inf`: a number of a gains or schedule file that is not finite is a
+/// usage error naming the file, the table (`[velocity.ilo1]`, `[level.velocity.ilo1]` with the
+/// level's number) and the key. Text that is not TOML is left to the parser's error.
+fn check_finite(path: &Path, text: &str) -> Result<()> {
+    fn walk(table: &toml::Table, name: &str, level: Option<usize>) -> Option<String> {
+        for (key, v) in table {
+            let here = |k: &str| {
+                let level = level.map_or(String::new(), |n| format!(" of level {n}"));
+                let table = if name.is_empty() {
+                    "the top level".to_string()
+                } else {
+                    format!("[{name}]")
+                };
+                format!("{table}{level} key {k}")
+            };
+            let sub = if name.is_empty() {
+                key.clone()
+            } else {
+                format!("{name}.{key}")
+            };
+            match v {
+                toml::Value::Float(x) if !x.is_finite() => {
+                    return Some(format!("{} is {x}", here(key)));
+                }
+                toml::Value::Table(t) => {
+                    if let Some(m) = walk(t, &sub, level) {
+                        return Some(m);
+                    }
+                }
+                toml::Value::Array(items) => {
+                    for (i, item) in items.iter().enumerate() {
+                        match item {
+                            toml::Value::Table(t) => {
+                                if let Some(m) = walk(t, &sub, Some(i + 1)) {
+                                    return Some(m);
+                                }
+                            }
+                            toml::Value::Float(x) if !x.is_finite() => {
+                                return Some(format!("{} item {} is {x}", here(key), i + 1));
+                            }
+                            _ => {}
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+        None
+    }
+    match toml::from_str::<toml::Table>(text) {
+        Ok(t) => match walk(&t, "", None) {
+            Some(m) => Err(Error::Usage(format!(
+                "{}: bad {} file: {m}: every number must be finite",
+                path.display(),
+                if t.contains_key("level") {
+                    "schedule"
+                } else {
+                    "gains"
+                }
+            ))),
+            None => Ok(()),
+        },
+        Err(_) => Ok(()),
+    }
 }
 
 impl FamilyGains {

@@ -175,16 +175,10 @@ pub struct PaperResult {
     pub acc_clean: [f64; FAMILY_COUNT],
 }
 
-/// Checks an MSE window end (`--window` of `paper` and `tune`): a positive finite number of
-/// seconds, else an [`Error::Usage`].
+/// Checks an MSE window end (`--window` of `paper` and `tune`): a finite number of seconds in
+/// (0, 30 days], else an [`Error::Usage`].
 pub fn check_window(window_s: f64) -> Result<()> {
-    if window_s.is_finite() && window_s > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::Usage(format!(
-            "--window must be a positive number of seconds, got {window_s}"
-        )))
-    }
+    crate::cmd::seconds("--window", window_s, false).map(drop)
 }
 
 /// Runs the protocol. The 6 (variance, seed) runs are spread over 2 threads.

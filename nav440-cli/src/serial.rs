@@ -133,7 +133,9 @@ impl PortArgs {
     /// and the pings per baud (at least 1). Returns the target.
     pub(crate) fn check(&self) -> Result<Target> {
         let t = target(self)?;
-        self.unit_baud.map(parse_baud).transpose()?;
+        self.unit_baud
+            .map(|b| parse_baud("--unit-baud", b))
+            .transpose()?;
         if !(1..=MAX_REPLY_TIMEOUT_MS).contains(&self.reply_timeout) {
             return Err(Error::Usage(format!(
                 "--reply-timeout must be 1 to {MAX_REPLY_TIMEOUT_MS} ms, got {}",
@@ -150,8 +152,8 @@ impl PortArgs {
 fn target(a: &PortArgs) -> Result<Target> {
     let t = Target {
         packet: parse_output_type(&a.packet)?,
-        rate: parse_rate(a.rate)?,
-        baud: parse_baud(a.baud)?,
+        rate: parse_rate("--rate", a.rate)?,
+        baud: parse_baud("--baud", a.baud)?,
         persist: a.persist,
     };
     if a.rate == 0 {
@@ -173,7 +175,10 @@ fn target(a: &PortArgs) -> Result<Target> {
 /// Opens the port and runs the boot sequence; returns the driver (at the target baud).
 pub(crate) fn open_and_boot(a: &PortArgs) -> Result<(IoDriver<SerialIo>, Report, Target)> {
     let t = a.check()?;
-    let start_baud = a.unit_baud.map(parse_baud).transpose()?;
+    let start_baud = a
+        .unit_baud
+        .map(|b| parse_baud("--unit-baud", b))
+        .transpose()?;
     let first = start_baud.unwrap_or(Baud::B57600).bits_per_second();
     let port = serialport::new(&a.port, first)
         .timeout(Duration::from_millis(100))

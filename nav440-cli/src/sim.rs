@@ -261,8 +261,8 @@ pub fn parse_output_type(name: &str) -> Result<PacketType> {
     )))
 }
 
-/// The rate for `hz` (0 = quiet).
-pub fn parse_rate(hz: u32) -> Result<PacketRate> {
+/// The rate for `hz` (0 = quiet); the usage error names the flag `flag`.
+pub fn parse_rate(flag: &str, hz: u32) -> Result<PacketRate> {
     let r = match hz {
         0 => Some(PacketRate::Quiet),
         h if h > 0 && 100 % h == 0 => PacketRate::from_divider((100 / h) as u16),
@@ -270,16 +270,16 @@ pub fn parse_rate(hz: u32) -> Result<PacketRate> {
     };
     r.ok_or_else(|| {
         Error::Usage(format!(
-            "rate {hz} Hz is not one of 0, 2, 4, 5, 10, 20, 25, 50, 100"
+            "{flag} {hz} Hz is not one of 0, 2, 4, 5, 10, 20, 25, 50, 100"
         ))
     })
 }
 
-/// The baud for `bps`.
-pub fn parse_baud(bps: u32) -> Result<Baud> {
+/// The baud for `bps`; the usage error names the flag `flag`.
+pub fn parse_baud(flag: &str, bps: u32) -> Result<Baud> {
     Baud::from_bits_per_second(bps).ok_or_else(|| {
         Error::Usage(format!(
-            "baud {bps} is not one of 9600, 19200, 38400, 57600"
+            "{flag} {bps} is not one of 9600, 19200, 38400, 57600"
         ))
     })
 }
@@ -761,9 +761,9 @@ impl Session<'_> {
 /// or the host went away, then writes the record.
 pub fn run(args: &SimArgs) -> Result<Summary> {
     let listen = parse_listen(&args.listen, args.listen_any)?;
-    let baud = parse_baud(args.baud)?;
+    let baud = parse_baud("--baud", args.baud)?;
     let packet = parse_output_type(&args.power_up_packet)?;
-    let rate = parse_rate(args.power_up_rate)?;
+    let rate = parse_rate("--power-up-rate", args.power_up_rate)?;
     crate::cmd::seconds("--timeout", args.timeout, true)?;
     crate::cmd::seconds("--silence", args.silence, true)?;
     let eeprom = UnitFields {

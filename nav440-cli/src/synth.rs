@@ -133,17 +133,19 @@ impl FromStr for NoiseStep {
             Some((v, t)) => (v, Some(t)),
             None => (s, None),
         };
-        let num = |x: &str, what: &str| -> std::result::Result<f64, String> {
+        let num = |x: &str, what: &str, max: f64| -> std::result::Result<f64, String> {
             match x.trim().parse::<f64>() {
-                Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+                Ok(v) if v.is_finite() && (0.0..=max).contains(&v) => Ok(v),
                 _ => Err(format!(
-                    "{what} must be a finite number >= 0, got {x:?} (expected VAR or VAR@SECONDS, e.g. 0.5@10)"
+                    "{what} must be >= 0 and <= {max:e}, got {x:?} (expected VAR or VAR@SECONDS, e.g. 0.5@10)"
                 )),
             }
         };
         Ok(NoiseStep {
-            var_deg2: num(var, "the noise variance (deg^2)")?,
-            from_s: from.map_or(Ok(0.0), |t| num(t, "the start time (s)"))?,
+            var_deg2: num(var, "the noise variance (deg^2)", crate::cmd::MAX_NOISE_VAR)?,
+            from_s: from.map_or(Ok(0.0), |t| {
+                num(t, "the start time (s)", crate::cmd::MAX_SECONDS)
+            })?,
         })
     }
 }
@@ -192,7 +194,7 @@ pub fn period_ms(rate_hz: u32) -> Result<u64> {
         Ok(1000 / u64::from(rate_hz))
     } else {
         Err(Error::Usage(format!(
-            "unsupported rate {rate_hz} Hz (the NAV440 sends at 100/divider: 100, 50, 25, 20, 10, 5, 4 or 2 Hz)"
+            "--rate {rate_hz} Hz is not supported (the NAV440 sends at 100/divider: 100, 50, 25, 20, 10, 5, 4 or 2 Hz)"
         )))
     }
 }
@@ -490,7 +492,9 @@ mod tests {
         assert_eq!(noise_var_at(&s, 9.99), 0.01);
         assert_eq!(noise_var_at(&s, 10.0), 0.5);
         assert_eq!(noise_var_at(&[], 3.0), 0.0);
-        for bad in ["", "x", "-1", "0.5@", "0.5@-2", "nan", "0.1@inf"] {
+        for bad in [
+            "", "x", "-1", "0.5@", "0.5@-2", "nan", "0.1@inf", "1e16", "0.1@3e6",
+        ] {
             assert!(bad.parse::<NoiseStep>().is_err(), "{bad}");
         }
     }

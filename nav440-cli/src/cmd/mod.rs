@@ -130,7 +130,7 @@ pub struct BankArgs {
     /// schedule file's hold].
     #[arg(long, value_enum)]
     pub(crate) hold: Option<HoldArg>,
-    /// Observer integration step h, s.
+    /// Observer integration step h, s (1e-7 to 1).
     #[arg(long, default_value_t = 1e-4)]
     pub(crate) step: f32,
     /// Gain preset: nav440 (tuned, default of `estimate` and `plot`) or paper (default of
@@ -209,7 +209,7 @@ pub(crate) fn one_axis(opts: &replay::EstimateOptions, cmd: &str) -> Result<()> 
 /// Measurement noise added to yaw before estimation (the paper's protocol).
 #[derive(Args, Debug)]
 pub struct NoiseArgs {
-    /// Add N(0, V) deg^2 noise to yaw before estimation.
+    /// Add N(0, V) deg^2 noise to yaw before estimation (0 to 1e15).
     #[arg(long, value_name = "V")]
     pub(crate) noise_var: Option<f64>,
     /// Seed of the noise.
@@ -248,10 +248,12 @@ pub(crate) fn parse_range(s: &str) -> std::result::Result<(f64, f64), String> {
     let (a, b) = s.split_once('-').ok_or_else(bad)?;
     let a: f64 = a.trim().parse().map_err(|_| bad())?;
     let b: f64 = b.trim().parse().map_err(|_| bad())?;
-    if a.is_finite() && b.is_finite() && a >= 0.0 && b > a {
+    if a.is_finite() && b.is_finite() && a >= 0.0 && b > a && b <= MAX_SECONDS {
         Ok((a, b))
     } else {
-        Err(format!("time range {s:?}: needs 0 <= T0 < T1"))
+        Err(format!(
+            "time range {s:?}: needs 0 <= T0 < T1 <= {MAX_SECONDS} s (30 days)"
+        ))
     }
 }
 
@@ -261,12 +263,7 @@ pub(crate) fn bank_options(
     b: &BankArgs,
     default_preset: PresetArg,
 ) -> Result<replay::EstimateOptions> {
-    if !(b.step.is_finite() && b.step > 0.0) {
-        return Err(Error::Usage(format!(
-            "--step must be a positive number of seconds, got {}",
-            b.step
-        )));
-    }
+    step(b.step)?;
     let preset = b.preset.unwrap_or(default_preset);
     let base = preset.config();
     let (mut config, mut schedule, mut file_hold) = (b.preset.map(PresetArg::config), None, None);
@@ -309,11 +306,84 @@ pub(crate) fn bank_options(
 
 pub(crate) fn noise(var: Option<f64>, seed: u64) -> Result<Option<replay::Noise>> {
     match var {
-        Some(v) if !(v.is_finite() && v >= 0.0) => Err(Error::Usage(format!(
-            "--noise-var must be >= 0 deg^2, got {v}"
-        ))),
-        Some(v) => Ok(Some(replay::Noise { var: v, seed })),
+        Some(v) => Ok(Some(replay::Noise {
+            var: noise_var("--noise-var", v)?,
+            seed,
+        })),
         None => Ok(None),
+    }
+}
+
+/// The largest noise variance any flag accepts, deg^2 (a standard deviation of 3.2e7 deg:
+/// far beyond any capture, still finite through the f32 estimators).
+pub(crate) const MAX_NOISE_VAR: f64 = 1e15;
+
+/// `v` deg^2 of the flag `flag` if it is a noise variance in [0, [`MAX_NOISE_VAR`]]; a usage
+/// error otherwise.
+pub(crate) fn noise_var(flag: &str, v: f64) -> Result<f64> {
+    if v.is_finite() && (0.0..=MAX_NOISE_VAR).contains(&v) {
+        Ok(v)
+    } else {
+        Err(Error::Usage(format!(
+            "{flag} must be >= 0 and <= 1e15 deg^2, got {v}"
+        )))
+    }
+}
+
+/// The observer step h range of `--step`, s.
+pub(crate) const STEP_RANGE: std::ops::RangeInclusive<f32> = 1e-7..=1.0;
+
+/// `h` s of `--step` if it lies in [`STEP_RANGE`]; a usage error otherwise.
+pub(crate) fn step(h: f32) -> Result<f32> {
+    if STEP_RANGE.contains(&h) {
+        Ok(h)
+    } else {
+        Err(Error::Usage(format!(
+            "--step must be a number of seconds >= 1e-7 and <= 1, got {h}"
+        )))
+    }
+}
+
+/// `v` of the flag `flag` if it lies in `range`; a usage error naming the range otherwise
+/// (`unit` follows the range, e.g. " bytes").
+pub(crate) fn count<T>(
+    flag: &str,
+    v: T,
+    range: std::ops::RangeInclusive<T>,
+    unit: &str,
+) -> Result<T>
+where
+    T: PartialOrd + std::fmt::Display + Copy,
+{
+    if range.contains(&v) {
+        Ok(v)
+    } else {
+        Err(Error::Usage(format!(
+            "{flag} must be {} to {}{unit}, got {v}",
+            range.start(),
+            range.end()
+        )))
+    }
+}
+
+/// Checks before long work that the file `p` can be written at its end, without changing
+/// it: an existing file is opened for appending (its contents are kept), a missing one is
+/// created and removed again. The error is the one writing would give.
+pub(crate) fn check_writable(p: &Path) -> Result<()> {
+    let err = |e: std::io::Error| Error::Output(format!("cannot write {}: {e}", p.display()));
+    if p.exists() {
+        std::fs::OpenOptions::new()
+            .append(true)
+            .open(p)
+            .map(drop)
+            .map_err(err)
+    } else {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(p)
+            .map_err(err)?;
+        std::fs::remove_file(p).map_err(err)
     }
 }
 

@@ -19,7 +19,7 @@ pub struct Args {
     /// Print Markdown tables (for a README) instead of text tables.
     #[arg(long)]
     markdown: bool,
-    /// MSE window end, s.
+    /// MSE window end, s (at most 2592000, 30 days).
     #[arg(long, default_value_t = 30.0)]
     window: f64,
 }

@@ -18,16 +18,21 @@ pub struct Args {
     bank: BankArgs,
     #[command(flatten)]
     noise: NoiseArgs,
-    /// Plot from this time, s.
+    /// Plot from this time, s (0 to 2592000, 30 days).
     #[arg(long)]
     from: Option<f64>,
-    /// Plot up to this time, s.
+    /// Plot up to this time, s (0 to 2592000, 30 days).
     #[arg(long)]
     to: Option<f64>,
 }
 
 /// Runs the bank on the capture and draws the five stacked panels.
 pub fn run(a: &Args) -> Result<()> {
+    for (flag, t) in [("--from", a.from), ("--to", a.to)] {
+        if let Some(t) = t {
+            super::seconds(flag, t, true)?;
+        }
+    }
     let mut opts = bank_options(&a.bank, PresetArg::Nav440)?;
     one_axis(&opts, "plot")?;
     opts.noise = noise(a.noise.noise_var, a.noise.seed)?;

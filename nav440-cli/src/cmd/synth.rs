@@ -32,19 +32,19 @@ pub struct Args {
     /// BIT word of every packet (e.g. 0x0002).
     #[arg(long, default_value = "0", value_parser = parse_u16)]
     bit: u16,
-    /// Flip this many random bits.
+    /// Flip this many random bits (0 to 1000000).
     #[arg(long, default_value_t = 0)]
     flip_bits: usize,
-    /// Delete this many random bytes.
+    /// Delete this many random bytes (0 to 1000000).
     #[arg(long, default_value_t = 0)]
     drop_bytes: usize,
-    /// Leave out this many random packets.
+    /// Leave out this many random packets (0 to 1000000).
     #[arg(long, default_value_t = 0)]
     drop_packets: usize,
-    /// Insert this many bursts of random bytes between packets.
+    /// Insert this many bursts of random bytes between packets (0 to 100000).
     #[arg(long, default_value_t = 0)]
     garbage: usize,
-    /// Longest garbage burst, bytes.
+    /// Longest garbage burst, bytes (1 to 1024).
     #[arg(long, default_value_t = 32)]
     garbage_max_len: usize,
     /// Seed of the corruption.
@@ -52,6 +52,7 @@ pub struct Args {
     corrupt_seed: u64,
     /// Gaussian noise added to the yaw angle: VAR (deg^2) from the start, or VAR@T from T s
     /// on; repeat for a noise level that changes (e.g. --yaw-noise 0.01 --yaw-noise 0.5@10).
+    /// VAR 0 to 1e15, T 0 to 2592000 (30 days), at most 1000 steps.
     #[arg(long = "yaw-noise", value_name = "VAR[@T]")]
     yaw_noise: Vec<synth::NoiseStep>,
     /// Seed of the yaw noise.
@@ -71,8 +72,43 @@ fn parse_u16(s: &str) -> std::result::Result<u16, String> {
     r.map_err(|_| format!("`{s}` is not a 16-bit value"))
 }
 
+/// The most events of each corruption kind (`--flip-bits`, `--drop-bytes`,
+/// `--drop-packets`).
+pub(crate) const MAX_CORRUPT_EVENTS: usize = 1_000_000;
+/// The most garbage bursts (`--garbage`).
+pub(crate) const MAX_GARBAGE_BURSTS: usize = 100_000;
+/// The longest garbage burst (`--garbage-max-len`), bytes: with [`MAX_GARBAGE_BURSTS`] at most
+/// 102.4 MB of garbage.
+pub(crate) const MAX_GARBAGE_LEN: usize = 1024;
+
+/// The most `--yaw-noise` steps (each packet looks them all up).
+pub(crate) const MAX_NOISE_STEPS: usize = 1000;
+
+/// Checks the corruption counts before any work (each a usage error naming its range).
+fn check_corruption(a: &Args) -> Result<()> {
+    use super::count;
+    count("--flip-bits", a.flip_bits, 0..=MAX_CORRUPT_EVENTS, "")?;
+    count("--drop-bytes", a.drop_bytes, 0..=MAX_CORRUPT_EVENTS, "")?;
+    count("--drop-packets", a.drop_packets, 0..=MAX_CORRUPT_EVENTS, "")?;
+    count("--garbage", a.garbage, 0..=MAX_GARBAGE_BURSTS, "")?;
+    count(
+        "--garbage-max-len",
+        a.garbage_max_len,
+        1..=MAX_GARBAGE_LEN,
+        " bytes",
+    )?;
+    if a.yaw_noise.len() > MAX_NOISE_STEPS {
+        return Err(Error::Usage(format!(
+            "--yaw-noise must be given 0 to {MAX_NOISE_STEPS} times, got {}",
+            a.yaw_noise.len()
+        )));
+    }
+    Ok(())
+}
+
 /// Writes the capture to `-o` and prints its JSON summary (packets, intact packets, peaks).
 pub fn run(a: Args) -> Result<()> {
+    check_corruption(&a)?;
     let cfg = synth::SynthConfig {
         profile: a.profile,
         seed: a.seed,

@@ -2,8 +2,10 @@
 
 use std::path::PathBuf;
 
-use super::{noise, one_axis, parse_range, write_file, AxisArg, HoldArg};
-use crate::error::{Error, Result};
+use super::{
+    check_writable, count, noise_var, one_axis, parse_range, write_file, AxisArg, HoldArg,
+};
+use crate::error::Result;
 use crate::progress::Progress;
 use crate::{optim, paper, replay, tune};
 
@@ -12,7 +14,7 @@ use crate::{optim, paper, replay, tune};
 pub struct Args {
     /// Capture file; `-` reads standard input.
     file: PathBuf,
-    /// Noise variance added to yaw, deg^2.
+    /// Noise variance added to yaw, deg^2 (0 to 1e15).
     #[arg(
         long,
         value_name = "V",
@@ -21,8 +23,9 @@ pub struct Args {
     )]
     noise_var: Option<f64>,
     /// Tune a gain schedule: one level per noise variance (deg^2, comma-separated,
-    /// increasing, e.g. 0.001,0.01,0.1,0.5,1); `-o` writes the schedule file that
-    /// `--gains` runs as a noise-adaptive bank, `--rust` its `SCHEDULE` array.
+    /// increasing, e.g. 0.001,0.01,0.1,0.5,1; each > 0 and <= 1e15, at most 8 levels); `-o`
+    /// writes the schedule file that `--gains` runs as a noise-adaptive bank, `--rust` its
+    /// `SCHEDULE` array.
     #[arg(
         long,
         value_name = "V1,V2,...",
@@ -30,25 +33,26 @@ pub struct Args {
         conflicts_with = "exhaustive"
     )]
     schedule: Option<Vec<f64>>,
-    /// Number of noise seeds averaged per evaluation.
+    /// Number of noise seeds averaged per evaluation (1 to 100).
     #[arg(long, default_value_t = 3)]
     seeds: u64,
-    /// MSE window end, s (tune and score on 0-WINDOW s).
+    /// MSE window end, s (tune and score on 0-WINDOW s; at most 2592000, 30 days).
     #[arg(long, default_value_t = 30.0, conflicts_with = "train")]
     window: f64,
-    /// Tune on the MSE over this time range, s (e.g. 0-15).
+    /// Tune on the MSE over this time range, s (e.g. 0-15; 0 <= T0 < T1 <= 2592000).
     #[arg(long, value_name = "T0-T1", value_parser = parse_range)]
     train: Option<(f64, f64)>,
     /// Report the MSE before/after over this time range, s (default: the training range).
     #[arg(long, value_name = "T2-T3", value_parser = parse_range)]
     test: Option<(f64, f64)>,
-    /// Reference mode: an exhaustive log grid of N points per gain instead of the search.
+    /// Reference mode: an exhaustive log grid of N points per gain instead of the search
+    /// (2 to 20).
     #[arg(long, value_name = "N", num_args = 0..=1, default_missing_value = "12")]
     exhaustive: Option<usize>,
     /// Sample adapter; default: tune both and keep the better.
     #[arg(long, value_enum)]
     hold: Option<HoldArg>,
-    /// Observer step h, s.
+    /// Observer step h, s (1e-7 to 1).
     #[arg(long, default_value_t = 1e-4)]
     step: f32,
     /// Write the tuned gains (TOML, accepted by `--gains`) here.
@@ -64,13 +68,12 @@ pub struct Args {
 
 /// Tunes the gains (or the schedule), prints the report and writes `-o` / `--rust`.
 pub fn run(a: Args) -> Result<()> {
-    if let Some(v) = a.noise_var {
-        noise(Some(v), 0)?;
+    check_numbers(&a)?;
+    // The outputs are written after the tuning: a path that cannot be written is found now,
+    // without changing an existing file.
+    for p in [&a.output, &a.rust].into_iter().flatten() {
+        check_writable(p)?;
     }
-    for &v in a.schedule.iter().flatten() {
-        noise(Some(v), 0)?;
-    }
-    paper::check_window(a.window)?;
     let samples = replay::read_samples(&a.file)?;
     let opts = replay::EstimateOptions {
         hold: a.hold.map_or(estimators::Hold::Linear, Into::into),
@@ -85,11 +88,6 @@ pub fn run(a: Args) -> Result<()> {
         train: a.train.unwrap_or((0.0, a.window)),
         test: a.test,
         method: match a.exhaustive {
-            Some(n) if n < 2 => {
-                return Err(Error::Usage(format!(
-                    "--exhaustive needs at least 2 points per gain, got {n}"
-                )))
-            }
             Some(points) => optim::Method::Exhaustive { points },
             None => optim::Method::Search,
         },
@@ -136,6 +134,28 @@ pub fn run(a: Args) -> Result<()> {
         write_file(&p, &res.to_rust())?;
     }
     Ok(())
+}
+
+/// The most noise seeds per evaluation (`--seeds`).
+pub(crate) const MAX_SEEDS: u64 = 100;
+/// The most grid points per gain of `--exhaustive` (`points^4` evaluations for the
+/// four-gain family: 160,000 at 20).
+pub(crate) const MAX_GRID_POINTS: usize = 20;
+
+/// Checks every number of the arguments before any file is touched or any work starts.
+fn check_numbers(a: &Args) -> Result<()> {
+    if let Some(v) = a.noise_var {
+        noise_var("--noise-var", v)?;
+    }
+    if let Some(levels) = &a.schedule {
+        tune::check_levels(levels)?;
+    }
+    count("--seeds", a.seeds, 1..=MAX_SEEDS, "")?;
+    if let Some(n) = a.exhaustive {
+        count("--exhaustive", n, 2..=MAX_GRID_POINTS, " points per gain")?;
+    }
+    super::step(a.step)?;
+    paper::check_window(a.window)
 }
 
 /// The progress bar of `runs` tuner runs of `spec` (on stderr when it is a terminal): each

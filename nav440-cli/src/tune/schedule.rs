@@ -34,6 +34,24 @@ pub(super) fn tune_both(
     ))
 }
 
+/// Checks the noise variances of `--schedule`: 1 to [`estimators::adaptive::MAX_LEVELS`]
+/// levels, each > 0 and at most [`crate::cmd::MAX_NOISE_VAR`] deg^2, in increasing order.
+pub fn check_levels(levels: &[f64]) -> Result<()> {
+    if levels.is_empty()
+        || levels.len() > estimators::adaptive::MAX_LEVELS
+        || levels.windows(2).any(|w| w[1] <= w[0])
+        || levels
+            .iter()
+            .any(|v| !(v.is_finite() && *v > 0.0 && *v <= crate::cmd::MAX_NOISE_VAR))
+    {
+        return Err(Error::Usage(format!(
+            "--schedule needs 1 to {} noise variances > 0 and <= 1e15 deg^2 in increasing order, got {levels:?}",
+            estimators::adaptive::MAX_LEVELS
+        )));
+    }
+    Ok(())
+}
+
 /// `nav440 tune --schedule V1,V2,..`: [`tune_with`] at each noise level (`spec.noise_var`
 /// replaced; one hold: `spec.holds[0]`, linear by default); then, per velocity observer
 /// family (AVE, ILO1-3, ED), each level takes the best of every level's tuned gains at its own
@@ -51,16 +69,7 @@ pub fn tune_schedule(
     levels: &[f64],
     progress: &Progress,
 ) -> Result<(crate::gains::ScheduleFile, String)> {
-    if levels.is_empty()
-        || levels.len() > estimators::adaptive::MAX_LEVELS
-        || levels.windows(2).any(|w| w[1] <= w[0])
-        || levels.iter().any(|v| !(v.is_finite() && *v > 0.0))
-    {
-        return Err(Error::Usage(format!(
-            "--schedule needs 1 to {} noise variances > 0 in increasing order, got {levels:?}",
-            estimators::adaptive::MAX_LEVELS
-        )));
-    }
+    check_levels(levels)?;
     let hold = spec.holds.first().copied().unwrap_or(Hold::Linear);
     // A schedule is for the device, which runs for hours: its AVE is tuned with the product's
     // leaky `deltahat` law (`estimators::presets::AVE_DEFAULT`) whatever law the start gains
