@@ -8,8 +8,8 @@
 //! * every injected fault is reported (`stream silent`, `unit reset mid-stream`, `time stamps
 //!   frozen`, and the garbage in the `skipped` counter);
 //! * the periodic counters come every 10 s of stream;
-//! * the stack high-water mark equals that of a short run of the same image with one fault
-//!   of each kind.
+//! * the stack high-water mark is that of a short run of the same image with one fault of
+//!   each kind, within one exception frame ([`STACK_JITTER`]).
 
 use super::build::build;
 use super::equivalence::compare_csv;
@@ -18,6 +18,11 @@ use super::qemu_run::{counter, counters, run_unit};
 use super::{work_dir, BankChoice, FW_BIN};
 use crate::qemu;
 use std::time::{Duration, Instant};
+
+/// How far the stack high-water mark of the long run may lie above the short run's, B: where
+/// an interrupt lands decides how deep its frame stacks on `main`'s (the same short run gave
+/// 6,504 and 6,512 B), and one exception frame with the FPU state is 104 B.
+const STACK_JITTER: u64 = 128;
 
 /// Packets per hour of stream at 100 Hz.
 const PACKETS_PER_HOUR: u64 = 360_000;
@@ -165,9 +170,9 @@ pub fn soak(hours: f64, seed: u64) -> Result<(), String> {
         ));
     }
     let peak = counter(&c, "stack_peak");
-    if peak != Some(base) {
+    if peak.is_none_or(|p| p > base + STACK_JITTER) {
         problems.push(format!(
-            "stack high-water mark {peak:?} B, {base} B on the short run with the same faults"
+            "stack high-water mark {peak:?} B, {base} B on the short run with the same faults (+{STACK_JITTER} B allowed)"
         ));
     }
     let host = host_estimate(&record, &host_extra)?;
@@ -189,10 +194,11 @@ pub fn soak(hours: f64, seed: u64) -> Result<(), String> {
     }
     let bytes = std::fs::metadata(&record).map_or(0, |m| m.len());
     eprintln!(
-        "xtask: SOAK OK: {hours} h of stream ({} faults injected: {per_hour} each of silence, reset, freeze, garbage per hour) through the product firmware on {} in {run_s:.0} s ({:.0} s in all): CSV identical to `nav440 estimate` on the {bytes} bytes streamed while configured ({lines} lines), every fault reported, {periodic} periodic counter reports, stack high-water {base} B as on a short run with the same faults",
+        "xtask: SOAK OK: {hours} h of stream ({} faults injected: {per_hour} each of silence, reset, freeze, garbage per hour) through the product firmware on {} in {run_s:.0} s ({:.0} s in all): CSV identical to `nav440 estimate` on the {bytes} bytes streamed while configured ({lines} lines), every fault reported, {periodic} periodic counter reports, stack high-water {} B ({base} B on a short run with the same faults)",
         inject.len(),
         board.machine,
-        start.elapsed().as_secs_f64()
+        start.elapsed().as_secs_f64(),
+        peak.unwrap_or(0)
     );
     Ok(())
 }
