@@ -1,9 +1,7 @@
 //! Adaptive velocity estimator, AVE (paper eq. 4).
 
-use crate::adaptive::ObserverSwitch;
-use crate::bank::{BankGains, Channel};
 use crate::error::{non_negative, positive};
-use crate::family::{coordinate, geometric, Family, Gains, Scheduling, Scorer, SearchPoint};
+use crate::family::{coordinate, geometric, Gains, Scorer, SearchPoint};
 use crate::fxk::{
     advance_one, advance_two, frac, mag, mulf, mulf32, run, smul, Coef, Kernel, Stage,
 };
@@ -613,30 +611,17 @@ impl<const D: u8> Stage for AveStage<D> {
     }
 }
 
-/// The AVE family of the paper bank: AVE velocity, AVE-AVE acceleration (one
-/// [`crate::VelAcc`] row, sharing its first stage when both halves have the same gains);
-/// gains [`BankGains::ave`].
-#[derive(Clone, Copy, Debug)]
-pub struct AveFamily;
-
-impl Family for AveFamily {
-    type Gains = AveConfig;
-    const NAME: &'static str = "ave";
-    const LABEL: &'static str = "AVE";
-    const VELOCITY: Channel = Channel::AveV;
-    const ACCELERATION: Channel = Channel::AveA;
-    const SCHEDULING: Scheduling = Scheduling::Observer;
-
-    fn get(half: &BankGains) -> AveConfig {
-        half.ave
-    }
-
-    fn set(half: &mut BankGains, gains: AveConfig) {
-        half.ave = gains;
-    }
-
-    fn switch_up_mut(switch: &mut ObserverSwitch) -> Option<&mut f32> {
-        Some(&mut switch.ave)
+crate::family::family! {
+    /// The AVE family of the paper bank: AVE velocity, AVE-AVE acceleration (one
+    /// [`crate::VelAcc`] row, sharing its first stage when both halves have the same gains);
+    /// gains [`BankGains::ave`](crate::BankGains::ave).
+    AveFamily {
+        gains: AveConfig = BankGains::ave,
+        name: "ave",
+        label: "AVE",
+        channels: AveV, AveA,
+        scheduling: Observer,
+        switch: ObserverSwitch::ave,
     }
 }
 

@@ -1,9 +1,7 @@
 //! Levant's robust exact differentiator, ED (paper eqs. 5-7; Levant 1998).
 
-use crate::adaptive::ObserverSwitch;
-use crate::bank::{BankGains, Channel};
 use crate::error::positive;
-use crate::family::{coordinate, geometric, Family, Gains, Scheduling, Scorer, SearchPoint};
+use crate::family::{coordinate, geometric, Gains, Scorer, SearchPoint};
 use crate::fxk::{advance_one, advance_two, frac, mag, mulf, run, sqrt_fast, Coef, Kernel, Stage};
 use crate::law::{step_n, Law, Stateful};
 use crate::{ConfigError, Hold, NativeSqrt, Real, SqrtFn};
@@ -441,29 +439,16 @@ impl Stage for EdFx {
     }
 }
 
-/// The ED family of the paper bank: Levant ED velocity, ED-ED acceleration (one
-/// [`crate::VelAcc`] row); gains [`BankGains::ed`].
-#[derive(Clone, Copy, Debug)]
-pub struct EdFamily;
-
-impl Family for EdFamily {
-    type Gains = EdConfig;
-    const NAME: &'static str = "ed";
-    const LABEL: &'static str = "ED";
-    const VELOCITY: Channel = Channel::EdV;
-    const ACCELERATION: Channel = Channel::EdA;
-    const SCHEDULING: Scheduling = Scheduling::Observer;
-
-    fn get(half: &BankGains) -> EdConfig {
-        half.ed
-    }
-
-    fn set(half: &mut BankGains, gains: EdConfig) {
-        half.ed = gains;
-    }
-
-    fn switch_up_mut(switch: &mut ObserverSwitch) -> Option<&mut f32> {
-        Some(&mut switch.ed)
+crate::family::family! {
+    /// The ED family of the paper bank: Levant ED velocity, ED-ED acceleration (one
+    /// [`crate::VelAcc`] row); gains [`BankGains::ed`](crate::BankGains::ed).
+    EdFamily {
+        gains: EdConfig = BankGains::ed,
+        name: "ed",
+        label: "ED",
+        channels: EdV, EdA,
+        scheduling: Observer,
+        switch: ObserverSwitch::ed,
     }
 }
 

@@ -40,7 +40,8 @@
 //!    `lib.rs`): the law (`FooParams`, a [`Law`]), its configuration `FooConfig` (with the
 //!    `serde` and `defmt` derives of the others), `impl Gains for FooConfig` and the family
 //!    marker `FooFamily` (`impl Family`: name, label, channels, scheduling, where its gains
-//!    are in [`BankGains`]).
+//!    are in [`BankGains`]; `family!` declares both for gains that are one field of
+//!    [`BankGains`], as in `ed.rs`).
 //! 2. `bank/paper.rs`: `FooFamily` in the family list; its two channels
 //!    (`FooV = "foo_v"`, `FooA = "foo_a"`) and its row or rows, each with a `warm` clause, in
 //!    the `estimator_bank!` table below the list.
@@ -252,6 +253,55 @@ macro_rules! families {
     };
 }
 pub(crate) use families;
+
+/// A family marker whose gains are one field of each [`BankGains`] half: the marker type
+/// (with its docs) and its [`Family`] implementation. `switch:` names the field of
+/// [`ObserverSwitch`] an observer records its switch point in ([`Family::switch_up_mut`]);
+/// without it the family has none.
+macro_rules! family {
+    (
+        $(#[$m:meta])*
+        $marker:ident {
+            gains: $gains:ident = BankGains::$field:ident,
+            name: $name:literal,
+            label: $label:literal,
+            channels: $velocity:ident, $acceleration:ident,
+            scheduling: $scheduling:ident,
+            $(switch: ObserverSwitch::$switch:ident,)?
+        }
+    ) => {
+        $(#[$m])*
+        #[derive(Clone, Copy, Debug)]
+        pub struct $marker;
+
+        impl $crate::family::Family for $marker {
+            type Gains = $gains;
+            const NAME: &'static str = $name;
+            const LABEL: &'static str = $label;
+            const VELOCITY: $crate::bank::Channel = $crate::bank::Channel::$velocity;
+            const ACCELERATION: $crate::bank::Channel = $crate::bank::Channel::$acceleration;
+            const SCHEDULING: $crate::family::Scheduling =
+                $crate::family::Scheduling::$scheduling;
+
+            fn get(half: &$crate::bank::BankGains) -> $gains {
+                half.$field
+            }
+
+            fn set(half: &mut $crate::bank::BankGains, gains: $gains) {
+                half.$field = gains;
+            }
+
+            $(
+                fn switch_up_mut(
+                    switch: &mut $crate::adaptive::ObserverSwitch,
+                ) -> Option<&mut f32> {
+                    Some(&mut switch.$switch)
+                }
+            )?
+        }
+    };
+}
+pub(crate) use family;
 
 /// Coordinate `i` of `x` as f32, or `current` if `x` is shorter.
 pub(crate) fn coordinate(x: &[f64], i: usize, current: f32) -> f32 {

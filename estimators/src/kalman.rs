@@ -1,9 +1,8 @@
 //! Steady-state constant-acceleration Kalman tracker (alpha-beta-gamma filter): the reference
 //! an engineer would otherwise use. Not from the paper.
 
-use crate::bank::{BankGains, Channel};
 use crate::error::positive;
-use crate::family::{coordinate, geometric, Family, Gains, Scheduling, Scorer, SearchPoint};
+use crate::family::{coordinate, geometric, Gains, Scorer, SearchPoint};
 use crate::law::Law;
 use crate::{ConfigError, Hold, Real};
 
@@ -324,8 +323,9 @@ pub fn steady_state_gain(dt: f64, q: f64, r: f64) -> [f64; 3] {
     k
 }
 
-/// Noise model of the Kalman tracker in a bank half ([`BankGains::kf`]): with the nominal
-/// sample period as `dt` it is the [`KalmanConfig`] of the half's tracker.
+/// Noise model of the Kalman tracker in a bank half
+/// ([`BankGains::kf`](crate::BankGains::kf)): with the nominal sample period as `dt` it is
+/// the [`KalmanConfig`] of the half's tracker.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -337,26 +337,16 @@ pub struct KalmanNoise {
     pub r: f32,
 }
 
-/// The Kalman tracker family of the paper bank: a tracker with the velocity half's noise
-/// reports the velocity, one with the acceleration half's noise the acceleration (not a
-/// series); gains [`BankGains::kf`].
-#[derive(Clone, Copy, Debug)]
-pub struct KfFamily;
-
-impl Family for KfFamily {
-    type Gains = KalmanNoise;
-    const NAME: &'static str = "kf";
-    const LABEL: &'static str = "KF";
-    const VELOCITY: Channel = Channel::KfV;
-    const ACCELERATION: Channel = Channel::KfA;
-    const SCHEDULING: Scheduling = Scheduling::Smooth;
-
-    fn get(half: &BankGains) -> KalmanNoise {
-        half.kf
-    }
-
-    fn set(half: &mut BankGains, gains: KalmanNoise) {
-        half.kf = gains;
+crate::family::family! {
+    /// The Kalman tracker family of the paper bank: a tracker with the velocity half's noise
+    /// reports the velocity, one with the acceleration half's noise the acceleration (not a
+    /// series); gains [`BankGains::kf`](crate::BankGains::kf).
+    KfFamily {
+        gains: KalmanNoise = BankGains::kf,
+        name: "kf",
+        label: "KF",
+        channels: KfV, KfA,
+        scheduling: Smooth,
     }
 }
 

@@ -499,113 +499,69 @@ pub trait Real:
     }
 }
 
-/// The float types step every law at `h`: no coarse step, nothing stored for it.
-macro_rules! float_without_coarse_step {
-    () => {
-        const AVE_STEP_FACTOR: u32 = 1;
-        type Coarse<X: Copy + Debug + PartialEq> = core::marker::PhantomData<X>;
-        #[inline(always)]
-        fn coarse_new<X: Copy + Debug + PartialEq>(_x: Option<X>) -> Self::Coarse<X> {
-            core::marker::PhantomData
-        }
-        #[inline(always)]
-        fn coarse_get<X: Copy + Debug + PartialEq>(_c: &Self::Coarse<X>) -> Option<X> {
-            None
+/// `Real` for a float type `$t`: every law stepped at `h` (no coarse step, nothing stored
+/// for it), conversions by `as` (exact where they widen), `libm`'s `$abs` and `$sqrt`.
+macro_rules! float_real {
+    ($t:ty, $abs:path, $sqrt:path) => {
+        impl Real for $t {
+            const ZERO: Self = 0.0;
+            const ONE: Self = 1.0;
+            const AVE_STEP_FACTOR: u32 = 1;
+            type Coarse<X: Copy + Debug + PartialEq> = core::marker::PhantomData<X>;
+            #[inline(always)]
+            fn coarse_new<X: Copy + Debug + PartialEq>(_x: Option<X>) -> Self::Coarse<X> {
+                core::marker::PhantomData
+            }
+            #[inline(always)]
+            fn coarse_get<X: Copy + Debug + PartialEq>(_c: &Self::Coarse<X>) -> Option<X> {
+                None
+            }
+            #[inline]
+            fn from_f64(x: f64) -> Self {
+                x as $t
+            }
+            #[inline]
+            fn from_f32(x: f32) -> Self {
+                x as $t
+            }
+            #[inline]
+            fn from_i32(x: i32) -> Self {
+                x as $t
+            }
+            #[inline]
+            fn to_f32(self) -> f32 {
+                self as f32
+            }
+            #[inline]
+            fn to_f64(self) -> f64 {
+                self as f64
+            }
+            #[inline]
+            fn abs(self) -> Self {
+                $abs(self)
+            }
+            #[inline]
+            fn sqrt(self) -> Self {
+                if self > 0.0 {
+                    $sqrt(self)
+                } else {
+                    0.0
+                }
+            }
+            #[inline]
+            fn div_int(self, n: u32) -> Self {
+                if n == 0 {
+                    self
+                } else {
+                    self / n as $t
+                }
+            }
         }
     };
 }
 
-impl Real for f32 {
-    const ZERO: Self = 0.0;
-    const ONE: Self = 1.0;
-    float_without_coarse_step!();
-    #[inline]
-    fn from_f64(x: f64) -> Self {
-        x as f32
-    }
-    #[inline]
-    fn from_f32(x: f32) -> Self {
-        x
-    }
-    #[inline]
-    fn from_i32(x: i32) -> Self {
-        x as f32
-    }
-    #[inline]
-    fn to_f32(self) -> f32 {
-        self
-    }
-    #[inline]
-    fn to_f64(self) -> f64 {
-        f64::from(self)
-    }
-    #[inline]
-    fn abs(self) -> Self {
-        libm::fabsf(self)
-    }
-    #[inline]
-    fn sqrt(self) -> Self {
-        if self > 0.0 {
-            libm::sqrtf(self)
-        } else {
-            0.0
-        }
-    }
-    #[inline]
-    fn div_int(self, n: u32) -> Self {
-        if n == 0 {
-            self
-        } else {
-            self / n as f32
-        }
-    }
-}
-
-impl Real for f64 {
-    const ZERO: Self = 0.0;
-    const ONE: Self = 1.0;
-    float_without_coarse_step!();
-    #[inline]
-    fn from_f64(x: f64) -> Self {
-        x
-    }
-    #[inline]
-    fn from_f32(x: f32) -> Self {
-        f64::from(x)
-    }
-    #[inline]
-    fn from_i32(x: i32) -> Self {
-        f64::from(x)
-    }
-    #[inline]
-    fn to_f32(self) -> f32 {
-        self as f32
-    }
-    #[inline]
-    fn to_f64(self) -> f64 {
-        self
-    }
-    #[inline]
-    fn abs(self) -> Self {
-        libm::fabs(self)
-    }
-    #[inline]
-    fn sqrt(self) -> Self {
-        if self > 0.0 {
-            libm::sqrt(self)
-        } else {
-            0.0
-        }
-    }
-    #[inline]
-    fn div_int(self, n: u32) -> Self {
-        if n == 0 {
-            self
-        } else {
-            self / f64::from(n)
-        }
-    }
-}
+float_real!(f32, libm::fabsf, libm::sqrtf);
+float_real!(f64, libm::fabs, libm::sqrt);
 
 impl Real for Fx {
     const ZERO: Self = Fx(I32F32::ZERO);

@@ -68,6 +68,14 @@ fn axis_config(axis: Axis, cfg: &BankConfig) -> BankConfig {
     BankConfig { wrap, ..*cfg }
 }
 
+/// The bank constructor of an [`Estimation`] and a [`Pipeline`]: called with an axis and
+/// the configuration (with the measured sample period) when the warm-up ends, it returns
+/// that axis's bank or the error `E`. Every `FnMut(Axis, &BankConfig) -> Result<B, E>` is one
+/// (e.g. a closure over [`axis_bank`]).
+pub trait BankBuilder<B, E>: FnMut(Axis, &BankConfig) -> Result<B, E> {}
+
+impl<B, E, F: FnMut(Axis, &BankConfig) -> Result<B, E>> BankBuilder<B, E> for F {}
+
 /// The bank of one axis: `B::from_config(cfg)` (any bank built from a [`BankConfig`]:
 /// `PaperBank`, `ProductBank`, a custom `estimator_bank!` table), with the +-180 deg
 /// unwrapping switched off for pitch ([`Axis::wraps`]).
@@ -204,12 +212,7 @@ impl<B, E, F, const N: usize> core::fmt::Debug for Estimation<B, E, F, N> {
     }
 }
 
-impl<B, E, F, const N: usize> Estimation<B, E, F, N>
-where
-    B: AxisBank,
-    E: Clone,
-    F: FnMut(Axis, &BankConfig) -> Result<B, E>,
-{
+impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize> Estimation<B, E, F, N> {
     /// A back end with `N` bank slots for `axes`, the configuration `cfg` (its sample period
     /// is replaced by the measured one) and the bank constructor `build`. Only the first `N`
     /// selected axes (CSV order) are kept ([`Estimation::axes`] tells which).
@@ -316,12 +319,7 @@ where
     }
 }
 
-impl<B, E, F> Estimation<B, E, F>
-where
-    B: AxisBank,
-    E: Clone,
-    F: FnMut(Axis, &BankConfig) -> Result<B, E>,
-{
+impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>> Estimation<B, E, F> {
     /// A back end for `axes` (any of the three) with the configuration `cfg` (its sample
     /// period is replaced by the measured one) and the bank constructor `build`.
     pub fn new(axes: Axes, cfg: BankConfig, build: F) -> Self {
@@ -397,12 +395,7 @@ impl<B, E, F, const N: usize> core::fmt::Debug for Pipeline<B, E, F, N> {
     }
 }
 
-impl<B, E, F, const N: usize> Pipeline<B, E, F, N>
-where
-    B: AxisBank,
-    E: Clone,
-    F: FnMut(Axis, &BankConfig) -> Result<B, E>,
-{
+impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize> Pipeline<B, E, F, N> {
     /// A pipeline with `N` bank slots estimating the first `N` of `axes` (see
     /// [`Estimation::with_slots`]).
     pub fn with_slots(axes: Axes, cfg: BankConfig, build: F) -> Self {
@@ -507,12 +500,7 @@ where
     }
 }
 
-impl<B, E, F> Pipeline<B, E, F>
-where
-    B: AxisBank,
-    E: Clone,
-    F: FnMut(Axis, &BankConfig) -> Result<B, E>,
-{
+impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>> Pipeline<B, E, F> {
     /// A pipeline estimating `axes` (any of the three; see [`Estimation::new`]).
     pub fn new(axes: Axes, cfg: BankConfig, build: F) -> Self {
         Self::with_slots(axes, cfg, build)

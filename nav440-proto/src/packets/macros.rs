@@ -9,6 +9,7 @@
 //! View(ViewFields, TYPE, LEN, stream|reply) {
 //!     /// doc of the field
 //!     name: kind[si_accessor, ...] @ offset => role;
+//!     ..group @ offset;
 //!     ...
 //! }
 //! ```
@@ -18,6 +19,8 @@
 //! counter and code kinds); `=> role` is optional (see [`Role`](crate::Role)). `stream`
 //! marks a type the unit can output continuously (see
 //! [`PacketType::output_payload_len`](crate::PacketType::output_payload_len)).
+//! `..group @ offset;` stands for the fields of a group several packets share (an arm of
+//! `field_group!` in `table.rs`), laid out from `offset` on.
 
 /// One fixed-layout packet: view, `*Fields` struct, layout and role tables.
 macro_rules! fixed_packet {
@@ -26,7 +29,7 @@ macro_rules! fixed_packet {
         $view:ident($fields:ident, $ptype:ident, $len:literal) {
             $(
                 $(#[$fm:meta])*
-                $f:ident: $kind:ident $([$($acc:ident),+])? @ $off:literal $(=> $role:ident)?;
+                $f:ident: $kind:ident $([$($acc:ident),+])? @ $off:expr $(=> $role:ident)?;
             )*
         }
     ) => {
@@ -151,6 +154,38 @@ macro_rules! fixed_packet {
     };
 }
 
+/// Reads a packet's body line by line, replacing each `..group @ offset;` by the group's
+/// fields (`field_group!`), then hands the packet to `fixed_packet!`. Called as
+/// `splice_groups! { [packet head] [fields so far] lines to read }`.
+macro_rules! splice_groups {
+    ([$($head:tt)*] [$($fields:tt)*]) => {
+        fixed_packet! { $($head)* { $($fields)* } }
+    };
+    ([$($head:tt)*] [$($fields:tt)*] ..$group:ident @ $off:literal; $($rest:tt)*) => {
+        field_group! { $group @ $off, [$($head)*] [$($fields)*] $($rest)* }
+    };
+    (
+        [$($head:tt)*] [$($fields:tt)*]
+        $(#[$fm:meta])*
+        $f:ident: $kind:ident $([$($acc:ident),+])? @ $off:expr $(=> $role:ident)?;
+        $($rest:tt)*
+    ) => {
+        splice_groups! {
+            [$($head)*]
+            [$($fields)* $(#[$fm])* $f: $kind $([$($acc),+])? @ $off $(=> $role)?;]
+            $($rest)*
+        }
+    };
+}
+
+/// The end of an arm of `field_group!`: appends the group's fields `$group` to the fields
+/// read so far and reads on.
+macro_rules! group_fields {
+    ([[$($head:tt)*] [$($fields:tt)*] $($rest:tt)*] $($group:tt)*) => {
+        splice_groups! { [$($head)*] [$($fields)* $($group)*] $($rest)* }
+    };
+}
+
 macro_rules! stream_flag {
     (stream) => {
         true
@@ -173,9 +208,9 @@ macro_rules! packet_table {
         )*
     ) => {
         $(
-            fixed_packet! {
-                $(#[$vm])*
-                $view($fields, $ptype, $len) { $($body)* }
+            splice_groups! {
+                [$(#[$vm])* $view($fields, $ptype, $len)] []
+                $($body)*
             }
         )*
 

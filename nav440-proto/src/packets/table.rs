@@ -1,10 +1,11 @@
 //! The packet table: every fixed-layout packet, declared once.
 //!
 //! One line per field: `name: kind[si accessors] @ offset => role;` (grammar in
-//! `macros.rs`, kinds in [`fields`](super::fields)). The kind fixes wire type, scale, unit
-//! and docs; the role (optional) feeds [`Packet::attitude`], [`Packet::body_rates`],
-//! [`Packet::yaw_sample`], [`Packet::time`] and [`Packet::bit`]. Offsets are checked at
-//! compile time to tile the payload. Adding a packet type is one more entry here (plus its
+//! `macros.rs`, kinds in [`fields`](super::fields)), or one line per group of fields several
+//! packets share: `..group @ offset;` (the groups are `field_group!`'s arms, below). The kind
+//! fixes wire type, scale, unit and docs; the role (optional) feeds [`Packet::attitude`],
+//! [`Packet::body_rates`], [`Packet::yaw_sample`], [`Packet::time`] and [`Packet::bit`].
+//! Offsets are checked at compile time to tile the payload. Adding a packet type is one more entry here (plus its
 //! [`PacketType`] constant); see docs/PACKETS.md.
 
 #[allow(unused_imports)] // doc links
@@ -18,27 +19,60 @@ use crate::encode::{encode_frame, EncodeError};
 use crate::parser::Frame;
 use crate::types::PacketType;
 
+/// The field groups several packets share: `..group @ offset;` in a packet's body stands for
+/// the group's fields, the first at `offset` (`$o` below), the others after it.
+macro_rules! field_group {
+    (roll_pitch @ $o:literal, $($k:tt)*) => { group_fields! { [$($k)*]
+        /// Roll angle.
+        roll: angle[roll_rad, roll_deg] @ $o => roll;
+        /// Pitch angle.
+        pitch: angle[pitch_rad, pitch_deg] @ $o + 2 => pitch;
+    } };
+    (corrected_rates @ $o:literal, $($k:tt)*) => { group_fields! { [$($k)*]
+        /// X corrected angular rate.
+        rate_x: rate[rate_x_rad_s, rate_x_deg_s] @ $o => p;
+        /// Y corrected angular rate.
+        rate_y: rate[rate_y_rad_s, rate_y_deg_s] @ $o + 2 => q;
+        /// Z corrected angular rate.
+        rate_z: rate[rate_z_rad_s, rate_z_deg_s] @ $o + 4 => r;
+    } };
+    (accel @ $o:literal, $($k:tt)*) => { group_fields! { [$($k)*]
+        /// X acceleration.
+        accel_x: accel[accel_x_g] @ $o;
+        /// Y acceleration.
+        accel_y: accel[accel_y_g] @ $o + 2;
+        /// Z acceleration.
+        accel_z: accel[accel_z_g] @ $o + 4;
+    } };
+    (mag @ $o:literal, $($k:tt)*) => { group_fields! { [$($k)*]
+        /// X magnetic field.
+        mag_x: mag[mag_x_gauss] @ $o;
+        /// Y magnetic field.
+        mag_y: mag[mag_y_gauss] @ $o + 2;
+        /// Z magnetic field.
+        mag_z: mag[mag_z_gauss] @ $o + 4;
+    } };
+    (velocity @ $o:literal, $($k:tt)*) => { group_fields! { [$($k)*]
+        /// North velocity.
+        vel_n: vel[vel_n_m_s] @ $o;
+        /// East velocity.
+        vel_e: vel[vel_e_m_s] @ $o + 2;
+        /// Down velocity.
+        vel_d: vel[vel_d_m_s] @ $o + 4;
+    } };
+}
+
 packet_table! {
     /// S0: scaled sensor data (30-byte payload).
     S0(S0Fields, S0, 30, stream) {
-        /// X acceleration.
-        accel_x: accel[accel_x_g] @ 0;
-        /// Y acceleration.
-        accel_y: accel[accel_y_g] @ 2;
-        /// Z acceleration.
-        accel_z: accel[accel_z_g] @ 4;
+        ..accel @ 0;
         /// X angular rate.
         rate_x: rate[rate_x_rad_s, rate_x_deg_s] @ 6 => p;
         /// Y angular rate.
         rate_y: rate[rate_y_rad_s, rate_y_deg_s] @ 8 => q;
         /// Z angular rate.
         rate_z: rate[rate_z_rad_s, rate_z_deg_s] @ 10 => r;
-        /// X magnetic field.
-        mag_x: mag[mag_x_gauss] @ 12;
-        /// Y magnetic field.
-        mag_y: mag[mag_y_gauss] @ 14;
-        /// Z magnetic field.
-        mag_z: mag[mag_z_gauss] @ 16;
+        ..mag @ 12;
         /// X rate-sensor temperature.
         rate_temp_x: temp[rate_temp_x_degc] @ 18;
         /// Y rate-sensor temperature.
@@ -55,12 +89,7 @@ packet_table! {
 
     /// S1: scaled sensor data with a sample counter (24-byte payload).
     S1(S1Fields, S1, 24, stream) {
-        /// X acceleration.
-        accel_x: accel[accel_x_g] @ 0;
-        /// Y acceleration.
-        accel_y: accel[accel_y_g] @ 2;
-        /// Z acceleration.
-        accel_z: accel[accel_z_g] @ 4;
+        ..accel @ 0;
         /// X angular rate (uncorrected).
         rate_x: rate[rate_x_rad_s, rate_x_deg_s] @ 6 => p;
         /// Y angular rate (uncorrected).
@@ -103,30 +132,17 @@ packet_table! {
 
     /// A0: angles with magnetic yaw, GPSITOW time (30-byte payload).
     A0(A0Fields, A0, 30, stream) {
-        /// Roll angle.
-        roll: angle[roll_rad, roll_deg] @ 0 => roll;
-        /// Pitch angle.
-        pitch: angle[pitch_rad, pitch_deg] @ 2 => pitch;
+        ..roll_pitch @ 0;
         /// Magnetic yaw.
         yaw_mag: angle[yaw_mag_rad, yaw_mag_deg] @ 4 => yaw;
-        /// X corrected angular rate.
-        rate_x: rate[rate_x_rad_s, rate_x_deg_s] @ 6 => p;
-        /// Y corrected angular rate.
-        rate_y: rate[rate_y_rad_s, rate_y_deg_s] @ 8 => q;
-        /// Z corrected angular rate.
-        rate_z: rate[rate_z_rad_s, rate_z_deg_s] @ 10 => r;
+        ..corrected_rates @ 6;
         /// X corrected acceleration.
         accel_x: accel[accel_x_g] @ 12;
         /// Y corrected acceleration.
         accel_y: accel[accel_y_g] @ 14;
         /// Z corrected acceleration.
         accel_z: accel[accel_z_g] @ 16;
-        /// X magnetic field.
-        mag_x: mag[mag_x_gauss] @ 18;
-        /// Y magnetic field.
-        mag_y: mag[mag_y_gauss] @ 20;
-        /// Z magnetic field.
-        mag_z: mag[mag_z_gauss] @ 22;
+        ..mag @ 18;
         /// X rate-sensor temperature.
         x_rate_temp: temp[x_rate_temp_degc] @ 24;
         /// GPSITOW: low 16 bits of the GPS time of week.
@@ -137,30 +153,12 @@ packet_table! {
 
     /// A1: angles with magnetic yaw, timeITOW time (32-byte payload).
     A1(A1Fields, A1, 32, stream) {
-        /// Roll angle.
-        roll: angle[roll_rad, roll_deg] @ 0 => roll;
-        /// Pitch angle.
-        pitch: angle[pitch_rad, pitch_deg] @ 2 => pitch;
+        ..roll_pitch @ 0;
         /// Magnetic yaw.
         yaw_mag: angle[yaw_mag_rad, yaw_mag_deg] @ 4 => yaw;
-        /// X corrected angular rate.
-        rate_x: rate[rate_x_rad_s, rate_x_deg_s] @ 6 => p;
-        /// Y corrected angular rate.
-        rate_y: rate[rate_y_rad_s, rate_y_deg_s] @ 8 => q;
-        /// Z corrected angular rate.
-        rate_z: rate[rate_z_rad_s, rate_z_deg_s] @ 10 => r;
-        /// X acceleration.
-        accel_x: accel[accel_x_g] @ 12;
-        /// Y acceleration.
-        accel_y: accel[accel_y_g] @ 14;
-        /// Z acceleration.
-        accel_z: accel[accel_z_g] @ 16;
-        /// X magnetic field.
-        mag_x: mag[mag_x_gauss] @ 18;
-        /// Y magnetic field.
-        mag_y: mag[mag_y_gauss] @ 20;
-        /// Z magnetic field.
-        mag_z: mag[mag_z_gauss] @ 22;
+        ..corrected_rates @ 6;
+        ..accel @ 12;
+        ..mag @ 18;
         /// X rate-sensor temperature.
         x_rate_temp: temp[x_rate_temp_degc] @ 24;
         /// timeITOW: GPS time of week.
@@ -171,24 +169,11 @@ packet_table! {
 
     /// A2: angles with free (true) yaw, timeITOW time (30-byte payload).
     A2(A2Fields, A2, 30, stream) {
-        /// Roll angle.
-        roll: angle[roll_rad, roll_deg] @ 0 => roll;
-        /// Pitch angle.
-        pitch: angle[pitch_rad, pitch_deg] @ 2 => pitch;
+        ..roll_pitch @ 0;
         /// True (free) yaw.
         yaw_true: angle[yaw_true_rad, yaw_true_deg] @ 4 => yaw;
-        /// X corrected angular rate.
-        rate_x: rate[rate_x_rad_s, rate_x_deg_s] @ 6 => p;
-        /// Y corrected angular rate.
-        rate_y: rate[rate_y_rad_s, rate_y_deg_s] @ 8 => q;
-        /// Z corrected angular rate.
-        rate_z: rate[rate_z_rad_s, rate_z_deg_s] @ 10 => r;
-        /// X acceleration.
-        accel_x: accel[accel_x_g] @ 12;
-        /// Y acceleration.
-        accel_y: accel[accel_y_g] @ 14;
-        /// Z acceleration.
-        accel_z: accel[accel_z_g] @ 16;
+        ..corrected_rates @ 6;
+        ..accel @ 12;
         /// X rate-sensor temperature (the manual's 2/2^16 scale is a typo for 200/2^16).
         rate_temp_x: temp[rate_temp_x_degc] @ 18;
         /// Y rate-sensor temperature.
@@ -203,24 +188,11 @@ packet_table! {
 
     /// N0: navigation data, GPSITOW time (32-byte payload).
     N0(N0Fields, N0, 32, stream) {
-        /// Roll angle.
-        roll: angle[roll_rad, roll_deg] @ 0 => roll;
-        /// Pitch angle.
-        pitch: angle[pitch_rad, pitch_deg] @ 2 => pitch;
+        ..roll_pitch @ 0;
         /// True yaw.
         yaw_true: angle[yaw_true_rad, yaw_true_deg] @ 4 => yaw;
-        /// X corrected angular rate.
-        rate_x: rate[rate_x_rad_s, rate_x_deg_s] @ 6 => p;
-        /// Y corrected angular rate.
-        rate_y: rate[rate_y_rad_s, rate_y_deg_s] @ 8 => q;
-        /// Z corrected angular rate.
-        rate_z: rate[rate_z_rad_s, rate_z_deg_s] @ 10 => r;
-        /// North velocity.
-        vel_n: vel[vel_n_m_s] @ 12;
-        /// East velocity.
-        vel_e: vel[vel_e_m_s] @ 14;
-        /// Down velocity.
-        vel_d: vel[vel_d_m_s] @ 16;
+        ..corrected_rates @ 6;
+        ..velocity @ 12;
         /// Longitude.
         longitude: latlon[longitude_rad, longitude_deg] @ 18;
         /// Latitude.
@@ -235,30 +207,12 @@ packet_table! {
 
     /// N1: navigation data, timeITOW time; the NAV440's default packet (42-byte payload).
     N1(N1Fields, N1, 42, stream) {
-        /// Roll angle.
-        roll: angle[roll_rad, roll_deg] @ 0 => roll;
-        /// Pitch angle.
-        pitch: angle[pitch_rad, pitch_deg] @ 2 => pitch;
+        ..roll_pitch @ 0;
         /// True yaw.
         yaw_true: angle[yaw_true_rad, yaw_true_deg] @ 4 => yaw;
-        /// X corrected angular rate.
-        rate_x: rate[rate_x_rad_s, rate_x_deg_s] @ 6 => p;
-        /// Y corrected angular rate.
-        rate_y: rate[rate_y_rad_s, rate_y_deg_s] @ 8 => q;
-        /// Z corrected angular rate.
-        rate_z: rate[rate_z_rad_s, rate_z_deg_s] @ 10 => r;
-        /// X acceleration.
-        accel_x: accel[accel_x_g] @ 12;
-        /// Y acceleration.
-        accel_y: accel[accel_y_g] @ 14;
-        /// Z acceleration.
-        accel_z: accel[accel_z_g] @ 16;
-        /// North velocity.
-        vel_n: vel[vel_n_m_s] @ 18;
-        /// East velocity.
-        vel_e: vel[vel_e_m_s] @ 20;
-        /// Down velocity.
-        vel_d: vel[vel_d_m_s] @ 22;
+        ..corrected_rates @ 6;
+        ..accel @ 12;
+        ..velocity @ 18;
         /// Longitude.
         longitude: latlon[longitude_rad, longitude_deg] @ 24;
         /// Latitude.
@@ -275,10 +229,7 @@ packet_table! {
 
     /// B1: short angle packet (18-byte payload).
     B1(B1Fields, B1, 18, stream) {
-        /// Roll angle.
-        roll: angle[roll_rad, roll_deg] @ 0 => roll;
-        /// Pitch angle.
-        pitch: angle[pitch_rad, pitch_deg] @ 2 => pitch;
+        ..roll_pitch @ 0;
         /// Yaw angle.
         yaw: angle[yaw_rad, yaw_deg] @ 4 => yaw;
         /// Z angular rate.

@@ -99,36 +99,53 @@ fn counted(t: PacketType, payload: &[u8], width: usize) -> Result<&[u8], DecodeE
     }
 }
 
-/// `n` (U1) followed by `n` field IDs (U2): the SF/WF reply and the GF/RF request.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct FieldIds<'a> {
-    payload: &'a [u8],
+/// A list payload of `n` (U1) followed by `n` entries of `$width` bytes: the view type
+/// `$list` with `new`, `len`, `is_empty` (docs naming the entries `$entries`) and `entries`,
+/// the raw entries in order.
+macro_rules! counted_list {
+    ($(#[$doc:meta])* $list:ident, $width:literal, $entries:literal) => {
+        $(#[$doc])*
+        #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+        #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+        pub struct $list<'a> {
+            payload: &'a [u8],
+        }
+
+        impl<'a> $list<'a> {
+            #[doc = concat!(" Checks `payload.len() == 1 + ", $width, " n`; `t` names the type in the error.")]
+            pub fn new(t: PacketType, payload: &'a [u8]) -> Result<Self, DecodeError> {
+                counted(t, payload, $width).map(|payload| Self { payload })
+            }
+
+            #[doc = concat!(" Number of ", $entries, ".")]
+            pub fn len(&self) -> usize {
+                self.payload.len() / $width
+            }
+
+            #[doc = concat!(" True when there are no ", $entries, ".")]
+            pub fn is_empty(&self) -> bool {
+                self.len() == 0
+            }
+
+            /// The entries' bytes in order.
+            fn entries(&self) -> core::slice::ChunksExact<'a, u8> {
+                self.payload.get(1..).unwrap_or(&[]).chunks_exact($width)
+            }
+        }
+    };
 }
 
+counted_list!(
+    /// `n` (U1) followed by `n` field IDs (U2): the SF/WF reply and the GF/RF request.
+    FieldIds,
+    2,
+    "IDs"
+);
+
 impl<'a> FieldIds<'a> {
-    /// Checks `payload.len() == 1 + 2 n`; `t` names the type in the error.
-    pub fn new(t: PacketType, payload: &'a [u8]) -> Result<Self, DecodeError> {
-        counted(t, payload, 2).map(|payload| Self { payload })
-    }
-
-    /// Number of IDs.
-    pub fn len(&self) -> usize {
-        self.payload.len() / 2
-    }
-
-    /// True when there are no IDs.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
     /// The IDs in order.
     pub fn iter(&self) -> impl Iterator<Item = FieldId> + 'a {
-        self.payload
-            .get(1..)
-            .unwrap_or(&[])
-            .chunks_exact(2)
-            .map(|c| FieldId(u16::read(c, 0)))
+        self.entries().map(|c| FieldId(u16::read(c, 0)))
     }
 
     /// True when `id` is listed.
@@ -137,35 +154,17 @@ impl<'a> FieldIds<'a> {
     }
 }
 
-/// `n` (U1) followed by `n` (field ID U2, value U2) pairs: the GF/RF reply and the SF/WF request.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct FieldValues<'a> {
-    payload: &'a [u8],
-}
+counted_list!(
+    /// `n` (U1) followed by `n` (field ID U2, value U2) pairs: the GF/RF reply and the SF/WF request.
+    FieldValues,
+    4,
+    "pairs"
+);
 
 impl<'a> FieldValues<'a> {
-    /// Checks `payload.len() == 1 + 4 n`; `t` names the type in the error.
-    pub fn new(t: PacketType, payload: &'a [u8]) -> Result<Self, DecodeError> {
-        counted(t, payload, 4).map(|payload| Self { payload })
-    }
-
-    /// Number of pairs.
-    pub fn len(&self) -> usize {
-        self.payload.len() / 4
-    }
-
-    /// True when there are no pairs.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
     /// The (ID, value) pairs in order.
     pub fn iter(&self) -> impl Iterator<Item = (FieldId, u16)> + 'a {
-        self.payload
-            .get(1..)
-            .unwrap_or(&[])
-            .chunks_exact(4)
+        self.entries()
             .map(|c| (FieldId(u16::read(c, 0)), u16::read(c, 2)))
     }
 
