@@ -356,7 +356,7 @@ pub fn ci_steps() -> Result<(), String> {
     // The firmware against the simulated unit: boot, configure, stream, estimate, faults.
     ci_unit(None)?;
     // A quarter of an hour of stream with one fault of each kind (`cargo xtask soak`; an
-    // hour takes about 16 minutes of emulation here, docs/RELIABILITY.md).
+    // hour takes about 11 minutes of emulation here, docs/RELIABILITY.md).
     super::soak::soak(CI_SOAK_HOURS, 1)?;
     // A panic ends the run with exit status 1 and its message.
     let panic_elf = build(m4f_board.target, &[], "panic_check")?;
