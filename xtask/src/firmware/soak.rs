@@ -120,12 +120,7 @@ pub fn soak(hours: f64, seed: u64) -> Result<(), String> {
     };
     // The stream: `nav440 synth` at 100 Hz for H hours (generated, not stored).
     let capture = dir.join("soak.bin");
-    let secs = format!("{}", hours * 3600.0);
-    let seed_s = seed.to_string();
-    nav440_synth(
-        &capture,
-        &["--duration", &secs, "--seed", &seed_s, "--profile", "sin5"],
-    )?;
+    synth_stream(&capture, hours * 3600.0, seed)?;
     let inject = injections(hours, seed);
     let record = dir.join("soak-record.bin");
     let mut args: Vec<&str> = vec!["--fast", "--silence", "1", "--timeout", "0"];
@@ -200,6 +195,50 @@ pub fn soak(hours: f64, seed: u64) -> Result<(), String> {
         start.elapsed().as_secs_f64(),
         peak.unwrap_or(0)
     );
+    Ok(())
+}
+
+/// `nav440 synth`'s longest capture, s (`synth::MAX_DURATION_S`).
+const SEGMENT_S: f64 = 10_000.0;
+
+/// `synth`'s first time stamp, ms (its default `--start-itow`: day 2, 10:00).
+const START_ITOW_MS: u64 = 2 * 86_400_000 + 10 * 3_600_000;
+
+/// Writes `duration_s` of 100 Hz stream to `out`: one `nav440 synth` capture, or several of at
+/// most [`SEGMENT_S`] back to back (seeds `seed`, `seed + 1`, ...; each starts one period after
+/// the last packet of the one before, so the time stamps go on; the motion restarts).
+fn synth_stream(out: &std::path::Path, duration_s: f64, seed: u64) -> Result<(), String> {
+    use std::io::Write as _;
+    let mut file =
+        std::fs::File::create(out).map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+    let mut done_s = 0.0;
+    let mut k = 0u64;
+    while done_s < duration_s {
+        let d = (duration_s - done_s).min(SEGMENT_S);
+        let part = out.with_extension(format!("part{k}.bin"));
+        let itow = START_ITOW_MS + (done_s * 1000.0) as u64 + 10 * k;
+        let (secs, seed_s, itow_s) = (format!("{d}"), (seed + k).to_string(), itow.to_string());
+        nav440_synth(
+            &part,
+            &[
+                "--duration",
+                &secs,
+                "--seed",
+                &seed_s,
+                "--profile",
+                "sin5",
+                "--start-itow",
+                &itow_s,
+            ],
+        )?;
+        let bytes =
+            std::fs::read(&part).map_err(|e| format!("cannot read {}: {e}", part.display()))?;
+        file.write_all(&bytes)
+            .map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+        let _ = std::fs::remove_file(&part);
+        done_s += d;
+        k += 1;
+    }
     Ok(())
 }
 
