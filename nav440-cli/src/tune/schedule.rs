@@ -35,7 +35,7 @@ pub(super) fn tune_both(
 }
 
 /// Checks the noise variances of `--schedule`: 1 to [`estimators::adaptive::MAX_LEVELS`]
-/// levels, each > 0 and at most [`crate::cmd::MAX_NOISE_VAR`] deg^2, in increasing order.
+/// levels, each > 0 and at most `MAX_NOISE_VAR` (1e15) deg^2, in increasing order.
 pub fn check_levels(levels: &[f64]) -> Result<()> {
     if levels.is_empty()
         || levels.len() > estimators::adaptive::MAX_LEVELS
