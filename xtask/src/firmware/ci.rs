@@ -93,7 +93,7 @@ fn map_check_catches_an_image_at_0(f405: &Path) -> Result<(), String> {
 }
 
 /// Hours of stream time of the soak `ci` runs.
-const CI_SOAK_HOURS: f64 = 0.25;
+const CI_SOAK_HOURS: f64 = 1.0;
 
 /// The firmware part of `cargo xtask ci`.
 pub fn ci_steps() -> Result<(), String> {
@@ -355,8 +355,8 @@ pub fn ci_steps() -> Result<(), String> {
     }
     // The firmware against the simulated unit: boot, configure, stream, estimate, faults.
     ci_unit(None)?;
-    // A quarter of an hour of stream with one fault of each kind (`cargo xtask soak`; an
-    // hour takes about 11 minutes of emulation here, docs/RELIABILITY.md).
+    // An hour of stream with one fault of each kind (`cargo xtask soak`; about 11 minutes of
+    // emulation here, docs/RELIABILITY.md).
     super::soak::soak(CI_SOAK_HOURS, 1)?;
     // A panic ends the run with exit status 1 and its message.
     let panic_elf = build(m4f_board.target, &[], "panic_check")?;
