@@ -171,6 +171,13 @@ impl<T: Real, E: Estimator<T>> SampleAdapter<T, E> {
         }
     }
 
+    /// Forgets the last sample: the next one re-initialises the estimator from itself and
+    /// reports 0, as the first sample does (what a bank's `new_epoch` does to each of its
+    /// estimators).
+    pub fn restart(&mut self) {
+        self.clock.clear();
+    }
+
     /// The wrapped estimator.
     pub fn estimator(&self) -> &E {
         &self.est

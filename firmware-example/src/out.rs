@@ -99,7 +99,7 @@ pub fn summary(
     let c = pipe.estimation().counters();
     let f = pipe.front().time_faults();
     defmt::println!(
-        "firmware: bytes={=u64} frames={=u64} crc_errors={=u64} skipped={=u64} decode_errors={=u64} samples={=u64} rows={=u64} rejected={=u64} format_errors={=u64} uart_overruns={=u32} uart_stalls={=u32} yaw_packets={=u64} impossible={=u32} bad_backward={=u32} bad_forward={=u32} backward_jumps={=u32} kind_switches={=u32} other_kind={=u32} duplicates={=u32} gaps={=u32} bit_failed={=u64} bit_flag={=str} bit_hardware_error={=u64} bit_com_error={=u64} bit_software_error={=u64} bit_last=0x{=u16:04x} unit_bytes={=u64} stack_peak={=usize}",
+        "firmware: bytes={=u64} frames={=u64} crc_errors={=u64} skipped={=u64} decode_errors={=u64} samples={=u64} rows={=u64} rejected={=u64} format_errors={=u64} uart_overruns={=u32} uart_stalls={=u32} yaw_packets={=u64} impossible={=u32} bad_backward={=u32} bad_forward={=u32} backward_jumps={=u32} kind_switches={=u32} other_kind={=u32} duplicates={=u32} gaps={=u32} near_lock={=u64} lock_passes={=u32} bit_failed={=u64} bit_flag={=str} bit_hardware_error={=u64} bit_com_error={=u64} bit_software_error={=u64} bit_last=0x{=u16:04x} unit_bytes={=u64} stack_peak={=usize}",
         s.bytes,
         s.frames,
         s.crc_errors,
@@ -120,6 +120,8 @@ pub fn summary(
         f.other_kind,
         f.duplicates,
         c.gaps,
+        c.near_lock,
+        c.lock_passes,
         fc.bit.failed,
         nav440_pipeline::bit::FAILURE_FLAG,
         fc.bit.hardware_error,

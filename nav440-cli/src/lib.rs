@@ -15,6 +15,7 @@ pub mod plot;
 pub mod plots;
 pub mod progress;
 pub mod replay;
+pub mod score;
 pub mod serial;
 pub mod sim;
 pub mod synth;

@@ -49,7 +49,8 @@ pub const REFERENCE_AVE: AveConfig = AveConfig {
 /// Euler-kinematics rate, NaN where there is none) behind the same
 /// `estimators::SampleAdapter` the bank uses (same step, hold and maximum gap): reset to the
 /// first sample (output 0), then `n = round(dt / h)` steps per sample. Returns one
-/// acceleration per sample, deg/s^2 (NaN for a sample the adapter refuses).
+/// acceleration per sample, deg/s^2 (NaN for a sample the adapter refuses, and near gimbal
+/// lock, where there is no rate: the AVE restarts at the next sample with one).
 pub fn ave_on_rate(
     samples: &[Sample],
     cfg: &AveConfig,
@@ -62,11 +63,21 @@ pub fn ave_on_rate(
     let mut adapter =
         SampleAdapter::new(ave, opts.step_s, bank.max_gap_s(), opts.hold).map_err(bad)?;
     let axis = opts.axis();
+    let mut restart = false;
     Ok(samples
         .iter()
-        .map(|s| {
-            let rate = s.reference(axis).unwrap_or(f32::NAN);
-            adapter.update(s.t_us, rate).unwrap_or(f32::NAN)
+        .map(|s| match s.reference(axis) {
+            // Near gimbal lock: no rate to differentiate; restart after it, as the bank.
+            None => {
+                restart = true;
+                f32::NAN
+            }
+            Some(rate) => {
+                if std::mem::take(&mut restart) {
+                    adapter.restart();
+                }
+                adapter.update(s.t_us, rate).unwrap_or(f32::NAN)
+            }
         })
         .collect())
 }
@@ -105,21 +116,28 @@ pub fn row_mse(
     acc_ref: &[f32],
     window_s: f64,
 ) -> ([f64; FAMILY_COUNT], [f64; FAMILY_COUNT]) {
-    // Rows are a subsequence of samples (rejected samples are missing): match by time.
+    // Rows are a subsequence of samples (rejected samples are missing): match by time. A row
+    // not scored (gimbal lock, crate::score) gets a NaN reference, which `mse` leaves out.
+    let scored = row_scored(axis, rows, samples);
     let mut accr = Vec::with_capacity(rows.len());
     let mut j = 0;
-    for r in rows {
+    for (r, &k) in rows.iter().zip(&scored) {
         while j < samples.len() && samples[j].t_us < r.t_us {
             j += 1;
         }
-        accr.push(acc_ref.get(j).copied().unwrap_or(f32::NAN));
+        accr.push(match k {
+            true => acc_ref.get(j).copied().unwrap_or(f32::NAN),
+            false => f32::NAN,
+        });
     }
     let t: Vec<u64> = rows.iter().map(|r| r.t_us).collect();
     let rate: Vec<f32> = rows
         .iter()
-        .map(|r| {
+        .zip(&scored)
+        .map(|(r, &k)| {
             r.axis(axis)
                 .and_then(|a| a.reference_deg_s)
+                .filter(|_| k)
                 .unwrap_or(f32::NAN)
         })
         .collect();
@@ -139,6 +157,21 @@ pub fn row_mse(
         a[i] = mse(&t, &ea, &accr, window_s);
     }
     (v, a)
+}
+
+/// Per row of `rows` (a subsequence of `samples`, matched by time): whether `axis` is scored
+/// there ([`crate::score::Lock`]).
+pub fn row_scored(axis: Axis, rows: &[Row], samples: &[Sample]) -> Vec<bool> {
+    let lock = crate::score::Lock::of(samples, axis);
+    let mut j = 0;
+    rows.iter()
+        .map(|r| {
+            while j < samples.len() && samples[j].t_us < r.t_us {
+                j += 1;
+            }
+            lock.scored.get(j).copied().unwrap_or(false)
+        })
+        .collect()
 }
 
 /// (noise variance index, velocity MSE, acceleration MSE) of one run.
@@ -173,6 +206,11 @@ pub struct PaperResult {
     pub vel_clean: [f64; FAMILY_COUNT],
     /// Acceleration MSE without added noise, (deg/s^2)^2.
     pub acc_clean: [f64; FAMILY_COUNT],
+    /// Rows in the MSE window (of the run without noise).
+    pub rows_in_window: usize,
+    /// Of those, the rows scored: the others are near gimbal lock or within
+    /// [`crate::score::LOCK_SETTLE_S`] after it (roll and yaw only).
+    pub rows_scored: usize,
 }
 
 /// Checks an MSE window end (`--window` of `paper` and `tune`): a finite number of seconds in
@@ -253,6 +291,14 @@ pub fn run(
     o.noise = None;
     let (rows, _) = replay::estimate(samples, &o)?;
     let (vel_clean, acc_clean) = row_mse(opts.axis(), &rows, samples, &acc_ref, window_s);
+    let lim = (window_s * 1e6).round() as u64;
+    let in_window = |r: &&Row| r.t_us <= lim;
+    let rows_in_window = rows.iter().filter(in_window).count();
+    let rows_scored = rows
+        .iter()
+        .zip(row_scored(opts.axis(), &rows, samples))
+        .filter(|(r, k)| *k && in_window(r))
+        .count();
     let duration_s = samples.last().map_or(0.0, |s| s.t_s());
     Ok(PaperResult {
         capture: capture.to_string(),
@@ -268,6 +314,8 @@ pub fn run(
         acc,
         vel_clean,
         acc_clean,
+        rows_in_window,
+        rows_scored,
     })
 }
 
@@ -307,6 +355,52 @@ fn fmt_val(v: f64) -> String {
 }
 
 impl PaperResult {
+    /// The line every output form reports about the rows scored, e.g. "rows scored: 3480 of
+    /// 3501 in the MSE window (21 left out near gimbal lock (|pitch| >= 80 deg) and within 1 s
+    /// after it)".
+    pub fn scored_line(&self) -> String {
+        let left = self.rows_in_window - self.rows_scored.min(self.rows_in_window);
+        let mut s = format!(
+            "rows scored: {} of {} in the MSE window",
+            self.rows_scored, self.rows_in_window
+        );
+        if left > 0 {
+            s.push_str(&format!(
+                " ({left} left out near gimbal lock (|pitch| >= {} deg) and within {} s after it)",
+                nav440_pipeline::euler::PITCH_LIMIT_DEG,
+                crate::score::LOCK_SETTLE_S
+            ));
+        }
+        s
+    }
+
+    /// One warning per family and table whose MSE is not finite (no row scored, or the
+    /// estimate diverged), naming the window; empty when every MSE is a number.
+    pub fn warnings(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        for (what, ours, clean) in [
+            ("velocity", &self.vel, &self.vel_clean),
+            ("acceleration", &self.acc, &self.acc_clean),
+        ] {
+            for (i, name) in COLUMNS.iter().enumerate() {
+                let runs = [ours[0][i], ours[1][i], clean[i]];
+                if runs.iter().all(|v| v.is_finite()) {
+                    continue;
+                }
+                let why = if self.rows_scored == 0 {
+                    "no row is scored"
+                } else {
+                    "the estimate is not finite (diverged)"
+                };
+                out.push(format!(
+                    "{name} {what} MSE over 0-{} s is not a number: {why}",
+                    self.window_s
+                ));
+            }
+        }
+        out
+    }
+
     /// (title, ours, paper, no-noise baseline) of Tables 1 and 3.
     #[allow(clippy::type_complexity)]
     fn tables(
@@ -355,6 +449,8 @@ impl PaperResult {
             "velocity reference: {}; acceleration reference: AVE (k=500, gamma1=20000) on it, same adapter\n",
             velocity_reference(self.axis)
         ));
+        s.push_str(&self.scored_line());
+        s.push('\n');
         for (title, ours, paper, clean) in self.tables() {
             s.push_str(&format!("\n{title}\n"));
             s.push_str(&format!("{:<14}", "sigma^2"));
@@ -390,6 +486,9 @@ impl PaperResult {
     /// Markdown tables (for the README).
     pub fn to_markdown(&self) -> String {
         let mut s = String::new();
+        if self.rows_scored < self.rows_in_window {
+            s.push_str(&format!("\n{}\n", self.scored_line()));
+        }
         for (title, ours, paper, clean) in self.tables() {
             s.push_str(&format!(
                 "\n{title}\n\n| sigma^2 | | {} |\n|---|---|{}\n",
@@ -447,6 +546,8 @@ impl PaperResult {
                 "velocity_reference": velocity_reference(self.axis),
                 "acceleration_reference": "AVE k=500 gamma1=20000 on the velocity reference, same sample adapter",
             },
+            "rows_in_window": self.rows_in_window,
+            "rows_scored": self.rows_scored,
             "velocity_mse": table(&self.vel, &PAPER_VEL_MSE, &self.vel_clean),
             "acceleration_mse": table(&self.acc, &PAPER_ACC_MSE, &self.acc_clean),
         })

@@ -100,11 +100,21 @@ fn draw<DB: DrawingBackend>(
             .draw()?;
         for s in &panel.series {
             let style = ShapeStyle::from(&s.color).stroke_width(s.width);
-            let pts = s.points.iter().map(|&(t, v)| (t, v.clamp(y0, y1)));
+            // A non-finite value (no estimate: near gimbal lock, or not scored) breaks the
+            // line: each finite run is its own polyline; the legend entry comes with the first.
+            let mut runs = s
+                .points
+                .split(|&(t, v)| !(t.is_finite() && v.is_finite()))
+                .filter(|run| !run.is_empty());
+            let first = runs.next().unwrap_or(&[]);
+            let clamp = move |&(t, v): &(f64, f64)| (t, v.clamp(y0, y1));
             chart
-                .draw_series(LineSeries::new(pts, style))?
+                .draw_series(LineSeries::new(first.iter().map(clamp), style))?
                 .label(s.name.clone())
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style));
+            for run in runs {
+                chart.draw_series(LineSeries::new(run.iter().map(clamp), style))?;
+            }
         }
         chart
             .configure_series_labels()

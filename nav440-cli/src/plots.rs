@@ -31,15 +31,40 @@ pub fn panels(
     for (s, a) in samples.iter().zip(&acc_ref) {
         accr_by_t.insert(s.t_us, *a);
     }
-    let rows: Vec<_> = rows.into_iter().filter(|r| keep(t_of(r.t_us))).collect();
+    // Rows not scored (near gimbal lock and settling after it, crate::score) are drawn as
+    // gaps in the estimates, as `paper` and `tune` leave them out.
+    let scored = crate::paper::row_scored(axis, &rows, samples);
+    let left_out = scored.iter().filter(|&&k| !k).count();
+    if let Some(note) = crate::score::left_out_note(left_out, rows.len()) {
+        eprintln!("nav440: plot: {note}; drawn as gaps");
+    }
+    let rows: Vec<(replay::Row, bool)> = rows
+        .into_iter()
+        .zip(scored)
+        .filter(|(r, _)| keep(t_of(r.t_us)))
+        .collect();
     if rows.is_empty() {
         return Err(Error::Usage("no sample in the requested time range".into()));
     }
-    let line = |name: &str, color: RGBColor, width: u32, f: &dyn Fn(&replay::Row) -> f64| Series {
+    // `estimate`: a value left out where the row is not scored.
+    let series = |name: &str,
+                  color: RGBColor,
+                  width: u32,
+                  estimate: bool,
+                  f: &dyn Fn(&replay::Row) -> f64| Series {
         name: name.to_string(),
         color,
         width,
-        points: rows.iter().map(|r| (t_of(r.t_us), f(r))).collect(),
+        points: rows
+            .iter()
+            .map(|(r, k)| {
+                let v = if estimate && !k { f64::NAN } else { f(r) };
+                (t_of(r.t_us), v)
+            })
+            .collect(),
+    };
+    let line = |name: &str, color: RGBColor, width: u32, f: &dyn Fn(&replay::Row) -> f64| {
+        series(name, color, width, false, f)
     };
     let out = |r: &replay::Row| r.axis(axis).map(|a| a.out);
     let yaw = Panel {
@@ -63,7 +88,7 @@ pub fn panels(
         |r: &replay::Row| f64::from(accr_by_t.get(&r.t_us).copied().unwrap_or(f32::NAN));
     let range_of = |f: &dyn Fn(&replay::Row) -> f64| {
         let (mut a, mut b) = (f64::INFINITY, f64::NEG_INFINITY);
-        for r in &rows {
+        for (r, _) in &rows {
             let v = f(r);
             if v.is_finite() {
                 a = a.min(v);
@@ -76,12 +101,13 @@ pub fn panels(
     let vr = range_of(&rate_ref);
     let ar = range_of(&acc_ref_f);
     let group = |title: &str, unit: &str, idx: &[usize], acc: bool| {
-        let mut series = Vec::new();
+        let mut lines = Vec::new();
         for &i in idx {
-            series.push(line(
+            lines.push(series(
                 NAMES[i],
                 ESTIMATOR_COLORS[i],
                 1,
+                true,
                 &|r: &replay::Row| {
                     out(r).map_or(f64::NAN, |o| {
                         f64::from(if acc {
@@ -94,7 +120,7 @@ pub fn panels(
             ));
         }
         // The reference last, in black over the estimates, so it stays visible.
-        series.push(if acc {
+        lines.push(if acc {
             line("reference: AVE on measured rate", BLACK, 2, &acc_ref_f)
         } else {
             line("reference: measured rate", BLACK, 2, &rate_ref)
@@ -102,7 +128,7 @@ pub fn panels(
         Panel {
             title: title.to_string(),
             y_label: unit.to_string(),
-            series,
+            series: lines,
             y_range: Some(if acc { ar } else { vr }),
         }
     };

@@ -39,6 +39,12 @@ impl Axis {
     pub const fn wraps(self) -> bool {
         !matches!(self, Axis::Pitch)
     }
+
+    /// `true` for an angle whose Euler rate is singular at pitch +-90 deg (roll, yaw): its bank
+    /// is not fed near gimbal lock ([`crate::euler::near_lock`]) and restarts after it.
+    pub const fn singular_near_lock(self) -> bool {
+        !matches!(self, Axis::Pitch)
+    }
 }
 
 /// A non-empty or empty set of axes (a bit per axis).

@@ -100,8 +100,8 @@ pub fn write_axis<W: Write, O: EstimatorOutput>(
 }
 
 /// Writes one row (without line terminator): the time, then the fields of each axis of
-/// `axes` ([`write_axis`]; `2 + O::CHANNELS` empty fields for an axis the row lacks, which
-/// the pipeline never emits).
+/// `axes` ([`write_axis`]; `2 + O::CHANNELS` empty fields for an axis the row lacks: roll and
+/// yaw near gimbal lock, see [`crate::euler::near_lock`]).
 pub fn write_row<W: Write, O: EstimatorOutput>(
     w: &mut W,
     row: &Row<O>,

@@ -9,7 +9,8 @@
 //! rates divide by cos theta: near |pitch| = 90 deg (gimbal lock) they are undefined and
 //! amplify every error of q, r and the angles by 1 / cos theta. Beyond [`PITCH_LIMIT_DEG`] they
 //! are not given (`None`: an empty CSV field, left out of every MSE); the pitch rate is defined
-//! at any pitch. Computed in `f32` with `libm` on every target, so the host and the firmware
+//! at any pitch. The same limit decides where the roll and yaw banks are not fed
+//! ([`near_lock`], see `crate::Estimation`). Computed in `f32` with `libm` on every target, so the host and the firmware
 //! give the same bits. A level unit (roll = pitch = 0) gives exactly p, q, r.
 
 use crate::Axis;
@@ -19,6 +20,14 @@ use crate::Axis;
 /// error; one pitch LSB of 0.0055 deg changes tan theta by 0.2 %). At |pitch| >= 80 deg they
 /// are `None`.
 pub const PITCH_LIMIT_DEG: f32 = 80.0;
+
+/// `true` when `pitch_deg` is a finite pitch (deg) with |pitch| >= [`PITCH_LIMIT_DEG`]: the
+/// samples where the roll and yaw angles swing with the heading of the pole rather than with
+/// the body's motion. The pipeline does not feed the roll and yaw banks there and restarts them
+/// when the pitch returns below the limit.
+pub fn near_lock(pitch_deg: f32) -> bool {
+    pitch_deg.abs() >= PITCH_LIMIT_DEG
+}
 
 /// Degrees to radians in `f32`.
 const DEG_TO_RAD: f32 = core::f32::consts::PI / 180.0;

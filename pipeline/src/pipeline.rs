@@ -14,6 +14,13 @@
 //! (the banks re-initialise), GPSITOW samples in a timeITOW stream are ignored; each is
 //! counted. A sample any selected axis's bank rejects (non-finite or out-of-range angle, time
 //! not increasing) yields no row and is counted by reason (the first rejecting axis's).
+//!
+//! Gimbal lock: while the pitch is at or beyond [`crate::euler::PITCH_LIMIT_DEG`] (80 deg),
+//! the roll and yaw angles swing with the heading of the pole, up to 100 deg between two
+//! samples, and their banks would ring for a second after each pass. They are not fed there:
+//! the row carries no roll and yaw fields (empty CSV fields; the pitch is estimated as
+//! always), and the first sample below the limit restarts their banks from itself, as a new
+//! time epoch does ([`Counters::near_lock`], [`Counters::lock_passes`]).
 
 use crate::period::{PeriodEstimator, WARMUP_SAMPLES};
 use crate::sample::{Frontend, Sample};
@@ -115,7 +122,8 @@ pub struct AxisRow<O = PaperOutput> {
 pub struct Row<O = PaperOutput> {
     /// Sample time, us since the first sample.
     pub t_us: u64,
-    /// Roll, pitch, yaw ([`Axis::index`]); `Some` exactly for the selected axes.
+    /// Roll, pitch, yaw ([`Axis::index`]); `Some` for the selected axes, except roll and yaw
+    /// near gimbal lock ([`crate::euler::near_lock`]: their banks are not fed there).
     pub axes: [Option<AxisRow<O>>; 3],
 }
 
@@ -169,6 +177,11 @@ pub struct Counters {
     pub rejected: Rejections,
     /// Gaps longer than the gap rule (the most of any axis's bank).
     pub gaps: u32,
+    /// Samples at or beyond the gimbal-lock limit ([`crate::euler::near_lock`]) whose roll and
+    /// yaw were not estimated (counted when a roll or yaw bank runs).
+    pub near_lock: u64,
+    /// Returns from the gimbal-lock limit: the roll and yaw banks restarted.
+    pub lock_passes: u32,
 }
 
 /// Where the back end is.
@@ -201,6 +214,8 @@ pub struct Estimation<B, E, F, const N: usize = 3> {
     /// A bank could not be built for the measured period.
     failed: Option<E>,
     counters: Counters,
+    /// The last sample was near gimbal lock: the roll and yaw banks restart at the next one.
+    in_lock: bool,
 }
 
 impl<B, E, F, const N: usize> core::fmt::Debug for Estimation<B, E, F, N> {
@@ -234,6 +249,7 @@ impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize> Estimation<B, 
             banks: heapless::Vec::new(),
             failed: None,
             counters: Counters::default(),
+            in_lock: false,
         }
     }
 
@@ -266,7 +282,7 @@ impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize> Estimation<B, 
         self.counters.samples = self.counters.samples.saturating_add(1);
         match self.phase {
             Phase::Running => {
-                run_sample(&mut self.banks, self.axes, &mut self.counters, &s, emit);
+                run_sample(&mut self.banks, self.axes, &mut self.counters, &mut self.in_lock, &s, emit);
                 Ok(())
             }
             Phase::Warmup => {
@@ -312,7 +328,7 @@ impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize> Estimation<B, 
             }
         }
         for s in &self.held {
-            run_sample(&mut self.banks, self.axes, &mut self.counters, s, emit);
+            run_sample(&mut self.banks, self.axes, &mut self.counters, &mut self.in_lock, s, emit);
         }
         self.held.clear();
         Ok(())
@@ -327,12 +343,15 @@ impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>> Estimation<B, E, F> {
     }
 }
 
-/// Runs one sample through every selected axis's bank and emits its row.
+/// Runs one sample through every selected axis's bank and emits its row. Near gimbal lock
+/// the roll and yaw banks are skipped (their fields stay `None`); the first sample after it
+/// reaches them as the start of a new epoch (`in_lock` carries the state between samples).
 #[inline(never)]
 fn run_sample<B: AxisBank>(
     banks: &mut [B],
     axes: Axes,
     counters: &mut Counters,
+    in_lock: &mut bool,
     s: &Sample,
     emit: &mut dyn FnMut(&Row<B::Output>),
 ) {
@@ -341,11 +360,35 @@ fn run_sample<B: AxisBank>(
         t_us: s.t_us,
         axes: [None; 3],
     };
+    let near_lock = s.near_lock();
+    let singular_axes = axes.iter().any(Axis::singular_near_lock);
+    if singular_axes && near_lock {
+        counters.near_lock = counters.near_lock.saturating_add(1);
+    }
+    let restart = Sample {
+        new_epoch: true,
+        ..*s
+    };
+    let leaving_lock = *in_lock && !near_lock;
+    if singular_axes && leaving_lock {
+        counters.lock_passes = counters.lock_passes.saturating_add(1);
+    }
+    *in_lock = near_lock;
     let mut err = None;
     let mut gaps = 0;
     for (bank, axis) in banks.iter_mut().zip(axes.iter()) {
         let i = axis.index();
-        match bank.step(s, s.angle(axis)) {
+        let input = if !axis.singular_near_lock() {
+            s
+        } else if near_lock {
+            gaps = gaps.max(bank.gaps());
+            continue;
+        } else if leaving_lock {
+            &restart
+        } else {
+            s
+        };
+        match bank.step(input, s.angle(axis)) {
             Ok(out) => {
                 row.axes[i] = Some(AxisRow {
                     reference_deg_s: refs[i],
@@ -484,8 +527,8 @@ impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize> Pipeline<B, E,
         )?;
         write!(
             w,
-            " yaw_packets={} impossible={} bad_backward={} bad_forward={} backward_jumps={} kind_switches={} other_kind={} duplicates={} gaps={}",
-            fc.attitude_packets, f.impossible, f.bad_backward, f.bad_forward, f.backward_jumps, f.kind_switches, f.other_kind, f.duplicates, c.gaps
+            " yaw_packets={} impossible={} bad_backward={} bad_forward={} backward_jumps={} kind_switches={} other_kind={} duplicates={} gaps={} near_lock={} lock_passes={}",
+            fc.attitude_packets, f.impossible, f.bad_backward, f.bad_forward, f.backward_jumps, f.kind_switches, f.other_kind, f.duplicates, c.gaps, c.near_lock, c.lock_passes
         )?;
         write!(
             w,

@@ -83,6 +83,12 @@ impl Sample {
         self.references()[axis.index()]
     }
 
+    /// `true` when the sample's pitch is at or beyond the gimbal-lock limit
+    /// ([`crate::euler::near_lock`]).
+    pub fn near_lock(&self) -> bool {
+        crate::euler::near_lock(self.angles_deg[1])
+    }
+
     /// The reference rates of roll, pitch, yaw (deg/s), see [`crate::euler`].
     pub fn references(&self) -> [Option<f32>; 3] {
         euler_rates_deg(self.angles_deg[0], self.angles_deg[1], self.rates_deg_s)

@@ -31,6 +31,9 @@ pub fn run(a: &Args) -> Result<()> {
     paper::check_window(a.window)?;
     let samples = replay::read_samples(&a.file)?;
     let res = paper::run(&samples, &opts, a.window, &replay::capture_name(&a.file))?;
+    for w in res.warnings() {
+        eprintln!("nav440: warning: {w}");
+    }
     let text = if a.json {
         format!("{}\n", res.to_json())
     } else if a.markdown {

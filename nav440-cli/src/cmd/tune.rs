@@ -126,6 +126,9 @@ pub fn run(a: Args) -> Result<()> {
     let res = tune::tune_with_progress(&samples, &opts, &spec, &progress);
     progress.finish();
     let res = res?;
+    for w in &res.warnings {
+        eprintln!("nav440: warning: {w}");
+    }
     super::stdout_or_file(None, |w| w.write_all(res.to_text().as_bytes()))?;
     if let Some(p) = a.output {
         write_file(&p, &res.to_toml())?;

@@ -62,10 +62,7 @@ impl Estimation {
     ) -> Result<EstimationSummary> {
         forward_rows(on_row, |emit| self.inner.finish(emit))?;
         let c = self.inner.counters();
-        Ok(EstimationSummary {
-            rejected: c.rejected,
-            gaps: c.gaps,
-        })
+        Ok(EstimationSummary::of(c))
     }
 }
 
@@ -184,10 +181,7 @@ pub(crate) fn stream_bank<'a, O: HostOutput, W: std::io::Write + ?Sized>(
     sink.end()?;
     let c = pipe.estimation().counters();
     Ok(StreamReport {
-        summary: EstimationSummary {
-            rejected: c.rejected,
-            gaps: c.gaps,
-        },
+        summary: EstimationSummary::of(c),
         faults: *pipe.front().time_faults(),
         bit: pipe.front().counters().bit,
         schedule_misfit_us: opts

@@ -111,6 +111,33 @@ pub struct EstimationSummary {
     pub rejected: Rejections,
     /// Gaps longer than the gap rule, where the bank re-initialised (new epochs not counted).
     pub gaps: u32,
+    /// Samples near gimbal lock whose roll and yaw were not estimated
+    /// (`nav440_pipeline::Counters::near_lock`).
+    pub near_lock: u64,
+    /// Returns from gimbal lock, where the roll and yaw banks restarted.
+    pub lock_passes: u32,
+}
+
+impl EstimationSummary {
+    /// The summary of the back end's counters.
+    pub fn of(c: &nav440_pipeline::Counters) -> Self {
+        Self {
+            rejected: c.rejected,
+            gaps: c.gaps,
+            near_lock: c.near_lock,
+            lock_passes: c.lock_passes,
+        }
+    }
+}
+
+/// The one-line warning for samples near gimbal lock (`None` when there were none).
+pub fn lock_warning(near_lock: u64, passes: u32) -> Option<String> {
+    (near_lock > 0).then(|| {
+        format!(
+            "{near_lock} samples with |pitch| >= {} deg (gimbal lock): roll and yaw are not estimated there (empty fields) and their banks restart after each of the {passes} returns below it",
+            nav440_pipeline::euler::PITCH_LIMIT_DEG
+        )
+    })
 }
 
 /// What [`estimate_stream`] reports besides the CSV.
@@ -138,6 +165,10 @@ impl StreamReport {
             .into_iter()
             .chain(rejection_warning(&self.summary.rejected))
             .chain(fault_warning(&self.faults, self.summary.gaps))
+            .chain(lock_warning(
+                self.summary.near_lock,
+                self.summary.lock_passes,
+            ))
             .chain(self.schedule_misfit_us.map(schedule_warning))
             .chain(end_of_input_warning(self.end_dropped_bytes))
     }

@@ -28,6 +28,7 @@ use crate::optim::{self, Method};
 use crate::paper::{ave_on_rate, row_mse, steps_between, REFERENCE_AVE};
 use crate::progress::Progress;
 use crate::replay::{self, EstimateOptions, Noise, Sample};
+use crate::score::Lock;
 use estimators::{
     for_each_family, BankConfig, Estimator, Family, FamilyVisitor, Gains, Hold, Kalman,
     KalmanConfig, KalmanNoise, Law, SampleAdapter, Scheduling, Scorer, Series, Stateful, FAMILIES,
@@ -109,6 +110,13 @@ pub struct TuneResult {
     pub acc_before: [f64; FAMILY_COUNT],
     /// Acceleration MSE with the tuned gains.
     pub acc_after: [f64; FAMILY_COUNT],
+    /// Samples scored in the training range.
+    pub rows_scored: usize,
+    /// Samples of the training range left out near gimbal lock and within
+    /// [`crate::score::LOCK_SETTLE_S`] after it.
+    pub rows_left_out: usize,
+    /// Families with no finite training MSE (their gains are left as they were).
+    pub warnings: Vec<String>,
 }
 
 /// Precomputed inputs of one tuning problem.
@@ -123,16 +131,31 @@ struct Problem<'a> {
     sample_period_s: f32,
     /// MSE range, s.
     range: (f64, f64),
+    /// Which samples are fed and scored (gimbal lock, [`crate::score`]).
+    lock: Lock,
     /// Told of every evaluation and family fit (`nav440 tune`'s progress bar).
     progress: Option<&'a Progress>,
 }
 
 /// MSE of `est` against `reference` over the samples with `from <= t <= to` (s); NaN if none.
-pub fn mse_range(t_us: &[u64], est: &[f32], reference: &[f32], (from, to): (f64, f64)) -> f64 {
+pub fn mse_range(t_us: &[u64], est: &[f32], reference: &[f32], range: (f64, f64)) -> f64 {
+    mse_scored(t_us, est, reference, range, None)
+}
+
+/// [`mse_range`] over the samples `scored` marks (all when `None`; see [`crate::score`]):
+/// NaN if none is scored, non-finite if an estimate is.
+pub fn mse_scored(
+    t_us: &[u64],
+    est: &[f32],
+    reference: &[f32],
+    (from, to): (f64, f64),
+    scored: Option<&[bool]>,
+) -> f64 {
     let (lo, hi) = ((from * 1e6).round() as u64, (to * 1e6).round() as u64);
     let (mut sum, mut n) = (0.0f64, 0usize);
-    for ((&t, &e), &r) in t_us.iter().zip(est).zip(reference) {
-        if t >= lo && t <= hi {
+    for (k, ((&t, &e), &r)) in t_us.iter().zip(est).zip(reference).enumerate() {
+        let counted = scored.is_none_or(|m| m.get(k).copied().unwrap_or(false));
+        if counted && t >= lo && t <= hi {
             let d = f64::from(e) - f64::from(r);
             sum += d * d;
             n += 1;
@@ -278,10 +301,19 @@ impl Problem<'_> {
                 return f64::INFINITY;
             };
             let mut out = Vec::with_capacity(y.len());
-            for (s, &v) in self.samples.iter().zip(y) {
+            let mut restart = false;
+            for ((s, &v), &fed) in self.samples.iter().zip(y).zip(&self.lock.fed) {
+                if !fed {
+                    restart = true;
+                    out.push(f32::NAN);
+                    continue;
+                }
+                if std::mem::take(&mut restart) {
+                    ad.restart();
+                }
                 out.push(ad.update(s.t_us, v).unwrap_or(f32::NAN));
             }
-            let m = mse_range(&t, &out, reference, self.range);
+            let m = mse_scored(&t, &out, reference, self.range, Some(&self.lock.scored));
             if !m.is_finite() {
                 return f64::INFINITY;
             }
@@ -313,7 +345,13 @@ impl Problem<'_> {
             };
             let mut out = Vec::with_capacity(y.len());
             let mut prev: Option<u64> = None;
-            for (s, &v) in self.samples.iter().zip(y) {
+            for ((s, &v), &fed) in self.samples.iter().zip(y).zip(&self.lock.fed) {
+                if !fed {
+                    // Restarts at the next sample fed, as the bank does after gimbal lock.
+                    prev = None;
+                    out.push(f32::NAN);
+                    continue;
+                }
                 match prev {
                     None => kf.reset(v),
                     // Like the bank: dt = (number of steps h in the interval) * h.
@@ -326,7 +364,7 @@ impl Problem<'_> {
                     kf.velocity()
                 });
             }
-            let m = mse_range(&t, &out, reference, self.range);
+            let m = mse_scored(&t, &out, reference, self.range, Some(&self.lock.scored));
             if !m.is_finite() {
                 return f64::INFINITY;
             }
@@ -395,7 +433,10 @@ fn tune_family(
             let r = fit::<F::Gains>(self.method, f64::from(h), &g0.search_point(), &f);
             self.stats[column] = (r.cost, r.evals, r.secs);
             self.p.fitted();
-            self.out.set::<F>(Some(g0.with_search_point(&r.x)));
+            // Nothing finite to minimise: the family keeps the gains it started from.
+            if r.cost.is_finite() {
+                self.out.set::<F>(Some(g0.with_search_point(&r.x)));
+            }
         }
     }
     let mut tune = Tune {
@@ -475,6 +516,24 @@ pub fn tune_with_progress(
         spec.holds.clone()
     };
     let hold_before = opts.hold;
+    let lock = Lock::of(samples, axis);
+    let rows_scored = lock.scored_in(samples, spec.train);
+    let rows_left_out = lock.left_out_in(samples, spec.train);
+    if rows_scored == 0 {
+        return Err(Error::Usage(format!(
+            "nothing to score on the training range {}-{} s: {}",
+            spec.train.0,
+            spec.train.1,
+            match rows_left_out {
+                0 => "no sample lies in it".to_string(),
+                n => format!(
+                    "all its {n} samples are near gimbal lock (|pitch| >= {} deg) or within {} s after it",
+                    nav440_pipeline::euler::PITCH_LIMIT_DEG,
+                    crate::score::LOCK_SETTLE_S
+                ),
+            }
+        )));
+    }
     let base_before = opts.bank_config_for(samples);
     let paper = GainsFile::from_bank(&base_before);
     // The Euler-kinematics rate; NaN (left out of every MSE) near gimbal lock.
@@ -502,6 +561,7 @@ pub fn tune_with_progress(
             max_gap_s: base.max_gap_s(),
             sample_period_s: base.sample_period_s,
             range: spec.train,
+            lock: Lock::of(samples, axis),
             progress: Some(progress),
         };
         let (velocity, acceleration) = std::thread::scope(|s| {
@@ -539,6 +599,25 @@ pub fn tune_with_progress(
     let Some((_, gains, hold)) = best else {
         return Err(Error::Other("no hold to tune".into()));
     };
+    let mut warnings = Vec::new();
+    if let Some(run) = runs.iter().find(|r| r.hold == hold) {
+        for (half, what) in ["velocity", "acceleration"].iter().enumerate() {
+            for (i, name) in NAMES.iter().enumerate() {
+                if !run.cost[half][i].is_finite() {
+                    warnings.push(format!(
+                        "{name} {what}: no finite training MSE on {}-{} s ({rows_scored} rows scored); its gains are left as they were",
+                        spec.train.0, spec.train.1
+                    ));
+                }
+            }
+        }
+        if run.cost.iter().flatten().all(|c| !c.is_finite()) {
+            return Err(Error::Other(format!(
+                "no family could be scored on the training range {}-{} s ({rows_scored} rows scored): every training MSE is not finite, so nothing was tuned and no file is written",
+                spec.train.0, spec.train.1
+            )));
+        }
+    }
     // Before/after through the whole bank, on the test range, against the same references.
     let bank_mse =
         |cfg: BankConfig| bank_mse_with(samples, opts, &acc_ref, cfg, noise_var, 1..=seeds, test);
@@ -563,6 +642,9 @@ pub fn tune_with_progress(
         vel_after,
         acc_before,
         acc_after,
+        rows_scored,
+        rows_left_out,
+        warnings,
     })
 }
 

@@ -116,6 +116,7 @@ pub fn tune_preset(
             max_gap_s: cfg.max_gap_s(),
             sample_period_s: cfg.sample_period_s,
             range: c.range,
+            lock: crate::score::Lock::of(&c.samples, axis),
             progress: None,
         });
     }

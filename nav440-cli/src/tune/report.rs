@@ -41,6 +41,12 @@ impl TuneResult {
             self.noise_var, self.train.0, self.train.1, self.test.0, self.test.1, self.seeds
         );
         s.push_str(&format!(
+            "training rows scored: {}{}\n",
+            self.rows_scored,
+            crate::score::left_out_note(self.rows_left_out, self.rows_scored + self.rows_left_out)
+                .map_or(String::new(), |n| format!(" ({n})"))
+        ));
+        s.push_str(&format!(
             "method: {}; hold kept: {} (before: {}); {} evaluations in {:.1} s\n",
             match self.method {
                 Method::Search =>
