@@ -40,7 +40,7 @@ use nav440_cli::optim::Method;
 use nav440_cli::paper::{ave_on_rate, COLUMNS as NAMES, REFERENCE_AVE};
 use nav440_cli::replay::{self, Axis, EstimateOptions, Sample};
 use nav440_cli::synth::{angle_raw, ANGLE_LSB_DEG};
-use nav440_cli::tune::{mse_range, tune_with, tuned_ave_deltahat, TuneSpec};
+use nav440_cli::tune::{mse_range, tune_with, tuned_ave_deltahat, Families, TuneSpec};
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
@@ -220,6 +220,7 @@ fn tuned_for(samples: &[Sample], noise_var: f64, range: (f64, f64)) -> BankConfi
             test: None,
             method: Method::Search,
             holds: vec![Hold::Linear],
+            families: Families::ALL,
         },
     )
     .unwrap();

@@ -13,7 +13,7 @@ use host_tests::data;
 use nav440_cli::optim::Method;
 use nav440_cli::paper::COLUMNS;
 use nav440_cli::replay::{self, EstimateOptions};
-use nav440_cli::tune::{tune_with, TuneSpec};
+use nav440_cli::tune::{tune_with, Families, TuneSpec};
 
 fn run(
     file: &str,
@@ -35,6 +35,7 @@ fn run(
             test: None,
             method,
             holds: vec![hold],
+            families: Families::ALL,
         },
     )
     .unwrap();

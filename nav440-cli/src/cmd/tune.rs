@@ -3,7 +3,8 @@
 use std::path::PathBuf;
 
 use super::{
-    check_writable, count, noise_var, one_axis, parse_range, write_file, AxisArg, HoldArg,
+    check_writable, count, noise_var, one_axis, parse_range, write_file, AxisArg, BankArg,
+    HoldArg,
 };
 use crate::error::Result;
 use crate::progress::Progress;
@@ -64,6 +65,17 @@ pub struct Args {
     /// Tuned axis: roll, pitch or yaw.
     #[arg(long, value_enum, default_value = "yaw")]
     axis: AxisArg,
+    /// The bank tuned: paper (all 14 estimators) or product (its ILO1 velocity and Kalman
+    /// acceleration only; the hold is chosen for these two, and `-o` / `--rust` hold their
+    /// gains alone, for `nav440 estimate --bank product --gains` and the product firmware).
+    #[arg(
+        long,
+        value_enum,
+        default_value = "paper",
+        value_name = "BANK",
+        conflicts_with = "schedule"
+    )]
+    bank: BankArg,
 }
 
 /// Tunes the gains (or the schedule), prints the report and writes `-o` / `--rust`.
@@ -94,6 +106,10 @@ pub fn run(a: Args) -> Result<()> {
         holds: match a.hold {
             Some(h) => vec![h.into()],
             None => vec![estimators::Hold::Linear, estimators::Hold::ZeroOrder],
+        },
+        families: match a.bank {
+            BankArg::Paper => tune::Families::ALL,
+            BankArg::Product => tune::Families::product(),
         },
     };
     if let Some(levels) = a.schedule {

@@ -30,7 +30,7 @@ use crate::progress::Progress;
 use crate::replay::{self, EstimateOptions, Noise, Sample};
 use crate::score::Lock;
 use estimators::{
-    for_each_family, BankConfig, Estimator, Family, FamilyVisitor, Gains, Hold, Kalman,
+    for_each_family, BankConfig, Channel, Estimator, Family, FamilyVisitor, Gains, Hold, Kalman,
     KalmanConfig, KalmanNoise, Law, SampleAdapter, Scheduling, Scorer, Series, Stateful, FAMILIES,
     FAMILY_COUNT,
 };
@@ -39,8 +39,37 @@ use std::time::Instant;
 // Column names in bank order.
 use crate::paper::COLUMNS as NAMES;
 
-/// The number of tuned MSEs (every family, velocity and acceleration).
-const TUNED_MSES: usize = 2 * FAMILY_COUNT;
+/// Which families a run tunes, per half (velocity, acceleration; columns in
+/// [`crate::paper::COLUMNS`] order).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Families(pub [[bool; FAMILY_COUNT]; 2]);
+
+impl Families {
+    /// Every family of the paper bank (`nav440 tune`'s default, `--bank paper`).
+    pub const ALL: Families = Families([[true; FAMILY_COUNT]; 2]);
+
+    /// The product bank's rows (`--bank product`): ILO1 velocity and Kalman acceleration
+    /// (`estimators::ProductBank` runs these two with the paper bank's gains for them).
+    pub fn product() -> Families {
+        let column = |channels: &[Channel; FAMILY_COUNT], c: Channel| {
+            channels.iter().position(|&x| x == c).unwrap_or(0)
+        };
+        let mut f = [[false; FAMILY_COUNT]; 2];
+        f[0][column(&Channel::VELOCITY, Channel::Ilo1V)] = true;
+        f[1][column(&Channel::ACCELERATION, Channel::KfA)] = true;
+        Families(f)
+    }
+
+    /// Whether column `i` of the half `acc` is tuned.
+    pub fn tunes(&self, acc: bool, i: usize) -> bool {
+        self.0[usize::from(acc)].get(i).copied().unwrap_or(false)
+    }
+
+    /// The number of tuned MSEs (the hold's score is their geometric mean).
+    pub fn count(&self) -> usize {
+        self.0.iter().flatten().filter(|&&t| t).count()
+    }
+}
 
 /// What to tune and how.
 #[derive(Clone, Debug)]
@@ -57,6 +86,9 @@ pub struct TuneSpec {
     pub method: Method,
     /// Holds tuned (the best is kept); empty: the options' hold only.
     pub holds: Vec<Hold>,
+    /// The families tuned (the others keep their gains and are left out of the report and
+    /// of the hold's score).
+    pub families: Families,
 }
 
 /// Cost of the tuning of one hold.
@@ -117,6 +149,8 @@ pub struct TuneResult {
     pub rows_left_out: usize,
     /// Families with no finite training MSE (their gains are left as they were).
     pub warnings: Vec<String>,
+    /// The families tuned ([`TuneSpec::families`]).
+    pub families: Families,
 }
 
 /// Precomputed inputs of one tuning problem.
@@ -405,6 +439,7 @@ fn tune_family(
     start: &FamilyGains,
     acc: bool,
     method: Method,
+    families: Families,
 ) -> (FamilyGains, [(f64, usize, f64); FAMILY_COUNT]) {
     /// Tunes each family in turn.
     struct Tune<'a, E> {
@@ -412,11 +447,17 @@ fn tune_family(
         start: &'a FamilyGains,
         acc: bool,
         method: Method,
+        families: Families,
         out: FamilyGains,
         stats: [(f64, usize, f64); FAMILY_COUNT],
     }
     impl<E: Eval> FamilyVisitor for Tune<'_, E> {
         fn family<F: Family>(&mut self, column: usize) {
+            if !self.families.tunes(self.acc, column) {
+                // Not tuned: no cost (NaN), left out of the score and the report.
+                self.stats[column] = (f64::NAN, 0, 0.0);
+                return;
+            }
             let Some(g0) = self.start.get::<F>() else {
                 return;
             };
@@ -444,6 +485,7 @@ fn tune_family(
         start,
         acc,
         method,
+        families,
         out: *start,
         stats: [(f64::INFINITY, 0, 0.0); FAMILY_COUNT],
     };
@@ -470,6 +512,7 @@ pub fn tune(
             test: None,
             method: Method::Search,
             holds: vec![Hold::Linear, Hold::ZeroOrder],
+            families: Families::ALL,
         },
     )
 }
@@ -565,8 +608,22 @@ pub fn tune_with_progress(
             progress: Some(progress),
         };
         let (velocity, acceleration) = std::thread::scope(|s| {
-            let v = s.spawn(|| tune_family(&problem, &paper.velocity, false, spec.method));
-            let a = tune_family(&problem, &paper.acceleration, true, spec.method);
+            let v = s.spawn(|| {
+                tune_family(
+                    &problem,
+                    &paper.velocity,
+                    false,
+                    spec.method,
+                    spec.families,
+                )
+            });
+            let a = tune_family(
+                &problem,
+                &paper.acceleration,
+                true,
+                spec.method,
+                spec.families,
+            );
             (v.join(), a)
         });
         let velocity = velocity.map_err(|_| Error::Other("tuning thread panicked".into()))?;
@@ -583,13 +640,17 @@ pub fn tune_with_progress(
                 run.cost[half][i] = c;
                 run.evals[half][i] = e;
                 run.secs[half][i] = t;
-                log_sum += c.ln();
+                if spec.families.tunes(half == 1, i) {
+                    log_sum += c.ln();
+                }
             }
         }
-        run.score = (log_sum / TUNED_MSES as f64).exp();
+        run.score = (log_sum / spec.families.count().max(1) as f64).exp();
+        // The families not tuned are left out of the file (they keep the bank's gains).
+        let f = spec.families;
         let gains = GainsFile {
-            velocity: velocity.0,
-            acceleration: acceleration.0,
+            velocity: velocity.0.only(|i| f.tunes(false, i)),
+            acceleration: acceleration.0.only(|i| f.tunes(true, i)),
         };
         if best.as_ref().is_none_or(|b| run.score < b.0) {
             best = Some((run.score, gains, hold));
@@ -603,7 +664,7 @@ pub fn tune_with_progress(
     if let Some(run) = runs.iter().find(|r| r.hold == hold) {
         for (half, what) in ["velocity", "acceleration"].iter().enumerate() {
             for (i, name) in NAMES.iter().enumerate() {
-                if !run.cost[half][i].is_finite() {
+                if spec.families.tunes(half == 1, i) && !run.cost[half][i].is_finite() {
                     warnings.push(format!(
                         "{name} {what}: no finite training MSE on {}-{} s ({rows_scored} rows scored); its gains are left as they were",
                         spec.train.0, spec.train.1
@@ -645,6 +706,7 @@ pub fn tune_with_progress(
         rows_scored,
         rows_left_out,
         warnings,
+        families: spec.families,
     })
 }
 

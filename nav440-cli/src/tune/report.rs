@@ -61,13 +61,17 @@ impl TuneResult {
         ));
         for r in &self.runs {
             s.push_str(&format!(
-                "  hold {:<6} score (geometric mean of the {TUNED_MSES} tuned training MSEs) {:.4}\n",
+                "  hold {:<6} score (geometric mean of the {} tuned training MSEs) {:.4}\n",
                 hold_name(r.hold),
+                self.families.count(),
                 r.score
             ));
             for (half, name) in ["velocity", "acceleration"].iter().enumerate() {
                 s.push_str(&format!("    {name:<12} training MSE / evaluations / s:"));
                 for (i, name) in NAMES.iter().enumerate() {
+                    if !self.families.tunes(half == 1, i) {
+                        continue;
+                    }
                     s.push_str(&format!(
                         " {name} {:.4}/{}/{:.2}",
                         r.cost[half][i], r.evals[half][i], r.secs[half][i]
@@ -76,7 +80,7 @@ impl TuneResult {
                 s.push('\n');
             }
         }
-        for (title, paper, tuned, before, after) in [
+        for (acc, (title, paper, tuned, before, after)) in [
             (
                 "velocity, MSE (deg/s)^2",
                 &self.paper.velocity,
@@ -91,13 +95,16 @@ impl TuneResult {
                 &self.acc_before,
                 &self.acc_after,
             ),
-        ] {
+        ]
+        .into_iter()
+        .enumerate()
+        {
             s.push_str(&format!("\n{title}\n"));
             s.push_str(&format!(
                 "{:<5} {:>12} {:>12}  {:<40} {}\n",
                 "", "before", "after", "paper gains", "tuned gains"
             ));
-            for i in 0..FAMILY_COUNT {
+            for i in (0..FAMILY_COUNT).filter(|&i| self.families.tunes(acc == 1, i)) {
                 s.push_str(&format!(
                     "{:<5} {:>12.3} {:>12.3}  {:<40} {}\n",
                     NAMES[i],
@@ -122,12 +129,17 @@ impl TuneResult {
     /// The gains file (TOML, read by `--gains`).
     pub fn to_toml(&self) -> String {
         format!(
-            "# nav440 tune: gains for noise variance {} deg^2 (MSE over {}-{} s, {} seeds), hold {}\n# use: nav440 estimate FILE --gains THIS_FILE --hold {}\n{}",
+            "# nav440 tune: gains for noise variance {} deg^2 (MSE over {}-{} s, {} seeds), hold {}\n# use: nav440 estimate FILE{} --gains THIS_FILE --hold {}\n{}",
             self.noise_var,
             self.train.0,
             self.train.1,
             self.seeds,
             hold_name(self.hold),
+            if self.families == Families::ALL {
+                ""
+            } else {
+                " --bank product"
+            },
             hold_name(self.hold),
             self.gains.to_toml()
         )

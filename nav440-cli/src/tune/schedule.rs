@@ -14,8 +14,8 @@ pub(super) fn tune_both(
     let v0 = start.velocity.only(|i| which(false, i));
     let a0 = start.acceleration.only(|i| which(true, i));
     let (velocity, acceleration) = std::thread::scope(|s| {
-        let v = s.spawn(|| tune_family(set, &v0, false, method));
-        let a = tune_family(set, &a0, true, method);
+        let v = s.spawn(|| tune_family(set, &v0, false, method, Families::ALL));
+        let a = tune_family(set, &a0, true, method, Families::ALL);
         (v.join(), a)
     });
     let velocity = velocity.map_err(|_| Error::Other("tuning thread panicked".into()))?;
