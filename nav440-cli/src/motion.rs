@@ -1,9 +1,12 @@
-//! Motion profiles: yaw angle, rate and acceleration as closed-form functions of time.
+//! Motion profiles: attitude, body rates and acceleration as closed-form functions of time.
 //!
-//! Every profile returns the *unwrapped* yaw `x(t)` in degrees, its analytic first derivative
-//! (deg/s) and second derivative (deg/s^2). The capture generator (`crate::synth`) quantises
-//! and wraps them into NAV440 packets, so the rate carried by a synthetic packet is the exact
-//! derivative of the motion, not a numerical difference of the angle.
+//! The yaw-only profiles (fig5, spin, sin5) turn a level unit: they return the *unwrapped* yaw
+//! `x(t)` in degrees, its analytic first derivative (deg/s, the body z rate) and second
+//! derivative (deg/s^2), with roll = pitch = 0. The tumble profile ([`tumble`]) turns the unit
+//! about all three axes through gimbal lock: Euler angles, body rates p, q, r and the
+//! derivative of r. The capture generator (`crate::synth`) quantises and wraps them into
+//! NAV440 packets, so the rates carried by a synthetic packet are the exact angular velocity
+//! of the motion, not a numerical difference of the angles.
 
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
@@ -13,15 +16,42 @@ use std::str::FromStr;
 
 use crate::progress::Progress;
 
-/// One point of a motion: unwrapped yaw (deg), yaw rate (deg/s), yaw acceleration (deg/s^2).
+pub mod tumble;
+
+/// One point of a motion: attitude (deg), body rates (deg/s) and the z rate's derivative
+/// (deg/s^2).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MotionPoint {
-    /// Unwrapped yaw angle, degrees.
+    /// Yaw angle, degrees: unwrapped for the yaw-only profiles; for [`ProfileKind::Tumble`] the
+    /// Euler yaw (aerospace ZYX sequence) in (-180, 180].
     pub yaw_deg: f64,
-    /// Yaw rate (body z rate for a level unit), deg/s.
+    /// Body z rate r, deg/s: the yaw rate of the yaw-only profiles (a level unit).
     pub rate_deg_s: f64,
-    /// Yaw acceleration, deg/s^2.
+    /// Time derivative of [`Self::rate_deg_s`], deg/s^2: the yaw acceleration of the yaw-only
+    /// profiles.
     pub acc_deg_s2: f64,
+    /// Euler roll (ZYX), degrees in (-180, 180]; 0 for the yaw-only profiles.
+    pub roll_deg: f64,
+    /// Euler pitch (ZYX), degrees in [-90, 90]; 0 for the yaw-only profiles.
+    pub pitch_deg: f64,
+    /// Body rates p, q, r (about the unit's x, y, z axes), deg/s: `[0, 0, rate_deg_s]` for the
+    /// yaw-only profiles.
+    pub body_rates_deg_s: [f64; 3],
+}
+
+impl MotionPoint {
+    /// A level unit (roll = pitch = 0) at yaw `yaw_deg` (deg) turning at `rate_deg_s` (deg/s)
+    /// with acceleration `acc_deg_s2` (deg/s^2).
+    pub fn level(yaw_deg: f64, rate_deg_s: f64, acc_deg_s2: f64) -> Self {
+        MotionPoint {
+            yaw_deg,
+            rate_deg_s,
+            acc_deg_s2,
+            roll_deg: 0.0,
+            pitch_deg: 0.0,
+            body_rates_deg_s: [0.0, 0.0, rate_deg_s],
+        }
+    }
 }
 
 /// Which motion to synthesise.
@@ -35,11 +65,21 @@ pub enum ProfileKind {
     /// Section 3.2 of the paper: x(t) = (1 - cos 5t)/5 rad, i.e. velocity sin 5t rad/s,
     /// expressed in degrees: yaw = (180/pi)(1 - cos 5t)/5 deg, rate = (180/pi) sin 5t deg/s.
     Sin5,
+    /// A hand-held unit pointing up (pitch mostly 60-80 deg) that nods through the vertical
+    /// about once per 10 s and turns over every 31 s, so its pitch passes within 0.5 deg of
+    /// +90 and -90 deg and its Euler roll and yaw swing fast there (gimbal lock) while the
+    /// body rates stay below about 120 deg/s. Three-axis motion; see [`tumble`].
+    Tumble,
 }
 
 impl ProfileKind {
     /// All profiles, for help texts.
-    pub const ALL: [ProfileKind; 3] = [ProfileKind::Fig5, ProfileKind::Spin, ProfileKind::Sin5];
+    pub const ALL: [ProfileKind; 4] = [
+        ProfileKind::Fig5,
+        ProfileKind::Spin,
+        ProfileKind::Sin5,
+        ProfileKind::Tumble,
+    ];
 
     /// The CLI name of the profile.
     pub fn name(self) -> &'static str {
@@ -47,6 +87,7 @@ impl ProfileKind {
             ProfileKind::Fig5 => "fig5",
             ProfileKind::Spin => "spin",
             ProfileKind::Sin5 => "sin5",
+            ProfileKind::Tumble => "tumble",
         }
     }
 }
@@ -63,7 +104,7 @@ impl FromStr for ProfileKind {
         ProfileKind::ALL
             .into_iter()
             .find(|p| p.name() == s)
-            .ok_or_else(|| format!("unknown profile `{s}` (expected fig5, spin or sin5)"))
+            .ok_or_else(|| format!("unknown profile `{s}` (expected fig5, spin, sin5 or tumble)"))
     }
 }
 
@@ -164,7 +205,8 @@ impl Profile {
         self.duration_s
     }
 
-    /// Largest |yaw|, |rate|, |acc| over the profile, sampled every `dt` seconds.
+    /// Largest |yaw|, |rate|, |acc| over the profile, sampled every `dt` seconds (for
+    /// [`ProfileKind::Tumble`]: the Euler yaw, the body rate r and its derivative).
     pub fn peaks(&self, dt: f64) -> (f64, f64, f64) {
         let n = (self.duration_s / dt).ceil() as usize;
         let mut m = (0.0f64, 0.0f64, 0.0f64);
@@ -203,20 +245,21 @@ impl Profile {
         match self.kind {
             ProfileKind::Sin5 => {
                 let k = 180.0 / PI;
-                MotionPoint {
-                    yaw_deg: k * (1.0 - (5.0 * t).cos()) / 5.0,
-                    rate_deg_s: k * (5.0 * t).sin(),
-                    acc_deg_s2: k * 5.0 * (5.0 * t).cos(),
-                }
+                MotionPoint::level(
+                    k * (1.0 - (5.0 * t).cos()) / 5.0,
+                    k * (5.0 * t).sin(),
+                    k * 5.0 * (5.0 * t).cos(),
+                )
             }
             ProfileKind::Spin => {
                 let w = 2.0 * PI * SPIN_MOD_HZ;
-                MotionPoint {
-                    yaw_deg: SPIN_MEAN_DEG_S * t + SPIN_MOD_DEG_S / w * (1.0 - (w * t).cos()),
-                    rate_deg_s: SPIN_MEAN_DEG_S + SPIN_MOD_DEG_S * (w * t).sin(),
-                    acc_deg_s2: SPIN_MOD_DEG_S * w * (w * t).cos(),
-                }
+                MotionPoint::level(
+                    SPIN_MEAN_DEG_S * t + SPIN_MOD_DEG_S / w * (1.0 - (w * t).cos()),
+                    SPIN_MEAN_DEG_S + SPIN_MOD_DEG_S * (w * t).sin(),
+                    SPIN_MOD_DEG_S * w * (w * t).cos(),
+                )
             }
+            ProfileKind::Tumble => tumble::at(t),
             ProfileKind::Fig5 => {
                 // s(t) = sum a_i (sin(w_i t + p_i) - sin p_i): zero at t = 0; window e(t) ramps the
                 // motion in and out smoothly, so x = e s, x' = e' s + e s', x'' = e'' s + 2 e' s' + e s''.
@@ -227,11 +270,7 @@ impl Profile {
                     dds -= a * w * w * (w * t + p).sin();
                 }
                 let (e, de, dde) = ramp_window(t, self.duration_s, FIG5_RAMP_S);
-                MotionPoint {
-                    yaw_deg: e * s,
-                    rate_deg_s: de * s + e * ds,
-                    acc_deg_s2: dde * s + 2.0 * de * ds + e * dds,
-                }
+                MotionPoint::level(e * s, de * s + e * ds, dde * s + 2.0 * de * ds + e * dds)
             }
         }
     }
@@ -266,21 +305,36 @@ fn ramp_window(t: f64, len: f64, ramp: f64) -> (f64, f64, f64) {
 mod tests {
     use super::*;
 
-    /// Central differences of the angle agree with the analytic rate, and of the rate with the
-    /// analytic acceleration (checks the closed-form derivatives, independent of the generator).
+    /// Central differences of the yaw agree with the yaw rate the Euler kinematics give from
+    /// the body rates, (q sin roll + r cos roll) / cos pitch (for a level unit: r, the analytic
+    /// rate), and of the rate with the analytic acceleration (checks the closed-form
+    /// derivatives, independent of the generator). The yaw difference is wrapped to +-180 deg
+    /// (the tumble's yaw is wrapped); points at |pitch| >= 80 deg, where the yaw rate is
+    /// ill-conditioned, are left out.
     #[test]
     fn derivatives_match_finite_differences() {
         for kind in ProfileKind::ALL {
             let p = Profile::new(kind, 35.0, 7);
             let h = 1e-5;
+            let mut checked = 0;
             for i in 1..350 {
                 let t = i as f64 * 0.1 + 0.0123;
                 let (a, b, c) = (p.at(t - h), p.at(t), p.at(t + h));
-                let rate_fd = (c.yaw_deg - a.yaw_deg) / (2.0 * h);
                 let acc_fd = (c.rate_deg_s - a.rate_deg_s) / (2.0 * h);
-                assert!((rate_fd - b.rate_deg_s).abs() < 1e-3, "{kind} rate at {t}");
                 assert!((acc_fd - b.acc_deg_s2).abs() < 1e-2, "{kind} acc at {t}");
+                assert_eq!(b.rate_deg_s, b.body_rates_deg_s[2], "{kind} r at {t}");
+                if b.pitch_deg.abs() >= 80.0 {
+                    continue;
+                }
+                let dyaw = (c.yaw_deg - a.yaw_deg + 180.0).rem_euclid(360.0) - 180.0;
+                let rate_fd = dyaw / (2.0 * h);
+                let [_, q, r] = b.body_rates_deg_s;
+                let (sf, cf) = b.roll_deg.to_radians().sin_cos();
+                let yaw_rate = (q * sf + r * cf) / b.pitch_deg.to_radians().cos();
+                assert!((rate_fd - yaw_rate).abs() < 1e-3, "{kind} rate at {t}");
+                checked += 1;
             }
+            assert!(checked > 300, "{kind}: {checked}");
         }
     }
 

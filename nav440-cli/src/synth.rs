@@ -1,11 +1,14 @@
 //! Capture generator: a motion profile -> the byte stream a NAV440 sends.
 //!
 //! Each packet holds the motion at its time stamp, quantised to the protocol's LSBs
-//! (docs/NAV440-PROTOCOL.md): yaw wrapped to [-180, 180) deg in 360/2^16 deg steps, the
-//! body z rate (the analytic derivative of the motion) in 1260/2^16 deg/s steps (saturating),
-//! timeITOW in ms (wrapping at the end of the GPS week), and the BIT word. The unit is level
-//! (roll = pitch = 0, x/y rates 0, accelerometers read (0, 0, 1) g as in the protocol's example
-//! packet), temperatures 25 degC. Frames are built by `nav440-proto`'s encoders.
+//! (docs/NAV440-PROTOCOL.md): roll, pitch and yaw wrapped to [-180, 180) deg in 360/2^16 deg
+//! steps, the body rates p, q, r (the analytic angular velocity of the motion) in 1260/2^16
+//! deg/s steps (saturating), timeITOW in ms (wrapping at the end of the GPS week), and the BIT
+//! word. The yaw-only profiles keep the unit level (roll = pitch = 0, x/y rates 0). The
+//! accelerometers read gravity only, (0, 0, 1) g for a level unit as in the protocol's example
+//! packet, rotated into the body frame for any other attitude; the A1's magnetometer reads a
+//! field of 0.25 G north and 0.4 G down rotated the same way. Temperatures are 25 degC. Frames
+//! are built by `nav440-proto`'s encoders.
 
 use crate::corrupt::{self, Corruption, CorruptionReport};
 use crate::error::{Error, Result};
@@ -257,10 +260,10 @@ fn frames_with(cfg: &SynthConfig, progress: &Progress) -> Result<Vec<Vec<u8>>> {
         } else {
             0.0
         };
-        out.push(encode_packet(
+        out.push(encode_attitude(
             cfg.packet,
-            m.yaw_deg + noise,
-            m.rate_deg_s,
+            [m.roll_deg, m.pitch_deg, m.yaw_deg + noise],
+            m.body_rates_deg_s,
             itow,
             cfg.bit,
         )?);
@@ -306,7 +309,8 @@ pub fn a2_samples(
 }
 
 /// Encodes one packet of a level unit with the given yaw (deg, any range), z rate (deg/s),
-/// timeITOW (ms) and BIT word.
+/// timeITOW (ms) and BIT word: [`encode_attitude`] with roll = pitch = 0 and rates
+/// `[0, 0, rate_deg_s]`.
 pub fn encode_packet(
     kind: PacketKind,
     yaw_deg: f64,
@@ -314,45 +318,94 @@ pub fn encode_packet(
     itow: u32,
     bit: u16,
 ) -> Result<Vec<u8>> {
-    let yaw = angle_raw(yaw_deg);
-    let rz = sat_i16(rate_deg_s, RATE_LSB_DEG_S);
-    let one_g = sat_i16(1.0, ACCEL_LSB_G);
+    encode_attitude(kind, [0.0, 0.0, yaw_deg], [0.0, 0.0, rate_deg_s], itow, bit)
+}
+
+/// The level unit's magnetic field in the NED frame (north, east, down), gauss.
+const MAG_NED_G: [f64; 3] = [0.25, 0.0, 0.4];
+
+/// Encodes one packet of a unit at Euler angles `angles_deg` = [roll, pitch, yaw] (deg, any
+/// range; aerospace ZYX sequence) turning at body rates `rates_deg_s` = [p, q, r] (deg/s),
+/// with the given timeITOW (ms) and BIT word. The accelerometers read (0, 0, 1) g rotated into
+/// the body frame, R^T (0, 0, 1) = (-sin pitch, sin roll cos pitch, cos roll cos pitch) g
+/// (gravity only, no motion of the unit's centre); the A1's magnetometer reads R^T (0.25, 0,
+/// 0.4) G (north, east, down). A level unit reads (0, 0, 1) g and (0.25 cos yaw, -0.25 sin
+/// yaw, 0.4) G.
+pub fn encode_attitude(
+    kind: PacketKind,
+    angles_deg: [f64; 3],
+    rates_deg_s: [f64; 3],
+    itow: u32,
+    bit: u16,
+) -> Result<Vec<u8>> {
+    let [roll_deg, pitch_deg, yaw_deg] = angles_deg;
+    let (roll, pitch, yaw) = (
+        angle_raw(roll_deg),
+        angle_raw(pitch_deg),
+        angle_raw(yaw_deg),
+    );
+    let [rx, ry, rz] = rates_deg_s.map(|w| sat_i16(w, RATE_LSB_DEG_S));
+    let (sf, cf) = (roll_deg.to_radians().sin(), roll_deg.to_radians().cos());
+    let (st, ct) = (pitch_deg.to_radians().sin(), pitch_deg.to_radians().cos());
+    let y = yaw_deg.to_radians();
+    let (sy, cy) = (y.sin(), y.cos());
+    let [ax, ay, az] = [-st, sf * ct, cf * ct].map(|g| sat_i16(g, ACCEL_LSB_G));
     let temp = sat_i16(25.0, TEMP_LSB_C);
     let mut buf = [0u8; nav440_proto::MAX_FRAME];
     let len = match kind {
         PacketKind::A1 => {
-            // A magnetometer that sees a horizontal field of 0.25 G along magnetic north.
-            let y = yaw_deg.to_radians();
+            // R^T m with R = Rz(yaw) Ry(pitch) Rx(roll) and m = (n, 0, d): the first and third
+            // rows of R times n and d.
+            let [n, _, d] = MAG_NED_G;
+            let mag_x = n * (cy * ct) + d * -st;
+            let mag_y = n * (cy * st * sf - sy * cf) + d * (ct * sf);
+            let mag_z = n * (cy * st * cf + sy * sf) + d * (ct * cf);
             nav440_proto::A1Fields {
+                roll,
+                pitch,
                 yaw_mag: yaw,
+                rate_x: rx,
+                rate_y: ry,
                 rate_z: rz,
-                accel_z: one_g,
-                mag_x: sat_i16(0.25 * y.cos(), MAG_LSB_G),
-                mag_y: sat_i16(-0.25 * y.sin(), MAG_LSB_G),
-                mag_z: sat_i16(0.4, MAG_LSB_G),
+                accel_x: ax,
+                accel_y: ay,
+                accel_z: az,
+                mag_x: sat_i16(mag_x, MAG_LSB_G),
+                mag_y: sat_i16(mag_y, MAG_LSB_G),
+                mag_z: sat_i16(mag_z, MAG_LSB_G),
                 x_rate_temp: temp,
                 time_itow: itow,
                 bit,
-                ..Default::default()
             }
             .encode(&mut buf)
         }
         PacketKind::A2 => nav440_proto::A2Fields {
+            roll,
+            pitch,
             yaw_true: yaw,
+            rate_x: rx,
+            rate_y: ry,
             rate_z: rz,
-            accel_z: one_g,
+            accel_x: ax,
+            accel_y: ay,
+            accel_z: az,
             rate_temp_x: temp,
             rate_temp_y: temp,
             rate_temp_z: temp,
             time_itow: itow,
             bit,
-            ..Default::default()
         }
         .encode(&mut buf),
         PacketKind::N1 => nav440_proto::N1Fields {
+            roll,
+            pitch,
             yaw_true: yaw,
+            rate_x: rx,
+            rate_y: ry,
             rate_z: rz,
-            accel_z: one_g,
+            accel_x: ax,
+            accel_y: ay,
+            accel_z: az,
             // A bench somewhere at 35.0 N, 139.0 E, 40 m, standing still.
             longitude: (139.0 / LATLON_LSB_DEG).round() as i32,
             latitude: (35.0 / LATLON_LSB_DEG).round() as i32,
@@ -411,6 +464,152 @@ mod tests {
             .map(|h| u8::from_str_radix(h, 16).unwrap())
             .collect();
         assert_eq!(&buf[..n], &want[..]);
+    }
+
+    /// The yaw-only profiles' frames are the level unit's packets as they are encoded field by
+    /// field: yaw and z rate quantised, roll, pitch, x/y rates and accelerations 0, accel z 1 g,
+    /// the A1's magnetometer (0.25 cos yaw, -0.25 sin yaw, 0.4) G, with the yaw noise on.
+    #[test]
+    fn level_profiles_encode_as_before() {
+        let one_g = (1.0 / ACCEL_LSB_G).round() as i16;
+        let temp = (25.0 / TEMP_LSB_C).round() as i16;
+        for profile in [ProfileKind::Fig5, ProfileKind::Spin, ProfileKind::Sin5] {
+            for packet in [PacketKind::A1, PacketKind::A2, PacketKind::N1] {
+                let cfg = SynthConfig {
+                    profile,
+                    packet,
+                    duration_s: 3.0,
+                    rate_hz: 50,
+                    ..SynthConfig::default()
+                };
+                let noisy = SynthConfig {
+                    yaw_noise: vec!["0.2@1".parse().unwrap()],
+                    ..cfg.clone()
+                };
+                let motion = Profile::new(profile, cfg.duration_s, cfg.seed);
+                let (clean, with_noise) = (frames(&cfg).unwrap(), frames(&noisy).unwrap());
+                assert_eq!(clean.len(), 151);
+                for (k, (f, g)) in clean.iter().zip(&with_noise).enumerate() {
+                    let t = k as f64 * 0.02;
+                    let m = motion.at(t);
+                    let itow = (cfg.start_itow_ms + 20 * k as u64) as u32;
+                    let yaw = (m.yaw_deg / ANGLE_LSB_DEG).round() as i64;
+                    let yaw = ((yaw + 32768).rem_euclid(65536) - 32768) as i16;
+                    let rz = (m.rate_deg_s / RATE_LSB_DEG_S).round() as i16;
+                    let mut buf = [0u8; 64];
+                    let n = match packet {
+                        PacketKind::A1 => {
+                            let y = m.yaw_deg.to_radians();
+                            nav440_proto::A1Fields {
+                                yaw_mag: yaw,
+                                rate_z: rz,
+                                accel_z: one_g,
+                                mag_x: (0.25 * y.cos() / MAG_LSB_G).round() as i16,
+                                mag_y: (-0.25 * y.sin() / MAG_LSB_G).round() as i16,
+                                mag_z: (0.4 / MAG_LSB_G).round() as i16,
+                                x_rate_temp: temp,
+                                time_itow: itow,
+                                ..Default::default()
+                            }
+                            .encode(&mut buf)
+                        }
+                        PacketKind::A2 => nav440_proto::A2Fields {
+                            yaw_true: yaw,
+                            rate_z: rz,
+                            accel_z: one_g,
+                            rate_temp_x: temp,
+                            rate_temp_y: temp,
+                            rate_temp_z: temp,
+                            time_itow: itow,
+                            ..Default::default()
+                        }
+                        .encode(&mut buf),
+                        PacketKind::N1 => nav440_proto::N1Fields {
+                            yaw_true: yaw,
+                            rate_z: rz,
+                            accel_z: one_g,
+                            longitude: (139.0 / LATLON_LSB_DEG).round() as i32,
+                            latitude: (35.0 / LATLON_LSB_DEG).round() as i32,
+                            altitude: 160,
+                            x_rate_temp: temp,
+                            time_itow: itow,
+                            ..Default::default()
+                        }
+                        .encode(&mut buf),
+                    }
+                    .unwrap();
+                    assert_eq!(f[..], buf[..n], "{profile} {packet} packet {k}");
+                    if k < 50 {
+                        assert_eq!(f, g, "{profile} {packet}: no noise before 1 s");
+                    }
+                }
+                assert_ne!(clean, with_noise);
+            }
+        }
+    }
+
+    /// A tumble capture of A2 packets decodes to the profile's roll, pitch, yaw (wrapped) and
+    /// body rates within half an LSB (plus the f32 rounding of the decoded sample, below 2e-5
+    /// deg), one sample per packet at its time; its pitch reaches beyond 89 deg in magnitude
+    /// and the x, y rates are not all 0.
+    #[test]
+    fn tumble_a2_capture_decodes_to_the_profile() {
+        let samples = a2_samples(ProfileKind::Tumble, 1, 100, 60.0).unwrap();
+        assert_eq!(samples.len(), 6001);
+        let motion = Profile::new(ProfileKind::Tumble, 60.0, 1);
+        let (mut max_pitch, mut max_pq) = (0.0f64, 0.0f64);
+        for (k, s) in samples.iter().enumerate() {
+            assert_eq!(s.t_us, k as u64 * 10_000);
+            let m = motion.at(k as f64 * 0.01);
+            let want = [m.roll_deg, m.pitch_deg, m.yaw_deg];
+            for (ax, (got, w)) in s.angles_deg.iter().zip(want).enumerate() {
+                let d = (f64::from(*got) - w + 180.0).rem_euclid(360.0) - 180.0;
+                assert!(
+                    d.abs() <= ANGLE_LSB_DEG / 2.0 + 2e-5,
+                    "angle {ax} at {k}: {d}"
+                );
+            }
+            for (ax, (got, w)) in s.rates_deg_s.iter().zip(m.body_rates_deg_s).enumerate() {
+                let d = f64::from(*got) - w;
+                assert!(
+                    d.abs() <= RATE_LSB_DEG_S / 2.0 + 2e-5,
+                    "rate {ax} at {k}: {d}"
+                );
+            }
+            max_pitch = max_pitch.max(f64::from(s.angles_deg[1]).abs());
+            max_pq = max_pq.max(f64::from(
+                s.rates_deg_s[0].abs().max(s.rates_deg_s[1].abs()),
+            ));
+        }
+        assert!(max_pitch > 89.0, "{max_pitch}");
+        assert!(max_pq > 50.0, "{max_pq}");
+    }
+
+    /// Gravity and the magnetic field rotate into the body frame: pitched up 90 deg the
+    /// accelerometers read (-1, 0, 0) g; rolled 90 deg, (0, 1, 0) g; at yaw 90 deg, pitch 30
+    /// deg the A1's magnetometer reads R^T (0.25, 0, 0.4) G = (-0.4 sin 30, -0.25, 0.4 cos 30)
+    /// = (-0.2, -0.25, 0.3464) G. Byte offsets of the fields from docs/NAV440-PROTOCOL.md (the
+    /// payload starts at byte 5).
+    #[test]
+    fn gravity_and_field_rotate_into_the_body() {
+        let field = |f: &[u8], off: usize| i16::from_be_bytes([f[5 + off], f[6 + off]]);
+        let accel = |f: &[u8]| [12, 14, 16].map(|o| f64::from(field(f, o)) * ACCEL_LSB_G);
+        let close =
+            |a: [f64; 3], b: [f64; 3], tol: f64| a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol);
+        let a2 = |angles| encode_attitude(PacketKind::A2, angles, [0.0; 3], 0, 0).unwrap();
+        let g = accel(&a2([0.0, 90.0, 0.0]));
+        assert!(close(g, [-1.0, 0.0, 0.0], ACCEL_LSB_G), "{g:?}");
+        let g = accel(&a2([90.0, 0.0, 30.0]));
+        assert!(close(g, [0.0, 1.0, 0.0], ACCEL_LSB_G), "{g:?}");
+        let a1 = encode_attitude(PacketKind::A1, [0.0, 30.0, 90.0], [1.0, 2.0, 3.0], 0, 0).unwrap();
+        let mag = [18, 20, 22].map(|o| f64::from(field(&a1, o)) * MAG_LSB_G);
+        let want = [-0.2, -0.25, 0.4 * 3f64.sqrt() / 2.0];
+        assert!(close(mag, want, MAG_LSB_G), "{mag:?}");
+        let rates = [6, 8, 10].map(|o| f64::from(field(&a1, o)) * RATE_LSB_DEG_S);
+        assert!(
+            close(rates, [1.0, 2.0, 3.0], RATE_LSB_DEG_S / 2.0),
+            "{rates:?}"
+        );
     }
 
     #[test]

@@ -11,7 +11,8 @@ use crate::synth;
 /// Arguments of `nav440 synth`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Motion profile: fig5 (paper Fig. 5-like hand rotation), spin (many turns), sin5 (section 3.2).
+    /// Motion profile: fig5 (paper Fig. 5-like hand rotation), spin (many turns), sin5 (section 3.2),
+    /// tumble (a hand-held unit nodding through pitch +-90 deg: three axes, gimbal lock).
     #[arg(long, default_value = "fig5")]
     profile: ProfileKind,
     /// Packet type: A1, A2 or N1.
