@@ -5,7 +5,9 @@
 //!   the CSV header line of `nav440 estimate --bank ... --axis ...` from them.
 //! * [`row`]: one message per sample, `row {=[u8]}`: one packed byte payload (little-endian),
 //!   the sample time (u64, us since the first sample), then per estimated axis (roll, pitch,
-//!   yaw order) [`AXIS_BYTES`] bytes: a flag byte (bit 0: a reference rate is present), the
+//!   yaw order) [`AXIS_BYTES`] bytes: a flag byte (bit 0: a reference rate is present; bit 1,
+//!   [`NO_ESTIMATE`]: the axis has no estimate in this row, near gimbal lock, and the rest of
+//!   the block is 0), the
 //!   unwrapped angle (deg, f32), its f64 residual (deg, 0 while f32 holds the angle), the
 //!   reference rate (deg/s, f32; 0 when absent) and the bank's channel values (in the order of
 //!   its names, f32: 14 for the paper bank, 2 for the product bank). One argument, so the transport gets one write for the
@@ -27,6 +29,10 @@ use nav440_pipeline::{AxisRow, Row};
 
 /// Marker of the row message (the host finds it in the ELF's defmt table).
 pub const ROW_TAG: &str = "row";
+
+/// Flag bit of an axis block: no estimate for the axis in this row (roll and yaw while the
+/// pitch is at or beyond the gimbal-lock limit, `nav440_pipeline::euler::near_lock`).
+pub const NO_ESTIMATE: u8 = 2;
 
 /// Bytes of one axis in a [`row`] payload: flags (1), angle (f32), residual (f64), reference
 /// rate (f32), the channel values (f32 each).
@@ -69,20 +75,20 @@ pub fn header() {
     );
 }
 
-/// Sends one sample's row message (the axes of `r` that are present, at most those of
-/// [`AXES`]).
+/// Sends one sample's row message: one block per axis of [`AXES`], [`NO_ESTIMATE`] for an
+/// axis the row has no estimate for.
 pub fn row(r: &Row<Output>) {
     let mut buf = [0u8; ROW_BYTES];
     let (time, rest) = buf.split_at_mut(8);
     time.copy_from_slice(&r.t_us.to_le_bytes());
     let (blocks, _) = rest.as_chunks_mut::<AXIS_BYTES>();
-    let mut n = 0;
-    for (dst, a) in blocks.iter_mut().zip(r.axes.iter().flatten()) {
-        put_axis(dst, a);
-        n += 1;
+    for (dst, axis) in blocks.iter_mut().zip(AXES.iter()) {
+        match r.axis(axis) {
+            Some(a) => put_axis(dst, a),
+            None => dst[0] = NO_ESTIMATE,
+        }
     }
-    let len = 8 + n * AXIS_BYTES;
-    defmt::println!("row {=[u8]}", buf.get(..len).unwrap_or(&buf));
+    defmt::println!("row {=[u8]}", &buf[..]);
 }
 
 /// Sends the end-of-run counters: the `key=value` line of `nav440_pipeline::Pipeline::summary`

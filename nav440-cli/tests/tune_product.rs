@@ -79,7 +79,10 @@ fn product_tuning_runs_in_estimate_with_the_reported_mse() {
         p(&rust),
     ]);
     // Two rows tuned, one per table; the hold's score is theirs alone.
-    assert!(report.contains("geometric mean of the 2 tuned training MSEs"), "{report}");
+    assert!(
+        report.contains("geometric mean of the 2 tuned training MSEs"),
+        "{report}"
+    );
     let families: Vec<&str> = report
         .lines()
         .filter_map(|l| l.split_whitespace().next())
@@ -104,7 +107,14 @@ fn product_tuning_runs_in_estimate_with_the_reported_mse() {
     assert!(after < before, "{report}");
     let noise = ["--noise-var", "0.5", "--seed", "1"];
     let run = |extra: &[&str]| {
-        let mut args = vec!["estimate", p(&cap), "--bank", "product", "--preset", "paper"];
+        let mut args = vec![
+            "estimate",
+            p(&cap),
+            "--bank",
+            "product",
+            "--preset",
+            "paper",
+        ];
         args.extend_from_slice(extra);
         args.extend_from_slice(&noise);
         ilo1_mse(&ok(&args), 10.0)

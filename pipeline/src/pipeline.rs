@@ -282,7 +282,14 @@ impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize> Estimation<B, 
         self.counters.samples = self.counters.samples.saturating_add(1);
         match self.phase {
             Phase::Running => {
-                run_sample(&mut self.banks, self.axes, &mut self.counters, &mut self.in_lock, &s, emit);
+                run_sample(
+                    &mut self.banks,
+                    self.axes,
+                    &mut self.counters,
+                    &mut self.in_lock,
+                    &s,
+                    emit,
+                );
                 Ok(())
             }
             Phase::Warmup => {
@@ -328,7 +335,14 @@ impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize> Estimation<B, 
             }
         }
         for s in &self.held {
-            run_sample(&mut self.banks, self.axes, &mut self.counters, &mut self.in_lock, s, emit);
+            run_sample(
+                &mut self.banks,
+                self.axes,
+                &mut self.counters,
+                &mut self.in_lock,
+                s,
+                emit,
+            );
         }
         self.held.clear();
         Ok(())

@@ -72,7 +72,11 @@ fn roll_and_yaw_skip_the_lock_and_restart_after_it() {
     // after the restart (a bank fed through the lock would see pitch-pole swings instead).
     let ad = |k: u64| rows[k as usize].axis(Axis::Yaw).unwrap().out[Channel::AdV];
     for k in [LOCK.start - 1, LOCK.end + 100, N - 1] {
-        assert!((ad(k) - YAW_RATE).abs() < 0.5, "AD velocity {} at {k}", ad(k));
+        assert!(
+            (ad(k) - YAW_RATE).abs() < 0.5,
+            "AD velocity {} at {k}",
+            ad(k)
+        );
     }
 }
 

@@ -136,6 +136,10 @@ impl Converter {
     }
 }
 
+/// Flag bit of an axis block: the axis has no estimate in the row (the firmware's
+/// `out::NO_ESTIMATE`).
+const NO_ESTIMATE: u8 = 2;
+
 /// Bytes of one axis in a row payload of a bank with `channels` channels: flags, angle
 /// (f32), residual (f64), reference (f32), the channel values (f32).
 const fn axis_bytes(channels: usize) -> usize {
@@ -159,7 +163,11 @@ fn parse_row<O: FromValues>(s: &str, axes: Axes) -> Option<Row<O>> {
         axes: [None; 3],
     };
     for (axis, b) in axes.iter().zip(rest.chunks_exact(per_axis)) {
-        row.axes[axis.index()] = Some(parse_axis(b)?);
+        // Flag bit 1: the axis has no estimate in this row (roll and yaw near gimbal lock).
+        row.axes[axis.index()] = match b.first()? & NO_ESTIMATE {
+            0 => Some(parse_axis(b)?),
+            _ => None,
+        };
     }
     Some(row)
 }
@@ -330,6 +338,11 @@ mod tests {
             lines[2],
             "0.0100,12.5,,0.5,0.00001,-2.25,3,4,5,6,7,8,9,10,11,12,13"
         );
+        // Flag bit 1: no estimate (near gimbal lock): the axis's fields are empty.
+        let mut b = 10100u64.to_le_bytes().to_vec();
+        b.extend(axis_bytes(2, 0.0, 0.0, 0.0, &[0.0; 14]));
+        c.message(&format!("row {b:?}"), &mut t).unwrap();
+        assert_eq!(t.csv.lines().nth(3), Some("0.0101,,,,,,,,,,,,,,,,"));
         c.message("firmware: bytes=3", &mut t).unwrap();
         assert_eq!(t.diag, "firmware: bytes=3\n");
         // A payload of the wrong length is an error, not a row.

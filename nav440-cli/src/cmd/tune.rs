@@ -3,8 +3,7 @@
 use std::path::PathBuf;
 
 use super::{
-    check_writable, count, noise_var, one_axis, parse_range, write_file, AxisArg, BankArg,
-    HoldArg,
+    check_writable, count, noise_var, one_axis, parse_range, write_file, AxisArg, BankArg, HoldArg,
 };
 use crate::error::Result;
 use crate::progress::Progress;

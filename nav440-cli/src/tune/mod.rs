@@ -609,13 +609,7 @@ pub fn tune_with_progress(
         };
         let (velocity, acceleration) = std::thread::scope(|s| {
             let v = s.spawn(|| {
-                tune_family(
-                    &problem,
-                    &paper.velocity,
-                    false,
-                    spec.method,
-                    spec.families,
-                )
+                tune_family(&problem, &paper.velocity, false, spec.method, spec.families)
             });
             let a = tune_family(
                 &problem,

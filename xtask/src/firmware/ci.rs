@@ -214,7 +214,12 @@ pub fn ci_steps() -> Result<(), String> {
         )?;
         low_rates.push(path);
     }
-    // Every bundled capture (all packet types and rates, the week wrap) plus those seven.
+    // A unit nodding through pitch +-90 deg (15 s, two passes, 45 samples at |pitch| >= 80
+    // deg): the roll and yaw banks skip the lock and restart after it, on the board as on the
+    // host.
+    let tumble = work_dir()?.join("ci-tumble.bin");
+    nav440_synth(&tumble, &["--profile", "tumble", "--duration", "15"])?;
+    // Every bundled capture (all packet types and rates, the week wrap) plus those eight.
     let mut captures = data_captures();
     captures.extend([
         corrupted,
@@ -222,6 +227,7 @@ pub fn ci_steps() -> Result<(), String> {
         rate_change,
         bit_fail.clone(),
         false_header.clone(),
+        tumble.clone(),
     ]);
     captures.extend(low_rates);
     for (board, elf) in &elfs {
@@ -235,6 +241,17 @@ pub fn ci_steps() -> Result<(), String> {
                     "the firmware on {} reported end_dropped={:?} for {}, expected {dropped}",
                     board.name,
                     counter(&c, "end_dropped"),
+                    capture.display()
+                ));
+            }
+            if *capture == tumble
+                && (counter(&c, "near_lock"), counter(&c, "lock_passes")) != (Some(45), Some(2))
+            {
+                return Err(format!(
+                    "the firmware on {} reported near_lock={:?} lock_passes={:?} for {}, expected 45 and 2",
+                    board.name,
+                    counter(&c, "near_lock"),
+                    counter(&c, "lock_passes"),
                     capture.display()
                 ));
             }
