@@ -117,3 +117,113 @@ fn roll_and_yaw_recover_within_a_second_of_each_pass() {
 fn replay_name(i: usize) -> &'static str {
     nav440_cli::paper::COLUMNS[i]
 }
+
+/// The tool on a tumble capture (20 s, two passes: 3.25-3.44 s and 13.59-13.83 s at
+/// |pitch| >= 80 deg), through the real binary.
+mod cli {
+    use std::path::PathBuf;
+    use std::process::{Command, Output};
+
+    const BIN: &str = env!("CARGO_BIN_EXE_nav440");
+
+    fn run(args: &[&str]) -> Output {
+        Command::new(BIN).args(args).output().expect("run nav440")
+    }
+
+    fn capture(test: &str) -> PathBuf {
+        let path = std::env::temp_dir().join(format!(
+            "nav440-gimbal-{}-{test}.bin",
+            std::process::id()
+        ));
+        let p = path.to_str().unwrap();
+        let o = run(&["synth", "--profile", "tumble", "--duration", "20", "-o", p]);
+        assert!(o.status.success());
+        path
+    }
+
+    /// `tune` through gimbal lock scores the rows away from it, improves every family on the
+    /// rows it never saw, and exits 0.
+    #[test]
+    fn tune_through_gimbal_lock_improves_and_exits_0() {
+        let cap = capture("tune");
+        let o = run(&[
+            "tune",
+            cap.to_str().unwrap(),
+            "--noise-var",
+            "0.01",
+            "--train",
+            "0-10",
+            "--test",
+            "10-20",
+            "--seeds",
+            "1",
+            "--hold",
+            "linear",
+        ]);
+        let _ = std::fs::remove_file(&cap);
+        let text = String::from_utf8(o.stdout).unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        // 0-10 s: 1001 rows, 20 near the lock and the 100 of the second after it left out.
+        assert!(
+            text.contains("training rows scored: 881 (120 of 1001 rows left out near gimbal lock"),
+            "{text}"
+        );
+        let mut improved = 0;
+        for l in text.lines() {
+            let w: Vec<&str> = l.split_whitespace().collect();
+            if w.len() >= 3 && ["AVE", "ILO1", "ILO2", "ILO3", "AD", "ED", "KF"].contains(&w[0]) {
+                let (b, a): (f64, f64) = (w[1].parse().unwrap(), w[2].parse().unwrap());
+                assert!(a.is_finite() && b.is_finite(), "{l}");
+                improved += usize::from(a < b);
+            }
+        }
+        assert!(improved >= 1, "{text}");
+        assert!(o.stderr.is_empty(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+
+    /// A training range inside the lock and its settle time has nothing to score: exit 2
+    /// with the reason on one line, and no file written.
+    #[test]
+    fn tune_with_nothing_to_score_exits_2() {
+        let cap = capture("empty");
+        let out = cap.with_extension("toml");
+        let o = run(&[
+            "tune",
+            cap.to_str().unwrap(),
+            "--noise-var",
+            "0",
+            "--train",
+            "3.3-3.5",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        let _ = std::fs::remove_file(&cap);
+        let err = String::from_utf8(o.stderr).unwrap();
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert_eq!(
+            err,
+            "nav440: nothing to score on the training range 3.3-3.5 s: all its 21 samples are near gimbal lock (|pitch| >= 80 deg) or within 1 s after it\n"
+        );
+        assert!(!out.exists());
+    }
+
+    /// `paper` reports the rows it scored and prints only numbers.
+    #[test]
+    fn paper_reports_the_rows_scored() {
+        let cap = capture("paper");
+        let o = run(&["paper", cap.to_str().unwrap(), "--json", "--window", "20"]);
+        let _ = std::fs::remove_file(&cap);
+        assert!(o.status.success() && o.stderr.is_empty());
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        // 2001 rows; 45 near the lock and 200 in the second after each of the two passes.
+        assert_eq!(j["rows_in_window"], 2001);
+        assert_eq!(j["rows_scored"], 2001 - 45 - 200);
+        for table in ["velocity_mse", "acceleration_mse"] {
+            for (_, row) in j[table].as_object().unwrap() {
+                for (_, v) in row["ours"].as_object().unwrap() {
+                    assert!(v.as_f64().is_some_and(f64::is_finite), "{table}: {v}");
+                }
+            }
+        }
+    }
+}
