@@ -131,10 +131,8 @@ mod cli {
     }
 
     fn capture(test: &str) -> PathBuf {
-        let path = std::env::temp_dir().join(format!(
-            "nav440-gimbal-{}-{test}.bin",
-            std::process::id()
-        ));
+        let path =
+            std::env::temp_dir().join(format!("nav440-gimbal-{}-{test}.bin", std::process::id()));
         let p = path.to_str().unwrap();
         let o = run(&["synth", "--profile", "tumble", "--duration", "20", "-o", p]);
         assert!(o.status.success());
@@ -178,7 +176,11 @@ mod cli {
             }
         }
         assert!(improved >= 1, "{text}");
-        assert!(o.stderr.is_empty(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert!(
+            o.stderr.is_empty(),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
     }
 
     /// A training range inside the lock and its settle time has nothing to score: exit 2
