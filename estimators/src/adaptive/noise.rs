@@ -12,7 +12,7 @@ use crate::ConfigError;
 /// `d3^2 / 20` with time constant `tau_s`, at least [`NoiseEstimator::MIN_TAU_SAMPLES`]
 /// periods (weight `dt / tau` per sample; the first `tau / dt` samples are averaged with
 /// weight `1/k` so the estimate starts at once), where each term is clipped to 9 times the
-/// current estimate (a robust mean: a motion burst or a glitch moves it by at most
+/// current estimate, or [`NoiseEstimator::CLIP_FLOOR`] if that is larger (a robust mean: a motion burst or a glitch moves it by at most
 /// `9 dt / tau` of itself; for Gaussian noise the clip removes under 1 % of the mean). A
 /// sample interval that differs from the previous one by more than a quarter (a lost packet,
 /// a gap, a new epoch) restarts the differences (the estimate is kept). Limitation: at low
@@ -42,6 +42,14 @@ impl NoiseEstimator {
     /// seconds (its relative spread falls as `1 / sqrt(terms)`). At 100 Hz the default 0.5 s
     /// is exactly 50 periods; at 20 Hz the time constant becomes 2.5 s.
     pub const MIN_TAU_SAMPLES: f32 = 50.0;
+
+    /// The least estimate the clip of a term is taken from, deg^2 (a term is clipped to 9
+    /// times the estimate or this, whichever is larger): an angle that starts exactly constant
+    /// (a unit at rest below one LSB of noise, 0.0055 deg, whose quantisation alone reads
+    /// 2.6e-6) would otherwise hold the estimate at 0 for ever, every later term clipped to
+    /// 9 x 0. From this floor the estimate grows by up to 16 % a sample: 0.5 deg^2 in under
+    /// 1 s at 100 Hz.
+    pub const CLIP_FLOOR: f32 = 1e-6;
 
     /// An estimator with time constant `tau_s` (s), or [`Self::MIN_TAU_SAMPLES`] periods if
     /// that is longer, for samples every `sample_period_s` (s).
@@ -88,8 +96,9 @@ impl NoiseEstimator {
         if self.nd >= 2 {
             let d3 = d - 2.0 * self.d[0] + self.d[1];
             let mut x = d3 * d3 * (1.0 / 20.0);
-            if self.count >= 8 && x > 9.0 * self.var {
-                x = 9.0 * self.var;
+            let clip = 9.0 * self.var.max(Self::CLIP_FLOOR);
+            if self.count >= 8 && x > clip {
+                x = clip;
             }
             self.count = self.count.saturating_add(1);
             let w = (1.0 / self.count as f32).max(self.alpha);

@@ -40,6 +40,30 @@ fn noise_estimate_matches_the_added_variance() {
     assert!((v - 0.01).abs() < 0.001, "{v}");
 }
 
+/// An angle that is exactly constant at first (no noise above the quantisation: every term
+/// 0) does not hold the estimate at 0: when N(0, 0.5) noise starts at 1 s, the estimate reads
+/// 0.5 within 20 % 2 s later (one time constant is 0.5 s; the growth from the clip's floor
+/// takes under 1 s). Without the floor it stayed at exactly 0 for ever (found on `nav440
+/// synth --profile tumble`, which starts at rest).
+#[test]
+fn a_constant_start_does_not_lock_the_estimate_at_zero() {
+    let mut g = Gauss::new(5);
+    let mut e = NoiseEstimator::new(0.5, 0.01).unwrap();
+    for k in 0..300u64 {
+        let noise = if k >= 100 {
+            0.5f64.sqrt() * g.next()
+        } else {
+            0.0
+        };
+        e.update(k * 10_000, (12.5 + noise) as f32);
+        if k == 99 {
+            assert_eq!(e.variance(), Some(0.0));
+        }
+    }
+    let v = e.variance().unwrap();
+    assert!((v - 0.5).abs() < 0.1, "{v}");
+}
+
 /// At 20 Hz the time constant is 50 periods (2.5 s), not the 0.5 s asked for: the
 /// estimator is the same as one asked for 2.5 s, and on N(0, 0.01) noise over a smooth
 /// motion it stays within 0.5x to 2x of 0.01 once started (with 0.5 s, 10 terms, it read
