@@ -85,14 +85,28 @@ pub type Pipeline = nav440_pipeline::Pipeline<Bank, ConfigError, BuildFn, BANK_S
 /// The bank preset the firmware runs: the one `nav440 estimate` runs by default
 /// (`BankConfig::NAV440`; the paper's presets are `BankConfig::PAPER`, `nav440 estimate
 /// --preset paper`).
+#[cfg(not(feature = "tuned-gains"))]
 pub const PRESET: BankConfig = BankConfig::NAV440;
+
+/// Gains tuned for the product bank by `nav440 tune --bank product --rust` (feature
+/// `tuned-gains`): `host-tests/data/gains/product_fig5.rs`, beside the `product_fig5.toml`
+/// that `nav440 estimate --bank product --gains` reads.
+#[cfg(feature = "tuned-gains")]
+#[allow(missing_docs)] // generated file: its constant is documented at the `PRESET` below
+mod tuned {
+    include!("../../host-tests/data/gains/product_fig5.rs");
+}
+/// The bank preset the firmware runs (feature `tuned-gains`): the tuned gains at every
+/// packet rate ([`FOLLOW_RATE`] is `false`).
+#[cfg(feature = "tuned-gains")]
+pub const PRESET: BankConfig = tuned::TUNED;
 
 /// Whether the banks run the shipped preset's gains for the unit's measured packet rate
 /// (`BankConfig::NAV440_RATES`) instead of [`PRESET`]'s own: `true` for the NAV440 preset,
-/// whose gains are a table per packet rate; set it `false` to run fixed gains (e.g.
-/// `BankConfig::PAPER` or `nav440 tune --rust` output) at every rate. The `adaptive-gains`
-/// banks take their gains from the schedule.
-pub const FOLLOW_RATE: bool = true;
+/// whose gains are a table per packet rate; `false` runs fixed gains (e.g.
+/// `BankConfig::PAPER` or `nav440 tune --rust` output, as the feature `tuned-gains` does) at
+/// every rate. The `adaptive-gains` banks take their gains from the schedule.
+pub const FOLLOW_RATE: bool = !cfg!(feature = "tuned-gains");
 
 /// Checks once, at start, that [`PRESET`] builds, so that a bad configuration fails at start.
 pub fn check() -> Result<(), ConfigError> {

@@ -148,9 +148,16 @@ impl TuneResult {
     /// A Rust snippet building the tuned `BankConfig` (paste into the firmware); it sets the
     /// hold the tuner kept.
     pub fn to_rust(&self) -> String {
-        let s = self
+        let mut s = self
             .gains
             .to_rust(&format!("noise variance {} deg^2", self.noise_var));
+        if self.families != Families::ALL {
+            s.insert_str(
+                0,
+                "// The product bank's two rows (ILO1 velocity, Kalman acceleration): `ProductBank::new(&TUNED)`,\n\
+                 // or in the product firmware `PRESET = TUNED` with `FOLLOW_RATE = false` (firmware-example/src/pipeline.rs).\n",
+            );
+        }
         match self.hold {
             Hold::Linear => s,
             Hold::ZeroOrder => s.replace(

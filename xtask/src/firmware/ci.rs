@@ -15,6 +15,7 @@ use super::size::size;
 use super::unit_cases::ci_unit;
 use super::{
     read_file, root, work_dir, BankChoice, ADAPTIVE, FW_BIN, ONE_AXIS, PRODUCT, STM32_FEATURE,
+    TUNED, TUNED_GAINS,
 };
 use crate::qemu::{self, Output};
 use std::path::Path;
@@ -153,6 +154,16 @@ pub fn ci_steps() -> Result<(), String> {
         check_map(&elf, "mps2")?;
         product_elfs.push((*board, elf));
     }
+    // The product firmware with the gains `nav440 tune --bank product --rust` wrote (feature
+    // `tuned-gains`): lint and build for the M4F board (the feature changes only the preset;
+    // the product bank itself runs on every board above).
+    let mut tuned_elfs = Vec::new();
+    for board in qemu::BOARDS.iter().take(1) {
+        clippy_firmware(board.target, Some(TUNED))?;
+        let elf = build(board.target, &[PRODUCT, TUNED], FW_BIN)?;
+        check_map(&elf, "mps2")?;
+        tuned_elfs.push((*board, elf));
+    }
     // The firmware with noise-adaptive gains: lint and build for M4F and thumbv6m.
     let mut adaptive_elfs = Vec::new();
     for board in adaptive_boards() {
@@ -271,6 +282,26 @@ pub fn ci_steps() -> Result<(), String> {
         eprintln!("xtask: product firmware on {}", board.name);
         let extra = firmware_host_args(board.target, BankChoice::Product);
         for capture in &captures {
+            equivalence(board, elf, capture, &extra)?;
+        }
+    }
+    // The tuned product firmware prints the CSV of the command the gains file names (`nav440
+    // estimate FILE --bank product --gains product_fig5.toml --hold H`), byte for byte, on the
+    // bundled capture and the tumble.
+    let gains = root().join(TUNED_GAINS);
+    let gains_text = read_file(&gains).map(|b| String::from_utf8_lossy(&b).into_owned())?;
+    let hold = gains_text
+        .split_whitespace()
+        .skip_while(|w| *w != "--hold")
+        .nth(1)
+        .ok_or_else(|| format!("{TUNED_GAINS} names no --hold in its header"))?
+        .to_owned();
+    let gains = gains.display().to_string();
+    for (board, elf) in &tuned_elfs {
+        eprintln!("xtask: tuned product firmware on {}", board.name);
+        let mut extra = firmware_host_args(board.target, BankChoice::Product);
+        extra.extend(["--gains", &gains, "--hold", &hold]);
+        for capture in [&bundled, &tumble] {
             equivalence(board, elf, capture, &extra)?;
         }
     }

@@ -54,6 +54,12 @@ const ONE_AXIS: &str = "one-axis";
 
 /// Feature of the firmware with noise-adaptive gains (`estimators::AdaptiveBank`).
 const ADAPTIVE: &str = "adaptive-gains";
+/// The firmware feature of the product bank with the tuned gains of
+/// [`TUNED_GAINS`] (`firmware-example/src/pipeline.rs`).
+const TUNED: &str = "tuned-gains";
+/// The gains file `nav440 tune --bank product` wrote beside the snippet the `tuned-gains`
+/// firmware includes (relative to the workspace root).
+const TUNED_GAINS: &str = "host-tests/data/gains/product_fig5.toml";
 
 /// The bank a firmware image runs (`--bank`): the paper's 14 estimators (default) or the
 /// product bank (feature `bank-product`).
