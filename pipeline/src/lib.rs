@@ -61,3 +61,8 @@ pub use pipeline::{
     Pipeline, Rejections, Row, ROW_CAPACITY,
 };
 pub use sample::{attitude, Attitude, FrontCounters, Frontend, Sample};
+
+/// The examples of the crate README, compiled and run as doc tests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

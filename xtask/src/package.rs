@@ -19,12 +19,13 @@ fn to_root() -> Result<(), String> {
 pub const LIBRARIES: &[(&str, &str)] = &[
     ("nav440-proto", "nav440-proto"),
     ("estimators", "velocity-estimators"),
+    ("pipeline", "nav440-pipeline"),
 ];
 
 /// Runs every example of the libraries (each checks its own result and exits non-zero on a
-/// failure), then `cargo publish --dry-run` of each library (`--allow-dirty`: CI's checkout may
-/// hold build products; the dry run packages, verifies that the package builds on its own
-/// with its crates.io dependencies, and uploads nothing).
+/// failure), then `cargo publish --dry-run` of the three libraries together (`--allow-dirty`:
+/// CI's checkout may hold build products; the dry run packages, verifies that each package
+/// builds on its own with its registry dependencies, and uploads nothing).
 pub fn package() -> Result<(), String> {
     to_root()?;
     cargo(&[
@@ -76,10 +77,24 @@ pub fn package() -> Result<(), String> {
         "-D",
         "warnings",
     ])?;
+    cargo(&[
+        "run",
+        "-q",
+        "-p",
+        "nav440-pipeline",
+        "--example",
+        "estimate_capture",
+        "--",
+        "host-tests/data/fig5_a2_100hz.bin",
+    ])?;
+    // All three in one dry run: `nav440-pipeline` depends on the other two by version, which
+    // cargo resolves against the packages it has just made (not against crates.io).
+    let mut args = vec!["publish", "--dry-run", "--allow-dirty"];
     for (_, lib) in LIBRARIES {
-        cargo(&["publish", "--dry-run", "--allow-dirty", "-p", lib])?;
+        args.extend(["-p", lib]);
     }
-    Ok(())
+    cargo(&args)
+}
 }
 
 /// The `rust-version` of `[package]` (or `[workspace.package]`) in a manifest's text, if set
