@@ -95,7 +95,6 @@ pub fn package() -> Result<(), String> {
     }
     cargo(&args)
 }
-}
 
 /// The `rust-version` of `[package]` (or `[workspace.package]`) in a manifest's text, if set
 /// as a plain string.
