@@ -185,7 +185,26 @@ pub fn check_memory_map(path: &Path, expect: Option<&str>) -> Result<MapReport, 
             ));
         }
     }
-    let chip = chip(&board)?;
+    check_sections(path, &elf, chip(&board)?)
+}
+
+/// Checks `path` against the chip of board `board`, whether or not the image names a board:
+/// for an image built outside this workspace (the outside-firmware fixture), which carries no
+/// `NAV440_BOARD`. The same checks as [`check_memory_map`].
+pub fn check_memory_map_for(path: &Path, board: &str) -> Result<MapReport, String> {
+    let data = read(path)?;
+    let elf = parse(path, &data)?;
+    check_sections(path, &elf, chip(board)?)
+}
+
+/// The checks of [`check_memory_map`] against `chip`.
+fn check_sections(
+    path: &Path,
+    elf: &object::File<'_>,
+    chip: &'static Chip,
+) -> Result<MapReport, String> {
+    let shown = path.display();
+    let board = chip.board.to_owned();
     let mut sections = 0;
     let mut vector_table = None;
     for s in elf.sections() {
@@ -217,7 +236,7 @@ pub fn check_memory_map(path: &Path, expect: Option<&str>) -> Result<MapReport, 
         sections += 1;
     }
     // The load addresses (what a probe writes) are the program headers' `p_paddr`.
-    let object::File::Elf32(f) = &elf else {
+    let object::File::Elf32(f) = elf else {
         return Err(format!("{shown}: not a 32-bit ELF file"));
     };
     let e = f.endian();
@@ -250,7 +269,7 @@ pub fn check_memory_map(path: &Path, expect: Option<&str>) -> Result<MapReport, 
         board,
         sections,
         vector_table,
-        float_symbols: float_symbols_in(&elf),
+        float_symbols: float_symbols_in(elf),
     })
 }
 

@@ -12,6 +12,8 @@
 //! * `cargo xtask msrv`  - the libraries' declared `rust-version` checked with that toolchain.
 //! * `cargo xtask package` - the libraries' examples run and `cargo publish --dry-run`.
 //! * `cargo xtask embassy` - the embassy example (async driver) under QEMU against `nav440 sim`.
+//! * `cargo xtask outside-firmware` - a firmware outside the workspace on the libraries by
+//!   version: built for thumbv7em and thumbv6m, map-checked, run on QEMU.
 //! * `cargo xtask flash ELF` - the runner of `cargo run` for the firmware: checks a board
 //!   image's memory map and flashes it with `probe-rs run --chip` of its board; refuses an
 //!   image of the emulated boards.
@@ -142,11 +144,16 @@ enum Cmd {
     /// Checks each library with the toolchain of its declared `rust-version` (installed with
     /// rustup when missing), and that the workspace's `rust-version` is the pinned toolchain.
     Msrv,
-    /// Runs the libraries' examples and `cargo publish --dry-run` of each (needs crates.io).
+    /// Runs the libraries' examples and one `cargo publish --dry-run` of the three (needs
+    /// crates.io).
     Package,
     /// The embassy example (async driver on embassy-executor) built for thumbv7em and run on
     /// QEMU `mps2-an386` against `nav440 sim`.
     Embassy,
+    /// The firmware outside the workspace (`fixtures/outside-firmware`: the three libraries by
+    /// version, patched to this checkout) built for thumbv7em and thumbv6m, map-checked and
+    /// run on QEMU against `nav440 estimate`.
+    OutsideFirmware,
     /// Flashes a board image with probe-rs and prints its defmt output (the runner of `cargo
     /// run` for the firmware, `.cargo/config.toml`): reads the board from the ELF, checks its
     /// memory map, then runs `probe-rs run --chip CHIP ELF`. An image of the emulated `mps2`
@@ -209,6 +216,7 @@ fn main() -> ExitCode {
         Cmd::Msrv => package::msrv(),
         Cmd::Package => package::package(),
         Cmd::Embassy => firmware::embassy(),
+        Cmd::OutsideFirmware => firmware::outside_firmware(),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -329,6 +337,7 @@ fn ci() -> Result<(), String> {
     package::msrv()?;
     firmware::ci_steps()?;
     firmware::embassy()?;
+    firmware::outside_firmware()?;
     eprintln!(
         "xtask ci: all checks passed in {:.0} s",
         start.elapsed().as_secs_f64()
