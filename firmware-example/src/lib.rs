@@ -14,10 +14,10 @@
 //! * [`cycles`]: instruction counting with SysTick under `qemu -icount` (see the bench binary).
 //! * [`pipeline`]: the firmware's `nav440_pipeline::Pipeline` (parser -> attitude -> BIT ->
 //!   `TimeBase` -> one `PaperBank` per axis -> CSV rows).
-//! * [`stack`]: stack high-water mark (painted stack).
+//! * [`stack`]: stack high-water mark (the stack cortex-m-rt's `paint-stack` painted).
 //! * `sqrt`: the ED's square root as the `VSQRT.F32` instruction (FPU builds).
 //!
-//! This is the only crate of the workspace with `unsafe` (register access, stack painting, the
+//! This is the only crate of the workspace with `unsafe` (register access, the stack scan, the
 //! `VSQRT` instruction, NVIC unmasking); every `unsafe` block carries a `// SAFETY:` comment.
 #![no_std]
 

@@ -4,8 +4,9 @@
 //! board; `cargo xtask qemu/demo/unit` decode the frames into the CSV of `nav440 estimate`.
 //!
 //! # Boot and run (unit mode, the default)
-//! 1. The stack is painted (before any interrupt is enabled), then the UARTs and SysTick
-//!    (1 kHz time base) start: the NAV440 UART's receive interrupt is the first interrupt.
+//! 1. The UARTs and SysTick (1 kHz time base) start (the stack was painted by the reset
+//!    handler, cortex-m-rt's `paint-stack`): the NAV440 UART's receive interrupt is the first
+//!    interrupt.
 //! 2. `nav440_proto::boot::boot` configures the unit to [`TARGET`] (A2 at 100 Hz at
 //!    57600 Bd, checked against the unit's byte budget at compile time): find it (ping at
 //!    57600, 38400, 19200, 9600 Bd), switch the baud, set type and rate, read them back. The
@@ -91,9 +92,6 @@ fn boot_status<E>(e: &BootError<E>) -> Status {
 
 #[entry]
 fn main() -> ! {
-    // First, before any interrupt is enabled: the stack high-water mark then covers the
-    // interrupt handlers too.
-    stack::paint();
     log::init();
     let Some(core) = cortex_m::Peripherals::take() else {
         defmt::println!("firmware: core peripherals already taken");

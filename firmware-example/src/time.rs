@@ -29,7 +29,7 @@ fn SysTick() {
 }
 
 /// Starts SysTick on the core clock (`core_clock_hz`) with a 1 ms period and its interrupt
-/// enabled; returns the delay provider. Call after painting the stack.
+/// enabled; returns the delay provider.
 pub fn start(mut syst: SYST, core_clock_hz: u32) -> Delay {
     let ticks = (core_clock_hz / 1000).clamp(2, 0x0100_0000);
     TICKS_PER_MS.store(ticks, Ordering::Relaxed);

@@ -207,7 +207,7 @@ pub struct Board {
 impl Board {
     /// Sets up the board's clocks and UARTs: the NAV440 UART at `baud` Bd 8N1 with TX, RX and
     /// the RX interrupt enabled and unmasked in the NVIC, and the control channel. This is the
-    /// first interrupt the firmware enables: paint the stack before. `None` if called twice.
+    /// first interrupt the firmware enables. `None` if called twice.
     pub fn take(baud: u32) -> Option<Self> {
         let queue: &'static mut Queue<u8, { RX_QUEUE_BYTES + 1 }> =
             cortex_m::singleton!(: Queue<u8, { RX_QUEUE_BYTES + 1 }> = Queue::new())?;

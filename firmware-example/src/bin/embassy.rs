@@ -122,7 +122,6 @@ async fn yield_now() {
 
 #[embassy_executor::main]
 async fn main(_spawner: Spawner) {
-    stack::paint();
     let Some(core) = cortex_m::Peripherals::take() else {
         fail(1, format_args!("core peripherals already taken"))
     };
