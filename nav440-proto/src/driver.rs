@@ -490,17 +490,9 @@ impl<P: Port, D: DelayNs> Link for BlockingLink<'_, P, D> {
 }
 
 /// Runs a future whose every step completes at once (the [`Engine`] over a
-/// [`BlockingLink`]) to its end on the calling thread.
-pub(crate) fn block_on<F: core::future::Future>(f: F) -> F::Output {
-    let mut f = core::pin::pin!(f);
-    let mut cx = core::task::Context::from_waker(core::task::Waker::noop());
-    loop {
-        // A blocking link never suspends, so the first poll is the last.
-        if let core::task::Poll::Ready(out) = f.as_mut().poll(&mut cx) {
-            return out;
-        }
-    }
-}
+/// [`BlockingLink`]) to its end on the calling thread: `embassy_futures::block_on` (a no-op
+/// waker; a blocking link never suspends, so the first poll is the last).
+pub(crate) use embassy_futures::block_on;
 
 /// The protocol state and logic every driver shares (blocking, non-blocking and async):
 /// requests, reply matching ([`ReplyWait`]), time-outs, the parser and its counters. Its
