@@ -105,20 +105,6 @@ fn fail(status: u32, what: core::fmt::Arguments<'_>) -> ! {
     host::exit_code(status)
 }
 
-/// Lets the executor run other tasks once.
-async fn yield_now() {
-    let mut yielded = false;
-    poll_fn(|cx| {
-        if yielded {
-            Poll::Ready(())
-        } else {
-            yielded = true;
-            cx.waker().wake_by_ref();
-            Poll::Pending
-        }
-    })
-    .await;
-}
 
 #[embassy_executor::main]
 async fn main(_spawner: Spawner) {
@@ -201,7 +187,7 @@ async fn main(_spawner: Spawner) {
                 message.unwrap_or_else(|m| fail(1, format_args!("bad control message {m:02x?}"))),
             );
         } else {
-            yield_now().await;
+            embassy_futures::yield_now().await;
         }
     }
     finish(&mut pipe, &uart.0, total.unwrap_or(0))
