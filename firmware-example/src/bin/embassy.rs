@@ -105,7 +105,6 @@ fn fail(status: u32, what: core::fmt::Arguments<'_>) -> ! {
     host::exit_code(status)
 }
 
-
 #[embassy_executor::main]
 async fn main(_spawner: Spawner) {
     let Some(core) = cortex_m::Peripherals::take() else {
