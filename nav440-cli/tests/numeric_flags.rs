@@ -109,6 +109,7 @@ const NOT_NUMERIC: &[(&str, &str)] = &[
     ("tune", "--output"),
     ("tune", "--rust"),
     ("tune", "--axis"),
+    ("tune", "--bank"),
     ("plot", "file"),
     ("plot", "--output"),
     ("plot", "--hold"),
