@@ -12,8 +12,11 @@ use crate::{optim, paper, replay, tune};
 /// Arguments of `nav440 tune`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Capture file; `-` reads standard input.
-    file: PathBuf,
+    /// Capture file; `-` reads standard input. Several captures (at one packet rate) tune one
+    /// gain set, or one schedule, on all of them: each family's objective is the geometric mean
+    /// of its MSEs over the captures.
+    #[arg(required = true, value_name = "FILE")]
+    files: Vec<PathBuf>,
     /// Noise variance added to yaw, deg^2 (0 to 1e15).
     #[arg(
         long,
@@ -85,7 +88,12 @@ pub fn run(a: Args) -> Result<()> {
     for p in [&a.output, &a.rust].into_iter().flatten() {
         check_writable(p)?;
     }
-    let samples = replay::read_samples(&a.file)?;
+    let captures = a
+        .files
+        .iter()
+        .map(|f| replay::read_samples(f))
+        .collect::<Result<Vec<_>>>()?;
+    let captures: Vec<&[replay::Sample]> = captures.iter().map(Vec::as_slice).collect();
     let opts = replay::EstimateOptions {
         hold: a.hold.map_or(estimators::Hold::Linear, Into::into),
         step_s: a.step,
@@ -117,7 +125,7 @@ pub fn run(a: Args) -> Result<()> {
             ..spec
         };
         let progress = progress(&spec, levels.len() as u64);
-        let tuned = tune::tune_schedule(&samples, &opts, &spec, &levels, &progress);
+        let tuned = tune::tune_schedule_on(&captures, &opts, &spec, &levels, &progress);
         progress.finish();
         let (file, text) = tuned?;
         super::stdout_or_file(None, |w| w.write_all(text.as_bytes()))?;
@@ -138,7 +146,7 @@ pub fn run(a: Args) -> Result<()> {
         return Ok(());
     }
     let progress = progress(&spec, 1);
-    let res = tune::tune_with_progress(&samples, &opts, &spec, &progress);
+    let res = tune::tune_on(&captures, &opts, &spec, &progress);
     progress.finish();
     let res = res?;
     for w in &res.warnings {

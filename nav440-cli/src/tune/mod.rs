@@ -544,24 +544,49 @@ pub fn tune_with_progress(
     spec: &TuneSpec,
     progress: &Progress,
 ) -> Result<TuneResult> {
+    tune_on(&[samples], opts, spec, progress)
+}
+
+/// [`tune_with_progress`] on several captures at once (`nav440 tune FILE FILE ...`): each
+/// family's objective is the geometric mean of its MSE over the captures (each capture weighs
+/// the same whatever its MSE's scale), and the before/after MSEs are the means over the
+/// captures. The captures must share one packet rate (the bank's nominal period). With one
+/// capture it is exactly [`tune_with_progress`].
+pub fn tune_on(
+    captures: &[&[Sample]],
+    opts: &EstimateOptions,
+    spec: &TuneSpec,
+    progress: &Progress,
+) -> Result<TuneResult> {
     let started = Instant::now();
     check_range("--train", spec.train)?;
     let test = spec.test.unwrap_or(spec.train);
     check_range("--test", test)?;
+    let Some(&first) = captures.first() else {
+        return Err(Error::Usage("no capture to tune on".into()));
+    };
     let seeds = spec.seeds.max(1);
     let noise_var = spec.noise_var;
     let opts = &opts.paper_law();
     let axis = opts.axis();
-    let ys = noisy_inputs(samples, axis, noise_var, 1..=seeds)?;
     let holds = if spec.holds.is_empty() {
         vec![opts.hold]
     } else {
         spec.holds.clone()
     };
     let hold_before = opts.hold;
-    let lock = Lock::of(samples, axis);
-    let rows_scored = lock.scored_in(samples, spec.train);
-    let rows_left_out = lock.left_out_in(samples, spec.train);
+    check_one_rate(captures, opts)?;
+    let locks: Vec<Lock> = captures.iter().map(|c| Lock::of(c, axis)).collect();
+    let rows_scored: usize = locks
+        .iter()
+        .zip(captures)
+        .map(|(l, c)| l.scored_in(c, spec.train))
+        .sum();
+    let rows_left_out: usize = locks
+        .iter()
+        .zip(captures)
+        .map(|(l, c)| l.left_out_in(c, spec.train))
+        .sum();
     if rows_scored == 0 {
         return Err(Error::Usage(format!(
             "nothing to score on the training range {}-{} s: {}",
@@ -577,50 +602,58 @@ pub fn tune_with_progress(
             }
         )));
     }
-    let base_before = opts.bank_config_for(samples);
+    let base_before = opts.bank_config_for(first);
     let paper = GainsFile::from_bank(&base_before);
-    // The Euler-kinematics rate; NaN (left out of every MSE) near gimbal lock.
-    let vel_ref: Vec<f32> = samples
-        .iter()
-        .map(|s| s.reference(axis).unwrap_or(f32::NAN))
-        .collect();
+    // Per capture: the noisy inputs, the Euler-kinematics rate (NaN, left out of every MSE,
+    // near gimbal lock) and one acceleration reference for every hold: the AVE on the rate with
+    // the options' hold (the paper's protocol), so that the holds are compared on one target.
+    let mut inputs = Vec::with_capacity(captures.len());
+    for (&samples, lock) in captures.iter().zip(&locks) {
+        let ys = noisy_inputs(samples, axis, noise_var, 1..=seeds)?;
+        let vel_ref: Vec<f32> = samples
+            .iter()
+            .map(|s| s.reference(axis).unwrap_or(f32::NAN))
+            .collect();
+        let acc_ref = ave_on_rate(samples, &REFERENCE_AVE, opts)?;
+        inputs.push((samples, ys, vel_ref, acc_ref, lock));
+    }
     let mut runs = Vec::new();
-    // One acceleration reference for every hold: the AVE on the rate with the options' hold
-    // (the paper's protocol), so that the holds are compared on the same target.
-    let acc_ref = ave_on_rate(samples, &REFERENCE_AVE, opts)?;
     let mut best: Option<(f64, GainsFile, Hold)> = None;
     for &hold in &holds {
         let o = EstimateOptions {
             hold,
             ..opts.clone()
         };
-        let base = o.bank_config_for(samples);
-        let problem = Problem {
-            samples,
-            ys: ys.clone(),
-            vel_ref: vel_ref.clone(),
-            acc_ref: acc_ref.clone(),
-            opts: &o,
-            max_gap_s: base.max_gap_s(),
-            sample_period_s: base.sample_period_s,
-            range: spec.train,
-            lock: Lock::of(samples, axis),
-            progress: Some(progress),
+        let problems: Vec<Problem<'_>> = inputs
+            .iter()
+            .map(|(samples, ys, vel_ref, acc_ref, lock)| {
+                let base = o.bank_config_for(samples);
+                Problem {
+                    samples,
+                    ys: ys.clone(),
+                    vel_ref: vel_ref.clone(),
+                    acc_ref: acc_ref.clone(),
+                    opts: &o,
+                    max_gap_s: base.max_gap_s(),
+                    sample_period_s: base.sample_period_s,
+                    range: spec.train,
+                    lock: (*lock).clone(),
+                    progress: Some(progress),
+                }
+            })
+            .collect();
+        let (velocity, acceleration) = match problems.as_slice() {
+            [one] => tune_halves(one, &paper, spec)?,
+            many => tune_halves(
+                &Problems {
+                    problems: many,
+                    baselines: None,
+                    hinge: false,
+                },
+                &paper,
+                spec,
+            )?,
         };
-        let (velocity, acceleration) = std::thread::scope(|s| {
-            let v = s.spawn(|| {
-                tune_family(&problem, &paper.velocity, false, spec.method, spec.families)
-            });
-            let a = tune_family(
-                &problem,
-                &paper.acceleration,
-                true,
-                spec.method,
-                spec.families,
-            );
-            (v.join(), a)
-        });
-        let velocity = velocity.map_err(|_| Error::Other("tuning thread panicked".into()))?;
         let mut run = HoldRun {
             hold,
             score: 0.0,
@@ -673,9 +706,20 @@ pub fn tune_with_progress(
             )));
         }
     }
-    // Before/after through the whole bank, on the test range, against the same references.
-    let bank_mse =
-        |cfg: BankConfig| bank_mse_with(samples, opts, &acc_ref, cfg, noise_var, 1..=seeds, test);
+    // Before/after through the whole bank, on the test range, against the same references:
+    // the mean over the captures.
+    let bank_mse = |cfg: BankConfig| -> Result<([f64; FAMILY_COUNT], [f64; FAMILY_COUNT])> {
+        let mut sum = ([0.0; FAMILY_COUNT], [0.0; FAMILY_COUNT]);
+        for (samples, _, _, acc_ref, _) in &inputs {
+            let (v, a) = bank_mse_with(samples, opts, acc_ref, cfg, noise_var, 1..=seeds, test)?;
+            for i in 0..FAMILY_COUNT {
+                sum.0[i] += v[i];
+                sum.1[i] += a[i];
+            }
+        }
+        let n = inputs.len() as f64;
+        Ok((sum.0.map(|x| x / n), sum.1.map(|x| x / n)))
+    };
     let (vel_before, acc_before) = bank_mse(base_before)?;
     let mut tuned_cfg = gains.apply(base_before);
     tuned_cfg.hold = hold;
@@ -702,6 +746,46 @@ pub fn tune_with_progress(
         warnings,
         families: spec.families,
     })
+}
+
+/// Tunes both halves of `start` on `eval` (the velocity half on a second thread): the tuned
+/// gains and each family's (cost, evaluations, seconds).
+#[allow(clippy::type_complexity)]
+fn tune_halves(
+    eval: &impl Eval,
+    start: &GainsFile,
+    spec: &TuneSpec,
+) -> Result<(
+    (FamilyGains, [(f64, usize, f64); FAMILY_COUNT]),
+    (FamilyGains, [(f64, usize, f64); FAMILY_COUNT]),
+)> {
+    let (velocity, acceleration) = std::thread::scope(|s| {
+        let v = s.spawn(|| tune_family(eval, &start.velocity, false, spec.method, spec.families));
+        let a = tune_family(eval, &start.acceleration, true, spec.method, spec.families);
+        (v.join(), a)
+    });
+    let velocity = velocity.map_err(|_| Error::Other("tuning thread panicked".into()))?;
+    Ok((velocity, acceleration))
+}
+
+/// Refuses captures at different packet rates (their banks' nominal periods differ): one
+/// tuned gain set is for one rate.
+pub(crate) fn check_one_rate(captures: &[&[Sample]], opts: &EstimateOptions) -> Result<()> {
+    let periods: Vec<f32> = captures
+        .iter()
+        .map(|c| opts.bank_config_for(c).sample_period_s)
+        .collect();
+    if periods.windows(2).any(|w| w[0] != w[1]) {
+        return Err(Error::Usage(format!(
+            "the captures have different packet periods ({}): tune on captures at one packet rate",
+            periods
+                .iter()
+                .map(|p| format!("{p} s"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        )));
+    }
+    Ok(())
 }
 
 /// The unwrapped noisy angle of `axis` for each noise seed (the tuner's inputs).

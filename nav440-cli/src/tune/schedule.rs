@@ -69,7 +69,25 @@ pub fn tune_schedule(
     levels: &[f64],
     progress: &Progress,
 ) -> Result<(crate::gains::ScheduleFile, String)> {
+    tune_schedule_on(&[samples], opts, spec, levels, progress)
+}
+
+/// [`tune_schedule`] on several captures at once (`nav440 tune FILE FILE ... --schedule`):
+/// each level is tuned on all of them ([`tune_on`]); the MSEs that pick each level's observers
+/// and the switch points are the means over the captures, and so is the AVE's `deltahat`. The
+/// captures must share one packet rate. With one capture it is exactly [`tune_schedule`].
+pub fn tune_schedule_on(
+    captures: &[&[Sample]],
+    opts: &EstimateOptions,
+    spec: &TuneSpec,
+    levels: &[f64],
+    progress: &Progress,
+) -> Result<(crate::gains::ScheduleFile, String)> {
     check_levels(levels)?;
+    let Some(&samples) = captures.first() else {
+        return Err(Error::Usage("no capture to tune on".into()));
+    };
+    check_one_rate(captures, opts)?;
     let hold = spec.holds.first().copied().unwrap_or(Hold::Linear);
     // A schedule is for the device, which runs for hours: its AVE is tuned with the product's
     // leaky `deltahat` law (`estimators::presets::AVE_DEFAULT`) whatever law the start gains
@@ -87,8 +105,8 @@ pub fn tune_schedule(
     let mut text = String::new();
     let mut tuned: Vec<GainsFile> = Vec::new();
     for &v in levels {
-        let res = tune_with_progress(
-            samples,
+        let res = tune_on(
+            captures,
             opts,
             &TuneSpec {
                 noise_var: v,
@@ -108,12 +126,22 @@ pub fn tune_schedule(
     };
     // Each level's observers: the best of every level's tuned gains at this level's noise
     // (the search of one level can end in a worse basin than a neighbour's gains).
-    let acc_ref = ave_on_rate(samples, &REFERENCE_AVE, opts)?;
+    // The mean over the captures of each level's velocity MSEs at each level's noise.
+    let acc_refs = captures
+        .iter()
+        .map(|c| ave_on_rate(c, &REFERENCE_AVE, opts))
+        .collect::<Result<Vec<_>>>()?;
     let mut at = vec![vec![[0.0f64; FAMILY_COUNT]; levels.len()]; levels.len()];
     for (i, g) in tuned.iter().enumerate() {
         for (j, &v) in levels.iter().enumerate() {
-            let seeds = 1..=spec.seeds.max(1);
-            at[i][j] = bank_mse_with(samples, opts, &acc_ref, config(g), v, seeds, spec.train)?.0;
+            for (c, acc_ref) in captures.iter().zip(&acc_refs) {
+                let seeds = 1..=spec.seeds.max(1);
+                let m = bank_mse_with(c, opts, acc_ref, config(g), v, seeds, spec.train)?.0;
+                for (x, y) in at[i][j].iter_mut().zip(m) {
+                    *x += y;
+                }
+            }
+            at[i][j] = at[i][j].map(|x| x / captures.len() as f64);
         }
     }
     // `source[j][c]`: the level whose tuned gains level `j` runs for the observer family of
@@ -139,7 +167,21 @@ pub fn tune_schedule(
     }
     let mut level = Vec::new();
     for (g, &v) in tuned.iter().zip(levels) {
-        let deltahat = tuned_ave_deltahat(samples, opts, &config(g), v, spec.seeds, spec.train)?;
+        let mut sum = [0.0f64; 3];
+        for c in captures {
+            let d = tuned_ave_deltahat(c, opts, &config(g), v, spec.seeds, spec.train)?;
+            for (x, y) in sum
+                .iter_mut()
+                .zip([d.velocity, d.acceleration[0], d.acceleration[1]])
+            {
+                *x += f64::from(y);
+            }
+        }
+        let m = sum.map(|x| (x / captures.len() as f64) as f32);
+        let deltahat = estimators::AveDeltahat {
+            velocity: m[0],
+            acceleration: [m[1], m[2]],
+        };
         text.push_str(&format!(
             "level {v} deg^2: AVE deltahat tuned with (mean over the run): velocity {} deg/s, AVE-AVE {} deg/s, {} deg/s^2\n",
             deltahat.velocity, deltahat.acceleration[0], deltahat.acceleration[1]
