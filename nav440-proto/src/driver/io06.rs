@@ -1,7 +1,7 @@
 //! `embedded-io` 0.6 serial ports (feature `embedded-io-06`).
 //!
-//! HALs such as `embassy-stm32` and `stm32f4xx-hal` implement `embedded-io` 0.6, while this
-//! crate's drivers take 0.7 ports. [`Compat06`] shows a 0.6 port through the 0.7 traits, so
+//! Some HALs implement `embedded-io` 0.6 (e.g. `stm32f4xx-hal` 0.23), while this crate's
+//! drivers take 0.7 ports (which `embassy-stm32` 0.6 and `rp2040-hal` 0.12 implement). [`Compat06`] shows a 0.6 port through the 0.7 traits, so
 //! the same drivers run over it: `IoDriver::new(Compat06(uart))` (blocking, also named
 //! [`Io06Driver`]) or `AsyncDriver::new(Compat06(uart))`.
 
@@ -12,7 +12,7 @@ use embedded_io_06 as eio;
 pub type Io06Driver<S> = super::IoDriver<Compat06<S>>;
 
 /// An `embedded-io` 0.6 serial port seen through the 0.7 traits, blocking and async: wrap a
-/// HAL's 0.6 UART (e.g. `embassy-stm32`'s `BufferedUart`) to use it with
+/// HAL's 0.6 UART (e.g. `stm32f4xx-hal` 0.23's serial port) to use it with
 /// [`IoDriver`](super::IoDriver) or [`AsyncDriver`](super::AsyncDriver)
 /// (`AsyncDriver::new(Compat06(uart))`). Each 0.7 trait is implemented when the port
 /// implements its 0.6 counterpart (`embedded_io` 0.6 `Read`, `ReadReady`, `Write`;
