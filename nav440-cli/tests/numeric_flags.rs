@@ -104,7 +104,7 @@ const NOT_NUMERIC: &[(&str, &str)] = &[
     ("paper", "--gains"),
     ("paper", "--noise-at"),
     ("paper", "--axis"),
-    ("tune", "file"),
+    ("tune", "files"),
     ("tune", "--hold"),
     ("tune", "--output"),
     ("tune", "--rust"),
