@@ -45,8 +45,7 @@ pub fn euler_rates_deg(roll_deg: f32, pitch_deg: f32, pqr_deg_s: [f32; 3]) -> [O
     let (sp, cp) = libm::sincosf(phi);
     let q_sin_r_cos = q * sp + r * cp;
     let pitch_rate = q * cp - r * sp;
-    let near_lock = !pitch_deg.is_finite() || pitch_deg.abs() >= PITCH_LIMIT_DEG;
-    if near_lock {
+    if !pitch_deg.is_finite() || near_lock(pitch_deg) {
         return [None, Some(pitch_rate), None];
     }
     let theta = pitch_deg * DEG_TO_RAD;

@@ -379,28 +379,28 @@ fn run_sample<B: AxisBank>(
     if singular_axes && near_lock {
         counters.near_lock = counters.near_lock.saturating_add(1);
     }
-    let restart = Sample {
-        new_epoch: true,
-        ..*s
-    };
     let leaving_lock = *in_lock && !near_lock;
     if singular_axes && leaving_lock {
         counters.lock_passes = counters.lock_passes.saturating_add(1);
     }
     *in_lock = near_lock;
+    // The roll and yaw banks' input on the first sample after the lock: a new epoch.
+    let restart = leaving_lock.then_some(Sample {
+        new_epoch: true,
+        ..*s
+    });
     let mut err = None;
     let mut gaps = 0;
     for (bank, axis) in banks.iter_mut().zip(axes.iter()) {
         let i = axis.index();
-        let input = if !axis.singular_near_lock() {
-            s
-        } else if near_lock {
+        let singular = axis.singular_near_lock();
+        if singular && near_lock {
             gaps = gaps.max(bank.gaps());
             continue;
-        } else if leaving_lock {
-            &restart
-        } else {
-            s
+        }
+        let input = match &restart {
+            Some(r) if singular => r,
+            _ => s,
         };
         match bank.step(input, s.angle(axis)) {
             Ok(out) => {
