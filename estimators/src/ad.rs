@@ -2,7 +2,9 @@
 
 use crate::bank::{BankGains, Channel};
 use crate::error::positive;
-use crate::family::{coordinate, geometric, Family, Gains, Scheduling, Scorer, SearchPoint};
+use crate::family::{
+    coordinate, geometric, search_range, Family, Gains, Scheduling, Scorer, SearchPoint,
+};
 use crate::law::{Law, Stateful};
 use crate::linear::{LinearLaw, LIN_MAX};
 use crate::{ConfigError, Real};
@@ -176,10 +178,7 @@ impl Gains for AdConfig {
 
     /// `T` in `[1e-4, 1]` s.
     fn search_box(_h_s: f64) -> (SearchPoint, SearchPoint) {
-        (
-            SearchPoint::from_array([1e-4]),
-            SearchPoint::from_array([1.0]),
-        )
+        search_range([1e-4], [1.0])
     }
 
     fn score<S: Scorer>(&self, h: f32, scorer: &S) -> Result<S::Score, ConfigError> {

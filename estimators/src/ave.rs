@@ -1,11 +1,11 @@
 //! Adaptive velocity estimator, AVE (paper eq. 4).
 
 use crate::error::{non_negative, positive};
-use crate::family::{coordinate, geometric, Gains, Scorer, SearchPoint};
+use crate::family::{coordinate, geometric, search_range, Gains, Scorer, SearchPoint};
 use crate::fxk::{
     advance_one, advance_two, frac, mag, mulf, mulf32, run, smul, Coef, Kernel, Stage,
 };
-use crate::law::{step_n, Law, Stateful};
+use crate::law::{step_n, Interval, Law, Stateful};
 use crate::real::{fx_mul, umul32};
 use crate::{ConfigError, Hold, Real};
 
@@ -321,19 +321,15 @@ impl<T: Real> Law for AveParams<T> {
         step_n(self, s, y_prev, y_new, n, hold)
     }
 
-    #[allow(clippy::too_many_arguments)]
     #[inline]
     fn advance_pair(
         v: &Self,
         a2: &Self,
         sv: &mut AveState<T>,
         sa: &mut AveState<T>,
-        y_prev: T,
-        y_new: T,
-        n: u32,
-        hold: Hold,
+        interval: Interval<T>,
     ) -> bool {
-        advance_two(AveK::of(v), AveK::of(a2), sv, sa, y_prev, y_new, n, hold)
+        advance_two(AveK::of(v), AveK::of(a2), sv, sa, interval)
     }
 }
 
@@ -445,35 +441,14 @@ struct AveFx {
     bound: u32,
 }
 
-/// [`AveState`] as raw Q31.32 bits.
-#[derive(Clone, Copy, Debug)]
-struct AveFxState {
-    x: i64,
-    th: i64,
-    d: i64,
+crate::fxk::fx_state! {
+    /// [`AveState`] as raw Q31.32 bits.
+    AveFxState for AveState { x: xhat, th: theta, d: delta }
 }
 
 const PAPER: u8 = 0;
 const BOUNDED: u8 = 1;
 const LEAKY: u8 = 2;
-
-impl AveFxState {
-    #[inline(always)]
-    fn of<T: Real>(s: &AveState<T>) -> Option<Self> {
-        Some(Self {
-            x: s.xhat.fx_bits()?,
-            th: s.theta.fx_bits()?,
-            d: s.delta.fx_bits()?,
-        })
-    }
-
-    #[inline(always)]
-    fn store<T: Real>(&self, s: &mut AveState<T>) {
-        s.xhat = T::from_fx_bits(self.x);
-        s.theta = T::from_fx_bits(self.th);
-        s.delta = T::from_fx_bits(self.d);
-    }
-}
 
 impl AveFx {
     /// `None` for the float types or when a coefficient is outside the kernel's classes.
@@ -611,20 +586,6 @@ impl<const D: u8> Stage for AveStage<D> {
     }
 }
 
-crate::family::family! {
-    /// The AVE family of the paper bank: AVE velocity, AVE-AVE acceleration (one
-    /// [`crate::VelAcc`] row, sharing its first stage when both halves have the same gains);
-    /// gains [`BankGains::ave`](crate::BankGains::ave).
-    AveFamily {
-        gains: AveConfig = BankGains::ave,
-        name: "ave",
-        label: "AVE",
-        channels: AveV, AveA,
-        scheduling: Observer,
-        switch: ObserverSwitch::ave,
-    }
-}
-
 impl Gains for AveConfig {
     /// `k` and `gamma1` geometrically; the `deltahat` law of the nearer one.
     fn interpolate(&self, other: &Self, w: f32) -> Self {
@@ -651,10 +612,7 @@ impl Gains for AveConfig {
     /// `k` in `[0.1, 1e5]` 1/s (tuned at low noise it reaches 10), `gamma1` in `[10, 1e8]`
     /// 1/s^2; [`AveParams::new`] refuses what the step does not resolve.
     fn search_box(_h_s: f64) -> (SearchPoint, SearchPoint) {
-        (
-            SearchPoint::from_array([0.1, 10.0]),
-            SearchPoint::from_array([1e5, 1e8]),
-        )
+        search_range([0.1, 10.0], [1e5, 1e8])
     }
 
     fn score<S: Scorer>(&self, h: f32, scorer: &S) -> Result<S::Score, ConfigError> {
@@ -663,5 +621,19 @@ impl Gains for AveConfig {
 
     fn describe(&self, w: &mut dyn core::fmt::Write) -> core::fmt::Result {
         write!(w, "k={} gamma1={}", self.k, self.gamma1)
+    }
+}
+
+crate::family::family! {
+    /// The AVE family of the paper bank: AVE velocity, AVE-AVE acceleration (one
+    /// [`crate::VelAcc`] row, sharing its first stage when both halves have the same gains);
+    /// gains [`BankGains::ave`](crate::BankGains::ave).
+    AveFamily {
+        gains: AveConfig = BankGains::ave,
+        name: "ave",
+        label: "AVE",
+        channels: AveV, AveA,
+        scheduling: Observer,
+        switch: ObserverSwitch::ave,
     }
 }

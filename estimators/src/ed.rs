@@ -1,9 +1,9 @@
 //! Levant's robust exact differentiator, ED (paper eqs. 5-7; Levant 1998).
 
 use crate::error::positive;
-use crate::family::{coordinate, geometric, Gains, Scorer, SearchPoint};
+use crate::family::{coordinate, geometric, search_range, Gains, Scorer, SearchPoint};
 use crate::fxk::{advance_one, advance_two, frac, mag, mulf, run, sqrt_fast, Coef, Kernel, Stage};
-use crate::law::{step_n, Law, Stateful};
+use crate::law::{step_n, Interval, Law, Stateful};
 use crate::{ConfigError, Hold, NativeSqrt, Real, SqrtFn};
 use core::marker::PhantomData;
 
@@ -243,19 +243,15 @@ impl<T: Real, S: SqrtFn<T>> Law for EdParams<T, S> {
         }
     }
 
-    #[allow(clippy::too_many_arguments)]
     #[inline]
     fn advance_pair(
         v: &Self,
         a2: &Self,
         sv: &mut EdState<T>,
         sa: &mut EdState<T>,
-        y_prev: T,
-        y_new: T,
-        n: u32,
-        hold: Hold,
+        interval: Interval<T>,
     ) -> bool {
-        advance_two(EdFx::of(v), EdFx::of(a2), sv, sa, y_prev, y_new, n, hold)
+        advance_two(EdFx::of(v), EdFx::of(a2), sv, sa, interval)
     }
 
     /// `n` steps; the scheme is chosen once per interval, not per step. [`crate::Fx`] with
@@ -309,30 +305,9 @@ struct EdFx {
 const ED_B: u32 = 60;
 const ED_BOUND: u32 = 1 << (ED_B - 32);
 
-/// [`EdState`] as raw Q31.32 bits.
-#[derive(Clone, Copy, Debug)]
-struct EdFxState {
-    z: i64,
-    u1: i64,
-    u: i64,
-}
-
-impl EdFxState {
-    #[inline(always)]
-    fn of<T: Real>(s: &EdState<T>) -> Option<Self> {
-        Some(Self {
-            z: s.z.fx_bits()?,
-            u1: s.u1.fx_bits()?,
-            u: s.u.fx_bits()?,
-        })
-    }
-
-    #[inline(always)]
-    fn store<T: Real>(&self, s: &mut EdState<T>) {
-        s.z = T::from_fx_bits(self.z);
-        s.u1 = T::from_fx_bits(self.u1);
-        s.u = T::from_fx_bits(self.u);
-    }
+crate::fxk::fx_state! {
+    /// [`EdState`] as raw Q31.32 bits.
+    EdFxState for EdState { z: z, u1: u1, u: u }
 }
 
 impl EdFx {
@@ -439,19 +414,6 @@ impl Stage for EdFx {
     }
 }
 
-crate::family::family! {
-    /// The ED family of the paper bank: Levant ED velocity, ED-ED acceleration (one
-    /// [`crate::VelAcc`] row); gains [`BankGains::ed`](crate::BankGains::ed).
-    EdFamily {
-        gains: EdConfig = BankGains::ed,
-        name: "ed",
-        label: "ED",
-        channels: EdV, EdA,
-        scheduling: Observer,
-        switch: ObserverSwitch::ed,
-    }
-}
-
 impl Gains for EdConfig {
     /// `lambda` and `alpha` geometrically.
     fn interpolate(&self, other: &Self, w: f32) -> Self {
@@ -475,10 +437,7 @@ impl Gains for EdConfig {
 
     /// `lambda` in `[0.1, 1e5]` (tuned at low noise it reaches 10), `alpha` in `[10, 1e6]`.
     fn search_box(_h_s: f64) -> (SearchPoint, SearchPoint) {
-        (
-            SearchPoint::from_array([0.1, 10.0]),
-            SearchPoint::from_array([1e5, 1e6]),
-        )
+        search_range([0.1, 10.0], [1e5, 1e6])
     }
 
     /// The ED with the paper's explicit Euler scheme.
@@ -488,5 +447,18 @@ impl Gains for EdConfig {
 
     fn describe(&self, w: &mut dyn core::fmt::Write) -> core::fmt::Result {
         write!(w, "lambda={} alpha={}", self.lambda, self.alpha)
+    }
+}
+
+crate::family::family! {
+    /// The ED family of the paper bank: Levant ED velocity, ED-ED acceleration (one
+    /// [`crate::VelAcc`] row); gains [`BankGains::ed`](crate::BankGains::ed).
+    EdFamily {
+        gains: EdConfig = BankGains::ed,
+        name: "ed",
+        label: "ED",
+        channels: EdV, EdA,
+        scheduling: Observer,
+        switch: ObserverSwitch::ed,
     }
 }

@@ -308,6 +308,17 @@ pub(crate) fn coordinate(x: &[f64], i: usize, current: f32) -> f32 {
     x.get(i).map_or(current, |&v| v as f32)
 }
 
+/// A [`Gains::search_box`] from the lowest and highest value of each coordinate.
+pub(crate) fn search_range<const N: usize>(
+    lowest: [f64; N],
+    highest: [f64; N],
+) -> (SearchPoint, SearchPoint) {
+    (
+        SearchPoint::from_array(lowest),
+        SearchPoint::from_array(highest),
+    )
+}
+
 pub use crate::bank::{for_each_family, FAMILIES, FAMILY_COUNT};
 
 #[cfg(test)]

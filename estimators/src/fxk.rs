@@ -30,6 +30,7 @@
 //!
 //! See docs/FIXED-POINT.md for the measured cost.
 
+use crate::law::Interval;
 use crate::real::{smul32u, umul32};
 use crate::{Hold, Real};
 
@@ -205,6 +206,34 @@ pub(crate) fn inputs<T: Real>(y_prev: T, y_new: T, n: u32, hold: Hold) -> Option
     }
 }
 
+/// Declares a law's state as raw Q31.32 bits: a struct whose `i64` fields mirror the state's
+/// fields (`raw: field`), with `of` (the bits of a state, `None` for the float types) and
+/// `store` (writes them back).
+macro_rules! fx_state {
+    ($(#[$m:meta])* $name:ident for $state:ident { $($raw:ident: $field:ident),+ $(,)? }) => {
+        $(#[$m])*
+        #[derive(Clone, Copy, Debug)]
+        struct $name {
+            $($raw: i64),+
+        }
+
+        impl $name {
+            #[inline(always)]
+            fn of<T: Real>(s: &$state<T>) -> Option<Self> {
+                Some(Self {
+                    $($raw: s.$field.fx_bits()?),+
+                })
+            }
+
+            #[inline(always)]
+            fn store<T: Real>(&self, s: &mut $state<T>) {
+                $(s.$field = T::from_fx_bits(self.$raw);)+
+            }
+        }
+    };
+}
+pub(crate) use fx_state;
+
 /// A law's integer kernel over one sample interval (the AVE's, the ED's): `a2` is the
 /// series' second stage fed by `self`; the states are written only when it succeeds (else
 /// the caller runs the generic code from the same states).
@@ -243,20 +272,16 @@ pub(crate) fn advance_one<S: Copy, K: Kernel<S>, T: Real>(
 }
 
 /// `Law::advance_pair` through the kernels of both stages; `true` when they ran the interval.
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn advance_two<S, K: Kernel<S>, T: Real>(
     kv: Option<K>,
     ka: Option<K>,
     sv: &mut S,
     sa: &mut S,
-    y_prev: T,
-    y_new: T,
-    n: u32,
-    hold: Hold,
+    iv: Interval<T>,
 ) -> bool {
-    match (kv, ka, inputs(y_prev, y_new, n, hold)) {
-        (Some(kv), Some(ka), Some(ys)) => kv.advance(Some(&ka), sv, sa, ys, n),
+    match (kv, ka, inputs(iv.y_prev, iv.y_new, iv.n, iv.hold)) {
+        (Some(kv), Some(ka), Some(ys)) => kv.advance(Some(&ka), sv, sa, ys, iv.n),
         _ => false,
     }
 }

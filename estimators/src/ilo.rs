@@ -4,7 +4,9 @@
 use crate::adaptive::ObserverSwitch;
 use crate::bank::{BankGains, Channel};
 use crate::error::positive;
-use crate::family::{coordinate, geometric, Family, Gains, Scheduling, Scorer, SearchPoint};
+use crate::family::{
+    coordinate, geometric, search_range, Family, Gains, Scheduling, Scorer, SearchPoint,
+};
 use crate::law::{Law, Stateful};
 use crate::linear::{LinearLaw, LIN_MAX};
 use crate::{ConfigError, Real};
@@ -287,10 +289,7 @@ impl Gains for IloConfig {
     /// in `[0.1, 0.99 / h]` 1/s (`h L < 1`, as [`IloParams::new`] demands), `K2` in
     /// `[1e-3, 1e4]`.
     fn search_box(h_s: f64) -> (SearchPoint, SearchPoint) {
-        (
-            SearchPoint::from_array([1e-7, 0.1, 1e-3]),
-            SearchPoint::from_array([0.95, 0.99 / h_s, 1e4]),
-        )
+        search_range([1e-7, 0.1, 1e-3], [0.95, 0.99 / h_s, 1e4])
     }
 
     fn score<S: Scorer>(&self, h: f32, scorer: &S) -> Result<S::Score, ConfigError> {

@@ -2,7 +2,7 @@
 //! an engineer would otherwise use. Not from the paper.
 
 use crate::error::positive;
-use crate::family::{coordinate, geometric, Gains, Scorer, SearchPoint};
+use crate::family::{coordinate, geometric, search_range, Gains, Scorer, SearchPoint};
 use crate::law::Law;
 use crate::{ConfigError, Hold, Real};
 
@@ -337,19 +337,6 @@ pub struct KalmanNoise {
     pub r: f32,
 }
 
-crate::family::family! {
-    /// The Kalman tracker family of the paper bank: a tracker with the velocity half's noise
-    /// reports the velocity, one with the acceleration half's noise the acceleration (not a
-    /// series); gains [`BankGains::kf`](crate::BankGains::kf).
-    KfFamily {
-        gains: KalmanNoise = BankGains::kf,
-        name: "kf",
-        label: "KF",
-        channels: KfV, KfA,
-        scheduling: Smooth,
-    }
-}
-
 impl Gains for KalmanNoise {
     /// `q` and `r` geometrically.
     fn interpolate(&self, other: &Self, w: f32) -> Self {
@@ -373,10 +360,7 @@ impl Gains for KalmanNoise {
 
     /// `q` in `[1, 1e12]` deg^2/s^5.
     fn search_box(_h_s: f64) -> (SearchPoint, SearchPoint) {
-        (
-            SearchPoint::from_array([1.0]),
-            SearchPoint::from_array([1e12]),
-        )
+        search_range([1.0], [1e12])
     }
 
     /// The tracker (it needs the nominal sample period, which the scorer knows: it checks
@@ -387,5 +371,18 @@ impl Gains for KalmanNoise {
 
     fn describe(&self, w: &mut dyn core::fmt::Write) -> core::fmt::Result {
         write!(w, "q={} r={}", self.q, self.r)
+    }
+}
+
+crate::family::family! {
+    /// The Kalman tracker family of the paper bank: a tracker with the velocity half's noise
+    /// reports the velocity, one with the acceleration half's noise the acceleration (not a
+    /// series); gains [`BankGains::kf`](crate::BankGains::kf).
+    KfFamily {
+        gains: KalmanNoise = BankGains::kf,
+        name: "kf",
+        label: "KF",
+        channels: KfV, KfA,
+        scheduling: Smooth,
     }
 }

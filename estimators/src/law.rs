@@ -92,21 +92,32 @@ pub trait Law: Copy + core::fmt::Debug {
     /// with exactly the results of stepping; `false` (states untouched) when the law has no such
     /// path for its number type. Internal hook of the fixed-point kernels ([`crate::Fx`]).
     #[doc(hidden)]
-    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn advance_pair(
         v: &Self,
         a2: &Self,
         sv: &mut Self::State,
         sa: &mut Self::State,
-        y_prev: Self::Num,
-        y_new: Self::Num,
-        n: u32,
-        hold: Hold,
+        interval: Interval<Self::Num>,
     ) -> bool {
-        let _ = (v, a2, sv, sa, y_prev, y_new, n, hold);
+        let _ = (v, a2, sv, sa, interval);
         false
     }
+}
+
+/// One sample interval of [`Law::advance_pair`]: `n` steps from the input `y_prev` to
+/// `y_new`, presented as `hold` prescribes.
+#[doc(hidden)]
+#[derive(Clone, Copy, Debug)]
+pub struct Interval<T> {
+    /// The previous sample.
+    pub y_prev: T,
+    /// The new sample.
+    pub y_new: T,
+    /// Steps in the interval.
+    pub n: u32,
+    /// How the input moves between the two samples.
+    pub hold: Hold,
 }
 
 /// The stepping implementation of [`Law::advance`] (usable by overriding impls as their

@@ -1,6 +1,6 @@
 //! A velocity law and the acceleration series of the same family in one row of a bank.
 
-use crate::law::{stepped_inputs, Law};
+use crate::law::{stepped_inputs, Interval, Law};
 use crate::{Hold, Real};
 
 /// A velocity law `v` and the acceleration series `a1 -> a2` of the same family (AVE and
@@ -205,21 +205,23 @@ impl<T: Real, L: Law<Num = T>> Law for VelAcc<L> {
     #[inline]
     fn advance(&self, s: &mut Self::State, y_prev: T, y_new: T, n: u32, hold: Hold) -> T {
         if n > 0 {
+            let interval = Interval {
+                y_prev,
+                y_new,
+                n,
+                hold,
+            };
             // `None`: the laws disagree on the coarse step, all three run at `h` (below).
             let f = self.factors();
             let coarse = matches!(f, Some(Some(_)));
             if f.is_some()
                 && self.shared
-                && L::advance_pair(
-                    &self.v, &self.a2, &mut s.v, &mut s.a2, y_prev, y_new, n, hold,
-                )
+                && L::advance_pair(&self.v, &self.a2, &mut s.v, &mut s.a2, interval)
             {
                 // The law's own fast path (the fixed-point kernels): same results.
             } else if f.is_some()
                 && !self.shared
-                && L::advance_pair(
-                    &self.a1, &self.a2, &mut s.a1, &mut s.a2, y_prev, y_new, n, hold,
-                )
+                && L::advance_pair(&self.a1, &self.a2, &mut s.a1, &mut s.a2, interval)
             {
                 // Own acceleration gains (the NAV440 preset) and a fast path (the fixed-point
                 // kernels): the series through it, the velocity law through its own

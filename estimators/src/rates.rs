@@ -45,212 +45,20 @@ impl BankConfig {
         RateGains {
             tuned_period_s: [0.1, 0.1],
             below_period_s: 0.15,
-            velocity: BankGains {
-                ave: AveConfig {
-                    k: 15.901477,
-                    gamma1: 2527.9377,
-                    delta: DeltaMode::Leaky { sigma: 0.1 },
-                },
-                ilo: [
-                    IloConfig {
-                        k1: 0.99963784,
-                        l: 3.3495007,
-                        k2: 0.18083054,
-                    },
-                    IloConfig {
-                        k1: 0.99874496,
-                        l: 0.9821319,
-                        k2: 0.2513233,
-                    },
-                    IloConfig {
-                        k1: 0.9984375,
-                        l: 0.51490784,
-                        k2: 0.24682654,
-                    },
-                ],
-                ad_t: 0.01,
-                ed: EdConfig {
-                    lambda: 41.933903,
-                    alpha: 792.0185,
-                },
-                kf: KalmanNoise {
-                    q: 865964.3,
-                    r: 0.01,
-                },
-            },
-            acceleration: BankGains {
-                ave: AveConfig {
-                    k: 3907.8513,
-                    gamma1: 41282.277,
-                    delta: DeltaMode::Leaky { sigma: 0.1 },
-                },
-                ilo: [
-                    IloConfig {
-                        k1: 0.99986583,
-                        l: 20.535536,
-                        k2: 0.03770592,
-                    },
-                    IloConfig {
-                        k1: 0.9964557,
-                        l: 2.7176259,
-                        k2: 0.03758118,
-                    },
-                    IloConfig {
-                        k1: 0.9964763,
-                        l: 2.7924683,
-                        k2: 0.04329888,
-                    },
-                ],
-                ad_t: 0.1,
-                ed: EdConfig {
-                    lambda: 64.92697,
-                    alpha: 1898.2759,
-                },
-                kf: KalmanNoise {
-                    q: 562341.3,
-                    r: 0.01,
-                },
-            },
+            velocity: VELOCITY_10HZ,
+            acceleration: ACCELERATION_10HZ,
         },
         RateGains {
             tuned_period_s: [0.2, 0.2],
             below_period_s: 0.35,
-            velocity: BankGains {
-                ave: AveConfig {
-                    k: 8.100932,
-                    gamma1: 492.2327,
-                    delta: DeltaMode::Leaky { sigma: 0.1 },
-                },
-                ilo: [
-                    IloConfig {
-                        k1: 0.9997079,
-                        l: 0.95763564,
-                        k2: 0.017412001,
-                    },
-                    IloConfig {
-                        k1: 0.9999586,
-                        l: 7.9813766,
-                        k2: 0.044160113,
-                    },
-                    IloConfig {
-                        k1: 0.99996984,
-                        l: 9.791185,
-                        k2: 0.04394129,
-                    },
-                ],
-                ad_t: 0.01,
-                ed: EdConfig {
-                    lambda: 35.588688,
-                    alpha: 738.0498,
-                },
-                kf: KalmanNoise {
-                    q: 1000000.0,
-                    r: 0.01,
-                },
-            },
-            acceleration: BankGains {
-                ave: AveConfig {
-                    k: 976.244,
-                    gamma1: 12217.426,
-                    delta: DeltaMode::Leaky { sigma: 0.1 },
-                },
-                ilo: [
-                    IloConfig {
-                        k1: 0.99934953,
-                        l: 3.0830474,
-                        k2: 0.013154294,
-                    },
-                    IloConfig {
-                        k1: 0.9999984,
-                        l: 92.38243,
-                        k2: 0.116386585,
-                    },
-                    IloConfig {
-                        k1: 0.99999833,
-                        l: 102.395515,
-                        k2: 0.12551305,
-                    },
-                ],
-                ad_t: 0.1,
-                ed: EdConfig {
-                    lambda: 67.739586,
-                    alpha: 34.97904,
-                },
-                kf: KalmanNoise {
-                    q: 1000000.0,
-                    r: 0.01,
-                },
-            },
+            velocity: VELOCITY_5HZ,
+            acceleration: ACCELERATION_5HZ,
         },
         RateGains {
             tuned_period_s: [0.5, 0.5],
             below_period_s: f32::INFINITY,
-            velocity: BankGains {
-                ave: AveConfig {
-                    k: 5.4977474,
-                    gamma1: 1101.8396,
-                    delta: DeltaMode::Leaky { sigma: 0.1 },
-                },
-                ilo: [
-                    IloConfig {
-                        k1: 0.99962264,
-                        l: 0.28474265,
-                        k2: 0.3196953,
-                    },
-                    IloConfig {
-                        k1: 0.9,
-                        l: 5.0,
-                        k2: 10.0,
-                    },
-                    IloConfig {
-                        k1: 0.7,
-                        l: 1.0,
-                        k2: 20.0,
-                    },
-                ],
-                ad_t: 0.01,
-                ed: EdConfig {
-                    lambda: 25.610422,
-                    alpha: 11.747248,
-                },
-                kf: KalmanNoise {
-                    q: 1000000.0,
-                    r: 0.01,
-                },
-            },
-            acceleration: BankGains {
-                ave: AveConfig {
-                    k: 1980.9358,
-                    gamma1: 13907.01,
-                    delta: DeltaMode::Leaky { sigma: 0.1 },
-                },
-                ilo: [
-                    IloConfig {
-                        k1: 0.99998593,
-                        l: 14.489442,
-                        k2: 0.009862104,
-                    },
-                    IloConfig {
-                        k1: 0.9996201,
-                        l: 3.6620657,
-                        k2: 0.0036763593,
-                    },
-                    IloConfig {
-                        k1: 0.9996201,
-                        l: 3.6620657,
-                        k2: 0.0036763593,
-                    },
-                ],
-                ad_t: 0.15399265,
-                ed: EdConfig {
-                    lambda: 23.12775,
-                    alpha: 18.797533,
-                },
-                kf: KalmanNoise {
-                    q: 1000000.0,
-                    r: 0.01,
-                },
-            },
+            velocity: VELOCITY_2HZ,
+            acceleration: ACCELERATION_2HZ,
         },
     ];
 
@@ -288,6 +96,216 @@ impl BankConfig {
         }
     }
 }
+
+/// Velocity gains at 10 Hz.
+const VELOCITY_10HZ: BankGains = BankGains {
+    ave: AveConfig {
+        k: 15.901477,
+        gamma1: 2527.9377,
+        delta: DeltaMode::Leaky { sigma: 0.1 },
+    },
+    ilo: [
+        IloConfig {
+            k1: 0.99963784,
+            l: 3.3495007,
+            k2: 0.18083054,
+        },
+        IloConfig {
+            k1: 0.99874496,
+            l: 0.9821319,
+            k2: 0.2513233,
+        },
+        IloConfig {
+            k1: 0.9984375,
+            l: 0.51490784,
+            k2: 0.24682654,
+        },
+    ],
+    ad_t: 0.01,
+    ed: EdConfig {
+        lambda: 41.933903,
+        alpha: 792.0185,
+    },
+    kf: KalmanNoise {
+        q: 865964.3,
+        r: 0.01,
+    },
+};
+
+/// Acceleration gains at 10 Hz.
+const ACCELERATION_10HZ: BankGains = BankGains {
+    ave: AveConfig {
+        k: 3907.8513,
+        gamma1: 41282.277,
+        delta: DeltaMode::Leaky { sigma: 0.1 },
+    },
+    ilo: [
+        IloConfig {
+            k1: 0.99986583,
+            l: 20.535536,
+            k2: 0.03770592,
+        },
+        IloConfig {
+            k1: 0.9964557,
+            l: 2.7176259,
+            k2: 0.03758118,
+        },
+        IloConfig {
+            k1: 0.9964763,
+            l: 2.7924683,
+            k2: 0.04329888,
+        },
+    ],
+    ad_t: 0.1,
+    ed: EdConfig {
+        lambda: 64.92697,
+        alpha: 1898.2759,
+    },
+    kf: KalmanNoise {
+        q: 562341.3,
+        r: 0.01,
+    },
+};
+
+/// Velocity gains at 5 Hz (and 4 Hz).
+const VELOCITY_5HZ: BankGains = BankGains {
+    ave: AveConfig {
+        k: 8.100932,
+        gamma1: 492.2327,
+        delta: DeltaMode::Leaky { sigma: 0.1 },
+    },
+    ilo: [
+        IloConfig {
+            k1: 0.9997079,
+            l: 0.95763564,
+            k2: 0.017412001,
+        },
+        IloConfig {
+            k1: 0.9999586,
+            l: 7.9813766,
+            k2: 0.044160113,
+        },
+        IloConfig {
+            k1: 0.99996984,
+            l: 9.791185,
+            k2: 0.04394129,
+        },
+    ],
+    ad_t: 0.01,
+    ed: EdConfig {
+        lambda: 35.588688,
+        alpha: 738.0498,
+    },
+    kf: KalmanNoise {
+        q: 1000000.0,
+        r: 0.01,
+    },
+};
+
+/// Acceleration gains at 5 Hz (and 4 Hz).
+const ACCELERATION_5HZ: BankGains = BankGains {
+    ave: AveConfig {
+        k: 976.244,
+        gamma1: 12217.426,
+        delta: DeltaMode::Leaky { sigma: 0.1 },
+    },
+    ilo: [
+        IloConfig {
+            k1: 0.99934953,
+            l: 3.0830474,
+            k2: 0.013154294,
+        },
+        IloConfig {
+            k1: 0.9999984,
+            l: 92.38243,
+            k2: 0.116386585,
+        },
+        IloConfig {
+            k1: 0.99999833,
+            l: 102.395515,
+            k2: 0.12551305,
+        },
+    ],
+    ad_t: 0.1,
+    ed: EdConfig {
+        lambda: 67.739586,
+        alpha: 34.97904,
+    },
+    kf: KalmanNoise {
+        q: 1000000.0,
+        r: 0.01,
+    },
+};
+
+/// Velocity gains at 2 Hz.
+const VELOCITY_2HZ: BankGains = BankGains {
+    ave: AveConfig {
+        k: 5.4977474,
+        gamma1: 1101.8396,
+        delta: DeltaMode::Leaky { sigma: 0.1 },
+    },
+    ilo: [
+        IloConfig {
+            k1: 0.99962264,
+            l: 0.28474265,
+            k2: 0.3196953,
+        },
+        IloConfig {
+            k1: 0.9,
+            l: 5.0,
+            k2: 10.0,
+        },
+        IloConfig {
+            k1: 0.7,
+            l: 1.0,
+            k2: 20.0,
+        },
+    ],
+    ad_t: 0.01,
+    ed: EdConfig {
+        lambda: 25.610422,
+        alpha: 11.747248,
+    },
+    kf: KalmanNoise {
+        q: 1000000.0,
+        r: 0.01,
+    },
+};
+
+/// Acceleration gains at 2 Hz.
+const ACCELERATION_2HZ: BankGains = BankGains {
+    ave: AveConfig {
+        k: 1980.9358,
+        gamma1: 13907.01,
+        delta: DeltaMode::Leaky { sigma: 0.1 },
+    },
+    ilo: [
+        IloConfig {
+            k1: 0.99998593,
+            l: 14.489442,
+            k2: 0.009862104,
+        },
+        IloConfig {
+            k1: 0.9996201,
+            l: 3.6620657,
+            k2: 0.0036763593,
+        },
+        IloConfig {
+            k1: 0.9996201,
+            l: 3.6620657,
+            k2: 0.0036763593,
+        },
+    ],
+    ad_t: 0.15399265,
+    ed: EdConfig {
+        lambda: 23.12775,
+        alpha: 18.797533,
+    },
+    kf: KalmanNoise {
+        q: 1000000.0,
+        r: 0.01,
+    },
+};
 
 #[cfg(test)]
 mod tests {

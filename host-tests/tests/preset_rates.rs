@@ -124,10 +124,10 @@ fn print_nav440_rate_presets() {
         println!("  geometric mean ratio of the tuned gains to DEFAULT's: {gm:?}");
         println!("  paper's gains kept: {kept:?}");
         println!(
-            "RateGains {{\n    tuned_period_s: {},\n    below_period_s: ?,\n    velocity: {},\n    acceleration: {},\n}},",
+            "const VELOCITY_{rate_hz}HZ: BankGains = {};\nconst ACCELERATION_{rate_hz}HZ: BankGains = {};\nRateGains {{\n    tuned_period_s: {},\n    below_period_s: ?,\n    velocity: VELOCITY_{rate_hz}HZ,\n    acceleration: ACCELERATION_{rate_hz}HZ,\n}},",
+            bank_gains_literal(&cfg.velocity, ""),
+            bank_gains_literal(&cfg.acceleration, ""),
             1.0 / f64::from(rate_hz),
-            bank_gains_literal(&cfg.velocity, "    "),
-            bank_gains_literal(&cfg.acceleration, "    ")
         );
     }
 }
