@@ -305,7 +305,7 @@ fn bank_per_sample<S: estimators::SqrtFn<Num>>(
     bank: Option<PaperBank<Num, S>>,
 ) {
     let Some(mut bank) = bank else {
-        fail("YawBank")
+        fail("PaperBank")
     };
     let mut total = 0;
     let mut csv_total = 0;
@@ -657,7 +657,7 @@ fn main() -> ! {
         ..cfg
     };
     {
-        let make = |c: &BankConfig| Bank::new(c).unwrap_or_else(|_| fail("YawBank"));
+        let make = |c: &BankConfig| Bank::new(c).unwrap_or_else(|_| fail("PaperBank"));
         let mut banks = [make(&cfg), make(&pitch_cfg), make(&cfg)];
         three_axes_per_sample!(c, overhead, "paper bank, 3 axes", banks);
     }
@@ -673,7 +673,8 @@ fn main() -> ! {
         let ed_c = Ed::<Num, Counting>::new(&v.ed, h).unwrap_or_else(|_| fail("ED"));
         sqrt_count_stepped("ED, VSQRT (Euler x100)", ed_c);
         sqrt_count_stepped("ED-ED, VSQRT (Euler x100)", Series::of(&ed_c, &ed_c));
-        let mut counted = PaperBank::<Num, Counting>::new(&cfg).unwrap_or_else(|_| fail("YawBank"));
+        let mut counted =
+            PaperBank::<Num, Counting>::new(&cfg).unwrap_or_else(|_| fail("PaperBank"));
         SQRTS.store(0, Ordering::Relaxed);
         for k in 0..SAMPLES {
             let y = yaw(k);
@@ -806,7 +807,7 @@ fn main() -> ! {
         core::mem::size_of::<Stateful<Series<EdParams<Num>, EdParams<Num>>>>(),
     );
     // The label keeps the bench output as it was (the type is `PaperBank`).
-    ram("YawBank (whole bank)", core::mem::size_of::<Bank>());
+    ram("PaperBank (whole bank)", core::mem::size_of::<Bank>());
     ram(
         "ProductBank (one axis)",
         core::mem::size_of::<ProductBank<Num, BankSqrt>>(),

@@ -34,10 +34,8 @@ pub(super) fn fmt_gains(f: &FamilyGains, i: usize) -> String {
 impl TuneResult {
     /// The printed report.
     pub fn to_text(&self) -> String {
-        // "YawBank" (the type is `PaperBank`): the report is kept byte for byte; changing it is
-        // a change of the output of its own.
         let mut s = format!(
-            "tuned for noise variance {} deg^2, trained on {}-{} s, scored on {}-{} s, mean of {} seeds (MSE measured through YawBank)\n",
+            "tuned for noise variance {} deg^2, trained on {}-{} s, scored on {}-{} s, mean of {} seeds (MSE measured through PaperBank)\n",
             self.noise_var, self.train.0, self.train.1, self.test.0, self.test.1, self.seeds
         );
         s.push_str(&format!(
@@ -152,6 +150,7 @@ impl TuneResult {
             .gains
             .to_rust(&format!("noise variance {} deg^2", self.noise_var));
         if self.families != Families::ALL {
+            s = s.replacen("`PaperBank::new`", "`ProductBank::new`", 1);
             s.insert_str(
                 0,
                 "// The product bank's two rows (ILO1 velocity, Kalman acceleration): `ProductBank::new(&TUNED)`,\n\
