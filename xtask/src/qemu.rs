@@ -158,6 +158,23 @@ pub fn ensure_qemu() -> Result<(), String> {
     }
 }
 
+/// [`ensure_qemu`] for a step that runs `what` on QEMU: `Ok(true)` when QEMU is there (or
+/// installed); `Ok(false)`, said loudly, when it is not and `XTASK_SKIP_QEMU=1` (a machine where
+/// QEMU cannot be installed: the step's lints and builds still run); the error otherwise.
+pub fn ensure_or_skip(what: &str) -> Result<bool, String> {
+    match ensure_qemu() {
+        Ok(()) => Ok(true),
+        Err(e) if std::env::var("XTASK_SKIP_QEMU").is_ok_and(|v| v == "1") => {
+            let bar = "!".repeat(78);
+            eprintln!("{bar}\nxtask: XTASK_SKIP_QEMU=1: SKIPPING {what}: {e}\n{bar}");
+            Ok(false)
+        }
+        Err(e) => Err(format!(
+            "{e}\n(set XTASK_SKIP_QEMU=1 to run the other checks without the QEMU part)"
+        )),
+    }
+}
+
 /// True when `qemu-system-arm` runs (no install attempt).
 pub fn qemu_available() -> bool {
     qemu_version().is_some()

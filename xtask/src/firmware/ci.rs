@@ -101,23 +101,9 @@ pub fn ci_steps() -> Result<(), String> {
     // QEMU must be there or installable: the test command runs every test. Only an explicit
     // opt-out (XTASK_SKIP_QEMU=1, for a machine where QEMU cannot be installed) skips the QEMU
     // runs, loudly; the lints and cross builds still run.
-    let qemu_ok = match qemu::ensure_qemu() {
-        Ok(()) => true,
-        Err(e) if std::env::var("XTASK_SKIP_QEMU").is_ok_and(|v| v == "1") => {
-            eprintln!("{}", "!".repeat(78));
-            eprintln!(
-                "xtask: XTASK_SKIP_QEMU=1: SKIPPING the firmware QEMU runs, the firmware/host"
-            );
-            eprintln!("xtask: equivalence check, the bench and the stack measurement: {e}");
-            eprintln!("{}", "!".repeat(78));
-            false
-        }
-        Err(e) => {
-            return Err(format!(
-                "{e}\n(set XTASK_SKIP_QEMU=1 to run the other checks without the QEMU part)"
-            ))
-        }
-    };
+    let qemu_ok = qemu::ensure_or_skip(
+        "the firmware QEMU runs, the firmware/host equivalence check, the bench and the stack measurement",
+    )?;
     // Lints: the FPU build and the no-FPU (fixed-point) builds.
     for target in crate::THUMB_TARGETS {
         clippy_firmware(target, None)?;

@@ -29,14 +29,7 @@ pub fn outside_firmware() -> Result<(), String> {
         &root().join(CAPTURE),
         &["--bank", "product", "--preset", "paper", "--axis", "yaw"],
     )?;
-    let qemu_ok = match qemu::ensure_qemu() {
-        Ok(()) => true,
-        Err(e) if std::env::var("XTASK_SKIP_QEMU").is_ok_and(|v| v == "1") => {
-            eprintln!("xtask: XTASK_SKIP_QEMU=1: SKIPPING the outside firmware's QEMU runs: {e}");
-            false
-        }
-        Err(e) => return Err(e),
-    };
+    let qemu_ok = qemu::ensure_or_skip("the outside firmware's QEMU runs")?;
     cargo(&["fmt", "--manifest-path", &manifest, "--", "--check"])?;
     for name in BOARDS {
         let board = qemu::board(name)?;

@@ -331,14 +331,8 @@ pub fn embassy() -> Result<(), String> {
         "warnings",
     ])?;
     let elf = build(board.target, &["embassy"], "embassy")?;
-    // As in `ci-firmware`: without QEMU, XTASK_SKIP_QEMU=1 skips the runs, loudly.
-    match qemu::ensure_qemu() {
-        Ok(()) => {}
-        Err(e) if std::env::var("XTASK_SKIP_QEMU").is_ok_and(|v| v == "1") => {
-            eprintln!("xtask: XTASK_SKIP_QEMU=1: SKIPPING the embassy example's QEMU runs: {e}");
-            return Ok(());
-        }
-        Err(e) => return Err(e),
+    if !qemu::ensure_or_skip("the embassy example's QEMU runs")? {
+        return Ok(());
     }
     let nav440 = nav440_bin()?;
     let mut cases: Vec<UnitCase> = data_captures()
