@@ -61,24 +61,24 @@ impl Lock {
         }
     }
 
-    /// Samples scored of those with `from <= t <= to` (s).
-    pub fn scored_in(&self, samples: &[Sample], (from, to): (f64, f64)) -> usize {
+    /// Of the samples with `from <= t <= to` (s): how many are scored, and how many are left
+    /// out (near the lock or settling).
+    pub fn counts_in(&self, samples: &[Sample], (from, to): (f64, f64)) -> (usize, usize) {
         let (lo, hi) = ((from * 1e6).round() as u64, (to * 1e6).round() as u64);
         samples
             .iter()
             .zip(&self.scored)
-            .filter(|(s, &k)| k && s.t_us >= lo && s.t_us <= hi)
-            .count()
-    }
-
-    /// Samples left out (near the lock or settling) of those with `from <= t <= to` (s).
-    pub fn left_out_in(&self, samples: &[Sample], (from, to): (f64, f64)) -> usize {
-        let (lo, hi) = ((from * 1e6).round() as u64, (to * 1e6).round() as u64);
-        samples
-            .iter()
-            .zip(&self.scored)
-            .filter(|(s, &k)| !k && s.t_us >= lo && s.t_us <= hi)
-            .count()
+            .filter(|(s, _)| s.t_us >= lo && s.t_us <= hi)
+            .fold(
+                (0, 0),
+                |(yes, no), (_, &k)| {
+                    if k {
+                        (yes + 1, no)
+                    } else {
+                        (yes, no + 1)
+                    }
+                },
+            )
     }
 }
 
@@ -118,8 +118,8 @@ mod tests {
         let left: Vec<usize> = (0..20).filter(|&k| !yaw.scored[k]).collect();
         assert_eq!(left, (3..=14).collect::<Vec<_>>());
         assert_eq!((yaw.near_lock, yaw.settling), (2, 10));
-        assert_eq!(yaw.scored_in(&samples, (0.0, 1.9)), 8);
-        assert_eq!(yaw.left_out_in(&samples, (0.0, 1.0)), 8);
+        assert_eq!(yaw.counts_in(&samples, (0.0, 1.9)).0, 8);
+        assert_eq!(yaw.counts_in(&samples, (0.0, 1.0)).1, 8);
         let pitch = Lock::of(&samples, Axis::Pitch);
         assert!(pitch.fed.iter().chain(&pitch.scored).all(|&k| k));
         assert_eq!((pitch.near_lock, pitch.settling), (0, 0));

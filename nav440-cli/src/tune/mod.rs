@@ -577,16 +577,11 @@ pub fn tune_on(
     let hold_before = opts.hold;
     check_one_rate(captures, opts)?;
     let locks: Vec<Lock> = captures.iter().map(|c| Lock::of(c, axis)).collect();
-    let rows_scored: usize = locks
+    let (rows_scored, rows_left_out) = locks
         .iter()
         .zip(captures)
-        .map(|(l, c)| l.scored_in(c, spec.train))
-        .sum();
-    let rows_left_out: usize = locks
-        .iter()
-        .zip(captures)
-        .map(|(l, c)| l.left_out_in(c, spec.train))
-        .sum();
+        .map(|(l, c)| l.counts_in(c, spec.train))
+        .fold((0, 0), |(a, b), (x, y)| (a + x, b + y));
     if rows_scored == 0 {
         return Err(Error::Usage(format!(
             "nothing to score on the training range {}-{} s: {}",
