@@ -12,6 +12,8 @@
 //! * `cargo xtask msrv`  - the libraries' declared `rust-version` checked with that toolchain.
 //! * `cargo xtask package` - the libraries' examples run and `cargo publish --dry-run`.
 //! * `cargo xtask embassy` - the embassy example (async driver) under QEMU against `nav440 sim`.
+//! * `cargo xtask embassy-stm32` - the embassy-stm32 firmware for the STM32F405: doc block
+//!   check, lints, build, memory map, and the QEMU run that shows what the emulator lacks.
 //! * `cargo xtask outside-firmware` - a firmware outside the workspace on the libraries by
 //!   version: built for thumbv7em and thumbv6m, map-checked, run on QEMU.
 //! * `cargo xtask flash ELF` - the runner of `cargo run` for the firmware: checks a board
@@ -150,6 +152,11 @@ enum Cmd {
     /// The embassy example (async driver on embassy-executor) built for thumbv7em and run on
     /// QEMU `mps2-an386` against `nav440 sim`.
     Embassy,
+    /// The embassy-stm32 firmware for the STM32F405 (`firmware-embassy`): checks that the
+    /// async driver's docs show its boot code, lints and builds it for thumbv7em, checks its
+    /// memory map, and runs it on QEMU `netduinoplus2` for a bounded time to assert the
+    /// documented failure there (no RCC model: `embassy_stm32::init` waits for HSIRDY).
+    EmbassyStm32,
     /// The firmware outside the workspace (`fixtures/outside-firmware`: the three libraries by
     /// version, patched to this checkout) built for thumbv7em and thumbv6m, map-checked and
     /// run on QEMU against `nav440 estimate`.
@@ -216,6 +223,7 @@ fn main() -> ExitCode {
         Cmd::Msrv => package::msrv(),
         Cmd::Package => package::package(),
         Cmd::Embassy => firmware::embassy(),
+        Cmd::EmbassyStm32 => firmware::embassy_stm32(),
         Cmd::OutsideFirmware => firmware::outside_firmware(),
     };
     match result {
@@ -337,6 +345,7 @@ fn ci() -> Result<(), String> {
     package::msrv()?;
     firmware::ci_steps()?;
     firmware::embassy()?;
+    firmware::embassy_stm32()?;
     firmware::outside_firmware()?;
     eprintln!(
         "xtask ci: all checks passed in {:.0} s",

@@ -10,19 +10,10 @@
 //! On a real board with `embassy-stm32`, the two adapters below are not needed: its
 //! `BufferedUart` implements the `embedded-io(-async)` 0.7 traits (embassy-stm32 0.6; a HAL
 //! on 0.6 goes through `nav440_proto::driver::Compat06` with nav440-proto's `embedded-io-06`
-//! feature) and `embassy_time::Delay` implements `embedded_hal_async::delay::DelayNs`. This
-//! sketch is not compiled here (no embassy-stm32 build in this repository yet); its
-//! `set_baudrate` returns `usart::ConfigError`, which the closure must map into the UART's
-//! error type:
-//!
-//! ```ignore
-//! let mut driver = AsyncDriver::new(uart);
-//! let report = boot::boot_async(&mut driver, &TARGET, &Options::DEFAULT, &mut Delay, |u, b| {
-//!     // The local UART follows the unit; `ConfigError` is not the UART's error type.
-//!     u.set_baudrate(b.bits_per_second()).map_err(|_| usart::Error::Framing)
-//! })
-//! .await?;
-//! ```
+//! feature) and `embassy_time::Delay` implements `embedded_hal_async::delay::DelayNs`. The
+//! workspace's `firmware-embassy` crate is that firmware for the STM32F405 (`cargo xtask
+//! embassy-stm32`); its boot code, shown in the docs of `nav440_proto::driver::asynch`, maps
+//! `set_baudrate`'s `usart::ConfigError` into the UART's error type.
 //!
 //! Here the board is the emulated one of the blocking firmware (CMSDK UART0 with its
 //! interrupt-fed receive queue, SysTick at 1 kHz), adapted to the async traits by polling:

@@ -1,6 +1,41 @@
 //! The async driver: the same protocol logic as the blocking drivers ([`Engine`]), awaited
 //! over an [`embedded_io_async`] serial port with time-outs from
 //! [`embedded_hal_async::delay::DelayNs`].
+//!
+//! # On embassy-stm32
+//!
+//! The boot of the workspace's embassy-stm32 firmware (`firmware-embassy/src/main.rs`,
+//! STM32F405, NAV440 on USART1 as a `BufferedUart`): `embassy_time::Delay` times the replies
+//! out, and the baud switch maps `set_baudrate`'s `usart::ConfigError`, which is not the UART's
+//! error type, into a `usart::Error`. A failed boot is retried every second. This block is the
+//! code between the binary's `ANCHOR: boot` and `ANCHOR_END: boot` comments, line for line
+//! (dedented); `cargo xtask embassy-stm32` checks that the two are equal and builds the binary.
+//!
+//! ```rust,ignore
+//! let mut driver = AsyncDriver::new(uart);
+//! let report = loop {
+//!     // The local UART follows the unit; `ConfigError` is not the UART's error type.
+//!     let set_baud = |u: &mut BufferedUart<'_>, b: Baud| {
+//!         u.set_baudrate(b.bits_per_second()).map_err(|e| {
+//!             defmt::error!("set_baudrate({=u32}): {}", b.bits_per_second(), e);
+//!             usart::Error::Framing
+//!         })
+//!     };
+//!     match boot::boot_async(
+//!         &mut driver,
+//!         &TARGET,
+//!         &Options::DEFAULT,
+//!         &mut Delay,
+//!         set_baud,
+//!     )
+//!     .await
+//!     {
+//!         Ok(report) => break report,
+//!         Err(e) => defmt::println!("firmware: boot failed: {}", e),
+//!     }
+//!     Timer::after_secs(1).await;
+//! };
+//! ```
 
 use embedded_hal_async::delay::DelayNs;
 

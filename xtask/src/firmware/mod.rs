@@ -6,8 +6,8 @@
 //! * [`captures`]: the bundled captures and the ones CI synthesises;
 //! * [`qemu_run`]: a capture or a unit through the firmware in QEMU (`cargo xtask qemu`,
 //!   `unit`), the firmware's counters;
-//! * [`demo`](mod@demo), [`bench`](mod@bench), [`size`](mod@size), [`flash`](mod@flash): those
-//!   commands;
+//! * [`demo`](mod@demo), [`bench`](mod@bench), [`size`](mod@size), [`flash`](mod@flash),
+//!   [`embassy_stm32`](mod@embassy_stm32): those commands;
 //! * [`equivalence`]: firmware CSV against `nav440 estimate`;
 //! * [`unit_cases`]: the firmware against `nav440 sim` with an expected outcome per case
 //!   (`ci-unit`, `embassy`);
@@ -18,6 +18,7 @@ mod build;
 mod captures;
 mod ci;
 mod demo;
+mod embassy_stm32;
 mod equivalence;
 mod flash;
 mod nav440_cli;
@@ -30,6 +31,7 @@ mod unit_cases;
 pub use bench::bench;
 pub use ci::ci_steps;
 pub use demo::demo;
+pub use embassy_stm32::embassy_stm32;
 pub use flash::flash;
 pub use outside::outside_firmware;
 pub use qemu_run::{qemu, unit};

@@ -1,0 +1,157 @@
+//! The embassy-stm32 firmware for the STM32F405 (e.g. the Netduino Plus 2 or any STM32F405RG
+//! board): embassy-executor, embassy-stm32 and embassy-time.
+//!
+//! 1. `embassy_stm32::init` with the default configuration (16 MHz HSI, no PLL); embassy-time
+//!    ticks from TIM2.
+//! 2. The NAV440 on USART1 (TX PA9, RX PA10, AF7) as a `BufferedUart`, interrupt-driven,
+//!    starting at the unit's factory default of 38400 Bd.
+//! 3. `nav440_proto::boot::boot_async` over `nav440_proto::driver::AsyncDriver` configures the
+//!    unit to [`TARGET`] (A2 at 100 Hz at 57600 Bd), its reply time-outs through
+//!    `embassy_time::Delay`, the baud switch through `BufferedUart::set_baudrate`. A failed
+//!    boot is retried every second, one `boot failed` message per attempt.
+//! 4. Every byte after the read-back goes through `nav440_pipeline` with the product bank
+//!    (`estimators::ProductBank`: ILO1 velocity and Kalman acceleration per axis, the
+//!    `BankConfig::NAV440` gains for the measured packet rate), as firmware-example's
+//!    `bank-product` image and `nav440 estimate --bank product` do.
+//!
+//! Output: defmt messages over defmt-rtt (probe-rs reads them), see [`out`]:
+//!
+//! * `header {=str}` once, the channels of each axis: `angle_deg,` then the bank's CSV
+//!   columns (`ilo1_v,kf_a`);
+//! * `row {=u64} {=[?]}` per sample: the sample time (us since the first sample), then
+//!   per axis (roll, pitch, yaw) the unwrapped angle (deg) and the bank's two channels, nine
+//!   `f32`; an axis without an estimate in that row (near gimbal lock) is NaN;
+//! * `counters ...` every [`COUNTER_ROWS`] rows and after a UART error: the parser's and the
+//!   pipeline's counters and the UART errors so far.
+//!
+//! Build: `cargo build -p firmware-embassy --release --target thumbv7em-none-eabihf`;
+//! `cargo xtask embassy-stm32` lints, builds and checks the image's memory map. Flash:
+//! `cargo xtask flash target/thumbv7em-none-eabihf/release/firmware-embassy` (probe-rs).
+#![no_std]
+#![no_main]
+
+use defmt_rtt as _;
+use panic_probe as _;
+
+use embassy_executor::Spawner;
+use embassy_stm32::usart::{self, BufferedUart};
+use embassy_stm32::{bind_interrupts, peripherals};
+use embassy_time::{Delay, Timer};
+use nav440_proto::boot::{self, Options, Target};
+use nav440_proto::driver::AsyncDriver;
+use nav440_proto::Baud;
+
+mod out;
+
+bind_interrupts!(struct Irqs {
+    USART1 => usart::BufferedInterruptHandler<peripherals::USART1>;
+});
+
+/// The configuration the firmware gives the unit: A2 at 100 Hz at 57600 Bd, checked against
+/// the unit's byte budget at compile time.
+const TARGET: Target = Target::DEFAULT;
+const _: () = assert!(
+    TARGET.fits_budget(),
+    "TARGET exceeds the unit's byte budget"
+);
+
+/// Local UART rate before the search (the NAV440's factory default; the search tries all).
+const POWER_UP_BAUD: u32 = 38_400;
+
+/// A `counters` message every this many rows (10 s at 100 Hz).
+const COUNTER_ROWS: u64 = 1000;
+
+/// The board name in the ELF (NUL-terminated), as firmware-example's images carry it: `cargo
+/// xtask flash` and the memory-map check read the chip from it.
+#[no_mangle]
+#[used]
+pub static NAV440_BOARD: [u8; 10] = *b"stm32f405\0";
+
+#[embassy_executor::main]
+async fn main(_spawner: Spawner) {
+    let p = embassy_stm32::init(embassy_stm32::Config::default());
+    defmt::println!(
+        "firmware: embassy-stm32 up, USART1 at {=u32} Bd",
+        POWER_UP_BAUD
+    );
+
+    let mut config = usart::Config::default();
+    config.baudrate = POWER_UP_BAUD;
+    let mut tx_buf = [0u8; 64];
+    let mut rx_buf = [0u8; 512];
+    let uart = match BufferedUart::new(
+        p.USART1,
+        p.PA10,
+        p.PA9,
+        &mut tx_buf,
+        &mut rx_buf,
+        Irqs,
+        config,
+    ) {
+        Ok(u) => u,
+        Err(e) => defmt::panic!("USART1 configuration rejected: {}", e),
+    };
+
+    let mut pipe = out::pipeline();
+    // ANCHOR: boot
+    let mut driver = AsyncDriver::new(uart);
+    let report = loop {
+        // The local UART follows the unit; `ConfigError` is not the UART's error type.
+        let set_baud = |u: &mut BufferedUart<'_>, b: Baud| {
+            u.set_baudrate(b.bits_per_second()).map_err(|e| {
+                defmt::error!("set_baudrate({=u32}): {}", b.bits_per_second(), e);
+                usart::Error::Framing
+            })
+        };
+        match boot::boot_async(
+            &mut driver,
+            &TARGET,
+            &Options::DEFAULT,
+            &mut Delay,
+            set_baud,
+        )
+        .await
+        {
+            Ok(report) => break report,
+            Err(e) => defmt::println!("firmware: boot failed: {}", e),
+        }
+        Timer::after_secs(1).await;
+    };
+    // ANCHOR_END: boot
+    defmt::println!(
+        "firmware: unit configured: {} at {=u32} Bd (unit was at {=u32} Bd); boot_frames={=u32}",
+        TARGET.packet,
+        report.baud.bits_per_second(),
+        report.unit_baud.bits_per_second(),
+        report.unsolicited_frames,
+    );
+
+    out::header();
+    let mut emit = out::row;
+    if let Err(e) = pipe.feed(driver.pending_bytes(), &mut emit) {
+        defmt::panic!("bank: {}", e)
+    }
+    let mut uart = driver.release();
+    let mut uart_errors = 0u32;
+    let mut last_counters = 0u64;
+    let mut buf = [0u8; 64];
+    loop {
+        match embedded_io_async::Read::read(&mut uart, &mut buf).await {
+            Ok(n) => {
+                if let Err(e) = pipe.feed(&buf[..n], &mut emit) {
+                    defmt::panic!("bank: {}", e)
+                }
+            }
+            Err(e) => {
+                uart_errors = uart_errors.saturating_add(1);
+                defmt::println!("firmware: UART error: {}", e);
+                out::counters(&pipe, uart_errors);
+            }
+        }
+        let rows_now = pipe.estimation().counters().rows;
+        if rows_now >= last_counters + COUNTER_ROWS {
+            last_counters = rows_now;
+            out::counters(&pipe, uart_errors);
+        }
+    }
+}

@@ -1,0 +1,85 @@
+//! The pipeline (product bank on the three axes) and its output as defmt messages.
+//!
+//! * [`header`]: `header {=str}`, the channels of each axis's block in a row.
+//! * [`row`]: `row {=u64} {=[?]}`, the sample time (us since the first sample) and per axis
+//!   (roll, pitch, yaw) the unwrapped angle (deg), the ILO1 velocity (deg/s) and the Kalman
+//!   acceleration (deg/s^2): nine `f32`, NaN for an axis without an estimate in the row (roll
+//!   and yaw near gimbal lock).
+//! * [`counters`]: `firmware: counters ...`, the parser's and the pipeline's counters (the
+//!   keys of `nav440_pipeline::Pipeline::summary`'s line that apply) and the UART errors.
+
+use estimators::{BankConfig, EstimatorBank, EstimatorOutput};
+use nav440_pipeline::{Axes, Axis};
+
+/// The bank of each axis: the product bank (ILO1 velocity + Kalman acceleration) in `f32`.
+pub type Bank = estimators::ProductBank<f32>;
+
+/// What the bank gives per sample.
+pub type Output = <Bank as EstimatorBank>::Output;
+
+/// One row of the pipeline.
+pub type Row = nav440_pipeline::Row<Output>;
+
+/// The bank constructor the pipeline calls after the warm-up.
+type BuildFn = fn(Axis, &BankConfig) -> Result<Bank, estimators::ConfigError>;
+
+/// The firmware's pipeline: one bank per axis.
+pub type Pipeline = nav440_pipeline::Pipeline<Bank, estimators::ConfigError, BuildFn, 3>;
+
+/// Values per axis in a [`row`] message: the angle and the bank's channels.
+const AXIS_VALUES: usize = 1 + <Bank as EstimatorBank>::CHANNELS;
+
+/// Builds an axis's bank for the measured packet period with the NAV440 preset's gains for
+/// that period (`BankConfig::with_nav440_gains`, as `nav440 estimate --bank product` does).
+/// Out of line: the constructor is large.
+#[inline(never)]
+fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, estimators::ConfigError> {
+    nav440_pipeline::axis_bank(axis, &cfg.with_nav440_gains())
+}
+
+/// A pipeline with the NAV440 preset on all three axes (built in place).
+#[inline(always)]
+pub fn pipeline() -> Pipeline {
+    Pipeline::with_slots(Axes::ALL, BankConfig::NAV440, build_bank)
+}
+
+/// Sends the header message: the channels of one axis's block.
+pub fn header() {
+    defmt::println!(
+        "header angle_deg,{=str}",
+        <Output as EstimatorOutput>::CSV_COLUMNS
+    );
+}
+
+/// Sends one sample's row message (see the module doc).
+pub fn row(r: &Row) {
+    let mut v = [f32::NAN; 3 * AXIS_VALUES];
+    for (block, axis) in v.chunks_exact_mut(AXIS_VALUES).zip(Axis::ALL) {
+        if let Some(a) = r.axis(axis) {
+            block[0] = a.out.unwrapped_deg();
+            block[1..].copy_from_slice(a.out.values());
+        }
+    }
+    defmt::println!("row {=u64} {=[?]}", r.t_us, &v[..]);
+}
+
+/// Sends the counters message (see the module doc).
+pub fn counters(pipe: &Pipeline, uart_errors: u32) {
+    let s = pipe.front().parser_stats();
+    let fc = pipe.front().counters();
+    let c = pipe.estimation().counters();
+    defmt::println!(
+        "firmware: counters bytes={=u64} frames={=u64} crc_errors={=u64} skipped={=u64} decode_errors={=u64} samples={=u64} rows={=u64} rejected={=u64} gaps={=u32} near_lock={=u64} uart_errors={=u32}",
+        s.bytes,
+        s.frames,
+        s.crc_errors,
+        s.skipped_bytes,
+        fc.decode_errors,
+        c.samples,
+        c.rows,
+        c.rejected.total(),
+        c.gaps,
+        c.near_lock,
+        uart_errors,
+    );
+}
