@@ -1,5 +1,6 @@
 //! The embassy-stm32 firmware for the STM32F405 (e.g. the Netduino Plus 2 or any STM32F405RG
-//! board): embassy-executor, embassy-stm32 and embassy-time.
+//! board), or with feature `stm32f411` the NUCLEO-F411RE: embassy-executor, embassy-stm32 and
+//! embassy-time.
 //!
 //! 1. `embassy_stm32::init` with the default configuration (16 MHz HSI, no PLL); embassy-time
 //!    ticks from TIM2.
@@ -63,9 +64,16 @@ const COUNTER_ROWS: u64 = 1000;
 
 /// The board name in the ELF (NUL-terminated), as firmware-example's images carry it: `cargo
 /// xtask flash` and the memory-map check read the chip from it.
+#[cfg(feature = "stm32f405")]
 #[no_mangle]
 #[used]
 pub static NAV440_BOARD: [u8; 10] = *b"stm32f405\0";
+
+/// The board name in the ELF of the NUCLEO-F411RE image.
+#[cfg(feature = "stm32f411")]
+#[no_mangle]
+#[used]
+pub static NAV440_BOARD: [u8; 14] = *b"nucleo-f411re\0";
 
 #[embassy_executor::main]
 async fn main(_spawner: Spawner) {

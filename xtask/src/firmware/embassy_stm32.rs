@@ -1,14 +1,15 @@
-//! `cargo xtask embassy-stm32`: the embassy-stm32 firmware for the STM32F405
-//! (`firmware-embassy`).
+//! `cargo xtask embassy-stm32`: the embassy-stm32 firmware (`firmware-embassy`) for the
+//! STM32F405 and the NUCLEO-F411RE.
 //!
 //! 1. The async driver's docs show the firmware's boot code: the ```` ```rust,ignore ````
 //!    block of `nav440-proto/src/driver/asynch.rs` equals the region between the binary's
 //!    `ANCHOR: boot` and `ANCHOR_END: boot` comments, line for line (dedented).
 //! 2. Lints (`cargo fmt --check`, `cargo clippy -D warnings`) and builds the release ELF for
-//!    `thumbv7em-none-eabihf`.
-//! 3. Checks its memory map from the ELF against the `stm32f405` chip (vector table at
-//!    `0x0800_0000`, every section inside flash or RAM) and prints its flash and RAM.
-//! 4. QEMU 7.2's `netduinoplus2` cannot run it: the STM32F405 model has no RCC (an
+//!    `thumbv7em-none-eabihf`, once per chip ([`IMAGES`]).
+//! 3. Checks each image's memory map from the ELF against its chip (`nucleo-f411re`,
+//!    `stm32f405`: vector table at `0x0800_0000`, every section inside flash or RAM) and prints
+//!    its flash and RAM.
+//! 4. QEMU 7.2's `netduinoplus2` cannot run the STM32F405 image (and QEMU has no F411 board): the STM32F405 model has no RCC (an
 //!    unimplemented device that reads 0), and `embassy_stm32::init` waits for RCC_CR.HSIRDY.
 //!    The command runs the ELF there for a bounded time with `-d unimp` and asserts exactly
 //!    that (the HSION write, then nothing but reads of RCC_CR), so that the documented failure
@@ -48,38 +49,44 @@ const SPIN_READS: usize = 10_000;
 /// Wall-time bound of the QEMU run.
 const QEMU_LIMIT: Duration = Duration::from_secs(10);
 
+/// The images: (cargo feature arguments, chip in `crate::elf::CHIPS`). The STM32F405 last, so
+/// that the ELF left in the target directory is the one QEMU and `cargo xtask flash` take.
+const IMAGES: [(&[&str], &str); 2] = [
+    (
+        &["--no-default-features", "--features", "stm32f411"],
+        "nucleo-f411re",
+    ),
+    (&[], CHIP),
+];
+
 /// Runs the steps of the module doc.
 pub fn embassy_stm32() -> Result<(), String> {
     let start = Instant::now();
     check_doc_block()?;
     cargo(&["fmt", "-p", CRATE, "--", "--check"])?;
-    cargo(&[
-        "clippy",
-        "-p",
-        CRATE,
-        "--target",
-        TARGET,
-        "--release",
-        "--",
-        "-D",
-        "warnings",
-    ])?;
-    let t = Instant::now();
-    cargo(&["build", "-p", CRATE, "--target", TARGET, "--release"])?;
-    eprintln!("xtask: built {CRATE} in {:.1} s", t.elapsed().as_secs_f64());
     let elf = target_dir().join(TARGET).join("release").join(CRATE);
-    let map = crate::elf::check_memory_map(&elf, Some(CHIP))?;
-    let (flash, ram) = flash_ram(&elf)?;
-    eprintln!(
-        "xtask: OK: memory map of {CRATE}: board {}, {} loadable sections inside its chip's memory, vector table at {:#010x}; flash {flash} B, static RAM {ram} B",
-        map.board, map.sections, map.vector_table
-    );
-    match qemu::ensure_qemu() {
-        Ok(()) => qemu_lacks_rcc(&elf)?,
-        Err(e) if std::env::var("XTASK_SKIP_QEMU").is_ok_and(|v| v == "1") => {
-            eprintln!("xtask: XTASK_SKIP_QEMU=1: SKIPPING the embassy-stm32 QEMU check: {e}");
-        }
-        Err(e) => return Err(e),
+    for (features, chip) in IMAGES {
+        let mut clippy = vec!["clippy", "-p", CRATE, "--target", TARGET, "--release"];
+        clippy.extend(features);
+        clippy.extend(["--", "-D", "warnings"]);
+        cargo(&clippy)?;
+        let t = Instant::now();
+        let mut build = vec!["build", "-p", CRATE, "--target", TARGET, "--release"];
+        build.extend(features);
+        cargo(&build)?;
+        eprintln!(
+            "xtask: built {CRATE} for {chip} in {:.1} s",
+            t.elapsed().as_secs_f64()
+        );
+        let map = crate::elf::check_memory_map(&elf, Some(chip))?;
+        let (flash, ram) = super::size::flash_ram(&elf)?;
+        eprintln!(
+            "xtask: OK: memory map of {CRATE}: board {}, {} loadable sections inside its chip's memory, vector table at {:#010x}; flash {flash} B, static RAM {ram} B",
+            map.board, map.sections, map.vector_table
+        );
+    }
+    if qemu::ensure_or_skip("the embassy-stm32 QEMU check")? {
+        qemu_lacks_rcc(&elf)?;
     }
     eprintln!(
         "xtask: embassy-stm32: all checks passed in {:.0} s",
@@ -165,36 +172,6 @@ fn check_doc_block() -> Result<(), String> {
     Ok(())
 }
 
-/// Flash (bytes stored: allocated sections with contents in flash, plus the load image of
-/// `.data`) and static RAM (allocated sections in RAM: `.data`, `.bss`, `.uninit`; the stack
-/// is the rest) of the ELF, from its section headers.
-fn flash_ram(elf: &Path) -> Result<(u64, u64), String> {
-    use object::{Object, ObjectSection, SectionFlags, SectionKind};
-    let data = read_file(elf)?;
-    let file = object::File::parse(&*data).map_err(|e| format!("{}: {e}", elf.display()))?;
-    let chip = crate::elf::chip(CHIP)?;
-    let (mut flash, mut ram) = (0, 0);
-    for s in file.sections() {
-        let alloc = match s.flags() {
-            SectionFlags::Elf { sh_flags } => sh_flags & u64::from(object::elf::SHF_ALLOC) != 0,
-            _ => false,
-        };
-        if !alloc || s.size() == 0 {
-            continue;
-        }
-        let addr = s.address();
-        if addr >= chip.ram.origin && addr < chip.ram.origin + chip.ram.length {
-            ram += s.size();
-            if s.kind() == SectionKind::Data {
-                flash += s.size();
-            }
-        } else {
-            flash += s.size();
-        }
-    }
-    Ok((flash, ram))
-}
-
 /// Step 4 of the module doc: QEMU `netduinoplus2` with `-d unimp,guest_errors` (logged on
 /// QEMU's stderr) until the firmware has set HSION and then read RCC_CR [`SPIN_READS`] times
 /// in a row with no other access, or [`QEMU_LIMIT`].
@@ -274,7 +251,7 @@ fn qemu_lacks_rcc(elf: &Path) -> Result<(), String> {
             Ok(())
         }
         _ => Err(format!(
-            "QEMU {MACHINE} did not show the documented failure mode (the HSION write {}, then {SPIN_READS} reads of RCC_CR; {spin} seen) within {} s; QEMU {status}, {lines} log lines, the last other one: `{last_other}`. If this QEMU models the RCC, run the firmware against `nav440 sim` instead and update docs/FIRMWARE-OVERVIEW.md",
+            "QEMU {MACHINE} did not show the documented failure mode (the HSION write {}, then {SPIN_READS} reads of RCC_CR; {spin} seen) within {} s; QEMU {status}, {lines} log lines, the last other one: `{last_other}`. If this QEMU models the RCC, run the firmware against `nav440 sim` instead and update docs/EMBASSY.md",
             if hsion_at.is_some() { "seen" } else { "not seen" },
             QEMU_LIMIT.as_secs()
         )),

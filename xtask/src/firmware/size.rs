@@ -181,6 +181,12 @@ fn llvm_tool(name: &str) -> Result<PathBuf, String> {
     }
 }
 
+/// (flash, static RAM) of an ELF, bytes: text + data, data + bss (`llvm-size`).
+pub(super) fn flash_ram(elf: &Path) -> Result<(u64, u64), String> {
+    let (t, d, b) = sizes(&llvm_size()?, elf)?;
+    Ok((t + d, d + b))
+}
+
 /// (text, data, bss) of an ELF from `llvm-size` (Berkeley format).
 fn sizes(tool: &Path, elf: &Path) -> Result<(u64, u64, u64), String> {
     let o = Command::new(tool)
