@@ -23,6 +23,12 @@
 //! unit that streams without pause cannot keep a wait alive forever, even where a port
 //! delivers bytes faster than a real line would (emulators).
 //!
+//! A `DelayNs` that rounds a sleep up to a coarse tick lengthens every wait by as much: with a
+//! 1 kHz monotonic (e.g. rtic-monotonics' SysTick at its default rate, whose delays last one to
+//! two ticks) each 500 us step lasts 1-2 ms, and a boot against a silent unit took 2.5 times
+//! its nominal time when measured. With such a delay set [`Timing::poll_step_us`] to ten
+//! ticks or more (e.g. 10,000 us): the UART's receive buffer holds the bytes meanwhile.
+//!
 //! # Nothing is read past a reply
 //! While waiting, the driver reads one byte at a time and stops parsing right after the reply
 //! frame ([`Parser::feed_until`]): bytes after it stay in the serial port, or, in the one case
