@@ -16,7 +16,7 @@ fn committed_snippet_equals_its_toml() {
     assert_ne!(tuned::TUNED, BankConfig::PAPER);
     // The generator still writes exactly this text.
     assert_eq!(
-        g.to_rust("noise variance 0.01 deg^2"),
+        g.to_rust("noise variance 0.01 deg^2", "PaperBank"),
         include_str!("../data/gains/fig5_var0.01.rs")
     );
     // And the bank accepts it.

@@ -98,9 +98,11 @@ fn product_tuning_runs_in_estimate_with_the_reported_mse() {
     let tables: Vec<&str> = toml.lines().filter(|l| l.starts_with('[')).collect();
     assert_eq!(tables, ["[velocity.ilo1]", "[acceleration.kf]"], "{toml}");
     assert!(toml.contains("--bank product"), "{toml}");
-    assert!(std::fs::read_to_string(&rust)
-        .unwrap()
-        .contains("pub const TUNED: BankConfig"));
+    let snippet = std::fs::read_to_string(&rust).unwrap();
+    assert!(snippet.contains("pub const TUNED: BankConfig"), "{snippet}");
+    // It names the bank it is for, and no other.
+    assert!(snippet.contains("pass to `ProductBank::new`"), "{snippet}");
+    assert!(!snippet.contains("PaperBank"), "{snippet}");
 
     // The report's MSEs, recomputed from the product bank's CSV with the same noise (seed 1).
     let (before, after) = before_after(&report, "ILO1");

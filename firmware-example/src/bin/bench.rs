@@ -806,7 +806,6 @@ fn main() -> ! {
         "ED-ED",
         core::mem::size_of::<Stateful<Series<EdParams<Num>, EdParams<Num>>>>(),
     );
-    // The label keeps the bench output as it was (the type is `PaperBank`).
     ram("PaperBank (whole bank)", core::mem::size_of::<Bank>());
     ram(
         "ProductBank (one axis)",

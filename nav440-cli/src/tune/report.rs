@@ -146,11 +146,12 @@ impl TuneResult {
     /// A Rust snippet building the tuned `BankConfig` (paste into the firmware); it sets the
     /// hold the tuner kept.
     pub fn to_rust(&self) -> String {
+        let product = self.families != Families::ALL;
+        let bank = if product { "ProductBank" } else { "PaperBank" };
         let mut s = self
             .gains
-            .to_rust(&format!("noise variance {} deg^2", self.noise_var));
-        if self.families != Families::ALL {
-            s = s.replacen("`PaperBank::new`", "`ProductBank::new`", 1);
+            .to_rust(&format!("noise variance {} deg^2", self.noise_var), bank);
+        if product {
             s.insert_str(
                 0,
                 "// The product bank's two rows (ILO1 velocity, Kalman acceleration): `ProductBank::new(&TUNED)`,\n\
