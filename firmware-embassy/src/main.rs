@@ -25,8 +25,9 @@
 //! * `counters ...` every [`COUNTER_ROWS`] rows and after a UART error: the parser's and the
 //!   pipeline's counters and the UART errors so far.
 //!
-//! Build: `cargo build -p firmware-embassy --release --target thumbv7em-none-eabihf`;
-//! `cargo xtask embassy-stm32` lints, builds and checks the image's memory map. Flash:
+//! Build: `cargo build -p firmware-embassy --release --target thumbv7em-none-eabihf` (add
+//! `--no-default-features --features stm32f411` for the NUCLEO-F411RE); `cargo xtask
+//! embassy-stm32` lints, builds and checks both images' memory maps. Flash:
 //! `cargo xtask flash target/thumbv7em-none-eabihf/release/firmware-embassy` (probe-rs).
 #![no_std]
 #![no_main]

@@ -12,8 +12,9 @@
 //! * `cargo xtask msrv`  - the libraries' declared `rust-version` checked with that toolchain.
 //! * `cargo xtask package` - the libraries' examples run and `cargo publish --dry-run`.
 //! * `cargo xtask embassy` - the embassy example (async driver) under QEMU against `nav440 sim`.
-//! * `cargo xtask embassy-stm32` - the embassy-stm32 firmware for the STM32F405: doc block
-//!   check, lints, build, memory map, and the QEMU run that shows what the emulator lacks.
+//! * `cargo xtask embassy-stm32` - the embassy-stm32 firmware for the STM32F405 and the
+//!   NUCLEO-F411RE: doc block check, lints, builds, memory maps, and the QEMU run that shows
+//!   what the emulator lacks.
 //! * `cargo xtask outside-firmware` - a firmware outside the workspace on the libraries by
 //!   version: built for thumbv7em and thumbv6m, map-checked, run on QEMU.
 //! * `cargo xtask flash ELF` - the runner of `cargo run` for the firmware: checks a board
@@ -152,10 +153,11 @@ enum Cmd {
     /// The embassy example (async driver on embassy-executor) built for thumbv7em and run on
     /// QEMU `mps2-an386` against `nav440 sim`.
     Embassy,
-    /// The embassy-stm32 firmware for the STM32F405 (`firmware-embassy`): checks that the
-    /// async driver's docs show its boot code, lints and builds it for thumbv7em, checks its
-    /// memory map, and runs it on QEMU `netduinoplus2` for a bounded time to assert the
-    /// documented failure there (no RCC model: `embassy_stm32::init` waits for HSIRDY).
+    /// The embassy-stm32 firmware (`firmware-embassy`) for the STM32F405 and the NUCLEO-F411RE:
+    /// checks that the async driver's docs show its boot code, lints and builds both images
+    /// for thumbv7em, checks their memory maps, and runs the STM32F405 image on QEMU
+    /// `netduinoplus2` for a bounded time to assert the documented failure there (no RCC
+    /// model: `embassy_stm32::init` waits for HSIRDY).
     EmbassyStm32,
     /// The firmware outside the workspace (`fixtures/outside-firmware`: the three libraries by
     /// version, patched to this checkout) built for thumbv7em and thumbv6m, map-checked and

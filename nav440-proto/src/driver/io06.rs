@@ -1,9 +1,10 @@
 //! `embedded-io` 0.6 serial ports (feature `embedded-io-06`).
 //!
 //! Some HALs implement `embedded-io` 0.6 (e.g. `stm32f4xx-hal` 0.23), while this crate's
-//! drivers take 0.7 ports (which `embassy-stm32` 0.6 and `rp2040-hal` 0.12 implement). [`Compat06`] shows a 0.6 port through the 0.7 traits, so
-//! the same drivers run over it: `IoDriver::new(Compat06(uart))` (blocking, also named
-//! [`Io06Driver`]) or `AsyncDriver::new(Compat06(uart))`.
+//! drivers take 0.7 ports (which `embassy-stm32` 0.6 and `rp2040-hal` 0.12 implement).
+//! [`Compat06`] shows a 0.6 port through the 0.7 traits, so the same drivers run over it:
+//! `IoDriver::new(Compat06(uart))` (blocking, also named [`Io06Driver`]) or
+//! `AsyncDriver::new(Compat06(uart))`.
 
 use embedded_io_06 as eio;
 

@@ -9,8 +9,9 @@
 //! 3. Checks each image's memory map from the ELF against its chip (`nucleo-f411re`,
 //!    `stm32f405`: vector table at `0x0800_0000`, every section inside flash or RAM) and prints
 //!    its flash and RAM.
-//! 4. QEMU 7.2's `netduinoplus2` cannot run the STM32F405 image (and QEMU has no F411 board): the STM32F405 model has no RCC (an
-//!    unimplemented device that reads 0), and `embassy_stm32::init` waits for RCC_CR.HSIRDY.
+//! 4. QEMU 7.2's `netduinoplus2` cannot run the STM32F405 image (and QEMU has no F411 board):
+//!    the STM32F405 model has no RCC (an unimplemented device that reads 0), and
+//!    `embassy_stm32::init` waits for RCC_CR.HSIRDY.
 //!    The command runs the ELF there for a bounded time with `-d unimp` and asserts exactly
 //!    that (the HSION write, then nothing but reads of RCC_CR), so that the documented failure
 //!    mode stays true; when a QEMU models RCC the assertion fails and says so.
@@ -27,7 +28,7 @@ use std::time::{Duration, Instant};
 
 /// The firmware crate (and its binary).
 const CRATE: &str = "firmware-embassy";
-/// Its target (the STM32F405 is a Cortex-M4F).
+/// Its target (both chips are Cortex-M4F).
 const TARGET: &str = "thumbv7em-none-eabihf";
 /// The chip in `crate::elf::CHIPS` (the name the image carries in `NAV440_BOARD`).
 const CHIP: &str = "stm32f405";
