@@ -5,8 +5,10 @@
 //!   (roll, pitch, yaw) the unwrapped angle (deg), the ILO1 velocity (deg/s) and the Kalman
 //!   acceleration (deg/s^2): nine `f32`, NaN for an axis without an estimate in the row (roll
 //!   and yaw near gimbal lock).
-//! * [`counters`]: `firmware: counters ...`, the parser's and the pipeline's counters (the
-//!   keys of `nav440_pipeline::Pipeline::summary`'s line that apply) and the UART errors.
+//! * [`counters`]: `firmware: counters parser=.. front=.. back=.. uart_errors=..`: the
+//!   parser's statistics (`nav440_proto::Stats`), the front end's and the back end's counters
+//!   (`nav440_pipeline::FrontCounters`, `nav440_pipeline::Counters`), each as its struct with
+//!   every field, and the UART errors.
 
 use estimators::{BankConfig, EstimatorBank, EstimatorOutput};
 use nav440_pipeline::{Axes, Axis};
@@ -65,21 +67,11 @@ pub fn row(r: &Row) {
 
 /// Sends the counters message (see the module doc).
 pub fn counters(pipe: &Pipeline, uart_errors: u32) {
-    let s = pipe.front().parser_stats();
-    let fc = pipe.front().counters();
-    let c = pipe.estimation().counters();
     defmt::println!(
-        "firmware: counters bytes={=u64} frames={=u64} crc_errors={=u64} skipped={=u64} decode_errors={=u64} samples={=u64} rows={=u64} rejected={=u64} gaps={=u32} near_lock={=u64} uart_errors={=u32}",
-        s.bytes,
-        s.frames,
-        s.crc_errors,
-        s.skipped_bytes,
-        fc.decode_errors,
-        c.samples,
-        c.rows,
-        c.rejected.total(),
-        c.gaps,
-        c.near_lock,
+        "firmware: counters parser={} front={} back={} uart_errors={=u32}",
+        pipe.front().parser_stats(),
+        pipe.front().counters(),
+        pipe.estimation().counters(),
         uart_errors,
     );
 }

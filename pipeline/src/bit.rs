@@ -19,6 +19,7 @@ pub const fn is_failure(bit: Bit) -> bool {
 
 /// Samples not estimated because their BIT word flags a failure.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct BitCounts {
     /// Samples with masterFail set (not estimated).
     pub failed: u64,

@@ -136,6 +136,7 @@ impl<O> Row<O> {
 
 /// Samples the banks refused (they give no row), by reason.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Rejections {
     /// Time stamp not later than the previous sample's.
     pub time_not_increasing: u64,
@@ -168,6 +169,7 @@ impl Rejections {
 /// Counters of the back end (saturating). Once the banks run: `samples = rows +
 /// rejected.total()` (plus the firmware's format errors).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Counters {
     /// Samples taken (held warm-up samples included).
     pub samples: u64,

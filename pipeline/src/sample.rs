@@ -111,6 +111,7 @@ type Payload = ([f32; 3], [f32; 3]);
 /// bit.failed + samples + time faults' discarded + duplicates` (plus one sample held by the
 /// time base before `finish`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct FrontCounters {
     /// CRC-valid frames.
     pub frames: u64,
