@@ -47,6 +47,19 @@ pub struct AveConfig {
     pub delta: DeltaMode,
 }
 
+/// On one line: `AveConfig { k: .., gamma1: .., delta: DeltaMode::.. }`.
+impl crate::RustLiteral for AveConfig {
+    const RUST_TYPES: &'static [&'static str] = &["AveConfig", "DeltaMode"];
+
+    fn write_rust(&self, w: &mut dyn core::fmt::Write, _: crate::Indent<'_>) -> core::fmt::Result {
+        write!(
+            w,
+            "AveConfig {{ k: {:?}, gamma1: {:?}, delta: DeltaMode::{:?} }}",
+            self.k, self.gamma1, self.delta
+        )
+    }
+}
+
 /// The `deltahat` law as validated coefficients (see [`DeltaMode`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum DeltaLaw<T: Real> {

@@ -20,6 +20,19 @@ pub struct EdConfig {
     pub alpha: f32,
 }
 
+/// On one line: `EdConfig { lambda: .., alpha: .. }`.
+impl crate::RustLiteral for EdConfig {
+    const RUST_TYPES: &'static [&'static str] = &["EdConfig"];
+
+    fn write_rust(&self, w: &mut dyn core::fmt::Write, _: crate::Indent<'_>) -> core::fmt::Result {
+        write!(
+            w,
+            "EdConfig {{ lambda: {:?}, alpha: {:?} }}",
+            self.lambda, self.alpha
+        )
+    }
+}
+
 /// How the ED's discontinuous law is discretised.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

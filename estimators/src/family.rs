@@ -41,19 +41,19 @@
 //!    `serde` and `defmt` derives of the others), `impl Gains for FooConfig` and the family
 //!    marker `FooFamily` (`impl Family`: name, label, channels, scheduling, where its gains
 //!    are in [`BankGains`]; `family!` declares both for gains that are one field of
-//!    [`BankGains`], as in `ed.rs`).
-//! 2. `bank/paper.rs`: `FooFamily` in the family list; its two channels
-//!    (`FooV = "foo_v"`, `FooA = "foo_a"`) and its row or rows, each with a `warm` clause, in
-//!    the `estimator_bank!` table below the list.
-//! 3. `bank/config.rs`: the field `foo: FooConfig` of [`BankGains`], its paper values in
-//!    `BankGains::PAPER_VELOCITY` and `BankGains::PAPER_ACCELERATION`, its line in
-//!    [`BankGains::write_rust`] and its type in [`BankGains::RUST_TYPES`].
-//! 4. What the compiler and the tests then ask for: a value in each tuned preset
-//!    (`BankGains::NAV440_*`, and `BankConfig::NAV440_RATES` in `rates.rs`; the paper's until
-//!    it is tuned); the sizes in `ram.rs` (compile-time checked); the paper bank's CSV
-//!    contract (`nav440_pipeline::csv::HEADER` and the tests that spell out its columns);
-//!    the committed `nav440 tune --rust` snippets `host-tests/data/gains/*.rs`,
-//!    regenerated.
+//!    [`BankGains`], as in `ed.rs`), and `impl RustLiteral for FooConfig`.
+//! 2. `bank/paper.rs`: its entry in the family list, which declares [`BankGains`] with it
+//!    (`foo: FooConfig = (FOO_PAPER_V, FOO_PAPER_A) => [FooFamily],`: the field, its values
+//!    in [`BankGains::PAPER_VELOCITY`] and [`BankGains::PAPER_ACCELERATION`], its family;
+//!    [`BankGains::write_rust`] and [`BankGains::RUST_TYPES`] follow, with `FooConfig`'s
+//!    [`RustLiteral`]); its two channels (`FooV = "foo_v"`, `FooA = "foo_a"`) and its row or
+//!    rows, each with a `warm` clause, in the `estimator_bank!` table below the list.
+//! 3. What the compiler and the tests then ask for: the sizes in `ram.rs` (compile-time
+//!    checked); the paper bank's CSV contract (`nav440_pipeline::csv::HEADER` and the tests
+//!    that spell out its columns); the committed `nav440 tune --rust` snippets
+//!    `host-tests/data/gains/*.rs`, regenerated. The tuned presets
+//!    ([`crate::BankConfig::NAV440_RATES`], `rates.rs`) run the paper's gains for a family
+//!    their tables do not list.
 //!
 //! The channel lists, the warm gain change, the gain schedule, the gains file, the tuner and
 //! the `nav440 paper` tables then follow. Optional: an observer that should record its own
@@ -229,13 +229,158 @@ pub trait SerdeIfEnabled {}
 #[cfg(not(feature = "serde"))]
 impl<T> SerdeIfEnabled for T {}
 
-/// Defines the family list: [`FAMILIES`] and [`for_each_family`] from one list of types.
+/// Writes a gains value as the Rust expression that builds it: what
+/// [`BankGains::write_rust`] writes for each of its fields (and so what `nav440 tune --rust`
+/// prints). Each gain is written with `{:?}`, its shortest form that reads back to the same
+/// `f32`.
+pub trait RustLiteral {
+    /// The type names the expression uses (for a `use estimators::{..}` line).
+    const RUST_TYPES: &'static [&'static str];
+
+    /// Writes the expression. Where it breaks the line, the next line starts with `indent`
+    /// (the indentation of the line the expression starts on) plus its own indentation.
+    fn write_rust(&self, w: &mut dyn core::fmt::Write, indent: Indent<'_>) -> core::fmt::Result;
+}
+
+/// The indentation of a line of generated Rust: `base`, then four spaces per level.
+#[derive(Clone, Copy, Debug)]
+pub struct Indent<'a> {
+    /// What every line starts with.
+    pub base: &'a str,
+    /// Levels of four spaces after `base`.
+    pub levels: usize,
+}
+
+impl Indent<'_> {
+    /// One level deeper.
+    pub fn deeper(self) -> Self {
+        Self {
+            levels: self.levels + 1,
+            ..self
+        }
+    }
+}
+
+impl core::fmt::Display for Indent<'_> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(self.base)?;
+        for _ in 0..self.levels {
+            f.write_str("    ")?;
+        }
+        Ok(())
+    }
+}
+
+/// A bare gain (e.g. the AD's time constant, s).
+impl RustLiteral for f32 {
+    const RUST_TYPES: &'static [&'static str] = &[];
+
+    fn write_rust(&self, w: &mut dyn core::fmt::Write, _: Indent<'_>) -> core::fmt::Result {
+        write!(w, "{self:?}")
+    }
+}
+
+/// One element per line, one level deeper than the `[`.
+impl<T: RustLiteral, const N: usize> RustLiteral for [T; N] {
+    const RUST_TYPES: &'static [&'static str] = T::RUST_TYPES;
+
+    fn write_rust(&self, w: &mut dyn core::fmt::Write, indent: Indent<'_>) -> core::fmt::Result {
+        w.write_str("[\n")?;
+        for x in self {
+            write!(w, "{}", indent.deeper())?;
+            x.write_rust(w, indent.deeper())?;
+            w.write_str(",\n")?;
+        }
+        write!(w, "{indent}]")
+    }
+}
+
+/// Defines the paper bank's families and the gains of one half of the bank from one list:
+/// the struct [`BankGains`] (one field per entry, with its docs), its paper sets
+/// [`BankGains::PAPER_VELOCITY`] and [`BankGains::PAPER_ACCELERATION`],
+/// [`BankGains::write_rust`] and [`BankGains::RUST_TYPES`], and the family list
+/// [`FAMILIES`] and [`for_each_family`].
+///
+/// An entry is `field: Type = (paper velocity, paper acceleration) => [Family, ..]`: the
+/// field of [`BankGains`] and its type, its values in the two paper sets, and the families
+/// whose gains it holds (one, or one per element of an array field), in column order.
 macro_rules! families {
-    ($($(#[$m:meta])* $F:ty),+ $(,)?) => {
+    (
+        $(#[$sm:meta])*
+        pub struct BankGains {
+            $(
+                $(#[$m:meta])*
+                $field:ident: $ty:ty = ($velocity:expr, $acceleration:expr) => [$($F:ty),+],
+            )+
+        }
+    ) => {
+        $(#[$sm])*
+        pub struct BankGains {
+            $(
+                $(#[$m])*
+                pub $field: $ty,
+            )+
+        }
+
+        impl BankGains {
+            /// The paper's velocity set: AVE (500, 20000), Table 2 ILOs, AD `T = 0.01`, ED
+            /// (700, 770), and the default tracker noise.
+            pub const PAPER_VELOCITY: Self = Self {
+                $($field: $velocity,)+
+            };
+
+            /// The paper's acceleration set: AVE-AVE, Table 4 ILO-ILO, AD-AD `T = 0.1`,
+            /// ED-ED, and the default tracker noise.
+            pub const PAPER_ACCELERATION: Self = Self {
+                $($field: $acceleration,)+
+            };
+
+            /// The length of [`Self::RUST_TYPES`].
+            const RUST_TYPE_COUNT: usize = 0 $(+ <$ty as $crate::RustLiteral>::RUST_TYPES.len())+;
+
+            /// The type names [`Self::write_rust`] uses, field by field (a name may repeat),
+            /// for a `use estimators::{..}` line.
+            pub const RUST_TYPES: [&'static str; Self::RUST_TYPE_COUNT] = {
+                let mut all = [""; Self::RUST_TYPE_COUNT];
+                let mut n = 0;
+                $(
+                    let names = <$ty as $crate::RustLiteral>::RUST_TYPES;
+                    let mut i = 0;
+                    while i < names.len() {
+                        all[n] = names[i];
+                        n += 1;
+                        i += 1;
+                    }
+                )+
+                let _ = n;
+                all
+            };
+
+            /// Writes the Rust expression `BankGains { .. }` that builds these gains: every
+            /// field spelled out on its own line ([`RustLiteral`](crate::RustLiteral)), each
+            /// line after the first indented by `indent`. What `nav440 tune --rust` writes for
+            /// a firmware, and how the shipped presets are regenerated (see
+            /// [`BankConfig::NAV440`](crate::BankConfig::NAV440)).
+            pub fn write_rust(
+                &self,
+                w: &mut dyn core::fmt::Write,
+                indent: &str,
+            ) -> core::fmt::Result {
+                let field = $crate::Indent { base: indent, levels: 1 };
+                w.write_str("BankGains {\n")?;
+                $(
+                    write!(w, "{field}{}: ", stringify!($field))?;
+                    $crate::RustLiteral::write_rust(&self.$field, w, field)?;
+                    w.write_str(",\n")?;
+                )+
+                write!(w, "{indent}}}")
+            }
+        }
+
         /// The families of the paper bank, in column order (the order of
         /// [`crate::Channel::VELOCITY`] and of every per-family table and report).
-        pub const FAMILIES: [$crate::FamilyInfo; [$(stringify!($F)),+].len()] =
-            [$($crate::FamilyInfo::of::<$F>()),+];
+        pub const FAMILIES: [$crate::FamilyInfo; [$($(stringify!($F)),+),+].len()] =
+            [$($($crate::FamilyInfo::of::<$F>()),+),+];
 
         /// The number of families ([`FAMILIES`]`.len()`).
         pub const FAMILY_COUNT: usize = FAMILIES.len();
@@ -243,11 +388,10 @@ macro_rules! families {
         /// Calls `visitor.family::<F>(column)` for each family `F` of [`FAMILIES`], in order.
         pub fn for_each_family<V: $crate::FamilyVisitor>(visitor: &mut V) {
             let mut column = 0;
-            $(
-                $(#[$m])*
+            $($(
                 visitor.family::<$F>(column);
                 column += 1;
-            )+
+            )+)+
             let _ = column;
         }
     };

@@ -27,6 +27,19 @@ pub struct IloConfig {
     pub k2: f32,
 }
 
+/// On one line: `IloConfig { k1: .., l: .., k2: .. }`.
+impl crate::RustLiteral for IloConfig {
+    const RUST_TYPES: &'static [&'static str] = &["IloConfig"];
+
+    fn write_rust(&self, w: &mut dyn core::fmt::Write, _: crate::Indent<'_>) -> core::fmt::Result {
+        write!(
+            w,
+            "IloConfig {{ k1: {:?}, l: {:?}, k2: {:?} }}",
+            self.k1, self.l, self.k2
+        )
+    }
+}
+
 impl IloConfig {
     /// Gains from `(K1, L, Q)` by Theorem 3.1 for the scalar case `A = 0, C = F = 1`:
     /// `(-L) P + P (-L) = -Q` gives `P = Q / (2L)` and `P F = K2 C` gives `K2 = Q / (2L)`.

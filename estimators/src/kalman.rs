@@ -337,6 +337,15 @@ pub struct KalmanNoise {
     pub r: f32,
 }
 
+/// On one line: `KalmanNoise { q: .., r: .. }`.
+impl crate::RustLiteral for KalmanNoise {
+    const RUST_TYPES: &'static [&'static str] = &["KalmanNoise"];
+
+    fn write_rust(&self, w: &mut dyn core::fmt::Write, _: crate::Indent<'_>) -> core::fmt::Result {
+        write!(w, "KalmanNoise {{ q: {:?}, r: {:?} }}", self.q, self.r)
+    }
+}
+
 impl Gains for KalmanNoise {
     /// `q` and `r` geometrically.
     fn interpolate(&self, other: &Self, w: f32) -> Self {

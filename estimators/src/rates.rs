@@ -4,14 +4,24 @@
 //! Gains tuned at some packet rates do not travel to others: [`BankConfig::NAV440`]'s own
 //! gains, tuned on 100, 50, 25 and 20 Hz captures, are worse than the paper's at 10 Hz and
 //! below (docs/PRESETS.md, "Below 20 Hz", printed by
-//! `cargo test --release -p host-tests --test preset_rates -- --nocapture`). The NAV440 sends at 100, 50, 25, 20, 10, 5, 4 or 2 Hz (packet rate divider 1,
-//! 2, 4, 5, 10, 20, 25 or 50), so the preset is a table of [`RateGains`], one band of sample
-//! periods each: 100-20 Hz run [`BankConfig::NAV440`]'s gains, 10 Hz, 5 Hz (and 4 Hz) and
-//! 2 Hz each run gains tuned on synthetic motions and noise levels at that rate (not the
-//! bundled test captures), the paper's where tuning did not beat them by 1 %.
+//! `cargo test --release -p host-tests --test preset_rates -- --nocapture`). The NAV440 sends
+//! at 100, 50, 25, 20, 10, 5, 4 or 2 Hz (packet rate divider 1, 2, 4, 5, 10, 20, 25 or 50), so
+//! the preset is a table of [`RateGains`], one band of sample periods each: 100-20 Hz run
+//! [`BankConfig::NAV440`]'s gains, 10 Hz, 5 Hz (and 4 Hz) and 2 Hz each run gains tuned on
+//! synthetic motions and noise levels at that rate (not the bundled test captures), the
+//! paper's where tuning did not beat them by 1 %.
+//!
+//! The tuned gains are the tables below: one per family (a column of the paper's tables),
+//! one row per band. They are what [`RateGains::write_tables`] prints; a test checks that the
+//! tables in this file are its output for [`BankConfig::NAV440_RATES`]. Every band runs the
+//! AVE's `deltahat` law of [`AVE_DEFAULT`] and the tracker's `r` of [`KF_DEFAULT`]; a family
+//! the tables do not list runs the paper's gains ([`BankGains::PAPER_VELOCITY`],
+//! [`BankGains::PAPER_ACCELERATION`]).
 
-use crate::bank::{BankConfig, BankGains};
-use crate::{AveConfig, DeltaMode, EdConfig, IloConfig, KalmanNoise};
+use crate::bank::{BankConfig, BankGains, KF_DEFAULT};
+use crate::presets::AVE_DEFAULT;
+use crate::{AveConfig, EdConfig, IloConfig, KalmanNoise};
+use core::fmt::{self, Write};
 
 /// One band of the shipped preset's rate table ([`BankConfig::NAV440_RATES`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -35,32 +45,7 @@ impl BankConfig {
     /// the others were printed by
     /// `cargo test --release -p host-tests --test preset_rates -- --ignored --nocapture`
     /// (docs/PRESETS.md, "Below 20 Hz").
-    pub const NAV440_RATES: [RateGains; 4] = [
-        RateGains {
-            tuned_period_s: [0.01, 0.05],
-            below_period_s: 0.075,
-            velocity: BankGains::NAV440_VELOCITY,
-            acceleration: BankGains::NAV440_ACCELERATION,
-        },
-        RateGains {
-            tuned_period_s: [0.1, 0.1],
-            below_period_s: 0.15,
-            velocity: VELOCITY_10HZ,
-            acceleration: ACCELERATION_10HZ,
-        },
-        RateGains {
-            tuned_period_s: [0.2, 0.2],
-            below_period_s: 0.35,
-            velocity: VELOCITY_5HZ,
-            acceleration: ACCELERATION_5HZ,
-        },
-        RateGains {
-            tuned_period_s: [0.5, 0.5],
-            below_period_s: f32::INFINITY,
-            velocity: VELOCITY_2HZ,
-            acceleration: ACCELERATION_2HZ,
-        },
-    ];
+    pub const NAV440_RATES: [RateGains; BANDS] = [band(0), band(1), band(2), band(3)];
 
     /// The entry of [`BankConfig::NAV440_RATES`] whose band holds `sample_period_s` (s): the
     /// first whose `below_period_s` exceeds it; the last for a longer (or non-finite) period.
@@ -97,220 +82,258 @@ impl BankConfig {
     }
 }
 
-/// Velocity gains at 10 Hz.
-const VELOCITY_10HZ: BankGains = BankGains {
-    ave: AveConfig {
-        k: 15.901477,
-        gamma1: 2527.9377,
-        delta: DeltaMode::Leaky { sigma: 0.1 },
-    },
-    ilo: [
-        IloConfig {
-            k1: 0.99963784,
-            l: 3.3495007,
-            k2: 0.18083054,
-        },
-        IloConfig {
-            k1: 0.99874496,
-            l: 0.9821319,
-            k2: 0.2513233,
-        },
-        IloConfig {
-            k1: 0.9984375,
-            l: 0.51490784,
-            k2: 0.24682654,
-        },
-    ],
-    ad_t: 0.01,
-    ed: EdConfig {
-        lambda: 41.933903,
-        alpha: 792.0185,
-    },
-    kf: KalmanNoise {
-        q: 865964.3,
-        r: 0.01,
-    },
-};
+/// The number of bands of [`BankConfig::NAV440_RATES`].
+const BANDS: usize = 4;
 
-/// Acceleration gains at 10 Hz.
-const ACCELERATION_10HZ: BankGains = BankGains {
-    ave: AveConfig {
-        k: 3907.8513,
-        gamma1: 41282.277,
-        delta: DeltaMode::Leaky { sigma: 0.1 },
-    },
-    ilo: [
-        IloConfig {
-            k1: 0.99986583,
-            l: 20.535536,
-            k2: 0.03770592,
-        },
-        IloConfig {
-            k1: 0.9964557,
-            l: 2.7176259,
-            k2: 0.03758118,
-        },
-        IloConfig {
-            k1: 0.9964763,
-            l: 2.7924683,
-            k2: 0.04329888,
-        },
-    ],
-    ad_t: 0.1,
-    ed: EdConfig {
-        lambda: 64.92697,
-        alpha: 1898.2759,
-    },
-    kf: KalmanNoise {
-        q: 562341.3,
-        r: 0.01,
-    },
-};
+/// Band `i` of [`BankConfig::NAV440_RATES`], from the tables.
+const fn band(i: usize) -> RateGains {
+    let (tuned_period_s, below_period_s) = PERIODS[i];
+    RateGains {
+        tuned_period_s,
+        below_period_s,
+        velocity: band_gains(i, 0),
+        acceleration: band_gains(i, 1),
+    }
+}
 
-/// Velocity gains at 5 Hz (and 4 Hz).
-const VELOCITY_5HZ: BankGains = BankGains {
-    ave: AveConfig {
-        k: 8.100932,
-        gamma1: 492.2327,
-        delta: DeltaMode::Leaky { sigma: 0.1 },
-    },
-    ilo: [
-        IloConfig {
-            k1: 0.9997079,
-            l: 0.95763564,
-            k2: 0.017412001,
+/// The gains of half `half` (0: velocity, 1: acceleration) of band `i`, from the tables.
+#[allow(
+    clippy::needless_update,
+    reason = "a family the tables do not list runs the paper's gains"
+)]
+pub(crate) const fn band_gains(i: usize, half: usize) -> BankGains {
+    let (k, gamma1) = AVE[i][half];
+    let ilo = [ILO_VELOCITY, ILO_ACCELERATION][half][i];
+    let (lambda, alpha) = ED[i][half];
+    BankGains {
+        ave: AveConfig {
+            k,
+            gamma1,
+            ..AVE_DEFAULT
         },
-        IloConfig {
-            k1: 0.9999586,
-            l: 7.9813766,
-            k2: 0.044160113,
+        ilo: [ilo_config(ilo[0]), ilo_config(ilo[1]), ilo_config(ilo[2])],
+        ad_t: AD_T[i][half],
+        ed: EdConfig { lambda, alpha },
+        kf: KalmanNoise {
+            q: KF_Q[i][half],
+            ..KF_DEFAULT
         },
-        IloConfig {
-            k1: 0.99996984,
-            l: 9.791185,
-            k2: 0.04394129,
-        },
-    ],
-    ad_t: 0.01,
-    ed: EdConfig {
-        lambda: 35.588688,
-        alpha: 738.0498,
-    },
-    kf: KalmanNoise {
-        q: 1000000.0,
-        r: 0.01,
-    },
-};
+        ..[BankGains::PAPER_VELOCITY, BankGains::PAPER_ACCELERATION][half]
+    }
+}
 
-/// Acceleration gains at 5 Hz (and 4 Hz).
-const ACCELERATION_5HZ: BankGains = BankGains {
-    ave: AveConfig {
-        k: 976.244,
-        gamma1: 12217.426,
-        delta: DeltaMode::Leaky { sigma: 0.1 },
-    },
-    ilo: [
-        IloConfig {
-            k1: 0.99934953,
-            l: 3.0830474,
-            k2: 0.013154294,
-        },
-        IloConfig {
-            k1: 0.9999984,
-            l: 92.38243,
-            k2: 0.116386585,
-        },
-        IloConfig {
-            k1: 0.99999833,
-            l: 102.395515,
-            k2: 0.12551305,
-        },
-    ],
-    ad_t: 0.1,
-    ed: EdConfig {
-        lambda: 67.739586,
-        alpha: 34.97904,
-    },
-    kf: KalmanNoise {
-        q: 1000000.0,
-        r: 0.01,
-    },
-};
+/// An ILO's gains from a table's `(k1, l, k2)`.
+const fn ilo_config((k1, l, k2): (f32, f32, f32)) -> IloConfig {
+    IloConfig { k1, l, k2 }
+}
 
-/// Velocity gains at 2 Hz.
-const VELOCITY_2HZ: BankGains = BankGains {
-    ave: AveConfig {
-        k: 5.4977474,
-        gamma1: 1101.8396,
-        delta: DeltaMode::Leaky { sigma: 0.1 },
-    },
-    ilo: [
-        IloConfig {
-            k1: 0.99962264,
-            l: 0.28474265,
-            k2: 0.3196953,
-        },
-        IloConfig {
-            k1: 0.9,
-            l: 5.0,
-            k2: 10.0,
-        },
-        IloConfig {
-            k1: 0.7,
-            l: 1.0,
-            k2: 20.0,
-        },
-    ],
-    ad_t: 0.01,
-    ed: EdConfig {
-        lambda: 25.610422,
-        alpha: 11.747248,
-    },
-    kf: KalmanNoise {
-        q: 1000000.0,
-        r: 0.01,
-    },
-};
+impl RateGains {
+    /// Writes the tables of `bands` as they stand in this module's source (what
+    /// [`BankConfig::NAV440_RATES`] is built from): one per family, one row per band, each
+    /// gain with `{:?}` (its shortest form that reads back to the same `f32`), each row
+    /// labelled with the rates its gains were tuned at. How a re-tuned table is printed.
+    ///
+    /// An error, and nothing written, when a band cannot be written in the tables: its AVE
+    /// does not run [`AVE_DEFAULT`]'s `deltahat` law, or its tracker not [`KF_DEFAULT`]'s `r`.
+    pub fn write_tables(bands: &[RateGains], w: &mut dyn Write) -> fmt::Result {
+        let writable = |g: &BankGains| g.ave.delta == AVE_DEFAULT.delta && g.kf.r == KF_DEFAULT.r;
+        if !bands
+            .iter()
+            .all(|b| writable(&b.velocity) && writable(&b.acceleration))
+        {
+            return Err(fmt::Error);
+        }
+        let doc = "/// Each band's `(tuned_period_s, below_period_s)`, s (see [`RateGains`]).";
+        write_table(w, bands, doc, "PERIODS", "([f32; 2], f32)", |w, b| {
+            let [lo, hi] = b.tuned_period_s;
+            match b.below_period_s {
+                f32::INFINITY => write!(w, "([{lo:?}, {hi:?}], f32::INFINITY)"),
+                below => write!(w, "([{lo:?}, {hi:?}], {below:?})"),
+            }
+        })?;
+        let doc = "/// AVE `(k, gamma1)`, `[velocity, acceleration]`.";
+        write_table(w, bands, doc, "AVE", "[(f32, f32); 2]", |w, b| {
+            let (v, a) = (b.velocity.ave, b.acceleration.ave);
+            write!(
+                w,
+                "[({:?}, {:?}), ({:?}, {:?})]",
+                v.k, v.gamma1, a.k, a.gamma1
+            )
+        })?;
+        let doc = "/// ILO1, ILO2, ILO3 `(k1, l, k2)` of the velocity half.";
+        write_table(
+            w,
+            bands,
+            doc,
+            "ILO_VELOCITY",
+            "[(f32, f32, f32); 3]",
+            |w, b| write_ilo(w, &b.velocity.ilo),
+        )?;
+        let doc = "/// ILO1, ILO2, ILO3 `(k1, l, k2)` of the acceleration half.";
+        write_table(
+            w,
+            bands,
+            doc,
+            "ILO_ACCELERATION",
+            "[(f32, f32, f32); 3]",
+            |w, b| write_ilo(w, &b.acceleration.ilo),
+        )?;
+        let doc = "/// AD time constant `T`, s, `[velocity, acceleration]`.";
+        write_table(w, bands, doc, "AD_T", "[f32; 2]", |w, b| {
+            write!(w, "[{:?}, {:?}]", b.velocity.ad_t, b.acceleration.ad_t)
+        })?;
+        let doc = "/// ED `(lambda, alpha)`, `[velocity, acceleration]`.";
+        write_table(w, bands, doc, "ED", "[(f32, f32); 2]", |w, b| {
+            let (v, a) = (b.velocity.ed, b.acceleration.ed);
+            write!(
+                w,
+                "[({:?}, {:?}), ({:?}, {:?})]",
+                v.lambda, v.alpha, a.lambda, a.alpha
+            )
+        })?;
+        let doc = "/// Kalman tracker `q`, deg^2/s^5, `[velocity, acceleration]`.";
+        write_table(w, bands, doc, "KF_Q", "[f32; 2]", |w, b| {
+            write!(w, "[{:?}, {:?}]", b.velocity.kf.q, b.acceleration.kf.q)
+        })
+    }
+}
 
-/// Acceleration gains at 2 Hz.
-const ACCELERATION_2HZ: BankGains = BankGains {
-    ave: AveConfig {
-        k: 1980.9358,
-        gamma1: 13907.01,
-        delta: DeltaMode::Leaky { sigma: 0.1 },
-    },
-    ilo: [
-        IloConfig {
-            k1: 0.99998593,
-            l: 14.489442,
-            k2: 0.009862104,
-        },
-        IloConfig {
-            k1: 0.9996201,
-            l: 3.6620657,
-            k2: 0.0036763593,
-        },
-        IloConfig {
-            k1: 0.9996201,
-            l: 3.6620657,
-            k2: 0.0036763593,
-        },
-    ],
-    ad_t: 0.15399265,
-    ed: EdConfig {
-        lambda: 23.12775,
-        alpha: 18.797533,
-    },
-    kf: KalmanNoise {
-        q: 1000000.0,
-        r: 0.01,
-    },
-};
+/// One table of [`RateGains::write_tables`]: its doc line, its declaration, and one row per
+/// band (`row` writes the row's value), each labelled with the band's tuning rates; a blank
+/// line after all but the last table (`KF_Q`).
+fn write_table(
+    w: &mut dyn Write,
+    bands: &[RateGains],
+    doc: &str,
+    name: &str,
+    ty: &str,
+    row: impl Fn(&mut dyn Write, &RateGains) -> fmt::Result,
+) -> fmt::Result {
+    writeln!(
+        w,
+        "{doc}\n#[rustfmt::skip]\nconst {name}: [{ty}; BANDS] = ["
+    )?;
+    for b in bands {
+        w.write_str("    ")?;
+        row(w, b)?;
+        let [fast, slow] = b.tuned_period_s.map(|p| 1.0 / p);
+        if fast == slow {
+            writeln!(w, ", // {fast:.0} Hz")?;
+        } else {
+            writeln!(w, ", // {fast:.0}-{slow:.0} Hz")?;
+        }
+    }
+    w.write_str(if name == "KF_Q" { "];\n" } else { "];\n\n" })
+}
+
+/// An ILO row of [`RateGains::write_tables`]: `[(k1, l, k2), ..]`.
+fn write_ilo(w: &mut dyn Write, ilo: &[IloConfig; 3]) -> fmt::Result {
+    w.write_str("[")?;
+    for (i, c) in ilo.iter().enumerate() {
+        let sep = if i == 0 { "" } else { ", " };
+        write!(w, "{sep}({:?}, {:?}, {:?})", c.k1, c.l, c.k2)?;
+    }
+    w.write_str("]")
+}
+
+/// Each band's `(tuned_period_s, below_period_s)`, s (see [`RateGains`]).
+#[rustfmt::skip]
+const PERIODS: [([f32; 2], f32); BANDS] = [
+    ([0.01, 0.05], 0.075), // 100-20 Hz
+    ([0.1, 0.1], 0.15), // 10 Hz
+    ([0.2, 0.2], 0.35), // 5 Hz
+    ([0.5, 0.5], f32::INFINITY), // 2 Hz
+];
+
+/// AVE `(k, gamma1)`, `[velocity, acceleration]`.
+#[rustfmt::skip]
+const AVE: [[(f32, f32); 2]; BANDS] = [
+    [(43.09086, 1860.1345), (452.36716, 14271.597)], // 100-20 Hz
+    [(15.901477, 2527.9377), (3907.8513, 41282.277)], // 10 Hz
+    [(8.100932, 492.2327), (976.244, 12217.426)], // 5 Hz
+    [(5.4977474, 1101.8396), (1980.9358, 13907.01)], // 2 Hz
+];
+
+/// ILO1, ILO2, ILO3 `(k1, l, k2)` of the velocity half.
+#[rustfmt::skip]
+const ILO_VELOCITY: [[(f32, f32, f32); 3]; BANDS] = [
+    [(0.9975162, 0.13922282, 45.476727), (0.9988422, 0.81672835, 0.072374955), (0.9975247, 0.29125896, 0.1364848)], // 100-20 Hz
+    [(0.99963784, 3.3495007, 0.18083054), (0.99874496, 0.9821319, 0.2513233), (0.9984375, 0.51490784, 0.24682654)], // 10 Hz
+    [(0.9997079, 0.95763564, 0.017412001), (0.9999586, 7.9813766, 0.044160113), (0.99996984, 9.791185, 0.04394129)], // 5 Hz
+    [(0.99962264, 0.28474265, 0.3196953), (0.9, 5.0, 10.0), (0.7, 1.0, 20.0)], // 2 Hz
+];
+
+/// ILO1, ILO2, ILO3 `(k1, l, k2)` of the acceleration half.
+#[rustfmt::skip]
+const ILO_ACCELERATION: [[(f32, f32, f32); 3]; BANDS] = [
+    [(0.9987728, 2.9622777, 0.026748411), (0.8708157, 1.530036, 3.4881077), (0.99987406, 574.7061, 1.5084013)], // 100-20 Hz
+    [(0.99986583, 20.535536, 0.03770592), (0.9964557, 2.7176259, 0.03758118), (0.9964763, 2.7924683, 0.04329888)], // 10 Hz
+    [(0.99934953, 3.0830474, 0.013154294), (0.9999984, 92.38243, 0.116386585), (0.99999833, 102.395515, 0.12551305)], // 5 Hz
+    [(0.99998593, 14.489442, 0.009862104), (0.9996201, 3.6620657, 0.0036763593), (0.9996201, 3.6620657, 0.0036763593)], // 2 Hz
+];
+
+/// AD time constant `T`, s, `[velocity, acceleration]`.
+#[rustfmt::skip]
+const AD_T: [[f32; 2]; BANDS] = [
+    [0.011006941, 0.09932768], // 100-20 Hz
+    [0.01, 0.1], // 10 Hz
+    [0.01, 0.1], // 5 Hz
+    [0.01, 0.15399265], // 2 Hz
+];
+
+/// ED `(lambda, alpha)`, `[velocity, acceleration]`.
+#[rustfmt::skip]
+const ED: [[(f32, f32); 2]; BANDS] = [
+    [(26.93642, 873.99744), (28.747272, 6858.6904)], // 100-20 Hz
+    [(41.933903, 792.0185), (64.92697, 1898.2759)], // 10 Hz
+    [(35.588688, 738.0498), (67.739586, 34.97904)], // 5 Hz
+    [(25.610422, 11.747248), (23.12775, 18.797533)], // 2 Hz
+];
+
+/// Kalman tracker `q`, deg^2/s^5, `[velocity, acceleration]`.
+#[rustfmt::skip]
+const KF_Q: [[f32; 2]; BANDS] = [
+    [421696.5, 316227.78], // 100-20 Hz
+    [865964.3, 562341.3], // 10 Hz
+    [1000000.0, 1000000.0], // 5 Hz
+    [1000000.0, 1000000.0], // 2 Hz
+];
 
 #[cfg(test)]
 mod tests {
+    extern crate std;
     use super::*;
-    use crate::PaperBank;
+    use crate::{DeltaMode, PaperBank};
+    use std::string::String;
+
+    /// The tables in this file are [`RateGains::write_tables`]' output for the bands they
+    /// build, to the byte: every gain reads back from its `{:?}` form, and a re-tuned table is
+    /// pasted from the printer, not edited by hand.
+    #[test]
+    fn the_tables_are_what_write_tables_prints() {
+        let mut printed = String::new();
+        RateGains::write_tables(&BankConfig::NAV440_RATES, &mut printed).unwrap();
+        assert_eq!(printed.matches("#[rustfmt::skip]").count(), 7);
+        assert!(
+            include_str!("rates.rs").contains(&printed),
+            "rates.rs does not hold the printed tables:\n{printed}"
+        );
+    }
+
+    /// A band the tables cannot hold (another `deltahat` law, another tracker `r`) is refused,
+    /// with nothing written.
+    #[test]
+    fn write_tables_refuses_what_the_tables_cannot_hold() {
+        let mut paper_law = BankConfig::NAV440_RATES;
+        paper_law[1].velocity.ave.delta = DeltaMode::Paper;
+        let mut other_r = BankConfig::NAV440_RATES;
+        other_r[2].acceleration.kf.r = 0.5;
+        for bands in [paper_law, other_r] {
+            let mut printed = String::new();
+            assert!(RateGains::write_tables(&bands, &mut printed).is_err());
+            assert!(printed.is_empty());
+        }
+    }
 
     /// Every NAV440 packet rate (divider 1, 2, 4, 5, 10, 20, 25, 50: NAV440-PROTOCOL.md) runs
     /// the entry tuned at it or, for 25 and 20 Hz, on it (the first entry's family), and 4 Hz

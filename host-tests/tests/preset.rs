@@ -4,7 +4,8 @@
 //!   `cargo test --release -p host-tests --test preset -- --ignored --nocapture print_nav440_preset`
 //!   tunes one set of gains for a family of synthetic motions and noise levels ([`family`]:
 //!   `nav440 synth` motions, none of them a bundled capture with its noise) and prints the
-//!   `BankGains` literals pasted into `estimators/src/bank.rs`.
+//!   rate tables of `estimators/src/rates.rs` with these gains as their first band
+//!   (`RateGains::write_tables`), to paste there.
 //! * `nav440_beats_paper_on_the_bundled_captures_but_for_the_listed_cells`: on the bundled
 //!   captures, at the paper's two noise levels, the MSE of every column (7 velocity, 7
 //!   acceleration) with `BankConfig::NAV440` is below the MSE with `BankConfig::PAPER` (both
@@ -15,9 +16,8 @@
 //!   references are independent of the code under test: the motion's analytic rate, and the
 //!   paper's AVE on that rate for acceleration.
 
-use estimators::{BankConfig, BankGains, Hold};
+use estimators::{BankConfig, Hold, RateGains};
 use host_tests::data;
-use nav440_cli::gains::bank_gains_literal;
 use nav440_cli::motion::ProfileKind;
 use nav440_cli::optim::Method;
 use nav440_cli::paper::COLUMNS;
@@ -47,12 +47,6 @@ fn family() -> Vec<PresetCase> {
     synth_family(&motions, &[0.01, 0.1, 0.5]).unwrap()
 }
 
-/// `pub const NAME: Self = BankGains { .. };` for bank.rs's `impl BankGains` (the printer of
-/// `nav440 tune --rust`).
-fn literal(name: &str, g: &BankGains) -> String {
-    format!("pub const {name}: Self = {};\n", bank_gains_literal(g, ""))
-}
-
 #[test]
 #[ignore = "produces the NAV440 preset (minutes, release): cargo test --release -p host-tests --test preset -- --ignored --nocapture"]
 fn print_nav440_preset() {
@@ -76,8 +70,12 @@ fn print_nav440_preset() {
     println!("  velocity     {:?}", cost[0]);
     println!("  acceleration {:?}", cost[1]);
     print!("{report}");
-    println!("{}", literal("NAV440_VELOCITY", &cfg.velocity));
-    println!("{}", literal("NAV440_ACCELERATION", &cfg.acceleration));
+    let mut bands = BankConfig::NAV440_RATES;
+    bands[0].velocity = cfg.velocity;
+    bands[0].acceleration = cfg.acceleration;
+    let mut tables = String::new();
+    RateGains::write_tables(&bands, &mut tables).unwrap();
+    println!("{tables}");
 }
 
 /// The bundled captures scored (the corrupt and time-fault captures are fault-handling tests:

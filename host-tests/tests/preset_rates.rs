@@ -7,14 +7,15 @@
 //! * `print_nav440_rate_presets` (ignored; how the table was produced):
 //!   `cargo test --release -p host-tests --test preset_rates -- --ignored --nocapture`
 //!   tunes, for each rate, one set of gains on a family of synthetic motions at that rate
-//!   ([`family`]) and prints the `RateGains` entries pasted into `estimators/src/rates.rs`.
+//!   ([`family`]) and prints the tables of `estimators/src/rates.rs` with these gains as the
+//!   bands below 20 Hz (`RateGains::write_tables`), to paste there.
 //! * `rate_presets_beat_the_100_hz_gains_below_20_hz`: on other synthetic motions at each
 //!   rate, scored as `nav440 tune` scores (mean of noise seeds 1-3, references independent of
 //!   the code under test: the motion's analytic rate, the paper's AVE on it for acceleration),
 //!   each entry is within 2 % of PAPER in every column and better than the 20-100 Hz gains.
 
-use estimators::BankConfig;
-use nav440_cli::gains::{bank_gains_literal, GainsFile};
+use estimators::{BankConfig, RateGains};
+use nav440_cli::gains::GainsFile;
 use nav440_cli::motion::ProfileKind;
 use nav440_cli::optim::Method;
 use nav440_cli::paper::COLUMNS;
@@ -81,7 +82,8 @@ fn gm_ratios(
 #[test]
 #[ignore = "produces BankConfig::NAV440_RATES (minutes, release): cargo test --release -p host-tests --test preset_rates -- --ignored --nocapture"]
 fn print_nav440_rate_presets() {
-    for rate_hz in RATES {
+    let mut bands = BankConfig::NAV440_RATES;
+    for (band, rate_hz) in bands[1..].iter_mut().zip(RATES) {
         let cases = family(rate_hz);
         let t = std::time::Instant::now();
         // As `BankConfig::NAV440`: each family minimises its worst MSE ratio to the paper's
@@ -123,13 +125,13 @@ fn print_nav440_rate_presets() {
         print!("{report}");
         println!("  geometric mean ratio of the tuned gains to DEFAULT's: {gm:?}");
         println!("  paper's gains kept: {kept:?}");
-        println!(
-            "const VELOCITY_{rate_hz}HZ: BankGains = {};\nconst ACCELERATION_{rate_hz}HZ: BankGains = {};\nRateGains {{\n    tuned_period_s: {},\n    below_period_s: ?,\n    velocity: VELOCITY_{rate_hz}HZ,\n    acceleration: ACCELERATION_{rate_hz}HZ,\n}},",
-            bank_gains_literal(&cfg.velocity, ""),
-            bank_gains_literal(&cfg.acceleration, ""),
-            1.0 / f64::from(rate_hz),
-        );
+        assert_eq!(band.tuned_period_s, [1.0 / rate_hz as f32; 2]);
+        band.velocity = cfg.velocity;
+        band.acceleration = cfg.acceleration;
     }
+    let mut tables = String::new();
+    RateGains::write_tables(&bands, &mut tables).unwrap();
+    println!("{tables}");
 }
 
 /// The test motions at `rate_hz`: fig5 of shape seed 21 (30 s), spin (20 s) and sin5 (10 s),

@@ -1,39 +1,11 @@
-//! The configuration of a bank: [`BankConfig`](crate::BankConfig) and the gains of its halves, [`BankGains`].
+//! The configuration of a bank: [`BankConfig`](crate::BankConfig), and the named gain sets of
+//! its halves ([`BankGains`], declared with the family list in `bank/paper.rs`).
 
+use super::BankGains;
 use crate::presets::*;
-use crate::{AveConfig, EdConfig, EdScheme, Hold, IloConfig, KalmanNoise};
-
-/// Gains of one half of the bank: the velocity estimators, or the acceleration series (where
-/// both stages of a series get the same gains). One field per family of the paper bank
-/// ([`crate::FAMILIES`]; [`crate::Family::get`] reads a family's gains from here).
-#[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
-pub struct BankGains {
-    /// AVE.
-    pub ave: AveConfig,
-    /// ILO1, ILO2, ILO3 (learning delay `tau = h`, `D = 1`).
-    pub ilo: [IloConfig; 3],
-    /// AD time constant `T`, s.
-    pub ad_t: f32,
-    /// Levant ED.
-    pub ed: EdConfig,
-    /// Kalman tracker noise (the velocity column uses the velocity half's tracker, the
-    /// acceleration column the acceleration half's).
-    pub kf: KalmanNoise,
-}
+use crate::{EdScheme, Hold, KalmanNoise};
 
 impl BankGains {
-    /// The paper's velocity set: AVE (500, 20000), Table 2 ILOs, AD `T = 0.01`, ED (700, 770),
-    /// and the default tracker noise.
-    pub const PAPER_VELOCITY: Self = Self {
-        ave: AVE_PAPER,
-        ilo: [ILO1_TABLE2, ILO2_TABLE2, ILO3_TABLE2],
-        ad_t: AD_VELOCITY_T,
-        ed: ED_PAPER,
-        kf: KF_DEFAULT,
-    };
     /// [`Self::PAPER_VELOCITY`] with the product's AVE law ([`AVE_DEFAULT`], leaky deltahat).
     pub const DEFAULT_VELOCITY: Self = Self {
         ave: AVE_DEFAULT,
@@ -44,129 +16,15 @@ impl BankGains {
         ave: AVE_DEFAULT,
         ..Self::PAPER_ACCELERATION
     };
-    /// Velocity gains of [`BankConfig::NAV440`] (see there how they were produced: printed by
+    /// Velocity gains of [`BankConfig::NAV440`]: the first band of the rate table
+    /// ([`BankConfig::NAV440_RATES`], `estimators/src/rates.rs`; see [`BankConfig::NAV440`]
+    /// how they were produced: printed by
     /// `cargo test --release -p host-tests --test preset -- --ignored --nocapture`). The AVE
     /// keeps the leaky `deltahat` law of [`AVE_DEFAULT`]; each ILO was tuned to beat its own
     /// paper preset, so ILO1-3 differ; the tracker's `q/r` is what was tuned.
-    pub const NAV440_VELOCITY: Self = Self {
-        ave: AveConfig {
-            k: 43.09086,
-            gamma1: 1860.1345,
-            ..AVE_DEFAULT
-        },
-        ilo: [
-            IloConfig {
-                k1: 0.9975162,
-                l: 0.13922282,
-                k2: 45.476727,
-            },
-            IloConfig {
-                k1: 0.9988422,
-                l: 0.81672835,
-                k2: 0.072374955,
-            },
-            IloConfig {
-                k1: 0.9975247,
-                l: 0.29125896,
-                k2: 0.1364848,
-            },
-        ],
-        ad_t: 0.011006941,
-        ed: EdConfig {
-            lambda: 26.93642,
-            alpha: 873.99744,
-        },
-        kf: KalmanNoise {
-            q: 421696.5,
-            r: 0.01,
-        },
-    };
+    pub const NAV440_VELOCITY: Self = crate::rates::band_gains(0, 0);
     /// Acceleration gains of [`BankConfig::NAV440`] (both stages of each series).
-    pub const NAV440_ACCELERATION: Self = Self {
-        ave: AveConfig {
-            k: 452.36716,
-            gamma1: 14271.597,
-            ..AVE_DEFAULT
-        },
-        ilo: [
-            IloConfig {
-                k1: 0.9987728,
-                l: 2.9622777,
-                k2: 0.026748411,
-            },
-            IloConfig {
-                k1: 0.8708157,
-                l: 1.530036,
-                k2: 3.4881077,
-            },
-            IloConfig {
-                k1: 0.99987406,
-                l: 574.7061,
-                k2: 1.5084013,
-            },
-        ],
-        ad_t: 0.09932768,
-        ed: EdConfig {
-            lambda: 28.747272,
-            alpha: 6858.6904,
-        },
-        kf: KalmanNoise {
-            q: 316227.78,
-            r: 0.01,
-        },
-    };
-    /// The paper's acceleration set: AVE-AVE, Table 4 ILO-ILO, AD-AD `T = 0.1`, ED-ED.
-    pub const PAPER_ACCELERATION: Self = Self {
-        ave: AVE_PAPER,
-        ilo: [ILO1_TABLE4, ILO2_TABLE4, ILO3_TABLE4],
-        ad_t: AD_ACCELERATION_T,
-        ed: ED_PAPER,
-        kf: KF_DEFAULT,
-    };
-}
-
-impl BankGains {
-    /// The names [`Self::write_rust`] uses, for a `use estimators::{..}` line.
-    pub const RUST_TYPES: [&'static str; 5] = [
-        "AveConfig",
-        "DeltaMode",
-        "EdConfig",
-        "IloConfig",
-        "KalmanNoise",
-    ];
-
-    /// Writes the Rust expression `BankGains { .. }` that builds these gains: every field
-    /// spelled out, each gain in its shortest round-trip form (`{:?}`), one field per line,
-    /// each line after the first indented by `indent`. What `nav440 tune --rust` writes for a
-    /// firmware, and how the shipped presets above are regenerated (see
-    /// [`BankConfig::NAV440`]).
-    pub fn write_rust(&self, w: &mut dyn core::fmt::Write, indent: &str) -> core::fmt::Result {
-        let ilo = |c: &IloConfig| (c.k1, c.l, c.k2);
-        let [(a1, b1, c1), (a2, b2, c2), (a3, b3, c3)] = self.ilo.each_ref().map(ilo);
-        let i = indent;
-        write!(
-            w,
-            "BankGains {{\n\
-             {i}    ave: AveConfig {{ k: {:?}, gamma1: {:?}, delta: DeltaMode::{:?} }},\n\
-             {i}    ilo: [\n\
-             {i}        IloConfig {{ k1: {a1:?}, l: {b1:?}, k2: {c1:?} }},\n\
-             {i}        IloConfig {{ k1: {a2:?}, l: {b2:?}, k2: {c2:?} }},\n\
-             {i}        IloConfig {{ k1: {a3:?}, l: {b3:?}, k2: {c3:?} }},\n\
-             {i}    ],\n\
-             {i}    ad_t: {:?},\n\
-             {i}    ed: EdConfig {{ lambda: {:?}, alpha: {:?} }},\n\
-             {i}    kf: KalmanNoise {{ q: {:?}, r: {:?} }},\n\
-             {i}}}",
-            self.ave.k,
-            self.ave.gamma1,
-            self.ave.delta,
-            self.ad_t,
-            self.ed.lambda,
-            self.ed.alpha,
-            self.kf.q,
-            self.kf.r,
-        )
-    }
+    pub const NAV440_ACCELERATION: Self = crate::rates::band_gains(0, 1);
 }
 
 /// Default tracker noise (our choice, not the paper's): `r = 0.01 deg^2` (the paper's smaller

@@ -1,6 +1,6 @@
 //! The estimator banks shared by the firmware and the host CLI, each generated from one table
-//! by [`crate::estimator_bank!`]: [`PaperBank`] (the paper's 14 estimators, alias
-//! [`PaperBank`]) and [`ProductBank`] (one velocity and one acceleration estimator).
+//! by [`crate::estimator_bank!`]: [`PaperBank`] (the paper's 14 estimators) and
+//! [`ProductBank`] (one velocity and one acceleration estimator).
 
 mod config;
 mod input;

@@ -1,25 +1,43 @@
 //! [`PaperBank`](crate::PaperBank): the paper's 14 estimators.
 
-use super::{BankConfig, BankGains, Fed};
+use super::{BankConfig, Fed, KF_DEFAULT};
 use crate::kalman::{KalmanConfig, KalmanOutput, KalmanParams};
 use crate::presets::*;
 use crate::{
     AdFamily, AdParams, AveConfig, AveFamily, AveParams, ClosedForm, ConfigError, EdConfig,
-    EdFamily, EdParams, IloConfig, IloFamily, IloParams, KfFamily, Real, Series, SqrtFn, VelAcc,
+    EdFamily, EdParams, IloConfig, IloFamily, IloParams, KalmanNoise, KfFamily, Real, Series,
+    SqrtFn, VelAcc,
 };
 
-// The paper bank is defined by two tables: its families (the columns of the paper's
-// tables, each a `Family` next to its law) and, below, its rows (the laws it runs, each with
-// the channels it reports and how it takes a warm gain change). A family added to the list
-// needs its two channels and its rows in the table, and its gains in `BankGains`.
+// The paper bank is defined by two tables: its families with their gains (the columns of the
+// paper's tables, each a `Family` next to its law, and the field of `BankGains` that holds its
+// gains in one half of the bank) and, below, its rows (the laws it runs, each with the channels
+// it reports and how it takes a warm gain change). A family added to the list needs its two
+// channels and its rows in the table.
 crate::family::families! {
-    AveFamily,
-    IloFamily<0>,
-    IloFamily<1>,
-    IloFamily<2>,
-    AdFamily,
-    EdFamily,
-    KfFamily,
+    /// Gains of one half of the bank: the velocity estimators, or the acceleration series
+    /// (where both stages of a series get the same gains). One field per family of the paper
+    /// bank ([`crate::FAMILIES`]; [`crate::Family::get`] reads a family's gains from here).
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+    #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+    #[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
+    pub struct BankGains {
+        /// AVE.
+        ave: AveConfig = (AVE_PAPER, AVE_PAPER) => [AveFamily],
+        /// ILO1, ILO2, ILO3 (learning delay `tau = h`, `D = 1`).
+        ilo: [IloConfig; 3] = (
+            [ILO1_TABLE2, ILO2_TABLE2, ILO3_TABLE2],
+            [ILO1_TABLE4, ILO2_TABLE4, ILO3_TABLE4]
+        ) => [IloFamily<0>, IloFamily<1>, IloFamily<2>],
+        /// AD time constant `T`, s.
+        ad_t: f32 = (AD_VELOCITY_T, AD_ACCELERATION_T) => [AdFamily],
+        /// Levant ED.
+        ed: EdConfig = (ED_PAPER, ED_PAPER) => [EdFamily],
+        /// Kalman tracker noise (the velocity column uses the velocity half's tracker, the
+        /// acceleration column the acceleration half's).
+        kf: KalmanNoise = (KF_DEFAULT, KF_DEFAULT) => [KfFamily],
+    }
 }
 
 /// The names of the paper bank's families ([`FAMILIES`]), in column order: the velocity
