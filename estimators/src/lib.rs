@@ -81,7 +81,6 @@ pub mod adapter;
 pub mod adaptive;
 mod ave;
 mod bank;
-mod dd;
 mod ed;
 mod error;
 mod estimator;
@@ -115,7 +114,6 @@ pub use bank::{
     PaperOutput, PaperParams, PaperState, ProductBank, ProductChannel, ProductOutput,
     ProductParams, ProductState, Wrap, GAP_PERIODS, KF_DEFAULT, VELOCITY_NAMES,
 };
-pub use dd::{DdConfig, DdFamily, DdParams, DdState};
 pub use ed::{Ed, EdConfig, EdFamily, EdParams, EdScheme, EdState};
 pub use error::{ConfigError, SampleError};
 pub use estimator::{advance_by_steps, Estimator, Hold};

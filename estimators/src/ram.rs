@@ -50,11 +50,11 @@ pub const CLOSED_AD: (usize, usize) = (96, 184);
 /// `(f32, Fx)` of [`ClosedForm`]`<Series<IloParams<T, 1>, IloParams<T, 1>>>`.
 pub const CLOSED_ILO_ILO: (usize, usize) = (120, 232);
 /// `(f32, Fx)` of [`PaperParams`].
-pub const PAPER_PARAMS: (usize, usize) = (1116, 2272);
+pub const PAPER_PARAMS: (usize, usize) = (1092, 2224);
 /// `(f32, Fx)` of [`PaperState`].
-pub const PAPER_STATE: (usize, usize) = (288, 576);
+pub const PAPER_STATE: (usize, usize) = (264, 528);
 /// `(f32, Fx)` of the whole [`PaperBank`].
-pub const PAPER_BANK: (usize, usize) = (1488, 2936);
+pub const PAPER_BANK: (usize, usize) = (1440, 2840);
 /// `(f32, Fx)` of the [`ProductBank`].
 pub const PRODUCT_BANK: (usize, usize) = (240, 392);
 

@@ -37,8 +37,6 @@ crate::family::families! {
         /// Kalman tracker noise (the velocity column uses the velocity half's tracker, the
         /// acceleration column the acceleration half's).
         kf: KalmanNoise = (KF_DEFAULT, KF_DEFAULT) => [KfFamily],
-        /// DD.
-        dd: crate::DdConfig = (crate::DdConfig { t: 0.01 }, crate::DdConfig { t: 0.1 }) => [crate::DdFamily],
     }
 }
 
@@ -177,8 +175,6 @@ crate::estimator_bank! {
         EdV = "ed_v",
         /// Kalman tracker velocity, deg/s.
         KfV = "kf_v",
-        /// DD velocity.
-        DdV = "dd_v",
         /// AVE-AVE acceleration, deg/s^2.
         AveA = "ave_a",
         /// ILO1-ILO1 (Table 4) acceleration, deg/s^2.
@@ -193,8 +189,6 @@ crate::estimator_bank! {
         EdA = "ed_a",
         /// Kalman tracker acceleration, deg/s^2.
         KfA = "kf_a",
-        /// DD-DD acceleration.
-        DdA = "dd_a",
     }
     rows {
         // `warm replay(..)`: on a warm gain change the row is replayed over the recent
@@ -238,14 +232,6 @@ crate::estimator_bank! {
         /// Kalman tracker with the acceleration noise.
         kf_a: KalmanParams<T> = kalman(cfg, &cfg.acceleration, KalmanOutput::Acceleration) => [KfA = acceleration]
             warm replay(cfg.acceleration.kf);
-        /// DD.
-        dd_v: crate::DdParams<T> = crate::DdParams::new(&cfg.velocity.dd, cfg.h) => [DdV = output]
-            warm replay(cfg.velocity.dd);
-        /// DD-DD.
-        dd_a: Series<crate::DdParams<T>, crate::DdParams<T>> = {
-            let p = crate::DdParams::new(&cfg.acceleration.dd, cfg.h)?;
-            Ok(Series::new(p, p))
-        } => [DdA = output] warm replay(cfg.acceleration.dd);
     }
 }
 
