@@ -51,7 +51,8 @@
 //! 3. What the compiler and the tests then ask for: the sizes in `ram.rs` (compile-time
 //!    checked); the paper bank's CSV contract (`nav440_pipeline::csv::HEADER` and the tests
 //!    that spell out its columns); the committed `nav440 tune --rust` snippets
-//!    `host-tests/data/gains/*.rs`, regenerated. The tuned presets
+//!    `host-tests/data/gains/*.rs`, regenerated; the committed gain schedule, re-tuned (the
+//!    schedule tests hold every family to its tuned levels). The tuned presets
 //!    ([`crate::BankConfig::NAV440_RATES`], `rates.rs`) run the paper's gains for a family
 //!    their tables do not list.
 //!
