@@ -324,14 +324,15 @@ macro_rules! families {
         }
 
         impl BankGains {
-            /// The paper's velocity set: AVE (500, 20000), Table 2 ILOs, AD `T = 0.01`, ED
-            /// (700, 770), and the default tracker noise.
+            /// The paper's velocity set, the first paper value of each entry of the family
+            /// list: AVE (500, 20000), Table 2 ILOs, AD `T = 0.01`, ED (700, 770), and the
+            /// default tracker noise.
             pub const PAPER_VELOCITY: Self = Self {
                 $($field: $velocity,)+
             };
 
-            /// The paper's acceleration set: AVE-AVE, Table 4 ILO-ILO, AD-AD `T = 0.1`,
-            /// ED-ED, and the default tracker noise.
+            /// The paper's acceleration set, the second paper value of each entry: AVE-AVE,
+            /// Table 4 ILO-ILO, AD-AD `T = 0.1`, ED-ED, and the default tracker noise.
             pub const PAPER_ACCELERATION: Self = Self {
                 $($field: $acceleration,)+
             };
@@ -360,8 +361,8 @@ macro_rules! families {
             /// Writes the Rust expression `BankGains { .. }` that builds these gains: every
             /// field spelled out on its own line ([`RustLiteral`](crate::RustLiteral)), each
             /// line after the first indented by `indent`. What `nav440 tune --rust` writes for
-            /// a firmware, and how the shipped presets are regenerated (see
-            /// [`BankConfig::NAV440`](crate::BankConfig::NAV440)).
+            /// a firmware (the shipped presets are printed as tables instead:
+            /// [`RateGains::write_tables`](crate::RateGains::write_tables)).
             pub fn write_rust(
                 &self,
                 w: &mut dyn core::fmt::Write,

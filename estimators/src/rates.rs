@@ -143,87 +143,88 @@ impl RateGains {
         {
             return Err(fmt::Error);
         }
-        let doc = "/// Each band's `(tuned_period_s, below_period_s)`, s (see [`RateGains`]).";
-        write_table(w, bands, doc, "PERIODS", "([f32; 2], f32)", |w, b| {
-            let [lo, hi] = b.tuned_period_s;
-            match b.below_period_s {
-                f32::INFINITY => write!(w, "([{lo:?}, {hi:?}], f32::INFINITY)"),
-                below => write!(w, "([{lo:?}, {hi:?}], {below:?})"),
+        type Row<'a> = &'a dyn Fn(&mut dyn Write, &RateGains) -> fmt::Result;
+        let pairs = |w: &mut dyn Write, v: (f32, f32), a: (f32, f32)| {
+            write!(w, "[({:?}, {:?}), ({:?}, {:?})]", v.0, v.1, a.0, a.1)
+        };
+        let tables: [(&str, &str, &str, Row); 7] = [
+            (
+                "/// Each band's `(tuned_period_s, below_period_s)`, s (see [`RateGains`]).",
+                "PERIODS",
+                "([f32; 2], f32)",
+                &|w, b| {
+                    let [lo, hi] = b.tuned_period_s;
+                    match b.below_period_s {
+                        f32::INFINITY => write!(w, "([{lo:?}, {hi:?}], f32::INFINITY)"),
+                        below => write!(w, "([{lo:?}, {hi:?}], {below:?})"),
+                    }
+                },
+            ),
+            (
+                "/// AVE `(k, gamma1)`, `[velocity, acceleration]`.",
+                "AVE",
+                "[(f32, f32); 2]",
+                &|w, b| {
+                    let (v, a) = (b.velocity.ave, b.acceleration.ave);
+                    pairs(w, (v.k, v.gamma1), (a.k, a.gamma1))
+                },
+            ),
+            (
+                "/// ILO1, ILO2, ILO3 `(k1, l, k2)` of the velocity half.",
+                "ILO_VELOCITY",
+                "[(f32, f32, f32); 3]",
+                &|w, b| write_ilo(w, &b.velocity.ilo),
+            ),
+            (
+                "/// ILO1, ILO2, ILO3 `(k1, l, k2)` of the acceleration half.",
+                "ILO_ACCELERATION",
+                "[(f32, f32, f32); 3]",
+                &|w, b| write_ilo(w, &b.acceleration.ilo),
+            ),
+            (
+                "/// AD time constant `T`, s, `[velocity, acceleration]`.",
+                "AD_T",
+                "[f32; 2]",
+                &|w, b| write!(w, "[{:?}, {:?}]", b.velocity.ad_t, b.acceleration.ad_t),
+            ),
+            (
+                "/// ED `(lambda, alpha)`, `[velocity, acceleration]`.",
+                "ED",
+                "[(f32, f32); 2]",
+                &|w, b| {
+                    let (v, a) = (b.velocity.ed, b.acceleration.ed);
+                    pairs(w, (v.lambda, v.alpha), (a.lambda, a.alpha))
+                },
+            ),
+            (
+                "/// Kalman tracker `q`, deg^2/s^5, `[velocity, acceleration]`.",
+                "KF_Q",
+                "[f32; 2]",
+                &|w, b| write!(w, "[{:?}, {:?}]", b.velocity.kf.q, b.acceleration.kf.q),
+            ),
+        ];
+        for (i, (doc, name, ty, row)) in tables.into_iter().enumerate() {
+            if i > 0 {
+                w.write_str("\n")?;
             }
-        })?;
-        let doc = "/// AVE `(k, gamma1)`, `[velocity, acceleration]`.";
-        write_table(w, bands, doc, "AVE", "[(f32, f32); 2]", |w, b| {
-            let (v, a) = (b.velocity.ave, b.acceleration.ave);
-            write!(
+            writeln!(
                 w,
-                "[({:?}, {:?}), ({:?}, {:?})]",
-                v.k, v.gamma1, a.k, a.gamma1
-            )
-        })?;
-        let doc = "/// ILO1, ILO2, ILO3 `(k1, l, k2)` of the velocity half.";
-        write_table(
-            w,
-            bands,
-            doc,
-            "ILO_VELOCITY",
-            "[(f32, f32, f32); 3]",
-            |w, b| write_ilo(w, &b.velocity.ilo),
-        )?;
-        let doc = "/// ILO1, ILO2, ILO3 `(k1, l, k2)` of the acceleration half.";
-        write_table(
-            w,
-            bands,
-            doc,
-            "ILO_ACCELERATION",
-            "[(f32, f32, f32); 3]",
-            |w, b| write_ilo(w, &b.acceleration.ilo),
-        )?;
-        let doc = "/// AD time constant `T`, s, `[velocity, acceleration]`.";
-        write_table(w, bands, doc, "AD_T", "[f32; 2]", |w, b| {
-            write!(w, "[{:?}, {:?}]", b.velocity.ad_t, b.acceleration.ad_t)
-        })?;
-        let doc = "/// ED `(lambda, alpha)`, `[velocity, acceleration]`.";
-        write_table(w, bands, doc, "ED", "[(f32, f32); 2]", |w, b| {
-            let (v, a) = (b.velocity.ed, b.acceleration.ed);
-            write!(
-                w,
-                "[({:?}, {:?}), ({:?}, {:?})]",
-                v.lambda, v.alpha, a.lambda, a.alpha
-            )
-        })?;
-        let doc = "/// Kalman tracker `q`, deg^2/s^5, `[velocity, acceleration]`.";
-        write_table(w, bands, doc, "KF_Q", "[f32; 2]", |w, b| {
-            write!(w, "[{:?}, {:?}]", b.velocity.kf.q, b.acceleration.kf.q)
-        })
-    }
-}
-
-/// One table of [`RateGains::write_tables`]: its doc line, its declaration, and one row per
-/// band (`row` writes the row's value), each labelled with the band's tuning rates; a blank
-/// line after all but the last table (`KF_Q`).
-fn write_table(
-    w: &mut dyn Write,
-    bands: &[RateGains],
-    doc: &str,
-    name: &str,
-    ty: &str,
-    row: impl Fn(&mut dyn Write, &RateGains) -> fmt::Result,
-) -> fmt::Result {
-    writeln!(
-        w,
-        "{doc}\n#[rustfmt::skip]\nconst {name}: [{ty}; BANDS] = ["
-    )?;
-    for b in bands {
-        w.write_str("    ")?;
-        row(w, b)?;
-        let [fast, slow] = b.tuned_period_s.map(|p| 1.0 / p);
-        if fast == slow {
-            writeln!(w, ", // {fast:.0} Hz")?;
-        } else {
-            writeln!(w, ", // {fast:.0}-{slow:.0} Hz")?;
+                "{doc}\n#[rustfmt::skip]\nconst {name}: [{ty}; BANDS] = ["
+            )?;
+            for b in bands {
+                w.write_str("    ")?;
+                row(w, b)?;
+                let [fast, slow] = b.tuned_period_s.map(|p| 1.0 / p);
+                if fast == slow {
+                    writeln!(w, ", // {fast:.0} Hz")?;
+                } else {
+                    writeln!(w, ", // {fast:.0}-{slow:.0} Hz")?;
+                }
+            }
+            w.write_str("];\n")?;
         }
+        Ok(())
     }
-    w.write_str(if name == "KF_Q" { "];\n" } else { "];\n\n" })
 }
 
 /// An ILO row of [`RateGains::write_tables`]: `[(k1, l, k2), ..]`.

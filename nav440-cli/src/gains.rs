@@ -843,8 +843,7 @@ impl<'de> Deserialize<'de> for FamilyGains {
 }
 /// A Rust expression `BankGains { .. }` that builds `g` (every field spelled out; gains printed
 /// with `{:?}`, which round-trips f32 exactly), each line after the first indented by `indent`.
-/// Used by `nav440 tune --rust` and by the test that prints `BankGains::NAV440_*`
-/// (host-tests/tests/preset.rs).
+/// Used by `nav440 tune --rust`.
 pub fn bank_gains_literal(g: &BankGains, indent: &str) -> String {
     let mut s = String::new();
     let _ = g.write_rust(&mut s, indent);
