@@ -26,7 +26,9 @@ mod defmt_out;
 mod elf;
 mod firmware;
 mod package;
+mod pool;
 mod qemu;
+mod steps;
 mod unit;
 
 use clap::{Parser, Subcommand};
@@ -208,7 +210,7 @@ fn main() -> ExitCode {
             );
             Ok(())
         }),
-        Cmd::CiFirmware => firmware::ci_steps(),
+        Cmd::CiFirmware => firmware::ci_firmware(),
         Cmd::CiUnit { board } => firmware::ci_unit(board),
         Cmd::Soak { hours, seed } => firmware::soak(hours, seed),
         Cmd::Demo { board, capture } => firmware::demo(board, capture),
@@ -275,44 +277,100 @@ const CI_ENV: [(&str, &str); 3] = [
 ];
 
 fn ci() -> Result<(), String> {
-    let start = std::time::Instant::now();
     // CI machines have little free disk (a few GB). Every cargo below inherits these: no
     // incremental caches, and line tables instead of full debug info in the dev and release
     // profiles (backtraces keep their file and line; the firmware images' loaded sections and
-    // their defmt tables are unchanged). A run then leaves 7.2 GB in `target/`, not 11 GB.
+    // their defmt tables are unchanged).
     for (key, value) in CI_ENV {
         std::env::set_var(key, value);
     }
-    cargo(&["fmt", "--all", "--", "--check"])?;
-    cargo(&["clippy", "--all-targets", "--", "-D", "warnings"])?;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .ok_or("xtask lives in the workspace")?;
+    let steps = steps::Steps::new(root);
+    let r = ci_steps(&steps);
+    eprint!("{}", steps.table());
+    match &r {
+        Ok(()) => eprintln!("xtask ci: all checks passed"),
+        Err(e) => eprintln!("xtask ci: FAILED: {e}"),
+    }
+    r
+}
+
+/// The steps of `cargo xtask ci`, in order (docs/TESTS.md lists them with their budgets).
+fn ci_steps(steps: &steps::Steps) -> Result<(), String> {
+    steps.run("fmt", || cargo(&["fmt", "--all", "--", "--check"]))?;
+    steps.run("clippy host", || {
+        cargo(&["clippy", "--all-targets", "--", "-D", "warnings"])
+    })?;
+    steps.run("clippy thumb libraries", thumb_libraries)?;
+    steps.run("host tests", || cargo(&["test", "--all-targets"]))?;
+    steps.run("doc tests", || cargo(&["test", "--doc"]))?;
+    steps.run("release tests", release_tests)?;
+    // From here on every QEMU run is a job of the pool, queued as soon as its image is built,
+    // while this thread goes on building.
+    let pool = pool::Pool::new(firmware::POOL_THREADS, steps.clone())?;
+    let built = build_beside_the_pool(steps, &pool);
+    if built.is_err() {
+        pool.cancel();
+    }
+    let waited = steps.run("wait for the QEMU jobs", || pool.wait());
+    built.and(waited)
+}
+
+/// The steps that build while the pool runs the QEMU jobs.
+fn build_beside_the_pool(steps: &steps::Steps, pool: &pool::Pool) -> Result<(), String> {
+    firmware::ci_steps(pool)?;
+    steps.run("embassy example build", || firmware::embassy_jobs(pool))?;
+    steps.run("embassy-stm32", firmware::embassy_stm32)?;
+    steps.run("outside firmware", firmware::outside_firmware)?;
+    // Rustdoc of the host crates: broken intra-doc links and bad HTML fail the build.
+    steps.run("rustdoc", || {
+        run_env(
+            &cargo_bin(),
+            &["doc", "--no-deps"],
+            &[("RUSTDOCFLAGS", "-D warnings")],
+        )
+    })?;
+    // The libraries as users get them: examples, publishable packages, declared MSRV.
+    steps.run("package", package::package)?;
+    steps.run("msrv", package::msrv)?;
+    steps.run("size", firmware::size)
+}
+
+/// Clippy `-D warnings` of the no_std libraries on every thumb target, without and with their
+/// `defmt` feature: type-checking them for a target without `std` proves they are `no_std`
+/// (the firmware images, built for the same three targets, compile them to code).
+fn thumb_libraries() -> Result<(), String> {
+    let defmt: Vec<String> = NO_STD_CRATES.iter().map(|k| format!("{k}/defmt")).collect();
+    let defmt = defmt.join(",");
     for target in THUMB_TARGETS {
-        for krate in NO_STD_CRATES {
-            cargo(&[
-                "clippy", "-p", krate, "--target", target, "--", "-D", "warnings",
-            ])?;
-            cargo(&["build", "-p", krate, "--target", target, "--release"])?;
-            cargo(&[
-                "build",
-                "-p",
-                krate,
-                "--target",
-                target,
-                "--release",
-                "--features",
-                "defmt",
-            ])?;
+        for features in [None, Some(defmt.as_str())] {
+            let mut args = vec!["clippy", "--target", target];
+            for krate in NO_STD_CRATES {
+                args.extend(["-p", krate]);
+            }
+            if let Some(f) = features {
+                args.extend(["--features", f]);
+            }
+            args.extend(["--", "-D", "warnings"]);
+            cargo(&args)?;
         }
     }
-    cargo(&["test", "--all-targets"])?;
-    cargo(&["test", "--doc"])?;
-    // Release-mode tests: 10^6 random parser streams, constant-memory streaming of 200+ MiB,
-    // the 24 h run of the whole bank (f32 and fixed point, 8.64 M samples each), and the tuner's
-    // search against its exhaustive grid on slices of the bundled captures, the NAV440 preset
-    // against the paper's (at the bundled captures' rates and, its rate table, below 20 Hz),
-    // and the noise-adaptive bank on a noise switch.
+    Ok(())
+}
+
+/// The release-mode tests: 10^6 random parser streams, constant-memory streaming of 200+ MiB,
+/// the 24 h run of the whole bank (f32 and fixed point, 8.64 M samples each), and the tuner's
+/// search against its exhaustive grid on slices of the bundled captures, the NAV440 preset
+/// against the paper's (at the bundled captures' rates and, its rate table, below 20 Hz), and
+/// the noise-adaptive bank on a noise switch. Built with the profile of the `nav440` binary the
+/// firmware checks run (`fast-release`): one build serves both.
+fn release_tests() -> Result<(), String> {
     cargo(&[
         "test",
-        "--release",
+        "--profile",
+        firmware::NAV440_PROFILE,
         "-p",
         "nav440-proto",
         "-p",
@@ -336,22 +394,5 @@ fn ci() -> Result<(), String> {
         "--test",
         "schedule",
     ])?;
-    // Rustdoc of the host crates: broken intra-doc links and bad HTML fail the build.
-    run_env(
-        &cargo_bin(),
-        &["doc", "--no-deps"],
-        &[("RUSTDOCFLAGS", "-D warnings")],
-    )?;
-    // The libraries as users get them: examples, declared MSRV, publishable packages.
-    package::package()?;
-    package::msrv()?;
-    firmware::ci_steps()?;
-    firmware::embassy()?;
-    firmware::embassy_stm32()?;
-    firmware::outside_firmware()?;
-    eprintln!(
-        "xtask ci: all checks passed in {:.0} s",
-        start.elapsed().as_secs_f64()
-    );
-    Ok(())
+    firmware::adopt_nav440()
 }

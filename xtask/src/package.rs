@@ -139,28 +139,42 @@ pub fn msrv() -> Result<(), String> {
         ));
     }
     eprintln!("xtask msrv: workspace rust-version {workspace} = pinned toolchain {pinned}");
+    // The libraries by declared version: one `cargo check` per toolchain and feature set.
+    let mut by_version: Vec<(String, Vec<&str>)> = Vec::new();
     for (dir, lib) in LIBRARIES {
         let manifest = std::fs::read_to_string(format!("{dir}/Cargo.toml"))
             .map_err(|e| format!("cannot read {dir}/Cargo.toml: {e}"))?;
         let version = rust_version(&manifest)
             .ok_or_else(|| format!("{dir}/Cargo.toml declares no rust-version of its own"))?;
+        match by_version.iter_mut().find(|(v, _)| *v == version) {
+            Some((_, libs)) => libs.push(lib),
+            None => by_version.push((version, vec![lib])),
+        }
+    }
+    for (version, libs) in &by_version {
         let installed = Command::new("rustup")
-            .args(["run", &version, "rustc", "--version"])
+            .args(["run", version, "rustc", "--version"])
             .output()
             .map(|o| o.status.success())
             .unwrap_or(false);
         if !installed {
             run(
                 "rustup",
-                &["toolchain", "install", &version, "--profile", "minimal"],
+                &["toolchain", "install", version, "--profile", "minimal"],
             )?;
         }
         for features in [&[][..], &["--all-features"][..]] {
-            let mut args = vec!["run", &version, "cargo", "check", "-q", "-p", lib, "--lib"];
+            let mut args = vec!["run", version, "cargo", "check", "-q", "--lib"];
+            for lib in libs {
+                args.extend(["-p", lib]);
+            }
             args.extend_from_slice(features);
             run("rustup", &args)?;
         }
-        eprintln!("xtask msrv: {lib} builds with its rust-version {version}");
+        eprintln!(
+            "xtask msrv: {} compile with their declared rust-version {version}",
+            libs.join(" and ")
+        );
     }
     Ok(())
 }

@@ -351,9 +351,20 @@ pub fn uart_timeout(bytes: usize) -> Duration {
     Duration::from_secs(120 + (bytes / 200) as u64)
 }
 
-/// Path of an input file for a run, inside the target directory.
+/// A number no other call in this process returns: runs go on in parallel (`cargo xtask ci`'s
+/// job pool), so each names its files with one.
+pub fn run_number() -> u64 {
+    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+}
+
+/// Path of an input file for a run, inside the target directory (unique to the run).
 pub fn input_path(dir: &Path, tag: &str) -> PathBuf {
-    dir.join(format!("uart-input-{tag}-{}.bin", std::process::id()))
+    dir.join(format!(
+        "uart-input-{tag}-{}-{}.bin",
+        std::process::id(),
+        run_number()
+    ))
 }
 
 #[cfg(test)]

@@ -159,7 +159,11 @@ impl Gate {
 /// Socket path for `tag` (unix socket paths are limited to ~108 bytes: use the temp dir if
 /// the work dir is too deep).
 fn socket_path(dir: &Path, tag: &str) -> PathBuf {
-    let name = format!("n4-{tag}-{}.sock", std::process::id());
+    let name = format!(
+        "n4-{tag}-{}-{}.sock",
+        std::process::id(),
+        crate::qemu::run_number()
+    );
     let p = dir.join(&name);
     if p.as_os_str().len() < 100 {
         p

@@ -4,6 +4,7 @@
 use super::build::{build, build_profile, SMALL_PROFILE};
 use super::{BankChoice, BENCH_BIN, ONE_AXIS};
 use crate::qemu::{self, Board};
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 /// Clock of the reference real target for the budget (STM32F405-class Cortex-M4F), Hz.
@@ -46,16 +47,25 @@ pub(super) fn run_bench(
     small: bool,
     bank: BankChoice,
 ) -> Result<BenchOutput, String> {
+    run_built(board, &build_bench(board, small, bank)?)
+}
+
+/// Builds the bench image of `board` with `bank` (`small`: one axis, profile `small`).
+fn build_bench(board: &Board, small: bool, bank: BankChoice) -> Result<PathBuf, String> {
     let mut features: Vec<&str> = bank.features().to_vec();
-    let elf = if small {
+    if small {
         features.push(ONE_AXIS);
-        build_profile(board.target, &features, BENCH_BIN, SMALL_PROFILE)?
+        build_profile(board.target, &features, BENCH_BIN, SMALL_PROFILE)
     } else {
-        build(board.target, &features, BENCH_BIN)?
-    };
+        build(board.target, &features, BENCH_BIN)
+    }
+}
+
+/// Runs a built bench image on `board`: its measurements and RAM lines.
+fn run_built(board: &Board, elf: &Path) -> Result<BenchOutput, String> {
     let r = qemu::run_plain(
         board,
-        &elf,
+        elf,
         &["-icount", "shift=6"],
         Duration::from_secs(600),
     )?;
@@ -110,8 +120,31 @@ pub(super) fn run_bench(
 /// `cargo xtask bench`.
 pub fn bench(board: Board, small: bool, bank: BankChoice) -> Result<(), String> {
     qemu::ensure_qemu()?;
-    let (m, _) = run_bench(&board, small, bank)?;
-    println!(
+    prepare(board, small, bank)?()
+}
+
+/// [`bench`]'s build; the returned run (QEMU, then the report on stdout in one piece) can go
+/// to `cargo xtask ci`'s job pool.
+pub(super) fn prepare(
+    board: Board,
+    small: bool,
+    bank: BankChoice,
+) -> Result<impl FnOnce() -> Result<(), String> + Send + 'static, String> {
+    let elf = build_bench(&board, small, bank)?;
+    Ok(move || {
+        let (m, _) = run_built(&board, &elf)?;
+        let report = report(board, small, bank, &m);
+        print!("{report}");
+        Ok(())
+    })
+}
+
+/// The bench's report: its table and goals.
+fn report(board: Board, small: bool, bank: BankChoice, m: &[Measure]) -> String {
+    use std::fmt::Write as _;
+    let mut out = String::new();
+    let _ = writeln!(
+            out,
         "== instructions on QEMU {} ({}; firmware pipeline with the {} bank{}), counted with -icount shift=6 + SysTick ==",
         board.machine,
         board.about,
@@ -122,22 +155,25 @@ pub fn bench(board: Board, small: bool, bank: BankChoice) -> Result<(), String> 
             ""
         }
     );
-    println!(
+    let _ = writeln!(
+            out,
         "cycle column: ESTIMATE = instructions x {ASSUMED_CPI} (assumed average CPI of a Cortex-M4F), VSQRT.F32 counted as {VSQRT_CYCLES} cycles;\nCPU share: estimated cycles x {SAMPLE_RATE_HZ} Hz / {} MHz; last column: instructions x {SAMPLE_RATE_HZ} Hz / {} MHz (CPI 1, a floor)",
         REF_CLOCK_HZ / 1e6,
         REF_CLOCK_HZ / 1e6
     );
     if board.target != "thumbv7em-none-eabihf" {
-        println!(
+        let _ = writeln!(
+            out,
             "note: fixed-point bank (estimators::Fx, Q31.32, integer multiply and square root of docs/FIXED-POINT.md) without FPU; the share columns still use the M4F budget (168 MHz, 100 Hz) as the yardstick"
         );
     }
-    println!(
+    let _ = writeln!(
+        out,
         "{:<44} {:>12} {:>14} {:>16} {:>16}",
         "what", "instructions", "cycles (est.)", "CPU share (est.)", "share at CPI 1"
     );
     let pct = |cycles: f64| cycles * SAMPLE_RATE_HZ / REF_CLOCK_HZ * 100.0;
-    for x in &m {
+    for x in m {
         let cyc = x.cycles();
         let (share, floor) = if x.unit == "sample" {
             (
@@ -148,14 +184,16 @@ pub fn bench(board: Board, small: bool, bank: BankChoice) -> Result<(), String> 
             ("-".to_owned(), "-".to_owned())
         };
         let label = format!("{} (per {})", x.label, x.unit);
-        println!(
+        let _ = writeln!(
+            out,
             "{label:<44} {:>12.1} {cyc:>14.0} {share:>16} {floor:>16}",
             x.instr
         );
     }
     if let Some(b) = m.iter().find(|x| x.label == "whole bank") {
         let share = pct(b.cycles());
-        println!(
+        let _ = writeln!(
+            out,
             "goal: whole bank < 2 % of a 168 MHz M4F at 100 Hz -> {share:.3} % estimated ({:.3} % at CPI 1): {}",
             pct(b.instr),
             if share < 2.0 { "met" } else { "NOT met (estimate)" }
@@ -165,7 +203,8 @@ pub fn bench(board: Board, small: bool, bank: BankChoice) -> Result<(), String> 
     // three axes is 4 % of a 48 MHz core at 100 Hz.
     if bank == BankChoice::Product && board.target == "thumbv6m-none-eabi" && !small {
         if let Some(p) = m.iter().find(|x| x.label.starts_with("pipeline, A2 frame")) {
-            println!(
+            let _ = writeln!(
+            out,
                 "goal: product pipeline per A2 frame, three axes, thumbv6m <= {PRODUCT_PIPELINE_GOAL} instructions -> {:.0}: {}",
                 p.instr,
                 if p.instr <= PRODUCT_PIPELINE_GOAL { "met" } else { "NOT met" }
@@ -182,7 +221,8 @@ pub fn bench(board: Board, small: bool, bank: BankChoice) -> Result<(), String> 
     if let (Some((goal, baseline, what)), Some(b)) =
         (fixed_goal, m.iter().find(|x| x.label == "whole bank"))
     {
-        println!(
+        let _ = writeln!(
+            out,
             "goal: whole fixed-point bank, one axis, {what}: <= {goal:.0} instructions per sample (baseline {baseline:.0}) -> {:.0} ({:.1}x fewer): {}",
             b.instr,
             baseline / b.instr,
@@ -203,7 +243,8 @@ pub fn bench(board: Board, small: bool, bank: BankChoice) -> Result<(), String> 
         ),
     ] {
         if let Some(b) = m.iter().find(|x| x.label == label) {
-            println!(
+            let _ = writeln!(
+                out,
                 "goal: {what}: <= {goal:.0} instructions per sample -> {:.0}: {}",
                 b.instr,
                 if b.instr <= goal { "met" } else { "NOT met" }
@@ -211,21 +252,24 @@ pub fn bench(board: Board, small: bool, bank: BankChoice) -> Result<(), String> 
         }
     }
     if let Some(b) = m.iter().find(|x| x.label.starts_with("boot sequence")) {
-        println!(
+        let _ = writeln!(
+            out,
             "boot: {:.0} instructions from power-up configuration to confirmed A2 100 Hz 57600 Bd (ping, GF, SF baud, ping, SF type/rate, GF; replies at once, no waiting): about {:.2} ms of a 168 MHz M4F (estimate), once per start",
             b.instr,
             b.cycles() / REF_CLOCK_HZ * 1e3
         );
     }
     if let Some(t) = m.iter().find(|x| x.label.starts_with("transmit")) {
-        println!(
+        let _ = writeln!(
+            out,
             "transmit: {:.1} instructions per byte through embedded_io::Write (a 12-byte SF request: {:.0})",
             t.instr,
             t.instr * 12.0
         );
     }
     if let Some(p) = m.iter().find(|x| x.label == "parser") {
-        println!(
+        let _ = writeln!(
+            out,
             "goal: parser < 30 instructions/byte -> {:.1}: {}",
             p.instr,
             if p.instr < 30.0 { "met" } else { "NOT met" }
@@ -233,7 +277,8 @@ pub fn bench(board: Board, small: bool, bank: BankChoice) -> Result<(), String> 
     }
     // The output stage (one defmt row message per sample).
     if let Some(o) = m.iter().find(|x| x.label.starts_with("defmt row message")) {
-        println!(
+        let _ = writeln!(
+            out,
             "goal: output stage <= {OUTPUT_GOAL:.0} instructions per sample -> {:.0}: {}",
             o.instr,
             if o.instr <= OUTPUT_GOAL {
@@ -243,7 +288,7 @@ pub fn bench(board: Board, small: bool, bank: BankChoice) -> Result<(), String> 
             }
         );
     }
-    Ok(())
+    out
 }
 
 /// Goal: instructions of the output stage per sample.

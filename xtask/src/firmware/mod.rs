@@ -29,17 +29,22 @@ mod soak;
 mod unit_cases;
 
 pub use bench::bench;
-pub use ci::ci_steps;
+pub use ci::{ci_firmware, ci_steps};
 pub use demo::demo;
 pub use embassy_stm32::embassy_stm32;
 pub use flash::flash;
+pub use nav440_cli::{adopt_nav440, NAV440_PROFILE};
 pub use outside::outside_firmware;
 pub use qemu_run::{qemu, unit};
 pub use size::{size, size_components};
 pub use soak::soak;
-pub use unit_cases::{ci_unit, embassy};
+pub use unit_cases::{ci_unit, embassy, embassy_jobs};
 
 use std::path::{Path, PathBuf};
+
+/// Threads of the QEMU job pool: a run spends much of its time waiting on its emulated UART or
+/// on wall-clock time-outs, so three share two cores with the builds that go on beside them.
+pub const POOL_THREADS: usize = 3;
 
 /// The firmware crate.
 const FW: &str = "firmware-example";
@@ -130,6 +135,13 @@ fn work_dir() -> Result<PathBuf, String> {
     let d = target_dir().join("xtask");
     std::fs::create_dir_all(&d).map_err(|e| format!("cannot create {}: {e}", d.display()))?;
     Ok(d)
+}
+
+/// A file name in [`work_dir`] that no other run of this process uses (runs go on in
+/// parallel in `cargo xtask ci`'s job pool).
+fn unique_path(prefix: &str, ext: &str) -> Result<PathBuf, String> {
+    let n = crate::qemu::run_number();
+    Ok(work_dir()?.join(format!("{prefix}-{}-{n}.{ext}", std::process::id())))
 }
 
 fn read_file(p: &Path) -> Result<Vec<u8>, String> {

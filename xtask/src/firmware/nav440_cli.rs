@@ -8,28 +8,70 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Duration;
 
-/// Cargo arguments that run the host CLI `nav440`; its own arguments follow.
-const NAV440_RUN: &[&str] = &["run", "-q", "-p", "nav440-cli", "--bin", "nav440", "--"];
+/// The cargo profile of the `nav440` binary xtask runs: the one `cargo xtask ci`'s release-mode
+/// tests build it with (`Cargo.toml`), so the tests and the checks share one build.
+pub const NAV440_PROFILE: &str = "fast-release";
 
 /// `nav440 synth ARGS -o OUT` (the host CLI's capture generator).
 pub(super) fn nav440_synth(out: &Path, args: &[&str]) -> Result<(), String> {
+    let nav440 = nav440_bin()?;
     let out_s = out.display().to_string();
-    let mut all = NAV440_RUN.to_vec();
-    all.push("synth");
+    let mut all = vec!["synth"];
     all.extend_from_slice(args);
     all.extend(["-o", &out_s]);
-    cargo(&all)
+    crate::run(&nav440.display().to_string(), &all)
 }
 
-/// The `nav440` binary of the host CLI, built once (debug profile, as `NAV440_RUN`).
+/// The `nav440` binary xtask runs, once known ([`nav440_bin`], [`adopt_nav440`]).
+static NAV440: std::sync::OnceLock<Result<PathBuf, String>> = std::sync::OnceLock::new();
+
+/// The `nav440` binary of the host CLI: built once per xtask run ([`NAV440_PROFILE`]) and
+/// copied to the work directory, so later cargo builds never replace it under a running job.
 pub(super) fn nav440_bin() -> Result<PathBuf, String> {
-    cargo(&["build", "-q", "-p", "nav440-cli", "--bin", "nav440"])?;
-    let p = target_dir().join("debug").join("nav440");
-    if p.is_file() {
-        Ok(p)
-    } else {
-        Err(format!("built nav440 not found at {}", p.display()))
+    NAV440
+        .get_or_init(|| {
+            cargo(&[
+                "build",
+                "-q",
+                "-p",
+                "nav440-cli",
+                "--bin",
+                "nav440",
+                "--profile",
+                NAV440_PROFILE,
+            ])?;
+            copy_nav440()
+        })
+        .clone()
+}
+
+/// Takes the `nav440` that cargo just built in [`NAV440_PROFILE`] as the binary of this run:
+/// `cargo xtask ci` calls it right after its release-mode tests, whose build includes the
+/// binary (nav440-cli's tests run it), so the tests and the checks share that one build.
+pub fn adopt_nav440() -> Result<(), String> {
+    let bin = NAV440.get_or_init(copy_nav440).clone()?;
+    eprintln!(
+        "xtask: the checks run {} (the release-mode tests' build)",
+        bin.display()
+    );
+    Ok(())
+}
+
+/// Copies `nav440` from cargo's [`NAV440_PROFILE`] output to the work directory.
+fn copy_nav440() -> Result<PathBuf, String> {
+    let built = target_dir().join(NAV440_PROFILE).join("nav440");
+    // Earlier runs' copies go (a copy still running elsewhere keeps its open inode).
+    let dir = super::work_dir()?;
+    for e in std::fs::read_dir(&dir).into_iter().flatten().flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        if name.starts_with("nav440-") && name.ends_with(".bin") {
+            let _ = std::fs::remove_file(e.path());
+        }
     }
+    let copy = super::unique_path("nav440", "bin")?;
+    std::fs::copy(&built, &copy)
+        .map_err(|e| format!("cannot copy {} to {}: {e}", built.display(), copy.display()))?;
+    Ok(copy)
 }
 
 /// A running `nav440 sim`, killed when dropped.
@@ -152,15 +194,15 @@ pub(super) fn firmware_host_args(target: &str, bank: BankChoice) -> Vec<&'static
 
 /// `nav440 estimate FILE [extra]` on the host; its CSV.
 pub(super) fn host_estimate(file: &Path, extra: &[&str]) -> Result<String, String> {
+    let nav440 = nav440_bin()?;
     let f = file.display().to_string();
-    let mut args = NAV440_RUN.to_vec();
-    args.extend(["estimate", &f]);
+    let mut args = vec!["estimate", &f];
     args.extend_from_slice(extra);
-    eprintln!("+ cargo {}", args.join(" "));
-    let o = Command::new(crate::cargo_bin())
+    eprintln!("+ {} {}", nav440.display(), args.join(" "));
+    let o = Command::new(&nav440)
         .args(&args)
         .output()
-        .map_err(|e| format!("cannot run cargo: {e}"))?;
+        .map_err(|e| format!("cannot run {}: {e}", nav440.display()))?;
     if !o.status.success() {
         return Err(format!(
             "`nav440 estimate` failed: {}",

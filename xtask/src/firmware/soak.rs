@@ -2,7 +2,9 @@
 //! image on QEMU `netduinoplus2`, which reconfigures a unit after a reset or a silence instead
 //! of exiting) against `nav440 sim` streaming as fast as it is read, for H hours of stream
 //! time at 100 Hz, with a silence (1 s), a reset, a frozen-stamp run (50 packets) and a burst
-//! of garbage (256 bytes) injected at random packets in every hour. It checks that
+//! of garbage (256 bytes) injected at random packets in every fault window (an hour; `cargo
+//! xtask ci` runs 10 minutes of stream with a window of 2.5 minutes, [`CI_SOAK`]). It checks
+//! that
 //! * the firmware's CSV equals `nav440 estimate` on the bytes the unit streamed while
 //!   configured (the simulator's record: what the firmware's pipeline got);
 //! * every injected fault is reported (`stream silent`, `unit reset mid-stream`, `time stamps
@@ -24,15 +26,19 @@ use std::time::{Duration, Instant};
 /// 6,504 and 6,512 B), and one exception frame with the FPU state is 104 B.
 const STACK_JITTER: u64 = 128;
 
-/// Packets per hour of stream at 100 Hz.
-const PACKETS_PER_HOUR: u64 = 360_000;
+/// Packets per minute of stream at 100 Hz.
+const PACKETS_PER_MINUTE: u64 = 6_000;
 
-/// The faults injected once per hour, and the firmware's line that reports each.
+/// The faults injected once per fault window, and the firmware's line that reports each.
 const FAULTS: [(&str, &str); 3] = [
     ("silence", "firmware: stream silent: no complete frame for"),
     ("reset", "firmware: unit reset mid-stream"),
     ("freeze", "firmware: time stamps frozen"),
 ];
+
+/// Minutes of stream of the soak `cargo xtask ci` runs, and its fault window: 16 faults in 10
+/// minutes of stream, the same checks as an hour with 4 (docs/RELIABILITY.md).
+pub(super) const CI_SOAK: (f64, f64) = (10.0, 2.5);
 
 /// A small deterministic generator (splitmix64) for the injection points.
 fn splitmix(state: &mut u64) -> u64 {
@@ -43,17 +49,18 @@ fn splitmix(state: &mut u64) -> u64 {
     z ^ (z >> 31)
 }
 
-/// The `--inject` arguments: in every hour, each fault once at a random packet, at least
-/// 2,000 packets (20 s) from any other, so each is reported on its own.
-fn injections(hours: f64, seed: u64) -> Vec<String> {
-    let total = (hours * PACKETS_PER_HOUR as f64) as u64;
-    let hour = PACKETS_PER_HOUR.min(total);
+/// The `--inject` arguments for `minutes` of stream: in every window of `window_min`
+/// minutes, each fault once at a random packet, at least 2,000 packets (20 s) from any other,
+/// so each is reported on its own.
+fn injections(minutes: f64, window_min: f64, seed: u64) -> Vec<String> {
+    let total = (minutes * PACKETS_PER_MINUTE as f64) as u64;
+    let window = ((window_min * PACKETS_PER_MINUTE as f64) as u64).min(total);
     let mut state = seed;
     let mut points: Vec<u64> = Vec::new();
     let mut out = Vec::new();
     let mut start = 0;
     while start + 2_000 < total {
-        let span = hour.min(total - start);
+        let span = window.min(total - start);
         for kind in FAULTS.iter().map(|f| f.0).chain(["garbage"]) {
             let at = loop {
                 let at = start + 1_000 + splitmix(&mut state) % span.saturating_sub(2_000).max(1);
@@ -64,12 +71,12 @@ fn injections(hours: f64, seed: u64) -> Vec<String> {
             points.push(at);
             out.push(format!("{kind}@{at}"));
         }
-        start += hour;
+        start += window;
     }
     out
 }
 
-/// `cargo xtask soak --hours H --seed S`.
+/// `cargo xtask soak --hours H --seed S`: H hours of stream, the four faults once an hour.
 pub fn soak(hours: f64, seed: u64) -> Result<(), String> {
     if !(hours.is_finite() && hours > 0.0 && hours <= 48.0) {
         return Err(format!("--hours must be > 0 and <= 48, got {hours}"));
@@ -81,14 +88,43 @@ pub fn soak(hours: f64, seed: u64) -> Result<(), String> {
         ));
     }
     qemu::ensure_qemu()?;
+    prepare(hours * 60.0, 60.0, seed)?()
+}
+
+/// The soak of `minutes` of stream with the four faults once every `window_min` minutes: the
+/// image built and the stream written here; the returned run (QEMU, then the checks) can go to
+/// `cargo xtask ci`'s job pool.
+pub(super) fn prepare(
+    minutes: f64,
+    window_min: f64,
+    seed: u64,
+) -> Result<impl FnOnce() -> Result<(), String> + Send + 'static, String> {
     let start = Instant::now();
     let board = qemu::STM32_BOARD;
     let mut features = board.features.to_vec();
     features.extend(BankChoice::Product.features());
     let elf = build(board.target, &features, FW_BIN)?;
-    let host_extra = firmware_host_args(board.target, BankChoice::Product);
     let nav440 = nav440_bin()?;
     let dir = work_dir()?;
+    // The stream: `nav440 synth` at 100 Hz (generated, not stored).
+    let capture = dir.join("soak.bin");
+    synth_stream(&capture, minutes * 60.0, seed)?;
+    let inject = injections(minutes, window_min, seed);
+    Ok(move || run(board, elf, nav440, capture, inject, minutes, start))
+}
+
+/// Runs a prepared soak and checks it (see the module doc).
+fn run(
+    board: qemu::Board,
+    elf: std::path::PathBuf,
+    nav440: std::path::PathBuf,
+    capture: std::path::PathBuf,
+    inject: Vec<String>,
+    minutes: f64,
+    start: Instant,
+) -> Result<(), String> {
+    let dir = work_dir()?;
+    let host_extra = firmware_host_args(board.target, BankChoice::Product);
     // The stack baseline: a short run of the same image with one fault of each kind.
     let short = super::root().join("host-tests/data/fig5_a2_100hz.bin");
     let base = {
@@ -118,17 +154,14 @@ pub fn soak(hours: f64, seed: u64) -> Result<(), String> {
         counter(&counters(&r.stderr), "stack_peak")
             .ok_or_else(|| format!("no stack_peak in the baseline run:\n{}", r.stderr))?
     };
-    // The stream: `nav440 synth` at 100 Hz for H hours (generated, not stored).
-    let capture = dir.join("soak.bin");
-    synth_stream(&capture, hours * 3600.0, seed)?;
-    let inject = injections(hours, seed);
     let record = dir.join("soak-record.bin");
     let mut args: Vec<&str> = vec!["--fast", "--silence", "1", "--timeout", "0"];
     for i in &inject {
         args.extend(["--inject", i]);
     }
     let sim = Sim::start(&nav440, &capture, Some(&record), &args)?;
-    let limit = Duration::from_secs_f64(hours * 3600.0);
+    // A last resort against a hung firmware: stream time itself (QEMU runs faster than that).
+    let limit = Duration::from_secs_f64((minutes * 60.0).max(600.0));
     let run_start = Instant::now();
     let r = run_unit(&board, &elf, &sim.addr, false, limit)?;
     let run_s = run_start.elapsed().as_secs_f64();
@@ -141,7 +174,6 @@ pub fn soak(hours: f64, seed: u64) -> Result<(), String> {
         problems.push(format!("firmware exit status {:?}", r.code()));
     }
     // Every fault reported, once per injection.
-    let per_hour = inject.len() / 4;
     for (kind, line) in FAULTS {
         let want = inject.iter().filter(|i| i.starts_with(kind)).count();
         let got = r.stderr.matches(line).count();
@@ -156,12 +188,12 @@ pub fn soak(hours: f64, seed: u64) -> Result<(), String> {
             "{garbage} garbage bursts of 256 bytes injected, skipped={skipped}"
         ));
     }
+    // One periodic report per 10 s of stream.
     let periodic = r.stderr.matches("firmware: counters after").count() as u64;
-    let want_periodic = (hours * 360.0) as u64 * 9 / 10;
-    if periodic < want_periodic {
+    let expected = (minutes * 6.0) as u64;
+    if periodic < expected * 9 / 10 {
         problems.push(format!(
-            "{periodic} periodic counter reports, expected about {}",
-            (hours * 360.0) as u64
+            "{periodic} periodic counter reports, expected about {expected}"
         ));
     }
     let peak = counter(&c, "stack_peak");
@@ -182,14 +214,14 @@ pub fn soak(hours: f64, seed: u64) -> Result<(), String> {
     };
     if !problems.is_empty() {
         return Err(format!(
-            "soak of {hours} h failed:\n  {}\n(the firmware's stderr: {})",
+            "soak of {minutes} min failed:\n  {}\n(the firmware's stderr: {})",
             problems.join("\n  "),
             log.display()
         ));
     }
     let bytes = std::fs::metadata(&record).map_or(0, |m| m.len());
     eprintln!(
-        "xtask: SOAK OK: {hours} h of stream ({} faults injected: {per_hour} each of silence, reset, freeze, garbage per hour) through the product firmware on {} in {run_s:.0} s ({:.0} s in all): CSV identical to `nav440 estimate` on the {bytes} bytes streamed while configured ({lines} lines), every fault reported, {periodic} periodic counter reports, stack high-water {} B ({base} B on a short run with the same faults)",
+        "xtask: SOAK OK: {minutes} min of stream ({} faults injected: silence, reset, freeze, garbage, each once per fault window) through the product firmware on {} in {run_s:.0} s ({:.0} s in all): CSV identical to `nav440 estimate` on the {bytes} bytes streamed while configured ({lines} lines), every fault reported, {periodic} periodic counter reports, stack high-water {} B ({base} B on a short run with the same faults)",
         inject.len(),
         board.machine,
         start.elapsed().as_secs_f64(),
@@ -253,7 +285,7 @@ mod tests {
 
     #[test]
     fn injections_are_spread_and_apart() {
-        let i = injections(2.0, 1);
+        let i = injections(120.0, 60.0, 1);
         assert_eq!(i.len(), 8);
         let mut at: Vec<u64> = i
             .iter()
@@ -261,6 +293,17 @@ mod tests {
             .collect();
         at.sort();
         assert!(at.windows(2).all(|w| w[1] - w[0] >= 2_000));
-        assert!(*at.last().unwrap() < 2 * PACKETS_PER_HOUR);
+        assert!(*at.last().unwrap() < 120 * PACKETS_PER_MINUTE);
+        // CI's soak: four faults in each of its four windows.
+        let (minutes, window) = CI_SOAK;
+        let ci = injections(minutes, window, 1);
+        assert_eq!(ci.len(), 16);
+        let mut at: Vec<u64> = ci
+            .iter()
+            .map(|s| s.split_once('@').unwrap().1.parse().unwrap())
+            .collect();
+        at.sort();
+        assert!(at.windows(2).all(|w| w[1] - w[0] >= 2_000));
+        assert!(*at.last().unwrap() < 10 * PACKETS_PER_MINUTE);
     }
 }

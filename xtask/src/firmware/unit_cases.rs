@@ -7,8 +7,9 @@ use super::captures::data_captures;
 use super::equivalence::compare_csv;
 use super::nav440_cli::{firmware_host_args, host_estimate, nav440_bin, Sim, FIRMWARE_AXIS};
 use super::qemu_run::{counter, counters, run_unit, unit_timeout};
-use super::{root, work_dir, BankChoice, FW, FW_BIN, STM32_FEATURE};
+use super::{root, unique_path, BankChoice, FW, FW_BIN, STM32_FEATURE};
 use crate::cargo;
+use crate::pool::Pool;
 use crate::qemu::{self, Board};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -50,7 +51,7 @@ fn unit_case(
     case: &UnitCase,
     host_extra: &[&str],
 ) -> Result<String, String> {
-    let record = work_dir()?.join(format!("ci-unit-{}-{}.bin", board.name, case.name));
+    let record = unique_path(&format!("ci-unit-{}-{}", board.name, case.name), "bin")?;
     let mut sim_args = case.sim_args.to_vec();
     sim_args.extend(["--timeout", SIM_TIMEOUT]);
     let sim = Sim::start(nav440, &case.capture, Some(&record), &sim_args)?;
@@ -149,11 +150,53 @@ fn unit_case(
     }
 }
 
+/// Queues `case` on `board` (image `elf`) as a job of the step `group`; the host's CSV comes
+/// from `nav440 estimate RECORD host_extra`.
+fn spawn_case(
+    pool: &Pool,
+    group: &'static str,
+    board: Board,
+    elf: &Path,
+    case: UnitCase,
+    host_extra: Vec<String>,
+) -> Result<(), String> {
+    let nav440 = nav440_bin()?;
+    let elf = elf.to_path_buf();
+    let label = format!(
+        "{} ({}) on {}",
+        case.name,
+        case.capture
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        board.name
+    );
+    pool.spawn(group, label, move || {
+        let t = std::time::Instant::now();
+        let extra: Vec<&str> = host_extra.iter().map(String::as_str).collect();
+        let ok = unit_case(&board, &elf, &nav440, &case, &extra)?;
+        eprintln!(
+            "xtask: {group} OK ({:.1} s): {ok}",
+            t.elapsed().as_secs_f64()
+        );
+        Ok(())
+    });
+    Ok(())
+}
+
+/// The step of the unit runs in `cargo xtask ci`'s table.
+pub(super) const UNIT_STEP: &str = "unit runs (pool)";
+
 /// The firmware against `nav440 sim` on every emulated board and the STM32 profile: every
 /// bundled capture (CSV identical to `nav440 estimate` on what the unit streamed after
 /// configuration) and the faults, each with its diagnostic and exit status.
-fn unit_ci(captures: &[PathBuf], short: &Path, only: Option<Board>) -> Result<(), String> {
-    let nav440 = nav440_bin()?;
+/// The images are built here; each run is a job of `pool`.
+pub(super) fn unit_ci(
+    pool: &Pool,
+    captures: &[PathBuf],
+    short: &Path,
+    only: Option<Board>,
+) -> Result<(), String> {
     let short = short.to_path_buf();
     let mut boards: Vec<Board> = qemu::BOARDS.to_vec();
     boards.push(qemu::STM32_BOARD);
@@ -163,7 +206,10 @@ fn unit_ci(captures: &[PathBuf], short: &Path, only: Option<Board>) -> Result<()
     for board in &boards {
         let elf = build(board.target, board.features, FW_BIN)?;
         let stm32 = board.features.contains(&STM32_FEATURE);
-        let host_extra = &firmware_host_args(board.target, BankChoice::Paper)[..];
+        let host_extra: Vec<String> = firmware_host_args(board.target, BankChoice::Paper)
+            .into_iter()
+            .map(str::to_owned)
+            .collect();
         let mut cases: Vec<UnitCase> = captures
             .iter()
             .map(|c| UnitCase {
@@ -275,10 +321,8 @@ fn unit_ci(captures: &[PathBuf], short: &Path, only: Option<Board>) -> Result<()
                 report: "firmware: stream silent: no complete frame for",
             },
         });
-        for case in &cases {
-            let t = std::time::Instant::now();
-            let ok = unit_case(board, &elf, &nav440, case, host_extra)?;
-            eprintln!("xtask: UNIT OK ({:.1} s): {ok}", t.elapsed().as_secs_f64());
+        for case in cases {
+            spawn_case(pool, UNIT_STEP, *board, &elf, case, host_extra.clone())?;
         }
         // The product firmware of a board that cannot replay captures (its board image):
         // every capture through the simulated unit, byte-identical to `nav440 estimate --bank
@@ -287,7 +331,10 @@ fn unit_ci(captures: &[PathBuf], short: &Path, only: Option<Board>) -> Result<()
             let mut features = board.features.to_vec();
             features.extend(BankChoice::Product.features());
             let elf = build(board.target, &features, FW_BIN)?;
-            let extra = firmware_host_args(board.target, BankChoice::Product);
+            let extra: Vec<String> = firmware_host_args(board.target, BankChoice::Product)
+                .into_iter()
+                .map(str::to_owned)
+                .collect();
             for c in captures {
                 let case = UnitCase {
                     name: "product-capture",
@@ -297,14 +344,15 @@ fn unit_ci(captures: &[PathBuf], short: &Path, only: Option<Board>) -> Result<()
                         stderr_has: "unit was at 38400 Bd",
                     },
                 };
-                let t = std::time::Instant::now();
-                let ok = unit_case(board, &elf, &nav440, &case, &extra)?;
-                eprintln!("xtask: UNIT OK ({:.1} s): {ok}", t.elapsed().as_secs_f64());
+                spawn_case(pool, UNIT_STEP, *board, &elf, case, extra.clone())?;
             }
         }
     }
     Ok(())
 }
+
+/// The step of the embassy example's runs in `cargo xtask ci`'s table.
+pub(super) const EMBASSY_STEP: &str = "embassy example runs (pool)";
 
 /// `cargo xtask embassy`: the embassy example (`firmware-example/src/bin/embassy.rs`, an
 /// embassy-executor task with nav440-proto's async driver) linted, built for thumbv7em and run
@@ -312,6 +360,18 @@ fn unit_ci(captures: &[PathBuf], short: &Path, only: Option<Board>) -> Result<()
 /// estimate` on what the unit streamed after configuration) and a unit that never answers.
 pub fn embassy() -> Result<(), String> {
     let start = std::time::Instant::now();
+    let pool = Pool::new(super::POOL_THREADS, crate::steps::Steps::new(&root()))?;
+    embassy_jobs(&pool)?;
+    pool.wait()?;
+    eprintln!(
+        "xtask: embassy example against nav440 sim: every case passed in {:.0} s",
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// [`embassy`]'s lint and build; its runs are jobs of `pool`.
+pub fn embassy_jobs(pool: &Pool) -> Result<(), String> {
     let board = qemu::BOARDS
         .iter()
         .find(|b| b.name == "an386")
@@ -334,7 +394,6 @@ pub fn embassy() -> Result<(), String> {
     if !qemu::ensure_or_skip("the embassy example's QEMU runs")? {
         return Ok(());
     }
-    let nav440 = nav440_bin()?;
     let mut cases: Vec<UnitCase> = data_captures()
         .into_iter()
         .map(|capture| UnitCase {
@@ -355,19 +414,11 @@ pub fn embassy() -> Result<(), String> {
             diagnostic: "boot failed: no answer from the unit",
         },
     });
-    for case in &cases {
-        let t = std::time::Instant::now();
+    for case in cases {
         // The embassy example runs the firmware's pipeline (`pipeline::AXES`) and defmt rows.
-        let ok = unit_case(board, &elf, &nav440, case, &["--axis", FIRMWARE_AXIS])?;
-        eprintln!(
-            "xtask: EMBASSY OK ({:.1} s): {ok}",
-            t.elapsed().as_secs_f64()
-        );
+        let extra = vec!["--axis".to_owned(), FIRMWARE_AXIS.to_owned()];
+        spawn_case(pool, EMBASSY_STEP, *board, &elf, case, extra)?;
     }
-    eprintln!(
-        "xtask: embassy example against nav440 sim: every case passed in {:.0} s",
-        start.elapsed().as_secs_f64()
-    );
     Ok(())
 }
 
@@ -375,11 +426,17 @@ pub fn embassy() -> Result<(), String> {
 pub fn ci_unit(only: Option<Board>) -> Result<(), String> {
     qemu::ensure_qemu()?;
     let start = std::time::Instant::now();
-    let short = root().join("host-tests/data/sin5_a2_25hz_weekwrap.bin");
-    unit_ci(&data_captures(), &short, only)?;
+    let pool = Pool::new(super::POOL_THREADS, crate::steps::Steps::new(&root()))?;
+    unit_ci(&pool, &data_captures(), &short_capture(), only)?;
+    pool.wait()?;
     eprintln!(
         "xtask: firmware against nav440 sim: every case passed in {:.0} s",
         start.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+/// The short capture of the unit cases (faults, baud).
+pub(super) fn short_capture() -> PathBuf {
+    root().join("host-tests/data/sin5_a2_25hz_weekwrap.bin")
 }
