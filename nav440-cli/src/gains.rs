@@ -27,6 +27,7 @@
 //! configuration types (its `serde` feature).
 
 use crate::error::{Error, Result};
+use estimators::ConfigError;
 use estimators::{
     for_each_family, AveFamily, BankConfig, BankGains, Family, FamilyVisitor, ObserverSwitch,
     FAMILIES, FAMILY_COUNT,
@@ -476,6 +477,36 @@ impl ScheduleFile {
     }
 }
 
+/// Checks every table of a loaded gains or schedule file `path` at the step `h` (s): a table
+/// whose gains do not build their law is a usage error naming the file, the table (with the
+/// level in a schedule file) and the key. Called before any capture is read.
+pub fn check_tables(path: &Path, loaded: &Loaded, h: f32) -> Result<()> {
+    let halves = |v: &FamilyGains, a: &FamilyGains, prefix: &str, level: Option<usize>| {
+        for (half, g) in [("velocity", v), ("acceleration", a)] {
+            if let Err((name, key, e)) = g.check(h) {
+                let level = level.map_or(String::new(), |n| format!(" of level {n}"));
+                return Err(table_error(
+                    &format!("[{prefix}{half}.{name}]{level}"),
+                    key.as_deref(),
+                    &e,
+                ));
+            }
+        }
+        Ok(())
+    };
+    let (kind, r) = match loaded {
+        Loaded::Fixed(g) => ("gains", halves(&g.velocity, &g.acceleration, "", None)),
+        Loaded::Schedule(f) => (
+            "schedule",
+            f.level
+                .iter()
+                .enumerate()
+                .try_for_each(|(i, l)| halves(&l.velocity, &l.acceleration, "level.", Some(i + 1))),
+        ),
+    };
+    r.map_err(|m| Error::Usage(format!("{}: bad {kind} file: {m}", path.display())))
+}
+
 /// Reads a gains file or a schedule file (told apart by its `[[level]]` tables).
 pub fn load_any(path: &Path) -> Result<Loaded> {
     let text = read_text(path)?;
@@ -532,8 +563,20 @@ pub fn load(path: &Path) -> Result<estimators::BankConfig> {
     Ok(g.apply(BankConfig::default()))
 }
 
-/// TOML allows `nan` and `inf`: a number of a gains or schedule file that is not finite is a
-/// usage error naming the file, the table (`[velocity.ilo1]`, `[level.velocity.ilo1]` with the
+/// Why the number `x` of a gains or schedule file cannot be used, if it cannot: not finite,
+/// or beyond what the estimators' f32 holds (it would become infinite).
+fn bad_number(x: f64) -> Option<&'static str> {
+    if !x.is_finite() {
+        Some("every number must be finite")
+    } else if x.abs() > f64::from(f32::MAX) {
+        Some("out of range: every number must be at most 3.4e38 in magnitude (an f32)")
+    } else {
+        None
+    }
+}
+
+/// TOML allows `nan` and `inf`: a number of a gains or schedule file that is not finite (or
+/// beyond an f32's range) is a usage error naming the file, the table (`[velocity.ilo1]`, `[level.velocity.ilo1]` with the
 /// level's number) and the key. Text that is not TOML is left to the parser's error.
 fn check_finite(path: &Path, text: &str) -> Result<()> {
     fn walk(table: &toml::Table, name: &str, level: Option<usize>) -> Option<String> {
@@ -553,8 +596,10 @@ fn check_finite(path: &Path, text: &str) -> Result<()> {
                 format!("{name}.{key}")
             };
             match v {
-                toml::Value::Float(x) if !x.is_finite() => {
-                    return Some(format!("{} is {x}", here(key)));
+                toml::Value::Float(x) => {
+                    if let Some(why) = bad_number(*x) {
+                        return Some(format!("{} is {x:?}: {why}", here(key)));
+                    }
                 }
                 toml::Value::Table(t) => {
                     if let Some(m) = walk(t, &sub, level) {
@@ -569,8 +614,14 @@ fn check_finite(path: &Path, text: &str) -> Result<()> {
                                     return Some(m);
                                 }
                             }
-                            toml::Value::Float(x) if !x.is_finite() => {
-                                return Some(format!("{} item {} is {x}", here(key), i + 1));
+                            toml::Value::Float(x) => {
+                                if let Some(why) = bad_number(*x) {
+                                    return Some(format!(
+                                        "{} item {} is {x:?}: {why}",
+                                        here(key),
+                                        i + 1
+                                    ));
+                                }
                             }
                             _ => {}
                         }
@@ -584,7 +635,7 @@ fn check_finite(path: &Path, text: &str) -> Result<()> {
     match toml::from_str::<toml::Table>(text) {
         Ok(t) => match walk(&t, "", None) {
             Some(m) => Err(Error::Usage(format!(
-                "{}: bad {} file: {m}: every number must be finite",
+                "{}: bad {} file: {m}",
                 path.display(),
                 if t.contains_key("level") {
                     "schedule"
@@ -675,8 +726,71 @@ impl FamilyGains {
         base
     }
 
+    /// Checks that every table present builds its law at the step `h` (s): the first that
+    /// does not, as (its table name, the key at fault if one is named, the law's error). Run
+    /// before any capture is read, so a range error names the file, the table and the key.
+    pub fn check(
+        &self,
+        h: f32,
+    ) -> std::result::Result<(), (&'static str, Option<String>, ConfigError)> {
+        /// A scorer that only builds the law.
+        struct Builds;
+        impl estimators::Scorer for Builds {
+            type Score = ();
+            fn law<L: estimators::Law<Num = f32>>(&self, _: L) {}
+            fn tracker(&self, _: estimators::KalmanNoise) {}
+        }
+        struct Check<'a>(&'a FamilyGains, f32, Option<(&'static str, ConfigError)>);
+        impl FamilyVisitor for Check<'_> {
+            fn family<F: Family>(&mut self, column: usize) {
+                if self.2.is_some() {
+                    return;
+                }
+                if let Some(g) = self.0.get_at::<F>(column) {
+                    if let Err(e) = estimators::Gains::score(&g, self.1, &Builds) {
+                        self.2 = Some((F::NAME, e));
+                    }
+                }
+            }
+        }
+        let mut c = Check(self, h, None);
+        for_each_family(&mut c);
+        match c.2 {
+            None => Ok(()),
+            Some((name, e)) => Err((name, config_error_key(&e), e)),
+        }
+    }
+
     pub(crate) fn rust(&self, base: &BankGains, indent: &str) -> String {
         bank_gains_literal(&self.apply(*base), indent)
+    }
+}
+
+/// The gains-file key a law's configuration error is about, when it names one (`K1` is key
+/// `k1`, `1/T` key `t`, `gamma1 / k` keys `gamma1` and `k`).
+fn config_error_key(e: &ConfigError) -> Option<String> {
+    let p = match *e {
+        ConfigError::NotFinite(p)
+        | ConfigError::NotPositive(p)
+        | ConfigError::Negative(p)
+        | ConfigError::StepTooLarge(p) => p,
+        ConfigError::K1OutOfRange => "K1",
+        _ => return None,
+    };
+    let key = match p {
+        "1/T" => "t".to_string(),
+        "gamma1 / k" => "gamma1 and k".to_string(),
+        p => p.to_ascii_lowercase(),
+    };
+    Some(key)
+}
+
+/// The message of a table that does not build: `[velocity.ilo1] key k1: K1 must be in (0, 1]`
+/// (`where_` the table's name with the level, e.g. `[level.velocity.ilo1] of level 2`).
+pub fn table_error(where_: &str, key: Option<&str>, e: &ConfigError) -> String {
+    match key {
+        Some(k) => format!("{where_} key {k}: {e}"),
+        None => format!("{where_}: {e}"),
     }
 }
 

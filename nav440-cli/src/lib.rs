@@ -10,6 +10,7 @@ pub mod error;
 pub mod gains;
 pub mod motion;
 pub mod optim;
+pub mod output;
 pub mod paper;
 pub mod plot;
 pub mod plots;

@@ -9,6 +9,18 @@ use clap::Parser;
 use nav440_cli::cmd::Cli;
 use std::process::ExitCode;
 
+/// Before `main` (and before Rust's runtime puts `/dev/null` in place of a closed standard
+/// descriptor): whether standard output is closed (`nav440 stats F >&-`), so that a command
+/// writing there fails (exit 5) instead of losing its output.
+#[ctor::ctor]
+fn stdout_at_start() {
+    use std::os::fd::BorrowedFd;
+    // SAFETY: descriptor 1 is only duplicated (F_DUPFD_CLOEXEC), never closed or used for
+    // I/O here; a closed descriptor gives EBADF.
+    let fd = unsafe { BorrowedFd::borrow_raw(1) };
+    nav440_cli::output::set_stdout_closed_at_start(fd.try_clone_to_owned().is_err());
+}
+
 fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(c) => c,

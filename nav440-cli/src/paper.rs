@@ -227,6 +227,13 @@ pub fn run(
     capture: &str,
 ) -> Result<PaperResult> {
     check_window(window_s)?;
+    if samples.len() < crate::score::MIN_ROWS {
+        return Err(Error::Usage(format!(
+            "{capture}: {} sample(s) carrying the angle: the paper's tables need at least {} (fewer give all-zero MSEs)",
+            samples.len(),
+            crate::score::MIN_ROWS
+        )));
+    }
     // What the report names as the gains (`--gains` files set `overlay`, `--preset nav440`
     // `follow_rate`).
     let gains = if opts.overlay.is_some() {

@@ -41,7 +41,8 @@ pub const ESTIMATOR_COLORS: [RGBColor; 7] = [
 ];
 
 /// Renders `panels` stacked vertically into an SVG of `width` px, each panel `panel_height`
-/// px high, written to the file `path`, or to standard output when `path` is `-`.
+/// px high, written to the file `path` (through a temporary file renamed at the end,
+/// [`crate::output::OutputFile`]), or to standard output when `path` is `-`.
 pub fn render_svg(
     path: &Path,
     title: &str,
@@ -57,18 +58,7 @@ pub fn render_svg(
         root.present()
             .map_err(|e| format!("cannot draw {}: {e}", path.display()))?;
     }
-    if crate::replay::is_stdin(path) {
-        use std::io::Write;
-        let mut out = std::io::stdout().lock();
-        match out.write_all(svg.as_bytes()).and_then(|()| out.flush()) {
-            Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
-                Err(format!("cannot write output: {e}"))
-            }
-            _ => Ok(()),
-        }
-    } else {
-        std::fs::write(path, svg).map_err(|e| format!("cannot write {}: {e}", path.display()))
-    }
+    crate::output::write_output(path, svg.as_bytes()).map_err(|e| e.to_string())
 }
 
 fn draw<DB: DrawingBackend>(

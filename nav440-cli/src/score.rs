@@ -93,6 +93,10 @@ pub fn left_out_note(left_out: usize, rows: usize) -> Option<String> {
     })
 }
 
+/// The fewest rows `paper` scores and `tune` tunes on: with fewer, every estimator is still at
+/// its initial value and the MSEs are zero or meaningless, so both refuse (exit 2).
+pub const MIN_ROWS: usize = 3;
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -227,6 +227,17 @@ pub(crate) fn report_json(port: &str, r: &Report, t: &Target) -> serde_json::Val
 pub(crate) fn stream_after_boot(
     d: IoDriver<SerialIo>,
     duration: Option<f64>,
+    on_bytes: impl FnMut(&[u8]) -> Result<bool>,
+) -> Result<u64> {
+    stream_until(d, duration, None, on_bytes)
+}
+
+/// [`stream_after_boot`], also ending (as at the end of the stream) once `stop` is set: the
+/// port's read time-out (100 ms) bounds the delay.
+pub(crate) fn stream_until(
+    d: IoDriver<SerialIo>,
+    duration: Option<f64>,
+    stop: Option<&std::sync::atomic::AtomicBool>,
     mut on_bytes: impl FnMut(&[u8]) -> Result<bool>,
 ) -> Result<u64> {
     let duration = duration
@@ -241,7 +252,9 @@ pub(crate) fn stream_after_boot(
     }
     let mut buf = [0u8; 1024];
     loop {
-        if end.is_some_and(|e| Instant::now() >= e) {
+        if end.is_some_and(|e| Instant::now() >= e)
+            || stop.is_some_and(|s| s.load(std::sync::atomic::Ordering::Relaxed))
+        {
             return Ok(total);
         }
         match port.read(&mut buf) {

@@ -36,6 +36,7 @@ use nav440_proto::{
 
 pub use crate::cmd::sim::{Args as SimArgs, Fault};
 use crate::error::{Error, Result};
+use crate::output::OutputFile;
 use crate::replay::read_capture;
 
 /// Raw fields of one sample, as the packets carry them (the union of every output packet).
@@ -518,6 +519,54 @@ struct Session<'a> {
     first_itow: Option<u32>,
     /// Faults still to inject: (after this many capture packets, what), sorted.
     injections: Vec<(u64, Inject)>,
+    /// `--timeout`: when the session ends, whether or not the host reads.
+    deadline: Option<Instant>,
+}
+
+/// How long one write to the host may block before the deadline is checked again (the
+/// connection's write time-out).
+const WRITE_SLICE: Duration = Duration::from_millis(200);
+
+/// Without `--timeout`: a host that reads nothing for this long is taken as gone.
+const STALLED_HOST: Duration = Duration::from_secs(60);
+
+/// Writes all of `bytes` to the host. Each write blocks at most [`WRITE_SLICE`] (the
+/// connection's write time-out); a host that does not read ends the write with `TimedOut`
+/// at `deadline` (or after [`STALLED_HOST`] without progress when there is none).
+fn write_by(
+    conn: &mut dyn Conn,
+    mut bytes: &[u8],
+    deadline: Option<Instant>,
+) -> std::io::Result<()> {
+    let mut progress = Instant::now();
+    while !bytes.is_empty() {
+        match conn.write(bytes) {
+            Ok(0) => return Err(std::io::ErrorKind::WriteZero.into()),
+            Ok(n) => {
+                bytes = bytes.get(n..).unwrap_or_default();
+                progress = Instant::now();
+            }
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::TimedOut
+                        | std::io::ErrorKind::WouldBlock
+                        | std::io::ErrorKind::Interrupted
+                ) =>
+            {
+                let now = Instant::now();
+                let over = match deadline {
+                    Some(d) => now >= d,
+                    None => now.duration_since(progress) >= STALLED_HOST,
+                };
+                if over {
+                    return Err(std::io::ErrorKind::TimedOut.into());
+                }
+            }
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(())
 }
 
 impl Session<'_> {
@@ -536,7 +585,7 @@ impl Session<'_> {
         if self.phase == Phase::Configured {
             self.record.extend_from_slice(bytes);
         }
-        conn.write_all(bytes)
+        write_by(conn, bytes, self.deadline)
     }
 
     fn on_bytes(&mut self, conn: &mut dyn Conn, bytes: &[u8]) -> std::io::Result<()> {
@@ -778,6 +827,34 @@ pub fn run(args: &SimArgs) -> Result<Summary> {
             args.power_up_rate, args.baud
         )));
     }
+    // The output files: never the capture, never standard output (it carries the address),
+    // created (as temporary files in their directories) before the unit serves, renamed at
+    // the end of the session.
+    let mut outputs: Vec<(&str, &std::path::Path)> = Vec::new();
+    for (flag, p) in [
+        ("--record", &args.record),
+        ("--summary", &args.summary),
+        ("--address-file", &args.address_file),
+    ] {
+        if let Some(p) = p {
+            if crate::output::is_stdout(p) {
+                return Err(Error::Usage(format!(
+                    "{flag} -: standard output carries the address; name a file"
+                )));
+            }
+            crate::output::check_not_input(flag, p, &[&args.capture])?;
+            for &(other, q) in &outputs {
+                crate::output::check_distinct((flag, p), (other, q))?;
+            }
+            outputs.push((flag, p.as_path()));
+        }
+    }
+    let mut record_out = args.record.as_deref().map(OutputFile::create).transpose()?;
+    let summary_out = args
+        .summary
+        .as_deref()
+        .map(OutputFile::create)
+        .transpose()?;
     let bytes = read_capture(&args.capture)?;
     let samples = capture_samples(&bytes)
         .map_err(|e| Error::NotNav440(format!("{}: {e}", args.capture.display())))?;
@@ -805,6 +882,7 @@ pub fn run(args: &SimArgs) -> Result<Summary> {
         last_itow: None,
         first_itow: None,
         injections: injections(args)?,
+        deadline,
     };
 
     // Our handle on the pty's slave end: keeps the pty alive until the host has opened it,
@@ -821,13 +899,17 @@ pub fn run(args: &SimArgs) -> Result<Summary> {
             announce(args, &format!("tcp:{local}"))?;
             let (s, _) = accept(&l, deadline)?;
             let _ = s.set_nodelay(true);
+            s.set_write_timeout(Some(WRITE_SLICE))
+                .map_err(|e| Error::Other(format!("cannot accept a connection: {e}")))?;
             Box::new(s)
         }
         Listen::Pty => {
             let (mut master, slave) = serialport::TTYPort::pair()
                 .map_err(|e| Error::Other(format!("cannot open a pseudo-terminal: {e}")))?;
             let path = serialport::SerialPort::name(&slave).unwrap_or_default();
-            let _ = serialport::SerialPort::set_timeout(&mut master, Duration::from_secs(60));
+            // The read and write time-out of the master: a write blocks at most this long
+            // before the deadline is checked again (`write_by`).
+            let _ = serialport::SerialPort::set_timeout(&mut master, WRITE_SLICE);
             announce(args, &path)?;
             _slave = Some(slave);
             Box::new(master)
@@ -843,12 +925,13 @@ pub fn run(args: &SimArgs) -> Result<Summary> {
     stop.store(true, Ordering::Relaxed);
     conn.close();
     drop(conn);
-    if let Some(p) = &args.record {
-        std::fs::write(p, &session.record)
+    if let (Some(p), Some(mut f)) = (&args.record, record_out.take()) {
+        f.write_all(&session.record)
             .map_err(|e| Error::Output(format!("cannot write {}: {e}", p.display())))?;
+        f.commit()?;
     }
     session.summary.recorded_bytes = session.record.len() as u64;
-    if let Some(p) = &args.summary {
+    if let (Some(p), Some(mut f)) = (&args.summary, summary_out) {
         let s = &session.summary;
         let json = serde_json::json!({
             "requests": s.requests,
@@ -860,21 +943,27 @@ pub fn run(args: &SimArgs) -> Result<Summary> {
             "injected": s.injected,
             "error": result.as_ref().err().map(ToString::to_string),
         });
-        std::fs::write(p, format!("{json}\n"))
+        writeln!(f, "{json}")
             .map_err(|e| Error::Output(format!("cannot write {}: {e}", p.display())))?;
+        f.commit()?;
     }
     result?;
     Ok(session.summary)
 }
 
+/// Prints the address on standard output (a closed pipe is ignored: the host may have read
+/// it) and writes `--address-file` through a temporary file of its own renamed over it, so a
+/// reader never sees a partial line and no other file is touched.
 fn announce(args: &SimArgs, what: &str) -> Result<()> {
-    println!("{what}");
-    let _ = std::io::stdout().flush();
+    let mut out = std::io::stdout();
+    match writeln!(out, "{what}").and_then(|()| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            return Err(Error::Output(format!("cannot write standard output: {e}")))
+        }
+        _ => {}
+    }
     if let Some(p) = &args.address_file {
-        let tmp = p.with_extension("tmp");
-        std::fs::write(&tmp, format!("{what}\n"))
-            .and_then(|_| std::fs::rename(&tmp, p))
-            .map_err(|e| Error::Output(format!("cannot write {}: {e}", p.display())))?;
+        crate::output::write_output(p, format!("{what}\n").as_bytes())?;
     }
     Ok(())
 }
@@ -909,6 +998,13 @@ fn serve(
     deadline: Option<Instant>,
     slave: &mut Option<serialport::TTYPort>,
 ) -> Result<()> {
+    let timeout = s.args.timeout;
+    let late = || deadline.is_some_and(|d| Instant::now() >= d);
+    let timed_out = || {
+        Err(Error::Other(format!(
+            "session not over after --timeout {timeout} s"
+        )))
+    };
     let io = |e: std::io::Error| -> Error {
         if matches!(
             e.kind(),
@@ -920,15 +1016,14 @@ fn serve(
         }
     };
     loop {
-        if deadline.is_some_and(|d| Instant::now() >= d) {
-            return Err(Error::Other(format!(
-                "session not over after --timeout {} s",
-                s.args.timeout
-            )));
+        if late() {
+            return timed_out();
         }
         match rx.recv_timeout(s.wait_time()) {
             Ok(Msg::Bytes(b)) => match s.on_bytes(conn, &b) {
                 Ok(()) => {}
+                // A write the host did not take before the deadline.
+                Err(_) if late() => return timed_out(),
                 Err(e) => return peer_gone(s, io(e)),
             },
             Ok(Msg::Closed) | Err(RecvTimeoutError::Disconnected) => {
@@ -946,7 +1041,10 @@ fn serve(
                     // not read yet: wait until it has read everything (at most 30 s).
                     // The kernel moves written bytes to the slave's queue asynchronously, so
                     // the queue must stay empty for 200 ms in a row.
-                    let until = Instant::now() + Duration::from_secs(30);
+                    let mut until = Instant::now() + Duration::from_secs(30);
+                    if let Some(d) = deadline {
+                        until = until.min(d);
+                    }
                     let mut empty_since = None;
                     while Instant::now() < until {
                         let queued = serialport::SerialPort::bytes_to_read(slave).unwrap_or(0);
@@ -958,10 +1056,14 @@ fn serve(
                         }
                         std::thread::sleep(Duration::from_millis(5));
                     }
+                    if late() {
+                        return timed_out();
+                    }
                 }
                 s.log(format_args!("capture streamed: closing"));
                 return Ok(());
             }
+            Err(_) if late() => return timed_out(),
             Err(e) => return peer_gone(s, io(e)),
         }
     }

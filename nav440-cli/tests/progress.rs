@@ -75,8 +75,14 @@ fn piped_long_commands_print_no_progress() {
         &["synth", "--duration", "60", "-o", synth.to_str().unwrap()],
     ];
     for args in runs {
+        // Only warnings (e.g. a family the tuning made worse), one line each: no progress.
         let stderr = stderr_of(args);
-        assert_eq!(stderr, "", "{args:?} wrote on a piped stderr");
+        assert!(
+            stderr
+                .lines()
+                .all(|l| l.starts_with("nav440: warning: ") && !l.contains('\r')),
+            "{args:?} wrote on a piped stderr: {stderr:?}"
+        );
     }
     let _ = std::fs::remove_dir_all(dir);
 }

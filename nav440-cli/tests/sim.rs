@@ -30,9 +30,14 @@ fn tmp(name: &str) -> PathBuf {
 
 /// Starts `nav440 sim CAPTURE --listen L ARGS`; returns the child and the address it printed.
 fn start_sim(capture: &str, listen: &str, args: &[&str]) -> (Child, String) {
+    start_sim_at(&data(capture), listen, args)
+}
+
+/// [`start_sim`] on a capture anywhere.
+fn start_sim_at(capture: &Path, listen: &str, args: &[&str]) -> (Child, String) {
     let mut child = Command::new(BIN)
         .arg("sim")
-        .arg(data(capture))
+        .arg(capture)
         .args(["--listen", listen])
         .args(if args.contains(&"--timeout") {
             &[][..]
@@ -497,4 +502,187 @@ fn config_over_a_pty_reports_a_nak_in_one_line() {
 fn stop(mut child: Child) {
     let _ = child.kill();
     let _ = child.wait();
+}
+
+// --- deadlines that hold, outputs checked before serving, no byte lost at an interrupt ---
+
+/// `--timeout` over TCP ends the session although the host stops reading: the unit streams a
+/// 5 MB capture with `--fast` to a host that booted it and then reads nothing (every socket
+/// buffer fills and the unit's writes block); it exits 1 within 3x the deadline, with the
+/// summary it writes naming the time-out.
+#[test]
+fn sim_timeout_ends_a_tcp_session_whose_host_stops_reading() {
+    let big = tmp("big40.bin");
+    let one = std::fs::read(data("fig5_a2_100hz.bin")).unwrap();
+    std::fs::write(&big, one.repeat(40)).unwrap();
+    let summary = tmp("tcp-stall.json");
+    let started = std::time::Instant::now();
+    let (child, addr) = start_sim_at(
+        &big,
+        "tcp:127.0.0.1:0",
+        &[
+            "--fast",
+            "--timeout",
+            "3",
+            "--summary",
+            summary.to_str().unwrap(),
+        ],
+    );
+    let (r, d) = boot_tcp(&addr, Target::DEFAULT);
+    r.unwrap();
+    // The host keeps the connection open and reads nothing.
+    let (code, err) = finish(child);
+    let elapsed = started.elapsed();
+    drop(d);
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains("session not over after --timeout 3 s"),
+        "{err}"
+    );
+    assert!(elapsed < Duration::from_secs(9), "ended after {elapsed:?}");
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&summary).unwrap()).unwrap();
+    assert_eq!(v["completed"], false);
+    assert_eq!(v["error"], "session not over after --timeout 3 s");
+    // It streamed, and less than the capture: the host's buffers filled.
+    let packets = v["packets"].as_u64().unwrap();
+    assert!(packets > 0 && packets < 40 * 3501, "{v}");
+}
+
+/// `--timeout` over a pseudo-terminal ends the session although the host stops reading:
+/// `nav440 config` boots the unit (which then streams with `--fast`) and leaves; the pty's
+/// buffer fills, and the unit exits 1 within 3x the deadline.
+#[test]
+fn sim_timeout_ends_a_pty_session_whose_host_stops_reading() {
+    let started = std::time::Instant::now();
+    let (child, path) = start_sim("fig5_a2_100hz.bin", "pty", &["--fast", "--timeout", "3"]);
+    let out = nav440(&["config", "--port", &path]);
+    assert_eq!(out.status.code(), Some(0));
+    let (code, err) = finish(child);
+    let elapsed = started.elapsed();
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains("session not over after --timeout 3 s"),
+        "{err}"
+    );
+    assert!(elapsed < Duration::from_secs(9), "ended after {elapsed:?}");
+}
+
+/// `--record` and `--summary` are checked before the unit serves: a path that cannot be
+/// written is exit 5, the capture itself exit 2, standard output exit 2, each before the
+/// address is printed, and no file changes.
+#[test]
+fn sim_checks_its_output_paths_before_serving() {
+    let cap = tmp("sim-out-cap.bin");
+    std::fs::copy(data("fig5_a2_100hz.bin"), &cap).unwrap();
+    let before = std::fs::read(&cap).unwrap();
+    let missing = tmp("no-such-dir").join("r.bin");
+    let cap_s = cap.to_str().unwrap();
+    for (args, want) in [
+        (vec!["--record", missing.to_str().unwrap()], 5),
+        (vec!["--summary", missing.to_str().unwrap()], 5),
+        (vec!["--record", cap_s], 2),
+        (vec!["--summary", cap_s], 2),
+        (vec!["--record", "-"], 2),
+    ] {
+        let out = Command::new(BIN)
+            .args([
+                "sim",
+                cap_s,
+                "--listen",
+                "tcp:127.0.0.1:0",
+                "--timeout",
+                "30",
+            ])
+            .args(&args)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(want), "{args:?}");
+        assert!(out.stdout.is_empty(), "{args:?}: served");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert_eq!(std::fs::read(&cap).unwrap(), before);
+    }
+}
+
+/// `--address-file F.txt` goes through a temporary file of its own: an existing `F.tmp`
+/// is left as it was, and `F.txt` holds the address line.
+#[test]
+fn sim_address_file_leaves_an_existing_tmp_file_alone() {
+    let f = tmp("addr.txt");
+    let t = tmp("addr.tmp");
+    std::fs::write(&t, "not the simulator's\n").unwrap();
+    let (child, addr) = start_sim(
+        "fig5_a2_100hz.bin",
+        "tcp:127.0.0.1:0",
+        &["--timeout", "1", "--address-file", f.to_str().unwrap()],
+    );
+    let (code, err) = finish(child);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("no host connected before --timeout"), "{err}");
+    assert_eq!(
+        std::fs::read_to_string(&t).unwrap(),
+        "not the simulator's\n"
+    );
+    assert_eq!(std::fs::read_to_string(&f).unwrap(), format!("{addr}\n"));
+}
+
+/// `nav440 record` stopped by SIGINT (Ctrl-C) keeps every byte it received: against the
+/// simulator at 100 Hz in wall time, the file grows as frames arrive (written chunk by
+/// chunk), and after the interrupt it holds at least what it held before, exactly the
+/// capture's first bytes (the simulator streams the A2 capture unchanged), and record exits 0
+/// saying it was interrupted.
+#[test]
+fn record_keeps_every_byte_received_before_sigint() {
+    let out_file = tmp("sigint.bin");
+    let (sim, path) = start_sim("fig5_a2_100hz.bin", "pty", &["--timeout", "30"]);
+    let mut rec = Command::new(BIN)
+        .args(["record", "--port", &path, "-o", out_file.to_str().unwrap()])
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // 100 frames (1 s at 100 Hz) on disk while recording: nothing waits in a buffer.
+    let frame = 37u64;
+    let mut seen = 0;
+    for _ in 0..3000 {
+        seen = std::fs::metadata(&out_file).map_or(0, |m| m.len());
+        if seen >= 100 * frame {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    assert!(seen >= 100 * frame, "the file did not grow: {seen} bytes");
+    let st = Command::new("kill")
+        .args(["-INT", &rec.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(st.success());
+    let mut err = String::new();
+    rec.stderr.take().unwrap().read_to_string(&mut err).unwrap();
+    let code = rec.wait().unwrap().code();
+    stop(sim);
+    assert_eq!(code, Some(0), "{err}");
+    let got = std::fs::read(&out_file).unwrap();
+    assert!(got.len() as u64 >= seen, "{} < {seen}", got.len());
+    let capture = std::fs::read(data("fig5_a2_100hz.bin")).unwrap();
+    assert_eq!(got[..], capture[..got.len()]);
+    assert!(
+        err.contains(&format!(
+            "nav440 record: interrupted: {} bytes written to",
+            got.len()
+        )),
+        "{err}"
+    );
+}
+
+/// `nav440 record -o -` writes the stream to standard output.
+#[test]
+fn record_dash_writes_standard_output() {
+    let (child, path) = start_sim("fig5_a2_100hz.bin", "pty", &["--fast"]);
+    let out = nav440(&["record", "--port", &path, "-o", "-"]);
+    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(finish(child).0, 0);
+    assert_eq!(
+        out.stdout,
+        std::fs::read(data("fig5_a2_100hz.bin")).unwrap()
+    );
 }

@@ -12,6 +12,7 @@ pub struct Args {
 
 /// Prints the completion script of [`super::Cli`] for the shell on stdout.
 pub fn run(a: &Args) -> Result<()> {
+    crate::output::check_stdout()?;
     // Generated into memory first: clap_complete panics on a write error, and a closed pipe
     // must stay a silent success as for every other command.
     let mut script = Vec::new();

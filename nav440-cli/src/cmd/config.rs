@@ -12,7 +12,8 @@ pub struct Args {
 
 /// `nav440 config`: the boot sequence; the report as one JSON object on stdout.
 pub fn run(a: &Args) -> Result<()> {
+    crate::output::check_stdout()?;
     let (_, report, t) = open_and_boot(&a.port)?;
-    println!("{}", report_json(&a.port.port, &report, &t));
-    Ok(())
+    let json = report_json(&a.port.port, &report, &t);
+    super::stdout_or_file(None, |w| writeln!(w, "{json}"))
 }

@@ -20,7 +20,29 @@ pub struct Args {
 
 /// Decodes the capture named in `a`.
 pub fn run(a: &Args) -> Result<()> {
+    if let Some(t) = &a.packet_type {
+        check_type(t)?;
+    }
+    crate::output::check_stdout()?;
     decode(&a.file, a.packet_type.as_deref())
+}
+
+/// A `--type` that is not a packet type of the protocol is a usage error (exit 2) naming the
+/// known ones, before the capture is read.
+fn check_type(t: &str) -> Result<()> {
+    let known = nav440_proto::PacketType::KNOWN;
+    if known.iter().any(|k| k.name().eq_ignore_ascii_case(t)) {
+        Ok(())
+    } else {
+        Err(crate::error::Error::Usage(format!(
+            "--type {t:?} is not a NAV440 packet type (one of {})",
+            known
+                .iter()
+                .map(|k| k.name())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )))
+    }
 }
 
 /// Bytes of standard input (or of a pipe) that `decode` reads before it fixes its header.

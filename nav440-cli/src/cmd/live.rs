@@ -17,6 +17,7 @@ pub struct Args {
 
 /// `nav440 live`: the boot sequence, then the estimate CSV on stdout while receiving.
 pub fn run(a: &Args) -> Result<()> {
+    crate::output::check_stdout()?;
     a.port.check()?;
     if let Some(s) = a.duration {
         super::seconds("--duration", s, false)?;

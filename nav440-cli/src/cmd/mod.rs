@@ -271,7 +271,11 @@ pub(crate) fn bank_options(
     // applied over the rate's gains); the paper's and a schedule's do not.
     let mut follow_rate = preset == PresetArg::Nav440;
     let mut overlay = None;
-    match b.gains.as_deref().map(gains::load_any).transpose()? {
+    let loaded = b.gains.as_deref().map(gains::load_any).transpose()?;
+    if let (Some(path), Some(l)) = (b.gains.as_deref(), loaded.as_ref()) {
+        gains::check_tables(path, l, b.step)?;
+    }
+    match loaded {
         None => {}
         Some(gains::Loaded::Fixed(g)) => {
             config = Some(g.apply(base));
@@ -366,55 +370,22 @@ where
     }
 }
 
-/// Checks before long work that the file `p` can be written at its end, without changing
-/// it: an existing file is opened for appending (its contents are kept), a missing one is
-/// created and removed again. The error is the one writing would give.
-pub(crate) fn check_writable(p: &Path) -> Result<()> {
-    let err = |e: std::io::Error| Error::Output(format!("cannot write {}: {e}", p.display()));
-    if p.exists() {
-        std::fs::OpenOptions::new()
-            .append(true)
-            .open(p)
-            .map(drop)
-            .map_err(err)
-    } else {
-        std::fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(p)
-            .map_err(err)?;
-        std::fs::remove_file(p).map_err(err)
-    }
-}
-
+/// Writes to standard output (`output` `None`) or to the file `output` through
+/// [`crate::output::OutputFile`]; a closed pipe is not an error, a standard output closed at
+/// start is.
 pub(crate) fn stdout_or_file(
     output: Option<&Path>,
     write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<()> {
-    let res = match output {
-        Some(p) => {
-            let f = std::fs::File::create(p)
-                .map_err(|e| Error::Output(format!("cannot create {}: {e}", p.display())))?;
-            let mut w = std::io::BufWriter::new(f);
-            write(&mut w).and_then(|_| w.flush())
-        }
-        None => {
-            let out = std::io::stdout();
-            let mut w = std::io::BufWriter::new(out.lock());
-            write(&mut w).and_then(|_| w.flush())
-        }
-    };
+    let dest = output.unwrap_or(Path::new(crate::output::STDOUT_NAME));
+    let mut w = crate::output::OutputFile::create(dest)?;
+    let res = write(&mut w).and_then(|_| w.flush());
     match res {
         // A closed pipe (`nav440 estimate f | head`) is not an error worth reporting.
         Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
         Err(e) => Err(Error::Output(format!("cannot write output: {e}"))),
-        Ok(()) => Ok(()),
+        Ok(()) => w.commit(),
     }
-}
-
-/// Writes `text` to the file `p` (an output error names the file).
-pub(crate) fn write_file(p: &Path, text: &str) -> Result<()> {
-    std::fs::write(p, text).map_err(|e| Error::Output(format!("cannot write {}: {e}", p.display())))
 }
 
 /// The longest duration or time-out any command accepts, s (30 days).

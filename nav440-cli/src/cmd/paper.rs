@@ -26,6 +26,7 @@ pub struct Args {
 
 /// Runs the paper's experiment on the capture and prints the tables (text, Markdown or JSON).
 pub fn run(a: &Args) -> Result<()> {
+    crate::output::check_stdout()?;
     let opts = bank_options(&a.bank, PresetArg::Paper)?;
     one_axis(&opts, "paper")?;
     paper::check_window(a.window)?;

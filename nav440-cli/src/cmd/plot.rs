@@ -36,6 +36,12 @@ pub fn run(a: &Args) -> Result<()> {
     let mut opts = bank_options(&a.bank, PresetArg::Nav440)?;
     one_axis(&opts, "plot")?;
     opts.noise = noise(a.noise.noise_var, a.noise.seed)?;
+    let mut inputs = vec![a.file.as_path()];
+    inputs.extend(a.bank.gains.as_deref());
+    crate::output::check_not_input("-o", &a.output, &inputs)?;
+    if crate::output::is_stdout(&a.output) {
+        crate::output::check_stdout()?;
+    }
     let samples = replay::read_samples(&a.file)?;
     plots::plot_capture(
         &samples,

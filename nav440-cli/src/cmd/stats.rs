@@ -14,6 +14,7 @@ pub struct Args {
 
 /// Counts the frames, CRC errors, skipped and pending bytes of the input, streamed.
 pub fn run(a: &Args) -> Result<()> {
+    crate::output::check_stdout()?;
     let mut r = replay::open_capture(&a.file)?;
     let mut counter = replay::StatsCounter::new();
     r.for_each_chunk(|b| {

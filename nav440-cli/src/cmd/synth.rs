@@ -59,7 +59,8 @@ pub struct Args {
     /// Seed of the yaw noise.
     #[arg(long, default_value_t = 1)]
     noise_seed: u64,
-    /// Output capture file.
+    /// Output capture file (`-`: standard output; the JSON summary then goes to standard
+    /// error).
     #[arg(short, long, value_name = "FILE")]
     output: PathBuf,
 }
@@ -110,6 +111,9 @@ fn check_corruption(a: &Args) -> Result<()> {
 /// Writes the capture to `-o` and prints its JSON summary (packets, intact packets, peaks).
 pub fn run(a: Args) -> Result<()> {
     check_corruption(&a)?;
+    // `-o -`: the capture on standard output, the summary on standard error.
+    let to_stdout = crate::output::is_stdout(&a.output);
+    crate::output::check_stdout()?;
     let cfg = synth::SynthConfig {
         profile: a.profile,
         seed: a.seed,
@@ -146,10 +150,9 @@ pub fn run(a: Args) -> Result<()> {
     progress.finish();
     let (cap, peaks, rms_acc) = made?;
     let output = a.output;
-    std::fs::write(&output, &cap.bytes)
-        .map_err(|e| Error::Output(format!("cannot write {}: {e}", output.display())))?;
+    crate::output::write_output(&output, &cap.bytes)?;
     let summary = serde_json::json!({
-        "file": output.display().to_string(),
+        "file": crate::output::output_name(&output),
         "bytes": cap.bytes.len(),
         "packets": cap.packets,
         "dropped_packets": cap.report.dropped.len(),
@@ -161,5 +164,9 @@ pub fn run(a: Args) -> Result<()> {
         "peak_acc_deg_s2": peaks.2,
         "rms_acc_deg_s2": rms_acc,
     });
+    if to_stdout {
+        eprintln!("{summary}");
+        return Ok(());
+    }
     super::stdout_or_file(None, |w| writeln!(w, "{summary}"))
 }

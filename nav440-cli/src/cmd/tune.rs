@@ -1,11 +1,11 @@
 //! `nav440 tune`: per-family gain calibration on a capture, or a noise-level gain schedule.
 
+use std::io::Write;
 use std::path::PathBuf;
 
-use super::{
-    check_writable, count, noise_var, one_axis, parse_range, write_file, AxisArg, BankArg, HoldArg,
-};
-use crate::error::Result;
+use super::{count, noise_var, one_axis, parse_range, AxisArg, BankArg, HoldArg};
+use crate::error::{Error, Result};
+use crate::output::{self, OutputFile};
 use crate::progress::Progress;
 use crate::{optim, paper, replay, tune};
 
@@ -58,10 +58,12 @@ pub struct Args {
     /// Observer step h, s (1e-7 to 1).
     #[arg(long, default_value_t = 1e-4)]
     step: f32,
-    /// Write the tuned gains (TOML, accepted by `--gains`) here.
+    /// Write the tuned gains (TOML, accepted by `--gains`) here (`-`: standard output; the
+    /// report then goes to standard error).
     #[arg(short, long, value_name = "FILE")]
     output: Option<PathBuf>,
-    /// Also write a Rust snippet (BankConfig literal for the firmware) here.
+    /// Also write a Rust snippet (BankConfig literal for the firmware) here (`-`: standard
+    /// output; the report then goes to standard error).
     #[arg(long, value_name = "FILE")]
     rust: Option<PathBuf>,
     /// Tuned axis: roll, pitch or yaw.
@@ -83,11 +85,34 @@ pub struct Args {
 /// Tunes the gains (or the schedule), prints the report and writes `-o` / `--rust`.
 pub fn run(a: Args) -> Result<()> {
     check_numbers(&a)?;
-    // The outputs are written after the tuning: a path that cannot be written is found now,
-    // without changing an existing file.
-    for p in [&a.output, &a.rust].into_iter().flatten() {
-        check_writable(p)?;
+    output::check_stdout()?;
+    // The outputs: neither may be a capture, nor both the same; their temporary files are
+    // created now, so a directory that cannot take a file is an output error before the
+    // captures are read, and nothing at the paths changes until the tuning succeeded.
+    if let (Some(o), Some(r)) = (&a.output, &a.rust) {
+        output::check_distinct(("-o", o), ("--rust", r))?;
     }
+    let inputs: Vec<&std::path::Path> = a.files.iter().map(PathBuf::as_path).collect();
+    for (flag, p) in [("-o", &a.output), ("--rust", &a.rust)] {
+        if let Some(p) = p {
+            output::check_not_input(flag, p, &inputs)?;
+        }
+    }
+    let out = a.output.as_deref().map(OutputFile::create).transpose()?;
+    let rust = a.rust.as_deref().map(OutputFile::create).transpose()?;
+    // With `-o -` or `--rust -` the file goes to standard output and the report to stderr.
+    let report_to_stderr = [&out, &rust]
+        .into_iter()
+        .flatten()
+        .any(OutputFile::is_stdout);
+    let report = |text: &str| -> Result<()> {
+        if report_to_stderr {
+            eprint!("{text}");
+            Ok(())
+        } else {
+            super::stdout_or_file(None, |w| w.write_all(text.as_bytes()))
+        }
+    };
     let captures = a
         .files
         .iter()
@@ -119,7 +144,7 @@ pub fn run(a: Args) -> Result<()> {
             BankArg::Product => tune::Families::product(),
         },
     };
-    if let Some(levels) = a.schedule {
+    let (toml_text, rust_text) = if let Some(levels) = a.schedule {
         let spec = tune::TuneSpec {
             holds: vec![a.hold.map_or(estimators::Hold::Linear, Into::into)],
             ..spec
@@ -128,36 +153,38 @@ pub fn run(a: Args) -> Result<()> {
         let tuned = tune::tune_schedule_on(&captures, &opts, &spec, &levels, &progress);
         progress.finish();
         let (file, text) = tuned?;
-        super::stdout_or_file(None, |w| w.write_all(text.as_bytes()))?;
-        if let Some(p) = a.output {
-            write_file(&p, &file.to_toml())?;
+        report(&text)?;
+        let what = format!(
+            "--schedule {}",
+            levels
+                .iter()
+                .map(|v| v.to_string())
+                .collect::<Vec<_>>()
+                .join(",")
+        );
+        (
+            file.to_toml(),
+            file.to_rust(&what, &estimators::BankConfig::NAV440),
+        )
+    } else {
+        let progress = progress(&spec, 1);
+        let res = tune::tune_on(&captures, &opts, &spec, &progress);
+        progress.finish();
+        let res = res?;
+        for w in &res.warnings {
+            eprintln!("nav440: warning: {w}");
         }
-        if let Some(p) = a.rust {
-            let what = format!(
-                "--schedule {}",
-                levels
-                    .iter()
-                    .map(|v| v.to_string())
-                    .collect::<Vec<_>>()
-                    .join(",")
-            );
-            write_file(&p, &file.to_rust(&what, &estimators::BankConfig::NAV440))?;
+        report(&res.to_text())?;
+        (res.to_toml(), res.to_rust())
+    };
+    for (f, text) in [(out, toml_text), (rust, rust_text)] {
+        if let Some(mut f) = f {
+            match f.write_all(text.as_bytes()) {
+                Err(e) if f.is_stdout() && e.kind() == std::io::ErrorKind::BrokenPipe => {}
+                r => r.map_err(|e| Error::Output(format!("cannot write output: {e}")))?,
+            }
+            f.commit()?;
         }
-        return Ok(());
-    }
-    let progress = progress(&spec, 1);
-    let res = tune::tune_on(&captures, &opts, &spec, &progress);
-    progress.finish();
-    let res = res?;
-    for w in &res.warnings {
-        eprintln!("nav440: warning: {w}");
-    }
-    super::stdout_or_file(None, |w| w.write_all(res.to_text().as_bytes()))?;
-    if let Some(p) = a.output {
-        write_file(&p, &res.to_toml())?;
-    }
-    if let Some(p) = a.rust {
-        write_file(&p, &res.to_rust())?;
     }
     Ok(())
 }

@@ -597,6 +597,30 @@ pub fn tune_on(
             }
         )));
     }
+    if rows_scored < crate::score::MIN_ROWS {
+        return Err(Error::Usage(format!(
+            "only {rows_scored} row(s) to score on the training range {}-{} s: tuning needs at least {} (fewer give an MSE of 0 whatever the gains)",
+            spec.train.0,
+            spec.train.1,
+            crate::score::MIN_ROWS
+        )));
+    }
+    let test_rows: usize = locks
+        .iter()
+        .zip(captures)
+        .map(|(l, c)| l.counts_in(c, test).0)
+        .sum();
+    if test_rows == 0 {
+        let end = captures
+            .iter()
+            .filter_map(|c| c.last())
+            .map(|s| s.t_s())
+            .fold(0.0, f64::max);
+        return Err(Error::Usage(format!(
+            "--test {}-{} s holds no row to score (the data spans 0-{end:.2} s)",
+            test.0, test.1
+        )));
+    }
     let base_before = opts.bank_config_for(first);
     let paper = GainsFile::from_bank(&base_before);
     // Per capture: the noisy inputs, the Euler-kinematics rate (NaN, left out of every MSE,
@@ -719,6 +743,26 @@ pub fn tune_on(
     let mut tuned_cfg = gains.apply(base_before);
     tuned_cfg.hold = hold;
     let (vel_after, acc_after) = bank_mse(tuned_cfg)?;
+    // A family whose tuned gains score worse than the gains it started from, on the range the
+    // report measures: said on stderr, family by family (the hold is chosen by the bank's
+    // overall score, so one family can lose what the others gain).
+    for (what, before, after, acc) in [
+        ("velocity", &vel_before, &vel_after, false),
+        ("acceleration", &acc_before, &acc_after, true),
+    ] {
+        for (i, name) in NAMES.iter().enumerate() {
+            let (b, a) = (before[i], after[i]);
+            if spec.families.tunes(acc, i) && b.is_finite() && a.is_finite() && a > b {
+                warnings.push(format!(
+                    "{name} {what}: the tuned gains score worse than the starting gains on {}-{} s (MSE {b:.3} before, {a:.3} after, hold {}); keep the starting [{what}.{}] table if that matters",
+                    test.0,
+                    test.1,
+                    hold_name(hold),
+                    name.to_ascii_lowercase()
+                ));
+            }
+        }
+    }
     Ok(TuneResult {
         noise_var,
         seeds,
