@@ -21,6 +21,9 @@ pub enum ConfigError {
     StepTooLarge(&'static str),
     /// The maximum gap is shorter than one step `h`.
     GapTooShort,
+    /// A bank's gap rule is more than [`crate::MAX_GAP_PERIODS`] (1000) nominal periods (the
+    /// Kalman tracker sub-steps an interval of at most [`crate::kalman::MAX_SUBSTEPS`]).
+    GapTooLong,
     /// The nominal sample period is not at least one step `h`.
     SamplePeriodTooShort,
     /// The nominal sample period is more than `10^6` steps `h` (the closed-form maps and the
@@ -59,6 +62,9 @@ impl core::fmt::Display for ConfigError {
             Self::StepTooLarge(p) => write!(f, "h * `{p}` must be < 1 for the Euler step"),
             Self::GapTooShort => f.write_str(
                 "the gap rule (max_gap_periods x sample_period_s) must be at least one step h",
+            ),
+            Self::GapTooLong => f.write_str(
+                "the gap rule (max_gap_periods) must be at most 1000 nominal sample periods",
             ),
             Self::SamplePeriodTooShort => f.write_str("sample period must be at least h"),
             Self::SamplePeriodTooLong => f.write_str("sample period must be at most 1e6 steps h"),

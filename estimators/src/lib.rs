@@ -112,7 +112,7 @@ pub use ave::{
 pub use bank::{
     Accepted, AdAdMap, BankConfig, BankGains, BankInput, Channel, Fed, Feed, PaperBank,
     PaperOutput, PaperParams, PaperState, ProductBank, ProductChannel, ProductOutput,
-    ProductParams, ProductState, Wrap, GAP_PERIODS, KF_DEFAULT, VELOCITY_NAMES,
+    ProductParams, ProductState, Wrap, GAP_PERIODS, KF_DEFAULT, MAX_GAP_PERIODS, VELOCITY_NAMES,
 };
 pub use ed::{Ed, EdConfig, EdFamily, EdParams, EdScheme, EdState};
 pub use error::{ConfigError, SampleError};

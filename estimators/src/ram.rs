@@ -15,7 +15,7 @@
 //! | [`Ilo`]`<T, 1>` | 32 | 64 |
 //! | [`Ad`] | 16 | 32 |
 //! | [`Ed`] | 44 | 88 |
-//! | [`Kalman`] | 24 | 48 |
+//! | [`Kalman`] (gains, nominal period, state, last input, restart count) | 36 | 72 |
 //! | [`Unwrapper`] | 16 | 24 |
 //! | [`ClosedForm`]`<IloParams<T, 1>>` (params) | 104 | 200 |
 //! | [`ClosedForm`]`<AdParams<T>>` (params) | 96 | 184 |
@@ -40,7 +40,7 @@ pub const AD: (usize, usize) = (16, 32);
 /// `(f32, Fx)` of [`Ed`].
 pub const ED: (usize, usize) = (44, 88);
 /// `(f32, Fx)` of [`Kalman`].
-pub const KALMAN: (usize, usize) = (24, 48);
+pub const KALMAN: (usize, usize) = (36, 72);
 /// `(f32, Fx)` of [`Unwrapper`].
 pub const UNWRAPPER: (usize, usize) = (16, 24);
 /// `(f32, Fx)` of [`ClosedForm`]`<IloParams<T, 1>>`.

@@ -84,6 +84,17 @@ pub trait EstimatorBank {
 
     /// How many times a gap longer than the gap rule re-initialised the bank.
     fn reinit_count(&self) -> u32;
+
+    /// Takes over from `old`, the bank this one replaces (built for another nominal period
+    /// after a new epoch, as `nav440_pipeline` does), what spans epochs: the unwrapper (its
+    /// turn count and last angle) and [`Self::reinit_count`]. The laws' states are not taken
+    /// (the next sample starts a new epoch). The default takes nothing.
+    fn take_over(&mut self, old: &Self)
+    where
+        Self: Sized,
+    {
+        let _ = old;
+    }
 }
 
 /// A bank built from a [`BankConfig`] alone (every bank [`crate::estimator_bank!`]

@@ -3,11 +3,22 @@
 //!
 //! Nominal sample period: the banks precompute their closed-form maps and Kalman gains for
 //! the packet rate (`BankConfig::sample_period_s`). It is set by [`crate::period`]: the upper
-//! median of the intervals between the first [`WARMUP_SAMPLES`] samples. A streaming device
-//! cannot build the banks before it knows that period, so [`Estimation`] holds back those first
-//! samples, then builds the banks and runs them and all later ones through them; rows are only
-//! delayed by the warm-up (0.16 s at 100 Hz). A stream shorter than the warm-up is decided at
-//! its end ([`Estimation::finish`]) from the intervals it has (none: the configured period).
+//! median of the intervals between the first [`WARMUP_SAMPLES`] samples of each time epoch. A
+//! streaming device cannot build the banks before it knows that period, so [`Estimation`] holds
+//! back those first samples, then builds the banks and runs them and all later ones through
+//! them; rows are only delayed by the warm-up (0.16 s at 100 Hz). A stream shorter than the
+//! warm-up is decided at its end ([`Estimation::finish`]) from the intervals it has (none: the
+//! configured period).
+//!
+//! Every new time epoch (a confirmed backward jump: the unit was reset, re-booted, or another
+//! recording starts) is a new warm-up: its first [`WARMUP_SAMPLES`] samples (fewer if the
+//! next epoch starts sooner or the stream ends) are held back and measured by the same rule.
+//! The same period: the banks run on as before (rows identical to a run without the hold-back,
+//! only later). Another period: every bank is built again for it (the builder decides the
+//! gains for the rate, as at the start), takes over the old bank's turn count and gap count
+//! ([`AxisBank::take_over`]), and [`Counters::period_changes`] counts the change
+//! ([`Estimation::period_s`] is the period in use); the host prints it on stderr, the firmware
+//! as a `firmware:` message. An epoch with fewer than two samples keeps the period in use.
 //!
 //! Time faults follow `nav440_proto::TimeBase` (see [`crate::Frontend`]): an impossible or
 //! single bad stamp costs its own sample only, a confirmed backward jump starts a new epoch
@@ -47,6 +58,17 @@ pub trait AxisBank {
 
     /// Gaps longer than the gap rule so far, where the bank re-initialised.
     fn gaps(&self) -> u32;
+
+    /// Called on a bank just built for a new nominal period (after a new epoch) with the bank
+    /// it replaces: takes over what spans epochs (for an [`EstimatorBank`]:
+    /// [`EstimatorBank::take_over`], the unwrapper's turns and the gap count). The default
+    /// takes nothing.
+    fn take_over(&mut self, old: Self)
+    where
+        Self: Sized,
+    {
+        let _ = old;
+    }
 }
 
 impl<B: EstimatorBank> AxisBank for B {
@@ -62,6 +84,10 @@ impl<B: EstimatorBank> AxisBank for B {
 
     fn gaps(&self) -> u32 {
         self.reinit_count()
+    }
+
+    fn take_over(&mut self, old: Self) {
+        EstimatorBank::take_over(self, &old);
     }
 }
 
@@ -184,12 +210,15 @@ pub struct Counters {
     pub near_lock: u64,
     /// Returns from the gimbal-lock limit: the roll and yaw banks restarted.
     pub lock_passes: u32,
+    /// New epochs whose measured nominal period differed from the one in use: the banks were
+    /// built again for it ([`Estimation::period_s`]).
+    pub period_changes: u32,
 }
 
 /// Where the back end is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Phase {
-    /// Collecting the first samples.
+    /// Collecting the first samples of the stream or of a new epoch.
     Warmup,
     /// Running: one bank per selected axis.
     Running,
@@ -215,6 +244,8 @@ pub struct Estimation<B, E, F, const N: usize = 3> {
     banks: heapless::Vec<B, N>,
     /// A bank could not be built for the measured period.
     failed: Option<E>,
+    /// The configuration the banks were built with (`None` before the first build).
+    built: Option<BankConfig>,
     counters: Counters,
     /// The last sample was near gimbal lock: the roll and yaw banks restart at the next one.
     in_lock: bool,
@@ -250,6 +281,7 @@ impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize> Estimation<B, 
             held: heapless::Vec::new(),
             banks: heapless::Vec::new(),
             failed: None,
+            built: None,
             counters: Counters::default(),
             in_lock: false,
         }
@@ -265,10 +297,16 @@ impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize> Estimation<B, 
         &self.counters
     }
 
-    /// The bank of `axis`, once running (`None` before, after a failed build, or for an axis
+    /// The nominal sample period the banks run with, s (`None` before they are built): the
+    /// one measured at the start or at the last epoch whose period changed.
+    pub fn period_s(&self) -> Option<f32> {
+        self.built.map(|c| c.sample_period_s)
+    }
+
+    /// The bank of `axis`, once built (`None` before, after a failed build, or for an axis
     /// that is not estimated).
     pub fn bank(&self, axis: Axis) -> Option<&B> {
-        if self.phase != Phase::Running || self.failed.is_some() {
+        if self.built.is_none() || self.failed.is_some() {
             return None;
         }
         let slot = self.axes.iter().position(|a| a == axis)?;
@@ -282,6 +320,12 @@ impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize> Estimation<B, 
             return Err(e.clone());
         }
         self.counters.samples = self.counters.samples.saturating_add(1);
+        // A new epoch is a new warm-up; the one under way ends with the samples it has (the
+        // stream's first warm-up only once it has an interval).
+        if s.new_epoch && (self.built.is_some() || self.held.len() >= 2) {
+            self.start(emit)?;
+            self.phase = Phase::Warmup;
+        }
         match self.phase {
             Phase::Running => {
                 run_sample(
@@ -311,8 +355,9 @@ impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize> Estimation<B, 
         self.start(emit)
     }
 
-    /// Ends the warm-up: builds the banks for the measured period and runs the held samples
-    /// (nothing if already running).
+    /// Ends the warm-up: builds the banks for the measured period (again, after a new epoch
+    /// whose period differs from the one in use) and runs the held samples (nothing if already
+    /// running).
     #[inline(never)]
     fn start(&mut self, emit: &mut dyn FnMut(&Row<B::Output>)) -> Result<(), E> {
         if let Some(e) = &self.failed {
@@ -321,21 +366,38 @@ impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize> Estimation<B, 
         if self.phase == Phase::Running {
             return Ok(());
         }
-        let cfg = PeriodEstimator::from_times(self.held.iter().map(|s| s.t_us)).apply(self.cfg);
+        // Fewer than two samples: the period in use (at the start, the configuration's).
+        let base = self.built.unwrap_or(self.cfg);
+        let cfg = PeriodEstimator::from_times(self.held.iter().map(|s| s.t_us)).apply(base);
         self.phase = Phase::Running;
-        for axis in self.axes.iter().take(N) {
-            match (self.build)(axis, &cfg) {
-                // Cannot fail: at most `N` axes are kept.
-                Ok(b) => {
-                    let _ = self.banks.push(b);
-                }
-                Err(e) => {
-                    self.banks.clear();
-                    self.failed = Some(e.clone());
-                    return Err(e);
+        if self.built.is_none() {
+            for axis in self.axes.iter().take(N) {
+                match (self.build)(axis, &cfg) {
+                    // Cannot fail: at most `N` axes are kept.
+                    Ok(b) => {
+                        let _ = self.banks.push(b);
+                    }
+                    Err(e) => return Err(self.fail(e)),
                 }
             }
+        } else if cfg.sample_period_s != base.sample_period_s {
+            // Another period after a new epoch: every bank again, for it.
+            let mut fresh: heapless::Vec<B, N> = heapless::Vec::new();
+            for axis in self.axes.iter().take(N) {
+                match (self.build)(axis, &cfg) {
+                    Ok(b) => {
+                        let _ = fresh.push(b);
+                    }
+                    Err(e) => return Err(self.fail(e)),
+                }
+            }
+            for (new, old) in fresh.iter_mut().zip(self.banks.drain(..)) {
+                new.take_over(old);
+            }
+            self.banks = fresh;
+            self.counters.period_changes = self.counters.period_changes.saturating_add(1);
         }
+        self.built = Some(cfg);
         for s in &self.held {
             run_sample(
                 &mut self.banks,
@@ -348,6 +410,14 @@ impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize> Estimation<B, 
         }
         self.held.clear();
         Ok(())
+    }
+
+    /// A bank could not be built: no bank runs from now on, `e` is returned by every call.
+    #[cold]
+    fn fail(&mut self, e: E) -> E {
+        self.banks.clear();
+        self.failed = Some(e.clone());
+        e
     }
 }
 

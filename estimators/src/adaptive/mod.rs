@@ -277,4 +277,11 @@ impl<T: Real, S: SqrtFn<T>> crate::EstimatorBank for AdaptiveBank<T, S> {
     fn reinit_count(&self) -> u32 {
         AdaptiveBank::reinit_count(self)
     }
+
+    /// The inner bank's [`EstimatorBank::take_over`](crate::EstimatorBank::take_over)
+    /// (unwrapper, re-init count); the noise estimate and the gains start again, as the bank
+    /// is new.
+    fn take_over(&mut self, old: &Self) {
+        self.bank.take_over(&old.bank);
+    }
 }

@@ -43,7 +43,8 @@ pub struct BankConfig {
     pub hold: Hold,
     /// Gap rule: the longest sample interval integrated across, in nominal sample periods
     /// ([`BankConfig::sample_period_s`]); a longer gap re-initialises the bank from the new
-    /// sample. Default [`GAP_PERIODS`] (25: 0.25 s at 100 Hz, 12.5 s at 2 Hz).
+    /// sample. Default [`GAP_PERIODS`] (25: 0.25 s at 100 Hz, 12.5 s at 2 Hz); at most
+    /// [`MAX_GAP_PERIODS`] (1000).
     pub max_gap_periods: f32,
     /// Nominal sample period, s: **set it to the sensor's** (e.g. 0.005 at 200 Hz). Default
     /// 0.01 (100 Hz, the NAV440's), and nothing warns when it is wrong: the bank runs any
@@ -115,6 +116,12 @@ impl BankConfig {
 /// Default gap rule, in nominal sample periods: 25 (0.25 s at 100 Hz). The bank integrates
 /// across up to 24 lost packets at any packet rate.
 pub const GAP_PERIODS: f32 = 25.0;
+
+/// Longest gap rule a bank accepts ([`BankConfig::max_gap_periods`]), in nominal sample periods:
+/// 1000, below the Kalman tracker's [`crate::kalman::MAX_SUBSTEPS`] (1024), so that every
+/// interval a bank integrates across is one the tracker sub-steps (a longer one is the bank's
+/// gap, counted by its `reinit_count`). Larger: [`crate::ConfigError::GapTooLong`].
+pub const MAX_GAP_PERIODS: f32 = 1000.0;
 
 /// How a bank unwraps its input angle.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -103,6 +103,9 @@ impl<T: Real> BankInput<T> {
         if n0f > 1e6 {
             return Err(ConfigError::SamplePeriodTooLong);
         }
+        if cfg.max_gap_periods > super::MAX_GAP_PERIODS {
+            return Err(ConfigError::GapTooLong);
+        }
         let clock = SampleClock::new(h, cfg.max_gap_s())?;
         let n0 = if cfg.closed_form { n0f as u32 } else { 0 };
         Ok((
@@ -185,6 +188,14 @@ impl<T: Real> BankInput<T> {
     /// Sets the unwrapper's turn count (only the reported angle moves).
     pub fn set_turns(&mut self, turns: i64) {
         self.unwrap.set_turns(turns);
+    }
+
+    /// Takes the unwrapper (turns, last angle) and the re-init count of `old` (see
+    /// `EstimatorBank::take_over`); the clock starts a new epoch.
+    pub fn take_over(&mut self, old: &Self) {
+        self.unwrap = old.unwrap;
+        self.reinits = old.reinits;
+        self.clock.clear();
     }
 
     /// Forgets everything but the configuration and the re-init count.

@@ -354,6 +354,13 @@ macro_rules! estimator_bank {
                 self.input.set_turns(turns);
             }
 
+            /// Takes over from `old` (the bank this one replaces, built for another nominal
+            /// period after a new epoch) its unwrapper and its re-init count; the next sample
+            /// starts a new epoch (`EstimatorBank::take_over`).
+            pub fn take_over(&mut self, old: &Self) {
+                self.input.take_over(&old.input);
+            }
+
             /// Forgets everything: the next sample is treated as the first one.
             pub fn restart(&mut self) {
                 self.input.restart();
@@ -480,6 +487,10 @@ macro_rules! estimator_bank {
 
             fn reinit_count(&self) -> u32 {
                 $Bank::reinit_count(self)
+            }
+
+            fn take_over(&mut self, old: &Self) {
+                $Bank::take_over(self, old)
             }
         }
 

@@ -11,9 +11,14 @@ pub trait DynBank<O> {
     fn new_epoch(&mut self);
     /// `EstimatorBank::reinit_count`.
     fn reinit_count(&self) -> u32;
+    /// The bank as `Any` (for [`DynBank::take_over`]).
+    fn as_any(&self) -> &dyn std::any::Any;
+    /// `EstimatorBank::take_over` from `old` when it is a bank of the same type (nothing
+    /// otherwise).
+    fn take_over(&mut self, old: &dyn std::any::Any);
 }
 
-impl<B: EstimatorBank> DynBank<B::Output> for B {
+impl<B: EstimatorBank + 'static> DynBank<B::Output> for B {
     fn update(&mut self, t_us: u64, deg: f32) -> std::result::Result<B::Output, SampleError> {
         EstimatorBank::update(self, t_us, deg)
     }
@@ -24,6 +29,16 @@ impl<B: EstimatorBank> DynBank<B::Output> for B {
 
     fn reinit_count(&self) -> u32 {
         EstimatorBank::reinit_count(self)
+    }
+
+    fn as_any(&self) -> &dyn std::any::Any {
+        self
+    }
+
+    fn take_over(&mut self, old: &dyn std::any::Any) {
+        if let Some(old) = old.downcast_ref::<B>() {
+            EstimatorBank::take_over(self, old);
+        }
     }
 }
 
@@ -282,6 +297,18 @@ impl<O: HostOutput> AxisBank for HostBank<O> {
         match &self.step {
             Some(st) => st.gaps,
             None => self.bank.reinit_count(),
+        }
+    }
+
+    /// The bank's take-over (unwrapper, gap count), and the noise generator and the
+    /// per-step mode's unwrapping and gap count continue where they were.
+    fn take_over(&mut self, old: Self) {
+        self.bank.take_over(old.bank.as_any());
+        self.noise = old.noise;
+        if let (Some(st), Some(old_st)) = (self.step.as_mut(), old.step) {
+            st.unwrap = old_st.unwrap;
+            st.gaps = old_st.gaps;
+            st.prev = old_st.prev;
         }
     }
 }

@@ -164,11 +164,13 @@ pub(crate) fn stream_bank<'a, O: HostOutput, W: std::io::Write + ?Sized>(
     let mut pipe: HostPipeline<O> =
         Pipeline::new(opts.axes, opts.bank_config(), build_fn::<O>(opts));
     let mut sink = CsvSink::new(w, opts.axes, csv_header_of::<O>(opts.axes));
+    let mut period = None;
     input.chunks(&mut |chunk| {
         let res = pipe.feed(chunk, &mut |r| sink.row(r));
         sink.take_error()?;
         res.map_err(Error::Usage)?;
         sink.flush()?;
+        report_period_change(&mut period, pipe.estimation().period_s());
         Ok(!sink.closed)
     })?;
     if sink.closed {
@@ -176,6 +178,7 @@ pub(crate) fn stream_bank<'a, O: HostOutput, W: std::io::Write + ?Sized>(
     }
     let res = pipe.finish(&mut |r| sink.row(r));
     sink.take_error()?;
+    report_period_change(&mut period, pipe.estimation().period_s());
     check_front(pipe.front())?;
     res.map_err(Error::Usage)?;
     sink.end()?;
@@ -191,6 +194,32 @@ pub(crate) fn stream_bank<'a, O: HostOutput, W: std::io::Write + ?Sized>(
             .map(|(t, p)| (s_to_us(t), s_to_us(p))),
         end_dropped_bytes: pipe.front().counters().end_dropped_bytes,
     })
+}
+
+/// Prints on stderr, as it happens, a change of the nominal sample period the banks run with
+/// (a new time epoch at another packet rate: `nav440_pipeline::Estimation` rebuilt the banks
+/// for it); `last` is the period seen so far, `now` the pipeline's.
+pub(crate) fn report_period_change(last: &mut Option<f32>, now: Option<f32>) {
+    if let (Some(before), Some(after)) = (*last, now) {
+        if before != after {
+            eprintln!("nav440: warning: {}", period_change_message(before, after));
+        }
+    }
+    if now.is_some() {
+        *last = now;
+    }
+}
+
+/// The one-line message for a nominal sample period change (periods in s).
+pub fn period_change_message(before_s: f32, after_s: f32) -> String {
+    let hz = |s: f32| (1e3 / f64::from(s).max(1e-9)).round() / 1e3;
+    format!(
+        "new time epoch at another packet rate: nominal sample period {} s ({} Hz) -> {} s ({} Hz), measured on the epoch's first {WARMUP_SAMPLES} samples; the banks are rebuilt for it",
+        before_s,
+        hz(before_s),
+        after_s,
+        hz(after_s)
+    )
 }
 
 /// A period in s as whole us (rounded).

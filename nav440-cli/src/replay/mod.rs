@@ -116,6 +116,9 @@ pub struct EstimationSummary {
     pub near_lock: u64,
     /// Returns from gimbal lock, where the roll and yaw banks restarted.
     pub lock_passes: u32,
+    /// New epochs at another nominal sample period, where the banks were rebuilt
+    /// (`nav440_pipeline::Counters::period_changes`).
+    pub period_changes: u32,
 }
 
 impl EstimationSummary {
@@ -126,6 +129,7 @@ impl EstimationSummary {
             gaps: c.gaps,
             near_lock: c.near_lock,
             lock_passes: c.lock_passes,
+            period_changes: c.period_changes,
         }
     }
 }
