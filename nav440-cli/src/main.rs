@@ -9,19 +9,27 @@ use clap::Parser;
 use nav440_cli::cmd::Cli;
 use std::process::ExitCode;
 
-/// Before `main` (and before Rust's runtime puts `/dev/null` in place of a closed standard
-/// descriptor): whether standard output is closed (`nav440 stats F >&-`), so that a command
-/// writing there fails (exit 5) instead of losing its output.
-#[ctor::ctor]
-fn stdout_at_start() {
-    use std::os::fd::BorrowedFd;
-    // SAFETY: descriptor 1 is only duplicated (F_DUPFD_CLOEXEC), never closed or used for
-    // I/O here; a closed descriptor gives EBADF.
-    let fd = unsafe { BorrowedFd::borrow_raw(1) };
-    nav440_cli::output::set_stdout_closed_at_start(fd.try_clone_to_owned().is_err());
+/// Whether standard output was closed when the process started (`nav440 stats F >&-`), so that
+/// a command writing there fails (exit 5) instead of losing its output. Rust's runtime opens
+/// `/dev/null` read-write in place of a closed standard descriptor before `main`; a shell's
+/// redirection to it (`>/dev/null`) is write-only. Read from `/proc/self` (Linux; elsewhere
+/// `false`); a deliberate read-write `1<>/dev/null` counts as closed.
+fn stdout_closed_at_start() -> bool {
+    let to_null =
+        std::fs::read_link("/proc/self/fd/1").is_ok_and(|t| t == std::path::Path::new("/dev/null"));
+    to_null
+        && std::fs::read_to_string("/proc/self/fdinfo/1")
+            .ok()
+            .and_then(|info| {
+                let flags = info.lines().find_map(|l| l.strip_prefix("flags:"))?;
+                u32::from_str_radix(flags.trim(), 8).ok()
+            })
+            // O_ACCMODE == O_RDWR
+            .is_some_and(|flags| flags & 0o3 == 0o2)
 }
 
 fn main() -> ExitCode {
+    nav440_cli::output::set_stdout_closed_at_start(stdout_closed_at_start());
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {

@@ -40,8 +40,8 @@ pub fn output_name(path: &Path) -> String {
 
 static STDOUT_CLOSED_AT_START: AtomicBool = AtomicBool::new(false);
 
-/// Records that file descriptor 1 was closed when the process started (called by the
-/// `nav440` binary before `main`, before Rust's runtime opens `/dev/null` in its place).
+/// Records that file descriptor 1 was closed when the process started (the `nav440` binary
+/// tells at the start of `main`: Rust's runtime has put `/dev/null` in its place then).
 pub fn set_stdout_closed_at_start(closed: bool) {
     STDOUT_CLOSED_AT_START.store(closed, Ordering::Relaxed);
 }

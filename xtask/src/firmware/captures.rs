@@ -77,6 +77,46 @@ pub(super) fn rate_change_capture() -> Result<PathBuf, String> {
     Ok(out)
 }
 
+/// What the firmware prints when a new time epoch comes at another packet rate
+/// (firmware-example's `main.rs`): the pipeline measured the period again and rebuilt the banks.
+pub(super) const PERIOD_CHANGE: &str = "firmware: new time epoch at another packet rate";
+
+/// Writes `ci-rate-drop.bin`: 10 s of the `fig5` motion at 100 Hz, 10 s at 50 Hz in the same
+/// epoch (the rate halves after the warm-up), then 10 s at 20 Hz whose time stamps start over
+/// (a unit reset at a fifth of the first rate): 1,703 rows. Every estimate stays bounded and
+/// the new epoch's period is measured again (issue 38; `host-tests/tests/rate_change.rs`
+/// checks the same capture on the host).
+pub(super) fn rate_drop_capture() -> Result<PathBuf, String> {
+    let dir = work_dir()?;
+    let mut bytes = Vec::new();
+    // (file, rate Hz, timeITOW of the first packet ms): the 50 Hz part starts 20 ms after the
+    // last 100 Hz packet; the 20 Hz part at the first part's start (time goes back: a reset).
+    for (name, rate, itow) in [
+        ("ci-drop-100hz.bin", "100", "208800000"),
+        ("ci-drop-50hz.bin", "50", "208810020"),
+        ("ci-drop-20hz.bin", "20", "208800000"),
+    ] {
+        let part = dir.join(name);
+        nav440_synth(
+            &part,
+            &[
+                "--profile",
+                "fig5",
+                "--rate",
+                rate,
+                "--duration",
+                "10",
+                "--start-itow",
+                itow,
+            ],
+        )?;
+        bytes.extend(read_file(&part)?);
+    }
+    let out = dir.join("ci-rate-drop.bin");
+    std::fs::write(&out, &bytes).map_err(|e| format!("cannot write {}: {e}", out.display()))?;
+    Ok(out)
+}
+
 /// Packets (frame indices) of the bundled A2 capture whose BIT word becomes 0x0009
 /// (masterFail + softwareError) in the BIT-failure capture of `ci-firmware`.
 pub(super) const BIT_FAILED_FRAMES: std::ops::RangeInclusive<usize> = 1000..=1100;

@@ -5,9 +5,9 @@
 use super::build::{adaptive_boards, build, build_small, clippy_firmware, small_boards};
 use super::captures::{
     bit_fail_capture, bundled_capture, data_captures, false_header_capture, rate_change_capture,
-    BIT_FAILED_FRAMES, FALSE_HEADER, SPIN_20HZ,
+    rate_drop_capture, BIT_FAILED_FRAMES, FALSE_HEADER, PERIOD_CHANGE, SPIN_20HZ,
 };
-use super::equivalence::{equivalence, equivalence_csv, peak_velocity};
+use super::equivalence::{equivalence, equivalence_csv, equivalence_full, peak_of, peak_velocity};
 use super::nav440_cli::{adaptive_host_args, firmware_host_args, nav440_synth, small_host_args};
 use super::qemu_run::counter;
 use super::size::size;
@@ -238,12 +238,16 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
             "3",
         ],
     )?;
-    // Every bundled capture (all packet types and rates, the week wrap) plus those eight.
+    // The rate halves after the warm-up, then a reset at a fifth of it: the period is measured
+    // again and every estimate stays bounded (checked on the product images below).
+    let rate_drop = rate_drop_capture()?;
+    // Every bundled capture (all packet types and rates, the week wrap) plus those nine.
     let mut captures = data_captures();
     captures.extend([
         corrupted,
         short,
         rate_change,
+        rate_drop.clone(),
         bit_fail.clone(),
         false_header.clone(),
         tumble.clone(),
@@ -327,11 +331,12 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
         check_map(&elf, "mps2")?;
         if qemu_ok {
             let host = firmware_host_args(board.target, BankChoice::Product);
-            for capture in &captures {
+            for capture in captures.iter().filter(|c| **c != rate_drop) {
                 spawn_equivalence(pool, EQUIVALENCE_STEP, *board, &elf, capture, &host, |_| {
                     Ok(())
                 });
             }
+            queue_rate_drop(pool, *board, &elf, &rate_drop, &host);
         }
     }
     // The product firmware with the gains `nav440 tune --bank product --rust` wrote (feature
@@ -415,6 +420,44 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
         );
     }
     Ok(())
+}
+
+/// The product image on the capture whose rate halves and then drops to a fifth after a reset
+/// ([`rate_drop_capture`]): the CSV of `nav440 estimate`, byte for byte; the new epoch's
+/// period change reported once; the velocities within 10x the motion's 300 deg/s and the
+/// accelerations within 10x its 2,000 deg/s^2 on every axis (before the Kalman followed the
+/// actual interval, `kf_a` reached 2e38).
+fn queue_rate_drop(pool: &Pool, board: Board, elf: &Path, capture: &Path, host: &[&str]) {
+    let (elf, capture) = (elf.to_path_buf(), capture.to_path_buf());
+    let args: Vec<String> = host.iter().map(|a| (*a).to_owned()).collect();
+    pool.spawn(
+        EQUIVALENCE_STEP,
+        format!("rate drop on {} (product)", board.name),
+        move || {
+            let a: Vec<&str> = args.iter().map(String::as_str).collect();
+            let (c, csv, stderr) = equivalence_full(&board, &elf, &capture, &a)?;
+            let what = format!("the product firmware on {} ({})", board.name, capture.display());
+            let reports = stderr.matches(PERIOD_CHANGE).count();
+            if reports != 1 {
+                return Err(format!(
+                    "{what}: `{PERIOD_CHANGE}` printed {reports} times, expected once"
+                ));
+            }
+            expect_counter(&c, "backward_jumps", 1, &what)?;
+            for axis in ["roll_", "pitch_", "yaw_"] {
+                let (v, acc) = (peak_of(&csv, axis, "_v")?, peak_of(&csv, axis, "_a")?);
+                if v >= 3_000.0 || acc >= 20_000.0 {
+                    return Err(format!(
+                        "{what}: {axis}*_v up to {v} deg/s, {axis}*_a up to {acc} deg/s^2 (bounds 3000 and 20000)"
+                    ));
+                }
+            }
+            eprintln!(
+                "xtask: OK: {what}: the period change reported once, every estimate bounded"
+            );
+            Ok(())
+        },
+    );
 }
 
 /// The adaptive firmware's runs (see [`queue_firmware`]).

@@ -28,16 +28,22 @@ pub(super) fn compare_csv(fw: &str, host: &str) -> Result<usize, String> {
 /// The largest |value| in the velocity columns (`PREFIX..._v`) of a `nav440 estimate` CSV,
 /// deg/s (NaN counts as infinite).
 pub(super) fn peak_velocity(csv: &str, prefix: &str) -> Result<f64, String> {
+    peak_of(csv, prefix, "_v")
+}
+
+/// The largest |value| in the columns `PREFIX...SUFFIX` of a `nav440 estimate` CSV (NaN counts
+/// as infinite).
+pub(super) fn peak_of(csv: &str, prefix: &str, suffix: &str) -> Result<f64, String> {
     let mut lines = csv.lines();
     let header: Vec<&str> = lines.next().ok_or("empty CSV")?.split(',').collect();
     let cols: Vec<usize> = header
         .iter()
         .enumerate()
-        .filter(|(_, h)| h.starts_with(prefix) && h.ends_with("_v"))
+        .filter(|(_, h)| h.starts_with(prefix) && h.ends_with(suffix))
         .map(|(i, _)| i)
         .collect();
     if cols.is_empty() {
-        return Err(format!("no {prefix}*_v column in the CSV"));
+        return Err(format!("no {prefix}*{suffix} column in the CSV"));
     }
     let mut peak = 0.0f64;
     for line in lines {
@@ -107,6 +113,20 @@ pub(super) fn equivalence_csv(
     capture: &Path,
     host_extra: &[&str],
 ) -> Result<(Vec<(String, u64)>, String), String> {
+    equivalence_full(board, elf, capture, host_extra).map(|(c, csv, _)| (c, csv))
+}
+
+/// What an equivalence run gives: the firmware's counters, the CSV both printed, the firmware's
+/// stderr.
+pub(super) type Equivalent = (Vec<(String, u64)>, String, String);
+
+/// [`equivalence`], also returning the CSV both printed and the firmware's stderr.
+pub(super) fn equivalence_full(
+    board: &Board,
+    elf: &Path,
+    capture: &Path,
+    host_extra: &[&str],
+) -> Result<Equivalent, String> {
     let bytes = read_file(capture)?;
     let fw = run_capture(board, elf, &bytes, Output::Capture)?;
     let host = host_estimate(capture, host_extra)?;
@@ -124,7 +144,7 @@ pub(super) fn equivalence_csv(
             if counter(&c, "uart_overruns").unwrap_or(0) != 0 {
                 return Err("UART overruns reported under QEMU".into());
             }
-            Ok((c, host))
+            Ok((c, host, fw.stderr))
         }
         Err(diff) => {
             let detail = max_abs_diff(&fw.stdout, &host)
