@@ -34,7 +34,7 @@ mod unit;
 use clap::{Parser, Subcommand};
 use qemu::Board;
 use std::path::PathBuf;
-use std::process::{Command, ExitCode};
+use std::process::{Command, ExitCode, Stdio};
 
 /// The no_std library crates that must cross-compile for every thumb target.
 const NO_STD_CRATES: &[&str] = &["nav440-proto", "velocity-estimators", "nav440-pipeline"];
@@ -241,10 +241,27 @@ fn main() -> ExitCode {
 
 /// Runs a command with extra environment variables, echoing it; an error names the command.
 fn run_env(program: &str, args: &[&str], env: &[(&str, &str)]) -> Result<(), String> {
+    run_with(program, args, env, Stdio::inherit())
+}
+
+/// [`run_env`] with the command's standard output sent to this process's standard error: an
+/// installer's log never mixes with what a command prints on stdout (`cargo xtask qemu FILE >
+/// out.csv` on a machine without QEMU).
+fn run_to_stderr(program: &str, args: &[&str], env: &[(&str, &str)]) -> Result<(), String> {
+    run_with(program, args, env, Stdio::from(std::io::stderr()))
+}
+
+fn run_with(
+    program: &str,
+    args: &[&str],
+    env: &[(&str, &str)],
+    stdout: Stdio,
+) -> Result<(), String> {
     eprintln!("+ {program} {}", args.join(" "));
     let status = Command::new(program)
         .args(args)
         .envs(env.iter().copied())
+        .stdout(stdout)
         .status()
         .map_err(|e| format!("cannot start `{program}`: {e}"))?;
     if status.success() {

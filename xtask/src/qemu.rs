@@ -144,7 +144,7 @@ pub fn ensure_qemu() -> Result<(), String> {
         all.push("apt-get");
         all.extend_from_slice(args);
         let (prog, rest) = all.split_first().expect("non-empty");
-        crate::run_env(prog, rest, &[("DEBIAN_FRONTEND", "noninteractive")])
+        crate::run_to_stderr(prog, rest, &[("DEBIAN_FRONTEND", "noninteractive")])
     };
     apt(&["update"])
         .and_then(|()| apt(&["install", "-y", "--no-install-recommends", QEMU]))
