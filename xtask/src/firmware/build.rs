@@ -33,35 +33,36 @@ pub(super) fn adaptive_boards() -> [qemu::Board; 2] {
 }
 
 /// Builds the firmware binary `bin` for `target` with the cargo `profile` and returns the path of
-/// `bin`.
+/// its copy.
 pub(super) fn build_profile(
     target: &str,
     features: &[&str],
     bin: &str,
     profile: &str,
 ) -> Result<PathBuf, String> {
+    let mut copies = build_bins(target, features, &[bin], profile)?;
+    copies.pop().ok_or_else(|| format!("{bin} not built"))
+}
+
+/// Builds the firmware binaries `bins` for `target` with the cargo `profile` in one cargo run
+/// (their fat-LTO links then go on in parallel) and returns the paths of their copies, in order.
+pub(super) fn build_bins(
+    target: &str,
+    features: &[&str],
+    bins: &[&str],
+    profile: &str,
+) -> Result<Vec<PathBuf>, String> {
     let feats = features.join(",");
-    let mut args = vec![
-        "build",
-        "-p",
-        FW,
-        "--target",
-        target,
-        "--profile",
-        profile,
-        // Only the binary asked for: each one is a fat-LTO link, and the lints
-        // (`clippy_firmware`, `--bins`) already check every binary of each configuration.
-        "--bin",
-        bin,
-    ];
+    let mut args = vec!["build", "-p", FW, "--target", target, "--profile", profile];
+    // Only the binaries asked for: each one is a fat-LTO link, and the lints
+    // (`clippy_firmware`, `--bins`) already check every binary of each configuration.
+    for bin in bins {
+        args.extend(["--bin", bin]);
+    }
     if !feats.is_empty() {
         args.extend(["--features", &feats]);
     }
     cargo(&args)?;
-    let elf = target_dir().join(target).join(profile).join(bin);
-    if !elf.is_file() {
-        return Err(format!("built firmware not found at {}", elf.display()));
-    }
     // Builds with other features overwrite cargo's output: keep a copy per configuration.
     let mut tag = if feats.is_empty() {
         "default".to_owned()
@@ -71,10 +72,18 @@ pub(super) fn build_profile(
     if profile != "release" {
         tag = format!("{tag}-{profile}");
     }
-    let copy = work_dir()?.join(format!("{bin}-{target}-{tag}.elf"));
-    std::fs::copy(&elf, &copy)
-        .map_err(|e| format!("cannot copy {} to {}: {e}", elf.display(), copy.display()))?;
-    Ok(copy)
+    bins.iter()
+        .map(|bin| {
+            let elf = target_dir().join(target).join(profile).join(bin);
+            if !elf.is_file() {
+                return Err(format!("built firmware not found at {}", elf.display()));
+            }
+            let copy = work_dir()?.join(format!("{bin}-{target}-{tag}.elf"));
+            std::fs::copy(&elf, &copy)
+                .map_err(|e| format!("cannot copy {} to {}: {e}", elf.display(), copy.display()))?;
+            Ok(copy)
+        })
+        .collect()
 }
 
 /// `cargo clippy -D warnings` on the firmware's binaries for `target`, with `feature`.

@@ -2,7 +2,9 @@
 //! memory-map checks of every image, then under QEMU the firmware/host equivalence on every
 //! capture, the unit runs, the failure exits, the bench and the sizes.
 
-use super::build::{adaptive_boards, build, build_small, clippy_firmware, small_boards};
+use super::build::{
+    adaptive_boards, build, build_bins, build_small, clippy_firmware, small_boards,
+};
 use super::captures::{
     bit_fail_capture, bundled_capture, data_captures, false_header_capture, rate_change_capture,
     rate_drop_capture, BIT_FAILED_FRAMES, FALSE_HEADER, PERIOD_CHANGE, SPIN_20HZ,
@@ -14,8 +16,8 @@ use super::size::size;
 use super::soak::CI_SOAK;
 use super::unit_cases::{short_capture, unit_ci};
 use super::{
-    read_file, root, work_dir, BankChoice, ADAPTIVE, FW_BIN, ONE_AXIS, PRODUCT, STM32_FEATURE,
-    TUNED, TUNED_GAINS,
+    read_file, root, work_dir, BankChoice, ADAPTIVE, BENCH_BIN, FW_BIN, ONE_AXIS, PRODUCT,
+    STM32_FEATURE, TUNED, TUNED_GAINS,
 };
 use crate::pool::Pool;
 use crate::qemu::{self, Board, Output};
@@ -261,8 +263,17 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
     // The paper bank on every QEMU board: the CSV of `nav440 estimate` (`--fixed` without
     // FPU), byte for byte, on every capture; the special captures' counters checked too.
     let mut elfs = Vec::new();
-    for board in qemu::BOARDS {
-        let elf = build(board.target, &[], FW_BIN)?;
+    for (i, board) in qemu::BOARDS.iter().enumerate() {
+        // The M4F's bench and panic check images share this cargo run (and its links' cores).
+        let bins: &[&str] = if i == 0 {
+            &[FW_BIN, BENCH_BIN, "panic_check"]
+        } else {
+            &[FW_BIN]
+        };
+        let elf = build_bins(board.target, &[], bins, "release")?
+            .into_iter()
+            .next()
+            .ok_or("no image built")?;
         check_map(&elf, "mps2")?;
         if qemu_ok {
             let host = firmware_host_args(board.target, BankChoice::Paper);
@@ -327,7 +338,21 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
     // product --axis all` (`--fixed` without FPU), byte for byte, on every capture and board.
     for board in qemu::BOARDS {
         clippy_firmware(board.target, Some(PRODUCT))?;
-        let elf = build(board.target, BankChoice::Product.features(), FW_BIN)?;
+        // The product bench (thumbv6m) shares its image's cargo run.
+        let bins: &[&str] = if board.target == "thumbv6m-none-eabi" {
+            &[FW_BIN, BENCH_BIN]
+        } else {
+            &[FW_BIN]
+        };
+        let elf = build_bins(
+            board.target,
+            BankChoice::Product.features(),
+            bins,
+            "release",
+        )?
+        .into_iter()
+        .next()
+        .ok_or("no image built")?;
         check_map(&elf, "mps2")?;
         if qemu_ok {
             let host = firmware_host_args(board.target, BankChoice::Product);
