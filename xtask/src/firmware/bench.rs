@@ -123,7 +123,7 @@ pub fn bench(board: Board, small: bool, bank: BankChoice) -> Result<(), String> 
     prepare(board, small, bank)?()
 }
 
-/// [`bench`]'s build; the returned run (QEMU, then the report on stdout in one piece) can go
+/// [`bench()`]'s build; the returned run (QEMU, then the report on stdout in one piece) can go
 /// to `cargo xtask ci`'s job pool.
 pub(super) fn prepare(
     board: Board,
