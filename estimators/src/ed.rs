@@ -7,6 +7,13 @@ use crate::law::{step_n, Interval, Law, Stateful};
 use crate::{ConfigError, Hold, NativeSqrt, Real, SqrtFn};
 use core::marker::PhantomData;
 
+/// The largest `h * alpha` an [`EdParams`] accepts, unit/s (deg/s for an angle): the change
+/// of the ED's integrator `u1`, and of its output, in one step `h`. Past it the output
+/// chatters by more than 1e6 deg/s (the banks' whole angle range, `MAX_ABS_DEG` = 1e6 deg,
+/// per second): no rate is left to read (`alpha = 1e30` gave 8e28 deg/s). The paper's `alpha = 770` at `h = 1e-4` s is 0.077; the tuner's
+/// search box (`alpha` up to 1e6) stays within it at every step `h <= 1` s.
+pub const ED_MAX_H_ALPHA: f64 = 1e6;
+
 /// Parameters of the exact differentiator.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -97,11 +104,17 @@ pub type Ed<T, S = NativeSqrt> = Stateful<EdParams<T, S>>;
 
 impl<T: Real, S: SqrtFn<T>> EdParams<T, S> {
     /// Validates `cfg` for step `h` (s) and the discretisation `scheme`. Errors:
-    /// non-positive or non-finite `lambda`, `alpha`, `h`.
+    /// non-positive or non-finite `lambda`, `alpha`, `h`; `h * alpha` above [`ED_MAX_H_ALPHA`]
+    /// ([`ConfigError::StepRateTooLarge`]`("alpha")`).
     pub fn new(cfg: &EdConfig, h: f32, scheme: EdScheme) -> Result<Self, ConfigError> {
         let h = positive("h", f64::from(h))?;
         let lambda = positive("lambda", f64::from(cfg.lambda))?;
         let alpha = positive("alpha", f64::from(cfg.alpha))?;
+        // The integrator u1 (and the output u with it) moves by h alpha in every step: past
+        // ED_MAX_H_ALPHA the output carries no rate.
+        if h * alpha > ED_MAX_H_ALPHA {
+            return Err(ConfigError::StepRateTooLarge("alpha"));
+        }
         Ok(Self {
             h: T::from_f64(h),
             halpha: T::from_f64(h * alpha),

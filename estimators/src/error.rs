@@ -19,6 +19,11 @@ pub enum ConfigError {
     /// The explicit-Euler step is too large for a gain: `h * gain` must stay below 1 (stability
     /// of the forward-Euler update; the payload names the gain).
     StepTooLarge(&'static str),
+    /// A switching gain moves its integrator by more than [`crate::ED_MAX_H_ALPHA`] (1e6
+    /// unit/s) in one step: `h * gain` is past that (the payload names the gain, e.g. the
+    /// ED's `"alpha"`, whose integrator `u1` changes by `h alpha` per step, and the output
+    /// with it).
+    StepRateTooLarge(&'static str),
     /// The maximum gap is shorter than one step `h`.
     GapTooShort,
     /// A bank's gap rule is more than [`crate::MAX_GAP_PERIODS`] (1000) nominal periods (the
@@ -60,6 +65,10 @@ impl core::fmt::Display for ConfigError {
                 f.write_str("step h must be a whole number of microseconds in [1e-6, 1] s")
             }
             Self::StepTooLarge(p) => write!(f, "h * `{p}` must be < 1 for the Euler step"),
+            Self::StepRateTooLarge(p) => write!(
+                f,
+                "h * `{p}` must be at most 1e6 (the change of the output in one step, unit/s)"
+            ),
             Self::GapTooShort => f.write_str(
                 "the gap rule (max_gap_periods x sample_period_s) must be at least one step h",
             ),

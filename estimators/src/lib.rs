@@ -114,7 +114,7 @@ pub use bank::{
     PaperOutput, PaperParams, PaperState, ProductBank, ProductChannel, ProductOutput,
     ProductParams, ProductState, Wrap, GAP_PERIODS, KF_DEFAULT, MAX_GAP_PERIODS, VELOCITY_NAMES,
 };
-pub use ed::{Ed, EdConfig, EdFamily, EdParams, EdScheme, EdState};
+pub use ed::{Ed, EdConfig, EdFamily, EdParams, EdScheme, EdState, ED_MAX_H_ALPHA};
 pub use error::{ConfigError, SampleError};
 pub use estimator::{advance_by_steps, Estimator, Hold};
 pub use family::{

@@ -105,10 +105,16 @@ pub struct GainsFile {
 impl GainsFile {
     /// Parses TOML text.
     pub fn from_toml(text: &str) -> Result<Self> {
+        let table: toml::Table = toml::from_str(text)
+            .map_err(|e| Error::Usage(format!("bad gains file: {}", one_line(&e.to_string()))))?;
+        Self::from_table(table)
+    }
+
+    /// The gains file of a parsed TOML table.
+    pub fn from_table(mut table: toml::Table) -> Result<Self> {
         let bad = |e: &dyn std::fmt::Display| {
             Error::Usage(format!("bad gains file: {}", one_line(&e.to_string())))
         };
-        let mut table: toml::Table = toml::from_str(text).map_err(|e| bad(&e))?;
         // `[*.ave]` without `delta`: a placeholder law, replaced by the base's on apply.
         let mut from_base = [false; 2];
         for (half, flag) in ["velocity", "acceleration"]
@@ -507,15 +513,18 @@ pub fn check_tables(path: &Path, loaded: &Loaded, h: f32) -> Result<()> {
     r.map_err(|m| Error::Usage(format!("{}: bad {kind} file: {m}", path.display())))
 }
 
-/// Reads a gains file or a schedule file (told apart by its `[[level]]` tables).
+/// The largest gains or schedule file read, bytes (1 MiB; the shipped ones are under 4 KiB):
+/// a larger file is refused before it is parsed (a 50 MB file took 4 GB to parse).
+pub const MAX_GAINS_FILE_BYTES: u64 = 1 << 20;
+
+/// Reads a gains file or a schedule file (told apart by its `[[level]]` tables). The file is
+/// read up to [`MAX_GAINS_FILE_BYTES`] and parsed once.
 pub fn load_any(path: &Path) -> Result<Loaded> {
     let text = read_text(path)?;
-    check_finite(path, &text)?;
-    let is_schedule = toml::from_str::<toml::Table>(&text)
-        .map(|t| t.contains_key("level"))
-        .unwrap_or(false);
-    if is_schedule {
-        let f: ScheduleFile = toml::from_str(&text).map_err(|e| {
+    let table = parse_table(path, &text)?;
+    check_finite(path, &table)?;
+    if table.contains_key("level") {
+        let f: ScheduleFile = table.try_into().map_err(|e| {
             Error::Usage(format!(
                 "{}: bad schedule file: {}",
                 path.display(),
@@ -527,14 +536,40 @@ pub fn load_any(path: &Path) -> Result<Loaded> {
             .map_err(|e| Error::Usage(format!("{}: {e}", path.display())))?;
         return Ok(Loaded::Schedule(f));
     }
-    GainsFile::from_toml(&text)
+    GainsFile::from_table(table)
         .map(Loaded::Fixed)
         .map_err(|e| Error::Usage(format!("{}: {e}", path.display())))
 }
 
+/// The TOML table of a gains or schedule file's `text` (a usage error naming the file if it
+/// is not TOML).
+fn parse_table(path: &Path, text: &str) -> Result<toml::Table> {
+    toml::from_str(text).map_err(|e| {
+        Error::Usage(format!(
+            "{}: bad gains file: {}",
+            path.display(),
+            one_line(&e.to_string())
+        ))
+    })
+}
+
+/// The text of a gains file: at most [`MAX_GAINS_FILE_BYTES`] (more is an input error, exit
+/// 3, found while reading: nothing beyond the cap is read), UTF-8 (else a usage error).
 fn read_text(path: &Path) -> Result<String> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| Error::Input(format!("cannot read gains file {}: {e}", path.display())))?;
+    use std::io::Read;
+    let cannot =
+        |e: std::io::Error| Error::Input(format!("cannot read gains file {}: {e}", path.display()));
+    let f = std::fs::File::open(path).map_err(cannot)?;
+    let mut bytes = Vec::new();
+    f.take(MAX_GAINS_FILE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(cannot)?;
+    if bytes.len() as u64 > MAX_GAINS_FILE_BYTES {
+        return Err(Error::Input(format!(
+            "gains file {} is larger than {MAX_GAINS_FILE_BYTES} bytes (1 MiB), the most a gains or schedule file may hold (one written by `nav440 tune` is a few KiB)",
+            path.display()
+        )));
+    }
     // A file that is not text is a bad gains file (usage error, exit 2), like bad TOML.
     String::from_utf8(bytes).map_err(|e| {
         Error::Usage(format!(
@@ -545,20 +580,13 @@ fn read_text(path: &Path) -> Result<String> {
     })
 }
 
-/// Reads a gains file and applies it over the paper presets.
+/// Reads a gains file (at most [`MAX_GAINS_FILE_BYTES`], parsed once) and applies it over the
+/// paper presets.
 pub fn load(path: &Path) -> Result<estimators::BankConfig> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| Error::Input(format!("cannot read gains file {}: {e}", path.display())))?;
-    // A file that is not text is a bad gains file (usage error, exit 2), like bad TOML.
-    let text = String::from_utf8(bytes).map_err(|e| {
-        Error::Usage(format!(
-            "{}: bad gains file: not UTF-8 text (invalid byte at offset {})",
-            path.display(),
-            e.utf8_error().valid_up_to()
-        ))
-    })?;
-    check_finite(path, &text)?;
-    let g = GainsFile::from_toml(&text)
+    let text = read_text(path)?;
+    let table = parse_table(path, &text)?;
+    check_finite(path, &table)?;
+    let g = GainsFile::from_table(table)
         .map_err(|e| Error::Usage(format!("{}: {e}", path.display())))?;
     Ok(g.apply(BankConfig::default()))
 }
@@ -577,8 +605,8 @@ fn bad_number(x: f64) -> Option<&'static str> {
 
 /// TOML allows `nan` and `inf`: a number of a gains or schedule file that is not finite (or
 /// beyond an f32's range) is a usage error naming the file, the table (`[velocity.ilo1]`, `[level.velocity.ilo1]` with the
-/// level's number) and the key. Text that is not TOML is left to the parser's error.
-fn check_finite(path: &Path, text: &str) -> Result<()> {
+/// level's number) and the key.
+fn check_finite(path: &Path, t: &toml::Table) -> Result<()> {
     fn walk(table: &toml::Table, name: &str, level: Option<usize>) -> Option<String> {
         for (key, v) in table {
             let here = |k: &str| {
@@ -632,20 +660,17 @@ fn check_finite(path: &Path, text: &str) -> Result<()> {
         }
         None
     }
-    match toml::from_str::<toml::Table>(text) {
-        Ok(t) => match walk(&t, "", None) {
-            Some(m) => Err(Error::Usage(format!(
-                "{}: bad {} file: {m}",
-                path.display(),
-                if t.contains_key("level") {
-                    "schedule"
-                } else {
-                    "gains"
-                }
-            ))),
-            None => Ok(()),
-        },
-        Err(_) => Ok(()),
+    match walk(t, "", None) {
+        Some(m) => Err(Error::Usage(format!(
+            "{}: bad {} file: {m}",
+            path.display(),
+            if t.contains_key("level") {
+                "schedule"
+            } else {
+                "gains"
+            }
+        ))),
+        None => Ok(()),
     }
 }
 
@@ -773,7 +798,8 @@ fn config_error_key(e: &ConfigError) -> Option<String> {
         ConfigError::NotFinite(p)
         | ConfigError::NotPositive(p)
         | ConfigError::Negative(p)
-        | ConfigError::StepTooLarge(p) => p,
+        | ConfigError::StepTooLarge(p)
+        | ConfigError::StepRateTooLarge(p) => p,
         ConfigError::K1OutOfRange => "K1",
         _ => return None,
     };

@@ -211,6 +211,8 @@ pub struct PaperResult {
     /// Of those, the rows scored: the others are near gimbal lock or within
     /// [`crate::score::LOCK_SETTLE_S`] after it (roll and yaw only).
     pub rows_scored: usize,
+    /// The run without noise: samples the bank rejected, gaps (for the input warnings).
+    pub summary: replay::EstimationSummary,
 }
 
 /// Checks an MSE window end (`--window` of `paper` and `tune`): a finite number of seconds in
@@ -222,6 +224,33 @@ pub fn check_window(window_s: f64) -> Result<()> {
 /// Runs the protocol. The 6 (variance, seed) runs are spread over 2 threads.
 pub fn run(
     samples: &[Sample],
+    opts: &EstimateOptions,
+    window_s: f64,
+    capture: &str,
+) -> Result<PaperResult> {
+    let duration_s = samples.last().map_or(0.0, |s| s.t_s());
+    run_counted(
+        samples,
+        (samples.len(), duration_s),
+        opts,
+        window_s,
+        capture,
+    )
+}
+
+/// The MSE window's end, us.
+pub fn window_end_us(window_s: f64) -> u64 {
+    (window_s * 1e6).round() as u64
+}
+
+/// [`run`] on the samples a capture reader kept ([`crate::replay::read_samples_until`] up to
+/// [`window_end_us`]: the MSEs are causal, so they are those of the whole capture), with the
+/// whole capture's sample count and duration (s) for the report. Each run streams its rows
+/// into the MSE sums: memory is the samples' and 7 bytes per sample (the acceleration
+/// reference and the lock masks), whatever the window.
+pub fn run_counted(
+    samples: &[Sample],
+    (total, duration_s): (usize, f64),
     opts: &EstimateOptions,
     window_s: f64,
     capture: &str,
@@ -247,6 +276,7 @@ pub fn run(
     };
     let opts = &opts.paper_law();
     let acc_ref = ave_on_rate(samples, &REFERENCE_AVE, opts)?;
+    let lock = crate::score::Lock::of(samples, opts.axis());
     let jobs: Vec<(usize, u64)> = (0..NOISE_VARS.len())
         .flat_map(|i| SEEDS.iter().map(move |&s| (i, s)))
         .collect();
@@ -258,7 +288,7 @@ pub fn run(
         let handles: Vec<_> = chunks
             .into_iter()
             .map(|chunk| {
-                let acc_ref = &acc_ref;
+                let (acc_ref, lock) = (&acc_ref, &lock);
                 scope.spawn(move || {
                     chunk
                         .into_iter()
@@ -268,9 +298,8 @@ pub fn run(
                                 var: NOISE_VARS[i],
                                 seed,
                             });
-                            let (rows, _) = replay::estimate(samples, &o)?;
-                            let (v, a) = row_mse(opts.axis(), &rows, samples, acc_ref, window_s);
-                            Ok((i, v, a))
+                            let r = stream_mse(&o, samples, lock, acc_ref, window_s)?;
+                            Ok((i, r.vel, r.acc))
                         })
                         .collect::<Vec<_>>()
                 })
@@ -296,21 +325,13 @@ pub fn run(
     // Baseline without noise: the estimators' own tracking error (lag) on this motion.
     let mut o = opts.clone();
     o.noise = None;
-    let (rows, _) = replay::estimate(samples, &o)?;
-    let (vel_clean, acc_clean) = row_mse(opts.axis(), &rows, samples, &acc_ref, window_s);
-    let lim = (window_s * 1e6).round() as u64;
-    let in_window = |r: &&Row| r.t_us <= lim;
-    let rows_in_window = rows.iter().filter(in_window).count();
-    let rows_scored = rows
-        .iter()
-        .zip(row_scored(opts.axis(), &rows, samples))
-        .filter(|(r, k)| *k && in_window(r))
-        .count();
-    let duration_s = samples.last().map_or(0.0, |s| s.t_s());
+    let clean = stream_mse(&o, samples, &lock, &acc_ref, window_s)?;
+    let (vel_clean, acc_clean) = (clean.vel, clean.acc);
+    let (rows_in_window, rows_scored) = (clean.rows_in_window, clean.rows_scored);
     Ok(PaperResult {
         capture: capture.to_string(),
         axis: opts.axis(),
-        samples: samples.len(),
+        samples: total,
         duration_s,
         hold: opts.hold,
         step_s: opts.step_s,
@@ -323,6 +344,83 @@ pub fn run(
         acc_clean,
         rows_in_window,
         rows_scored,
+        summary: clean.summary,
+    })
+}
+
+/// What one run of the bank gives the tables ([`stream_mse`]).
+struct RunScore {
+    vel: [f64; FAMILY_COUNT],
+    acc: [f64; FAMILY_COUNT],
+    rows_in_window: usize,
+    rows_scored: usize,
+    summary: replay::EstimationSummary,
+}
+
+/// One run of the bank `o` over `samples`, its rows streamed into the MSE sums of [`row_mse`]
+/// (same rows, same order, same sums) without keeping them.
+fn stream_mse(
+    o: &EstimateOptions,
+    samples: &[Sample],
+    lock: &crate::score::Lock,
+    acc_ref: &[f32],
+    window_s: f64,
+) -> Result<RunScore> {
+    let axis = o.axis();
+    let lim = window_end_us(window_s);
+    let (mut sv, mut sa) = ([0.0f64; FAMILY_COUNT], [0.0f64; FAMILY_COUNT]);
+    let (mut nv, mut na) = (0usize, 0usize);
+    let (mut in_window, mut scored, mut j) = (0usize, 0usize, 0usize);
+    let mut on_row = |r: Row| {
+        while j < samples.len() && samples[j].t_us < r.t_us {
+            j += 1;
+        }
+        let k = lock.scored.get(j).copied().unwrap_or(false);
+        if r.t_us > lim {
+            return Ok(());
+        }
+        in_window += 1;
+        if !k {
+            return Ok(());
+        }
+        scored += 1;
+        let out = r.axis(axis).map(|a| a.out);
+        let rate = r.axis(axis).and_then(|a| a.reference_deg_s);
+        let accr = acc_ref.get(j).copied().unwrap_or(f32::NAN);
+        let add = |sum: &mut [f64; FAMILY_COUNT], n: &mut usize, reference: f32, ch: &[Channel]| {
+            if reference.is_nan() {
+                return;
+            }
+            for (s, &c) in sum.iter_mut().zip(ch) {
+                let e = out.map_or(f32::NAN, |o| o[c]);
+                let d = f64::from(e) - f64::from(reference);
+                *s += d * d;
+            }
+            *n += 1;
+        };
+        add(
+            &mut sv,
+            &mut nv,
+            rate.unwrap_or(f32::NAN),
+            &Channel::VELOCITY,
+        );
+        add(&mut sa, &mut na, accr, &Channel::ACCELERATION);
+        Ok(())
+    };
+    let mut est = replay::Estimation::new(o)?;
+    for &s in samples {
+        est.push(s, &mut on_row)?;
+    }
+    let summary = est.finish(&mut on_row)?;
+    let mean = |sum: [f64; FAMILY_COUNT], n: usize| {
+        sum.map(|s| if n == 0 { f64::NAN } else { s / n as f64 })
+    };
+    Ok(RunScore {
+        vel: mean(sv, nv),
+        acc: mean(sa, na),
+        rows_in_window: in_window,
+        rows_scored: scored,
+        summary,
     })
 }
 

@@ -855,7 +855,10 @@ pub fn run(args: &SimArgs) -> Result<Summary> {
         .as_deref()
         .map(OutputFile::create)
         .transpose()?;
-    let bytes = read_capture(&args.capture)?;
+    let bytes = read_capture(
+        &args.capture,
+        "`nav440 sim` holds its capture in memory: serve a part of it (e.g. `head -c 500M CAPTURE > part.bin`)",
+    )?;
     let samples = capture_samples(&bytes)
         .map_err(|e| Error::NotNav440(format!("{}: {e}", args.capture.display())))?;
     let quirks = Quirks {

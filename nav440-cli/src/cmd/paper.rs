@@ -30,8 +30,25 @@ pub fn run(a: &Args) -> Result<()> {
     let opts = bank_options(&a.bank, PresetArg::Paper)?;
     one_axis(&opts, "paper")?;
     paper::check_window(a.window)?;
-    let samples = replay::read_samples(&a.file)?;
-    let res = paper::run(&samples, &opts, a.window, &replay::capture_name(&a.file))?;
+    // The MSEs are causal: only the samples up to the window's end are kept.
+    let cap = replay::read_samples_until(
+        &a.file,
+        Some(paper::window_end_us(a.window)),
+        "a shorter --window keeps fewer samples; `nav440 estimate` streams a capture of any length",
+    )?;
+    let name = replay::capture_name(&a.file);
+    let total = usize::try_from(cap.total).unwrap_or(usize::MAX);
+    let duration_s = cap.last_t_us as f64 * 1e-6;
+    let res = paper::run_counted(&cap.samples, (total, duration_s), &opts, a.window, &name);
+    // The input's warnings as `estimate` prints them, also when the samples are too few.
+    let summary = match &res {
+        Ok(r) => r.summary,
+        Err(_) => replay::summary_of(&cap.samples, &opts.paper_law()).unwrap_or_default(),
+    };
+    for w in cap.warnings(&summary) {
+        eprintln!("nav440: warning: {w}");
+    }
+    let res = res?;
     for w in res.warnings() {
         eprintln!("nav440: warning: {w}");
     }

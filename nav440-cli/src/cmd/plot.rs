@@ -42,13 +42,27 @@ pub fn run(a: &Args) -> Result<()> {
     if crate::output::is_stdout(&a.output) {
         crate::output::check_stdout()?;
     }
-    let samples = replay::read_samples(&a.file)?;
-    plots::plot_capture(
-        &samples,
+    // The estimates are causal: only the samples up to --to are kept.
+    let cap = replay::read_samples_until(
+        &a.file,
+        a.to.map(|t| (t * 1e6).round() as u64),
+        "--to keeps only the samples up to it; `nav440 estimate` streams a capture of any length",
+    )?;
+    let res = plots::plot_capture(
+        &cap.samples,
         &opts,
         &replay::capture_name(&a.file),
         &a.output,
         a.from,
         a.to,
-    )
+    );
+    // The input's warnings as `estimate` prints them, also when nothing could be drawn.
+    let summary = match &res {
+        Ok(s) => *s,
+        Err(_) => replay::summary_of(&cap.samples, &opts).unwrap_or_default(),
+    };
+    for w in cap.warnings(&summary) {
+        eprintln!("nav440: warning: {w}");
+    }
+    res.map(drop)
 }

@@ -113,12 +113,6 @@ pub fn run(a: Args) -> Result<()> {
             super::stdout_or_file(None, |w| w.write_all(text.as_bytes()))
         }
     };
-    let captures = a
-        .files
-        .iter()
-        .map(|f| replay::read_samples(f))
-        .collect::<Result<Vec<_>>>()?;
-    let captures: Vec<&[replay::Sample]> = captures.iter().map(Vec::as_slice).collect();
     let opts = replay::EstimateOptions {
         hold: a.hold.map_or(estimators::Hold::Linear, Into::into),
         step_s: a.step,
@@ -126,6 +120,21 @@ pub fn run(a: Args) -> Result<()> {
         ..Default::default()
     };
     one_axis(&opts, "tune")?;
+    let mut captures = Vec::with_capacity(a.files.len());
+    for f in &a.files {
+        let cap = replay::read_samples_until(
+            f,
+            None,
+            "tune on a part of it (e.g. `head -c 500M CAPTURE > part.bin`)",
+        )?;
+        // The input's warnings as `estimate` prints them (one run of the starting bank).
+        let summary = replay::summary_of(&cap.samples, &opts.paper_law()).unwrap_or_default();
+        for w in cap.warnings(&summary) {
+            eprintln!("nav440: warning: {}: {w}", replay::capture_name(f));
+        }
+        captures.push(cap.samples);
+    }
+    let captures: Vec<&[replay::Sample]> = captures.iter().map(Vec::as_slice).collect();
     let spec = tune::TuneSpec {
         noise_var: a.noise_var.unwrap_or(0.0),
         seeds: a.seeds.max(1),

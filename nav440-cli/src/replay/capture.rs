@@ -28,6 +28,8 @@ pub struct CaptureReader {
     name: String,
     inner: Box<dyn std::io::Read>,
     bytes: u64,
+    /// The size of a regular file, bytes (`None` for standard input, a pipe or a device).
+    file_len: Option<u64>,
 }
 
 impl std::fmt::Debug for CaptureReader {
@@ -43,20 +45,24 @@ impl std::fmt::Debug for CaptureReader {
 /// file is an [`Error::Input`].
 pub fn open_capture(path: &Path) -> Result<CaptureReader> {
     let name = capture_name(path);
+    let mut file_len = None;
     let inner: Box<dyn std::io::Read> = if is_stdin(path) {
         Box::new(std::io::stdin())
     } else {
         let f = std::fs::File::open(path)
             .map_err(|e| Error::Input(format!("cannot read {name}: {}", io_reason(&e))))?;
-        if f.metadata().is_ok_and(|m| m.is_dir()) {
+        let meta = f.metadata().ok();
+        if meta.as_ref().is_some_and(|m| m.is_dir()) {
             return Err(Error::Input(format!("cannot read {name}: is a directory")));
         }
+        file_len = meta.filter(|m| m.is_file()).map(|m| m.len());
         Box::new(f)
     };
     Ok(CaptureReader {
         name,
         inner,
         bytes: 0,
+        file_len,
     })
 }
 
@@ -104,12 +110,37 @@ impl CaptureReader {
     }
 }
 
+/// The most a command holds of a capture in memory, bytes (1 GiB): the bytes of a capture read
+/// whole ([`read_capture`], `nav440 sim`), or the samples `paper`, `tune` and `plot` keep
+/// ([`MAX_SAMPLES`]). Beyond it the command stops with an [`Error::Input`] (exit 3), found
+/// while reading: nothing past the cap is read or allocated.
+pub const MAX_CAPTURE_BYTES: u64 = 1 << 30;
+
+/// The error for a capture `name` beyond the cap: what was read, the cap, and `hint` (how to
+/// stream instead, or how to cut it).
+pub(crate) fn too_large(name: &str, what: &str, hint: &str) -> Error {
+    Error::Input(format!(
+        "{name}: {what} more than {MAX_CAPTURE_BYTES} bytes (1 GiB), the most a command holds in memory; {hint}"
+    ))
+}
+
 /// Reads a whole capture into memory (file, or standard input for `-`); a missing, unreadable
-/// or empty input is an [`Error::Input`]. The commands stream instead (see [`CaptureReader`]).
-pub fn read_capture(path: &Path) -> Result<Vec<u8>> {
+/// or empty input is an [`Error::Input`], and so is one larger than [`MAX_CAPTURE_BYTES`]
+/// (a file's size is checked before reading; a stream is stopped at the cap, with `hint` in
+/// the message). The commands that can stream do (see [`CaptureReader`]).
+pub fn read_capture(path: &Path, hint: &str) -> Result<Vec<u8>> {
     let mut r = open_capture(path)?;
+    let over = |name: &str| too_large(name, "holds", hint);
+    if let Some(len) = r.file_len {
+        if len > MAX_CAPTURE_BYTES {
+            return Err(over(r.name()));
+        }
+    }
     let mut bytes = Vec::new();
     r.for_each_chunk(|c| {
+        if (bytes.len() + c.len()) as u64 > MAX_CAPTURE_BYTES {
+            return Err(over(&capture_name(path)));
+        }
         bytes.extend_from_slice(c);
         Ok(true)
     })?;

@@ -111,26 +111,128 @@ pub fn samples_and_faults(bytes: &[u8]) -> Result<(Vec<Sample>, TimeFaults)> {
 }
 
 /// [`samples`] of a capture read in chunks (file, or standard input for `-`): memory is the
-/// samples', not the capture's. Errors name the capture.
+/// samples', not the capture's (at most [`MAX_SAMPLES`]). Errors name the capture.
 pub fn read_samples(path: &Path) -> Result<Vec<Sample>> {
     read_samples_and_faults(path).map(|(s, _)| s)
 }
 
 /// [`read_samples`] and the time-stamp faults met on the way.
 pub fn read_samples_and_faults(path: &Path) -> Result<(Vec<Sample>, TimeFaults)> {
+    read_samples_until(path, None, "cut the capture into parts").map(|c| (c.samples, c.faults))
+}
+
+/// The most samples a command keeps in memory: [`MAX_CAPTURE_BYTES`] (1 GiB) of [`Sample`]s
+/// (40 bytes each: 26,843,545, 74.6 h at 100 Hz).
+pub const MAX_SAMPLES: usize = MAX_CAPTURE_BYTES as usize / std::mem::size_of::<Sample>();
+
+/// The samples of a capture that a command keeps ([`read_samples_until`]), with what the
+/// reading met over the whole capture.
+#[derive(Clone, Debug, Default)]
+pub struct CaptureSamples {
+    /// The samples kept: a prefix of the capture's.
+    pub samples: Vec<Sample>,
+    /// Samples the whole capture gave (kept or not).
+    pub total: u64,
+    /// Time of the capture's last sample, us since the first.
+    pub last_t_us: u64,
+    /// Time-stamp faults over the whole capture.
+    pub faults: TimeFaults,
+    /// Samples dropped for a BIT failure.
+    pub bit: BitCounts,
+    /// Bytes at the end of the input that did not complete a frame.
+    pub end_dropped_bytes: u64,
+}
+
+impl CaptureSamples {
+    /// The warnings `nav440 estimate` prints about its input, the same lines by the same code
+    /// ([`StreamReport::warnings`]): BIT failures, samples the bank rejected, time faults and
+    /// gaps, the end of input. `summary` is a run of the bank over the samples (its rejections
+    /// and gaps); samples near gimbal lock are left to each command's own note.
+    pub fn warnings(&self, summary: &EstimationSummary) -> impl Iterator<Item = String> {
+        StreamReport {
+            summary: EstimationSummary {
+                near_lock: 0,
+                lock_passes: 0,
+                ..*summary
+            },
+            faults: self.faults,
+            bit: self.bit,
+            schedule_misfit_us: None,
+            end_dropped_bytes: self.end_dropped_bytes,
+        }
+        .warnings()
+    }
+}
+
+/// Reads the samples of a capture in chunks and keeps the prefix a causal computation up to
+/// `until_us` needs: every sample up to the last at or before `until_us`, then
+/// [`WARMUP_SAMPLES`] more (so an epoch that starts by then has its whole period warm-up), and
+/// at least the first [`WARMUP_SAMPLES`]; every sample with `None`. The rest of the capture
+/// is read for its counts (faults, total, duration) and not kept. Keeping more than
+/// [`MAX_SAMPLES`] is an [`Error::Input`] (exit 3) with `hint`, found while reading. A stream
+/// without a sample is an [`Error::NotNav440`]; errors name the capture.
+pub fn read_samples_until(
+    path: &Path,
+    until_us: Option<u64>,
+    hint: &str,
+) -> Result<CaptureSamples> {
     let mut r = open_capture(path)?;
+    let name = r.name().to_string();
     let mut reader = SampleReader::new();
-    let mut out = Vec::new();
+    let mut out = CaptureSamples::default();
+    let mut past = 0usize;
+    let over = std::cell::Cell::new(false);
+    let mut keep = |s: Sample, out: &mut CaptureSamples| {
+        out.total += 1;
+        out.last_t_us = s.t_us;
+        let beyond = until_us.is_some_and(|u| s.t_us > u);
+        if beyond || past > 0 {
+            if past >= WARMUP_SAMPLES && out.samples.len() >= WARMUP_SAMPLES {
+                return;
+            }
+            past += 1;
+        }
+        if out.samples.len() >= MAX_SAMPLES {
+            over.set(true);
+            return;
+        }
+        out.samples.push(s);
+    };
     r.for_each_chunk(|c| {
-        reader.feed(c, |s| out.push(s));
-        Ok(true)
+        reader.feed(c, |s| keep(s, &mut out));
+        Ok(!over.get())
     })?;
-    reader.finish(|s| out.push(s));
+    if !over.get() {
+        reader.finish(|s| keep(s, &mut out));
+    }
+    if over.get() {
+        return Err(too_large(
+            &name,
+            &format!(
+                "its samples ({} bytes each) take",
+                std::mem::size_of::<Sample>()
+            ),
+            hint,
+        ));
+    }
     reader.check_nonempty().map_err(|e| match e {
-        Error::NotNav440(m) => Error::NotNav440(format!("{}: {m}", r.name())),
+        Error::NotNav440(m) => Error::NotNav440(format!("{name}: {m}")),
         other => other,
     })?;
-    Ok((out, reader.faults()))
+    out.faults = reader.faults();
+    out.bit = reader.bit();
+    out.end_dropped_bytes = reader.front.counters().end_dropped_bytes;
+    Ok(out)
+}
+
+/// The summary of a run of the bank `opts` over `samples` (rejections, gaps), no row kept.
+pub fn summary_of(samples: &[Sample], opts: &EstimateOptions) -> Result<EstimationSummary> {
+    let mut est = Estimation::new(opts)?;
+    let mut drop_row = |_: Row| Ok(());
+    for &s in samples {
+        est.push(s, &mut drop_row)?;
+    }
+    est.finish(&mut drop_row)
 }
 
 /// Unwraps a wrapped angle sequence (deg) so consecutive values differ by at most 180 deg.
