@@ -147,9 +147,11 @@ async fn main(_spawner: Spawner) {
     loop {
         match embedded_io_async::Read::read(&mut uart, &mut buf).await {
             Ok(n) => {
+                let changes = pipe.estimation().counters().period_changes;
                 if let Err(e) = pipe.feed(&buf[..n], &mut emit) {
                     defmt::panic!("bank: {}", e)
                 }
+                out::period_change(&pipe, changes);
             }
             Err(e) => {
                 uart_errors = uart_errors.saturating_add(1);

@@ -75,3 +75,16 @@ pub fn counters(pipe: &Pipeline, uart_errors: u32) {
         uart_errors,
     );
 }
+
+/// Reports a new time epoch at another packet rate while it happens (the pipeline measured the
+/// period on the epoch's first samples and rebuilt the banks for it) when `pipe`'s count of
+/// period changes has moved past `before`: `firmware: new time epoch at another packet rate:
+/// nominal sample period now N us; banks rebuilt`, as firmware-example prints it.
+pub fn period_change(pipe: &Pipeline, before: u32) {
+    if pipe.estimation().counters().period_changes != before {
+        defmt::println!(
+            "firmware: new time epoch at another packet rate: nominal sample period now {=u32} us; banks rebuilt",
+            pipe.estimation().period_s().map_or(0, |p| (p * 1e6) as u32)
+        );
+    }
+}

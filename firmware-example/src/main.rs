@@ -254,18 +254,11 @@ fn stream(
         }
         // All of it, the frames before the reset included (the rest is the new power-up
         // stream: frames the pipeline does not estimate, or a cut frame it skips).
-        let changes = pipe.estimation().counters().period_changes;
+        let changes = out::period_changes(pipe);
         if let Err(e) = pipe.feed(bytes, &mut out::row) {
             bank_failed(&e);
         }
-        if pipe.estimation().counters().period_changes != changes {
-            // A new epoch (a unit reset or re-boot) at another packet rate: the banks were
-            // rebuilt for the period measured on its first samples.
-            defmt::println!(
-                "firmware: new time epoch at another packet rate: nominal sample period now {=u32} us; banks rebuilt",
-                pipe.estimation().period_s().map_or(0, |p| (p * 1e6) as u32)
-            );
-        }
+        out::period_change(pipe, changes);
         flow
     };
     // Ends `stream` (re-configuration) or prints the periodic counters.

@@ -91,6 +91,24 @@ pub fn row(r: &Row<Output>) {
     defmt::println!("row {=[u8]}", &buf[..]);
 }
 
+/// The count of period changes of `pipe` (`nav440_pipeline::Counters::period_changes`), to
+/// hand to [`period_change`] after the next feed.
+pub fn period_changes(pipe: &crate::pipeline::Pipeline) -> u32 {
+    pipe.estimation().counters().period_changes
+}
+
+/// Reports a new time epoch at another packet rate while it happens (a unit reset or re-boot
+/// at another rate: the pipeline measured the period on the epoch's first samples and rebuilt
+/// the banks for it) when `pipe`'s count has moved past `before` ([`period_changes`]).
+pub fn period_change(pipe: &crate::pipeline::Pipeline, before: u32) {
+    if period_changes(pipe) != before {
+        defmt::println!(
+            "firmware: new time epoch at another packet rate: nominal sample period now {=u32} us; banks rebuilt",
+            pipe.estimation().period_s().map_or(0, |p| (p * 1e6) as u32)
+        );
+    }
+}
+
 /// Sends the end-of-run counters: the `key=value` line of `nav440_pipeline::Pipeline::summary`
 /// (same keys, same order) followed by `unit_bytes` and `stack_peak` (bytes).
 pub fn summary(

@@ -173,9 +173,11 @@ async fn main(_spawner: Spawner) {
                 Ok(n) => n,
                 Err(e) => fail(1, format_args!("UART error: {e:?}")),
             };
+            let changes = out::period_changes(&pipe);
             if let Err(e) = pipe.feed(&buf[..n], &mut emit) {
                 fail(1, format_args!("bank: {e:?}"))
             }
+            out::period_change(&pipe, changes);
         } else if let Some(message) = total.is_none().then(|| end.poll(&mut control)).flatten() {
             total = Some(
                 message.unwrap_or_else(|m| fail(1, format_args!("bad control message {m:02x?}"))),

@@ -81,22 +81,23 @@ pub(super) fn rate_change_capture() -> Result<PathBuf, String> {
 /// (firmware-example's `main.rs`): the pipeline measured the period again and rebuilt the banks.
 pub(super) const PERIOD_CHANGE: &str = "firmware: new time epoch at another packet rate";
 
-/// Writes `ci-rate-drop.bin`: 10 s of the `fig5` motion at 100 Hz, 10 s at 50 Hz in the same
+/// Writes `TAG-rate-drop.bin` (each caller its own tag: the files of one are read by running
+/// jobs while another writes): 10 s of the `fig5` motion at 100 Hz, 10 s at 50 Hz in the same
 /// epoch (the rate halves after the warm-up), then 10 s at 20 Hz whose time stamps start over
 /// (a unit reset at a fifth of the first rate): 1,703 rows. Every estimate stays bounded and
 /// the new epoch's period is measured again (issue 38; `host-tests/tests/rate_change.rs`
 /// checks the same capture on the host).
-pub(super) fn rate_drop_capture() -> Result<PathBuf, String> {
+pub(super) fn rate_drop_capture(tag: &str) -> Result<PathBuf, String> {
     let dir = work_dir()?;
     let mut bytes = Vec::new();
     // (file, rate Hz, timeITOW of the first packet ms): the 50 Hz part starts 20 ms after the
     // last 100 Hz packet; the 20 Hz part at the first part's start (time goes back: a reset).
-    for (name, rate, itow) in [
-        ("ci-drop-100hz.bin", "100", "208800000"),
-        ("ci-drop-50hz.bin", "50", "208810020"),
-        ("ci-drop-20hz.bin", "20", "208800000"),
+    for (rate, itow) in [
+        ("100", "208800000"),
+        ("50", "208810020"),
+        ("20", "208800000"),
     ] {
-        let part = dir.join(name);
+        let part = dir.join(format!("{tag}-drop-{rate}hz.bin"));
         nav440_synth(
             &part,
             &[
@@ -112,7 +113,7 @@ pub(super) fn rate_drop_capture() -> Result<PathBuf, String> {
         )?;
         bytes.extend(read_file(&part)?);
     }
-    let out = dir.join("ci-rate-drop.bin");
+    let out = dir.join(format!("{tag}-rate-drop.bin"));
     std::fs::write(&out, &bytes).map_err(|e| format!("cannot write {}: {e}", out.display()))?;
     Ok(out)
 }

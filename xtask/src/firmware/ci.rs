@@ -242,7 +242,7 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
     )?;
     // The rate halves after the warm-up, then a reset at a fifth of it: the period is measured
     // again and every estimate stays bounded (checked on the product images below).
-    let rate_drop = rate_drop_capture()?;
+    let rate_drop = rate_drop_capture("ci")?;
     // Every bundled capture (all packet types and rates, the week wrap) plus those nine.
     let mut captures = data_captures();
     captures.extend([

@@ -3,7 +3,7 @@
 //! embassy example (`cargo xtask embassy`).
 
 use super::build::build;
-use super::captures::data_captures;
+use super::captures::{data_captures, rate_drop_capture, PERIOD_CHANGE};
 use super::equivalence::compare_csv;
 use super::nav440_cli::{firmware_host_args, host_estimate, nav440_bin, Sim, FIRMWARE_AXIS};
 use super::qemu_run::{counter, counters, run_unit, unit_timeout};
@@ -405,6 +405,16 @@ pub fn embassy_jobs(pool: &Pool) -> Result<(), String> {
             },
         })
         .collect();
+    // The rate halves after the warm-up, then a reset at a fifth of it: the period change is
+    // reported while it happens.
+    cases.push(UnitCase {
+        name: "embassy-rate-drop",
+        capture: rate_drop_capture("embassy")?,
+        sim_args: &["--fast"],
+        expect: Expect::Csv {
+            stderr_has: PERIOD_CHANGE,
+        },
+    });
     cases.push(UnitCase {
         name: "embassy-no-answer",
         capture: root().join("host-tests/data/sin5_a2_25hz_weekwrap.bin"),
