@@ -414,9 +414,12 @@ fn uart_bytes(pipe: &pipeline::Pipeline) -> u64 {
 
 /// Ends a finite input: the held warm-up, the counters line, exit 0.
 fn finish(pipe: &mut pipeline::Pipeline, uart: &Uart0, unit_bytes: u64) -> ! {
+    // An epoch shorter than the warm-up is measured at the end of the input.
+    let changes = out::period_changes(pipe);
     if let Err(e) = pipe.finish(&mut out::row) {
         bank_failed(&e);
     }
+    out::period_change(pipe, changes);
     let dropped = pipe.front().counters().end_dropped_bytes;
     if dropped > 0 {
         defmt::println!(
@@ -485,9 +488,11 @@ fn replay(mut uart: Uart0, pipe: &mut pipeline::Pipeline) -> ! {
     while remaining > 0 {
         let want = remaining.min(buf.len());
         let n = uart.read(&mut buf[..want]).unwrap_or(0);
+        let changes = out::period_changes(pipe);
         if let Err(e) = pipe.feed(&buf[..n], &mut out::row) {
             bank_failed(&e);
         }
+        out::period_change(pipe, changes);
         remaining -= n;
     }
     let replayed = uart.bytes_read().saturating_sub(8);

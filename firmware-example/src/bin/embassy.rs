@@ -190,9 +190,11 @@ async fn main(_spawner: Spawner) {
 }
 
 fn finish(pipe: &mut pipeline::Pipeline, uart: &Uart0, unit_bytes: u64) -> ! {
+    let changes = out::period_changes(pipe);
     if let Err(e) = pipe.finish(&mut out::row) {
         fail(1, format_args!("bank: {e:?}"))
     }
+    out::period_change(pipe, changes);
     out::summary(
         pipe,
         uart.overruns(),
