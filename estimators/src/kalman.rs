@@ -18,8 +18,7 @@
 //! tracker is one fixed-gain filter stepped at (at most) its nominal period whatever the
 //! interval sequence: a bounded input gives a bounded output for jitter, dropouts, a lasting
 //! rate below or above the nominal one (`estimators/tests/timing.rs`). Shorter intervals
-//! (`dt <= dt0`) are one predict + update over `dt`, as always: at the nominal rate the outputs
-//! are bit for bit what they were. Cost: `k` updates of 9 multiplications for an interval of
+//! (`dt <= dt0`) are one predict + update over `dt`. Cost: `k` updates of 9 multiplications for an interval of
 //! `k` nominal periods (the nominal rate's work per second) and one division by `k`.
 //!
 //! Re-deriving the steady-state gain for each interval instead (the dimensionless gains

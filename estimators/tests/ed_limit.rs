@@ -1,5 +1,5 @@
-//! The ED's stability limit `h * alpha` (issue 38: `alpha = 1e30` passed validation and
-//! `ed_v` reached 8e28 deg/s): refused at configuration with a typed error naming `alpha`, in
+//! The ED's stability limit `h * alpha` (without it `alpha = 1e30` drives `ed_v` to 8e28
+//! deg/s): refused at configuration with a typed error naming `alpha`, in
 //! the law, in both banks' halves and for f32 and Q31.32; at the limit the bank still runs and
 //! its ED output stays within the chatter the limit allows.
 

@@ -1,8 +1,7 @@
 //! Captures whose packet rate changes, through `nav440 estimate`'s streaming path
 //! (`replay::estimate_stream`, the pipeline the firmware runs): every estimate of every bank
 //! (paper and product, f32 and fixed point) stays bounded, and a new epoch at another rate
-//! re-measures the nominal period (issue 38's repro: before, `kf_v` reached 3.1e16 deg/s on
-//! the first capture and `kf_a` 9.4e16 deg/s^2, 2.1e9 (the Q31.32 limit) in fixed point).
+//! re-measures the nominal period.
 //!
 //! Bounds, from the captures' motion: every velocity within 10x the largest reference rate
 //! (the packets' `yaw_rate`); every acceleration within 10x 2000 deg/s^2, the bound of the
@@ -103,7 +102,7 @@ fn check_all(what: &str, bytes: &[u8], rows: usize, period_changes: u32) {
     }
 }
 
-/// Issue 38's repro: the bundled 100 Hz fig5 capture, then the bundled 20 Hz spin capture
+/// The bundled 100 Hz fig5 capture, then the bundled 20 Hz spin capture
 /// (its time of week starts again: a new epoch). The second epoch runs at 50 ms.
 #[test]
 fn fig5_100hz_then_spin_20hz() {

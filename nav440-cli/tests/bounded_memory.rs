@@ -1,8 +1,8 @@
 //! Bounded memory and errors that point at the cause (docs/RELIABILITY.md, "Bounded memory"):
-//! each repro of issue 38 items 4 and 5 through the real binary, asserting the exit code, the
+//! each case through the real binary, asserting the exit code, the
 //! message and, for memory, that the command succeeds (or stops with its own error) under an
-//! address-space limit (`prlimit --as`) that the code before the fix exceeded (exit 134,
-//! "memory allocation failed"). The big inputs are generated here (nothing large is stored).
+//! address-space limit (`prlimit --as`) that a command holding every packet's row exceeds
+//! (exit 134, "memory allocation failed"). The big inputs are generated here (nothing large is stored).
 
 use nav440_cli::synth::{encode_packet, PacketKind};
 use std::io::Write;

@@ -1,5 +1,5 @@
 //! No file is lost, no output is lost silently (docs/RELIABILITY.md, "No file is lost"): each
-//! repro of issue 38 through the real binary, asserting the exit code and that no file changed.
+//! case through the real binary, asserting the exit code and that no file changed.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};

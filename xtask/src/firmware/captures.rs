@@ -85,7 +85,7 @@ pub(super) const PERIOD_CHANGE: &str = "firmware: new time epoch at another pack
 /// jobs while another writes): 10 s of the `fig5` motion at 100 Hz, 10 s at 50 Hz in the same
 /// epoch (the rate halves after the warm-up), then 10 s at 20 Hz whose time stamps start over
 /// (a unit reset at a fifth of the first rate): 1,703 rows. Every estimate stays bounded and
-/// the new epoch's period is measured again (issue 38; `host-tests/tests/rate_change.rs`
+/// the new epoch's period is measured again (`host-tests/tests/rate_change.rs`
 /// checks the same capture on the host).
 pub(super) fn rate_drop_capture(tag: &str) -> Result<PathBuf, String> {
     let dir = work_dir()?;
