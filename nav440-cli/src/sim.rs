@@ -358,6 +358,17 @@ enum Msg {
     Closed,
 }
 
+/// An I/O error after which the same read or write is tried again: a time-out that lets the
+/// session check its deadline, or an interrupted call.
+fn retryable(e: &std::io::Error) -> bool {
+    matches!(
+        e.kind(),
+        std::io::ErrorKind::TimedOut
+            | std::io::ErrorKind::WouldBlock
+            | std::io::ErrorKind::Interrupted
+    )
+}
+
 fn spawn_reader(mut r: Box<dyn Read + Send>, tx: Sender<Msg>, stop: Arc<AtomicBool>) {
     std::thread::spawn(move || {
         let mut buf = [0u8; 512];
@@ -369,13 +380,7 @@ fn spawn_reader(mut r: Box<dyn Read + Send>, tx: Sender<Msg>, stop: Arc<AtomicBo
                         return;
                     }
                 }
-                Err(e)
-                    if matches!(
-                        e.kind(),
-                        std::io::ErrorKind::TimedOut
-                            | std::io::ErrorKind::WouldBlock
-                            | std::io::ErrorKind::Interrupted
-                    ) => {}
+                Err(e) if retryable(&e) => {}
                 Err(_) => break,
             }
         }
@@ -546,14 +551,7 @@ fn write_by(
                 bytes = bytes.get(n..).unwrap_or_default();
                 progress = Instant::now();
             }
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    std::io::ErrorKind::TimedOut
-                        | std::io::ErrorKind::WouldBlock
-                        | std::io::ErrorKind::Interrupted
-                ) =>
-            {
+            Err(e) if retryable(&e) => {
                 let now = Instant::now();
                 let over = match deadline {
                     Some(d) => now >= d,
