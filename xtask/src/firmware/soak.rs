@@ -283,27 +283,27 @@ fn write_log(path: &std::path::Path, text: &str) -> Result<(), String> {
 mod tests {
     use super::*;
 
+    /// The injection points, sorted, each at least 2,000 packets from the next and all before
+    /// `minutes` of stream.
+    fn assert_spread(injections: &[String], minutes: u64) {
+        let mut at: Vec<u64> = injections
+            .iter()
+            .map(|s| s.split_once('@').unwrap().1.parse().unwrap())
+            .collect();
+        at.sort();
+        assert!(at.windows(2).all(|w| w[1] - w[0] >= 2_000));
+        assert!(*at.last().unwrap() < minutes * PACKETS_PER_MINUTE);
+    }
+
     #[test]
     fn injections_are_spread_and_apart() {
         let i = injections(120.0, 60.0, 1);
         assert_eq!(i.len(), 8);
-        let mut at: Vec<u64> = i
-            .iter()
-            .map(|s| s.split_once('@').unwrap().1.parse().unwrap())
-            .collect();
-        at.sort();
-        assert!(at.windows(2).all(|w| w[1] - w[0] >= 2_000));
-        assert!(*at.last().unwrap() < 120 * PACKETS_PER_MINUTE);
+        assert_spread(&i, 120);
         // CI's soak: four faults in each of its four windows.
         let (minutes, window) = CI_SOAK;
         let ci = injections(minutes, window, 1);
         assert_eq!(ci.len(), 16);
-        let mut at: Vec<u64> = ci
-            .iter()
-            .map(|s| s.split_once('@').unwrap().1.parse().unwrap())
-            .collect();
-        at.sort();
-        assert!(at.windows(2).all(|w| w[1] - w[0] >= 2_000));
-        assert!(*at.last().unwrap() < 10 * PACKETS_PER_MINUTE);
+        assert_spread(&ci, 10);
     }
 }
