@@ -19,9 +19,10 @@
 //!   `EdParams`, `KalmanParams`, [`Series`], [`ClosedForm`]) apart from its small state and
 //!   steps with `step(&self, &mut State, y)`; [`Stateful`] (aliases [`Ave`], [`Ilo`], [`Ad`],
 //!   [`Ed`]) binds the two into the classic [`Estimator`] object.
-//! * Banks are generated from one table by [`estimator_bank!`]: [`PaperBank`] (alias
-//!   [`PaperBank`]: the paper's 14 estimators, output indexed by [`Channel`]) and
-//!   [`ProductBank`] (one velocity and one acceleration estimator). [`BankConfig::wrap`] picks
+//! * A bank is a tuple of rows ([`Row`]: a law, how it is built from the [`BankConfig`], its
+//!   channels) behind one input stage: [`Bank`]. [`PaperBank`] (the paper's 14 estimators,
+//!   output indexed by [`Channel`]) and [`ProductBank`] (one velocity and one acceleration
+//!   estimator) are two of them. [`BankConfig::wrap`] picks
 //!   the unwrapping per axis ([`Wrap`]). See docs/BANK.md.
 //! * [`family`]: the paper bank's estimator families (one per column of the paper's tables),
 //!   listed once ([`FAMILIES`], [`for_each_family`]): the channel lists, the gain schedule's
@@ -110,9 +111,11 @@ pub use ave::{
     Ave, AveConfig, AveFamily, AveParams, AveState, DeltaLaw, DeltaMode, COARSE_STABILITY_MARGIN,
 };
 pub use bank::{
-    Accepted, AdAdMap, BankConfig, BankGains, BankInput, Channel, Fed, Feed, PaperBank,
-    PaperOutput, PaperParams, PaperState, ProductBank, ProductChannel, ProductOutput,
-    ProductParams, ProductState, Wrap, GAP_PERIODS, KF_DEFAULT, MAX_GAP_PERIODS, VELOCITY_NAMES,
+    replay, Accepted, AdA, AdAdMap, AdV, AveRow, Bank, BankConfig, BankGains, BankInput,
+    BankOutput, Channel, ChannelLists, Channels, Columns, EdRow, Fed, Feed, IloA, IloV, KfA, KfV,
+    PaperBank, PaperOutput, PaperParams, PaperRows, PaperState, ProductBank, ProductChannel,
+    ProductOutput, ProductParams, ProductRows, ProductState, Row, RowValues, Rows, Warm, Wrap,
+    GAP_PERIODS, KF_DEFAULT, MAX_GAP_PERIODS, VELOCITY_NAMES,
 };
 pub use ed::{Ed, EdConfig, EdFamily, EdParams, EdScheme, EdState, ED_MAX_H_ALPHA};
 pub use error::{ConfigError, SampleError};

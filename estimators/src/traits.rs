@@ -8,7 +8,7 @@
 //! Code that drives "a bank" (the `nav440-pipeline` crate, its CSV writer, a firmware) is
 //! generic over [`EstimatorBank`] and takes the channel count and names from it.
 
-use crate::{BankConfig, ConfigError, SampleError};
+use crate::{BankConfig, Columns, ConfigError, SampleError};
 
 /// One output of a bank for one sample: the unwrapped input angle and the channels' values.
 ///
@@ -17,7 +17,7 @@ use crate::{BankConfig, ConfigError, SampleError};
 /// `<ProductBank<Fx> as EstimatorBank>::CHANNELS`).
 ///
 /// Invariant: `CHANNEL_NAMES.len() == CHANNELS`, `values().len() == CHANNELS`, and
-/// `CSV_COLUMNS` is `CHANNEL_NAMES` joined with `,` (the generated outputs satisfy it by
+/// `CSV_COLUMNS` is `CHANNEL_NAMES` joined with `,` ([`crate::BankOutput`] satisfies it by
 /// construction).
 ///
 /// [`ProductOutput`]: crate::ProductOutput
@@ -27,8 +27,8 @@ pub trait EstimatorOutput: Copy + core::fmt::Debug + PartialEq {
     /// The channels' names (their CSV column names), in output order: e.g. `"ilo1_v"`
     /// (a velocity, deg/s) or `"kf_a"` (an acceleration, deg/s^2).
     const CHANNEL_NAMES: &'static [&'static str];
-    /// [`Self::CHANNEL_NAMES`] joined with `,` (e.g. `"ilo1_v,kf_a"`).
-    const CSV_COLUMNS: &'static str;
+    /// [`Self::CHANNEL_NAMES`] joined with `,` when displayed (e.g. `ilo1_v,kf_a`).
+    const CSV_COLUMNS: Columns = Columns(Self::CHANNEL_NAMES);
 
     /// The unwrapped input angle rounded to f32, deg.
     fn unwrapped_deg(&self) -> f32;
@@ -65,7 +65,7 @@ pub trait EstimatorBank {
     /// The channels' names, in output order ([`EstimatorOutput::CHANNEL_NAMES`]).
     const CHANNEL_NAMES: &'static [&'static str] = <Self::Output as EstimatorOutput>::CHANNEL_NAMES;
     /// The channels' names joined with `,` ([`EstimatorOutput::CSV_COLUMNS`]).
-    const CSV_COLUMNS: &'static str = <Self::Output as EstimatorOutput>::CSV_COLUMNS;
+    const CSV_COLUMNS: Columns = <Self::Output as EstimatorOutput>::CSV_COLUMNS;
 
     /// Feeds one sample: `t_us`, its time in µs (increasing); `angle_deg`, the angle in deg
     /// (within +-180 when the bank unwraps, `BankConfig::wrap`).
@@ -97,8 +97,7 @@ pub trait EstimatorBank {
     }
 }
 
-/// A bank built from a [`BankConfig`] alone (every bank [`crate::estimator_bank!`]
-/// generates): what a generic constructor such as `nav440_pipeline::axis_bank` calls.
+/// A bank built from a [`BankConfig`] alone (every [`crate::Bank`]): what a generic constructor such as `nav440_pipeline::axis_bank` calls.
 pub trait FromConfig: EstimatorBank + Sized {
     /// Builds the bank (validates every parameter of `cfg`).
     fn from_config(cfg: &BankConfig) -> Result<Self, ConfigError>;

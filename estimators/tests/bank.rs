@@ -126,11 +126,7 @@ fn gap_handling() {
     let first = bank.update(0, 12.5).unwrap();
     assert_eq!(
         first,
-        PaperOutput {
-            unwrapped_deg: 12.5,
-            residual_deg: 0.0,
-            values: [0.0; estimators::Channel::COUNT]
-        }
+        PaperOutput::new(12.5, 0.0, [0.0; estimators::Channel::COUNT])
     );
     bank.restart();
     let mut t_us = 0u64;

@@ -1,4 +1,4 @@
-//! The banks generated from one table (`estimator_bank!`), the `Law` API (parameters apart
+//! The banks (tuples of rows behind one input stage), the `Law` API (parameters apart
 //! from state) and the exactness of the bank's shortcuts, each checked against an independent
 //! computation: the same laws run one by one through `SampleAdapter`.
 
@@ -6,7 +6,8 @@ use estimators::presets::*;
 use estimators::{
     AveConfig, AveParams, BankConfig, Channel, ClosedForm, DeltaMode, EdParams, EdScheme,
     Estimator, Fx, Hold, IloParams, Kalman, KalmanConfig, KalmanOutput, KalmanParams, Law,
-    PaperBank, ProductBank, ProductChannel, Real, SampleAdapter, Series, Stateful, Wrap,
+    PaperBank, PaperOutput, ProductBank, ProductChannel, ProductOutput, Real, SampleAdapter,
+    Series, Stateful, Wrap,
 };
 
 /// A paper-like yaw (deg) at sample `k` of a 100 Hz stream: +-90 deg sweeps plus a
@@ -255,14 +256,16 @@ fn one_parameter_set_serves_several_states() {
     assert!((a.xhat - b.xhat).abs() < 1e-5);
 }
 
-/// Channel names, CSV columns and the CSV header come from the one table.
+/// Channel names, CSV columns and the CSV header come from the rows: every velocity channel,
+/// then every acceleration channel, in row order. The one place the banks' CSV columns are
+/// spelled out (the pipeline's header and every test use the banks' own names).
 #[test]
-fn names_come_from_the_table() {
+fn names_come_from_the_rows() {
     assert_eq!(Channel::COUNT, 14);
     assert_eq!(Channel::ALL.len(), 14);
     // The CSV contract (the pipeline crate's header is built from these names).
     assert_eq!(
-        Channel::CSV_COLUMNS,
+        PaperOutput::CSV_COLUMNS,
         "ave_v,ilo1_v,ilo2_v,ilo3_v,ad_v,ed_v,kf_v,ave_a,ilo1_a,ilo2_a,ilo3_a,ad_a,ed_a,kf_a"
     );
     for (i, c) in Channel::ALL.iter().enumerate() {
@@ -272,7 +275,11 @@ fn names_come_from_the_table() {
         assert_eq!(Channel::VELOCITY[i].name(), format!("{name}_v"));
         assert_eq!(Channel::ACCELERATION[i].name(), format!("{name}_a"));
     }
-    assert_eq!(ProductChannel::CSV_COLUMNS, "ilo1_v,kf_a");
+    assert_eq!(ProductOutput::CSV_COLUMNS, "ilo1_v,kf_a");
+    assert_eq!(ProductOutput::CSV_COLUMNS.to_string(), "ilo1_v,kf_a");
+    assert_eq!(ProductChannel::KfA.name(), "kf_a");
+    assert_ne!(ProductOutput::CSV_COLUMNS, "ilo1_v,kf_a,");
+    assert_ne!(ProductOutput::CSV_COLUMNS, "ilo1_v");
 }
 
 /// `Wrap::None` (pitch) never adds turns: the angle column is the input, and a jump of more

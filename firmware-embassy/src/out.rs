@@ -48,7 +48,7 @@ pub fn pipeline() -> Pipeline {
 /// Sends the header message: the channels of one axis's block.
 pub fn header() {
     defmt::println!(
-        "header angle_deg,{=str}",
+        "header angle_deg,{}",
         <Output as EstimatorOutput>::CSV_COLUMNS
     );
 }

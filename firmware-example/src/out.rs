@@ -69,7 +69,7 @@ pub fn header() {
         mask |= 1 << a.index();
     }
     defmt::println!(
-        "header {=u8} {=str}",
+        "header {=u8} {}",
         mask,
         <Output as EstimatorOutput>::CSV_COLUMNS
     );

@@ -29,11 +29,49 @@
 
 use crate::{Axes, AxisBank, AxisRow, Row};
 use core::fmt::Write;
-use estimators::EstimatorOutput;
+use estimators::{EstimatorOutput, PaperOutput};
 
 /// The header line of the paper bank's yaw axis alone (without line terminator): the default
-/// of `nav440 estimate` (`write_header::<PaperBank<_>>(w, Axes::only(Axis::Yaw))`).
-pub const HEADER: &str = "t,yaw,yaw_rate,ave_v,ilo1_v,ilo2_v,ilo3_v,ad_v,ed_v,kf_v,ave_a,ilo1_a,ilo2_a,ilo3_a,ad_a,ed_a,kf_a";
+/// of `nav440 estimate` (`write_header::<PaperBank<_>>(w, Axes::only(Axis::Yaw))`), built at
+/// compile time from the bank's channel names.
+pub const HEADER: &str = {
+    let (bytes, len) = (HEADER_BYTES, PAPER_YAW_HEADER.1);
+    match core::str::from_utf8(bytes.split_at(len).0) {
+        Ok(s) => s,
+        Err(_) => panic!("the channel names are not UTF-8"),
+    }
+};
+
+/// [`HEADER`] in a buffer, and its length.
+const PAPER_YAW_HEADER: ([u8; 256], usize) = yaw_header(PaperOutput::NAMES.as_slice());
+/// The buffer of [`PAPER_YAW_HEADER`].
+const HEADER_BYTES: &[u8] = &PAPER_YAW_HEADER.0;
+
+/// `t,yaw,yaw_rate,` and `names` joined with `,`, in a buffer of 256 bytes (a compile-time
+/// error when longer), and its length.
+const fn yaw_header(names: &[&str]) -> ([u8; 256], usize) {
+    let mut out = [0u8; 256];
+    let prefix = b"t,yaw,yaw_rate";
+    let mut n = 0;
+    while n < prefix.len() {
+        out[n] = prefix[n];
+        n += 1;
+    }
+    let mut i = 0;
+    while i < names.len() {
+        out[n] = b',';
+        n += 1;
+        let b = names[i].as_bytes();
+        let mut j = 0;
+        while j < b.len() {
+            out[n] = b[j];
+            n += 1;
+            j += 1;
+        }
+        i += 1;
+    }
+    (out, n)
+}
 
 /// Writes the header line (without line terminator) of the rows of `axes` from the bank `B`
 /// (any [`AxisBank`], e.g. an `estimators::EstimatorBank`): the column names are its
@@ -169,11 +207,7 @@ mod tests {
     /// 4 empty fields.
     #[test]
     fn product_row() {
-        let out = estimators::ProductOutput {
-            unwrapped_deg: -10.5,
-            residual_deg: 0.0,
-            values: [12.25, -0.5],
-        };
+        let out = estimators::ProductOutput::new(-10.5, 0.0, [12.25, -0.5]);
         let mut axes = [None; 3];
         axes[Axis::Yaw.index()] = Some(AxisRow {
             reference_deg_s: Some(3.0),
@@ -199,8 +233,15 @@ mod tests {
         );
         assert_eq!(
             header(Axes::only(Axis::Pitch)).as_str(),
-            "t,pitch,pitch_rate,ave_v,ilo1_v,ilo2_v,ilo3_v,ad_v,ed_v,kf_v,ave_a,ilo1_a,ilo2_a,ilo3_a,ad_a,ed_a,kf_a"
+            HEADER.replace("yaw", "pitch").as_str()
         );
+        // The channels follow the angle and its rate, in the bank's order.
+        let mut cols = HEADER.split(',');
+        assert_eq!(
+            cols.by_ref().take(3).collect::<heapless::Vec<_, 3>>(),
+            ["t", "yaw", "yaw_rate"]
+        );
+        assert!(cols.eq(PaperOutput::NAMES.iter().copied()));
         let all = header(Axes::ALL);
         let cols: heapless::Vec<&str, 64> = all.split(',').collect();
         assert_eq!(cols.len(), 1 + 3 * 16);
@@ -213,13 +254,13 @@ mod tests {
 
     #[test]
     fn time_and_empty_reference() {
-        let out = PaperOutput {
-            unwrapped_deg: 1.5,
-            residual_deg: 0.0,
-            values: [
+        let out = PaperOutput::new(
+            1.5,
+            0.0,
+            [
                 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 0.25, 0.25, 0.25, 0.25, 0.25, 0.25, 0.25,
             ],
-        };
+        );
         let mut s = heapless::String::<256>::new();
         write_time(&mut s, 12_345_650).unwrap();
         write_axis(&mut s, None, &out).unwrap();

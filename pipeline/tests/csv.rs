@@ -18,12 +18,12 @@ fn row(t_us: u64, reference: Option<f32>, out: PaperOutput) -> Row {
 fn csv_row_format() {
     assert_eq!(
         csv::HEADER,
-        "t,yaw,yaw_rate,ave_v,ilo1_v,ilo2_v,ilo3_v,ad_v,ed_v,kf_v,ave_a,ilo1_a,ilo2_a,ilo3_a,ad_a,ed_a,kf_a"
+        format!("t,yaw,yaw_rate,{}", PaperOutput::CSV_COLUMNS)
     );
-    let out = PaperOutput {
-        unwrapped_deg: -361.5,
-        residual_deg: 0.0,
-        values: [
+    let out = PaperOutput::new(
+        -361.5,
+        0.0,
+        [
             1.0,
             0.1,
             -2.5,
@@ -39,7 +39,7 @@ fn csv_row_format() {
             5.0,
             6.0,
         ],
-    };
+    );
     let yaw = Axes::only(Axis::Yaw);
     let mut s = String::new();
     csv::write_row(&mut s, &row(1_234_567, Some(99.5), out), yaw).unwrap();

@@ -9,7 +9,7 @@
 //! they are the exact bits the firmware sent.
 
 use defmt_decoder::{DecodeError, StreamDecoder, Table};
-use estimators::{EstimatorOutput, PaperOutput, ProductOutput};
+use estimators::{BankOutput, ChannelLists, EstimatorOutput, PaperOutput, ProductOutput};
 use nav440_pipeline::{csv, Axes, Axis, AxisRow, Row};
 use std::path::Path;
 
@@ -32,22 +32,13 @@ trait FromValues: EstimatorOutput {
     fn from_values(angle: f32, residual: f64, values: &[f32]) -> Self;
 }
 
-macro_rules! from_values {
-    ($($Out:ty),+) => {$(
-        impl FromValues for $Out {
-            fn from_values(angle: f32, residual: f64, values: &[f32]) -> Self {
-                let mut out = Self {
-                    unwrapped_deg: angle,
-                    residual_deg: residual,
-                    ..Self::default()
-                };
-                out.values.copy_from_slice(values);
-                out
-            }
-        }
-    )+};
+impl<R: ChannelLists, const N: usize> FromValues for BankOutput<R, N> {
+    fn from_values(angle: f32, residual: f64, values: &[f32]) -> Self {
+        let mut v = [0.0; N];
+        v.copy_from_slice(values);
+        Self::new(angle, residual, v)
+    }
 }
-from_values!(PaperOutput, ProductOutput);
 
 /// The banks a firmware may run, known by their channel names (the header message's).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

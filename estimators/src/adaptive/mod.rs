@@ -116,7 +116,11 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
         let bank = PaperBank::new(&schedule.config_at(base, level))?;
         // Every level must build (so that a retune never fails half-way).
         for l in schedule.levels() {
-            crate::bank::PaperParams::<T, S>::new(&schedule.config_at(base, l.noise_var), 0)?;
+            <crate::PaperRows as crate::Rows<T, S>>::build(
+                &schedule.config_at(base, l.noise_var),
+                0,
+                None,
+            )?;
         }
         Ok(AdaptiveBank {
             bank,

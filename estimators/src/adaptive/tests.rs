@@ -394,7 +394,9 @@ fn set_gains_equals_a_fresh_build() {
             let cfg = s.config_at(&base, v);
             bank.set_gains(&cfg).unwrap();
             let (_, n0) = crate::BankInput::<T>::new(&cfg).unwrap();
-            let fresh = crate::bank::PaperParams::<T>::new(&cfg, n0).unwrap();
+            let fresh =
+                <crate::PaperRows as crate::Rows<T, crate::NativeSqrt>>::build(&cfg, n0, None)
+                    .unwrap();
             assert_eq!(
                 format!("{:?}", bank.params()),
                 format!("{fresh:?}"),

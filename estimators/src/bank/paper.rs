@@ -1,8 +1,10 @@
 //! [`PaperBank`](crate::PaperBank): the paper's 14 estimators.
 
+use super::rows::{Bank, BankOutput, Channels, Row, RowValues, Rows, Warm};
 use super::{BankConfig, Fed, KF_DEFAULT};
 use crate::kalman::{KalmanConfig, KalmanOutput, KalmanParams};
 use crate::presets::*;
+use crate::Law;
 use crate::{
     AdFamily, AdParams, AveConfig, AveFamily, AveParams, ClosedForm, ConfigError, EdConfig,
     EdFamily, EdParams, IloConfig, IloFamily, IloParams, KalmanNoise, KfFamily, Real, Series,
@@ -148,90 +150,327 @@ fn ad_a<T: Real>(
     ))
 }
 
-crate::estimator_bank! {
-    /// The paper's bank for one angle: unwrap -> sample adapter -> AVE, ILO1-3 (Table 2),
-    /// AD (T = 0.01), ED (700/770), Kalman for velocity, and AVE-AVE, ILO1-3-ILO1-3
-    /// (Table 4), AD-AD (T = 0.1), ED-ED, Kalman for acceleration.
-    ///
-    /// Generic over [`Real`]: `PaperBank<f32>` for FPU targets, `PaperBank<Fx>` for
-    /// Cortex-M0/M3 (the `f32` inputs and outputs are only converted; all arithmetic is
-    /// integer). No heap; the whole state is inline (see [`crate::ram`] for its size). `S` is
-    /// the ED's square root (default [`NativeSqrt`](crate::NativeSqrt); see [`SqrtFn`] for plugging in an FPU
-    /// instruction with identical results).
-    bank PaperBank, params PaperParams, state PaperState, output PaperOutput, channel Channel;
-    build(cfg, n0, prev);
-    channels {
-        /// AVE velocity, deg/s.
-        AveV = "ave_v",
-        /// ILO1 (Table 2) velocity, deg/s.
-        Ilo1V = "ilo1_v",
-        /// ILO2 (Table 2) velocity, deg/s.
-        Ilo2V = "ilo2_v",
-        /// ILO3 (Table 2) velocity, deg/s.
-        Ilo3V = "ilo3_v",
-        /// AD (T = 0.01 s) velocity, deg/s.
-        AdV = "ad_v",
-        /// Levant ED velocity, deg/s.
-        EdV = "ed_v",
-        /// Kalman tracker velocity, deg/s.
-        KfV = "kf_v",
-        /// AVE-AVE acceleration, deg/s^2.
-        AveA = "ave_a",
-        /// ILO1-ILO1 (Table 4) acceleration, deg/s^2.
-        Ilo1A = "ilo1_a",
-        /// ILO2-ILO2 (Table 4) acceleration, deg/s^2.
-        Ilo2A = "ilo2_a",
-        /// ILO3-ILO3 (Table 4) acceleration, deg/s^2.
-        Ilo3A = "ilo3_a",
-        /// AD-AD (T = 0.1 s) acceleration, deg/s^2.
-        AdA = "ad_a",
-        /// ED-ED acceleration, deg/s^2.
-        EdA = "ed_a",
-        /// Kalman tracker acceleration, deg/s^2.
-        KfA = "kf_a",
+/// The channels of an ILO row `I` (0-based), velocity then acceleration.
+const ILO_NAMES: [[&str; 1]; 6] = [
+    ["ilo1_v"],
+    ["ilo2_v"],
+    ["ilo3_v"],
+    ["ilo1_a"],
+    ["ilo2_a"],
+    ["ilo3_a"],
+];
+
+/// AVE velocity and AVE-AVE acceleration (`cfg.velocity.ave`, `cfg.acceleration.ave`; one
+/// shared first stage when the two are equal). Replayed on a warm gain change.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AveRow;
+
+impl Channels for AveRow {
+    const VELOCITY: &'static [&'static str] = &["ave_v"];
+    const ACCELERATION: &'static [&'static str] = &["ave_a"];
+}
+
+impl<T: Real, S: SqrtFn<T>> Row<T, S> for AveRow {
+    type Law = VelAcc<AveParams<T>>;
+    fn build(cfg: &BankConfig, _: u32, _: Option<&Self::Law>) -> Result<Self::Law, ConfigError> {
+        ave_pair(cfg)
     }
-    rows {
-        // `warm replay(..)`: on a warm gain change the row is replayed over the recent
-        // samples; `warm bumpless(..)`: moved bumplessly, for the rows that, replayed from
-        // rest, take longer than the replayed history (`REPLAY_CAPACITY` samples) to settle:
-        // the ED, whose velocity state moves at most `alpha` deg/s per second, and the
-        // closed-form series, whose second stage starts from zero acceleration.
-        /// AVE and AVE-AVE.
-        ave: VelAcc<AveParams<T>> = ave_pair(cfg) => [AveV = velocity, AveA = acceleration]
-            warm replay((cfg.velocity.ave, cfg.acceleration.ave));
-        /// ILO1, Table 2 gains.
-        ilo1_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 0, n0, prev) => [Ilo1V = output]
-            warm replay(cfg.velocity.ilo[0]);
-        /// ILO2, Table 2 gains.
-        ilo2_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 1, n0, prev) => [Ilo2V = output]
-            warm replay(cfg.velocity.ilo[1]);
-        /// ILO3, Table 2 gains.
-        ilo3_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 2, n0, prev) => [Ilo3V = output]
-            warm replay(cfg.velocity.ilo[2]);
-        /// AD.
-        ad_v: ClosedForm<AdParams<T>> = ad_v(cfg, n0, prev) => [AdV = output]
-            warm replay(cfg.velocity.ad_t);
-        /// ED and ED-ED.
-        ed: VelAcc<EdParams<T, S>> = ed_pair(cfg) => [EdV = velocity, EdA = acceleration]
-            warm bumpless((cfg.velocity.ed, cfg.acceleration.ed));
-        /// Kalman tracker with the velocity noise.
-        kf_v: KalmanParams<T> = kalman(cfg, &cfg.velocity, KalmanOutput::Velocity) => [KfV = velocity]
-            warm replay(cfg.velocity.kf);
-        /// ILO1-ILO1, Table 4 gains.
-        ilo1_a: IloIloMap<T> = ilo_a(cfg, 0, n0, prev) => [Ilo1A = output]
-            warm bumpless(cfg.acceleration.ilo[0]);
-        /// ILO2-ILO2, Table 4 gains.
-        ilo2_a: IloIloMap<T> = ilo_a(cfg, 1, n0, prev) => [Ilo2A = output]
-            warm bumpless(cfg.acceleration.ilo[1]);
-        /// ILO3-ILO3, Table 4 gains.
-        ilo3_a: IloIloMap<T> = ilo_a(cfg, 2, n0, prev) => [Ilo3A = output]
-            warm bumpless(cfg.acceleration.ilo[2]);
-        /// AD-AD.
-        ad_a: AdAdMap<T> = ad_a(cfg, n0, prev) => [AdA = output]
-            warm bumpless(cfg.acceleration.ad_t);
-        /// Kalman tracker with the acceleration noise.
-        kf_a: KalmanParams<T> = kalman(cfg, &cfg.acceleration, KalmanOutput::Acceleration) => [KfA = acceleration]
-            warm replay(cfg.acceleration.kf);
+    #[inline]
+    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_>) {
+        out.velocity(law.velocity(s));
+        out.acceleration(law.acceleration(s));
+    }
+    fn warm(old: &BankConfig, new: &BankConfig) -> Warm {
+        Warm::replay_if(
+            (old.velocity.ave, old.acceleration.ave) != (new.velocity.ave, new.acceleration.ave),
+        )
+    }
+}
+
+/// ILO `I + 1` velocity (`cfg.velocity.ilo[I]`, Table 2 gains by default) through its
+/// closed-form map. Replayed on a warm gain change.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct IloV<const I: usize>;
+
+impl<const I: usize> Channels for IloV<I> {
+    const VELOCITY: &'static [&'static str] = &ILO_NAMES[I];
+    const ACCELERATION: &'static [&'static str] = &[];
+}
+
+impl<T: Real, S: SqrtFn<T>, const I: usize> Row<T, S> for IloV<I> {
+    type Law = ClosedForm<IloParams<T, 1>>;
+    fn build(
+        cfg: &BankConfig,
+        n0: u32,
+        prev: Option<&Self::Law>,
+    ) -> Result<Self::Law, ConfigError> {
+        ilo_v(cfg, I, n0, prev)
+    }
+    #[inline]
+    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_>) {
+        out.velocity(law.output(s));
+    }
+    fn warm(old: &BankConfig, new: &BankConfig) -> Warm {
+        Warm::replay_if(old.velocity.ilo.get(I) != new.velocity.ilo.get(I))
+    }
+}
+
+/// ILO `I + 1` - ILO `I + 1` acceleration (both stages `cfg.acceleration.ilo[I]`, Table 4 gains
+/// by default) through its closed-form map. Moved bumplessly on a warm gain change (replayed
+/// from rest, its second stage takes longer than the replayed history to settle).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct IloA<const I: usize>;
+
+impl<const I: usize> Channels for IloA<I> {
+    const VELOCITY: &'static [&'static str] = &[];
+    const ACCELERATION: &'static [&'static str] = &ILO_NAMES[3 + I];
+}
+
+impl<T: Real, S: SqrtFn<T>, const I: usize> Row<T, S> for IloA<I> {
+    type Law = IloIloMap<T>;
+    fn build(
+        cfg: &BankConfig,
+        n0: u32,
+        prev: Option<&Self::Law>,
+    ) -> Result<Self::Law, ConfigError> {
+        ilo_a(cfg, I, n0, prev)
+    }
+    #[inline]
+    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_>) {
+        out.acceleration(law.output(s));
+    }
+    fn warm(old: &BankConfig, new: &BankConfig) -> Warm {
+        Warm::bumpless_if(old.acceleration.ilo.get(I) != new.acceleration.ilo.get(I))
+    }
+}
+
+/// AD velocity (`cfg.velocity.ad_t`) through its closed-form map. Replayed on a warm gain
+/// change.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AdV;
+
+impl Channels for AdV {
+    const VELOCITY: &'static [&'static str] = &["ad_v"];
+    const ACCELERATION: &'static [&'static str] = &[];
+}
+
+impl<T: Real, S: SqrtFn<T>> Row<T, S> for AdV {
+    type Law = ClosedForm<AdParams<T>>;
+    fn build(
+        cfg: &BankConfig,
+        n0: u32,
+        prev: Option<&Self::Law>,
+    ) -> Result<Self::Law, ConfigError> {
+        ad_v(cfg, n0, prev)
+    }
+    #[inline]
+    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_>) {
+        out.velocity(law.output(s));
+    }
+    fn warm(old: &BankConfig, new: &BankConfig) -> Warm {
+        Warm::replay_if(old.velocity.ad_t != new.velocity.ad_t)
+    }
+}
+
+/// AD-AD acceleration (both stages `cfg.acceleration.ad_t`) through its closed-form map.
+/// Moved bumplessly on a warm gain change.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AdA;
+
+impl Channels for AdA {
+    const VELOCITY: &'static [&'static str] = &[];
+    const ACCELERATION: &'static [&'static str] = &["ad_a"];
+}
+
+impl<T: Real, S: SqrtFn<T>> Row<T, S> for AdA {
+    type Law = AdAdMap<T>;
+    fn build(
+        cfg: &BankConfig,
+        n0: u32,
+        prev: Option<&Self::Law>,
+    ) -> Result<Self::Law, ConfigError> {
+        ad_a(cfg, n0, prev)
+    }
+    #[inline]
+    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_>) {
+        out.acceleration(law.output(s));
+    }
+    fn warm(old: &BankConfig, new: &BankConfig) -> Warm {
+        Warm::bumpless_if(old.acceleration.ad_t != new.acceleration.ad_t)
+    }
+}
+
+/// Levant ED velocity and ED-ED acceleration (`cfg.velocity.ed`, `cfg.acceleration.ed`; one
+/// shared first stage when the two are equal). Moved bumplessly on a warm gain change (its
+/// velocity state moves at most `alpha` deg/s per second, too slowly for a replay).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EdRow;
+
+impl Channels for EdRow {
+    const VELOCITY: &'static [&'static str] = &["ed_v"];
+    const ACCELERATION: &'static [&'static str] = &["ed_a"];
+}
+
+impl<T: Real, S: SqrtFn<T>> Row<T, S> for EdRow {
+    type Law = VelAcc<EdParams<T, S>>;
+    fn build(cfg: &BankConfig, _: u32, _: Option<&Self::Law>) -> Result<Self::Law, ConfigError> {
+        ed_pair(cfg)
+    }
+    #[inline]
+    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_>) {
+        out.velocity(law.velocity(s));
+        out.acceleration(law.acceleration(s));
+    }
+    fn warm(old: &BankConfig, new: &BankConfig) -> Warm {
+        Warm::bumpless_if(
+            (old.velocity.ed, old.acceleration.ed) != (new.velocity.ed, new.acceleration.ed),
+        )
+    }
+}
+
+/// The Kalman tracker with the velocity half's noise (`cfg.velocity.kf`), its velocity.
+/// Replayed on a warm gain change.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct KfV;
+
+impl Channels for KfV {
+    const VELOCITY: &'static [&'static str] = &["kf_v"];
+    const ACCELERATION: &'static [&'static str] = &[];
+}
+
+impl<T: Real, S: SqrtFn<T>> Row<T, S> for KfV {
+    type Law = KalmanParams<T>;
+    fn build(cfg: &BankConfig, _: u32, _: Option<&Self::Law>) -> Result<Self::Law, ConfigError> {
+        kalman(cfg, &cfg.velocity, KalmanOutput::Velocity)
+    }
+    #[inline]
+    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_>) {
+        out.velocity(law.velocity(s));
+    }
+    fn warm(old: &BankConfig, new: &BankConfig) -> Warm {
+        Warm::replay_if(old.velocity.kf != new.velocity.kf)
+    }
+}
+
+/// The Kalman tracker with the acceleration half's noise (`cfg.acceleration.kf`), its
+/// acceleration. Replayed on a warm gain change.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct KfA;
+
+impl Channels for KfA {
+    const VELOCITY: &'static [&'static str] = &[];
+    const ACCELERATION: &'static [&'static str] = &["kf_a"];
+}
+
+impl<T: Real, S: SqrtFn<T>> Row<T, S> for KfA {
+    type Law = KalmanParams<T>;
+    fn build(cfg: &BankConfig, _: u32, _: Option<&Self::Law>) -> Result<Self::Law, ConfigError> {
+        kalman(cfg, &cfg.acceleration, KalmanOutput::Acceleration)
+    }
+    #[inline]
+    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_>) {
+        out.acceleration(law.acceleration(s));
+    }
+    fn warm(old: &BankConfig, new: &BankConfig) -> Warm {
+        Warm::replay_if(old.acceleration.kf != new.acceleration.kf)
+    }
+}
+
+/// The paper bank's rows, one family after the other (the channels: every velocity, then
+/// every acceleration, in family order).
+pub type PaperRows = (
+    AveRow,
+    IloV<0>,
+    IloA<0>,
+    IloV<1>,
+    IloA<1>,
+    IloV<2>,
+    IloA<2>,
+    AdV,
+    AdA,
+    EdRow,
+    KfV,
+    KfA,
+);
+
+/// The paper's bank for one angle: unwrap -> sample adapter -> AVE, ILO1-3 (Table 2), AD
+/// (T = 0.01), ED (700/770), Kalman for velocity, and AVE-AVE, ILO1-3-ILO1-3 (Table 4), AD-AD
+/// (T = 0.1), ED-ED, Kalman for acceleration ([`PaperRows`]).
+///
+/// Generic over [`Real`]: `PaperBank<f32>` for FPU targets, `PaperBank<Fx>` for Cortex-M0/M3
+/// (the `f32` inputs and outputs are only converted; all arithmetic is integer). No heap; the
+/// whole state is inline (see [`crate::ram`] for its size). `S` is the ED's square root
+/// (default [`NativeSqrt`](crate::NativeSqrt); see [`SqrtFn`] for plugging in an FPU
+/// instruction with identical results).
+pub type PaperBank<T, S = crate::NativeSqrt> = Bank<PaperRows, { Channel::COUNT }, T, S>;
+/// The output of [`PaperBank`], indexed by [`Channel`].
+pub type PaperOutput = BankOutput<PaperRows, { Channel::COUNT }>;
+/// The parameters of every row of [`PaperBank`] (validated once; shareable between axes).
+pub type PaperParams<T, S = crate::NativeSqrt> = <PaperRows as Rows<T, S>>::Params;
+/// The state of every row of [`PaperBank`].
+pub type PaperState<T, S = crate::NativeSqrt> = <PaperRows as Rows<T, S>>::State;
+
+/// The channels of [`PaperBank`] (output columns), in CSV order: `out[channel]`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Channel {
+    /// AVE velocity, deg/s.
+    AveV,
+    /// ILO1 (Table 2) velocity, deg/s.
+    Ilo1V,
+    /// ILO2 (Table 2) velocity, deg/s.
+    Ilo2V,
+    /// ILO3 (Table 2) velocity, deg/s.
+    Ilo3V,
+    /// AD (T = 0.01 s) velocity, deg/s.
+    AdV,
+    /// Levant ED velocity, deg/s.
+    EdV,
+    /// Kalman tracker velocity, deg/s.
+    KfV,
+    /// AVE-AVE acceleration, deg/s^2.
+    AveA,
+    /// ILO1-ILO1 (Table 4) acceleration, deg/s^2.
+    Ilo1A,
+    /// ILO2-ILO2 (Table 4) acceleration, deg/s^2.
+    Ilo2A,
+    /// ILO3-ILO3 (Table 4) acceleration, deg/s^2.
+    Ilo3A,
+    /// AD-AD (T = 0.1 s) acceleration, deg/s^2.
+    AdA,
+    /// ED-ED acceleration, deg/s^2.
+    EdA,
+    /// Kalman tracker acceleration, deg/s^2.
+    KfA,
+}
+
+impl Channel {
+    /// Every channel, in order.
+    pub const ALL: &'static [Channel] = {
+        use Channel::*;
+        &[
+            AveV, Ilo1V, Ilo2V, Ilo3V, AdV, EdV, KfV, AveA, Ilo1A, Ilo2A, Ilo3A, AdA, EdA, KfA,
+        ]
+    };
+    /// The number of channels.
+    pub const COUNT: usize = Self::ALL.len();
+    /// The CSV column names, in order (the rows' channels, [`PaperRows`]).
+    pub const NAMES: [&'static str; Self::COUNT] = PaperOutput::NAMES;
+
+    /// The channel's CSV column name.
+    pub const fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
+
+    /// The channel's position in [`Self::ALL`] and in the output.
+    pub const fn index(self) -> usize {
+        self as usize
+    }
+}
+
+impl core::ops::Index<Channel> for PaperOutput {
+    type Output = f32;
+    fn index(&self, c: Channel) -> &f32 {
+        &self.values[c as usize]
     }
 }
 
@@ -275,8 +514,8 @@ impl<T: Real, S: SqrtFn<T>> PaperBank<T, S> {
     /// AVE-AVE series' stages' (deg/s, deg/s^2; the first stage's is the velocity AVE's when
     /// the row shares it, [`VelAcc::is_shared`]).
     pub fn ave_deltahat(&self) -> crate::AveDeltahat {
-        let s = &self.state.ave;
-        let a1 = if self.params.ave.is_shared() {
+        let s = &self.state().0;
+        let a1 = if self.params().0.is_shared() {
             s.v.delta
         } else {
             s.a1.delta
@@ -292,7 +531,7 @@ impl<T: Real, S: SqrtFn<T>> PaperBank<T, S> {
     /// when it changes the AVE gains and its schedule records the `deltahat` they were tuned
     /// with.
     pub fn set_ave_deltahat(&mut self, d: &crate::AveDeltahat) {
-        set_ave_deltahat(&mut self.state, d);
+        set_ave_deltahat::<T, S>(self.state_mut(), d);
     }
 }
 
@@ -320,7 +559,9 @@ impl<T: Real, S: SqrtFn<T>> PaperBank<T, S> {
         T: 'h,
     {
         let deltahat = deltahat.unwrap_or_else(|| self.ave_deltahat());
-        self.set_gains_warm_with(old, new, history, |s| set_ave_deltahat(s, &deltahat))
+        self.set_gains_warm_with(old, new, history, |s| {
+            set_ave_deltahat::<T, S>(s, &deltahat)
+        })
     }
 }
 
@@ -334,7 +575,7 @@ pub(crate) fn set_ave_deltahat<T: Real, S: SqrtFn<T>>(
             *x = T::from_f32(v);
         }
     };
-    let s = &mut state.ave;
+    let s = &mut state.0;
     set(&mut s.v.delta, d.velocity);
     set(&mut s.a1.delta, d.acceleration[0]);
     set(&mut s.a2.delta, d.acceleration[1]);

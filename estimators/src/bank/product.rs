@@ -1,30 +1,50 @@
 //! [`ProductBank`]: one velocity and one acceleration estimator.
 
-use super::paper::{ilo_v, kalman};
-use crate::kalman::{KalmanOutput, KalmanParams};
-use crate::{ClosedForm, IloParams};
+use super::paper::{IloV, KfA};
+use super::rows::{Bank, BankOutput, Rows};
 
-crate::estimator_bank! {
-    /// The product preset: one velocity and one acceleration estimator per axis, the two
-    /// cheapest good ones of the paper bank: ILO1 (Table 2 gains of `cfg.velocity.ilo[0]`,
-    /// through its exact closed-form map; the best ILO without noise) for velocity and the
-    /// Kalman tracker (`cfg.acceleration.kf`) for acceleration, each a few dozen operations per
-    /// sample. Same input stage, API and output conventions as [`PaperBank`](crate::PaperBank); a firmware that
-    /// wants other estimators writes its own table with [`crate::estimator_bank!`].
-    bank ProductBank, params ProductParams, state ProductState, output ProductOutput, channel ProductChannel;
-    build(cfg, n0, prev);
-    channels {
-        /// ILO1 velocity, deg/s.
-        Ilo1V = "ilo1_v",
-        /// Kalman tracker acceleration, deg/s^2.
-        KfA = "kf_a",
+/// The product bank's rows: ILO1 velocity and the Kalman tracker's acceleration.
+pub type ProductRows = (IloV<0>, KfA);
+
+/// The product preset: one velocity and one acceleration estimator per axis, the two cheapest
+/// good ones of the paper bank: ILO1 (Table 2 gains of `cfg.velocity.ilo[0]`, through its exact
+/// closed-form map; the best ILO without noise) for velocity and the Kalman tracker
+/// (`cfg.acceleration.kf`) for acceleration, each a few dozen operations per sample. Same input
+/// stage, API and output conventions as [`PaperBank`](crate::PaperBank); a firmware that wants
+/// other estimators names its own tuple of rows ([`crate::Row`]).
+pub type ProductBank<T, S = crate::NativeSqrt> = Bank<ProductRows, { ProductChannel::COUNT }, T, S>;
+/// The output of [`ProductBank`], indexed by [`ProductChannel`].
+pub type ProductOutput = BankOutput<ProductRows, { ProductChannel::COUNT }>;
+
+/// The parameters of both rows of [`ProductBank`].
+pub type ProductParams<T, S = crate::NativeSqrt> = <ProductRows as Rows<T, S>>::Params;
+/// The state of both rows of [`ProductBank`].
+pub type ProductState<T, S = crate::NativeSqrt> = <ProductRows as Rows<T, S>>::State;
+
+/// The channels of [`ProductBank`], in CSV order: `out[channel]`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ProductChannel {
+    /// ILO1 velocity, deg/s.
+    Ilo1V,
+    /// Kalman tracker acceleration, deg/s^2.
+    KfA,
+}
+
+impl ProductChannel {
+    /// Every channel, in order.
+    pub const ALL: &'static [ProductChannel] = &[ProductChannel::Ilo1V, ProductChannel::KfA];
+    /// The number of channels.
+    pub const COUNT: usize = Self::ALL.len();
+
+    /// The channel's CSV column name.
+    pub const fn name(self) -> &'static str {
+        ProductOutput::NAMES[self as usize]
     }
-    rows {
-        /// ILO1, Table 2 gains.
-        ilo1_v: ClosedForm<IloParams<T, 1>> = ilo_v(cfg, 0, n0, prev) => [Ilo1V = output]
-            warm replay(cfg.velocity.ilo[0]);
-        /// Kalman tracker with the acceleration noise.
-        kf_a: KalmanParams<T> = kalman(cfg, &cfg.acceleration, KalmanOutput::Acceleration) => [KfA = acceleration]
-            warm replay(cfg.acceleration.kf);
+}
+
+impl core::ops::Index<ProductChannel> for ProductOutput {
+    type Output = f32;
+    fn index(&self, c: ProductChannel) -> &f32 {
+        &self.values[c as usize]
     }
 }
