@@ -30,11 +30,10 @@
 //! * Another sensor: [`ProductBank`] with [`BankConfig::sample_period_s`] set to the sensor's
 //!   period (the default is 100 Hz) and [`Wrap::None`] for a signal that does not wrap
 //!   (`examples/other_imu_200hz.rs`, docs/OTHER-IMU.md).
-//! * [`EstimatorBank`]: the one trait of every bank (the generated ones and [`AdaptiveBank`]):
-//!   `update`, `new_epoch`, `reinit_count`, and its [`EstimatorOutput`] (unwrapped angle and
-//!   channel values) with the channels' count and names as consts
-//!   (`<ProductBank<Fx> as EstimatorBank>::CHANNELS`); [`FromConfig`] builds a generated bank
-//!   from a [`BankConfig`].
+//! * [`EstimatorBank`]: the one trait of every bank (every [`Bank`] and [`AdaptiveBank`]):
+//!   `update`, `new_epoch`, `reinit_count`, `take_over`, and its [`EstimatorOutput`]
+//!   (unwrapped angle and channel values) with the channels' count and names as consts
+//!   (`<ProductBank<Fx> as EstimatorBank>::CHANNELS`).
 //! * Feature `serde`: `Serialize`/`Deserialize` on the configuration types (no_std, no alloc).
 //! * Units: inputs in deg (any position-like unit works), velocities in unit/s, accelerations
 //!   in unit/s^2, times in s (`h`, `T`, `tau`) or integer microseconds (sample timestamps).
@@ -134,7 +133,7 @@ pub use pair::{VelAcc, VelAccState};
 pub use rates::RateGains;
 pub use real::{Fx, NativeSqrt, Real, SqrtFn};
 pub use series::{Series, SeriesState};
-pub use traits::{EstimatorBank, EstimatorOutput, FromConfig};
+pub use traits::{EstimatorBank, EstimatorOutput};
 pub use unwrap::Unwrapper;
 
 /// The examples of the crate README, compiled and run as doc tests.

@@ -1,14 +1,14 @@
 //! The one interface of every estimator bank: [`EstimatorBank`] (one sample in, one output
-//! out), its output [`EstimatorOutput`] (the unwrapped angle and one value per channel, with
-//! the channels' names), and [`FromConfig`] (a bank built from a [`BankConfig`] alone).
+//! out) and its output [`EstimatorOutput`] (the unwrapped angle and one value per channel,
+//! with the channels' names).
 //!
-//! Every bank [`crate::estimator_bank!`] generates implements all three ([`crate::PaperBank`],
-//! [`crate::ProductBank`] and any custom table); [`crate::AdaptiveBank`] implements
-//! [`EstimatorBank`] (it is built from a gain schedule, not from a configuration alone).
+//! Every [`crate::Bank`] implements it ([`crate::PaperBank`], [`crate::ProductBank`] and any
+//! custom tuple of rows, built by `Bank::new`), and so does [`crate::AdaptiveBank`] (built
+//! from a gain schedule).
 //! Code that drives "a bank" (the `nav440-pipeline` crate, its CSV writer, a firmware) is
 //! generic over [`EstimatorBank`] and takes the channel count and names from it.
 
-use crate::{BankConfig, Columns, ConfigError, SampleError};
+use crate::{Columns, SampleError};
 
 /// One output of a bank for one sample: the unwrapped input angle and the channels' values.
 ///
@@ -95,10 +95,4 @@ pub trait EstimatorBank {
     {
         let _ = old;
     }
-}
-
-/// A bank built from a [`BankConfig`] alone (every [`crate::Bank`]): what a generic constructor such as `nav440_pipeline::axis_bank` calls.
-pub trait FromConfig: EstimatorBank + Sized {
-    /// Builds the bank (validates every parameter of `cfg`).
-    fn from_config(cfg: &BankConfig) -> Result<Self, ConfigError>;
 }

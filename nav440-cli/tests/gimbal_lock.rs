@@ -11,7 +11,7 @@
 //! every family on roll and yaw except ILO1 on yaw, 2.35; fed through, 53-2,900 except the
 //! AD. The assertion on ILO1 states that gap (docs/PIPELINE.md, "Near gimbal lock").
 
-use estimators::{BankConfig, Channel, FromConfig, PaperBank, FAMILY_COUNT};
+use estimators::{BankConfig, Channel, PaperBank, FAMILY_COUNT};
 use nav440_cli::motion::ProfileKind;
 use nav440_cli::replay::{self, Axes, Axis, EstimateOptions, Sample};
 use nav440_cli::synth::a2_samples;
@@ -80,7 +80,7 @@ fn roll_and_yaw_recover_within_a_second_of_each_pass() {
             rows[k].axis(axis).map(|a| a.out.velocities())
         });
         // The same bank fed through the lock.
-        let mut bank = PaperBank::<f32>::from_config(&BankConfig {
+        let mut bank = PaperBank::<f32>::new(&BankConfig {
             wrap: estimators::Wrap::Deg180,
             ..cfg
         })

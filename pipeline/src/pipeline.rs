@@ -37,8 +37,8 @@ use crate::period::{PeriodEstimator, WARMUP_SAMPLES};
 use crate::sample::{Frontend, Sample};
 use crate::{Axes, Axis};
 use estimators::{
-    AdaptiveBank, AdaptiveConfig, BankConfig, EstimatorBank, EstimatorOutput, FromConfig,
-    GainSchedule, PaperOutput, Real, SampleError, SqrtFn, Wrap,
+    AdaptiveBank, AdaptiveConfig, Bank, BankConfig, EstimatorBank, EstimatorOutput, GainSchedule,
+    PaperOutput, Real, Rows, SampleError, SqrtFn, Wrap,
 };
 
 /// One axis's estimator bank as the pipeline drives it: one sample (its time and epoch) and
@@ -109,14 +109,14 @@ pub trait BankBuilder<B, E>: FnMut(Axis, &BankConfig) -> Result<B, E> {}
 
 impl<B, E, F: FnMut(Axis, &BankConfig) -> Result<B, E>> BankBuilder<B, E> for F {}
 
-/// The bank of one axis: `B::from_config(cfg)` (any bank built from a [`BankConfig`]:
-/// `PaperBank`, `ProductBank`, a custom `estimator_bank!` table), with the +-180 deg
-/// unwrapping switched off for pitch ([`Axis::wraps`]).
-pub fn axis_bank<B: FromConfig>(
+/// The bank of one axis: `Bank::new(cfg)` (any [`Bank`]: `PaperBank`, `ProductBank`, a
+/// custom tuple of rows), with the +-180 deg unwrapping switched off for pitch
+/// ([`Axis::wraps`]).
+pub fn axis_bank<R: Rows<T, S>, const N: usize, T: Real, S: SqrtFn<T>>(
     axis: Axis,
     cfg: &BankConfig,
-) -> Result<B, estimators::ConfigError> {
-    B::from_config(&axis_config(axis, cfg))
+) -> Result<Bank<R, N, T, S>, estimators::ConfigError> {
+    Bank::new(&axis_config(axis, cfg))
 }
 
 /// The noise-adaptive bank of one axis (what `nav440 estimate --gains schedule.toml` runs):

@@ -8,7 +8,10 @@
 //!   and reference rate are the paper pipeline's, for f32 and fixed point, on every axis;
 //! * the CSV lines of `Pipeline::feed_csv` are the header's 5 columns.
 
-use estimators::{BankConfig, Channel, ConfigError, Fx, PaperBank, ProductBank, ProductChannel};
+use estimators::{
+    Bank, BankConfig, BankOutput, Channel, ConfigError, Fx, NativeSqrt, PaperRows, ProductBank,
+    ProductChannel, ProductRows, Real, Rows,
+};
 use nav440_pipeline::{axis_bank, csv, Axes, Axis, Pipeline, Row};
 use nav440_proto::{encode_frame, A2Fields, PacketType};
 
@@ -31,12 +34,15 @@ fn turning(n: u32, rate: f64) -> Vec<u8> {
     bytes
 }
 
-/// Every row of `bytes` through a pipeline of banks `B` on `axes`.
-fn rows<B>(bytes: &[u8], axes: Axes) -> Vec<Row<B::Output>>
-where
-    B: estimators::FromConfig,
-{
-    let build = |axis: Axis, cfg: &BankConfig| -> Result<B, ConfigError> { axis_bank(axis, cfg) };
+/// Every row of `bytes` through a pipeline of banks of rows `R` (`N` channels, number type
+/// `T`) on `axes`.
+fn rows<R: Rows<T, NativeSqrt>, const N: usize, T: Real>(
+    bytes: &[u8],
+    axes: Axes,
+) -> Vec<Row<BankOutput<R, N>>> {
+    let build = |axis: Axis, cfg: &BankConfig| -> Result<Bank<R, N, T>, ConfigError> {
+        axis_bank(axis, cfg)
+    };
     let mut pipe = Pipeline::new(axes, BankConfig::NAV440, build);
     let mut out = Vec::new();
     pipe.feed(bytes, &mut |r| out.push(*r)).unwrap();
@@ -55,7 +61,7 @@ fn capture() -> Vec<u8> {
 #[test]
 fn product_bank_tracks_a_constant_rate() {
     let bytes = turning(300, 30.0);
-    let rows = rows::<ProductBank<f32>>(&bytes, Axes::only(Axis::Yaw));
+    let rows = rows::<ProductRows, 2, f32>(&bytes, Axes::only(Axis::Yaw));
     assert_eq!(rows.len(), 300);
     for r in &rows[200..] {
         let a = r.axis(Axis::Yaw).unwrap();
@@ -80,14 +86,10 @@ fn product_bank_tracks_a_constant_rate() {
 
 /// The product bank's channels are the paper bank's ILO1 velocity and Kalman acceleration
 /// rows: the same values, bit for bit, sample for sample.
-fn same_as_paper<PB, QB>(axes: Axes)
-where
-    PB: estimators::FromConfig<Output = estimators::PaperOutput>,
-    QB: estimators::FromConfig<Output = estimators::ProductOutput>,
-{
+fn same_as_paper<T: Real>(axes: Axes) {
     let bytes = capture();
-    let paper = rows::<PB>(&bytes, axes);
-    let product = rows::<QB>(&bytes, axes);
+    let paper = rows::<PaperRows, 14, T>(&bytes, axes);
+    let product = rows::<ProductRows, 2, T>(&bytes, axes);
     assert!(paper.len() > 1000, "{} rows", paper.len());
     assert_eq!(paper.len(), product.len());
     let mut moving = 0;
@@ -121,19 +123,20 @@ where
 
 #[test]
 fn product_rows_are_the_paper_rows_f32() {
-    same_as_paper::<PaperBank<f32>, ProductBank<f32>>(Axes::only(Axis::Yaw));
-    same_as_paper::<PaperBank<f32>, ProductBank<f32>>(Axes::ALL);
+    same_as_paper::<f32>(Axes::only(Axis::Yaw));
+    same_as_paper::<f32>(Axes::ALL);
 }
 
 #[test]
 fn product_rows_are_the_paper_rows_fixed_point() {
-    same_as_paper::<PaperBank<Fx>, ProductBank<Fx>>(Axes::ALL);
+    same_as_paper::<Fx>(Axes::ALL);
 }
 
 #[test]
 fn product_csv_lines() {
     let bytes = turning(50, 30.0);
-    let build = |axis: Axis, cfg: &BankConfig| axis_bank::<ProductBank<Fx>>(axis, cfg);
+    let build =
+        |axis: Axis, cfg: &BankConfig| axis_bank::<ProductRows, 2, Fx, NativeSqrt>(axis, cfg);
     let mut pipe = Pipeline::new(Axes::ALL, BankConfig::NAV440, build);
     let mut header = String::new();
     csv::write_header::<ProductBank<Fx>>(&mut header, Axes::ALL).unwrap();

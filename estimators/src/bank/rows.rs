@@ -49,8 +49,7 @@ use core::marker::PhantomData;
 
 use super::{BankConfig, BankInput, Fed, Feed};
 use crate::{
-    ConfigError, EstimatorBank, EstimatorOutput, FromConfig, Hold, Law, NativeSqrt, Real,
-    SampleError, SqrtFn,
+    ConfigError, EstimatorBank, EstimatorOutput, Hold, Law, NativeSqrt, Real, SampleError, SqrtFn,
 };
 
 /// The channels (CSV columns) a row reports. Independent of the number
@@ -743,11 +742,5 @@ impl<R: Rows<T, S>, const N: usize, T: Real, S: SqrtFn<T>> EstimatorBank for Ban
 
     fn take_over(&mut self, old: &Self) {
         Bank::take_over(self, old)
-    }
-}
-
-impl<R: Rows<T, S>, const N: usize, T: Real, S: SqrtFn<T>> FromConfig for Bank<R, N, T, S> {
-    fn from_config(cfg: &BankConfig) -> Result<Self, ConfigError> {
-        Bank::new(cfg)
     }
 }

@@ -2,63 +2,74 @@
 
 use super::*;
 
-/// The part of `estimators::EstimatorBank` the host calls per sample, as an object (one
-/// boxed bank per axis whatever its number type).
-pub trait DynBank<O> {
-    /// `EstimatorBank::update`.
-    fn update(&mut self, t_us: u64, angle_deg: f32) -> std::result::Result<O, SampleError>;
-    /// `EstimatorBank::new_epoch`.
-    fn new_epoch(&mut self);
-    /// `EstimatorBank::reinit_count`.
-    fn reinit_count(&self) -> u32;
-    /// The bank as `Any` (for [`DynBank::take_over`]).
-    fn as_any(&self) -> &dyn std::any::Any;
-    /// `EstimatorBank::take_over` from `old` when it is a bank of the same type (nothing
-    /// otherwise).
-    fn take_over(&mut self, old: &dyn std::any::Any);
+/// The host's run-time choice between two banks of the same output (f32 or fixed point;
+/// fixed gains or a gain schedule): a thin wrapper that is itself an
+/// `estimators::EstimatorBank`.
+#[derive(Clone, Copy, Debug)]
+pub enum Either<A, B> {
+    /// The first kind.
+    A(A),
+    /// The second kind.
+    B(B),
 }
 
-impl<B: EstimatorBank + 'static> DynBank<B::Output> for B {
-    fn update(&mut self, t_us: u64, deg: f32) -> std::result::Result<B::Output, SampleError> {
-        EstimatorBank::update(self, t_us, deg)
+impl<A: EstimatorBank, B: EstimatorBank<Output = A::Output>> EstimatorBank for Either<A, B> {
+    type Output = A::Output;
+
+    fn update(&mut self, t_us: u64, angle_deg: f32) -> std::result::Result<A::Output, SampleError> {
+        match self {
+            Either::A(b) => b.update(t_us, angle_deg),
+            Either::B(b) => b.update(t_us, angle_deg),
+        }
     }
 
     fn new_epoch(&mut self) {
-        EstimatorBank::new_epoch(self);
+        match self {
+            Either::A(b) => b.new_epoch(),
+            Either::B(b) => b.new_epoch(),
+        }
     }
 
     fn reinit_count(&self) -> u32 {
-        EstimatorBank::reinit_count(self)
+        match self {
+            Either::A(b) => b.reinit_count(),
+            Either::B(b) => b.reinit_count(),
+        }
     }
 
-    fn as_any(&self) -> &dyn std::any::Any {
-        self
-    }
-
-    fn take_over(&mut self, old: &dyn std::any::Any) {
-        if let Some(old) = old.downcast_ref::<B>() {
-            EstimatorBank::take_over(self, old);
+    /// The take-over of the two banks when they are of the same kind (nothing otherwise).
+    fn take_over(&mut self, old: &Self) {
+        match (self, old) {
+            (Either::A(new), Either::A(old)) => new.take_over(old),
+            (Either::B(new), Either::B(old)) => new.take_over(old),
+            _ => {}
         }
     }
 }
 
+/// The paper bank as the host runs it: fixed gains (f32 or `Fx`) or a gain schedule (the
+/// noise-adaptive bank, f32 or `Fx`).
+pub type PaperHostBank = Either<
+    Either<PaperBank<f32>, PaperBank<Fx>>,
+    Either<estimators::AdaptiveBank<f32>, estimators::AdaptiveBank<Fx>>,
+>;
+/// The product bank as the host runs it: f32 or `Fx`.
+pub type ProductHostBank = Either<ProductBank<f32>, ProductBank<Fx>>;
+
 /// A built host bank: the bank, and for a noise-adaptive bank whose schedule was tuned at
 /// another sample period (`AdaptiveBank::period_fits`): (the schedule's period, the bank's), s.
-pub type BuiltBank<O> = (Box<dyn DynBank<O>>, Option<(f32, f32)>);
+pub type BuiltBank<B> = (B, Option<(f32, f32)>);
 
-/// The output of a bank `nav440 estimate` can run: how the host builds that bank (f32 or
-/// fixed point, fixed or scheduled gains) for an axis.
-pub trait HostOutput: EstimatorOutput + 'static {
-    /// The bank of `axis` for `cfg` (built by `nav440_pipeline::axis_bank` or
-    /// `adaptive_axis_bank`, which set the axis's unwrapping): `fixed` selects `Fx`,
-    /// `schedule` the noise-adaptive bank. Errors are the CLI's messages.
-    fn build(
-        axis: Axis,
-        cfg: &BankConfig,
-        fixed: bool,
-        schedule: Option<&GainSchedule>,
-    ) -> std::result::Result<BuiltBank<Self>, String>;
-}
+/// How the host builds the bank `B` of `axis` for `cfg` (through `nav440_pipeline::axis_bank`
+/// or `adaptive_axis_bank`, which set the axis's unwrapping): `fixed` selects `Fx`, `schedule`
+/// the noise-adaptive bank. Errors are the CLI's messages. [`paper_bank`] and
+/// [`product_bank`].
+pub type BuildBank<B> = fn(
+    axis: Axis,
+    cfg: &BankConfig,
+    fixed: bool,
+    schedule: Option<&GainSchedule>,
+) -> std::result::Result<BuiltBank<B>, String>;
 
 /// The CLI's message for a configuration the bank refuses.
 pub(crate) fn bad_config(cfg: &BankConfig, e: estimators::ConfigError) -> String {
@@ -80,64 +91,51 @@ pub(crate) fn misfit(fits: bool, tuned: &GainSchedule, run: f32) -> Option<(f32,
     Some((tuned.sample_period_s()?, run))
 }
 
-impl HostOutput for PaperOutput {
-    fn build(
-        axis: Axis,
-        cfg: &BankConfig,
-        fixed: bool,
-        schedule: Option<&GainSchedule>,
-    ) -> std::result::Result<BuiltBank<Self>, String> {
-        let bad = |e| bad_config(cfg, e);
-        if let Some(sched) = schedule {
-            return Ok(if fixed {
-                let b: estimators::AdaptiveBank<Fx> =
-                    adaptive_axis_bank(axis, cfg, sched).map_err(bad)?;
-                let m = misfit(b.period_fits(), b.schedule(), b.sample_period_s());
-                (Box::new(b), m)
-            } else {
-                let b: estimators::AdaptiveBank<f32> =
-                    adaptive_axis_bank(axis, cfg, sched).map_err(bad)?;
-                let m = misfit(b.period_fits(), b.schedule(), b.sample_period_s());
-                (Box::new(b), m)
-            });
-        }
-        Ok(if fixed {
-            (
-                Box::new(axis_bank::<PaperBank<Fx>>(axis, cfg).map_err(bad)?),
-                None,
-            )
+/// The paper bank of `axis` ([`BuildBank`]).
+pub fn paper_bank(
+    axis: Axis,
+    cfg: &BankConfig,
+    fixed: bool,
+    schedule: Option<&GainSchedule>,
+) -> std::result::Result<BuiltBank<PaperHostBank>, String> {
+    let bad = |e| bad_config(cfg, e);
+    if let Some(sched) = schedule {
+        return Ok(if fixed {
+            let b: estimators::AdaptiveBank<Fx> =
+                adaptive_axis_bank(axis, cfg, sched).map_err(bad)?;
+            let m = misfit(b.period_fits(), b.schedule(), b.sample_period_s());
+            (Either::B(Either::B(b)), m)
         } else {
-            (
-                Box::new(axis_bank::<PaperBank<f32>>(axis, cfg).map_err(bad)?),
-                None,
-            )
-        })
+            let b: estimators::AdaptiveBank<f32> =
+                adaptive_axis_bank(axis, cfg, sched).map_err(bad)?;
+            let m = misfit(b.period_fits(), b.schedule(), b.sample_period_s());
+            (Either::B(Either::A(b)), m)
+        });
     }
+    let bank = if fixed {
+        Either::B(axis_bank(axis, cfg).map_err(bad)?)
+    } else {
+        Either::A(axis_bank(axis, cfg).map_err(bad)?)
+    };
+    Ok((Either::A(bank), None))
 }
 
-impl HostOutput for ProductOutput {
-    fn build(
-        axis: Axis,
-        cfg: &BankConfig,
-        fixed: bool,
-        schedule: Option<&GainSchedule>,
-    ) -> std::result::Result<BuiltBank<Self>, String> {
-        if schedule.is_some() {
-            return Err(PRODUCT_SCHEDULE.to_string());
-        }
-        let bad = |e| bad_config(cfg, e);
-        Ok(if fixed {
-            (
-                Box::new(axis_bank::<ProductBank<Fx>>(axis, cfg).map_err(bad)?),
-                None,
-            )
-        } else {
-            (
-                Box::new(axis_bank::<ProductBank<f32>>(axis, cfg).map_err(bad)?),
-                None,
-            )
-        })
+/// The product bank of `axis` ([`BuildBank`]; a schedule is refused).
+pub fn product_bank(
+    axis: Axis,
+    cfg: &BankConfig,
+    fixed: bool,
+    schedule: Option<&GainSchedule>,
+) -> std::result::Result<BuiltBank<ProductHostBank>, String> {
+    if schedule.is_some() {
+        return Err(PRODUCT_SCHEDULE.to_string());
     }
+    let bad = |e| bad_config(cfg, e);
+    Ok(if fixed {
+        (Either::B(axis_bank(axis, cfg).map_err(bad)?), None)
+    } else {
+        (Either::A(axis_bank(axis, cfg).map_err(bad)?), None)
+    })
 }
 
 /// Why `--bank product` refuses a gain schedule.
@@ -187,28 +185,29 @@ pub(crate) struct StepState {
     prev: Option<(u64, f32)>,
 }
 
-/// The host's bank of one axis: the f32 or fixed-point bank of output `O` (the paper bank's
-/// by default, [`HostOutput`]), the added noise and the per-mode state; `nav440_pipeline`
-/// drives it ([`AxisBank`]).
-pub struct HostBank<O = PaperOutput> {
-    bank: Box<dyn DynBank<O>>,
+/// The host's bank of one axis: the bank `B` (the paper bank's by default, [`PaperHostBank`]),
+/// the added noise and the per-mode state; `nav440_pipeline` drives it ([`AxisBank`]).
+pub struct HostBank<B = PaperHostBank> {
+    bank: B,
     misfit: Option<(f32, f32)>,
     noise: NoiseGen,
     step: Option<StepState>,
 }
 
-impl<O> std::fmt::Debug for HostBank<O> {
+impl<B> std::fmt::Debug for HostBank<B> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("HostBank").finish_non_exhaustive()
     }
 }
 
-impl<O: HostOutput> HostBank<O> {
-    /// The bank of `axis` for the options `opts` and the warm-up's configuration `cfg`.
+impl<B: EstimatorBank> HostBank<B> {
+    /// The bank of `axis` built by `build` for the options `opts` and the warm-up's
+    /// configuration `cfg`.
     pub(crate) fn new(
         axis: Axis,
         opts: &EstimateOptions,
         cfg: &BankConfig,
+        build: BuildBank<B>,
     ) -> std::result::Result<Self, String> {
         let mut cfg = opts.at_period(*cfg);
         let noise = NoiseGen::new(opts.noise, axis).map_err(|e| e.to_string())?;
@@ -228,7 +227,7 @@ impl<O: HostOutput> HostBank<O> {
         } else {
             None
         };
-        let (bank, misfit) = O::build(axis, &cfg, opts.fixed, opts.schedule.as_ref())?;
+        let (bank, misfit) = build(axis, &cfg, opts.fixed, opts.schedule.as_ref())?;
         Ok(HostBank {
             bank,
             misfit,
@@ -244,11 +243,11 @@ impl<O: HostOutput> HostBank<O> {
     }
 }
 
-impl<O: HostOutput> AxisBank for HostBank<O> {
-    type Output = O;
+impl<B: EstimatorBank> AxisBank for HostBank<B> {
+    type Output = B::Output;
 
     /// The per-sample step of both noise modes.
-    fn step(&mut self, s: &Sample, angle_deg: f32) -> std::result::Result<O, SampleError> {
+    fn step(&mut self, s: &Sample, angle_deg: f32) -> std::result::Result<B::Output, SampleError> {
         let r = self;
         match r.step.as_mut() {
             None => {
@@ -303,7 +302,7 @@ impl<O: HostOutput> AxisBank for HostBank<O> {
     /// The bank's take-over (unwrapper, gap count), and the noise generator and the
     /// per-step mode's unwrapping and gap count continue where they were.
     fn take_over(&mut self, old: Self) {
-        self.bank.take_over(old.bank.as_any());
+        self.bank.take_over(&old.bank);
         self.noise = old.noise;
         if let (Some(st), Some(old_st)) = (self.step.as_mut(), old.step) {
             st.unwrap = old_st.unwrap;
@@ -314,16 +313,20 @@ impl<O: HostOutput> AxisBank for HostBank<O> {
 }
 
 /// The host's bank constructor (captures the options).
-pub(crate) type BuildFn<O = PaperOutput> =
-    Box<dyn FnMut(Axis, &BankConfig) -> std::result::Result<HostBank<O>, String>>;
+pub(crate) type BuildFn<B = PaperHostBank> =
+    Box<dyn FnMut(Axis, &BankConfig) -> std::result::Result<HostBank<B>, String>>;
 
-pub(crate) fn build_fn<O: HostOutput>(opts: &EstimateOptions) -> BuildFn<O> {
+/// The pipeline's bank constructor: [`HostBank::new`] with `build` and the options.
+pub(crate) fn build_fn<B: EstimatorBank + 'static>(
+    opts: &EstimateOptions,
+    build: BuildBank<B>,
+) -> BuildFn<B> {
     let opts = opts.clone();
-    Box::new(move |axis, cfg| HostBank::new(axis, &opts, cfg))
+    Box::new(move |axis, cfg| HostBank::new(axis, &opts, cfg, build))
 }
 
 /// `nav440 estimate`'s pipeline: `nav440_pipeline::Pipeline` with the host's banks.
-pub(crate) type HostPipeline<O> = Pipeline<HostBank<O>, String, BuildFn<O>>;
+pub(crate) type HostPipeline<B> = Pipeline<HostBank<B>, String, BuildFn<B>>;
 
 /// The options' bank is one the row APIs run (the paper bank's).
 pub(crate) fn check_paper_bank(opts: &EstimateOptions) -> Result<()> {

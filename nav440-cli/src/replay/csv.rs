@@ -43,7 +43,11 @@ impl Estimation {
         check_paper_bank(opts)?;
         NoiseGen::new(opts.noise, Axis::Yaw)?;
         Ok(Estimation {
-            inner: nav440_pipeline::Estimation::new(opts.axes, opts.bank_config(), build_fn(opts)),
+            inner: nav440_pipeline::Estimation::new(
+                opts.axes,
+                opts.bank_config(),
+                build_fn(opts, paper_bank),
+            ),
         })
     }
 
@@ -149,21 +153,22 @@ pub fn estimate_stream<'a, W: std::io::Write + ?Sized>(
 ) -> Result<StreamReport> {
     check_bank_options(opts)?;
     match opts.bank {
-        BankKind::Paper => stream_bank::<PaperOutput, W>(input, opts, w),
-        BankKind::Product => stream_bank::<ProductOutput, W>(input, opts, w),
+        BankKind::Paper => stream_bank(input, opts, w, paper_bank),
+        BankKind::Product => stream_bank(input, opts, w, product_bank),
     }
 }
 
-/// [`estimate_stream`] with the banks of output `O`.
-pub(crate) fn stream_bank<'a, O: HostOutput, W: std::io::Write + ?Sized>(
+/// [`estimate_stream`] with the banks `build` builds.
+pub(crate) fn stream_bank<'a, B: EstimatorBank + 'static, W: std::io::Write + ?Sized>(
     input: impl IntoChunks<'a>,
     opts: &EstimateOptions,
     w: &mut W,
+    build: BuildBank<B>,
 ) -> Result<StreamReport> {
     NoiseGen::new(opts.noise, Axis::Yaw)?;
-    let mut pipe: HostPipeline<O> =
-        Pipeline::new(opts.axes, opts.bank_config(), build_fn::<O>(opts));
-    let mut sink = CsvSink::new(w, opts.axes, csv_header_of::<O>(opts.axes));
+    let mut pipe: HostPipeline<B> =
+        Pipeline::new(opts.axes, opts.bank_config(), build_fn(opts, build));
+    let mut sink = CsvSink::new(w, opts.axes, csv_header_of::<B::Output>(opts.axes));
     let mut period = None;
     input.chunks(&mut |chunk| {
         let res = pipe.feed(chunk, &mut |r| sink.row(r));
