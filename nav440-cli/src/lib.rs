@@ -8,6 +8,7 @@ pub mod corrupt;
 pub mod decode;
 pub mod error;
 pub mod gains;
+pub mod limits;
 pub mod motion;
 pub mod optim;
 pub mod output;

@@ -145,9 +145,13 @@ impl FromStr for NoiseStep {
             }
         };
         Ok(NoiseStep {
-            var_deg2: num(var, "the noise variance (deg^2)", crate::cmd::MAX_NOISE_VAR)?,
+            var_deg2: num(
+                var,
+                "the noise variance (deg^2)",
+                crate::limits::MAX_NOISE_VAR,
+            )?,
             from_s: from.map_or(Ok(0.0), |t| {
-                num(t, "the start time (s)", crate::cmd::MAX_SECONDS)
+                num(t, "the start time (s)", crate::limits::MAX_SECONDS)
             })?,
         })
     }

@@ -3,8 +3,9 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use super::{count, noise_var, one_axis, parse_range, AxisArg, BankArg, HoldArg};
+use super::{one_axis, AxisArg, BankArg, HoldArg};
 use crate::error::{Error, Result};
+use crate::limits::{count, noise_var, parse_range};
 use crate::output::{self, OutputFile};
 use crate::progress::Progress;
 use crate::{optim, paper, replay, tune};
@@ -216,7 +217,7 @@ fn check_numbers(a: &Args) -> Result<()> {
     if let Some(n) = a.exhaustive {
         count("--exhaustive", n, 2..=MAX_GRID_POINTS, " points per gain")?;
     }
-    super::step(a.step)?;
+    crate::limits::step(a.step)?;
     paper::check_window(a.window)
 }
 
