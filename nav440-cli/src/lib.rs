@@ -16,6 +16,7 @@ pub mod paper;
 pub mod plot;
 pub mod plots;
 pub mod progress;
+pub mod raw_sample;
 pub mod replay;
 pub mod rust_literal;
 pub mod score;
