@@ -47,17 +47,19 @@
 //!    in [`BankGains::PAPER_VELOCITY`] and [`BankGains::PAPER_ACCELERATION`], its family);
 //!    its two channels (`FooV = "foo_v"`, `FooA = "foo_a"`) and its row or rows, each with a
 //!    `warm` clause, in the `estimator_bank!` table below the list.
-//! 3. What the compiler and the tests then ask for: the sizes in `ram.rs` (compile-time
+//! 3. The host tool (`nav440-cli`): the family in its tuner's list, with its search box and
+//!    scoring (`nav440-cli/src/search.rs`; a test holds that list to [`FAMILIES`]), and the
+//!    Rust literal `nav440 tune --rust` prints for `FooConfig` and for the new field of
+//!    [`BankGains`] (`nav440-cli/src/rust_literal.rs`, which does not compile until it names
+//!    every field).
+//! 4. What the compiler and the tests then ask for: the sizes in `ram.rs` (compile-time
 //!    checked); the paper bank's CSV contract (`nav440_pipeline::csv::HEADER` and the tests
 //!    that spell out its columns); the committed `nav440 tune --rust` snippets
-//!    `host-tests/data/gains/*.rs`, regenerated; the committed gain schedule, re-tuned (the
-//!    schedule tests hold every family to its tuned levels). The tuned presets
+//!    `host-tests/data/gains/*.rs`, regenerated, and the firmware's copies of them; the
+//!    committed gain schedule, re-tuned (the schedule tests hold every family to its tuned
+//!    levels). The tuned presets
 //!    ([`crate::BankConfig::NAV440_RATES`], `rates.rs`) run the paper's gains for a family
 //!    their tables do not list.
-//! 4. The host tool (`nav440-cli`): the family in its tuner's list with its search box and
-//!    scoring (`nav440-cli/src/tune/search.rs`), and the Rust literal `nav440 tune --rust`
-//!    prints for `FooConfig` and the new field of [`BankGains`]
-//!    (`nav440-cli/src/rust_literal.rs`); its tests check both lists against [`FAMILIES`].
 //!
 //! The channel lists, the warm gain change, the gain schedule, the gains file and the
 //! `nav440 paper` tables then follow. Optional: an observer that should record its own
