@@ -2,9 +2,7 @@
 
 use crate::bank::{BankGains, Channel};
 use crate::error::positive;
-use crate::family::{
-    coordinate, geometric, search_range, Family, Gains, Scheduling, Scorer, SearchPoint,
-};
+use crate::family::{geometric, Family, Gains, Scheduling};
 use crate::law::{Law, Stateful};
 use crate::linear::{LinearLaw, LIN_MAX};
 use crate::{ConfigError, Real};
@@ -163,29 +161,5 @@ impl Gains for AdConfig {
         AdConfig {
             t: geometric(self.t, other.t, w),
         }
-    }
-
-    /// `(T)`.
-    fn search_point(&self) -> SearchPoint {
-        SearchPoint::from_array([f64::from(self.t)])
-    }
-
-    fn with_search_point(&self, x: &[f64]) -> Self {
-        AdConfig {
-            t: coordinate(x, 0, self.t),
-        }
-    }
-
-    /// `T` in `[1e-4, 1]` s.
-    fn search_box(_h_s: f64) -> (SearchPoint, SearchPoint) {
-        search_range([1e-4], [1.0])
-    }
-
-    fn score<S: Scorer>(&self, h: f32, scorer: &S) -> Result<S::Score, ConfigError> {
-        Ok(scorer.law(AdParams::<f32>::new(self.t, h)?))
-    }
-
-    fn describe(&self, w: &mut dyn core::fmt::Write) -> core::fmt::Result {
-        write!(w, "T={}", self.t)
     }
 }

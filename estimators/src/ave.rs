@@ -1,7 +1,7 @@
 //! Adaptive velocity estimator, AVE (paper eq. 4).
 
 use crate::error::{non_negative, positive};
-use crate::family::{coordinate, geometric, search_range, Gains, Scorer, SearchPoint};
+use crate::family::{geometric, Gains};
 use crate::fxk::{
     advance_one, advance_two, frac, mag, mulf, mulf32, run, smul, Coef, Kernel, Stage,
 };
@@ -45,19 +45,6 @@ pub struct AveConfig {
     pub gamma1: f32,
     /// `deltahat` law.
     pub delta: DeltaMode,
-}
-
-/// On one line: `AveConfig { k: .., gamma1: .., delta: DeltaMode::.. }`.
-impl crate::RustLiteral for AveConfig {
-    const RUST_TYPES: &'static [&'static str] = &["AveConfig", "DeltaMode"];
-
-    fn write_rust(&self, w: &mut dyn core::fmt::Write, _: crate::Indent<'_>) -> core::fmt::Result {
-        write!(
-            w,
-            "AveConfig {{ k: {:?}, gamma1: {:?}, delta: DeltaMode::{:?} }}",
-            self.k, self.gamma1, self.delta
-        )
-    }
 }
 
 /// The `deltahat` law as validated coefficients (see [`DeltaMode`]).
@@ -607,33 +594,6 @@ impl Gains for AveConfig {
             gamma1: geometric(self.gamma1, other.gamma1, w),
             delta: if w < 0.5 { self.delta } else { other.delta },
         }
-    }
-
-    /// `(k, gamma1)`; the `deltahat` law is not searched.
-    fn search_point(&self) -> SearchPoint {
-        SearchPoint::from_array([f64::from(self.k), f64::from(self.gamma1)])
-    }
-
-    fn with_search_point(&self, x: &[f64]) -> Self {
-        AveConfig {
-            k: coordinate(x, 0, self.k),
-            gamma1: coordinate(x, 1, self.gamma1),
-            delta: self.delta,
-        }
-    }
-
-    /// `k` in `[0.1, 1e5]` 1/s (tuned at low noise it reaches 10), `gamma1` in `[10, 1e8]`
-    /// 1/s^2; [`AveParams::new`] refuses what the step does not resolve.
-    fn search_box(_h_s: f64) -> (SearchPoint, SearchPoint) {
-        search_range([0.1, 10.0], [1e5, 1e8])
-    }
-
-    fn score<S: Scorer>(&self, h: f32, scorer: &S) -> Result<S::Score, ConfigError> {
-        Ok(scorer.law(AveParams::<f32>::new(self, h)?))
-    }
-
-    fn describe(&self, w: &mut dyn core::fmt::Write) -> core::fmt::Result {
-        write!(w, "k={} gamma1={}", self.k, self.gamma1)
     }
 }
 

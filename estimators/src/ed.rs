@@ -1,7 +1,7 @@
 //! Levant's robust exact differentiator, ED (paper eqs. 5-7; Levant 1998).
 
 use crate::error::positive;
-use crate::family::{coordinate, geometric, search_range, Gains, Scorer, SearchPoint};
+use crate::family::{geometric, Gains};
 use crate::fxk::{advance_one, advance_two, frac, mag, mulf, run, sqrt_fast, Coef, Kernel, Stage};
 use crate::law::{step_n, Interval, Law, Stateful};
 use crate::{ConfigError, Hold, NativeSqrt, Real, SqrtFn};
@@ -25,19 +25,6 @@ pub struct EdConfig {
     /// Gain `alpha` of the integral switching term, unit/s^2 (paper: 770 deg/s^2); must exceed
     /// the bound `C` of the input's second derivative for exactness.
     pub alpha: f32,
-}
-
-/// On one line: `EdConfig { lambda: .., alpha: .. }`.
-impl crate::RustLiteral for EdConfig {
-    const RUST_TYPES: &'static [&'static str] = &["EdConfig"];
-
-    fn write_rust(&self, w: &mut dyn core::fmt::Write, _: crate::Indent<'_>) -> core::fmt::Result {
-        write!(
-            w,
-            "EdConfig {{ lambda: {:?}, alpha: {:?} }}",
-            self.lambda, self.alpha
-        )
-    }
 }
 
 /// How the ED's discontinuous law is discretised.
@@ -447,32 +434,6 @@ impl Gains for EdConfig {
             lambda: geometric(self.lambda, other.lambda, w),
             alpha: geometric(self.alpha, other.alpha, w),
         }
-    }
-
-    /// `(lambda, alpha)`.
-    fn search_point(&self) -> SearchPoint {
-        SearchPoint::from_array([f64::from(self.lambda), f64::from(self.alpha)])
-    }
-
-    fn with_search_point(&self, x: &[f64]) -> Self {
-        EdConfig {
-            lambda: coordinate(x, 0, self.lambda),
-            alpha: coordinate(x, 1, self.alpha),
-        }
-    }
-
-    /// `lambda` in `[0.1, 1e5]` (tuned at low noise it reaches 10), `alpha` in `[10, 1e6]`.
-    fn search_box(_h_s: f64) -> (SearchPoint, SearchPoint) {
-        search_range([0.1, 10.0], [1e5, 1e6])
-    }
-
-    /// The ED with the paper's explicit Euler scheme.
-    fn score<Sc: Scorer>(&self, h: f32, scorer: &Sc) -> Result<Sc::Score, ConfigError> {
-        Ok(scorer.law(EdParams::<f32>::new(self, h, EdScheme::Euler)?))
-    }
-
-    fn describe(&self, w: &mut dyn core::fmt::Write) -> core::fmt::Result {
-        write!(w, "lambda={} alpha={}", self.lambda, self.alpha)
     }
 }
 

@@ -7,15 +7,15 @@
 //! * its name (`ilo1`: the channels `ilo1_v`, `ilo1_a` and the gains file's `[velocity.ilo1]`
 //!   table), its label in reports (`ILO1`) and its two [`Channel`]s;
 //! * where its gains are in one half of a [`BankGains`] ([`Family::get`], [`Family::set`]),
-//!   and what those gains can do ([`Gains`]): be interpolated between two levels of a gain
-//!   schedule, be searched by a tuner, build the estimator a tuner scores;
+//!   and what those gains can do at run time ([`Gains`]): be interpolated between two levels
+//!   of a gain schedule;
 //! * how a gain schedule blends it ([`Scheduling`]) and, for an observer, where its switch
 //!   point is recorded ([`Family::switch_up_mut`]).
 //!
 //! [`FAMILIES`] lists the plain facts ([`FamilyInfo`]) in column order, for const contexts
 //! ([`Channel::VELOCITY`], [`crate::VELOCITY_NAMES`]); [`for_each_family`] calls a
 //! [`FamilyVisitor`] with each family's type, for code that needs the gains' types (the
-//! noise-adaptive interpolation, the gains file, the tuner):
+//! noise-adaptive interpolation; on the host, the gains file):
 //!
 //! ```
 //! use estimators::{for_each_family, BankGains, Family, FamilyVisitor};
@@ -37,34 +37,38 @@
 //! # Adding an estimator to the paper bank
 //!
 //! 1. Its module, next to the others (`src/foo.rs`; `mod foo;` and `pub use foo::{..}` in
-//!    `lib.rs`): the law (`FooParams`, a [`Law`]), its configuration `FooConfig` (with the
+//!    `lib.rs`): the law (`FooParams`, a [`crate::Law`]), its configuration `FooConfig` (with the
 //!    `serde` and `defmt` derives of the others), `impl Gains for FooConfig` and the family
 //!    marker `FooFamily` (`impl Family`: name, label, channels, scheduling, where its gains
 //!    are in [`BankGains`]; `family!` declares both for gains that are one field of
-//!    [`BankGains`], as in `ed.rs`), and `impl RustLiteral for FooConfig`.
+//!    [`BankGains`], as in `ed.rs`).
 //! 2. `bank/paper.rs`: its entry in the family list, which declares [`BankGains`] with it
 //!    (`foo: FooConfig = (FOO_PAPER_V, FOO_PAPER_A) => [FooFamily],`: the field, its values
-//!    in [`BankGains::PAPER_VELOCITY`] and [`BankGains::PAPER_ACCELERATION`], its family;
-//!    [`BankGains::write_rust`] and [`BankGains::RUST_TYPES`] follow, with `FooConfig`'s
-//!    [`RustLiteral`]); its two channels (`FooV = "foo_v"`, `FooA = "foo_a"`) and its row or
-//!    rows, each with a `warm` clause, in the `estimator_bank!` table below the list.
-//! 3. What the compiler and the tests then ask for: the sizes in `ram.rs` (compile-time
+//!    in [`BankGains::PAPER_VELOCITY`] and [`BankGains::PAPER_ACCELERATION`], its family);
+//!    its two channels (`FooV = "foo_v"`, `FooA = "foo_a"`) and its row or rows, each with a
+//!    `warm` clause, in the `estimator_bank!` table below the list.
+//! 3. The host tool (`nav440-cli`): the family in its tuner's list, with its search box and
+//!    scoring (`nav440-cli/src/search.rs`; a test holds that list to [`FAMILIES`]), and the
+//!    Rust literal `nav440 tune --rust` prints for `FooConfig` and for the new field of
+//!    [`BankGains`] (`nav440-cli/src/rust_literal.rs`, which does not compile until it names
+//!    every field).
+//! 4. What the compiler and the tests then ask for: the sizes in `ram.rs` (compile-time
 //!    checked); the paper bank's CSV contract (`nav440_pipeline::csv::HEADER` and the tests
 //!    that spell out its columns); the committed `nav440 tune --rust` snippets
-//!    `host-tests/data/gains/*.rs`, regenerated; the committed gain schedule, re-tuned (the
-//!    schedule tests hold every family to its tuned levels). The tuned presets
+//!    `host-tests/data/gains/*.rs`, regenerated, and the firmware's copies of them; the
+//!    committed gain schedule, re-tuned (the schedule tests hold every family to its tuned
+//!    levels). The tuned presets
 //!    ([`crate::BankConfig::NAV440_RATES`], `rates.rs`) run the paper's gains for a family
 //!    their tables do not list.
 //!
-//! The channel lists, the warm gain change, the gain schedule, the gains file, the tuner and
-//! the `nav440 paper` tables then follow. Optional: an observer that should record its own
+//! The channel lists, the warm gain change, the gain schedule, the gains file and the
+//! `nav440 paper` tables then follow. Optional: an observer that should record its own
 //! switch point per schedule level needs a field in [`ObserverSwitch`] (with its line in
-//! `ObserverSwitch::write_rust` and [`ObserverSwitch::all`]) returned by
+//! [`ObserverSwitch::all`] and in the host's Rust literal) returned by
 //! [`Family::switch_up_mut`]; `nav440 plot` draws the families its panels list.
 
 use crate::adaptive::ObserverSwitch;
 use crate::bank::{BankGains, Channel};
-use crate::{ConfigError, KalmanNoise, Law};
 
 /// A family of the paper bank: one column of the paper's tables, a velocity estimator and
 /// the acceleration series of the same law (both stages with the acceleration half's gains).
@@ -156,51 +160,13 @@ pub trait FamilyVisitor {
 }
 
 /// The gains of one family in one half of the bank (the law's configuration, e.g.
-/// [`crate::IloConfig`]): what a gain schedule, a tuner and a gains file do with them.
+/// [`crate::IloConfig`]): what a gain schedule does with them (and, with the `serde`
+/// feature, what a gains file reads and writes).
 pub trait Gains: Copy + PartialEq + core::fmt::Debug + SerdeIfEnabled {
     /// The gains between `self` (weight `1 - w`) and `other` (weight `w`, in `[0, 1]`), for a
     /// gain schedule: each gain geometrically ([`geometric`]: gains span decades); settings
     /// that are not numbers (the AVE's `deltahat` law) from the nearer one.
     fn interpolate(&self, other: &Self, w: f32) -> Self;
-
-    /// The gains a tuner searches, as coordinates (at most 4, in the order of
-    /// [`Self::search_box`]).
-    fn search_point(&self) -> SearchPoint;
-
-    /// These gains with the searched ones set from the coordinates `x` (the others, e.g. the
-    /// AVE's `deltahat` law, kept).
-    fn with_search_point(&self, x: &[f64]) -> Self;
-
-    /// The search range `(lowest, highest)` of each coordinate of [`Self::search_point`] at
-    /// the step `h_s` (s): the gains the law accepts at that step, spanning the paper's by
-    /// two decades or more each side.
-    fn search_box(h_s: f64) -> (SearchPoint, SearchPoint);
-
-    /// Hands the estimator these gains build at the step `h` (s) to `scorer`, which scores it
-    /// (a tuner's objective); the error of the law's constructor if they do not build one.
-    fn score<S: Scorer>(&self, h: f32, scorer: &S) -> Result<S::Score, ConfigError>;
-
-    /// Writes the gains on one line, `name=value` separated by spaces (e.g. `k=500
-    /// gamma1=20000`), as reports print them.
-    fn describe(&self, w: &mut dyn core::fmt::Write) -> core::fmt::Result;
-}
-
-/// The coordinates of a tuner's search ([`Gains::search_point`]).
-pub type SearchPoint = heapless::Vec<f64, 4>;
-
-/// What scores a family's candidate gains ([`Gains::score`]): a tuner's objective, given the
-/// estimator the gains build.
-pub trait Scorer {
-    /// The score (e.g. a mean square error).
-    type Score;
-
-    /// Scores a law stepped at `h` between samples: its output is the velocity estimate; the
-    /// scorer may run two of it in series for the acceleration (as the bank does).
-    fn law<L: Law<Num = f32>>(&self, law: L) -> Self::Score;
-
-    /// Scores a Kalman tracker with the noise `noise` (run once per sample, the bank's
-    /// [`crate::KalmanParams`]; velocity or acceleration output as the scorer needs).
-    fn tracker(&self, noise: KalmanNoise) -> Self::Score;
 }
 
 /// `a^(1-w) b^w` for positive `a`, `b` (linear in `ln`); `a + (b - a) w` otherwise; `a` for
@@ -230,76 +196,9 @@ pub trait SerdeIfEnabled {}
 #[cfg(not(feature = "serde"))]
 impl<T> SerdeIfEnabled for T {}
 
-/// Writes a gains value as the Rust expression that builds it: what
-/// [`BankGains::write_rust`] writes for each of its fields (and so what `nav440 tune --rust`
-/// prints). Each gain is written with `{:?}`, its shortest form that reads back to the same
-/// `f32`.
-pub trait RustLiteral {
-    /// The type names the expression uses (for a `use estimators::{..}` line).
-    const RUST_TYPES: &'static [&'static str];
-
-    /// Writes the expression. Where it breaks the line, the next line starts with `indent`
-    /// (the indentation of the line the expression starts on) plus its own indentation.
-    fn write_rust(&self, w: &mut dyn core::fmt::Write, indent: Indent<'_>) -> core::fmt::Result;
-}
-
-/// The indentation of a line of generated Rust: `base`, then four spaces per level.
-#[derive(Clone, Copy, Debug)]
-pub struct Indent<'a> {
-    /// What every line starts with.
-    pub base: &'a str,
-    /// Levels of four spaces after `base`.
-    pub levels: usize,
-}
-
-impl Indent<'_> {
-    /// One level deeper.
-    pub fn deeper(self) -> Self {
-        Self {
-            levels: self.levels + 1,
-            ..self
-        }
-    }
-}
-
-impl core::fmt::Display for Indent<'_> {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.write_str(self.base)?;
-        for _ in 0..self.levels {
-            f.write_str("    ")?;
-        }
-        Ok(())
-    }
-}
-
-/// A bare gain (e.g. the AD's time constant, s).
-impl RustLiteral for f32 {
-    const RUST_TYPES: &'static [&'static str] = &[];
-
-    fn write_rust(&self, w: &mut dyn core::fmt::Write, _: Indent<'_>) -> core::fmt::Result {
-        write!(w, "{self:?}")
-    }
-}
-
-/// One element per line, one level deeper than the `[`.
-impl<T: RustLiteral, const N: usize> RustLiteral for [T; N] {
-    const RUST_TYPES: &'static [&'static str] = T::RUST_TYPES;
-
-    fn write_rust(&self, w: &mut dyn core::fmt::Write, indent: Indent<'_>) -> core::fmt::Result {
-        w.write_str("[\n")?;
-        for x in self {
-            write!(w, "{}", indent.deeper())?;
-            x.write_rust(w, indent.deeper())?;
-            w.write_str(",\n")?;
-        }
-        write!(w, "{indent}]")
-    }
-}
-
 /// Defines the paper bank's families and the gains of one half of the bank from one list:
 /// the struct [`BankGains`] (one field per entry, with its docs), its paper sets
-/// [`BankGains::PAPER_VELOCITY`] and [`BankGains::PAPER_ACCELERATION`],
-/// [`BankGains::write_rust`] and [`BankGains::RUST_TYPES`], and the family list
+/// [`BankGains::PAPER_VELOCITY`] and [`BankGains::PAPER_ACCELERATION`], and the family list
 /// [`FAMILIES`] and [`for_each_family`].
 ///
 /// An entry is `field: Type = (paper velocity, paper acceleration) => [Family, ..]`: the
@@ -337,46 +236,6 @@ macro_rules! families {
                 $($field: $acceleration,)+
             };
 
-            /// The length of [`Self::RUST_TYPES`].
-            const RUST_TYPE_COUNT: usize = 0 $(+ <$ty as $crate::RustLiteral>::RUST_TYPES.len())+;
-
-            /// The type names [`Self::write_rust`] uses, field by field (a name may repeat),
-            /// for a `use estimators::{..}` line.
-            pub const RUST_TYPES: [&'static str; Self::RUST_TYPE_COUNT] = {
-                let mut all = [""; Self::RUST_TYPE_COUNT];
-                let mut n = 0;
-                $(
-                    let names = <$ty as $crate::RustLiteral>::RUST_TYPES;
-                    let mut i = 0;
-                    while i < names.len() {
-                        all[n] = names[i];
-                        n += 1;
-                        i += 1;
-                    }
-                )+
-                let _ = n;
-                all
-            };
-
-            /// Writes the Rust expression `BankGains { .. }` that builds these gains: every
-            /// field spelled out on its own line ([`RustLiteral`](crate::RustLiteral)), each
-            /// line after the first indented by `indent`. What `nav440 tune --rust` writes for
-            /// a firmware (the shipped presets are printed as tables instead:
-            /// [`RateGains::write_tables`](crate::RateGains::write_tables)).
-            pub fn write_rust(
-                &self,
-                w: &mut dyn core::fmt::Write,
-                indent: &str,
-            ) -> core::fmt::Result {
-                let field = $crate::Indent { base: indent, levels: 1 };
-                w.write_str("BankGains {\n")?;
-                $(
-                    write!(w, "{field}{}: ", stringify!($field))?;
-                    $crate::RustLiteral::write_rust(&self.$field, w, field)?;
-                    w.write_str(",\n")?;
-                )+
-                write!(w, "{indent}}}")
-            }
         }
 
         /// The families of the paper bank, in column order (the order of
@@ -449,22 +308,6 @@ macro_rules! family {
 }
 pub(crate) use family;
 
-/// Coordinate `i` of `x` as f32, or `current` if `x` is shorter.
-pub(crate) fn coordinate(x: &[f64], i: usize, current: f32) -> f32 {
-    x.get(i).map_or(current, |&v| v as f32)
-}
-
-/// A [`Gains::search_box`] from the lowest and highest value of each coordinate.
-pub(crate) fn search_range<const N: usize>(
-    lowest: [f64; N],
-    highest: [f64; N],
-) -> (SearchPoint, SearchPoint) {
-    (
-        SearchPoint::from_array(lowest),
-        SearchPoint::from_array(highest),
-    )
-}
-
 pub use crate::bank::{for_each_family, FAMILIES, FAMILY_COUNT};
 
 #[cfg(test)]
@@ -518,28 +361,5 @@ mod tests {
         let mut c = Copy(BankConfig::NAV440.velocity, BankConfig::PAPER.acceleration);
         for_each_family(&mut c);
         assert_eq!(c.1, c.0);
-    }
-
-    /// Each family's search point round-trips, and its paper gains lie in its search box.
-    #[test]
-    fn paper_gains_lie_in_the_search_box() {
-        struct Check;
-        impl FamilyVisitor for Check {
-            fn family<F: Family>(&mut self, _: usize) {
-                for half in [BankConfig::PAPER.velocity, BankConfig::PAPER.acceleration] {
-                    let g = F::get(&half);
-                    let x = g.search_point();
-                    assert_eq!(g.with_search_point(&x), g, "{}", F::NAME);
-                    let (lo, hi) = F::Gains::search_box(1e-4);
-                    assert_eq!((lo.len(), hi.len()), (x.len(), x.len()));
-                    for ((v, l), h) in x.iter().zip(&lo).zip(&hi) {
-                        // `K1 = 1` is the leak's lower end (1e-7) to f32 precision.
-                        let v = v.max(1e-7);
-                        assert!(v >= *l && v <= *h, "{}: {v} not in [{l}, {h}]", F::NAME);
-                    }
-                }
-            }
-        }
-        for_each_family(&mut Check);
     }
 }

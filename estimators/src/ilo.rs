@@ -4,9 +4,7 @@
 use crate::adaptive::ObserverSwitch;
 use crate::bank::{BankGains, Channel};
 use crate::error::positive;
-use crate::family::{
-    coordinate, geometric, search_range, Family, Gains, Scheduling, Scorer, SearchPoint,
-};
+use crate::family::{geometric, Family, Gains, Scheduling};
 use crate::law::{Law, Stateful};
 use crate::linear::{LinearLaw, LIN_MAX};
 use crate::{ConfigError, Real};
@@ -25,19 +23,6 @@ pub struct IloConfig {
     /// Learning gain `K2`, dimensionless per update (velocity per unit position error per
     /// `tau`), `> 0`. From a Lyapunov weight `Q` use [`IloConfig::from_lq`].
     pub k2: f32,
-}
-
-/// On one line: `IloConfig { k1: .., l: .., k2: .. }`.
-impl crate::RustLiteral for IloConfig {
-    const RUST_TYPES: &'static [&'static str] = &["IloConfig"];
-
-    fn write_rust(&self, w: &mut dyn core::fmt::Write, _: crate::Indent<'_>) -> core::fmt::Result {
-        write!(
-            w,
-            "IloConfig {{ k1: {:?}, l: {:?}, k2: {:?} }}",
-            self.k1, self.l, self.k2
-        )
-    }
 }
 
 impl IloConfig {
@@ -278,38 +263,5 @@ impl Gains for IloConfig {
             l: geometric(self.l, other.l, w),
             k2: geometric(self.k2, other.k2, w),
         }
-    }
-
-    /// `(1 - K1, L, K2)`: `K1` is searched as its leak on a log scale, because the best
-    /// `K1` lie within 1e-3 of 1 (a leak of a few 1/s at `tau = h`).
-    fn search_point(&self) -> SearchPoint {
-        SearchPoint::from_array([
-            1.0 - f64::from(self.k1),
-            f64::from(self.l),
-            f64::from(self.k2),
-        ])
-    }
-
-    fn with_search_point(&self, x: &[f64]) -> Self {
-        IloConfig {
-            k1: x.first().map_or(self.k1, |&leak| (1.0 - leak) as f32),
-            l: coordinate(x, 1, self.l),
-            k2: coordinate(x, 2, self.k2),
-        }
-    }
-
-    /// The leak `1 - K1` in `[1e-7, 0.95]` (`K1 = 1` to f32 precision, to `K1 = 0.05`), `L`
-    /// in `[0.1, 0.99 / h]` 1/s (`h L < 1`, as [`IloParams::new`] demands), `K2` in
-    /// `[1e-3, 1e4]`.
-    fn search_box(h_s: f64) -> (SearchPoint, SearchPoint) {
-        search_range([1e-7, 0.1, 1e-3], [0.95, 0.99 / h_s, 1e4])
-    }
-
-    fn score<S: Scorer>(&self, h: f32, scorer: &S) -> Result<S::Score, ConfigError> {
-        Ok(scorer.law(IloParams::<f32, 1>::new(self, h)?))
-    }
-
-    fn describe(&self, w: &mut dyn core::fmt::Write) -> core::fmt::Result {
-        write!(w, "K1={} L={} K2={}", self.k1, self.l, self.k2)
     }
 }

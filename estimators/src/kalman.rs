@@ -35,7 +35,7 @@
 //! stand-alone tracker.
 
 use crate::error::positive;
-use crate::family::{coordinate, geometric, search_range, Gains, Scorer, SearchPoint};
+use crate::family::{geometric, Gains};
 use crate::law::Law;
 use crate::{ConfigError, Hold, Real};
 
@@ -479,15 +479,6 @@ pub struct KalmanNoise {
     pub r: f32,
 }
 
-/// On one line: `KalmanNoise { q: .., r: .. }`.
-impl crate::RustLiteral for KalmanNoise {
-    const RUST_TYPES: &'static [&'static str] = &["KalmanNoise"];
-
-    fn write_rust(&self, w: &mut dyn core::fmt::Write, _: crate::Indent<'_>) -> core::fmt::Result {
-        write!(w, "KalmanNoise {{ q: {:?}, r: {:?} }}", self.q, self.r)
-    }
-}
-
 impl Gains for KalmanNoise {
     /// `q` and `r` geometrically.
     fn interpolate(&self, other: &Self, w: f32) -> Self {
@@ -495,33 +486,6 @@ impl Gains for KalmanNoise {
             q: geometric(self.q, other.q, w),
             r: geometric(self.r, other.r, w),
         }
-    }
-
-    /// `(q)`: only `q / r` matters for the steady-state gain, so `r` is kept.
-    fn search_point(&self) -> SearchPoint {
-        SearchPoint::from_array([f64::from(self.q)])
-    }
-
-    fn with_search_point(&self, x: &[f64]) -> Self {
-        KalmanNoise {
-            q: coordinate(x, 0, self.q),
-            r: self.r,
-        }
-    }
-
-    /// `q` in `[1, 1e12]` deg^2/s^5.
-    fn search_box(_h_s: f64) -> (SearchPoint, SearchPoint) {
-        search_range([1.0], [1e12])
-    }
-
-    /// The tracker (it needs the nominal sample period, which the scorer knows: it checks
-    /// the noise when it builds the tracker).
-    fn score<S: Scorer>(&self, _h: f32, scorer: &S) -> Result<S::Score, ConfigError> {
-        Ok(scorer.tracker(*self))
-    }
-
-    fn describe(&self, w: &mut dyn core::fmt::Write) -> core::fmt::Result {
-        write!(w, "q={} r={}", self.q, self.r)
     }
 }
 

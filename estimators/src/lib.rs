@@ -26,7 +26,7 @@
 //!   the unwrapping per axis ([`Wrap`]). See docs/BANK.md.
 //! * [`family`]: the paper bank's estimator families (one per column of the paper's tables),
 //!   listed once ([`FAMILIES`], [`for_each_family`]): the channel lists, the gain schedule's
-//!   interpolation and the host tools' gains file and tuner iterate them.
+//!   interpolation and the host tools' gains file iterate them.
 //! * Another sensor: [`ProductBank`] with [`BankConfig::sample_period_s`] set to the sensor's
 //!   period (the default is 100 Hz) and [`Wrap::None`] for a signal that does not wrap
 //!   (`examples/other_imu_200hz.rs`, docs/OTHER-IMU.md).
@@ -120,8 +120,7 @@ pub use ed::{Ed, EdConfig, EdFamily, EdParams, EdScheme, EdState, ED_MAX_H_ALPHA
 pub use error::{ConfigError, SampleError};
 pub use estimator::{advance_by_steps, Estimator, Hold};
 pub use family::{
-    for_each_family, Family, FamilyInfo, FamilyVisitor, Gains, Indent, RustLiteral, Scheduling,
-    Scorer, SearchPoint, FAMILIES, FAMILY_COUNT,
+    for_each_family, Family, FamilyInfo, FamilyVisitor, Gains, Scheduling, FAMILIES, FAMILY_COUNT,
 };
 pub use ilo::{Ilo, IloConfig, IloFamily, IloParams, IloState};
 pub use kalman::{

@@ -12,8 +12,9 @@
 //! paper's where tuning did not beat them by 1 %.
 //!
 //! The tuned gains are the tables below: one per family (a column of the paper's tables),
-//! one row per band. They are what [`RateGains::write_tables`] prints; a test checks that the
-//! tables in this file are its output for [`BankConfig::NAV440_RATES`]. Every band runs the
+//! one row per band, each gain in its shortest form that reads back to the same `f32`. The
+//! host tool prints them (`nav440_cli::rust_literal::write_rate_tables`, whose tests check that
+//! the tables in this file are its output for [`BankConfig::NAV440_RATES`]). Every band runs the
 //! AVE's `deltahat` law of [`AVE_DEFAULT`] and the tracker's `r` of [`KF_DEFAULT`]; a family
 //! the tables do not list runs the paper's gains ([`BankGains::PAPER_VELOCITY`],
 //! [`BankGains::PAPER_ACCELERATION`]).
@@ -21,7 +22,6 @@
 use crate::bank::{BankConfig, BankGains, KF_DEFAULT};
 use crate::presets::AVE_DEFAULT;
 use crate::{AveConfig, EdConfig, IloConfig, KalmanNoise};
-use core::fmt::{self, Write};
 
 /// One band of the shipped preset's rate table ([`BankConfig::NAV440_RATES`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -127,116 +127,6 @@ const fn ilo_config((k1, l, k2): (f32, f32, f32)) -> IloConfig {
     IloConfig { k1, l, k2 }
 }
 
-impl RateGains {
-    /// Writes the tables of `bands` as they stand in this module's source (what
-    /// [`BankConfig::NAV440_RATES`] is built from): one per family, one row per band, each
-    /// gain with `{:?}` (its shortest form that reads back to the same `f32`), each row
-    /// labelled with the rates its gains were tuned at. How a re-tuned table is printed.
-    ///
-    /// An error, and nothing written, when a band cannot be written in the tables: its AVE
-    /// does not run [`AVE_DEFAULT`]'s `deltahat` law, or its tracker not [`KF_DEFAULT`]'s `r`.
-    pub fn write_tables(bands: &[RateGains], w: &mut dyn Write) -> fmt::Result {
-        let writable = |g: &BankGains| g.ave.delta == AVE_DEFAULT.delta && g.kf.r == KF_DEFAULT.r;
-        if !bands
-            .iter()
-            .all(|b| writable(&b.velocity) && writable(&b.acceleration))
-        {
-            return Err(fmt::Error);
-        }
-        type Row<'a> = &'a dyn Fn(&mut dyn Write, &RateGains) -> fmt::Result;
-        let pairs = |w: &mut dyn Write, v: (f32, f32), a: (f32, f32)| {
-            write!(w, "[({:?}, {:?}), ({:?}, {:?})]", v.0, v.1, a.0, a.1)
-        };
-        let tables: [(&str, &str, &str, Row); 7] = [
-            (
-                "/// Each band's `(tuned_period_s, below_period_s)`, s (see [`RateGains`]).",
-                "PERIODS",
-                "([f32; 2], f32)",
-                &|w, b| {
-                    let [lo, hi] = b.tuned_period_s;
-                    match b.below_period_s {
-                        f32::INFINITY => write!(w, "([{lo:?}, {hi:?}], f32::INFINITY)"),
-                        below => write!(w, "([{lo:?}, {hi:?}], {below:?})"),
-                    }
-                },
-            ),
-            (
-                "/// AVE `(k, gamma1)`, `[velocity, acceleration]`.",
-                "AVE",
-                "[(f32, f32); 2]",
-                &|w, b| {
-                    let (v, a) = (b.velocity.ave, b.acceleration.ave);
-                    pairs(w, (v.k, v.gamma1), (a.k, a.gamma1))
-                },
-            ),
-            (
-                "/// ILO1, ILO2, ILO3 `(k1, l, k2)` of the velocity half.",
-                "ILO_VELOCITY",
-                "[(f32, f32, f32); 3]",
-                &|w, b| write_ilo(w, &b.velocity.ilo),
-            ),
-            (
-                "/// ILO1, ILO2, ILO3 `(k1, l, k2)` of the acceleration half.",
-                "ILO_ACCELERATION",
-                "[(f32, f32, f32); 3]",
-                &|w, b| write_ilo(w, &b.acceleration.ilo),
-            ),
-            (
-                "/// AD time constant `T`, s, `[velocity, acceleration]`.",
-                "AD_T",
-                "[f32; 2]",
-                &|w, b| write!(w, "[{:?}, {:?}]", b.velocity.ad_t, b.acceleration.ad_t),
-            ),
-            (
-                "/// ED `(lambda, alpha)`, `[velocity, acceleration]`.",
-                "ED",
-                "[(f32, f32); 2]",
-                &|w, b| {
-                    let (v, a) = (b.velocity.ed, b.acceleration.ed);
-                    pairs(w, (v.lambda, v.alpha), (a.lambda, a.alpha))
-                },
-            ),
-            (
-                "/// Kalman tracker `q`, deg^2/s^5, `[velocity, acceleration]`.",
-                "KF_Q",
-                "[f32; 2]",
-                &|w, b| write!(w, "[{:?}, {:?}]", b.velocity.kf.q, b.acceleration.kf.q),
-            ),
-        ];
-        for (i, (doc, name, ty, row)) in tables.into_iter().enumerate() {
-            if i > 0 {
-                w.write_str("\n")?;
-            }
-            writeln!(
-                w,
-                "{doc}\n#[rustfmt::skip]\nconst {name}: [{ty}; BANDS] = ["
-            )?;
-            for b in bands {
-                w.write_str("    ")?;
-                row(w, b)?;
-                let [fast, slow] = b.tuned_period_s.map(|p| 1.0 / p);
-                if fast == slow {
-                    writeln!(w, ", // {fast:.0} Hz")?;
-                } else {
-                    writeln!(w, ", // {fast:.0}-{slow:.0} Hz")?;
-                }
-            }
-            w.write_str("];\n")?;
-        }
-        Ok(())
-    }
-}
-
-/// An ILO row of [`RateGains::write_tables`]: `[(k1, l, k2), ..]`.
-fn write_ilo(w: &mut dyn Write, ilo: &[IloConfig; 3]) -> fmt::Result {
-    w.write_str("[")?;
-    for (i, c) in ilo.iter().enumerate() {
-        let sep = if i == 0 { "" } else { ", " };
-        write!(w, "{sep}({:?}, {:?}, {:?})", c.k1, c.l, c.k2)?;
-    }
-    w.write_str("]")
-}
-
 /// Each band's `(tuned_period_s, below_period_s)`, s (see [`RateGains`]).
 #[rustfmt::skip]
 const PERIODS: [([f32; 2], f32); BANDS] = [
@@ -304,37 +194,7 @@ const KF_Q: [[f32; 2]; BANDS] = [
 mod tests {
     extern crate std;
     use super::*;
-    use crate::{DeltaMode, PaperBank};
-    use std::string::String;
-
-    /// The tables in this file are [`RateGains::write_tables`]' output for the bands they
-    /// build, to the byte: every gain reads back from its `{:?}` form, and a re-tuned table is
-    /// pasted from the printer, not edited by hand.
-    #[test]
-    fn the_tables_are_what_write_tables_prints() {
-        let mut printed = String::new();
-        RateGains::write_tables(&BankConfig::NAV440_RATES, &mut printed).unwrap();
-        assert_eq!(printed.matches("#[rustfmt::skip]").count(), 7);
-        assert!(
-            include_str!("rates.rs").contains(&printed),
-            "rates.rs does not hold the printed tables:\n{printed}"
-        );
-    }
-
-    /// A band the tables cannot hold (another `deltahat` law, another tracker `r`) is refused,
-    /// with nothing written.
-    #[test]
-    fn write_tables_refuses_what_the_tables_cannot_hold() {
-        let mut paper_law = BankConfig::NAV440_RATES;
-        paper_law[1].velocity.ave.delta = DeltaMode::Paper;
-        let mut other_r = BankConfig::NAV440_RATES;
-        other_r[2].acceleration.kf.r = 0.5;
-        for bands in [paper_law, other_r] {
-            let mut printed = String::new();
-            assert!(RateGains::write_tables(&bands, &mut printed).is_err());
-            assert!(printed.is_empty());
-        }
-    }
+    use crate::PaperBank;
 
     /// Every NAV440 packet rate (divider 1, 2, 4, 5, 10, 20, 25, 50: NAV440-PROTOCOL.md) runs
     /// the entry tuned at it or, for 25 and 20 Hz, on it (the first entry's family), and 4 Hz

@@ -37,13 +37,14 @@ fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
 }
 
 /// The gain schedule of the noise-adaptive bank (feature `adaptive-gains`), as `nav440 tune
-/// --schedule 0.001,0.01,0.1,0.5,1 --rust` wrote it (`host-tests/data/gains/schedule_fig5.rs`,
-/// beside the `schedule_fig5.toml` that `nav440 estimate --gains` reads). Its hold is
+/// --schedule 0.001,0.01,0.1,0.5,1 --rust` wrote it (`src/gains/schedule_fig5.rs`, the same
+/// bytes as `host-tests/data/gains/schedule_fig5.rs` beside the `schedule_fig5.toml` that
+/// `nav440 estimate --gains` reads; `host-tests/tests/firmware_gains.rs` checks). Its hold is
 /// [`PRESET`]'s (linear; the file's header names the hold it was tuned with).
 #[cfg(feature = "adaptive-gains")]
 #[allow(missing_docs)] // generated file: its constant is documented at the `pub use` below
 mod schedule {
-    include!("../../host-tests/data/gains/schedule_fig5.rs");
+    include!("gains/schedule_fig5.rs");
 }
 /// The schedule's levels (noise variance, deg^2 -> velocity and acceleration gains) and the
 /// nominal sample period they were tuned at (s).
@@ -89,12 +90,13 @@ pub type Pipeline = nav440_pipeline::Pipeline<Bank, ConfigError, BuildFn, BANK_S
 pub const PRESET: BankConfig = BankConfig::NAV440;
 
 /// Gains tuned for the product bank by `nav440 tune --bank product --rust` (feature
-/// `tuned-gains`): `host-tests/data/gains/product_fig5.rs`, beside the `product_fig5.toml`
-/// that `nav440 estimate --bank product --gains` reads.
+/// `tuned-gains`): `src/gains/product_fig5.rs`, the same bytes as
+/// `host-tests/data/gains/product_fig5.rs` beside the `product_fig5.toml` that `nav440
+/// estimate --bank product --gains` reads.
 #[cfg(feature = "tuned-gains")]
 #[allow(missing_docs)] // generated file: its constant is documented at the `PRESET` below
 mod tuned {
-    include!("../../host-tests/data/gains/product_fig5.rs");
+    include!("gains/product_fig5.rs");
 }
 /// The bank preset the firmware runs (feature `tuned-gains`): the tuned gains at every
 /// packet rate ([`FOLLOW_RATE`] is `false`).

@@ -5,7 +5,7 @@
 //!   tunes one set of gains for a family of synthetic motions and noise levels ([`family`]:
 //!   `nav440 synth` motions, none of them a bundled capture with its noise) and prints the
 //!   rate tables of `estimators/src/rates.rs` with these gains as their first band
-//!   (`RateGains::write_tables`), to paste there.
+//!   (`nav440_cli::rust_literal::write_rate_tables`), to paste there.
 //! * `nav440_beats_paper_on_the_bundled_captures_but_for_the_listed_cells`: on the bundled
 //!   captures, at the paper's two noise levels, the MSE of every column (7 velocity, 7
 //!   acceleration) with `BankConfig::NAV440` is below the MSE with `BankConfig::PAPER` (both
@@ -16,12 +16,13 @@
 //!   references are independent of the code under test: the motion's analytic rate, and the
 //!   paper's AVE on that rate for acceleration.
 
-use estimators::{BankConfig, Hold, RateGains};
+use estimators::{BankConfig, Hold};
 use host_tests::data;
 use nav440_cli::motion::ProfileKind;
 use nav440_cli::optim::Method;
 use nav440_cli::paper::COLUMNS;
 use nav440_cli::replay;
+use nav440_cli::rust_literal::write_rate_tables;
 use nav440_cli::tune::{bank_mse, synth_family, tune_preset, PresetCase};
 
 /// The tuning family: synthetic motions (fig5 shapes of seeds 11-14, none of them a bundled
@@ -74,7 +75,7 @@ fn print_nav440_preset() {
     bands[0].velocity = cfg.velocity;
     bands[0].acceleration = cfg.acceleration;
     let mut tables = String::new();
-    RateGains::write_tables(&bands, &mut tables).unwrap();
+    write_rate_tables(&bands, &mut tables).unwrap();
     println!("{tables}");
 }
 

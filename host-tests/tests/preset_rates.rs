@@ -8,18 +8,19 @@
 //!   `cargo test --release -p host-tests --test preset_rates -- --ignored --nocapture`
 //!   tunes, for each rate, one set of gains on a family of synthetic motions at that rate
 //!   ([`family`]) and prints the tables of `estimators/src/rates.rs` with these gains as the
-//!   bands below 20 Hz (`RateGains::write_tables`), to paste there.
+//!   bands below 20 Hz (`nav440_cli::rust_literal::write_rate_tables`), to paste there.
 //! * `rate_presets_beat_the_100_hz_gains_below_20_hz`: on other synthetic motions at each
 //!   rate, scored as `nav440 tune` scores (mean of noise seeds 1-3, references independent of
 //!   the code under test: the motion's analytic rate, the paper's AVE on it for acceleration),
 //!   each entry is within 2 % of PAPER in every column and better than the 20-100 Hz gains.
 
-use estimators::{BankConfig, RateGains};
+use estimators::BankConfig;
 use nav440_cli::gains::GainsFile;
 use nav440_cli::motion::ProfileKind;
 use nav440_cli::optim::Method;
 use nav440_cli::paper::COLUMNS;
 use nav440_cli::replay::Sample;
+use nav440_cli::rust_literal::write_rate_tables;
 use nav440_cli::synth;
 use nav440_cli::tune::{bank_mse, synth_family, tune_preset, PresetCase};
 
@@ -130,7 +131,7 @@ fn print_nav440_rate_presets() {
         band.acceleration = cfg.acceleration;
     }
     let mut tables = String::new();
-    RateGains::write_tables(&bands, &mut tables).unwrap();
+    write_rate_tables(&bands, &mut tables).unwrap();
     println!("{tables}");
 }
 

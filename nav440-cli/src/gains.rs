@@ -27,6 +27,8 @@
 //! configuration types (its `serde` feature).
 
 use crate::error::{Error, Result};
+use crate::rust_literal::{bank_gains_literal, literal, use_line};
+use crate::search::{for_each_searched_family, Scorer, Search, SearchVisitor};
 use estimators::ConfigError;
 use estimators::{
     for_each_family, AveFamily, BankConfig, BankGains, Family, FamilyVisitor, ObserverSwitch,
@@ -464,11 +466,7 @@ impl ScheduleFile {
                 None => "None".to_string(),
             };
             let switch = match l.switch_up {
-                Some(SwitchUpFile(w)) => {
-                    let mut s = String::new();
-                    let _ = w.write_rust(&mut s);
-                    format!("Some({s})")
-                }
+                Some(SwitchUpFile(w)) => format!("Some({})", literal(&w, "")),
                 None => "None".to_string(),
             };
             s.push_str(&format!(
@@ -760,26 +758,29 @@ impl FamilyGains {
     ) -> std::result::Result<(), (&'static str, Option<String>, ConfigError)> {
         /// A scorer that only builds the law.
         struct Builds;
-        impl estimators::Scorer for Builds {
+        impl Scorer for Builds {
             type Score = ();
             fn law<L: estimators::Law<Num = f32>>(&self, _: L) {}
             fn tracker(&self, _: estimators::KalmanNoise) {}
         }
         struct Check<'a>(&'a FamilyGains, f32, Option<(&'static str, ConfigError)>);
-        impl FamilyVisitor for Check<'_> {
-            fn family<F: Family>(&mut self, column: usize) {
+        impl SearchVisitor for Check<'_> {
+            fn family<F: Family>(&mut self, column: usize)
+            where
+                F::Gains: Search,
+            {
                 if self.2.is_some() {
                     return;
                 }
                 if let Some(g) = self.0.get_at::<F>(column) {
-                    if let Err(e) = estimators::Gains::score(&g, self.1, &Builds) {
+                    if let Err(e) = g.score(self.1, &Builds) {
                         self.2 = Some((F::NAME, e));
                     }
                 }
             }
         }
         let mut c = Check(self, h, None);
-        for_each_family(&mut c);
+        for_each_searched_family(&mut c);
         match c.2 {
             None => Ok(()),
             Some((name, e)) => Err((name, config_error_key(&e), e)),
@@ -981,24 +982,6 @@ impl<'de> Deserialize<'de> for FamilyGains {
         d.deserialize_struct(FAMILY_GAINS, &estimators::VELOCITY_NAMES, Gains)
     }
 }
-/// A Rust expression `BankGains { .. }` that builds `g` (every field spelled out; gains printed
-/// with `{:?}`, which round-trips f32 exactly), each line after the first indented by `indent`.
-/// Used by `nav440 tune --rust`.
-pub fn bank_gains_literal(g: &BankGains, indent: &str) -> String {
-    let mut s = String::new();
-    let _ = g.write_rust(&mut s, indent);
-    s
-}
-
-/// `use estimators::{..};` importing `names` and every name [`BankGains::write_rust`] uses,
-/// sorted.
-fn use_line(names: &[&str]) -> String {
-    let mut all: Vec<&str> = BankGains::RUST_TYPES.iter().chain(names).copied().collect();
-    all.sort_unstable();
-    all.dedup();
-    format!("use estimators::{{{}}};", all.join(", "))
-}
-
 impl GainsFile {
     /// The gains of a bank configuration.
     pub fn from_bank(cfg: &BankConfig) -> Self {

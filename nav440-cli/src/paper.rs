@@ -218,7 +218,7 @@ pub struct PaperResult {
 /// Checks an MSE window end (`--window` of `paper` and `tune`): a finite number of seconds in
 /// (0, 30 days], else an [`Error::Usage`].
 pub fn check_window(window_s: f64) -> Result<()> {
-    crate::cmd::seconds("--window", window_s, false).map(drop)
+    crate::limits::seconds("--window", window_s, false).map(drop)
 }
 
 /// Runs the protocol. The 6 (variance, seed) runs are spread over 2 threads.

@@ -241,7 +241,7 @@ pub(crate) fn stream_until(
     mut on_bytes: impl FnMut(&[u8]) -> Result<bool>,
 ) -> Result<u64> {
     let duration = duration
-        .map(|s| crate::cmd::seconds("--duration", s, false))
+        .map(|s| crate::limits::seconds("--duration", s, false))
         .transpose()?;
     let pending = d.pending_bytes().to_vec();
     let SerialIo(mut port) = d.release();

@@ -23,224 +23,105 @@
 
 use std::io::{Read, Write};
 use std::net::{TcpListener, TcpStream};
+use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use clap::ValueEnum;
 use nav440_proto::unit::{Quirks, Unit, UnitFields};
-use nav440_proto::{
-    encode_frame, Baud, FieldInfo, Kind, Packet, PacketRate, PacketType, Parser, Role, TimeStamp,
-    MAX_FRAME,
-};
+use nav440_proto::{Baud, PacketRate, PacketType};
 
-pub use crate::cmd::sim::{Args as SimArgs, Fault};
 use crate::error::{Error, Result};
 use crate::output::OutputFile;
+pub use crate::raw_sample::{capture_samples, encode_sample, RawSample};
 use crate::replay::read_capture;
 
-/// Raw fields of one sample, as the packets carry them (the union of every output packet).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct RawSample {
-    /// Roll, pitch, yaw (I2 angles).
-    pub angles: [i16; 3],
-    /// Angular rates x, y, z.
-    pub rates: [i16; 3],
-    /// Accelerations x, y, z.
-    pub accels: [i16; 3],
-    /// Magnetic field x, y, z.
-    pub mags: [i16; 3],
-    /// Rate sensor temperatures x, y, z.
-    pub temps: [i16; 3],
-    /// Board temperature.
-    pub board_temp: i16,
-    /// Velocity N, E, D.
-    pub vel: [i16; 3],
-    /// Longitude, latitude (I4).
-    pub lon_lat: [i32; 2],
-    /// Altitude.
-    pub altitude: i16,
-    /// timeITOW, ms (GPSITOW-only packets: unwrapped from the 16-bit value).
-    pub itow: u32,
-    /// BIT word.
-    pub bit: u16,
+/// A deliberate fault of the simulated unit (for CI).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Fault {
+    /// Ignores every request (no reply, no NAK) but streams its power-up packets.
+    NoAnswer,
+    /// Sends nothing at all and ignores every request.
+    Dead,
+    /// NAKs every SF/WF that sets the packet type or rate.
+    NakConfig,
+    /// Accepts the rate in SF but keeps its old one: the read-back differs.
+    WrongReadback,
+    /// Resets mid-stream (after `--reset-after` packets): 100 ms of silence, then power-up
+    /// behaviour again (EEPROM configuration, power-up stream).
+    Reset,
+    /// Goes silent mid-stream (after `--reset-after` packets) with the link open: sends
+    /// nothing and ignores every request for `--silence` seconds (0: until the host leaves),
+    /// then answers requests again but streams only once configured again.
+    Silence,
+    /// Freezes its time stamps mid-stream: the 50 packets after the first `--reset-after`
+    /// repeat the last time stamp (the samples go on).
+    Freeze,
+    /// Streams at twice the configured rate: time stamps half a period apart.
+    DoubleRate,
 }
 
-impl RawSample {
-    /// The protocol document's real S1 frame (a stationary unit, BIT 0x0002).
-    pub const POWER_UP: Self = Self {
-        angles: [0; 3],
-        rates: [-2, -7, -1],
-        accels: [-32, 22, 3264],
-        mags: [0; 3],
-        temps: [0x27eb; 3],
-        board_temp: 0x27f7,
-        vel: [0; 3],
-        lon_lat: [0; 2],
-        altitude: 0,
-        itow: 0,
-        bit: 0x0002,
-    };
-}
-
-/// Where a field of the packet table lives in a [`RawSample`]: from its role, else its kind
-/// and the axis its name gives (`accel_x`, `rate_temp_y`, `x_rate_temp`, `vel_d`, ...).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Slot {
-    Angle(usize),
-    Rate(usize),
-    Accel(usize),
-    Mag(usize),
-    RateTemp(usize),
-    BoardTemp,
-    Vel(usize),
-    LonLat(usize),
-    Altitude,
-    Time,
-    Bit,
-    Counter,
-    /// Not simulated: sent as 0 (S2's delta velocities and angles, T0's detail words).
-    Zero,
-}
-
-impl Slot {
-    fn of(f: &FieldInfo) -> Slot {
-        let axis = |names: [&str; 3]| {
-            f.name
-                .split('_')
-                .find_map(|part| names.iter().position(|n| *n == part))
-        };
-        let xyz = axis(["x", "y", "z"]);
-        match (f.role, f.kind) {
-            (Some(Role::Roll), _) => Slot::Angle(0),
-            (Some(Role::Pitch), _) => Slot::Angle(1),
-            (Some(Role::Yaw), _) => Slot::Angle(2),
-            (Some(Role::P), _) => Slot::Rate(0),
-            (Some(Role::Q), _) => Slot::Rate(1),
-            (Some(Role::R), _) => Slot::Rate(2),
-            (Some(Role::Time), _) => Slot::Time,
-            (Some(Role::Bit), _) => Slot::Bit,
-            (None, Kind::Rate) => xyz.map_or(Slot::Zero, Slot::Rate),
-            (None, Kind::Accel) => xyz.map_or(Slot::Zero, Slot::Accel),
-            (None, Kind::Mag) => xyz.map_or(Slot::Zero, Slot::Mag),
-            (None, Kind::Temp) if f.name == "board_temp" => Slot::BoardTemp,
-            (None, Kind::Temp) => xyz.map_or(Slot::Zero, Slot::RateTemp),
-            (None, Kind::Velocity) => axis(["n", "e", "d"]).map_or(Slot::Zero, Slot::Vel),
-            (None, Kind::LatLon) => match f.name {
-                "longitude" => Slot::LonLat(0),
-                "latitude" => Slot::LonLat(1),
-                _ => Slot::Zero,
-            },
-            (None, Kind::Altitude) => Slot::Altitude,
-            (None, Kind::Counter) => Slot::Counter,
-            _ => Slot::Zero,
-        }
-    }
-}
-
-impl RawSample {
-    /// The wire value of `slot` (sign-extended; the encoder keeps the field's low bytes, so a
-    /// GPSITOW field gets the low 16 bits of [`Self::itow`]).
-    fn get(&self, slot: Slot, counter: u16) -> i64 {
-        match slot {
-            Slot::Angle(i) => self.angles[i].into(),
-            Slot::Rate(i) => self.rates[i].into(),
-            Slot::Accel(i) => self.accels[i].into(),
-            Slot::Mag(i) => self.mags[i].into(),
-            Slot::RateTemp(i) => self.temps[i].into(),
-            Slot::BoardTemp => self.board_temp.into(),
-            Slot::Vel(i) => self.vel[i].into(),
-            Slot::LonLat(i) => self.lon_lat[i].into(),
-            Slot::Altitude => self.altitude.into(),
-            Slot::Time => self.itow.into(),
-            Slot::Bit => self.bit.into(),
-            Slot::Counter => counter.into(),
-            Slot::Zero => 0,
-        }
-    }
-
-    /// Stores the wire bits `raw` of a field into `slot` (time and counter are not stored:
-    /// the time comes unwrapped from [`Packet::time`], the counter from the session).
-    fn set(&mut self, slot: Slot, raw: u64) {
-        match slot {
-            Slot::Angle(i) => self.angles[i] = raw as i16,
-            Slot::Rate(i) => self.rates[i] = raw as i16,
-            Slot::Accel(i) => self.accels[i] = raw as i16,
-            Slot::Mag(i) => self.mags[i] = raw as i16,
-            Slot::RateTemp(i) => self.temps[i] = raw as i16,
-            Slot::BoardTemp => self.board_temp = raw as i16,
-            Slot::Vel(i) => self.vel[i] = raw as i16,
-            Slot::LonLat(i) => self.lon_lat[i] = raw as i32,
-            Slot::Altitude => self.altitude = raw as i16,
-            Slot::Bit => self.bit = raw as u16,
-            Slot::Time | Slot::Counter | Slot::Zero => {}
-        }
-    }
-}
-
-/// The samples of every packet of `bytes` that carries yaw and a time stamp, in order, read
-/// through the packet table. A packet with the X rate-sensor temperature only (A0, A1, N1)
-/// gives it to all three sensors.
-pub fn capture_samples(bytes: &[u8]) -> Result<Vec<RawSample>> {
-    let mut parser = Parser::new();
-    let mut out = Vec::new();
-    let mut gps: Option<(u16, u32)> = None;
-    let mut frames = 0u64;
-    parser.feed(bytes, |frame| {
-        frames += 1;
-        let Ok(p) = Packet::decode(frame) else { return };
-        let Some(fields) = frame.packet_type.payload_fields() else {
-            return;
-        };
-        if !fields.iter().any(|f| f.role == Some(Role::Yaw)) {
-            return;
-        }
-        let mut s = RawSample::default();
-        let mut temps = [false; 3];
-        for f in fields {
-            let Some(wire) = frame.payload.get(f.offset..f.offset + f.size) else {
-                return;
-            };
-            let slot = Slot::of(f);
-            if let Slot::RateTemp(i) = slot {
-                temps[i] = true;
-            }
-            s.set(slot, wire.iter().fold(0, |v, &b| v << 8 | u64::from(b)));
-        }
-        if temps == [true, false, false] {
-            s.temps = [s.temps[0]; 3];
-        }
-        s.itow = match p.time() {
-            TimeStamp::Itow(t) => t,
-            TimeStamp::GpsItow(g) => {
-                let t = match gps {
-                    Some((last, acc)) => acc.wrapping_add(u32::from(g.wrapping_sub(last))),
-                    None => u32::from(g),
-                };
-                gps = Some((g, t));
-                t
-            }
-            TimeStamp::None => return,
-        };
-        out.push(s);
-    });
-    crate::replay::check_yaw_stream(frames, out.len() as u64)?;
-    Ok(out)
-}
-
-/// Encodes `s` as one frame of the continuous output type `t` (`counter` for S1/S2), field by
-/// field from the packet table; `None` for a type the unit does not stream.
-pub fn encode_sample(t: PacketType, s: &RawSample, counter: u16) -> Option<Vec<u8>> {
-    let mut payload = vec![0u8; t.output_payload_len()?];
-    for f in t.payload_fields()? {
-        let wire = s.get(Slot::of(f), counter).to_be_bytes();
-        payload
-            .get_mut(f.offset..f.offset + f.size)?
-            .copy_from_slice(wire.get(wire.len().checked_sub(f.size)?..)?);
-    }
-    let mut buf = [0u8; MAX_FRAME];
-    let n = encode_frame(t, &payload, &mut buf).ok()?;
-    buf.get(..n).map(<[u8]>::to_vec)
+/// Arguments of `nav440 sim`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct SimArgs {
+    /// Capture (raw NAV440 byte stream) whose samples the unit streams once configured.
+    pub capture: PathBuf,
+    /// Where the unit listens: tcp:HOST:PORT (loopback; port 0 picks a free port) or pty
+    /// (a pseudo-terminal pair). The address or the pty's path is printed on stdout.
+    #[arg(long, value_name = "ADDR")]
+    pub listen: String,
+    /// Allow a --listen address that is not loopback (the unit then answers anyone who can
+    /// reach the port).
+    #[arg(long)]
+    pub listen_any: bool,
+    /// Write exactly the bytes streamed after configuration (after the read-back reply) here.
+    #[arg(long, value_name = "FILE")]
+    pub record: Option<PathBuf>,
+    /// Also write the address / pty path (one line) to this file once listening.
+    #[arg(long, value_name = "FILE")]
+    pub address_file: Option<PathBuf>,
+    /// The unit's baud at power-up (EEPROM): 9600, 19200, 38400 or 57600.
+    #[arg(long, default_value_t = 38400)]
+    pub baud: u32,
+    /// Packet type streamed at power-up (S0, S1, S2, A0, A1, A2, N0, N1, B1, T0).
+    #[arg(long, default_value = "S1", value_name = "TYPE")]
+    pub power_up_packet: String,
+    /// Power-up rate, Hz (0 quiet, 2, 4, 5, 10, 20, 25, 50, 100).
+    #[arg(long, default_value_t = 20, value_name = "HZ")]
+    pub power_up_rate: u32,
+    /// Stream the capture as fast as the host reads, instead of at the commanded rate in wall time.
+    #[arg(long)]
+    pub fast: bool,
+    /// Start the power-up stream when the host connects rather than at its first byte.
+    #[arg(long)]
+    pub stream_at_connect: bool,
+    /// Misbehave on purpose.
+    #[arg(long, value_enum)]
+    pub fault: Option<Fault>,
+    /// With --fault reset, silence or freeze: capture packets streamed before the fault.
+    #[arg(long, default_value_t = 50, value_name = "N")]
+    pub reset_after: u64,
+    /// With --fault silence or --inject silence@N: how long the unit stays silent, s (0: until
+    /// the host leaves); it then answers requests but streams only once configured again.
+    #[arg(long, default_value_t = 0.0, value_name = "S")]
+    pub silence: f64,
+    /// Inject a fault after N capture packets (repeatable): silence@N, reset@N, freeze@N
+    /// (50 packets repeat the last time stamp) or garbage@N (256 bytes with false frame
+    /// headers, recorded).
+    #[arg(long, value_name = "KIND@N")]
+    pub inject: Vec<String>,
+    /// Give up (exit 1) when the session has not ended after this many seconds (0: never).
+    #[arg(long, default_value_t = 0.0, value_name = "S")]
+    pub timeout: f64,
+    /// Write the session's summary (JSON: requests, power_up_packets, packets, recorded_bytes,
+    /// completed, resets, injected) here at the end.
+    #[arg(long, value_name = "FILE")]
+    pub summary: Option<PathBuf>,
+    /// Log every request and state change on stderr.
+    #[arg(long)]
+    pub verbose: bool,
 }
 
 /// Parses a packet type name (`A2`) that the unit can stream.
@@ -811,8 +692,8 @@ pub fn run(args: &SimArgs) -> Result<Summary> {
     let baud = parse_baud("--baud", args.baud)?;
     let packet = parse_output_type(&args.power_up_packet)?;
     let rate = parse_rate("--power-up-rate", args.power_up_rate)?;
-    crate::cmd::seconds("--timeout", args.timeout, true)?;
-    crate::cmd::seconds("--silence", args.silence, true)?;
+    crate::limits::seconds("--timeout", args.timeout, true)?;
+    crate::limits::seconds("--silence", args.silence, true)?;
     let eeprom = UnitFields {
         rate_divider: rate.divider(),
         baud: baud.code(),

@@ -8,12 +8,15 @@
 //! accelerometers read gravity only, (0, 0, 1) g for a level unit as in the protocol's example
 //! packet, rotated into the body frame for any other attitude; the A1's magnetometer reads a
 //! field of 0.25 G north and 0.4 G down rotated the same way. Temperatures are 25 degC. Frames
-//! are built by `nav440-proto`'s encoders.
+//! are encoded field by field from `nav440-proto`'s packet table
+//! ([`crate::raw_sample::encode_sample`], the encoder `nav440 sim` streams with).
 
 use crate::corrupt::{self, Corruption, CorruptionReport};
 use crate::error::{Error, Result};
 use crate::motion::{Profile, ProfileKind};
 use crate::progress::Progress;
+use crate::raw_sample::{encode_sample, RawSample};
+use nav440_proto::PacketType;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
@@ -60,6 +63,14 @@ impl PacketKind {
             PacketKind::A1 => "A1",
             PacketKind::A2 => "A2",
             PacketKind::N1 => "N1",
+        }
+    }
+    /// The packet type of the packet table.
+    pub fn packet_type(self) -> PacketType {
+        match self {
+            PacketKind::A1 => PacketType::A1,
+            PacketKind::A2 => PacketType::A2,
+            PacketKind::N1 => PacketType::N1,
         }
     }
     /// Whole frame length in bytes (preamble, type, length, payload, CRC).
@@ -145,9 +156,13 @@ impl FromStr for NoiseStep {
             }
         };
         Ok(NoiseStep {
-            var_deg2: num(var, "the noise variance (deg^2)", crate::cmd::MAX_NOISE_VAR)?,
+            var_deg2: num(
+                var,
+                "the noise variance (deg^2)",
+                crate::limits::MAX_NOISE_VAR,
+            )?,
             from_s: from.map_or(Ok(0.0), |t| {
-                num(t, "the start time (s)", crate::cmd::MAX_SECONDS)
+                num(t, "the start time (s)", crate::limits::MAX_SECONDS)
             })?,
         })
     }
@@ -351,74 +366,33 @@ pub fn encode_attitude(
     let (sy, cy) = (y.sin(), y.cos());
     let [ax, ay, az] = [-st, sf * ct, cf * ct].map(|g| sat_i16(g, ACCEL_LSB_G));
     let temp = sat_i16(25.0, TEMP_LSB_C);
-    let mut buf = [0u8; nav440_proto::MAX_FRAME];
-    let len = match kind {
-        PacketKind::A1 => {
-            // R^T m with R = Rz(yaw) Ry(pitch) Rx(roll) and m = (n, 0, d): the first and third
-            // rows of R times n and d.
-            let [n, _, d] = MAG_NED_G;
-            let mag_x = n * (cy * ct) + d * -st;
-            let mag_y = n * (cy * st * sf - sy * cf) + d * (ct * sf);
-            let mag_z = n * (cy * st * cf + sy * sf) + d * (ct * cf);
-            nav440_proto::A1Fields {
-                roll,
-                pitch,
-                yaw_mag: yaw,
-                rate_x: rx,
-                rate_y: ry,
-                rate_z: rz,
-                accel_x: ax,
-                accel_y: ay,
-                accel_z: az,
-                mag_x: sat_i16(mag_x, MAG_LSB_G),
-                mag_y: sat_i16(mag_y, MAG_LSB_G),
-                mag_z: sat_i16(mag_z, MAG_LSB_G),
-                x_rate_temp: temp,
-                time_itow: itow,
-                bit,
-            }
-            .encode(&mut buf)
-        }
-        PacketKind::A2 => nav440_proto::A2Fields {
-            roll,
-            pitch,
-            yaw_true: yaw,
-            rate_x: rx,
-            rate_y: ry,
-            rate_z: rz,
-            accel_x: ax,
-            accel_y: ay,
-            accel_z: az,
-            rate_temp_x: temp,
-            rate_temp_y: temp,
-            rate_temp_z: temp,
-            time_itow: itow,
-            bit,
-        }
-        .encode(&mut buf),
-        PacketKind::N1 => nav440_proto::N1Fields {
-            roll,
-            pitch,
-            yaw_true: yaw,
-            rate_x: rx,
-            rate_y: ry,
-            rate_z: rz,
-            accel_x: ax,
-            accel_y: ay,
-            accel_z: az,
-            // A bench somewhere at 35.0 N, 139.0 E, 40 m, standing still.
-            longitude: (139.0 / LATLON_LSB_DEG).round() as i32,
-            latitude: (35.0 / LATLON_LSB_DEG).round() as i32,
-            altitude: (40.0 / ALT_LSB_M) as i16,
-            x_rate_temp: temp,
-            time_itow: itow,
-            bit,
-            ..Default::default()
-        }
-        .encode(&mut buf),
-    }
-    .map_err(|e| Error::Other(format!("cannot encode {kind} packet: {e:?}")))?;
-    Ok(buf.get(..len).unwrap_or(&[]).to_vec())
+    // R^T m with R = Rz(yaw) Ry(pitch) Rx(roll) and m = (n, 0, d): the first and third rows
+    // of R times n and d (only the A1 carries it).
+    let [n, _, d] = MAG_NED_G;
+    let mag = [
+        n * (cy * ct) + d * -st,
+        n * (cy * st * sf - sy * cf) + d * (ct * sf),
+        n * (cy * st * cf + sy * sf) + d * (ct * cf),
+    ];
+    let sample = RawSample {
+        angles: [roll, pitch, yaw],
+        rates: [rx, ry, rz],
+        accels: [ax, ay, az],
+        mags: mag.map(|m| sat_i16(m, MAG_LSB_G)),
+        // The A2 carries the three rate sensors' temperatures, the A1 and N1 the X sensor's.
+        temps: [temp; 3],
+        // A bench somewhere at 35.0 N, 139.0 E, 40 m, standing still (the N1's fields).
+        lon_lat: [
+            (139.0 / LATLON_LSB_DEG).round() as i32,
+            (35.0 / LATLON_LSB_DEG).round() as i32,
+        ],
+        altitude: (40.0 / ALT_LSB_M) as i16,
+        itow,
+        bit,
+        ..RawSample::default()
+    };
+    encode_sample(kind.packet_type(), &sample, 0)
+        .ok_or_else(|| Error::Other(format!("cannot encode {kind} packet")))
 }
 
 /// Angle in degrees of a quantised I2 angle field.

@@ -74,18 +74,6 @@ impl ObserverSwitch {
         Ok(())
     }
 
-    /// Writes the Rust expression `ObserverSwitch { .. }` that builds these switch points
-    /// (each in its shortest round-trip form, `{:?}`), for generated firmware code
-    /// (`nav440 tune --schedule --rust`).
-    pub fn write_rust(&self, w: &mut dyn core::fmt::Write) -> core::fmt::Result {
-        let [i1, i2, i3] = self.ilo;
-        write!(
-            w,
-            "ObserverSwitch {{ ave: {:?}, ilo: [{i1:?}, {i2:?}, {i3:?}], ed: {:?} }}",
-            self.ave, self.ed
-        )
-    }
-
     /// The switch points, deg^2, as `(column, value)` for each family that records one
     /// ([`Family::switch_up_mut`]), in column order ([`crate::FAMILIES`]).
     pub fn points(&self) -> heapless::Vec<(usize, f32), FAMILY_COUNT> {

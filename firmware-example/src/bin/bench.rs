@@ -352,9 +352,10 @@ fn bank_per_sample<S: estimators::SqrtFn<Num>>(
 }
 
 /// The gain schedule of `nav440 tune host-tests/data/fig5_a2_100hz.bin --schedule
-/// 0.001,0.01,0.1,0.5,1 --rust` (docs/ADAPTIVE-GAINS.md).
+/// 0.001,0.01,0.1,0.5,1 --rust` (docs/ADAPTIVE-GAINS.md), the firmware's copy
+/// (`src/gains/schedule_fig5.rs`).
 mod schedule {
-    include!("../../../host-tests/data/gains/schedule_fig5.rs");
+    include!("../gains/schedule_fig5.rs");
 }
 
 /// The noise-adaptive bank (`estimators::AdaptiveBank`): per-sample instructions of

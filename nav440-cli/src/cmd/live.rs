@@ -20,7 +20,7 @@ pub fn run(a: &Args) -> Result<()> {
     crate::output::check_stdout()?;
     a.port.check()?;
     if let Some(s) = a.duration {
-        super::seconds("--duration", s, false)?;
+        crate::limits::seconds("--duration", s, false)?;
     }
     let (d, report, t) = open_and_boot(&a.port)?;
     eprintln!("nav440 live: {}", report_json(&a.port.port, &report, &t));

@@ -30,7 +30,7 @@ pub struct Args {
 pub fn run(a: &Args) -> Result<()> {
     for (flag, t) in [("--from", a.from), ("--to", a.to)] {
         if let Some(t) = t {
-            super::seconds(flag, t, true)?;
+            crate::limits::seconds(flag, t, true)?;
         }
     }
     let mut opts = bank_options(&a.bank, PresetArg::Nav440)?;

@@ -33,7 +33,7 @@ pub struct Args {
 pub fn run(a: &Args) -> Result<()> {
     a.port.check()?;
     if let Some(s) = a.duration {
-        super::seconds("--duration", s, false)?;
+        crate::limits::seconds("--duration", s, false)?;
     }
     output::check_writable(&a.output)?;
     let name = output::output_name(&a.output);

@@ -88,7 +88,7 @@ pub(crate) const MAX_NOISE_STEPS: usize = 1000;
 
 /// Checks the corruption counts before any work (each a usage error naming its range).
 fn check_corruption(a: &Args) -> Result<()> {
-    use super::count;
+    use crate::limits::count;
     count("--flip-bits", a.flip_bits, 0..=MAX_CORRUPT_EVENTS, "")?;
     count("--drop-bytes", a.drop_bytes, 0..=MAX_CORRUPT_EVENTS, "")?;
     count("--drop-packets", a.drop_packets, 0..=MAX_CORRUPT_EVENTS, "")?;

@@ -3,8 +3,9 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use super::{count, noise_var, one_axis, parse_range, AxisArg, BankArg, HoldArg};
+use super::{one_axis, AxisArg, BankArg, HoldArg};
 use crate::error::{Error, Result};
+use crate::limits::{count, noise_var, parse_range};
 use crate::output::{self, OutputFile};
 use crate::progress::Progress;
 use crate::{optim, paper, replay, tune};
@@ -216,7 +217,7 @@ fn check_numbers(a: &Args) -> Result<()> {
     if let Some(n) = a.exhaustive {
         count("--exhaustive", n, 2..=MAX_GRID_POINTS, " points per gain")?;
     }
-    super::step(a.step)?;
+    crate::limits::step(a.step)?;
     paper::check_window(a.window)
 }
 
@@ -239,13 +240,16 @@ fn progress(spec: &tune::TuneSpec, runs: u64) -> Progress {
 /// The number of gains each family's search covers, in column order.
 fn search_dims() -> Vec<u32> {
     struct Dims(Vec<u32>);
-    impl estimators::FamilyVisitor for Dims {
-        fn family<F: estimators::Family>(&mut self, _column: usize) {
-            let (lo, _) = <F::Gains as estimators::Gains>::search_box(1.0);
+    impl crate::search::SearchVisitor for Dims {
+        fn family<F: estimators::Family>(&mut self, _column: usize)
+        where
+            F::Gains: crate::search::Search,
+        {
+            let (lo, _) = <F::Gains as crate::search::Search>::search_box(1.0);
             self.0.push(lo.len() as u32);
         }
     }
     let mut d = Dims(Vec::new());
-    estimators::for_each_family(&mut d);
+    crate::search::for_each_searched_family(&mut d);
     d.0
 }

@@ -4,7 +4,7 @@
 //! Method: for each family (AVE; ILO1, ILO2, ILO3 from their presets; AD; ED; KF) and each half
 //! of the bank (velocity against the measured rate; series acceleration against the AVE on the
 //! measured rate), [`crate::optim::minimise`] over every gain of the family within its valid
-//! range ([`estimators::Gains::search_box`]: K1 included) of the MSE over the training time range averaged over
+//! range ([`Search::search_box`]: K1 included) of the MSE over the training time range averaged over
 //! `seeds` noise seeds: a global search (coarse log grid, then Nelder-Mead of the `argmin`
 //! crate from several starts and from the paper preset) or, with `--exhaustive`, a log grid.
 //! Candidates the constructors reject (e.g. `h * L >= 1`) or that diverge count as infinite
@@ -29,9 +29,10 @@ use crate::paper::{ave_on_rate, row_mse, steps_between, REFERENCE_AVE};
 use crate::progress::Progress;
 use crate::replay::{self, EstimateOptions, Noise, Sample};
 use crate::score::Lock;
+use crate::search::{for_each_searched_family, Scorer, Search, SearchVisitor};
 use estimators::{
-    for_each_family, BankConfig, Channel, Estimator, Family, FamilyVisitor, Gains, Hold, Kalman,
-    KalmanConfig, KalmanNoise, Law, SampleAdapter, Scheduling, Scorer, Series, Stateful, FAMILIES,
+    for_each_family, BankConfig, Channel, Estimator, Family, FamilyVisitor, Hold, Kalman,
+    KalmanConfig, KalmanNoise, Law, SampleAdapter, Scheduling, Series, Stateful, FAMILIES,
     FAMILY_COUNT,
 };
 use std::time::Instant;
@@ -241,7 +242,7 @@ impl Eval for Problem<'_> {
     }
 }
 
-/// One family's objective in one half ([`Gains::score`] hands it the estimator to score).
+/// One family's objective in one half ([`Search::score`] hands it the estimator to score).
 struct Objective<'a, E> {
     eval: &'a E,
     column: usize,
@@ -416,9 +417,9 @@ struct Fit {
     secs: f64,
 }
 
-/// Minimises `f` from `x0` within the family's search box ([`Gains::search_box`]) at the
+/// Minimises `f` from `x0` within the family's search box ([`Search::search_box`]) at the
 /// step `h_s` (s).
-fn fit<G: Gains>(method: Method, h_s: f64, x0: &[f64], f: &dyn Fn(&[f64]) -> f64) -> Fit {
+fn fit<G: Search>(method: Method, h_s: f64, x0: &[f64], f: &dyn Fn(&[f64]) -> f64) -> Fit {
     let t = Instant::now();
     let (lo, hi) = G::search_box(h_s);
     let o = optim::minimise(method, x0, &lo, &hi, f);
@@ -431,8 +432,8 @@ fn fit<G: Gains>(method: Method, h_s: f64, x0: &[f64], f: &dyn Fn(&[f64]) -> f64
 }
 
 /// Tunes one half of the bank (velocity or acceleration) starting from `start`: each family
-/// present there, over every gain it searches ([`Gains::search_point`], within
-/// [`Gains::search_box`]; candidates its law refuses cost infinity). Returns the gains and,
+/// present there, over every gain it searches ([`Search::search_point`], within
+/// [`Search::search_box`]; candidates its law refuses cost infinity). Returns the gains and,
 /// per family, (tuned MSE, evaluations, seconds).
 fn tune_family(
     p: &impl Eval,
@@ -451,8 +452,11 @@ fn tune_family(
         out: FamilyGains,
         stats: [(f64, usize, f64); FAMILY_COUNT],
     }
-    impl<E: Eval> FamilyVisitor for Tune<'_, E> {
-        fn family<F: Family>(&mut self, column: usize) {
+    impl<E: Eval> SearchVisitor for Tune<'_, E> {
+        fn family<F: Family>(&mut self, column: usize)
+        where
+            F::Gains: Search,
+        {
             if !self.families.tunes(self.acc, column) {
                 // Not tuned: no cost (NaN), left out of the score and the report.
                 self.stats[column] = (f64::NAN, 0, 0.0);
@@ -489,7 +493,7 @@ fn tune_family(
         out: *start,
         stats: [(f64::INFINITY, 0, 0.0); FAMILY_COUNT],
     };
-    for_each_family(&mut tune);
+    for_each_searched_family(&mut tune);
     (tune.out, tune.stats)
 }
 
@@ -963,20 +967,5 @@ mod tests {
         assert!(check_range("--train", (-1.0, 1.0)).is_err());
         assert!(check_range("--train", (0.0, f64::NAN)).is_err());
         assert!(check_range("--train", (0.0, 0.5)).is_ok());
-    }
-
-    /// The ILO's `L` bound keeps `h L < 1` (the constructor's condition); both ends of the
-    /// leak map to valid `K1` (`K1 = 1 - 1e-7` rounds to `1 - 2^-23` in f32). (That every
-    /// family's paper gains lie in its search box is the estimators crate's test.)
-    #[test]
-    fn the_ilo_search_box_builds_valid_ilos() {
-        let (lo, hi) = estimators::IloConfig::search_box(1e-4);
-        assert!(hi[1] * 1e-4 < 1.0);
-        let g = estimators::presets::ILO1_TABLE2;
-        for c in [lo[0], hi[0]] {
-            let i = g.with_search_point(&[c, 1.0, 1.0]);
-            assert!(i.k1 > 0.0 && i.k1 < 1.0, "{}", i.k1);
-            assert!(estimators::Ilo::<f32, 1>::new(&i, 1e-4).is_ok());
-        }
     }
 }

@@ -10,20 +10,23 @@ pub(super) fn hold_name(h: Hold) -> &'static str {
     }
 }
 
-/// The gains of column `i` in `f` on one line ([`Gains::describe`]), `-` if absent.
+/// The gains of column `i` in `f` on one line ([`Search::describe`]), `-` if absent.
 pub(super) fn fmt_gains(f: &FamilyGains, i: usize) -> String {
     struct Describe<'a>(&'a FamilyGains, usize, String);
-    impl FamilyVisitor for Describe<'_> {
-        fn family<F: Family>(&mut self, column: usize) {
+    impl SearchVisitor for Describe<'_> {
+        fn family<F: Family>(&mut self, column: usize)
+        where
+            F::Gains: Search,
+        {
             if column == self.1 {
                 if let Some(g) = self.0.get::<F>() {
-                    let _ = g.describe(&mut self.2);
+                    self.2 = g.describe();
                 }
             }
         }
     }
     let mut d = Describe(f, i, String::new());
-    for_each_family(&mut d);
+    for_each_searched_family(&mut d);
     if d.2.is_empty() {
         "-".into()
     } else {

@@ -42,7 +42,7 @@ pub fn check_levels(levels: &[f64]) -> Result<()> {
         || levels.windows(2).any(|w| w[1] <= w[0])
         || levels
             .iter()
-            .any(|v| !(v.is_finite() && *v > 0.0 && *v <= crate::cmd::MAX_NOISE_VAR))
+            .any(|v| !(v.is_finite() && *v > 0.0 && *v <= crate::limits::MAX_NOISE_VAR))
     {
         return Err(Error::Usage(format!(
             "--schedule needs 1 to {} noise variances > 0 and <= 1e15 deg^2 in increasing order, got {levels:?}",
