@@ -33,7 +33,7 @@
 //!     let n = encode_frame(PacketType::A2, &p.payload(), &mut frame).unwrap();
 //!     bytes.extend_from_slice(&frame[..n]);
 //! }
-//! let build = |axis: Axis, cfg: &BankConfig| axis_bank::<PaperBank<f32>>(axis, cfg);
+//! let build = |axis: Axis, cfg: &BankConfig| -> Result<PaperBank<f32>, _> { axis_bank(axis, cfg) };
 //! let mut pipe = Pipeline::new(Axes::only(Axis::Yaw), BankConfig::default(), build);
 //! let mut lines = Vec::new();
 //! pipe.feed_csv(&bytes, |l| lines.push(l.to_string())).unwrap();

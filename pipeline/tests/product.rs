@@ -136,7 +136,7 @@ fn product_rows_are_the_paper_rows_fixed_point() {
 fn product_csv_lines() {
     let bytes = turning(50, 30.0);
     let build =
-        |axis: Axis, cfg: &BankConfig| axis_bank::<ProductRows, 2, Fx, NativeSqrt>(axis, cfg);
+        |axis: Axis, cfg: &BankConfig| -> Result<ProductBank<Fx>, _> { axis_bank(axis, cfg) };
     let mut pipe = Pipeline::new(Axes::ALL, BankConfig::NAV440, build);
     let mut header = String::new();
     csv::write_header::<ProductBank<Fx>>(&mut header, Axes::ALL).unwrap();
