@@ -1,7 +1,8 @@
 //! Links the firmware with cortex-m-rt's `link.x`, the chip's memory map and defmt's
-//! `defmt.x`. The chip feature (`stm32f405`, `stm32f411`) is a board's `embassy-feature` in
-//! `boards/boards.toml` (crate `nav440-boards`); the map is generated from that board's
-//! description, the same map as firmware-example's image of the board.
+//! `defmt.x`. The chip feature (`stm32f405`, `stm32f411`) is a board's `embassy_feature` in
+//! `boards/src/description.rs` (crate `nav440-boards`, included here as a module: its `lib.rs`
+//! says why); the map is generated from that board's description, the same map as
+//! firmware-example's image of the board.
 //!
 //! The linker runs in the workspace root, whose `memory.x` it finds before the search path;
 //! that file only includes `nav440-board-memory.x` (see the root `memory.x`). So this script
@@ -10,19 +11,22 @@
 
 use std::{env, fs, path::PathBuf};
 
+// The crate nav440-boards, of which this script uses a part.
+#[allow(dead_code)]
+#[path = "../boards/src/lib.rs"]
+mod nav440_boards;
+
 fn main() {
-    let manifest = PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").expect("set by cargo"));
     let out = PathBuf::from(env::var_os("OUT_DIR").expect("set by cargo"));
     let fail = |e: String| -> ! { panic!("firmware-embassy: {e}") };
-    let cargo_toml = manifest.join("Cargo.toml");
-    let text = fs::read_to_string(&cargo_toml).expect("Cargo.toml readable");
-    nav440_boards::check_embassy_features(&text).unwrap_or_else(|e| fail(e));
+    nav440_boards::validate(nav440_boards::BOARDS)
+        .unwrap_or_else(|e| fail(format!("{}: {e}", nav440_boards::DESCRIPTION_PATH)));
     let enabled: Vec<String> = env::vars()
         .map(|(k, _)| k)
         .filter(|k| k.starts_with("CARGO_FEATURE_"))
         .collect();
     let board = nav440_boards::select_embassy(&enabled).unwrap_or_else(|e| fail(e));
-    println!("cargo:rerun-if-changed={}", cargo_toml.display());
+    println!("cargo:rerun-if-changed=../boards/src");
     println!("cargo:rerun-if-changed=build.rs");
     if !env::var("TARGET").unwrap_or_default().starts_with("thumb") {
         // A host build (e.g. `cargo clippy --workspace` by mistake) gets no linker script.

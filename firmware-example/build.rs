@@ -1,9 +1,10 @@
 //! Selects the board and links the firmware with cortex-m-rt's `link.x` and the board's memory
-//! map, both from the board's description in `boards/boards.toml` (crate `nav440-boards`).
+//! map, both from the board's description in `boards/src/description.rs` (crate
+//! `nav440-boards`, included here as a module: its `lib.rs` says why).
 //!
-//! * The board: the one of the `board-*` feature, the default board (`mps2`) without one; the
-//!   crate's `board-*` features must be exactly the described boards' (checked here), and the
-//!   target one of the board's.
+//! * The board: the one of the `board-*` feature, the default board (`mps2`) without one; a
+//!   `board-*` feature must name a described board (checked here, as the description itself),
+//!   and the target must be one of the board's.
 //! * Its module: `board.rs` in `OUT_DIR` defines the macro `board_modules!`, which declares
 //!   the modules `src/board/<module>.rs` (and its shared backend module) and the board's
 //!   `NAME`; `src/board/mod.rs` includes it and invokes the macro.
@@ -20,6 +21,11 @@
 
 use std::{env, fs, path::PathBuf};
 
+// The crate nav440-boards, of which this script uses a part.
+#[allow(dead_code)]
+#[path = "../boards/src/lib.rs"]
+mod nav440_boards;
+
 /// The name `memory.x` includes (unique to this crate, never in a working directory).
 const BOARD_MAP: &str = "nav440-board-memory.x";
 
@@ -28,16 +34,15 @@ fn main() {
     let out = PathBuf::from(env::var_os("OUT_DIR").expect("set by cargo"));
     let target = env::var("TARGET").unwrap_or_default();
     let fail = |e: String| -> ! { panic!("firmware-example: {e}") };
-    let cargo_toml = manifest.join("Cargo.toml");
-    let text = fs::read_to_string(&cargo_toml).expect("Cargo.toml readable");
-    nav440_boards::check_firmware_features(&text).unwrap_or_else(|e| fail(e));
+    nav440_boards::validate(nav440_boards::BOARDS)
+        .unwrap_or_else(|e| fail(format!("{}: {e}", nav440_boards::DESCRIPTION_PATH)));
     let enabled: Vec<String> = env::vars()
         .map(|(k, _)| k)
         .filter(|k| k.starts_with("CARGO_FEATURE_"))
         .collect();
     let board = nav440_boards::select(&enabled).unwrap_or_else(|e| fail(e));
     let board_dir = manifest.join("src").join("board");
-    for m in std::iter::once(board.module()).chain(board.backend.clone()) {
+    for m in std::iter::once(board.module()).chain(board.backend.map(str::to_owned)) {
         let path = board_dir.join(format!("{m}.rs"));
         if !path.is_file() {
             fail(format!(
@@ -50,13 +55,13 @@ fn main() {
     fs::write(out.join("board.rs"), board.module_decl()).expect("OUT_DIR writable");
     let dispatch = manifest.join("..").join("memory.x");
     println!("cargo:rerun-if-changed={}", dispatch.display());
-    println!("cargo:rerun-if-changed={}", cargo_toml.display());
+    println!("cargo:rerun-if-changed=../boards/src");
     println!("cargo:rerun-if-changed=build.rs");
     if !target.starts_with("thumb") {
         // Host builds (e.g. `cargo clippy --workspace` by mistake) get no linker script.
         return;
     }
-    if !board.targets.contains(&target) {
+    if !board.targets.contains(&target.as_str()) {
         fail(format!(
             "board `{}` is built for {}, not {target}",
             board.name,

@@ -1,52 +1,49 @@
-//! The boards the firmware is built for, described once, in `boards/boards.toml`.
+//! The boards the firmware is built for, described once, in [`BOARDS`]
+//! (`boards/src/description.rs`).
 //!
 //! * firmware-example's build script takes the board of the `board-*` feature (the default
-//!   board without one), checks the crate's `board-*` features against the description,
-//!   declares the board's module ([`Board::module_decl`]) and links the memory map generated
-//!   from it ([`Board::linker_map`]);
+//!   board without one, [`select`]), declares the board's module ([`Board::module_decl`]) and
+//!   links the memory map generated from it ([`Board::linker_map`]);
 //! * firmware-embassy's build script takes the board of its chip feature
-//!   ([`Board::embassy_feature`]) and links the same generated map;
+//!   ([`Board::embassy_feature`], [`select_embassy`]) and links the same generated map;
 //! * xtask checks every image's ELF against its board's memories ([`find`]), flashes with its
 //!   probe-rs chip and builds the boards QEMU cannot run ([`Board::qemu`]).
+//!
+//! The build scripts include this file as a module (`#[path]`) instead of depending on the
+//! crate: a build-dependency would change the firmware crate's metadata hash, hence its
+//! symbol names and, through fat LTO, its code. So this crate depends on nothing but `std`.
 //!
 //! The figures of the description are the chips' (reference manuals, data sheets); the tests
 //! of this crate hold them once more, as literals.
 
 #![forbid(unsafe_code)]
 
-use serde::Deserialize;
-use std::collections::BTreeSet;
-use std::sync::OnceLock;
-
-/// The description, as committed.
-pub const DESCRIPTION: &str = include_str!("../boards.toml");
+mod description;
+pub use description::BOARDS;
 
 /// Where the description is, for messages.
-pub const DESCRIPTION_PATH: &str = "boards/boards.toml";
+pub const DESCRIPTION_PATH: &str = "boards/src/description.rs";
 
 /// One board: what the firmware image is built for, and what checks and flashes it.
-#[derive(Clone, Debug, Deserialize)]
-#[serde(rename_all = "kebab-case", deny_unknown_fields)]
+#[derive(Clone, Copy, Debug)]
 pub struct Board {
     /// The board's name: `NAV440_BOARD` in the ELF, feature `board-<name>`, module `<name>`
-    /// with `_` for `-`.
-    pub name: String,
+    /// with `_` for `-` (lower-case letters, digits and single `-`).
+    pub name: &'static str,
     /// What it is, for messages.
-    pub part: String,
+    pub part: &'static str,
     /// Selected when no `board-*` feature is (exactly one board).
-    #[serde(default)]
     pub default: bool,
     /// The shared module of `firmware-example/src/board/` the board's module builds on.
-    pub backend: Option<String>,
+    pub backend: Option<&'static str>,
     /// The Rust targets its images are built for (the first is CI's for a built-only board).
-    pub targets: Vec<String>,
+    pub targets: &'static [&'static str],
     /// The probe-rs chip name, `None` for an emulated-only board.
-    pub probe_chip: Option<String>,
+    pub probe_chip: Option<&'static str>,
     /// The QEMU machines that run its image; none: the board is built and checked only.
-    #[serde(default)]
-    pub qemu: Vec<String>,
+    pub qemu: &'static [&'static str],
     /// firmware-embassy's feature for this board's chip, if it builds for it.
-    pub embassy_feature: Option<String>,
+    pub embassy_feature: Option<&'static str>,
     /// The NAV440 UART.
     pub uart: Uart,
     /// Non-volatile code memory.
@@ -58,25 +55,23 @@ pub struct Board {
 }
 
 /// The UART the NAV440 is wired to.
-#[derive(Clone, Debug, Deserialize)]
-#[serde(rename_all = "kebab-case", deny_unknown_fields)]
+#[derive(Clone, Copy, Debug)]
 pub struct Uart {
     /// The peripheral.
-    pub peripheral: String,
+    pub peripheral: &'static str,
     /// Transmit pin (none on an emulated board).
-    pub tx: Option<String>,
+    pub tx: Option<&'static str>,
     /// Receive pin.
-    pub rx: Option<String>,
+    pub rx: Option<&'static str>,
     /// The pins' function (alternate function).
-    pub function: Option<String>,
+    pub function: Option<&'static str>,
 }
 
 /// An address range of the chip.
-#[derive(Clone, Debug, Deserialize)]
-#[serde(rename_all = "kebab-case", deny_unknown_fields)]
+#[derive(Clone, Copy, Debug)]
 pub struct Region {
     /// Name for messages.
-    pub name: String,
+    pub name: &'static str,
     /// First address.
     pub origin: u64,
     /// What the chip has, KiB.
@@ -86,15 +81,14 @@ pub struct Region {
 }
 
 /// A boot loader the image carries at the start of flash.
-#[derive(Clone, Debug, Deserialize)]
-#[serde(rename_all = "kebab-case", deny_unknown_fields)]
+#[derive(Clone, Copy, Debug)]
 pub struct BootLoader {
     /// Its size, bytes.
     pub bytes: u64,
     /// The input section that holds it.
-    pub section: String,
+    pub section: &'static str,
     /// The symbol that defines it (kept although no code refers to it).
-    pub symbol: String,
+    pub symbol: &'static str,
 }
 
 impl Region {
@@ -138,12 +132,12 @@ impl Board {
     /// The NAV440 wiring, e.g. `USART1: TX PA9, RX PA10, AF7`.
     pub fn wiring(&self) -> String {
         let u = &self.uart;
-        let parts: Vec<String> = [("TX ", &u.tx), ("RX ", &u.rx), ("", &u.function)]
+        let parts: Vec<String> = [("TX ", u.tx), ("RX ", u.rx), ("", u.function)]
             .into_iter()
-            .filter_map(|(k, v)| v.as_ref().map(|v| format!("{k}{v}")))
+            .filter_map(|(k, v)| v.map(|v| format!("{k}{v}")))
             .collect();
         if parts.is_empty() {
-            u.peripheral.clone()
+            u.peripheral.to_owned()
         } else {
             format!("{}: {}", u.peripheral, parts.join(", "))
         }
@@ -159,7 +153,7 @@ impl Board {
             "// The board `{}` of {DESCRIPTION_PATH}.\nmacro_rules! board_modules {{\n    () => {{\n",
             self.name
         );
-        if let Some(b) = &self.backend {
+        if let Some(b) = self.backend {
             s += &format!("        mod {b};\n");
         }
         let m = self.module();
@@ -220,23 +214,13 @@ fn size(bytes: u64) -> String {
     }
 }
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct File {
-    board: Vec<Board>,
-}
-
-/// Parses and checks a description: names unique and usable as feature and module names,
-/// exactly one default board, every board with a thumb target, memories inside the 32-bit
-/// address space and apart, link sizes within the chip's, the vector table aligned, chip
+/// Checks a description: names unique and usable as feature and module names, exactly one
+/// default board, every board with a thumb target, memories inside the 32-bit address space
+/// and apart, link sizes within the chip's, the vector table in flash and aligned, chip
 /// features unique.
-pub fn parse(text: &str) -> Result<Vec<Board>, String> {
-    let file: File = toml::from_str(text).map_err(|e| e.to_string())?;
-    let boards = file.board;
-    let mut names = BTreeSet::new();
-    let mut embassy = BTreeSet::new();
-    for b in &boards {
-        let n = &b.name;
+pub fn validate(boards: &[Board]) -> Result<(), String> {
+    for (i, b) in boards.iter().enumerate() {
+        let n = b.name;
         let ok = n.starts_with(|c: char| c.is_ascii_lowercase())
             && n.chars()
                 .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-');
@@ -245,11 +229,12 @@ pub fn parse(text: &str) -> Result<Vec<Board>, String> {
                 "board `{n}`: a name is lower-case letters, digits and single `-`"
             ));
         }
-        if !names.insert(b.module()) {
+        let earlier = &boards[..i];
+        if earlier.iter().any(|e| e.name == n) {
             return Err(format!("board `{n}` is described twice"));
         }
-        if let Some(f) = &b.embassy_feature {
-            if !embassy.insert(f.clone()) {
+        if let Some(f) = b.embassy_feature {
+            if earlier.iter().any(|e| e.embassy_feature == Some(f)) {
                 return Err(format!(
                     "board `{n}`: embassy feature `{f}` is another board's"
                 ));
@@ -269,7 +254,7 @@ pub fn parse(text: &str) -> Result<Vec<Board>, String> {
             }
             if r.link_kib.is_some_and(|l| l == 0 || l > r.kib) {
                 return Err(format!(
-                    "board `{n}`: {}'s link-kib must be between 1 and its kib ({})",
+                    "board `{n}`: {}'s link_kib must be between 1 and its kib ({})",
                     r.name, r.kib
                 ));
             }
@@ -287,27 +272,29 @@ pub fn parse(text: &str) -> Result<Vec<Board>, String> {
         }
     }
     match boards.iter().filter(|b| b.default).count() {
-        1 => Ok(boards),
+        1 => Ok(()),
         k => Err(format!(
-            "exactly one board must be `default = true` ({k} are)"
+            "exactly one board must be `default: true` ({k} are)"
         )),
     }
 }
 
-/// Every board of [`DESCRIPTION`].
+/// Every board of the description, checked ([`validate`]).
 ///
 /// # Panics
 ///
-/// If the description does not pass [`parse`] (the tests of this crate check it does).
+/// If the description does not pass [`validate`] (the tests of this crate check it does).
 pub fn all() -> &'static [Board] {
-    static BOARDS: OnceLock<Vec<Board>> = OnceLock::new();
-    BOARDS.get_or_init(|| parse(DESCRIPTION).unwrap_or_else(|e| panic!("{DESCRIPTION_PATH}: {e}")))
+    if let Err(e) = validate(BOARDS) {
+        panic!("{DESCRIPTION_PATH}: {e}");
+    }
+    BOARDS
 }
 
 /// The board named `name`.
 pub fn find(name: &str) -> Result<&'static Board, String> {
     all().iter().find(|b| b.name == name).ok_or_else(|| {
-        let names: Vec<_> = all().iter().map(|b| b.name.as_str()).collect();
+        let names: Vec<_> = all().iter().map(|b| b.name).collect();
         format!(
             "unknown board `{name}` (known: {}; {DESCRIPTION_PATH})",
             names.join(", ")
@@ -347,61 +334,9 @@ pub fn select(enabled: &[String]) -> Result<&'static Board, String> {
         [b] => Ok(b),
         many => Err(format!(
             "select at most one board-* feature (got {})",
-            many.iter()
-                .map(|b| b.name.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
+            many.iter().map(|b| b.name).collect::<Vec<_>>().join(", ")
         )),
     }
-}
-
-/// The names of the `[features]` of a Cargo manifest.
-fn manifest_features(manifest: &str) -> Result<BTreeSet<String>, String> {
-    let doc: toml::Table = manifest.parse().map_err(|e| format!("{e}"))?;
-    Ok(doc
-        .get("features")
-        .and_then(|f| f.as_table())
-        .map(|t| t.keys().cloned().collect())
-        .unwrap_or_default())
-}
-
-/// Two sets of names equal, or an error naming what is only in each.
-fn same(described: BTreeSet<String>, declared: BTreeSet<String>, what: &str) -> Result<(), String> {
-    let missing: Vec<_> = described.difference(&declared).cloned().collect();
-    let extra: Vec<_> = declared.difference(&described).cloned().collect();
-    if missing.is_empty() && extra.is_empty() {
-        return Ok(());
-    }
-    Err(format!(
-        "{what}: described in {DESCRIPTION_PATH} but not declared: [{}]; declared but not described: [{}]",
-        missing.join(", "),
-        extra.join(", ")
-    ))
-}
-
-/// Checks firmware-example's manifest: its `board-*` features are exactly the described
-/// boards' features.
-pub fn check_firmware_features(manifest: &str) -> Result<(), String> {
-    let declared = manifest_features(manifest)?
-        .into_iter()
-        .filter(|f| f.starts_with("board-"))
-        .collect();
-    let described = all().iter().filter_map(Board::feature).collect();
-    same(described, declared, "firmware-example's board-* features")
-}
-
-/// Checks firmware-embassy's manifest: its features but `default` are exactly the described
-/// boards' embassy features.
-pub fn check_embassy_features(manifest: &str) -> Result<(), String> {
-    let declared = manifest_features(manifest)?
-        .into_iter()
-        .filter(|f| f != "default")
-        .collect();
-    let described = all()
-        .iter()
-        .filter_map(|b| b.embassy_feature.clone())
-        .collect();
-    same(described, declared, "firmware-embassy's chip features")
 }
 
 /// The board of a firmware-embassy build whose enabled features' environment variables are
@@ -411,17 +346,13 @@ pub fn select_embassy(enabled: &[String]) -> Result<&'static Board, String> {
         .iter()
         .filter(|b| {
             b.embassy_feature
-                .as_ref()
                 .is_some_and(|f| enabled.contains(&feature_env(f)))
         })
         .collect();
     match picked.as_slice() {
         [b] => Ok(b),
         _ => {
-            let features: Vec<_> = all()
-                .iter()
-                .filter_map(|b| b.embassy_feature.as_deref())
-                .collect();
+            let features: Vec<_> = all().iter().filter_map(|b| b.embassy_feature).collect();
             Err(format!(
                 "firmware-embassy: enable exactly one chip feature: {}",
                 features.join(" or ")

@@ -1,9 +1,10 @@
 //! The description against the chips' documents, the generated maps and the selection rules.
 
 use nav440_boards::{
-    all, check_embassy_features, check_firmware_features, feature_env, find, parse, select,
-    select_embassy,
+    all, feature_env, find, select, select_embassy, validate, Board, BootLoader, Region, Uart,
+    BOARDS,
 };
+use std::collections::BTreeSet;
 use std::path::Path;
 
 const KIB: u64 = 1024;
@@ -123,7 +124,7 @@ fn wiring_and_qemu() {
     assert!(find("stm32f405").unwrap().runs_in_qemu());
     assert!(!find("rp-pico").unwrap().runs_in_qemu());
     assert_eq!(
-        find("rp-pico").unwrap().probe_chip.as_deref(),
+        find("rp-pico").unwrap().probe_chip,
         Some("RP2040")
     );
     assert_eq!(find("mps2").unwrap().probe_chip, None);
@@ -137,7 +138,7 @@ fn vars(v: &[&str]) -> Vec<String> {
 #[test]
 fn features_select_one_board() {
     assert_eq!(feature_env("board-rp-pico"), "CARGO_FEATURE_BOARD_RP_PICO");
-    let name = |v: &[&str]| select(&vars(v)).map(|b| b.name.clone());
+    let name = |v: &[&str]| select(&vars(v)).map(|b| b.name);
     assert_eq!(name(&[]).unwrap(), "mps2");
     assert_eq!(name(&["CARGO_FEATURE_ONE_AXIS"]).unwrap(), "mps2");
     assert_eq!(
@@ -151,74 +152,118 @@ fn features_select_one_board() {
     assert!(two.unwrap_err().contains("at most one"));
     let unknown = name(&["CARGO_FEATURE_BOARD_F446"]).unwrap_err();
     assert!(unknown.contains("CARGO_FEATURE_BOARD_F446"), "{unknown}");
-    let chip = |v: &[&str]| select_embassy(&vars(v)).map(|b| b.name.clone());
+    let chip = |v: &[&str]| select_embassy(&vars(v)).map(|b| b.name);
     assert_eq!(chip(&["CARGO_FEATURE_STM32F411"]).unwrap(), "nucleo-f411re");
     assert_eq!(chip(&["CARGO_FEATURE_STM32F405"]).unwrap(), "stm32f405");
     assert!(chip(&[]).is_err());
     assert!(chip(&["CARGO_FEATURE_STM32F405", "CARGO_FEATURE_STM32F411"]).is_err());
 }
 
-#[test]
-fn the_manifests_declare_the_described_features() {
+/// The names of the `[features]` of the manifest `path` (from the workspace root).
+fn features_of(path: &str) -> BTreeSet<String> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
-    let read = |p: &str| std::fs::read_to_string(root.join(p)).unwrap();
-    check_firmware_features(&read("firmware-example/Cargo.toml")).unwrap();
-    check_embassy_features(&read("firmware-embassy/Cargo.toml")).unwrap();
-    let missing = "[features]\nrtt = []\nboard-stm32f405 = []\nboard-rp-pico = []\nboard-x = []\n";
-    let e = check_firmware_features(missing).unwrap_err();
-    assert!(e.contains("not declared: [board-nucleo-f411re]"), "{e}");
-    assert!(e.contains("not described: [board-x]"), "{e}");
+    let text = std::fs::read_to_string(root.join(path)).unwrap();
+    let doc: toml::Table = text.parse().unwrap();
+    doc["features"]
+        .as_table()
+        .unwrap()
+        .keys()
+        .cloned()
+        .collect()
 }
 
-const ONE: &str = r#"
-[[board]]
-name = "a"
-part = "A"
-default = true
-targets = ["thumbv7em-none-eabihf"]
-uart = { peripheral = "UART0" }
-flash = { name = "flash", origin = 0x0800_0000, kib = 64 }
-ram = { name = "RAM", origin = 0x2000_0000, kib = 16 }
-"#;
+#[test]
+fn the_manifests_declare_the_described_features() {
+    let board_features: BTreeSet<String> = features_of("firmware-example/Cargo.toml")
+        .into_iter()
+        .filter(|f| f.starts_with("board-"))
+        .collect();
+    let described: BTreeSet<String> = all().iter().filter_map(Board::feature).collect();
+    assert_eq!(board_features, described);
+    assert!(described.contains("board-rp-pico"));
+    let chips: BTreeSet<String> = features_of("firmware-embassy/Cargo.toml")
+        .into_iter()
+        .filter(|f| f != "default")
+        .collect();
+    let described: BTreeSet<String> = all()
+        .iter()
+        .filter_map(|b| b.embassy_feature.map(str::to_owned))
+        .collect();
+    assert_eq!(chips, described);
+    assert_eq!(described.len(), 2);
+}
+
+const ONE: Board = Board {
+    name: "a",
+    part: "A",
+    default: true,
+    backend: None,
+    targets: &["thumbv7em-none-eabihf"],
+    probe_chip: None,
+    qemu: &[],
+    embassy_feature: None,
+    uart: Uart {
+        peripheral: "UART0",
+        tx: None,
+        rx: None,
+        function: None,
+    },
+    flash: Region {
+        name: "flash",
+        origin: 0x0800_0000,
+        kib: 64,
+        link_kib: None,
+    },
+    ram: Region {
+        name: "RAM",
+        origin: 0x2000_0000,
+        kib: 16,
+        link_kib: None,
+    },
+    boot_loader: None,
+};
 
 #[test]
 fn a_wrong_description_is_refused() {
-    assert_eq!(parse(ONE).unwrap().len(), 1);
-    let cases = [
-        (ONE.replace("default = true", ""), "exactly one board"),
-        (format!("{ONE}{ONE}"), "described twice"),
+    validate(BOARDS).unwrap();
+    validate(&[ONE]).unwrap();
+    let b = |f: fn(&mut Board)| {
+        let mut b = ONE;
+        f(&mut b);
+        b
+    };
+    let cases: [(Vec<Board>, &str); 8] = [
+        (vec![b(|b| b.default = false)], "exactly one board"),
+        (vec![ONE, b(|b| b.default = false)], "described twice"),
+        (vec![b(|b| b.ram.link_kib = Some(32))], "link_kib"),
+        (vec![b(|b| b.ram.origin = 0x0800_8000)], "overlap"),
+        (vec![b(|b| b.name = "A_b")], "lower-case"),
         (
-            ONE.replace("kib = 16", "kib = 16, link-kib = 32"),
-            "link-kib",
-        ),
-        (ONE.replace("0x2000_0000", "0x0800_8000"), "overlap"),
-        (ONE.replace("name = \"a\"", "name = \"A_b\""), "lower-case"),
-        (
-            ONE.replace("thumbv7em-none-eabihf", "x86_64-unknown-linux-gnu"),
+            vec![b(|b| b.targets = &["x86_64-unknown-linux-gnu"])],
             "thumb",
         ),
         (
-            ONE.replace(
-                "kib = 64 }",
-                "kib = 64 }\nboot-loader = { bytes = 100, section = \".b\", symbol = \"B\" }",
-            ),
+            vec![b(|b| {
+                b.boot_loader = Some(BootLoader {
+                    bytes: 100,
+                    section: ".b",
+                    symbol: "B",
+                })
+            })],
             "aligned",
         ),
-        (
-            ONE.replace("part = ", "chip = \"x\"\npart = "),
-            "unknown field",
-        ),
+        (vec![b(|b| b.flash.kib = 1 << 30)], "32-bit"),
     ];
-    for (text, want) in cases {
-        let e = parse(&text).unwrap_err();
+    for (boards, want) in cases {
+        let e = validate(&boards).unwrap_err();
         assert!(e.contains(want), "{want:?} not in {e:?}");
     }
 }
 
 #[test]
 fn regions_contain_exactly_their_range() {
-    let r = nav440_boards::Region {
-        name: "flash".into(),
+    let r = Region {
+        name: "flash",
         origin: 0x0800_0000,
         kib: 1,
         link_kib: None,

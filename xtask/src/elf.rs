@@ -1,7 +1,7 @@
 //! What a firmware image is, read from its ELF: the board it was built for (the symbol
 //! `NAV440_BOARD`) and whether every loadable byte lies where that board's chip has memory.
 //!
-//! The chips' memories are the boards' descriptions (`boards/boards.toml`, crate
+//! The chips' memories are the boards' descriptions (`boards/src/description.rs`, crate
 //! `nav440-boards`: the chips' whole flash and RAM as their reference manuals give them, which
 //! the crate's tests hold as literals), not the memory maps generated from them: the check
 //! is what catches a map that puts an image where its chip has no memory.
@@ -97,7 +97,7 @@ fn check_sections(
     chip: &'static Board,
 ) -> Result<MapReport, String> {
     let shown = path.display();
-    let board = chip.name.clone();
+    let board = chip.name.to_owned();
     let mut sections = 0;
     let mut vector_table = None;
     for s in elf.sections() {

@@ -316,7 +316,7 @@ fn ci() -> Result<(), String> {
 
 /// `cargo fmt --check`, and `rustfmt --check` of the firmware's board modules, which `cargo
 /// fmt` does not reach: firmware-example's build script declares them (`include!`), from
-/// `boards/boards.toml`.
+/// `boards/src/description.rs`.
 fn fmt_check() -> Result<(), String> {
     cargo(&["fmt", "--all", "--", "--check"])?;
     let dir =

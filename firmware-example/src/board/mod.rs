@@ -1,8 +1,8 @@
-//! Board support: one module per board, described in `boards/boards.toml` and picked by at
-//! most one `board-*` feature (none: the QEMU `mps2` boards). `build.rs` declares the selected
-//! board's module here (with its shared backend module, if any) and its memory map from the
-//! description. Each board module has its clocks, UARTs and pins and its output transport, and
-//! provides the same items:
+//! Board support: one module per board, described in `boards/src/description.rs` and picked
+//! by at most one `board-*` feature (none: the QEMU `mps2` boards). `build.rs` declares the
+//! selected board's module here (with its shared backend module, if any) and generates its
+//! memory map from the description. Each board module has its clocks, UARTs and pins and its
+//! output transport, and provides the same items:
 //!
 //! * identity: [`NAME`] (from the description; also written into the ELF as the symbol
 //!   `NAV440_BOARD`, which `cargo xtask flash` and the memory-map check read);

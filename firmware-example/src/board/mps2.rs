@@ -1,8 +1,8 @@
 //! QEMU's `mps2-an385` (Cortex-M3) and `mps2-an386` (Cortex-M4F) boards, emulated only: the
-//! default board of the firmware (no `board-*` feature). Memory map (`boards/boards.toml`):
-//! 1 MiB of code memory at 0 and 128 KiB of RAM at `0x2000_0000`, the size of an
-//! STM32F405-class part, so an image that fits here fits there. Output: defmt frames on the
-//! semihosting stdout.
+//! default board of the firmware (no `board-*` feature). Memory map (from
+//! `boards/src/description.rs`): 1 MiB of code memory at 0 and 128 KiB of RAM at
+//! `0x2000_0000`, the size of an STM32F405-class part, so an image that fits here fits there.
+//! Output: defmt frames on the semihosting stdout.
 //!
 //! Registers of the CMSDK APB UARTs of the QEMU `mps2-an385`/`mps2-an386` boards: UART0
 //! (base `0x4000_4000`, RX interrupt = IRQ 0) carries the NAV440 link, UART1 (base

@@ -9,7 +9,7 @@
 //! * Time base: SysTick on HCLK (16 MHz), [`crate::time`].
 //! * Output: defmt frames into the RTT up-channel `defmt`, read by probe-rs through the
 //!   on-board ST-LINK.
-//! * Memory map: generated from `boards/boards.toml` (flash at `0x0800_0000`).
+//! * Memory map: generated from `boards/src/description.rs` (flash at `0x0800_0000`).
 //! * Probe: `probe-rs run --chip STM32F411RETx` (`cargo run`, through `cargo xtask flash`).
 
 pub use super::stm32f4_hal::*;

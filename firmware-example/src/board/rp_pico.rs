@@ -5,8 +5,8 @@
 //! * Output: defmt frames into the RTT up-channel `defmt`, read by probe-rs (a Debug Probe or
 //!   a second Pico running debugprobe on SWD).
 //! * Time base: SysTick on the core clock (125 MHz), [`crate::time`].
-//! * Memory map: generated from `boards/boards.toml` (boot2 at `0x1000_0000`, vector table
-//!   at `0x1000_0100`, 256 KiB of striped SRAM at `0x2000_0000`).
+//! * Memory map: generated from `boards/src/description.rs` (boot2 at `0x1000_0000`, vector
+//!   table at `0x1000_0100`, 256 KiB of striped SRAM at `0x2000_0000`).
 //! * Probe: `probe-rs run --chip RP2040` (`cargo run`, through `cargo xtask flash`).
 //!
 //! * Clocks: the HAL's `init_clocks_and_plls` from the Pico's 12 MHz crystal: `clk_sys` =

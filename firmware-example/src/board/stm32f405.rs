@@ -8,7 +8,7 @@
 //! * Output: defmt frames into the RTT up-channel `defmt` (probe-rs reads it); under QEMU
 //!   `netduinoplus2` ([`host_present`]) the same frames also go to the semihosting stdout, so
 //!   CI runs the very ELF that is flashed.
-//! * Memory map: generated from `boards/boards.toml` (flash at `0x0800_0000`).
+//! * Memory map: generated from `boards/src/description.rs` (flash at `0x0800_0000`).
 //! * Probe: `probe-rs run --chip STM32F405RGTx` (`cargo run`, through `cargo xtask flash`).
 
 pub use super::stm32f4_hal::*;

@@ -309,12 +309,13 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
     let f405 = build("thumbv7em-none-eabihf", &[STM32_FEATURE], FW_BIN)?;
     check_map(&f405, "stm32f405")?;
     map_check_catches_an_image_at_0(&f405)?;
-    // The boards no emulator runs (`boards/boards.toml`: no `qemu`), for their first target.
+    // The boards no emulator runs (`boards/src/description.rs`: no `qemu`), for their first
+    // target.
     for board in nav440_boards::all().iter().filter(|b| !b.runs_in_qemu()) {
-        let (feature, target) = (board.feature(), &board.targets[0]);
+        let (feature, target) = (board.feature(), board.targets[0]);
         let features: Vec<&str> = feature.as_deref().into_iter().collect();
         clippy_firmware(target, feature.as_deref())?;
-        check_map(&build(target, &features, FW_BIN)?, &board.name)?;
+        check_map(&build(target, &features, FW_BIN)?, board.name)?;
     }
     // The firmware against the simulated unit: boot, configure, stream, estimate, faults
     // (builds the STM32F405 product image too).

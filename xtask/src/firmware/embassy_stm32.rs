@@ -48,22 +48,19 @@ const SPIN_READS: usize = 10_000;
 /// Wall-time bound of the QEMU run.
 const QEMU_LIMIT: Duration = Duration::from_secs(10);
 
-/// The images, one per board of `boards/boards.toml` with an `embassy-feature`: (cargo
-/// feature arguments, board name, the name the image carries in `NAV440_BOARD`). The board
-/// QEMU runs as [`MACHINE`] (the STM32F405) last, so that the ELF left in the target directory
-/// is the one QEMU and `cargo xtask flash` take.
-fn images() -> Vec<([String; 3], &'static str)> {
+/// The images, one per board of `boards/src/description.rs` with an `embassy_feature`: (cargo
+/// feature arguments, the board's name, which the image carries in `NAV440_BOARD`). The
+/// board QEMU runs as [`MACHINE`] (the STM32F405) last, so that the ELF left in the target
+/// directory is the one QEMU and `cargo xtask flash` take.
+fn images() -> Vec<([&'static str; 3], &'static str)> {
     let mut boards: Vec<_> = nav440_boards::all()
         .iter()
-        .filter_map(|b| Some((b.embassy_feature.clone()?, b)))
+        .filter_map(|b| Some((b.embassy_feature?, b)))
         .collect();
-    boards.sort_by_key(|(_, b)| b.qemu.iter().any(|m| m == MACHINE));
+    boards.sort_by_key(|(_, b)| b.qemu.contains(&MACHINE));
     boards
         .into_iter()
-        .map(|(f, b)| {
-            let args = ["--no-default-features".into(), "--features".into(), f];
-            (args, b.name.as_str())
-        })
+        .map(|(f, b)| (["--no-default-features", "--features", f], b.name))
         .collect()
 }
 
@@ -74,7 +71,6 @@ pub fn embassy_stm32() -> Result<(), String> {
     cargo(&["fmt", "-p", CRATE, "--", "--check"])?;
     let elf = target_dir().join(TARGET).join("release").join(CRATE);
     for (features, chip) in images() {
-        let features = features.each_ref().map(String::as_str);
         let mut clippy = vec!["clippy", "-p", CRATE, "--target", TARGET, "--release"];
         clippy.extend(features);
         clippy.extend(["--", "-D", "warnings"]);

@@ -13,7 +13,7 @@ pub fn flash(elf: &Path) -> Result<(), String> {
         )
     })?;
     let chip = crate::elf::chip(&board)?;
-    let Some(probe_chip) = chip.probe_chip.as_deref() else {
+    let Some(probe_chip) = chip.probe_chip else {
         return Err(format!(
             "{} is an image of the emulated board `{board}` ({}), not of a chip: run it with `cargo xtask qemu FILE`, `demo` or `unit`; to flash a board build it with its feature, e.g. `--features board-stm32f405` (docs/PORTING.md)",
             elf.display(),
