@@ -123,10 +123,7 @@ fn wiring_and_qemu() {
     );
     assert!(find("stm32f405").unwrap().runs_in_qemu());
     assert!(!find("rp-pico").unwrap().runs_in_qemu());
-    assert_eq!(
-        find("rp-pico").unwrap().probe_chip,
-        Some("RP2040")
-    );
+    assert_eq!(find("rp-pico").unwrap().probe_chip, Some("RP2040"));
     assert_eq!(find("mps2").unwrap().probe_chip, None);
     assert!(find("stm32").is_err());
 }
