@@ -214,10 +214,10 @@ fn size(bytes: u64) -> String {
     }
 }
 
-/// Checks a description: names unique and usable as feature and module names, exactly one
-/// default board, every board with a thumb target, memories inside the 32-bit address space
-/// and apart, link sizes within the chip's, the vector table in flash and aligned, chip
-/// features unique.
+/// Checks a description: names unique and usable as feature and module names, parts usable
+/// in a linker script comment, exactly one default board, every board with a thumb target,
+/// memories inside the 32-bit address space and apart, link sizes within the chip's, the
+/// vector table in flash and aligned, chip features unique.
 pub fn validate(boards: &[Board]) -> Result<(), String> {
     for (i, b) in boards.iter().enumerate() {
         let n = b.name;
@@ -227,6 +227,11 @@ pub fn validate(boards: &[Board]) -> Result<(), String> {
         if !ok || n.ends_with('-') || n.contains("--") {
             return Err(format!(
                 "board `{n}`: a name is lower-case letters, digits and single `-`"
+            ));
+        }
+        if b.part.contains("*/") {
+            return Err(format!(
+                "board `{n}`: the part goes into a linker script comment: no `*/`"
             ));
         }
         let earlier = &boards[..i];

@@ -229,7 +229,7 @@ fn a_wrong_description_is_refused() {
         f(&mut b);
         b
     };
-    let cases: [(Vec<Board>, &str); 8] = [
+    let cases: [(Vec<Board>, &str); 9] = [
         (vec![b(|b| b.default = false)], "exactly one board"),
         (vec![ONE, b(|b| b.default = false)], "described twice"),
         (vec![b(|b| b.ram.link_kib = Some(32))], "link_kib"),
@@ -250,6 +250,7 @@ fn a_wrong_description_is_refused() {
             "aligned",
         ),
         (vec![b(|b| b.flash.kib = 1 << 30)], "32-bit"),
+        (vec![b(|b| b.part = "A */ B")], "comment"),
     ];
     for (boards, want) in cases {
         let e = validate(&boards).unwrap_err();
