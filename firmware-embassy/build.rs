@@ -1,31 +1,40 @@
-//! Links the firmware with cortex-m-rt's `link.x`, the chip's map (`memory.x` for the
-//! STM32F405, `memory-f411.x` with feature `stm32f411`) and defmt's `defmt.x`.
+//! Links the firmware with cortex-m-rt's `link.x`, the chip's memory map and defmt's
+//! `defmt.x`. The chip feature (`stm32f405`, `stm32f411`) is a board's `embassy_feature` in
+//! `boards/src/description.rs` (crate `nav440-boards`, included here as a module: its `lib.rs`
+//! says why); the map is generated from that board's description, the same map as
+//! firmware-example's image of the board.
 //!
 //! The linker runs in the workspace root, whose `memory.x` it finds before the search path;
 //! that file only includes `nav440-board-memory.x` (see the root `memory.x`). So this script
-//! writes this crate's map into `OUT_DIR` under both names: whichever `memory.x` the linker
-//! finds, the image gets its chip's map (flash at 0x0800_0000).
+//! writes the map into `OUT_DIR` under both names: whichever `memory.x` the linker finds, the
+//! image gets its chip's map (flash at 0x0800_0000).
 
 use std::{env, fs, path::PathBuf};
 
+// The crate nav440-boards, of which this script uses a part.
+#[allow(dead_code)]
+#[path = "../boards/src/lib.rs"]
+mod nav440_boards;
+
 fn main() {
-    let manifest = PathBuf::from(env::var_os("CARGO_MANIFEST_DIR").expect("set by cargo"));
     let out = PathBuf::from(env::var_os("OUT_DIR").expect("set by cargo"));
-    let f405 = env::var_os("CARGO_FEATURE_STM32F405").is_some();
-    let f411 = env::var_os("CARGO_FEATURE_STM32F411").is_some();
-    if f405 == f411 {
-        panic!("firmware-embassy: enable exactly one chip feature: stm32f405 or stm32f411");
-    }
-    let map = manifest.join(if f411 { "memory-f411.x" } else { "memory.x" });
-    println!("cargo:rerun-if-changed={}", map.display());
+    let fail = |e: String| -> ! { panic!("firmware-embassy: {e}") };
+    nav440_boards::validate(nav440_boards::BOARDS)
+        .unwrap_or_else(|e| fail(format!("{}: {e}", nav440_boards::DESCRIPTION_PATH)));
+    let enabled: Vec<String> = env::vars()
+        .map(|(k, _)| k)
+        .filter(|k| k.starts_with("CARGO_FEATURE_"))
+        .collect();
+    let board = nav440_boards::select_embassy(&enabled).unwrap_or_else(|e| fail(e));
+    println!("cargo:rerun-if-changed=../boards/src");
     println!("cargo:rerun-if-changed=build.rs");
     if !env::var("TARGET").unwrap_or_default().starts_with("thumb") {
         // A host build (e.g. `cargo clippy --workspace` by mistake) gets no linker script.
         return;
     }
-    let text = fs::read(&map).expect("the chip's map exists in firmware-embassy/");
+    let map = board.linker_map();
     for name in ["memory.x", "nav440-board-memory.x"] {
-        fs::write(out.join(name), &text).expect("OUT_DIR writable");
+        fs::write(out.join(name), &map).expect("OUT_DIR writable");
     }
     println!("cargo:rustc-link-search={}", out.display());
     println!("cargo:rustc-link-arg-bins=-Tlink.x");

@@ -1,125 +1,18 @@
 //! What a firmware image is, read from its ELF: the board it was built for (the symbol
 //! `NAV440_BOARD`) and whether every loadable byte lies where that board's chip has memory.
 //!
-//! The chips' memories come from their reference manuals and data sheets, not from the
-//! linker scripts (`firmware-example/src/board/*.x`) the images were linked with: the check
-//! is what catches a wrong map.
+//! The chips' memories are the boards' descriptions (`boards/src/description.rs`, crate
+//! `nav440-boards`: the chips' whole flash and RAM as their reference manuals give them, which
+//! the crate's tests hold as literals), not the memory maps generated from them: the check
+//! is what catches a map that puts an image where its chip has no memory.
 
+use nav440_boards::Board;
 use object::{Object, ObjectSection, ObjectSymbol, SectionFlags};
 use std::path::Path;
 
-/// An address range, bytes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Region {
-    /// Name for messages.
-    pub name: &'static str,
-    /// First address.
-    pub origin: u64,
-    /// Bytes.
-    pub length: u64,
-}
-
-impl Region {
-    fn contains(&self, start: u64, len: u64) -> bool {
-        start >= self.origin && start.saturating_add(len) <= self.origin + self.length
-    }
-}
-
-/// A board's chip: where code may be stored (flash) and where data may live (RAM).
-#[derive(Clone, Copy, Debug)]
-pub struct Chip {
-    /// The firmware's board name (`NAV440_BOARD`).
-    pub board: &'static str,
-    /// What it is, for messages and docs.
-    pub part: &'static str,
-    /// The probe-rs chip name, `None` for an emulated-only board.
-    pub probe_chip: Option<&'static str>,
-    /// Non-volatile code memory.
-    pub flash: Region,
-    /// Static RAM usable for `.data`, `.bss` and the stack.
-    pub ram: Region,
-    /// Where the vector table must be: the address the core boots from (the flash origin,
-    /// or after a second-stage boot loader).
-    pub vector_table: u64,
-}
-
-/// Every board image the firmware builds.
-pub const CHIPS: &[Chip] = &[
-    Chip {
-        board: "mps2",
-        part: "QEMU mps2-an385/an386 (ARM AN385/AN386: 4 MiB code SSRAM at 0, 4 MiB SSRAM at 0x2000_0000)",
-        probe_chip: None,
-        flash: Region {
-            name: "code memory",
-            origin: 0,
-            length: 4 << 20,
-        },
-        ram: Region {
-            name: "SRAM",
-            origin: 0x2000_0000,
-            length: 4 << 20,
-        },
-        vector_table: 0,
-    },
-    Chip {
-        board: "stm32f405",
-        part: "STM32F405RG (RM0090: 1 MiB flash at 0x0800_0000, SRAM1+SRAM2 128 KiB at 0x2000_0000)",
-        probe_chip: Some("STM32F405RGTx"),
-        flash: Region {
-            name: "flash",
-            origin: 0x0800_0000,
-            length: 1 << 20,
-        },
-        ram: Region {
-            name: "SRAM1+SRAM2",
-            origin: 0x2000_0000,
-            length: 128 << 10,
-        },
-        vector_table: 0x0800_0000,
-    },
-    Chip {
-        board: "nucleo-f411re",
-        part: "STM32F411RE (RM0383: 512 KiB flash at 0x0800_0000, 128 KiB SRAM at 0x2000_0000)",
-        probe_chip: Some("STM32F411RETx"),
-        flash: Region {
-            name: "flash",
-            origin: 0x0800_0000,
-            length: 512 << 10,
-        },
-        ram: Region {
-            name: "SRAM",
-            origin: 0x2000_0000,
-            length: 128 << 10,
-        },
-        vector_table: 0x0800_0000,
-    },
-    Chip {
-        board: "rp-pico",
-        part: "RP2040 on the Raspberry Pi Pico (2 MiB QSPI flash at 0x1000_0000, 264 KiB SRAM at 0x2000_0000; boot2 in the first 256 bytes)",
-        probe_chip: Some("RP2040"),
-        flash: Region {
-            name: "flash (XIP)",
-            origin: 0x1000_0000,
-            length: 2 << 20,
-        },
-        ram: Region {
-            name: "SRAM",
-            origin: 0x2000_0000,
-            length: 264 << 10,
-        },
-        vector_table: 0x1000_0100,
-    },
-];
-
-/// The chip of board `name`.
-pub fn chip(name: &str) -> Result<&'static Chip, String> {
-    CHIPS.iter().find(|c| c.board == name).ok_or_else(|| {
-        let names: Vec<_> = CHIPS.iter().map(|c| c.board).collect();
-        format!(
-            "unknown board `{name}` in the image (known: {})",
-            names.join(", ")
-        )
-    })
+/// The board named `name` (the image's `NAV440_BOARD`).
+pub fn chip(name: &str) -> Result<&'static Board, String> {
+    nav440_boards::find(name).map_err(|e| format!("{e} in the image"))
 }
 
 fn read(path: &Path) -> Result<Vec<u8>, String> {
@@ -201,10 +94,10 @@ pub fn check_memory_map_for(path: &Path, board: &str) -> Result<MapReport, Strin
 fn check_sections(
     path: &Path,
     elf: &object::File<'_>,
-    chip: &'static Chip,
+    chip: &'static Board,
 ) -> Result<MapReport, String> {
     let shown = path.display();
-    let board = chip.board.to_owned();
+    let board = chip.name.to_owned();
     let mut sections = 0;
     let mut vector_table = None;
     for s in elf.sections() {
@@ -221,13 +114,13 @@ fn check_sections(
             return Err(format!(
                 "{shown}: section {name} at {start:#010x}..{:#010x} lies outside {}'s {} ({:#010x}, {} KiB) and {} ({:#010x}, {} KiB)",
                 start + len,
-                chip.board,
+                chip.name,
                 chip.flash.name,
                 chip.flash.origin,
-                chip.flash.length >> 10,
+                chip.flash.kib,
                 chip.ram.name,
                 chip.ram.origin,
-                chip.ram.length >> 10
+                chip.ram.kib
             ));
         }
         if name == ".vector_table" {
@@ -250,19 +143,20 @@ fn check_sections(
             return Err(format!(
                 "{shown}: a loadable segment ({file_len} bytes, run address {run:#010x}) is loaded at {load:#010x}..{:#010x}, outside {}'s {} ({:#010x}, {} KiB): a probe cannot write it",
                 load + file_len,
-                chip.board,
+                chip.name,
                 chip.flash.name,
                 chip.flash.origin,
-                chip.flash.length >> 10
+                chip.flash.kib
             ));
         }
     }
     let vector_table =
         vector_table.ok_or_else(|| format!("{shown}: the image has no .vector_table section"))?;
-    if vector_table != chip.vector_table {
+    if vector_table != chip.vector_table() {
         return Err(format!(
             "{shown}: section .vector_table is at {vector_table:#010x}, but {} boots from {:#010x}",
-            chip.board, chip.vector_table
+            chip.name,
+            chip.vector_table()
         ));
     }
     Ok(MapReport {
@@ -354,20 +248,6 @@ pub fn with_load_address(data: &[u8], addr: u32) -> Result<Vec<u8>, String> {
 mod tests {
     use super::*;
 
-    #[test]
-    fn regions_contain_exactly_their_range() {
-        let r = Region {
-            name: "flash",
-            origin: 0x0800_0000,
-            length: 1024,
-        };
-        assert!(r.contains(0x0800_0000, 1024));
-        assert!(!r.contains(0x0800_0000, 1025));
-        assert!(!r.contains(0x07ff_fffc, 8));
-        assert!(r.contains(0x0800_03fc, 4));
-        assert!(!r.contains(0, 4));
-    }
-
     /// This test program formats a float, so the detector must find the formatting code in
     /// its own executable (a host ELF, same symbol names).
     #[test]
@@ -378,14 +258,5 @@ mod tests {
         let data = read(&exe).expect("readable");
         let found = float_symbols_in(&parse(&exe, &data).expect("an ELF file"));
         assert!(!found.is_empty(), "no float formatting symbol found");
-    }
-
-    #[test]
-    fn every_board_is_known_once() {
-        for c in CHIPS {
-            assert_eq!(chip(c.board).map(|x| x.part), Ok(c.part));
-            assert!(c.flash.contains(c.vector_table, 0x40));
-        }
-        assert!(chip("stm32").is_err());
     }
 }

@@ -386,4 +386,34 @@ mod tests {
         );
         assert!(board("stm32").is_err());
     }
+
+    /// Each QEMU run is of a machine and a target of the board its features select in
+    /// `boards/src/description.rs`, and each machine described there is run.
+    #[test]
+    fn the_emulated_boards_are_the_described_ones() {
+        let runs: Vec<Board> = BOARDS.iter().copied().chain([STM32_BOARD]).collect();
+        let described = |r: &Board| {
+            let vars: Vec<String> = r
+                .features
+                .iter()
+                .map(|f| nav440_boards::feature_env(f))
+                .collect();
+            nav440_boards::select(&vars).expect("a described board")
+        };
+        for r in &runs {
+            let d = described(r);
+            assert!(d.qemu.contains(&r.machine), "{}", r.name);
+            assert!(d.targets.contains(&r.target), "{}", r.name);
+        }
+        for d in nav440_boards::all() {
+            for m in d.qemu {
+                assert!(
+                    runs.iter()
+                        .any(|r| r.machine == *m && described(r).name == d.name),
+                    "{} on {m}",
+                    d.name
+                );
+            }
+        }
+    }
 }

@@ -1,7 +1,8 @@
 //! QEMU's `mps2-an385` (Cortex-M3) and `mps2-an386` (Cortex-M4F) boards, emulated only: the
-//! default board of the firmware (no `board-*` feature). Memory map `mps2.x`: 1 MiB of code
-//! memory at 0 and 128 KiB of RAM at `0x2000_0000`, the size of an STM32F405-class part, so an
-//! image that fits here fits there. Output: defmt frames on the semihosting stdout.
+//! default board of the firmware (no `board-*` feature). Memory map (from
+//! `boards/src/description.rs`): 1 MiB of code memory at 0 and 128 KiB of RAM at
+//! `0x2000_0000`, the size of an STM32F405-class part, so an image that fits here fits there.
+//! Output: defmt frames on the semihosting stdout.
 //!
 //! Registers of the CMSDK APB UARTs of the QEMU `mps2-an385`/`mps2-an386` boards: UART0
 //! (base `0x4000_4000`, RX interrupt = IRQ 0) carries the NAV440 link, UART1 (base
@@ -11,10 +12,6 @@
 //! bit3 RX overrun; write 1 to clear an overrun bit), CTRL +0x8 (bit0 TX enable, bit1 RX
 //! enable, bit3 RX interrupt enable), INTSTATUS/INTCLEAR +0xC (bit1 RX), BAUDDIV +0x10.
 
-/// Board name (`NAV440_BOARD` in the ELF).
-pub const NAME: &str = "mps2";
-/// Emulated only: no probe-rs chip.
-pub const PROBE_CHIP: Option<&str> = None;
 /// Reply time-out of each boot request, ms (SysTick follows the host's clock under QEMU).
 pub const REPLY_TIMEOUT_MS: u32 = 500;
 /// A failed boot or a unit reset ends the run with a status (the harness reads it).

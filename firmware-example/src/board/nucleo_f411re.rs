@@ -9,15 +9,11 @@
 //! * Time base: SysTick on HCLK (16 MHz), [`crate::time`].
 //! * Output: defmt frames into the RTT up-channel `defmt`, read by probe-rs through the
 //!   on-board ST-LINK.
-//! * Memory map: `nucleo_f411re.x` (flash at `0x0800_0000`).
+//! * Memory map: generated from `boards/src/description.rs` (flash at `0x0800_0000`).
 //! * Probe: `probe-rs run --chip STM32F411RETx` (`cargo run`, through `cargo xtask flash`).
 
 pub use super::stm32f4_hal::*;
 
-/// Board name (`NAV440_BOARD` in the ELF).
-pub const NAME: &str = "nucleo-f411re";
-/// probe-rs chip name.
-pub const PROBE_CHIP: Option<&str> = Some("STM32F411RETx");
 /// Reply time-out of each boot request, ms.
 pub const REPLY_TIMEOUT_MS: u32 = 1000;
 /// A failed boot or a unit reset is retried for ever (one diagnostic line per attempt).

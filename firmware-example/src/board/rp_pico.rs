@@ -5,8 +5,8 @@
 //! * Output: defmt frames into the RTT up-channel `defmt`, read by probe-rs (a Debug Probe or
 //!   a second Pico running debugprobe on SWD).
 //! * Time base: SysTick on the core clock (125 MHz), [`crate::time`].
-//! * Memory map: `rp_pico.x` (boot2 at `0x1000_0000`, vector table at `0x1000_0100`, 256 KiB
-//!   of striped SRAM at `0x2000_0000`).
+//! * Memory map: generated from `boards/src/description.rs` (boot2 at `0x1000_0000`, vector
+//!   table at `0x1000_0100`, 256 KiB of striped SRAM at `0x2000_0000`).
 //! * Probe: `probe-rs run --chip RP2040` (`cargo run`, through `cargo xtask flash`).
 //!
 //! * Clocks: the HAL's `init_clocks_and_plls` from the Pico's 12 MHz crystal: `clk_sys` =
@@ -54,10 +54,6 @@ use rp2040_hal::{
 #[used]
 pub static BOOT2_FIRMWARE: [u8; 256] = rp2040_boot2::BOOT_LOADER_W25Q080;
 
-/// Board name (`NAV440_BOARD` in the ELF).
-pub const NAME: &str = "rp-pico";
-/// probe-rs chip name.
-pub const PROBE_CHIP: Option<&str> = Some("RP2040");
 /// Reply time-out of each boot request, ms.
 pub const REPLY_TIMEOUT_MS: u32 = 1000;
 /// A failed boot or a unit reset is retried for ever (one diagnostic line per attempt).

@@ -8,15 +8,11 @@
 //! * Output: defmt frames into the RTT up-channel `defmt` (probe-rs reads it); under QEMU
 //!   `netduinoplus2` ([`host_present`]) the same frames also go to the semihosting stdout, so
 //!   CI runs the very ELF that is flashed.
-//! * Memory map: `stm32f405.x` (flash at `0x0800_0000`).
+//! * Memory map: generated from `boards/src/description.rs` (flash at `0x0800_0000`).
 //! * Probe: `probe-rs run --chip STM32F405RGTx` (`cargo run`, through `cargo xtask flash`).
 
 pub use super::stm32f4_hal::*;
 
-/// Board name (`NAV440_BOARD` in the ELF).
-pub const NAME: &str = "stm32f405";
-/// probe-rs chip name.
-pub const PROBE_CHIP: Option<&str> = Some("STM32F405RGTx");
 /// Reply time-out of each boot request, ms. Under QEMU `netduinoplus2` SysTick runs 168/16
 /// times fast (see `crate::time`), so 1000 ms nominal is about 95 ms of wall time there, still
 /// well above the emulated round trip; on a board a failed search takes 12 s per attempt.

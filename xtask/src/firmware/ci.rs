@@ -24,17 +24,6 @@ use crate::qemu::{self, Board, Output};
 use std::path::Path;
 use std::time::Duration;
 
-/// The board images that only build (no emulator runs them): (feature, target, board name in
-/// the ELF).
-const BUILT_ONLY_BOARDS: &[(&str, &str, &str)] = &[
-    (
-        "board-nucleo-f411re",
-        "thumbv7em-none-eabihf",
-        "nucleo-f411re",
-    ),
-    ("board-rp-pico", "thumbv6m-none-eabi", "rp-pico"),
-];
-
 /// The memory-map check of one image (`cargo xtask check-map`), with a line saying so, and
 /// the check that it links no float formatting of `core::fmt`.
 fn check_map(elf: &Path, board: &str) -> Result<(), String> {
@@ -320,9 +309,13 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
     let f405 = build("thumbv7em-none-eabihf", &[STM32_FEATURE], FW_BIN)?;
     check_map(&f405, "stm32f405")?;
     map_check_catches_an_image_at_0(&f405)?;
-    for (feature, target, board) in BUILT_ONLY_BOARDS {
-        clippy_firmware(target, Some(feature))?;
-        check_map(&build(target, &[feature], FW_BIN)?, board)?;
+    // The boards no emulator runs (`boards/src/description.rs`: no `qemu`), for their first
+    // target.
+    for board in nav440_boards::all().iter().filter(|b| !b.runs_in_qemu()) {
+        let (feature, target) = (board.feature(), board.targets[0]);
+        let features: Vec<&str> = feature.as_deref().into_iter().collect();
+        clippy_firmware(target, feature.as_deref())?;
+        check_map(&build(target, &features, FW_BIN)?, board.name)?;
     }
     // The firmware against the simulated unit: boot, configure, stream, estimate, faults
     // (builds the STM32F405 product image too).

@@ -5,7 +5,7 @@
 //!    block of `nav440-proto/src/driver/asynch.rs` equals the region between the binary's
 //!    `ANCHOR: boot` and `ANCHOR_END: boot` comments, line for line (dedented).
 //! 2. Lints (`cargo fmt --check`, `cargo clippy -D warnings`) and builds the release ELF for
-//!    `thumbv7em-none-eabihf`, once per chip ([`IMAGES`]).
+//!    `thumbv7em-none-eabihf`, once per chip ([`images`]).
 //! 3. Checks each image's memory map from the ELF against its chip (`nucleo-f411re`,
 //!    `stm32f405`: vector table at `0x0800_0000`, every section inside flash or RAM) and prints
 //!    its flash and RAM.
@@ -30,8 +30,6 @@ use std::time::{Duration, Instant};
 const CRATE: &str = "firmware-embassy";
 /// Its target (both chips are Cortex-M4F).
 const TARGET: &str = "thumbv7em-none-eabihf";
-/// The chip in `crate::elf::CHIPS` (the name the image carries in `NAV440_BOARD`).
-const CHIP: &str = "stm32f405";
 /// The binary with the anchored boot code, relative to the workspace root.
 const MAIN: &str = "firmware-embassy/src/main.rs";
 /// The docs that show it, relative to the workspace root.
@@ -50,15 +48,21 @@ const SPIN_READS: usize = 10_000;
 /// Wall-time bound of the QEMU run.
 const QEMU_LIMIT: Duration = Duration::from_secs(10);
 
-/// The images: (cargo feature arguments, chip in `crate::elf::CHIPS`). The STM32F405 last, so
-/// that the ELF left in the target directory is the one QEMU and `cargo xtask flash` take.
-const IMAGES: [(&[&str], &str); 2] = [
-    (
-        &["--no-default-features", "--features", "stm32f411"],
-        "nucleo-f411re",
-    ),
-    (&[], CHIP),
-];
+/// The images, one per board of `boards/src/description.rs` with an `embassy_feature`: (cargo
+/// feature arguments, the board's name, which the image carries in `NAV440_BOARD`). The
+/// board QEMU runs as [`MACHINE`] (the STM32F405) last, so that the ELF left in the target
+/// directory is the one QEMU and `cargo xtask flash` take.
+fn images() -> Vec<([&'static str; 3], &'static str)> {
+    let mut boards: Vec<_> = nav440_boards::all()
+        .iter()
+        .filter_map(|b| Some((b.embassy_feature?, b)))
+        .collect();
+    boards.sort_by_key(|(_, b)| b.qemu.contains(&MACHINE));
+    boards
+        .into_iter()
+        .map(|(f, b)| (["--no-default-features", "--features", f], b.name))
+        .collect()
+}
 
 /// Runs the steps of the module doc.
 pub fn embassy_stm32() -> Result<(), String> {
@@ -66,7 +70,7 @@ pub fn embassy_stm32() -> Result<(), String> {
     check_doc_block()?;
     cargo(&["fmt", "-p", CRATE, "--", "--check"])?;
     let elf = target_dir().join(TARGET).join("release").join(CRATE);
-    for (features, chip) in IMAGES {
+    for (features, chip) in images() {
         let mut clippy = vec!["clippy", "-p", CRATE, "--target", TARGET, "--release"];
         clippy.extend(features);
         clippy.extend(["--", "-D", "warnings"]);

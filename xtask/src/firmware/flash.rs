@@ -22,9 +22,10 @@ pub fn flash(elf: &Path) -> Result<(), String> {
     };
     crate::elf::check_memory_map(elf, Some(&board))?;
     eprintln!(
-        "xtask: flashing {} ({}) with probe-rs, chip {probe_chip}",
+        "xtask: flashing {} ({}) with probe-rs, chip {probe_chip}; NAV440 on {}",
         elf.display(),
-        chip.part
+        chip.part,
+        chip.wiring()
     );
     let status = Command::new("probe-rs")
         .args(["run", "--chip", probe_chip])
