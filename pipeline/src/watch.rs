@@ -90,11 +90,18 @@ pub struct StreamWatch {
     rate_checked: bool,
     foreign_reported: bool,
     frames: u64,
+    /// Frames of the configured type per periodic report ([`COUNTER_INTERVAL_S`] s).
+    every: u32,
+    /// Frames of the configured type until the next periodic report (a count-down: no
+    /// division per frame).
+    to_periodic: u32,
 }
 
 impl StreamWatch {
     /// A watch of a stream of `packet` at `rate`, started at `now_ms`.
     pub fn new(packet: PacketType, rate: PacketRate, now_ms: u32) -> Self {
+        let period_ms = 10 * u32::from(rate.divider().max(1));
+        let every = (COUNTER_INTERVAL_S * 1000 / period_ms).max(1);
         Self {
             packet,
             rate,
@@ -106,6 +113,8 @@ impl StreamWatch {
             rate_checked: false,
             foreign_reported: false,
             frames: 0,
+            every,
+            to_periodic: every,
         }
     }
 
@@ -136,11 +145,12 @@ impl StreamWatch {
             }
             return;
         }
-        let period_ms = self.period_ms();
         self.frames = self.frames.saturating_add(1);
-        let every = u64::from(COUNTER_INTERVAL_S * 1000 / period_ms).max(1);
-        if self.frames.is_multiple_of(every) {
-            let stream_s = (self.frames / every).saturating_mul(u64::from(COUNTER_INTERVAL_S));
+        self.to_periodic -= 1;
+        if self.to_periodic == 0 {
+            self.to_periodic = self.every;
+            let stream_s =
+                (self.frames / u64::from(self.every)).saturating_mul(u64::from(COUNTER_INTERVAL_S));
             on_event(Event::Periodic {
                 stream_s: u32::try_from(stream_s).unwrap_or(u32::MAX),
             });
@@ -170,7 +180,7 @@ impl StreamWatch {
             if self.period.is_complete() {
                 self.rate_checked = true;
                 if let Some(p) = self.period.period_s().filter(|p| *p > 0.0) {
-                    let configured_s = period_ms as f32 * 1e-3;
+                    let configured_s = self.period_ms() as f32 * 1e-3;
                     if ((p - configured_s) / configured_s).abs() > RATE_TOLERANCE {
                         on_event(Event::RateMismatch {
                             measured_hz: 1.0 / p,
@@ -206,6 +216,8 @@ impl StreamWatch {
     /// the same stream (e.g. before a re-configuration): the periodic reports keep counting.
     pub fn continuing(mut self, frames: u64) -> Self {
         self.frames = frames;
+        // Cannot be 0: `frames % every < every`.
+        self.to_periodic = self.every - (frames % u64::from(self.every)) as u32;
         self
     }
 }
