@@ -14,12 +14,13 @@ type Bank = ProductBank<f32>;
 type Build = fn(Axis, &BankConfig) -> Result<Bank, ConfigError>;
 type Pipe = Pipeline<Bank, ConfigError, Build>;
 
+/// The yaw axis's product bank.
+fn build(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
+    axis_bank(axis, cfg)
+}
+
 fn pipe() -> Pipe {
-    Pipeline::new(
-        Axes::only(Axis::Yaw),
-        BankConfig::NAV440,
-        axis_bank::<Bank> as Build,
-    )
+    Pipeline::new(Axes::only(Axis::Yaw), BankConfig::NAV440, build as Build)
 }
 
 /// A pipeline whose watch is armed at 0 ms for A2 at 100 Hz.
