@@ -13,7 +13,10 @@
 //! 4. Every byte after the read-back goes through `nav440_pipeline` with the product bank
 //!    (`estimators::ProductBank`: ILO1 velocity and Kalman acceleration per axis, the
 //!    `BankConfig::NAV440` gains for the measured packet rate), as firmware-example's
-//!    `bank-product` image and `nav440 estimate --bank product` do.
+//!    `bank-product` image and `nav440 estimate --bank product` do, and through the
+//!    pipeline's stream watchdog (armed after every configuration, polled every
+//!    [`POLL_MS`] ms while no byte arrives). A silence or a frame of another type (a unit
+//!    reset) sends the firmware back to step 3, as firmware-example's real-board profile does.
 //!
 //! Output: defmt messages over defmt-rtt (probe-rs reads them), see [`out`]:
 //!
@@ -22,8 +25,13 @@
 //! * `row {=u64} {=[?]}` per sample: the sample time (us since the first sample), then
 //!   per axis (roll, pitch, yaw) the unwrapped angle (deg) and the bank's two channels, nine
 //!   `f32`; an axis without an estimate in that row (near gimbal lock) is NaN;
-//! * `counters ...` every [`COUNTER_ROWS`] rows and after a UART error: the parser's and the
-//!   pipeline's counters and the UART errors so far.
+//! * firmware-example's `firmware: ...` messages (`nav440_pipeline::report`): the stream
+//!   faults (`stream silent: ...`, `time stamps frozen: ...`, `packet rate differs ...`,
+//!   `unit reset mid-stream: ...`), the period change, and every 10 s of stream `counters
+//!   after N s of stream:` with the counters line (also after a UART error). In that line
+//!   `uart_overruns` counts the UART's receive errors, `unit_bytes` the bytes received;
+//!   `uart_stalls` and `stack_peak` are 0 (the `BufferedUart` never pauses reception, and the
+//!   stack is not painted).
 //!
 //! Build: `cargo build -p firmware-embassy --release --target thumbv7em-none-eabihf` (add
 //! `--no-default-features --features stm32f411` for the NUCLEO-F411RE); `cargo xtask
@@ -38,7 +46,8 @@ use panic_probe as _;
 use embassy_executor::Spawner;
 use embassy_stm32::usart::{self, BufferedUart};
 use embassy_stm32::{bind_interrupts, peripherals};
-use embassy_time::{Delay, Timer};
+use embassy_time::{with_timeout, Delay, Duration, Instant, Timer};
+use nav440_pipeline::report::{self, Flow};
 use nav440_proto::boot::{self, Options, Target};
 use nav440_proto::driver::AsyncDriver;
 use nav440_proto::Baud;
@@ -60,8 +69,14 @@ const _: () = assert!(
 /// Local UART rate before the search (the NAV440's factory default; the search tries all).
 const POWER_UP_BAUD: u32 = 38_400;
 
-/// A `counters` message every this many rows (10 s at 100 Hz).
-const COUNTER_ROWS: u64 = 1000;
+/// Longest wait for received bytes before the watchdog's silence check, ms (the silence
+/// limit is 500 ms at 100 Hz).
+const POLL_MS: u64 = 10;
+
+/// The watchdog's clock: milliseconds since start (embassy-time, wrapping).
+fn now_ms() -> u32 {
+    Instant::now().as_millis() as u32
+}
 
 /// The board name in the ELF (NUL-terminated), as firmware-example's images carry it: `cargo
 /// xtask flash` and the memory-map check read the chip from it.
@@ -88,7 +103,7 @@ async fn main(_spawner: Spawner) {
     config.baudrate = POWER_UP_BAUD;
     let mut tx_buf = [0u8; 64];
     let mut rx_buf = [0u8; 512];
-    let uart = match BufferedUart::new(
+    let mut uart = match BufferedUart::new(
         p.USART1,
         p.PA10,
         p.PA9,
@@ -102,67 +117,95 @@ async fn main(_spawner: Spawner) {
     };
 
     let mut pipe = out::pipeline();
-    // ANCHOR: boot
-    let mut driver = AsyncDriver::new(uart);
-    let report = loop {
-        // The local UART follows the unit; `ConfigError` is not the UART's error type.
-        let set_baud = |u: &mut BufferedUart<'_>, b: Baud| {
-            u.set_baudrate(b.bits_per_second()).map_err(|e| {
-                defmt::error!("set_baudrate({=u32}): {}", b.bits_per_second(), e);
-                usart::Error::Framing
-            })
-        };
-        match boot::boot_async(
-            &mut driver,
-            &TARGET,
-            &Options::DEFAULT,
-            &mut Delay,
-            set_baud,
-        )
-        .await
-        {
-            Ok(report) => break report,
-            Err(e) => defmt::println!("firmware: boot failed: {}", e),
-        }
-        Timer::after_secs(1).await;
-    };
-    // ANCHOR_END: boot
-    defmt::println!(
-        "firmware: unit configured: {} at {=u32} Bd (unit was at {=u32} Bd); boot_frames={=u32}",
-        TARGET.packet,
-        report.baud.bits_per_second(),
-        report.unit_baud.bits_per_second(),
-        report.unsolicited_frames,
-    );
-
-    out::header();
-    let mut emit = out::row;
-    if let Err(e) = pipe.feed(driver.pending_bytes(), &mut emit) {
-        defmt::panic!("bank: {}", e)
-    }
-    let mut uart = driver.release();
+    let mut first = true;
+    // Receive errors and bytes received so far (the counters line).
     let mut uart_errors = 0u32;
-    let mut last_counters = 0u64;
-    let mut buf = [0u8; 64];
+    let mut received = 0u64;
     loop {
-        match embedded_io_async::Read::read(&mut uart, &mut buf).await {
-            Ok(n) => {
-                let changes = pipe.estimation().counters().period_changes;
-                if let Err(e) = pipe.feed(&buf[..n], &mut emit) {
-                    defmt::panic!("bank: {}", e)
+        // ANCHOR: boot
+        let mut driver = AsyncDriver::new(uart);
+        let report = loop {
+            // The local UART follows the unit; `ConfigError` is not the UART's error type.
+            let set_baud = |u: &mut BufferedUart<'_>, b: Baud| {
+                u.set_baudrate(b.bits_per_second()).map_err(|e| {
+                    defmt::error!("set_baudrate({=u32}): {}", b.bits_per_second(), e);
+                    usart::Error::Framing
+                })
+            };
+            match boot::boot_async(
+                &mut driver,
+                &TARGET,
+                &Options::DEFAULT,
+                &mut Delay,
+                set_baud,
+            )
+            .await
+            {
+                Ok(report) => break report,
+                Err(e) => defmt::println!("firmware: boot failed: {}", e),
+            }
+            Timer::after_secs(1).await;
+        };
+        // ANCHOR_END: boot
+        defmt::println!(
+            "firmware: unit configured: {} at {=u32} Bd (unit was at {=u32} Bd); boot_frames={=u32}",
+            TARGET.packet,
+            report.baud.bits_per_second(),
+            report.unit_baud.bits_per_second(),
+            report.unsolicited_frames,
+        );
+        if first {
+            out::header();
+            first = false;
+        }
+        pipe.watch(TARGET.packet, TARGET.rate, now_ms());
+        let mut pending = [0u8; nav440_proto::MAX_FRAME];
+        let n = driver.pending_bytes().len().min(pending.len());
+        pending[..n].copy_from_slice(&driver.pending_bytes()[..n]);
+        uart = driver.release();
+        received += n as u64;
+        let mut go = process(&mut pipe, &pending[..n], uart_errors, received);
+        let mut buf = [0u8; 64];
+        while go {
+            match with_timeout(
+                Duration::from_millis(POLL_MS),
+                embedded_io_async::Read::read(&mut uart, &mut buf),
+            )
+            .await
+            {
+                Ok(Ok(n)) => {
+                    received += n as u64;
+                    go = process(&mut pipe, &buf[..n], uart_errors, received);
                 }
-                out::period_change(&pipe, changes);
+                Ok(Err(e)) => {
+                    uart_errors = uart_errors.saturating_add(1);
+                    defmt::println!("firmware: UART error: {}", e);
+                    report::summary(&pipe, uart_errors, 0, received, 0);
+                }
+                // Nothing within POLL_MS: the silence check below.
+                Err(_) => {}
             }
-            Err(e) => {
-                uart_errors = uart_errors.saturating_add(1);
-                defmt::println!("firmware: UART error: {}", e);
-                out::counters(&pipe, uart_errors);
-            }
+            // A silent unit (reported) is configured again.
+            go = go && !report::silence(&mut pipe, now_ms());
         }
-        let rows_now = pipe.estimation().counters().rows;
-        if rows_now >= last_counters + COUNTER_ROWS {
-            last_counters = rows_now;
-            out::counters(&pipe, uart_errors);
+    }
+}
+
+/// Feeds received bytes through the pipeline and its watch (`nav440_pipeline::report::feed`:
+/// rows, and every stream fault as it is seen); prints the counters every 10 s of stream.
+/// `false`: the unit reset (a frame of another type): configure it again.
+fn process(pipe: &mut out::Pipeline, bytes: &[u8], uart_errors: u32, received: u64) -> bool {
+    let flow = match report::feed(pipe, bytes, now_ms(), &mut out::row) {
+        Ok(f) => f,
+        Err(e) => defmt::panic!("bank: {}", e),
+    };
+    match flow {
+        Flow::Go => true,
+        Flow::Counters(stream_s) => {
+            report::periodic(stream_s);
+            report::summary(pipe, uart_errors, 0, received, 0);
+            true
         }
+        Flow::Reset => false,
     }
 }

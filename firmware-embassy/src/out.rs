@@ -5,10 +5,10 @@
 //!   (roll, pitch, yaw) the unwrapped angle (deg), the ILO1 velocity (deg/s) and the Kalman
 //!   acceleration (deg/s^2): nine `f32`, NaN for an axis without an estimate in the row (roll
 //!   and yaw near gimbal lock).
-//! * [`counters`]: `firmware: counters parser=.. front=.. back=.. uart_errors=..`: the
-//!   parser's statistics (`nav440_proto::Stats`), the front end's and the back end's counters
-//!   (`nav440_pipeline::FrontCounters`, `nav440_pipeline::Counters`), each as its struct with
-//!   every field, and the UART errors.
+//!
+//! The diagnostics and the counters are firmware-example's messages, from one implementation
+//! (`nav440_pipeline::report`): the stream watchdog's faults, the period change, `counters
+//! after N s of stream:` and the `key=value` counters line.
 
 use estimators::{BankConfig, EstimatorBank, EstimatorOutput};
 use nav440_pipeline::{Axes, Axis};
@@ -63,28 +63,4 @@ pub fn row(r: &Row) {
         }
     }
     defmt::println!("row {=u64} {=[?]}", r.t_us, &v[..]);
-}
-
-/// Sends the counters message (see the module doc).
-pub fn counters(pipe: &Pipeline, uart_errors: u32) {
-    defmt::println!(
-        "firmware: counters parser={} front={} back={} uart_errors={=u32}",
-        pipe.front().parser_stats(),
-        pipe.front().counters(),
-        pipe.estimation().counters(),
-        uart_errors,
-    );
-}
-
-/// Reports a new time epoch at another packet rate while it happens (the pipeline measured the
-/// period on the epoch's first samples and rebuilt the banks for it) when `pipe`'s count of
-/// period changes has moved past `before`: `firmware: new time epoch at another packet rate:
-/// nominal sample period now N us; banks rebuilt`, as firmware-example prints it.
-pub fn period_change(pipe: &Pipeline, before: u32) {
-    if pipe.estimation().counters().period_changes != before {
-        defmt::println!(
-            "firmware: new time epoch at another packet rate: nominal sample period now {=u32} us; banks rebuilt",
-            pipe.estimation().period_s().map_or(0, |p| (p * 1e6) as u32)
-        );
-    }
 }

@@ -34,8 +34,8 @@ use core::sync::atomic::{AtomicBool, Ordering};
 use cortex_m_rt::entry;
 use embedded_io::{Read as _, ReadReady as _};
 use firmware_example::uart::{Board, Control, EndMessage, Uart0};
-use firmware_example::{board, host, log, out, pipeline, stack, time};
-use nav440_pipeline::watch::{Event, StreamWatch};
+use firmware_example::{board, host, log, out, pipeline, time};
+use nav440_pipeline::report::{self, Flow};
 use nav440_proto::boot::{self, BootError, Options, Report, Target};
 use nav440_proto::driver::{IoDriver, Timing};
 use nav440_proto::Baud;
@@ -118,20 +118,11 @@ fn main() -> ! {
     let mut delay = time::start(core.SYST, core_clock_hz);
     let mut uart = uart;
     let mut control = control;
-    // Frames streamed so far, across re-configurations (the periodic counters' stream time).
-    let mut frames = 0u64;
     loop {
         let (configured, report, pending) = configure(uart, &mut delay);
         // Returns after a silence, or a unit reset on the real-board profile: configure the
         // unit again.
-        uart = stream(
-            configured,
-            &mut control,
-            &mut pipe,
-            &report,
-            &pending,
-            &mut frames,
-        );
+        uart = stream(configured, &mut control, &mut pipe, &report, &pending);
     }
 }
 
@@ -210,7 +201,6 @@ fn stream(
     pipe: &mut pipeline::Pipeline,
     report: &Report,
     pending: &[u8],
-    frames: &mut u64,
 ) -> Uart0 {
     defmt::println!(
         "firmware: unit configured: {=str} at {} Hz at {} Bd (found at {} Bd, unit was at {} Bd streaming {=str} with rate divider {}, {} ping retries); boot_frames={} boot_skipped={} boot_ms={}",
@@ -231,34 +221,18 @@ fn stream(
         HEADER_PRINTED.store(true, Ordering::Relaxed);
         print_header();
     }
-    let mut watch =
-        StreamWatch::new(TARGET.packet, TARGET.rate, time::now_ms()).continuing(*frames);
-    // Feeds the pipeline unless the bytes show a unit reset (`Flow::Reset`).
-    let process = |watch: &mut StreamWatch, pipe: &mut pipeline::Pipeline, bytes: &[u8]| -> Flow {
-        let mut flow = Flow::Go;
-        watch.feed(bytes, time::now_ms(), |e| match e {
-            Event::ForeignType { got, configured } => {
-                defmt::println!(
-                    "firmware: unit reset mid-stream: {=str} frame received after configuring {=str} ({=u64} bytes estimated)",
-                    got.name(),
-                    configured.name(),
-                    uart_bytes(pipe)
-                );
-                flow = Flow::Reset;
-            }
-            Event::Periodic { stream_s } => flow = flow.max(Flow::Counters(stream_s)),
-            other => report_fault(&other),
-        });
+    // The pipeline's stream watchdog, armed for the configured stream (its periodic counters
+    // count stream time across re-configurations).
+    pipe.watch(TARGET.packet, TARGET.rate, time::now_ms());
+    // Feeds the pipeline and its watch (every fault printed as it is seen): `Flow::Reset` when
+    // the bytes show a unit reset (the chunk is estimated first; the rest is the new power-up
+    // stream: frames the pipeline does not estimate, or a cut frame it skips).
+    let process = |pipe: &mut pipeline::Pipeline, bytes: &[u8]| -> Flow {
+        let flow = report::feed(pipe, bytes, time::now_ms(), &mut out::row)
+            .unwrap_or_else(|e| bank_failed(&e));
         if flow == Flow::Reset && !board::RETRY_FOREVER {
             fail(Status::UnitReset)
         }
-        // All of it, the frames before the reset included (the rest is the new power-up
-        // stream: frames the pipeline does not estimate, or a cut frame it skips).
-        let changes = out::period_changes(pipe);
-        if let Err(e) = pipe.feed(bytes, &mut out::row) {
-            bank_failed(&e);
-        }
-        out::period_change(pipe, changes);
         flow
     };
     // Ends `stream` (re-configuration) or prints the periodic counters.
@@ -267,20 +241,13 @@ fn stream(
             Flow::Go => true,
             Flow::Reset => false,
             Flow::Counters(stream_s) => {
-                defmt::println!("firmware: counters after {=u32} s of stream:", stream_s);
-                out::summary(
-                    pipe,
-                    uart.overruns(),
-                    uart.stalls(),
-                    uart.bytes_read(),
-                    stack::peak(),
-                );
+                report::periodic(stream_s);
+                out::summary(pipe, uart, uart.bytes_read());
                 true
             }
         }
     };
-    let flow = process(&mut watch, pipe, pending);
-    *frames = watch.frames();
+    let flow = process(pipe, pending);
     if !after(pipe, &uart, flow) {
         return uart;
     }
@@ -304,8 +271,7 @@ fn stream(
                     fail(Status::Internal)
                 }
             };
-            let flow = process(&mut watch, pipe, &buf[..n]);
-            *frames = watch.frames();
+            let flow = process(pipe, &buf[..n]);
             if !after(pipe, &uart, flow) {
                 return uart;
             }
@@ -331,14 +297,9 @@ fn stream(
                 read
             );
             total = Some(n);
-        } else if let Some(silence) = total
-            .is_none()
-            .then(|| watch.poll(time::now_ms()))
-            .flatten()
-        {
-            // The unit went silent with the link open: configure it again (a boot that fails
-            // ends the run under QEMU and is retried with a pause on a real board).
-            report_fault(&silence);
+        } else if total.is_none() && report::silence(pipe, time::now_ms()) {
+            // The unit went silent with the link open (reported): configure it again (a boot
+            // that fails ends the run under QEMU and is retried with a pause on a real board).
             return uart;
         } else {
             // Woken by the next received byte or the 1 ms tick.
@@ -346,56 +307,6 @@ fn stream(
         }
     }
     finish(pipe, &uart, total.unwrap_or(0))
-}
-
-/// What `stream` does after a chunk of bytes.
-#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
-enum Flow {
-    /// Go on reading.
-    Go,
-    /// Print the counters (another 10 s of stream), then go on.
-    Counters(u32),
-    /// The unit reset: configure it again.
-    Reset,
-}
-
-/// The one-line diagnostic of a stream fault, at the moment it is seen.
-fn report_fault(e: &Event) {
-    match *e {
-        Event::Silence {
-            silent_ms,
-            limit_ms,
-        } => defmt::println!(
-            "firmware: stream silent: no complete frame for {=u32} ms (limit {=u32} ms); configuring the unit again",
-            silent_ms,
-            limit_ms
-        ),
-        Event::Frozen { frames, stamp_ms } => defmt::println!(
-            "firmware: time stamps frozen: {=u32} frames in a row stamped {=u32} ms",
-            frames,
-            stamp_ms
-        ),
-        Event::Thawed { frames } => defmt::println!(
-            "firmware: time stamps advance again after {=u32} frames with one stamp",
-            frames
-        ),
-        Event::RateMismatch {
-            measured_hz,
-            configured_hz,
-        } => defmt::println!(
-            "firmware: packet rate differs from the configuration: {=f32} Hz measured, {=f32} Hz configured",
-            measured_hz,
-            configured_hz
-        ),
-        Event::ForeignType { got, configured } => defmt::println!(
-            "firmware: {=str} frame received, {=str} configured",
-            got.name(),
-            configured.name()
-        ),
-        Event::Periodic { stream_s } => {
-            defmt::println!("firmware: {=u32} s of stream", stream_s)
-        }
-    }
 }
 
 /// Sends the header message (the estimated axes, `pipeline::AXES`): the host writes the CSV
@@ -407,19 +318,12 @@ fn print_header() {
 /// The CSV header has been printed (once per run, also across re-configurations).
 static HEADER_PRINTED: AtomicBool = AtomicBool::new(false);
 
-/// Bytes the pipeline has parsed (for diagnostics).
-fn uart_bytes(pipe: &pipeline::Pipeline) -> u64 {
-    pipe.front().parser_stats().bytes
-}
-
 /// Ends a finite input: the held warm-up, the counters line, exit 0.
 fn finish(pipe: &mut pipeline::Pipeline, uart: &Uart0, unit_bytes: u64) -> ! {
     // An epoch shorter than the warm-up is measured at the end of the input.
-    let changes = out::period_changes(pipe);
-    if let Err(e) = pipe.finish(&mut out::row) {
+    if let Err(e) = report::finish(pipe, &mut out::row) {
         bank_failed(&e);
     }
-    out::period_change(pipe, changes);
     let dropped = pipe.front().counters().end_dropped_bytes;
     if dropped > 0 {
         defmt::println!(
@@ -429,13 +333,7 @@ fn finish(pipe: &mut pipeline::Pipeline, uart: &Uart0, unit_bytes: u64) -> ! {
     }
     #[cfg(feature = "adaptive-gains")]
     adaptive_summary(pipe);
-    out::summary(
-        pipe,
-        uart.overruns(),
-        uart.stalls(),
-        unit_bytes,
-        stack::peak(),
-    );
+    out::summary(pipe, uart, unit_bytes);
     host::exit(true)
 }
 
@@ -488,11 +386,10 @@ fn replay(mut uart: Uart0, pipe: &mut pipeline::Pipeline) -> ! {
     while remaining > 0 {
         let want = remaining.min(buf.len());
         let n = uart.read(&mut buf[..want]).unwrap_or(0);
-        let changes = out::period_changes(pipe);
-        if let Err(e) = pipe.feed(&buf[..n], &mut out::row) {
+        // No watch is armed in replay mode: only the period change is reported.
+        if let Err(e) = report::feed(pipe, &buf[..n], 0, &mut out::row) {
             bank_failed(&e);
         }
-        out::period_change(pipe, changes);
         remaining -= n;
     }
     let replayed = uart.bytes_read().saturating_sub(8);

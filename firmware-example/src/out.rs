@@ -12,7 +12,9 @@
 //!   reference rate (deg/s, f32; 0 when absent) and the bank's channel values (in the order of
 //!   its names, f32: 14 for the paper bank, 2 for the product bank). One argument, so the transport gets one write for the
 //!   whole payload (one semihosting call instead of one per value).
-//! * diagnostics and counters: `firmware: ...` messages (see `main.rs`).
+//! * [`summary`]: the counters line; it and the other diagnostics, the stream watchdog's
+//!   included, are the `firmware: ...` messages of `nav440_pipeline::report`, shared with the
+//!   embassy firmware (see `main.rs`).
 //!
 //! The host (`cargo xtask qemu/demo/unit`, through `defmt-decoder` and the ELF's defmt table)
 //! turns each `row` message back into the exact `f32`/`f64` bits and formats the line with
@@ -91,68 +93,15 @@ pub fn row(r: &Row<Output>) {
     defmt::println!("row {=[u8]}", &buf[..]);
 }
 
-/// The count of period changes of `pipe` (`nav440_pipeline::Counters::period_changes`), to
-/// hand to [`period_change`] after the next feed.
-pub fn period_changes(pipe: &crate::pipeline::Pipeline) -> u32 {
-    pipe.estimation().counters().period_changes
-}
-
-/// Reports a new time epoch at another packet rate while it happens (a unit reset or re-boot
-/// at another rate: the pipeline measured the period on the epoch's first samples and rebuilt
-/// the banks for it) when `pipe`'s count has moved past `before` ([`period_changes`]).
-pub fn period_change(pipe: &crate::pipeline::Pipeline, before: u32) {
-    if period_changes(pipe) != before {
-        defmt::println!(
-            "firmware: new time epoch at another packet rate: nominal sample period now {=u32} us; banks rebuilt",
-            pipe.estimation().period_s().map_or(0, |p| (p * 1e6) as u32)
-        );
-    }
-}
-
-/// Sends the end-of-run counters: the `key=value` line of `nav440_pipeline::Pipeline::summary`
-/// (same keys, same order) followed by `unit_bytes` and `stack_peak` (bytes).
-pub fn summary(
-    pipe: &crate::pipeline::Pipeline,
-    uart_overruns: u32,
-    uart_stalls: u32,
-    unit_bytes: u64,
-    stack_peak: usize,
-) {
-    let s = pipe.front().parser_stats();
-    let fc = pipe.front().counters();
-    let c = pipe.estimation().counters();
-    let f = pipe.front().time_faults();
-    defmt::println!(
-        "firmware: bytes={=u64} frames={=u64} crc_errors={=u64} skipped={=u64} decode_errors={=u64} samples={=u64} rows={=u64} rejected={=u64} format_errors={=u64} uart_overruns={=u32} uart_stalls={=u32} yaw_packets={=u64} impossible={=u32} bad_backward={=u32} bad_forward={=u32} backward_jumps={=u32} kind_switches={=u32} other_kind={=u32} duplicates={=u32} gaps={=u32} near_lock={=u64} lock_passes={=u32} bit_failed={=u64} bit_flag={=str} bit_hardware_error={=u64} bit_com_error={=u64} bit_software_error={=u64} bit_last=0x{=u16:04x} unit_bytes={=u64} stack_peak={=usize}",
-        s.bytes,
-        s.frames,
-        s.crc_errors,
-        s.skipped_bytes,
-        fc.decode_errors,
-        c.samples,
-        c.rows,
-        c.rejected.total(),
-        pipe.format_errors(),
-        uart_overruns,
-        uart_stalls,
-        fc.attitude_packets,
-        f.impossible,
-        f.bad_backward,
-        f.bad_forward,
-        f.backward_jumps,
-        f.kind_switches,
-        f.other_kind,
-        f.duplicates,
-        c.gaps,
-        c.near_lock,
-        c.lock_passes,
-        fc.bit.failed,
-        nav440_pipeline::bit::FAILURE_FLAG,
-        fc.bit.hardware_error,
-        fc.bit.com_error,
-        fc.bit.software_error,
-        fc.bit.last_word,
+/// Sends the counters line ([`nav440_pipeline::report::summary`], the same in every firmware)
+/// of `pipe` with `uart`'s overruns and stalls, `unit_bytes` (bytes the unit sent, or received
+/// so far) and the stack's high-water mark ([`crate::stack::peak`]).
+pub fn summary(pipe: &crate::pipeline::Pipeline, uart: &crate::uart::Uart0, unit_bytes: u64) {
+    nav440_pipeline::report::summary(
+        pipe,
+        uart.overruns(),
+        uart.stalls(),
         unit_bytes,
-        stack_peak
+        crate::stack::peak(),
     );
 }

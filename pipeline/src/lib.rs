@@ -52,6 +52,8 @@ pub mod csv;
 pub mod euler;
 pub mod period;
 mod pipeline;
+#[cfg(feature = "defmt")]
+pub mod report;
 mod sample;
 pub mod watch;
 
@@ -60,7 +62,7 @@ pub use pipeline::{
     adaptive_axis_bank, axis_bank, AxisBank, AxisRow, BankBuilder, Counters, CsvLine, Estimation,
     Pipeline, Rejections, Row, ROW_CAPACITY,
 };
-pub use sample::{attitude, Attitude, FrontCounters, Frontend, Sample};
+pub use sample::{attitude, Attitude, FrameSeen, FrontCounters, Frontend, Sample};
 
 /// The examples of the crate README, compiled and run as doc tests.
 #[cfg(doctest)]

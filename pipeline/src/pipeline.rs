@@ -35,11 +35,13 @@
 
 use crate::period::{PeriodEstimator, WARMUP_SAMPLES};
 use crate::sample::{Frontend, Sample};
+use crate::watch::{Event, StreamWatch};
 use crate::{Axes, Axis};
 use estimators::{
     AdaptiveBank, AdaptiveConfig, Bank, BankConfig, EstimatorBank, EstimatorOutput, GainSchedule,
     PaperOutput, Real, Rows, SampleError, SqrtFn, Wrap,
 };
+use nav440_proto::{PacketRate, PacketType};
 
 /// One axis's estimator bank as the pipeline drives it: one sample (its time and epoch) and
 /// the axis's angle in, one output out.
@@ -506,13 +508,15 @@ pub const ROW_CAPACITY: usize = 1600;
 pub type CsvLine = heapless::String<ROW_CAPACITY>;
 
 /// The whole pipeline: [`Frontend`] (bytes -> frames -> BIT check -> clock -> samples) and
-/// [`Estimation`] (warm-up/period -> banks -> rows). The firmware runs it as is; `nav440
-/// estimate` runs it with its own bank type (noise, fixed point). `N`: the bank slots (see
-/// [`Estimation`]).
+/// [`Estimation`] (warm-up/period -> banks -> rows), and on a device the stream watchdog
+/// ([`StreamWatch`], armed by [`Pipeline::watch`]) fed with the front end's frames. The
+/// firmware runs it as is; `nav440 estimate` runs it with its own bank type (noise, fixed
+/// point) and no watch. `N`: the bank slots (see [`Estimation`]).
 pub struct Pipeline<B, E, F, const N: usize = 3> {
     front: Frontend,
     est: Estimation<B, E, F, N>,
     format_errors: u64,
+    watch: Option<StreamWatch>,
 }
 
 impl<B, E, F, const N: usize> core::fmt::Debug for Pipeline<B, E, F, N> {
@@ -520,6 +524,7 @@ impl<B, E, F, const N: usize> core::fmt::Debug for Pipeline<B, E, F, N> {
         f.debug_struct("Pipeline")
             .field("front", &self.front)
             .field("est", &self.est)
+            .field("watch", &self.watch)
             .finish()
     }
 }
@@ -532,20 +537,79 @@ impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize> Pipeline<B, E,
             front: Frontend::new(),
             est: Estimation::with_slots(axes, cfg, build),
             format_errors: 0,
+            watch: None,
         }
     }
 
     /// Feeds received bytes; `emit` gets every row in order. Fails (now and on every later
-    /// call) if a bank cannot be built for the measured packet period.
+    /// call) if a bank cannot be built for the measured packet period. The stream watchdog,
+    /// if armed, does not see these bytes (a device feeds them with [`Pipeline::feed_watched`]).
     pub fn feed(&mut self, bytes: &[u8], emit: &mut dyn FnMut(&Row<B::Output>)) -> Result<(), E> {
-        let Self { front, est, .. } = self;
+        self.feed_inner(bytes, None, emit)
+    }
+
+    /// [`Pipeline::feed`] of bytes received at `now_ms` (a free-running millisecond clock,
+    /// wrapping) with the stream watchdog: every frame the front end parses goes to the watch
+    /// armed by [`Pipeline::watch`] (none armed: no event), and `on_event` gets what it
+    /// reports at the frame where it is seen ([`StreamWatch::frame`]), in stream order with
+    /// the rows.
+    pub fn feed_watched(
+        &mut self,
+        bytes: &[u8],
+        now_ms: u32,
+        emit: &mut dyn FnMut(&Row<B::Output>),
+        on_event: &mut dyn FnMut(Event),
+    ) -> Result<(), E> {
+        self.feed_inner(bytes, Some((now_ms, on_event)), emit)
+    }
+
+    /// The one parse of [`Pipeline::feed`] and [`Pipeline::feed_watched`]: frames to the
+    /// watch (with `watched`'s time and event sink), samples to the back end.
+    fn feed_inner(
+        &mut self,
+        bytes: &[u8],
+        watched: Option<(u32, &mut dyn FnMut(Event))>,
+        emit: &mut dyn FnMut(&Row<B::Output>),
+    ) -> Result<(), E> {
+        let Self {
+            front, est, watch, ..
+        } = self;
+        let mut watched =
+            watched.and_then(|(now_ms, on_event)| Some((watch.as_mut()?, now_ms, on_event)));
         let mut res = Ok(());
-        front.feed(bytes, |s| {
-            if res.is_ok() {
-                res = est.push(s, emit);
-            }
-        });
+        front.feed_frames(
+            bytes,
+            |frame| {
+                if let Some((w, now_ms, on_event)) = watched.as_mut() {
+                    w.frame(frame, *now_ms, &mut **on_event);
+                }
+            },
+            |s| {
+                if res.is_ok() {
+                    res = est.push(s, emit);
+                }
+            },
+        );
         res
+    }
+
+    /// Arms the stream watchdog at `now_ms` for a unit configured to stream `packet` at
+    /// `rate` (after every configuration; see [`crate::watch`]). Its periodic reports'
+    /// stream time continues from the watch it replaces (across re-configurations).
+    pub fn watch(&mut self, packet: PacketType, rate: PacketRate, now_ms: u32) {
+        let frames = self.watch.as_ref().map_or(0, StreamWatch::frames);
+        self.watch = Some(StreamWatch::new(packet, rate, now_ms).continuing(frames));
+    }
+
+    /// The stream watchdog, once armed ([`Pipeline::watch`]).
+    pub fn stream_watch(&self) -> Option<&StreamWatch> {
+        self.watch.as_ref()
+    }
+
+    /// Checks the armed watch for silence at `now_ms` ([`StreamWatch::poll`]: at most one
+    /// [`Event::Silence`] per silence; `None` without a watch).
+    pub fn poll_watch(&mut self, now_ms: u32) -> Option<Event> {
+        self.watch.as_mut()?.poll(now_ms)
     }
 
     /// End of a finite input: the sample the clock holds, and a stream shorter than the

@@ -4,7 +4,9 @@
 use crate::bit::BitCounts;
 use crate::euler::euler_rates_deg;
 use crate::Axis;
-use nav440_proto::{Bit, Frame, Packet, Parser, TimeBase, TimeFaults, TimeStamp, Timed};
+use nav440_proto::{
+    Bit, Frame, Packet, PacketType, Parser, TimeBase, TimeFaults, TimeStamp, Timed,
+};
 
 /// What the pipeline takes from a packet that carries the attitude.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -129,24 +131,50 @@ pub struct FrontCounters {
     pub end_dropped_bytes: u64,
 }
 
-/// One CRC-valid frame through the decoder, the BIT check and the time base.
+/// One CRC-valid frame as the front end sees it, before the BIT and time rules: what the
+/// stream watchdog ([`crate::watch::StreamWatch`]) consumes ([`Frontend::feed_frames`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FrameSeen {
+    /// The frame's packet type.
+    pub packet_type: PacketType,
+    /// The time stamp of a packet that carries the attitude (A0/A1/A2/N0/N1/B1); `None` for
+    /// another packet or a frame that does not decode.
+    pub time: Option<TimeStamp>,
+}
+
+/// One CRC-valid frame through the decoder, the BIT check and the time base; `seen` gets
+/// the frame first.
 fn on_frame(
     frame: Frame<'_>,
     clock: &mut TimeBase<Payload>,
     counters: &mut FrontCounters,
+    seen: &mut impl FnMut(&FrameSeen),
     out: &mut impl FnMut(Sample),
 ) {
     counters.frames = counters.frames.saturating_add(1);
+    let packet_type = frame.packet_type;
     let packet = match Packet::decode(frame) {
         Ok(p) => p,
         Err(_) => {
             counters.decode_errors = counters.decode_errors.saturating_add(1);
+            seen(&FrameSeen {
+                packet_type,
+                time: None,
+            });
             return;
         }
     };
     let Some(a) = attitude(&packet) else {
+        seen(&FrameSeen {
+            packet_type,
+            time: None,
+        });
         return;
     };
+    seen(&FrameSeen {
+        packet_type,
+        time: Some(a.time),
+    });
     counters.attitude_packets = counters.attitude_packets.saturating_add(1);
     if counters.bit.check(a.bit) {
         return;
@@ -174,13 +202,26 @@ impl Frontend {
     }
 
     /// Feeds bytes; `out` gets every sample released.
-    pub fn feed(&mut self, bytes: &[u8], mut out: impl FnMut(Sample)) {
+    pub fn feed(&mut self, bytes: &[u8], out: impl FnMut(Sample)) {
+        self.feed_frames(bytes, |_| {}, out);
+    }
+
+    /// [`Frontend::feed`] that also reports every CRC-valid frame to `seen` (in stream order,
+    /// before the samples it releases): the one parse the stream watchdog consumes.
+    pub fn feed_frames(
+        &mut self,
+        bytes: &[u8],
+        mut seen: impl FnMut(&FrameSeen),
+        mut out: impl FnMut(Sample),
+    ) {
         let Self {
             parser,
             clock,
             counters,
         } = self;
-        parser.feed(bytes, |frame| on_frame(frame, clock, counters, &mut out));
+        parser.feed(bytes, |frame| {
+            on_frame(frame, clock, counters, &mut seen, &mut out)
+        });
     }
 
     /// End of input: resolves a frame the parser still holds (complete frames behind a false
@@ -193,7 +234,8 @@ impl Frontend {
             clock,
             counters,
         } = self;
-        let dropped = parser.finish(|frame| on_frame(frame, clock, counters, &mut out));
+        let dropped =
+            parser.finish(|frame| on_frame(frame, clock, counters, &mut |_| {}, &mut out));
         counters.end_dropped_bytes = counters.end_dropped_bytes.saturating_add(dropped as u64);
         if let Some(t) = clock.finish() {
             counters.samples = counters.samples.saturating_add(1);

@@ -1,7 +1,9 @@
 //! Stream watchdog: what a device notices about a configured unit's stream while it runs.
 //!
-//! [`StreamWatch`] parses the bytes the pipeline gets (its own parser, so it sees every frame
-//! whatever the pipeline does with it) and reports, each at the moment it is seen:
+//! [`StreamWatch`] consumes the frames the pipeline's front end parses ([`crate::FrameSeen`]:
+//! every CRC-valid frame's type and, for an attitude packet, its time stamp; one parser for
+//! the estimates and the watch). Armed with [`crate::Pipeline::watch`], it is fed by
+//! [`crate::Pipeline::feed_watched`] and reports, each at the moment it is seen:
 //!
 //! * **silence**: no complete frame for [`StreamWatch::silence_limit_ms`] =
 //!   max([`MIN_SILENCE_MS`], [`PERIODS`] nominal periods) ([`StreamWatch::poll`]);
@@ -17,7 +19,8 @@
 //! Time comes from the caller as a free-running millisecond counter (`now_ms`, wrapping).
 
 use crate::period::PeriodEstimator;
-use nav440_proto::{Packet, PacketRate, PacketType, Parser, TimeStamp};
+use crate::FrameSeen;
+use nav440_proto::{PacketRate, PacketType, TimeStamp};
 
 /// The shortest silence reported, ms.
 pub const MIN_SILENCE_MS: u32 = 500;
@@ -77,7 +80,6 @@ pub enum Event {
 /// The stream watchdog of one configured stream (see the [module](self) doc).
 #[derive(Debug)]
 pub struct StreamWatch {
-    parser: Parser,
     packet: PacketType,
     rate: PacketRate,
     last_frame_ms: u32,
@@ -88,13 +90,19 @@ pub struct StreamWatch {
     rate_checked: bool,
     foreign_reported: bool,
     frames: u64,
+    /// Frames of the configured type per periodic report ([`COUNTER_INTERVAL_S`] s).
+    every: u32,
+    /// Frames of the configured type until the next periodic report (a count-down: no
+    /// division per frame).
+    to_periodic: u32,
 }
 
 impl StreamWatch {
     /// A watch of a stream of `packet` at `rate`, started at `now_ms`.
     pub fn new(packet: PacketType, rate: PacketRate, now_ms: u32) -> Self {
+        let period_ms = 10 * u32::from(rate.divider().max(1));
+        let every = (COUNTER_INTERVAL_S * 1000 / period_ms).max(1);
         Self {
-            parser: Parser::new(),
             packet,
             rate,
             last_frame_ms: now_ms,
@@ -105,6 +113,8 @@ impl StreamWatch {
             rate_checked: false,
             foreign_reported: false,
             frames: 0,
+            every,
+            to_periodic: every,
         }
     }
 
@@ -120,83 +130,66 @@ impl StreamWatch {
         (PERIODS * self.period_ms()).max(MIN_SILENCE_MS)
     }
 
-    /// Feeds received bytes at time `now_ms`; `on_event` gets what they show, in order.
-    pub fn feed(&mut self, bytes: &[u8], now_ms: u32, mut on_event: impl FnMut(Event)) {
-        let Self {
-            parser,
-            packet,
-            rate,
-            last_frame_ms,
-            silence_reported,
-            last_stamp,
-            frozen_run,
-            period,
-            rate_checked,
-            foreign_reported,
-            frames,
-        } = self;
-        let period_ms = 10 * u32::from(rate.divider().max(1));
-        parser.feed(bytes, |frame| {
-            *last_frame_ms = now_ms;
-            *silence_reported = false;
-            if frame.packet_type != *packet {
-                if !*foreign_reported {
-                    *foreign_reported = true;
-                    on_event(Event::ForeignType {
-                        got: frame.packet_type,
-                        configured: *packet,
-                    });
-                }
-                return;
-            }
-            *frames = frames.saturating_add(1);
-            let every = u64::from(COUNTER_INTERVAL_S * 1000 / period_ms).max(1);
-            if *frames % every == 0 {
-                let stream_s = (*frames / every).saturating_mul(u64::from(COUNTER_INTERVAL_S));
-                on_event(Event::Periodic {
-                    stream_s: u32::try_from(stream_s).unwrap_or(u32::MAX),
+    /// Takes one frame the front end parsed, complete at `now_ms`; `on_event` gets what it
+    /// shows, in order.
+    pub fn frame(&mut self, frame: &FrameSeen, now_ms: u32, mut on_event: impl FnMut(Event)) {
+        self.last_frame_ms = now_ms;
+        self.silence_reported = false;
+        if frame.packet_type != self.packet {
+            if !self.foreign_reported {
+                self.foreign_reported = true;
+                on_event(Event::ForeignType {
+                    got: frame.packet_type,
+                    configured: self.packet,
                 });
             }
-            let stamp = Packet::decode(frame)
-                .ok()
-                .and_then(|p| crate::attitude(&p))
-                .map(|a| a.time);
-            let Some(stamp) = stamp.filter(|s| *s != TimeStamp::None) else {
-                return;
-            };
-            if *last_stamp == Some(stamp) {
-                *frozen_run = frozen_run.saturating_add(1);
-                if *frozen_run == PERIODS {
-                    on_event(Event::Frozen {
-                        frames: *frozen_run,
-                        stamp_ms: stamp_ms(stamp),
-                    });
-                }
-                return;
-            }
-            if *frozen_run >= PERIODS {
-                on_event(Event::Thawed {
-                    frames: *frozen_run,
+            return;
+        }
+        self.frames = self.frames.saturating_add(1);
+        self.to_periodic -= 1;
+        if self.to_periodic == 0 {
+            self.to_periodic = self.every;
+            let stream_s =
+                (self.frames / u64::from(self.every)).saturating_mul(u64::from(COUNTER_INTERVAL_S));
+            on_event(Event::Periodic {
+                stream_s: u32::try_from(stream_s).unwrap_or(u32::MAX),
+            });
+        }
+        let Some(stamp) = frame.time.filter(|s| *s != TimeStamp::None) else {
+            return;
+        };
+        if self.last_stamp == Some(stamp) {
+            self.frozen_run = self.frozen_run.saturating_add(1);
+            if self.frozen_run == PERIODS {
+                on_event(Event::Frozen {
+                    frames: self.frozen_run,
+                    stamp_ms: stamp_ms(stamp),
                 });
             }
-            *frozen_run = 1;
-            *last_stamp = Some(stamp);
-            if !*rate_checked {
-                period.push(u64::from(stamp_ms(stamp)) * 1000);
-                if period.is_complete() {
-                    *rate_checked = true;
-                    if let Some(p) = period.period_s().filter(|p| *p > 0.0) {
-                        let configured_s = period_ms as f32 * 1e-3;
-                        if ((p - configured_s) / configured_s).abs() > RATE_TOLERANCE {
-                            on_event(Event::RateMismatch {
-                                measured_hz: 1.0 / p,
-                                configured_hz: rate.hz(),
-                            });
-                        }
+            return;
+        }
+        if self.frozen_run >= PERIODS {
+            on_event(Event::Thawed {
+                frames: self.frozen_run,
+            });
+        }
+        self.frozen_run = 1;
+        self.last_stamp = Some(stamp);
+        if !self.rate_checked {
+            self.period.push(u64::from(stamp_ms(stamp)) * 1000);
+            if self.period.is_complete() {
+                self.rate_checked = true;
+                if let Some(p) = self.period.period_s().filter(|p| *p > 0.0) {
+                    let configured_s = self.period_ms() as f32 * 1e-3;
+                    if ((p - configured_s) / configured_s).abs() > RATE_TOLERANCE {
+                        on_event(Event::RateMismatch {
+                            measured_hz: 1.0 / p,
+                            configured_hz: self.rate.hz(),
+                        });
                     }
                 }
             }
-        });
+        }
     }
 
     /// Checks for silence at time `now_ms`: [`Event::Silence`] once per silence (a frame ends
@@ -223,6 +216,8 @@ impl StreamWatch {
     /// the same stream (e.g. before a re-configuration): the periodic reports keep counting.
     pub fn continuing(mut self, frames: u64) -> Self {
         self.frames = frames;
+        // Cannot be 0: `frames % every < every`.
+        self.to_periodic = self.every - (frames % u64::from(self.every)) as u32;
         self
     }
 }

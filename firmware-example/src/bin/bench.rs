@@ -158,12 +158,19 @@ fn frames_mean<R>(
 
 /// Instructions per A2 frame through the firmware's whole pipeline (`pipeline::new()`:
 /// parser, attitude and BIT, clock, one bank per axis of `pipeline::AXES` with the Euler
-/// reference, the defmt row message), after the period warm-up and [`WARMUP`] more frames.
+/// reference, the defmt row message) with its stream watchdog armed for A2 at 100 Hz
+/// (`Pipeline::feed_watched`, as the firmware streams), after the period warm-up and
+/// [`WARMUP`] more frames.
 fn pipeline_per_frame(c: &Counter, overhead: u64) {
     if firmware_example::pipeline::check().is_err() {
         fail("the pipeline")
     }
     let mut pipe = firmware_example::pipeline::new();
+    pipe.watch(
+        nav440_proto::PacketType::A2,
+        nav440_proto::PacketRate::Hz100,
+        0,
+    );
     let warm = nav440_pipeline::period::WARMUP_SAMPLES as u32 + WARMUP;
     let mut rows = 0u32;
     let per_frame = frames_mean(
@@ -171,10 +178,17 @@ fn pipeline_per_frame(c: &Counter, overhead: u64) {
         overhead,
         warm,
         |frame| {
-            black_box(&mut pipe).feed(black_box(frame), &mut |row| {
-                firmware_example::out::row(black_box(row));
-                rows += 1;
-            })
+            black_box(&mut pipe).feed_watched(
+                black_box(frame),
+                0,
+                &mut |row| {
+                    firmware_example::out::row(black_box(row));
+                    rows += 1;
+                },
+                &mut |e| {
+                    black_box(e);
+                },
+            )
         },
         |res| {
             if res.is_err() {
@@ -187,7 +201,7 @@ fn pipeline_per_frame(c: &Counter, overhead: u64) {
     }
     line(
         "instr",
-        "pipeline, A2 frame: parse+clock+AXES banks+Euler+defmt row",
+        "pipeline, A2 frame: parse+clock+AXES banks+Euler+defmt row+watch",
         per_frame,
         "sample",
     );

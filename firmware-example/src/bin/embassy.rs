@@ -1,6 +1,10 @@
 //! The embassy example: an `embassy-executor` task configures the NAV440 with the async
 //! driver (`nav440_proto::boot::boot_async`), then estimates from its stream, printing the same
-//! CSV rows as the blocking firmware (`src/main.rs`).
+//! CSV rows as the blocking firmware (`src/main.rs`). The pipeline's stream watchdog reports
+//! with the blocking firmware's messages (`nav440_pipeline::report`): a silence, frozen time
+//! stamps, another packet rate or type, the counters every 10 s of stream. After a silence the
+//! unit is configured again (a boot that fails exits with status 2); a frame of another type
+//! (a unit reset) ends the run with status 5, as on the blocking firmware's emulated boards.
 //!
 //! Build: `cargo build -p firmware-example --release --target thumbv7em-none-eabihf
 //! --features embassy --bin embassy`. Run against the simulated unit on QEMU `mps2-an386`:
@@ -27,7 +31,8 @@ use core::task::Poll;
 
 use embassy_executor::Spawner;
 use firmware_example::uart::{Board, EndMessage, Uart0};
-use firmware_example::{host, out, pipeline, stack, time};
+use firmware_example::{board, host, out, pipeline, time};
+use nav440_pipeline::report::{self, Flow};
 use nav440_proto::boot::{self, Options, Target};
 use nav440_proto::driver::{AsyncDriver, Timing};
 use nav440_proto::Baud;
@@ -118,89 +123,112 @@ async fn main(_spawner: Spawner) {
         fail(1, format_args!("bank configuration rejected: {e:?}"))
     }
     let mut pipe = pipeline::new();
-
-    // 1. Configure the unit: the async driver, the same sequence as the blocking firmware.
-    let mut driver = AsyncDriver::new(AsyncUart(nav));
-    driver.set_timing(Timing {
-        reply_timeout_ms: 500,
-        ..Timing::DEFAULT
-    });
-    let set_baud = |u: &mut AsyncUart, b: Baud| {
-        u.0.set_baud(b.bits_per_second())
-            .map_err(firmware_example::uart::Error::from)
-    };
-    let report = match boot::boot_async(
-        &mut driver,
-        &TARGET,
-        &Options::DEFAULT,
-        &mut TickDelay,
-        set_baud,
-    )
-    .await
-    {
-        Ok(r) => r,
-        Err(e) => fail(2, format_args!("boot failed: {e}")),
-    };
-    host::stderr(format_args!(
-        "firmware: unit configured (embassy, async driver): {} at {} Bd (unit was at {} Bd); boot_frames={} boot_ms={}\n",
-        TARGET.packet,
-        report.baud.bits_per_second(),
-        report.unit_baud.bits_per_second(),
-        report.unsolicited_frames,
-        time::now_ms(),
-    ));
-
-    // 2. Estimate from the first byte after the read-back until the harness's byte count.
-    // The rows as defmt messages, like the blocking firmware (`firmware_example::out`).
-    out::header();
-    let mut emit = out::row;
-    if let Err(e) = pipe.feed(driver.pending_bytes(), &mut emit) {
-        fail(1, format_args!("bank: {e:?}"))
-    }
-    let mut uart = driver.release();
+    let mut uart = AsyncUart(nav);
     let mut end = EndMessage::default();
     let mut total: Option<u64> = None;
-    let mut buf = [0u8; 64];
+    let mut first = true;
     loop {
-        let read = uart.0.bytes_read();
-        if total.is_some_and(|n| read >= n) {
-            break;
+        // 1. Configure the unit: the async driver, the same sequence as the blocking firmware.
+        let mut driver = AsyncDriver::new(uart);
+        driver.set_timing(Timing {
+            reply_timeout_ms: 500,
+            ..Timing::DEFAULT
+        });
+        let set_baud = |u: &mut AsyncUart, b: Baud| {
+            u.0.set_baud(b.bits_per_second())
+                .map_err(firmware_example::uart::Error::from)
+        };
+        let report = match boot::boot_async(
+            &mut driver,
+            &TARGET,
+            &Options::DEFAULT,
+            &mut TickDelay,
+            set_baud,
+        )
+        .await
+        {
+            Ok(r) => r,
+            Err(e) => fail(2, format_args!("boot failed: {e}")),
+        };
+        host::stderr(format_args!(
+            "firmware: unit configured (embassy, async driver): {} at {} Bd (unit was at {} Bd); boot_frames={} boot_ms={}\n",
+            TARGET.packet,
+            report.baud.bits_per_second(),
+            report.unit_baud.bits_per_second(),
+            report.unsolicited_frames,
+            time::now_ms(),
+        ));
+
+        // 2. Estimate from the first byte after the read-back until the harness's byte count,
+        // or until the watchdog sees a silence (configure again). The rows as defmt messages,
+        // like the blocking firmware (`firmware_example::out`), the header once.
+        if first {
+            out::header();
+            first = false;
         }
-        if embedded_io::ReadReady::read_ready(&mut uart).unwrap_or(false) {
-            let room = total.map_or(buf.len() as u64, |n| n - read);
-            let want = (buf.len() as u64).min(room) as usize;
-            let n = match embedded_io_async::Read::read(&mut uart, &mut buf[..want]).await {
-                Ok(n) => n,
-                Err(e) => fail(1, format_args!("UART error: {e:?}")),
-            };
-            let changes = out::period_changes(&pipe);
-            if let Err(e) = pipe.feed(&buf[..n], &mut emit) {
-                fail(1, format_args!("bank: {e:?}"))
+        pipe.watch(TARGET.packet, TARGET.rate, time::now_ms());
+        let mut pending = [0u8; nav440_proto::MAX_FRAME];
+        let n = driver.pending_bytes().len().min(pending.len());
+        pending[..n].copy_from_slice(&driver.pending_bytes()[..n]);
+        uart = driver.release();
+        if !process(&mut pipe, &pending[..n], &uart.0) {
+            continue;
+        }
+        let mut buf = [0u8; 64];
+        loop {
+            let read = uart.0.bytes_read();
+            if total.is_some_and(|n| read >= n) {
+                finish(&mut pipe, &uart.0, total.unwrap_or(0))
             }
-            out::period_change(&pipe, changes);
-        } else if let Some(message) = total.is_none().then(|| end.poll(&mut control)).flatten() {
-            total = Some(
-                message.unwrap_or_else(|m| fail(1, format_args!("bad control message {m:02x?}"))),
-            );
-        } else {
-            embassy_futures::yield_now().await;
+            if embedded_io::ReadReady::read_ready(&mut uart).unwrap_or(false) {
+                let room = total.map_or(buf.len() as u64, |n| n - read);
+                let want = (buf.len() as u64).min(room) as usize;
+                let n = match embedded_io_async::Read::read(&mut uart, &mut buf[..want]).await {
+                    Ok(n) => n,
+                    Err(e) => fail(1, format_args!("UART error: {e:?}")),
+                };
+                if !process(&mut pipe, &buf[..n], &uart.0) {
+                    break;
+                }
+            } else if let Some(message) = total.is_none().then(|| end.poll(&mut control)).flatten()
+            {
+                total = Some(
+                    message
+                        .unwrap_or_else(|m| fail(1, format_args!("bad control message {m:02x?}"))),
+                );
+            } else if total.is_none() && report::silence(&mut pipe, time::now_ms()) {
+                // The unit went silent with the link open (reported): configure it again.
+                break;
+            } else {
+                embassy_futures::yield_now().await;
+            }
         }
     }
-    finish(&mut pipe, &uart.0, total.unwrap_or(0))
+}
+
+/// Feeds received bytes through the pipeline and its watch (`nav440_pipeline::report::feed`:
+/// rows, and every stream fault as it is seen); prints the counters every 10 s of stream.
+/// `false`: the unit reset (another packet type), configure it again (the emulated board ends
+/// the run with status 5, as the blocking firmware does).
+fn process(pipe: &mut pipeline::Pipeline, bytes: &[u8], uart: &Uart0) -> bool {
+    let flow = report::feed(pipe, bytes, time::now_ms(), &mut out::row)
+        .unwrap_or_else(|e| fail(1, format_args!("bank: {e:?}")));
+    match flow {
+        Flow::Go => true,
+        Flow::Counters(stream_s) => {
+            report::periodic(stream_s);
+            out::summary(pipe, uart, uart.bytes_read());
+            true
+        }
+        Flow::Reset if board::RETRY_FOREVER => false,
+        Flow::Reset => host::exit_code(5),
+    }
 }
 
 fn finish(pipe: &mut pipeline::Pipeline, uart: &Uart0, unit_bytes: u64) -> ! {
-    let changes = out::period_changes(pipe);
-    if let Err(e) = pipe.finish(&mut out::row) {
+    if let Err(e) = report::finish(pipe, &mut out::row) {
         fail(1, format_args!("bank: {e:?}"))
     }
-    out::period_change(pipe, changes);
-    out::summary(
-        pipe,
-        uart.overruns(),
-        uart.stalls(),
-        unit_bytes,
-        stack::peak(),
-    );
+    out::summary(pipe, uart, unit_bytes);
     host::exit(true)
 }

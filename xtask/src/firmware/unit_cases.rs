@@ -43,6 +43,42 @@ struct UnitCase {
 /// The simulator's session limit in CI (it exits 1 if a session lasts longer).
 const SIM_TIMEOUT: &str = "120";
 
+/// The unit silent for ever with the link open after 20 packets: reported within 0.5 s, then
+/// the boot finds no unit (the run ends by itself with status 2, not by the harness's time
+/// limit): the simulator's arguments and the firmware's diagnostic.
+const SILENCE: (&[&str], &str) = (
+    &["--fast", "--fault", "silence", "--reset-after", "20"],
+    "stream silent: no complete frame for",
+);
+
+/// Silent for 1 s after 20 packets, at the commanded rate in wall time (with --fast the unit
+/// would stream the rest of the capture and close while the firmware still pings it):
+/// reported at 0.5 s; the boot's first ping baud (3 x 500 ms) then finds the unit again.
+const SILENCE_1S: (&[&str], &str) = (
+    &[
+        "--fault",
+        "silence",
+        "--reset-after",
+        "20",
+        "--silence",
+        "1",
+    ],
+    "firmware: stream silent: no complete frame for",
+);
+
+/// Time stamps frozen for 50 packets after 20: reported, and the CSV identical to `nav440
+/// estimate` on the record.
+const FREEZE: (&[&str], &str) = (
+    &["--fast", "--fault", "freeze", "--reset-after", "20"],
+    "firmware: time stamps frozen: 25 frames in a row",
+);
+
+/// A reset after 20 packets (frames of another type follow): status 5 on the emulated boards.
+const RESET: (&[&str], &str) = (
+    &["--fast", "--fault", "reset", "--reset-after", "20"],
+    "unit reset mid-stream",
+);
+
 /// Runs one case on `board`; Ok(description) or Err(what went wrong).
 fn unit_case(
     board: &Board,
@@ -248,20 +284,8 @@ pub(super) fn unit_ci(
                 4,
                 "wrong read-back (GF)",
             ),
-            (
-                "reset",
-                &["--fast", "--fault", "reset", "--reset-after", "20"],
-                5,
-                "unit reset mid-stream",
-            ),
-            // Silent for ever with the link open: reported within 0.5 s, then the boot
-            // finds no unit (the run ends by itself, not by the harness's time limit).
-            (
-                "silence",
-                &["--fast", "--fault", "silence", "--reset-after", "20"],
-                2,
-                "stream silent: no complete frame for",
-            ),
+            ("reset", RESET.0, 5, RESET.1),
+            ("silence", SILENCE.0, 2, SILENCE.1),
         ];
         for (name, sim_args, status, diagnostic) in faults {
             let expect = match (stm32, name) {
@@ -285,11 +309,7 @@ pub(super) fn unit_ci(
         // frozen for 50 packets, a stream at twice the configured rate (CSV identical to
         // `nav440 estimate` on the record), a silence of 1 s (configured again, exit 0).
         for (name, sim_args, stderr_has) in [
-            (
-                "freeze",
-                &["--fast", "--fault", "freeze", "--reset-after", "20"][..],
-                "firmware: time stamps frozen: 25 frames in a row",
-            ),
+            ("freeze", FREEZE.0, FREEZE.1),
             (
                 "double-rate",
                 &["--fast", "--fault", "double-rate"][..],
@@ -303,22 +323,12 @@ pub(super) fn unit_ci(
                 expect: Expect::Csv { stderr_has },
             });
         }
-        // At the commanded rate in wall time (with --fast the unit would stream the rest of
-        // the capture and close while the firmware still pings it): silent 1 s, reported at
-        // 0.5 s; the boot's first ping baud (3 x 500 ms) then finds the unit again.
         cases.push(UnitCase {
             name: "silence-1s",
             capture: short.clone(),
-            sim_args: &[
-                "--fault",
-                "silence",
-                "--reset-after",
-                "20",
-                "--silence",
-                "1",
-            ],
+            sim_args: SILENCE_1S.0,
             expect: Expect::Reconfigures {
-                report: "firmware: stream silent: no complete frame for",
+                report: SILENCE_1S.1,
             },
         });
         for case in cases {
@@ -357,7 +367,8 @@ pub(super) const EMBASSY_STEP: &str = "embassy example runs (pool)";
 /// `cargo xtask embassy`: the embassy example (`firmware-example/src/bin/embassy.rs`, an
 /// embassy-executor task with nav440-proto's async driver) linted, built for thumbv7em and run
 /// on QEMU `mps2-an386` against `nav440 sim`: every bundled capture (CSV identical to `nav440
-/// estimate` on what the unit streamed after configuration) and a unit that never answers.
+/// estimate` on what the unit streamed after configuration), a unit that never answers, and the
+/// stream watchdog's cases of the blocking firmware (silence, frozen stamps, a reset).
 pub fn embassy() -> Result<(), String> {
     let start = std::time::Instant::now();
     let pool = Pool::new(super::POOL_THREADS, crate::steps::Steps::new(&root()))?;
@@ -417,11 +428,48 @@ pub fn embassy_jobs(pool: &Pool) -> Result<(), String> {
     });
     cases.push(UnitCase {
         name: "embassy-no-answer",
-        capture: root().join("host-tests/data/sin5_a2_25hz_weekwrap.bin"),
+        capture: short_capture(),
         sim_args: &["--fault", "no-answer"],
         expect: Expect::Fails {
             status: 2,
             diagnostic: "boot failed: no answer from the unit",
+        },
+    });
+    // The stream watchdog, as on the blocking firmware's emulated boards: a unit silent for
+    // ever (reported, then the boot finds no unit: status 2), silent for 1 s (reported,
+    // configured again, exit 0), frozen time stamps (reported, CSV = host), a reset (status 5).
+    cases.push(UnitCase {
+        name: "embassy-silence",
+        capture: short_capture(),
+        sim_args: SILENCE.0,
+        expect: Expect::Fails {
+            status: 2,
+            diagnostic: SILENCE.1,
+        },
+    });
+    cases.push(UnitCase {
+        name: "embassy-silence-1s",
+        capture: short_capture(),
+        sim_args: SILENCE_1S.0,
+        expect: Expect::Reconfigures {
+            report: SILENCE_1S.1,
+        },
+    });
+    cases.push(UnitCase {
+        name: "embassy-freeze",
+        capture: short_capture(),
+        sim_args: FREEZE.0,
+        expect: Expect::Csv {
+            stderr_has: FREEZE.1,
+        },
+    });
+    cases.push(UnitCase {
+        name: "embassy-reset",
+        capture: short_capture(),
+        sim_args: RESET.0,
+        expect: Expect::Fails {
+            status: 5,
+            diagnostic: RESET.1,
         },
     });
     for case in cases {
