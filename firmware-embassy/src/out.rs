@@ -45,12 +45,19 @@ pub fn pipeline() -> Pipeline {
     Pipeline::with_slots(Axes::ALL, BankConfig::NAV440, build_bank)
 }
 
+/// The bank's channel names.
+const NAMES: &[&str] = <Output as EstimatorOutput>::CHANNEL_NAMES;
+/// [`NAMES`] joined with `,` (the CSV columns), built at compile time.
+const COLUMN_BYTES: [u8; estimators::columns_len(NAMES)] = estimators::join_columns(NAMES);
+/// [`COLUMN_BYTES`] as text.
+const COLUMNS: &str = match core::str::from_utf8(&COLUMN_BYTES) {
+    Ok(s) => s,
+    Err(_) => panic!("the channel names are not UTF-8"),
+};
+
 /// Sends the header message: the channels of one axis's block.
 pub fn header() {
-    defmt::println!(
-        "header angle_deg,{}",
-        <Output as EstimatorOutput>::CSV_COLUMNS
-    );
+    defmt::println!("header angle_deg,{=str}", COLUMNS);
 }
 
 /// Sends one sample's row message (see the module doc).

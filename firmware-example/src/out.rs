@@ -63,6 +63,16 @@ fn put_axis(dst: &mut [u8; AXIS_BYTES], a: &AxisRow<Output>) {
     }
 }
 
+/// The bank's channel names.
+const NAMES: &[&str] = <Output as EstimatorOutput>::CHANNEL_NAMES;
+/// [`NAMES`] joined with `,` (the CSV columns), built at compile time.
+const COLUMN_BYTES: [u8; estimators::columns_len(NAMES)] = estimators::join_columns(NAMES);
+/// [`COLUMN_BYTES`] as text.
+const COLUMNS: &str = match core::str::from_utf8(&COLUMN_BYTES) {
+    Ok(s) => s,
+    Err(_) => panic!("the channel names are not UTF-8"),
+};
+
 /// Sends the header message: the axes of the rows (bit mask roll=1, pitch=2, yaw=4) and the
 /// bank's channel names (its CSV columns, comma-separated).
 pub fn header() {
@@ -70,11 +80,7 @@ pub fn header() {
     for a in AXES.iter() {
         mask |= 1 << a.index();
     }
-    defmt::println!(
-        "header {=u8} {}",
-        mask,
-        <Output as EstimatorOutput>::CSV_COLUMNS
-    );
+    defmt::println!("header {=u8} {=str}", mask, COLUMNS);
 }
 
 /// Sends one sample's row message: one block per axis of [`AXES`], [`NO_ESTIMATE`] for an

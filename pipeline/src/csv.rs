@@ -27,9 +27,9 @@
 //! assert_eq!(s, csv::HEADER);
 //! ```
 
-use crate::{Axes, AxisBank, AxisRow, Row};
+use crate::{Axes, AxisRow, Row};
 use core::fmt::Write;
-use estimators::{EstimatorOutput, PaperOutput};
+use estimators::{EstimatorBank, EstimatorOutput, PaperOutput};
 
 /// The header line of the paper bank's yaw axis alone (without line terminator): the default
 /// of `nav440 estimate` (`write_header::<PaperBank<_>>(w, Axes::only(Axis::Yaw))`), built at
@@ -74,9 +74,12 @@ const fn yaw_header(names: &[&str]) -> ([u8; 256], usize) {
 }
 
 /// Writes the header line (without line terminator) of the rows of `axes` from the bank `B`
-/// (any [`AxisBank`], e.g. an `estimators::EstimatorBank`): the column names are its
+/// (any `estimators::EstimatorBank`): the column names are its
 /// output's channel names ([`EstimatorOutput::CHANNEL_NAMES`]).
-pub fn write_header<B: AxisBank + ?Sized>(w: &mut impl Write, axes: Axes) -> core::fmt::Result {
+pub fn write_header<B: EstimatorBank + ?Sized>(
+    w: &mut impl Write,
+    axes: Axes,
+) -> core::fmt::Result {
     write_header_of::<B::Output>(w, axes)
 }
 

@@ -59,8 +59,8 @@ pub mod watch;
 
 pub use axis::{Axes, Axis};
 pub use pipeline::{
-    adaptive_axis_bank, axis_bank, AxisBank, AxisRow, BankBuilder, Counters, CsvLine, Estimation,
-    Pipeline, Rejections, Row, ROW_CAPACITY,
+    adaptive_axis_bank, axis_bank, axis_config, AxisRow, Counters, CsvLine, Estimation, Pipeline,
+    Rejections, Row, ROW_CAPACITY,
 };
 pub use sample::{attitude, Attitude, FrameSeen, FrontCounters, Frontend, Sample};
 

@@ -16,7 +16,7 @@
 //! The same period: the banks run on as before (rows identical to a run without the hold-back,
 //! only later). Another period: every bank is built again for it (the builder decides the
 //! gains for the rate, as at the start), takes over the old bank's turn count and gap count
-//! ([`AxisBank::take_over`]), and [`Counters::period_changes`] counts the change
+//! ([`EstimatorBank::take_over`]), and [`Counters::period_changes`] counts the change
 //! ([`Estimation::period_s`] is the period in use); the host prints it on stderr, the firmware
 //! as a `firmware:` message. An epoch with fewer than two samples keeps the period in use.
 //!
@@ -43,58 +43,8 @@ use estimators::{
 };
 use nav440_proto::{PacketRate, PacketType};
 
-/// One axis's estimator bank as the pipeline drives it: one sample (its time and epoch) and
-/// the axis's angle in, one output out.
-///
-/// Every [`EstimatorBank`] is one (blanket implementation: a sample that starts a new epoch
-/// calls [`EstimatorBank::new_epoch`] first, then [`EstimatorBank::update`]; the gaps are
-/// [`EstimatorBank::reinit_count`]). A wrapper that runs a bank its own way (the host CLI's,
-/// with added noise and a per-step mode) implements it directly.
-pub trait AxisBank {
-    /// The bank's output (angle and channel values; the channels' names and count are its
-    /// consts, [`EstimatorOutput::CHANNEL_NAMES`]).
-    type Output: EstimatorOutput;
-
-    /// Runs one sample's angle `angle_deg` (deg; the sample gives the time and the epoch).
-    fn step(&mut self, s: &Sample, angle_deg: f32) -> Result<Self::Output, SampleError>;
-
-    /// Gaps longer than the gap rule so far, where the bank re-initialised.
-    fn gaps(&self) -> u32;
-
-    /// Called on a bank just built for a new nominal period (after a new epoch) with the bank
-    /// it replaces: takes over what spans epochs (for an [`EstimatorBank`]:
-    /// [`EstimatorBank::take_over`], the unwrapper's turns and the gap count). The default
-    /// takes nothing.
-    fn take_over(&mut self, old: Self)
-    where
-        Self: Sized,
-    {
-        let _ = old;
-    }
-}
-
-impl<B: EstimatorBank> AxisBank for B {
-    type Output = B::Output;
-
-    #[inline]
-    fn step(&mut self, s: &Sample, angle_deg: f32) -> Result<B::Output, SampleError> {
-        if s.new_epoch {
-            self.new_epoch();
-        }
-        self.update(s.t_us, angle_deg)
-    }
-
-    fn gaps(&self) -> u32 {
-        self.reinit_count()
-    }
-
-    fn take_over(&mut self, old: Self) {
-        EstimatorBank::take_over(self, &old);
-    }
-}
-
 /// `cfg` for `axis`: the +-180 deg unwrapping switched off for pitch ([`Axis::wraps`]).
-fn axis_config(axis: Axis, cfg: &BankConfig) -> BankConfig {
+pub fn axis_config(axis: Axis, cfg: &BankConfig) -> BankConfig {
     let wrap = if axis.wraps() {
         Wrap::Deg180
     } else {
@@ -102,14 +52,6 @@ fn axis_config(axis: Axis, cfg: &BankConfig) -> BankConfig {
     };
     BankConfig { wrap, ..*cfg }
 }
-
-/// The bank constructor of an [`Estimation`] and a [`Pipeline`]: called with an axis and
-/// the configuration (with the measured sample period) when the warm-up ends, it returns
-/// that axis's bank or the error `E`. Every `FnMut(Axis, &BankConfig) -> Result<B, E>` is one
-/// (e.g. a closure over [`axis_bank`]).
-pub trait BankBuilder<B, E>: FnMut(Axis, &BankConfig) -> Result<B, E> {}
-
-impl<B, E, F: FnMut(Axis, &BankConfig) -> Result<B, E>> BankBuilder<B, E> for F {}
 
 /// The bank of one axis: `Bank::new(cfg)` (any [`Bank`]: `PaperBank`, `ProductBank`, a
 /// custom tuple of rows), with the +-180 deg unwrapping switched off for pitch
@@ -144,7 +86,7 @@ pub struct AxisRow<O = PaperOutput> {
     pub out: O,
 }
 
-/// One output row of a bank with output `O` ([`AxisBank::Output`]; default the paper
+/// One output row of a bank with output `O` ([`EstimatorBank::Output`]; default the paper
 /// bank's).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Row<O = PaperOutput> {
@@ -262,7 +204,9 @@ impl<B, E, F, const N: usize> core::fmt::Debug for Estimation<B, E, F, N> {
     }
 }
 
-impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize> Estimation<B, E, F, N> {
+impl<B: EstimatorBank, E: Clone, F: FnMut(Axis, &BankConfig) -> Result<B, E>, const N: usize>
+    Estimation<B, E, F, N>
+{
     /// A back end with `N` bank slots for `axes`, the configuration `cfg` (its sample period
     /// is replaced by the measured one) and the bank constructor `build`. Only the first `N`
     /// selected axes (CSV order) are kept ([`Estimation::axes`] tells which).
@@ -394,7 +338,7 @@ impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize> Estimation<B, 
                 }
             }
             for (new, old) in fresh.iter_mut().zip(self.banks.drain(..)) {
-                new.take_over(old);
+                new.take_over(&old);
             }
             self.banks = fresh;
             self.counters.period_changes = self.counters.period_changes.saturating_add(1);
@@ -423,7 +367,7 @@ impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize> Estimation<B, 
     }
 }
 
-impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>> Estimation<B, E, F> {
+impl<B: EstimatorBank, E: Clone, F: FnMut(Axis, &BankConfig) -> Result<B, E>> Estimation<B, E, F> {
     /// A back end for `axes` (any of the three) with the configuration `cfg` (its sample
     /// period is replaced by the measured one) and the bank constructor `build`.
     pub fn new(axes: Axes, cfg: BankConfig, build: F) -> Self {
@@ -435,7 +379,7 @@ impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>> Estimation<B, E, F> {
 /// the roll and yaw banks are skipped (their fields stay `None`); the first sample after it
 /// reaches them as the start of a new epoch (`in_lock` carries the state between samples).
 #[inline(never)]
-fn run_sample<B: AxisBank>(
+fn run_sample<B: EstimatorBank>(
     banks: &mut [B],
     axes: Axes,
     counters: &mut Counters,
@@ -469,14 +413,17 @@ fn run_sample<B: AxisBank>(
         let i = axis.index();
         let singular = axis.singular_near_lock();
         if singular && near_lock {
-            gaps = gaps.max(bank.gaps());
+            gaps = gaps.max(bank.reinit_count());
             continue;
         }
         let input = match &restart {
             Some(r) if singular => r,
             _ => s,
         };
-        match bank.step(input, s.angle(axis)) {
+        if input.new_epoch {
+            bank.new_epoch();
+        }
+        match bank.update(input.t_us, s.angle(axis)) {
             Ok(out) => {
                 row.axes[i] = Some(AxisRow {
                     reference_deg_s: refs[i],
@@ -487,7 +434,7 @@ fn run_sample<B: AxisBank>(
                 err.get_or_insert(e);
             }
         }
-        gaps = gaps.max(bank.gaps());
+        gaps = gaps.max(bank.reinit_count());
     }
     counters.gaps = gaps;
     match err {
@@ -529,7 +476,9 @@ impl<B, E, F, const N: usize> core::fmt::Debug for Pipeline<B, E, F, N> {
     }
 }
 
-impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize> Pipeline<B, E, F, N> {
+impl<B: EstimatorBank, E: Clone, F: FnMut(Axis, &BankConfig) -> Result<B, E>, const N: usize>
+    Pipeline<B, E, F, N>
+{
     /// A pipeline with `N` bank slots estimating the first `N` of `axes` (see
     /// [`Estimation::with_slots`]).
     pub fn with_slots(axes: Axes, cfg: BankConfig, build: F) -> Self {
@@ -693,7 +642,7 @@ impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize> Pipeline<B, E,
     }
 }
 
-impl<B: AxisBank, E: Clone, F: BankBuilder<B, E>> Pipeline<B, E, F> {
+impl<B: EstimatorBank, E: Clone, F: FnMut(Axis, &BankConfig) -> Result<B, E>> Pipeline<B, E, F> {
     /// A pipeline estimating `axes` (any of the three; see [`Estimation::new`]).
     pub fn new(axes: Axes, cfg: BankConfig, build: F) -> Self {
         Self::with_slots(axes, cfg, build)

@@ -14,7 +14,8 @@
 //! What the device does then (configure the unit again, exit with a status) is its own.
 
 use crate::watch::Event;
-use crate::{AxisBank, BankBuilder, Pipeline, Row};
+use crate::{Pipeline, Row};
+use estimators::EstimatorBank;
 
 /// What a device does after a chunk of bytes ([`feed`]); the largest of the chunk's events
 /// counts (`Reset` > `Counters` > `Go`).
@@ -36,7 +37,12 @@ pub enum Flow {
 /// configuring C (N bytes estimated)`, N the bytes parsed before this chunk) and, after the
 /// chunk, a change of the nominal period ([`period_change`]). Fails as
 /// [`Pipeline::feed`] does (no line printed then).
-pub fn feed<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize>(
+pub fn feed<
+    B: EstimatorBank,
+    E: Clone,
+    F: FnMut(crate::Axis, &estimators::BankConfig) -> Result<B, E>,
+    const N: usize,
+>(
     pipe: &mut Pipeline<B, E, F, N>,
     bytes: &[u8],
     now_ms: u32,
@@ -64,7 +70,12 @@ pub fn feed<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize>(
 
 /// [`Pipeline::finish`] (the end of a finite input: the held sample, an epoch shorter than the
 /// warm-up), then [`period_change`].
-pub fn finish<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize>(
+pub fn finish<
+    B: EstimatorBank,
+    E: Clone,
+    F: FnMut(crate::Axis, &estimators::BankConfig) -> Result<B, E>,
+    const N: usize,
+>(
     pipe: &mut Pipeline<B, E, F, N>,
     emit: &mut dyn FnMut(&Row<B::Output>),
 ) -> Result<(), E> {
@@ -77,7 +88,12 @@ pub fn finish<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize>(
 /// Checks `pipe`'s watch for silence at `now_ms` ([`Pipeline::poll_watch`]); a silence is
 /// printed ([`fault`]: `stream silent: ...; configuring the unit again`) and returns `true`
 /// (once per silence): the device configures the unit again.
-pub fn silence<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize>(
+pub fn silence<
+    B: EstimatorBank,
+    E: Clone,
+    F: FnMut(crate::Axis, &estimators::BankConfig) -> Result<B, E>,
+    const N: usize,
+>(
     pipe: &mut Pipeline<B, E, F, N>,
     now_ms: u32,
 ) -> bool {
@@ -133,7 +149,12 @@ pub fn fault(e: &Event) {
 /// at another rate: the pipeline measured the period on the epoch's first samples and rebuilt
 /// the banks for it) when `pipe`'s count of period changes
 /// ([`crate::Counters::period_changes`]) has moved past `before`.
-pub fn period_change<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize>(
+pub fn period_change<
+    B: EstimatorBank,
+    E: Clone,
+    F: FnMut(crate::Axis, &estimators::BankConfig) -> Result<B, E>,
+    const N: usize,
+>(
     pipe: &Pipeline<B, E, F, N>,
     before: u32,
 ) {
@@ -154,7 +175,12 @@ pub fn periodic(stream_s: u32) {
 /// Sends the counters: the `key=value` line of [`Pipeline::summary`] (same keys, same order)
 /// followed by `unit_bytes` (bytes the unit sent, or received so far) and `stack_peak` (the
 /// stack's high-water mark, bytes).
-pub fn summary<B: AxisBank, E: Clone, F: BankBuilder<B, E>, const N: usize>(
+pub fn summary<
+    B: EstimatorBank,
+    E: Clone,
+    F: FnMut(crate::Axis, &estimators::BankConfig) -> Result<B, E>,
+    const N: usize,
+>(
     pipe: &Pipeline<B, E, F, N>,
     uart_overruns: u32,
     uart_stalls: u32,

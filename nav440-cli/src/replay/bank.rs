@@ -142,6 +142,7 @@ pub fn product_bank(
 pub(crate) const PRODUCT_SCHEDULE: &str = "--bank product runs fixed gains; a gain schedule (a --gains file written by `nav440 tune --schedule`) runs the noise-adaptive paper bank: use --bank paper, or a fixed gains file";
 
 /// The added noise: N(0, var) draws from xoshiro256++ seeded with the seed, in order.
+#[derive(Clone)]
 pub(crate) struct NoiseGen {
     normal: Normal<f64>,
     rng: Xoshiro256PlusPlus,
@@ -171,6 +172,7 @@ impl NoiseGen {
 }
 
 /// What the [`NoiseAt::Step`] mode remembers between samples.
+#[derive(Clone)]
 pub(crate) struct StepState {
     /// Observer step, us.
     h_us: u64,
@@ -186,9 +188,12 @@ pub(crate) struct StepState {
 }
 
 /// The host's bank of one axis: the bank `B` (the paper bank's by default, [`PaperHostBank`]),
-/// the added noise and the per-mode state; `nav440_pipeline` drives it ([`AxisBank`]).
+/// the added noise and the per-mode state; `nav440_pipeline` drives it, as it drives any
+/// `EstimatorBank`.
 pub struct HostBank<B = PaperHostBank> {
     bank: B,
+    /// A new epoch was announced ([`EstimatorBank::new_epoch`]) for the next sample.
+    new_epoch: bool,
     misfit: Option<(f32, f32)>,
     noise: NoiseGen,
     step: Option<StepState>,
@@ -230,6 +235,7 @@ impl<B: EstimatorBank> HostBank<B> {
         let (bank, misfit) = build(axis, &cfg, opts.fixed, opts.schedule.as_ref())?;
         Ok(HostBank {
             bank,
+            new_epoch: false,
             misfit,
             noise,
             step,
@@ -243,43 +249,44 @@ impl<B: EstimatorBank> HostBank<B> {
     }
 }
 
-impl<B: EstimatorBank> AxisBank for HostBank<B> {
+impl<B: EstimatorBank> EstimatorBank for HostBank<B> {
     type Output = B::Output;
 
     /// The per-sample step of both noise modes.
-    fn step(&mut self, s: &Sample, angle_deg: f32) -> std::result::Result<B::Output, SampleError> {
+    fn update(&mut self, t_us: u64, angle_deg: f32) -> std::result::Result<B::Output, SampleError> {
+        let new_epoch = core::mem::take(&mut self.new_epoch);
         let r = self;
         match r.step.as_mut() {
             None => {
-                if s.new_epoch {
+                if new_epoch {
                     r.bank.new_epoch();
                 }
                 let y = r.noise.add(f64::from(angle_deg));
-                r.bank.update(s.t_us, y)
+                r.bank.update(t_us, y)
             }
             Some(st) => {
                 let y = match st.unwrap.as_mut() {
                     Some(u) => u.push(angle_deg),
                     None => angle_deg,
                 };
-                let prev = st.prev.replace((s.t_us, y));
+                let prev = st.prev.replace((t_us, y));
                 match prev {
-                    None => r.bank.update(s.t_us, r.noise.add(f64::from(y))),
+                    None => r.bank.update(t_us, r.noise.add(f64::from(y))),
                     // A new epoch, or a gap the sample-mode bank re-initialises on: no
                     // interpolation across it; the bank restarts from this sample.
-                    Some((pt, _)) if s.new_epoch || s.t_us.saturating_sub(pt) > st.gap_us => {
-                        if !s.new_epoch {
+                    Some((pt, _)) if new_epoch || t_us.saturating_sub(pt) > st.gap_us => {
+                        if !new_epoch {
                             st.gaps = st.gaps.saturating_add(1);
                         }
                         r.bank.new_epoch();
-                        r.bank.update(s.t_us, r.noise.add(f64::from(y)))
+                        r.bank.update(t_us, r.noise.add(f64::from(y)))
                     }
-                    Some((pt, py)) if s.t_us > pt => {
+                    Some((pt, py)) if t_us > pt => {
                         let h_us = st.h_us;
-                        let n = ((s.t_us - pt + h_us / 2) / h_us).max(1);
+                        let n = ((t_us - pt + h_us / 2) / h_us).max(1);
                         let mut last = Err(SampleError::NonIncreasingTime);
                         for j in 1..=n {
-                            let t = if j == n { s.t_us } else { pt + j * h_us };
+                            let t = if j == n { t_us } else { pt + j * h_us };
                             let yi = f64::from(py)
                                 + (f64::from(y) - f64::from(py)) * j as f64 / n as f64;
                             last = r.bank.update(t, r.noise.add(yi));
@@ -292,7 +299,11 @@ impl<B: EstimatorBank> AxisBank for HostBank<B> {
         }
     }
 
-    fn gaps(&self) -> u32 {
+    fn new_epoch(&mut self) {
+        self.new_epoch = true;
+    }
+
+    fn reinit_count(&self) -> u32 {
         match &self.step {
             Some(st) => st.gaps,
             None => self.bank.reinit_count(),
@@ -301,10 +312,10 @@ impl<B: EstimatorBank> AxisBank for HostBank<B> {
 
     /// The bank's take-over (unwrapper, gap count), and the noise generator and the
     /// per-step mode's unwrapping and gap count continue where they were.
-    fn take_over(&mut self, old: Self) {
+    fn take_over(&mut self, old: &Self) {
         self.bank.take_over(&old.bank);
-        self.noise = old.noise;
-        if let (Some(st), Some(old_st)) = (self.step.as_mut(), old.step) {
+        self.noise = old.noise.clone();
+        if let (Some(st), Some(old_st)) = (self.step.as_mut(), old.step.clone()) {
             st.unwrap = old_st.unwrap;
             st.gaps = old_st.gaps;
             st.prev = old_st.prev;
