@@ -69,6 +69,7 @@
 
 use crate::adaptive::ObserverSwitch;
 use crate::bank::{BankGains, Channel};
+use crate::{ConfigError, KalmanNoise, Law};
 
 /// A family of the paper bank: one column of the paper's tables, a velocity estimator and
 /// the acceleration series of the same law (both stages with the acceleration half's gains).
@@ -160,13 +161,35 @@ pub trait FamilyVisitor {
 }
 
 /// The gains of one family in one half of the bank (the law's configuration, e.g.
-/// [`crate::IloConfig`]): what a gain schedule does with them (and, with the `serde`
-/// feature, what a gains file reads and writes).
-pub trait Gains: Copy + PartialEq + core::fmt::Debug + SerdeIfEnabled {
+/// [`crate::IloConfig`]): what a gain schedule does with them, the estimator they build (and,
+/// with the `serde` feature, what a gains file reads and writes: the configuration's fields,
+/// by name, which host tools also read as the family's named gains).
+pub trait Gains: Copy + PartialEq + core::fmt::Debug + SerdeIfEnabled + 'static {
     /// The gains between `self` (weight `1 - w`) and `other` (weight `w`, in `[0, 1]`), for a
     /// gain schedule: each gain geometrically ([`geometric`]: gains span decades); settings
     /// that are not numbers (the AVE's `deltahat` law) from the nearer one.
     fn interpolate(&self, other: &Self, w: f32) -> Self;
+
+    /// Builds the estimator of the family's velocity column with these gains at the step `h`
+    /// (s) and hands it to `to`: a law stepped at `h` ([`LawVisitor::law`]; the acceleration
+    /// column is two of it in series) or a tracker run once per sample
+    /// ([`LawVisitor::tracker`]). The error of the law's constructor if these gains do not
+    /// build one at `h`.
+    fn build<V: LawVisitor>(&self, h: f32, to: V) -> Result<V::Output, ConfigError>;
+}
+
+/// What receives the estimator a family's gains build ([`Gains::build`]).
+pub trait LawVisitor {
+    /// What the visitor makes of the estimator.
+    type Output;
+
+    /// A law stepped at `h` between samples, its output the velocity estimate (in the bank the
+    /// acceleration column runs two of it in series, both with the acceleration half's gains).
+    fn law<L: Law<Num = f32>>(self, law: L) -> Self::Output;
+
+    /// A Kalman tracker with the noise `noise`, run once per sample at the nominal sample
+    /// period (the bank's [`crate::KalmanParams`]; its velocity or its acceleration output).
+    fn tracker(self, noise: KalmanNoise) -> Self::Output;
 }
 
 /// `a^(1-w) b^w` for positive `a`, `b` (linear in `ln`); `a + (b - a) w` otherwise; `a` for
