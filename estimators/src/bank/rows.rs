@@ -166,6 +166,14 @@ pub trait Rows<T: Real, S: SqrtFn<T>>: ChannelLists {
     fn fmt_params(p: &Self::Params, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result;
     /// Writes every row's state, as a tuple's `Debug` does.
     fn fmt_state(s: &Self::State, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result;
+    /// Every row's law, printable with `{:?}` ([`Self::fmt_params`]).
+    fn params_debug(p: &Self::Params) -> RowsDebug<'_, Self::Params> {
+        RowsDebug(p, Self::fmt_params)
+    }
+    /// Every row's state, printable with `{:?}` ([`Self::fmt_state`]).
+    fn state_debug(s: &Self::State) -> RowsDebug<'_, Self::State> {
+        RowsDebug(s, Self::fmt_state)
+    }
 
     /// Builds every row ([`Row::build`]; `prev`: the rows being replaced).
     fn build(
@@ -195,6 +203,19 @@ pub trait Rows<T: Real, S: SqrtFn<T>>: ChannelLists {
         old: &BankConfig,
         new: &BankConfig,
     );
+}
+
+/// Every row's law or state of a bank, printable with `{:?}` (as a tuple is, whatever the number
+/// of rows): [`Rows::params_debug`], [`Rows::state_debug`].
+pub struct RowsDebug<'a, X>(
+    &'a X,
+    fn(&X, &mut core::fmt::Formatter<'_>) -> core::fmt::Result,
+);
+
+impl<X> core::fmt::Debug for RowsDebug<'_, X> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        (self.1)(self.0, f)
+    }
 }
 
 /// Implements [`Channels`] and [`Rows`] for a tuple of rows.
@@ -485,20 +506,10 @@ impl<R: Rows<T, S>, const N: usize, T: Real, S: SqrtFn<T>> Copy for Bank<R, N, T
 
 impl<R: Rows<T, S>, const N: usize, T: Real, S: SqrtFn<T>> core::fmt::Debug for Bank<R, N, T, S> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        /// Every row's law or state, through [`Rows`].
-        struct Of<'a, X>(
-            &'a X,
-            fn(&X, &mut core::fmt::Formatter<'_>) -> core::fmt::Result,
-        );
-        impl<X> core::fmt::Debug for Of<'_, X> {
-            fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-                (self.1)(self.0, f)
-            }
-        }
         f.debug_struct("Bank")
             .field("input", &self.input)
-            .field("params", &Of(&self.params, R::fmt_params))
-            .field("state", &Of(&self.state, R::fmt_state))
+            .field("params", &R::params_debug(&self.params))
+            .field("state", &R::state_debug(&self.state))
             .finish()
     }
 }
