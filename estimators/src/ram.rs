@@ -20,9 +20,9 @@
 //! | [`ClosedForm`]`<IloParams<T, 1>>` (params) | 104 | 200 |
 //! | [`ClosedForm`]`<AdParams<T>>` (params) | 96 | 184 |
 //! | [`ClosedForm`]`<Series<IloParams<T, 1>, IloParams<T, 1>>>` (params) | 120 | 232 |
-//! | [`PaperParams`] (all 13 rows' parameters) | 1120 | 2280 |
-//! | [`PaperState`] (all 13 rows' state, one axis) | 288 | 576 |
-//! | [`PaperBank`] (whole bank, one axis) | 1488 | 2944 |
+//! | [`PaperParams`] (all 12 rows' parameters) | 1092 | 2224 |
+//! | [`PaperState`] (all 12 rows' state, one axis) | 264 | 528 |
+//! | [`PaperBank`] (whole bank, one axis) | 1440 | 2840 |
 //! | [`ProductBank`] (ILO1 + Kalman, one axis) | 240 | 392 |
 //!
 //! A [`Series`] is the sum of its stages; an `Ilo<T, D>` adds `D - 1` words of `T`; a closed
@@ -50,11 +50,11 @@ pub const CLOSED_AD: (usize, usize) = (96, 184);
 /// `(f32, Fx)` of [`ClosedForm`]`<Series<IloParams<T, 1>, IloParams<T, 1>>>`.
 pub const CLOSED_ILO_ILO: (usize, usize) = (120, 232);
 /// `(f32, Fx)` of [`PaperParams`].
-pub const PAPER_PARAMS: (usize, usize) = (1120, 2280);
+pub const PAPER_PARAMS: (usize, usize) = (1092, 2224);
 /// `(f32, Fx)` of [`PaperState`].
-pub const PAPER_STATE: (usize, usize) = (288, 576);
+pub const PAPER_STATE: (usize, usize) = (264, 528);
 /// `(f32, Fx)` of the whole [`PaperBank`].
-pub const PAPER_BANK: (usize, usize) = (1488, 2944);
+pub const PAPER_BANK: (usize, usize) = (1440, 2840);
 /// `(f32, Fx)` of the [`ProductBank`].
 pub const PRODUCT_BANK: (usize, usize) = (240, 392);
 

@@ -261,12 +261,12 @@ fn one_parameter_set_serves_several_states() {
 /// spelled out (the pipeline's header and every test use the banks' own names).
 #[test]
 fn names_come_from_the_rows() {
-    assert_eq!(Channel::COUNT, 16);
-    assert_eq!(Channel::ALL.len(), 16);
+    assert_eq!(Channel::COUNT, 14);
+    assert_eq!(Channel::ALL.len(), 14);
     // The CSV contract (the pipeline crate's header is built from these names).
     assert_eq!(
         PaperOutput::CSV_COLUMNS,
-        "ave_v,ilo1_v,ilo2_v,ilo3_v,ad_v,ed_v,kf_v,sbd_v,ave_a,ilo1_a,ilo2_a,ilo3_a,ad_a,ed_a,kf_a,sbd_a"
+        "ave_v,ilo1_v,ilo2_v,ilo3_v,ad_v,ed_v,kf_v,ave_a,ilo1_a,ilo2_a,ilo3_a,ad_a,ed_a,kf_a"
     );
     for (i, c) in Channel::ALL.iter().enumerate() {
         assert_eq!(c.index(), i);

@@ -39,8 +39,6 @@ crate::family::families! {
         /// Kalman tracker noise (the velocity column uses the velocity half's tracker, the
         /// acceleration column the acceleration half's).
         kf: KalmanNoise = (KF_DEFAULT, KF_DEFAULT) => [KfFamily],
-        /// Smoothed backward difference, time constant `T`.
-        sbd: crate::SbdConfig = (crate::SBD_VELOCITY, crate::SBD_ACCELERATION) => [crate::SbdFamily],
     }
 }
 
@@ -393,7 +391,6 @@ pub type PaperRows = (
     EdRow,
     KfV,
     KfA,
-    crate::SbdRow,
 );
 
 /// The paper's bank for one angle: unwrap -> sample adapter -> AVE, ILO1-3 (Table 2), AD
@@ -430,8 +427,6 @@ pub enum Channel {
     EdV,
     /// Kalman tracker velocity, deg/s.
     KfV,
-    /// Smoothed backward difference velocity, deg/s.
-    SbdV,
     /// AVE-AVE acceleration, deg/s^2.
     AveA,
     /// ILO1-ILO1 (Table 4) acceleration, deg/s^2.
@@ -446,8 +441,6 @@ pub enum Channel {
     EdA,
     /// Kalman tracker acceleration, deg/s^2.
     KfA,
-    /// Smoothed backward difference series acceleration, deg/s^2.
-    SbdA,
 }
 
 impl Channel {
@@ -455,8 +448,7 @@ impl Channel {
     pub const ALL: &'static [Channel] = {
         use Channel::*;
         &[
-            AveV, Ilo1V, Ilo2V, Ilo3V, AdV, EdV, KfV, SbdV, AveA, Ilo1A, Ilo2A, Ilo3A, AdA, EdA,
-            KfA, SbdA,
+            AveV, Ilo1V, Ilo2V, Ilo3V, AdV, EdV, KfV, AveA, Ilo1A, Ilo2A, Ilo3A, AdA, EdA, KfA,
         ]
     };
     /// The number of channels.

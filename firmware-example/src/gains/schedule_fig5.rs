@@ -2,7 +2,7 @@
 // `AdaptiveBank::new(&BankConfig { hold, ..BankConfig::NAV440 }, &schedule, &AdaptiveConfig::DEFAULT)`,
 // `schedule` being `GainSchedule::new(&SCHEDULE)?` with `.with_sample_period(p)?` when
 // `SCHEDULE_PERIOD_S` is `Some(p)`.
-use estimators::{AveConfig, AveDeltahat, BankGains, DeltaMode, EdConfig, IloConfig, KalmanNoise, ObserverSwitch, SbdConfig, ScheduleLevel};
+use estimators::{AveConfig, AveDeltahat, BankGains, DeltaMode, EdConfig, IloConfig, KalmanNoise, ObserverSwitch, ScheduleLevel};
 
 /// The nominal sample period the levels were tuned at, s.
 pub const SCHEDULE_PERIOD_S: Option<f32> = Some(0.01);
@@ -20,7 +20,6 @@ pub const SCHEDULE: [ScheduleLevel; 5] = [
             ad_t: 0.0061896583,
             ed: EdConfig { lambda: 167.35861, alpha: 11.512812 },
             kf: KalmanNoise { q: 2371373.8, r: 0.01 },
-            sbd: SbdConfig { t: 0.01 },
         },
         acceleration: BankGains {
             ave: AveConfig { k: 34.93257, gamma1: 2146.5457, delta: DeltaMode::Leaky { sigma: 0.1 } },
@@ -32,7 +31,6 @@ pub const SCHEDULE: [ScheduleLevel; 5] = [
             ad_t: 0.023713738,
             ed: EdConfig { lambda: 21.23143, alpha: 5039.2783 },
             kf: KalmanNoise { q: 1154782.0, r: 0.01 },
-            sbd: SbdConfig { t: 0.1 },
         },
         ave_deltahat: Some(AveDeltahat { velocity: 0.014618677, acceleration: [0.97046983, 6.6055694] }),
         switch_up: Some(ObserverSwitch { ave: 0.006565258, ilo: [0.0031622776, 0.0031622776, 0.0031622776], ed: 0.0010477299 }),
@@ -49,7 +47,6 @@ pub const SCHEDULE: [ScheduleLevel; 5] = [
             ad_t: 0.013990503,
             ed: EdConfig { lambda: 15.029838, alpha: 757.7744 },
             kf: KalmanNoise { q: 339820.84, r: 0.01 },
-            sbd: SbdConfig { t: 0.01 },
         },
         acceleration: BankGains {
             ave: AveConfig { k: 23.310259, gamma1: 1159.9977, delta: DeltaMode::Leaky { sigma: 0.1 } },
@@ -61,7 +58,6 @@ pub const SCHEDULE: [ScheduleLevel; 5] = [
             ad_t: 0.034807008,
             ed: EdConfig { lambda: 19.50073, alpha: 5469.868 },
             kf: KalmanNoise { q: 237137.38, r: 0.01 },
-            sbd: SbdConfig { t: 0.1 },
         },
         ave_deltahat: Some(AveDeltahat { velocity: 0.12345989, acceleration: [1.8421813, 13.339276] }),
         switch_up: Some(ObserverSwitch { ave: 0.031622775, ilo: [0.031622775, 0.031622775, 0.031622775], ed: 0.031622775 }),
@@ -78,7 +74,6 @@ pub const SCHEDULE: [ScheduleLevel; 5] = [
             ad_t: 0.026101572,
             ed: EdConfig { lambda: 14.743227, alpha: 755.2368 },
             kf: KalmanNoise { q: 48696.754, r: 0.01 },
-            sbd: SbdConfig { t: 0.01 },
         },
         acceleration: BankGains {
             ave: AveConfig { k: 17.773422, gamma1: 695.68506, delta: DeltaMode::Leaky { sigma: 0.1 } },
@@ -90,7 +85,6 @@ pub const SCHEDULE: [ScheduleLevel; 5] = [
             ad_t: 0.0510897,
             ed: EdConfig { lambda: 23.871288, alpha: 7134.0317 },
             kf: KalmanNoise { q: 42169.65, r: 0.01 },
-            sbd: SbdConfig { t: 0.1 },
         },
         ave_deltahat: Some(AveDeltahat { velocity: 0.2730495, acceleration: [3.3232386, 25.322184] }),
         switch_up: Some(ObserverSwitch { ave: 0.2236068, ilo: [0.2236068, 0.2236068, 0.2236068], ed: 0.2236068 }),
@@ -107,7 +101,6 @@ pub const SCHEDULE: [ScheduleLevel; 5] = [
             ad_t: 0.04216965,
             ed: EdConfig { lambda: 14.970205, alpha: 762.4117 },
             kf: KalmanNoise { q: 11547.82, r: 0.01 },
-            sbd: SbdConfig { t: 0.01 },
         },
         acceleration: BankGains {
             ave: AveConfig { k: 15.655728, gamma1: 507.2281, delta: DeltaMode::Leaky { sigma: 0.1 } },
@@ -119,7 +112,6 @@ pub const SCHEDULE: [ScheduleLevel; 5] = [
             ad_t: 0.068129204,
             ed: EdConfig { lambda: 52.504585, alpha: 10.306895 },
             kf: KalmanNoise { q: 11547.82, r: 0.01 },
-            sbd: SbdConfig { t: 0.1 },
         },
         ave_deltahat: Some(AveDeltahat { velocity: 0.5626439, acceleration: [5.208553, 38.979923] }),
         switch_up: Some(ObserverSwitch { ave: 0.70710677, ilo: [0.70710677, 0.70710677, 0.70710677], ed: 0.70710677 }),
@@ -136,7 +128,6 @@ pub const SCHEDULE: [ScheduleLevel; 5] = [
             ad_t: 0.051089697,
             ed: EdConfig { lambda: 13.442735, alpha: 767.00336 },
             kf: KalmanNoise { q: 6493.8164, r: 0.01 },
-            sbd: SbdConfig { t: 0.01 },
         },
         acceleration: BankGains {
             ave: AveConfig { k: 14.350279, gamma1: 430.03543, delta: DeltaMode::Leaky { sigma: 0.1 } },
@@ -148,7 +139,6 @@ pub const SCHEDULE: [ScheduleLevel; 5] = [
             ad_t: 0.07498942,
             ed: EdConfig { lambda: 0.4637242, alpha: 10.531283 },
             kf: KalmanNoise { q: 5623.413, r: 0.01 },
-            sbd: SbdConfig { t: 0.1 },
         },
         ave_deltahat: Some(AveDeltahat { velocity: 7.063896, acceleration: [6.6273303, 47.43187] }),
         switch_up: None,
