@@ -2,7 +2,7 @@
 
 use crate::bank::{BankGains, Channel};
 use crate::error::positive;
-use crate::family::{geometric, Family, Gains, Scheduling};
+use crate::family::{geometric, Family, Gains, LawVisitor, Scheduling};
 use crate::law::{Law, Stateful};
 use crate::linear::{LinearLaw, LIN_MAX};
 use crate::{ConfigError, Real};
@@ -161,5 +161,10 @@ impl Gains for AdConfig {
         AdConfig {
             t: geometric(self.t, other.t, w),
         }
+    }
+
+    /// [`AdParams`].
+    fn build<V: LawVisitor>(&self, h: f32, to: V) -> Result<V::Output, ConfigError> {
+        Ok(to.law(AdParams::<f32>::new(self.t, h)?))
     }
 }

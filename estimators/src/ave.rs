@@ -1,7 +1,7 @@
 //! Adaptive velocity estimator, AVE (paper eq. 4).
 
 use crate::error::{non_negative, positive};
-use crate::family::{geometric, Gains};
+use crate::family::{geometric, Gains, LawVisitor};
 use crate::fxk::{
     advance_one, advance_two, frac, mag, mulf, mulf32, run, smul, Coef, Kernel, Stage,
 };
@@ -594,6 +594,11 @@ impl Gains for AveConfig {
             gamma1: geometric(self.gamma1, other.gamma1, w),
             delta: if w < 0.5 { self.delta } else { other.delta },
         }
+    }
+
+    /// [`AveParams`].
+    fn build<V: LawVisitor>(&self, h: f32, to: V) -> Result<V::Output, ConfigError> {
+        Ok(to.law(AveParams::<f32>::new(self, h)?))
     }
 }
 

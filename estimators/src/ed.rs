@@ -1,7 +1,7 @@
 //! Levant's robust exact differentiator, ED (paper eqs. 5-7; Levant 1998).
 
 use crate::error::positive;
-use crate::family::{geometric, Gains};
+use crate::family::{geometric, Gains, LawVisitor};
 use crate::fxk::{advance_one, advance_two, frac, mag, mulf, run, sqrt_fast, Coef, Kernel, Stage};
 use crate::law::{step_n, Interval, Law, Stateful};
 use crate::{ConfigError, Hold, NativeSqrt, Real, SqrtFn};
@@ -434,6 +434,11 @@ impl Gains for EdConfig {
             lambda: geometric(self.lambda, other.lambda, w),
             alpha: geometric(self.alpha, other.alpha, w),
         }
+    }
+
+    /// [`EdParams`] with the paper's explicit Euler scheme ([`EdScheme::Euler`]).
+    fn build<V: LawVisitor>(&self, h: f32, to: V) -> Result<V::Output, ConfigError> {
+        Ok(to.law(EdParams::<f32>::new(self, h, EdScheme::Euler)?))
     }
 }
 

@@ -7,15 +7,15 @@
 //! * its name (`ilo1`: the channels `ilo1_v`, `ilo1_a` and the gains file's `[velocity.ilo1]`
 //!   table), its label in reports (`ILO1`) and its two [`Channel`]s;
 //! * where its gains are in one half of a [`BankGains`] ([`Family::get`], [`Family::set`]),
-//!   and what those gains can do at run time ([`Gains`]): be interpolated between two levels
-//!   of a gain schedule;
+//!   and what those gains can do ([`Gains`]): be interpolated between two levels of a gain
+//!   schedule, and build the family's estimator at a step `h` ([`Gains::build`]);
 //! * how a gain schedule blends it ([`Scheduling`]) and, for an observer, where its switch
 //!   point is recorded ([`Family::switch_up_mut`]).
 //!
 //! [`FAMILIES`] lists the plain facts ([`FamilyInfo`]) in column order, for const contexts
 //! ([`Channel::VELOCITY`], [`crate::VELOCITY_NAMES`]); [`for_each_family`] calls a
 //! [`FamilyVisitor`] with each family's type, for code that needs the gains' types (the
-//! noise-adaptive interpolation; on the host, the gains file):
+//! noise-adaptive interpolation; on the host, the gains file and the tuner):
 //!
 //! ```
 //! use estimators::{for_each_family, BankGains, Family, FamilyVisitor};
@@ -36,39 +36,37 @@
 //!
 //! # Adding an estimator to the paper bank
 //!
-//! 1. Its module, next to the others (`src/foo.rs`; `mod foo;` and `pub use foo::{..}` in
-//!    `lib.rs`): the law (`FooParams`, a [`crate::Law`]), its configuration `FooConfig` (with the
-//!    `serde` and `defmt` derives of the others), `impl Gains for FooConfig` and the family
-//!    marker `FooFamily` (`impl Family`: name, label, channels, scheduling, where its gains
-//!    are in [`BankGains`]; `family!` declares both for gains that are one field of
-//!    [`BankGains`], as in `ed.rs`).
-//! 2. `bank/paper.rs`: its entry in the family list, which declares [`BankGains`] with it
-//!    (`foo: FooConfig = (FOO_PAPER_V, FOO_PAPER_A) => [FooFamily],`: the field, its values
-//!    in [`BankGains::PAPER_VELOCITY`] and [`BankGains::PAPER_ACCELERATION`], its family);
-//!    its two channels (`FooV = "foo_v"`, `FooA = "foo_a"`) and its row or rows, each with a
-//!    `warm` clause, in the `estimator_bank!` table below the list.
-//! 3. The host tool (`nav440-cli`): the family in its tuner's list, with its search box and
-//!    scoring (`nav440-cli/src/search.rs`; a test holds that list to [`FAMILIES`]), and the
-//!    Rust literal `nav440 tune --rust` prints for `FooConfig` and for the new field of
-//!    [`BankGains`] (`nav440-cli/src/rust_literal.rs`, which does not compile until it names
-//!    every field).
-//! 4. What the compiler and the tests then ask for: the sizes in `ram.rs` (compile-time
-//!    checked); the paper bank's CSV contract (`nav440_pipeline::csv::HEADER` and the tests
-//!    that spell out its columns); the committed `nav440 tune --rust` snippets
-//!    `host-tests/data/gains/*.rs`, regenerated, and the firmware's copies of them; the
-//!    committed gain schedule, re-tuned (the schedule tests hold every family to its tuned
-//!    levels). The tuned presets
-//!    ([`crate::BankConfig::NAV440_RATES`], `rates.rs`) run the paper's gains for a family
-//!    their tables do not list.
+//! Four files by hand (tried with a family `SBD` in 8ad431f, reverted in 29b3727):
 //!
-//! The channel lists, the warm gain change, the gain schedule, the gains file and the
-//! `nav440 paper` tables then follow. Optional: an observer that should record its own
-//! switch point per schedule level needs a field in [`ObserverSwitch`] (with its line in
-//! [`ObserverSwitch::all`] and in the host's Rust literal) returned by
-//! [`Family::switch_up_mut`]; `nav440 plot` draws the families its panels list.
+//! 1. Its module `src/foo.rs`, with its unit test: the law (`FooParams`, a [`crate::Law`]),
+//!    its configuration `FooConfig` (the `serde` and `defmt` derives of the others; its
+//!    fields are the gains file's keys and the gains a host tuner searches) with its paper
+//!    values, `impl Gains for FooConfig` ([`Gains::interpolate`], [`Gains::build`]), the
+//!    family marker `FooFamily` (`family!`: name, label, channels, scheduling, its field of
+//!    [`BankGains`]) and its row `FooRow` (a [`crate::Row`] with its channels `foo_v`,
+//!    `foo_a` and its `warm` policy; [`crate::VelAcc`] runs both in one row).
+//! 2. `lib.rs`: `mod foo;` and `pub use foo::{..}`.
+//! 3. `bank/paper.rs`: its entry in the family list, which declares [`BankGains`] with it
+//!    (`foo: crate::FooConfig = (crate::FOO_VELOCITY, crate::FOO_ACCELERATION) =>
+//!    [crate::FooFamily],`), its channels `FooV`, `FooA` in [`Channel`] and
+//!    [`Channel::ALL`] (after the last velocity, after the last acceleration), and its row
+//!    in [`crate::PaperRows`] (up to 16 rows).
+//! 4. `ram.rs`: the sizes the compile-time check holds.
+//!
+//! The channel lists, the CSV header, the warm gain change, the gain schedule, the gains file,
+//! the `nav440 paper` tables, the host's tuner (which reads the gains by their `serde` names
+//! and builds the law with [`Gains::build`]) and its `nav440 tune --rust` printer then follow,
+//! with nothing in `nav440-cli`. Regenerated, not written: the CSV contract in
+//! `tests/table.rs`, the committed `nav440 tune --rust` snippets (`host-tests/data/gains/*.rs`
+//! and the firmware's copies) and, re-tuned, the committed gain schedule. The tuned presets
+//! ([`crate::BankConfig::NAV440_RATES`], `rates.rs`) run the paper's gains for a family their
+//! tables do not list. Optional: an observer that records its own switch point per schedule
+//! level needs a field in [`ObserverSwitch`] (with its line in [`ObserverSwitch::all`])
+//! returned by [`Family::switch_up_mut`]. docs/HOWTO-ESTIMATOR.md has the details.
 
 use crate::adaptive::ObserverSwitch;
 use crate::bank::{BankGains, Channel};
+use crate::{ConfigError, KalmanNoise, Law};
 
 /// A family of the paper bank: one column of the paper's tables, a velocity estimator and
 /// the acceleration series of the same law (both stages with the acceleration half's gains).
@@ -160,13 +158,35 @@ pub trait FamilyVisitor {
 }
 
 /// The gains of one family in one half of the bank (the law's configuration, e.g.
-/// [`crate::IloConfig`]): what a gain schedule does with them (and, with the `serde`
-/// feature, what a gains file reads and writes).
-pub trait Gains: Copy + PartialEq + core::fmt::Debug + SerdeIfEnabled {
+/// [`crate::IloConfig`]): what a gain schedule does with them, the estimator they build (and,
+/// with the `serde` feature, what a gains file reads and writes: the configuration's fields,
+/// by name, which host tools also read as the family's named gains).
+pub trait Gains: Copy + PartialEq + core::fmt::Debug + SerdeIfEnabled + 'static {
     /// The gains between `self` (weight `1 - w`) and `other` (weight `w`, in `[0, 1]`), for a
     /// gain schedule: each gain geometrically ([`geometric`]: gains span decades); settings
     /// that are not numbers (the AVE's `deltahat` law) from the nearer one.
     fn interpolate(&self, other: &Self, w: f32) -> Self;
+
+    /// Builds the estimator of the family's velocity column with these gains at the step `h`
+    /// (s) and hands it to `to`: a law stepped at `h` ([`LawVisitor::law`]; the acceleration
+    /// column is two of it in series) or a tracker run once per sample
+    /// ([`LawVisitor::tracker`]). The error of the law's constructor if these gains do not
+    /// build one at `h`.
+    fn build<V: LawVisitor>(&self, h: f32, to: V) -> Result<V::Output, ConfigError>;
+}
+
+/// What receives the estimator a family's gains build ([`Gains::build`]).
+pub trait LawVisitor {
+    /// What the visitor makes of the estimator.
+    type Output;
+
+    /// A law stepped at `h` between samples, its output the velocity estimate (in the bank the
+    /// acceleration column runs two of it in series, both with the acceleration half's gains).
+    fn law<L: Law<Num = f32>>(self, law: L) -> Self::Output;
+
+    /// A Kalman tracker with the noise `noise`, run once per sample at the nominal sample
+    /// period (the bank's [`crate::KalmanParams`]; its velocity or its acceleration output).
+    fn tracker(self, noise: KalmanNoise) -> Self::Output;
 }
 
 /// `a^(1-w) b^w` for positive `a`, `b` (linear in `ln`); `a + (b - a) w` otherwise; `a` for

@@ -4,7 +4,7 @@
 use crate::adaptive::ObserverSwitch;
 use crate::bank::{BankGains, Channel};
 use crate::error::positive;
-use crate::family::{geometric, Family, Gains, Scheduling};
+use crate::family::{geometric, Family, Gains, LawVisitor, Scheduling};
 use crate::law::{Law, Stateful};
 use crate::linear::{LinearLaw, LIN_MAX};
 use crate::{ConfigError, Real};
@@ -263,5 +263,10 @@ impl Gains for IloConfig {
             l: geometric(self.l, other.l, w),
             k2: geometric(self.k2, other.k2, w),
         }
+    }
+
+    /// [`IloParams`] with `D = 1` (learning delay `tau = h`), as in the bank.
+    fn build<V: LawVisitor>(&self, h: f32, to: V) -> Result<V::Output, ConfigError> {
+        Ok(to.law(IloParams::<f32, 1>::new(self, h)?))
     }
 }

@@ -35,7 +35,7 @@
 //! stand-alone tracker.
 
 use crate::error::positive;
-use crate::family::{geometric, Gains};
+use crate::family::{geometric, Gains, LawVisitor};
 use crate::law::Law;
 use crate::{ConfigError, Hold, Real};
 
@@ -486,6 +486,12 @@ impl Gains for KalmanNoise {
             q: geometric(self.q, other.q, w),
             r: geometric(self.r, other.r, w),
         }
+    }
+
+    /// The tracker ([`LawVisitor::tracker`]: it runs at the nominal sample period, which the
+    /// visitor knows; the noise is checked when the tracker is built).
+    fn build<V: LawVisitor>(&self, _h: f32, to: V) -> Result<V::Output, ConfigError> {
+        Ok(to.tracker(*self))
     }
 }
 

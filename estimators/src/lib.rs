@@ -120,7 +120,8 @@ pub use ed::{Ed, EdConfig, EdFamily, EdParams, EdScheme, EdState, ED_MAX_H_ALPHA
 pub use error::{ConfigError, SampleError};
 pub use estimator::{advance_by_steps, Estimator, Hold};
 pub use family::{
-    for_each_family, Family, FamilyInfo, FamilyVisitor, Gains, Scheduling, FAMILIES, FAMILY_COUNT,
+    for_each_family, Family, FamilyInfo, FamilyVisitor, Gains, LawVisitor, Scheduling, FAMILIES,
+    FAMILY_COUNT,
 };
 pub use ilo::{Ilo, IloConfig, IloFamily, IloParams, IloState};
 pub use kalman::{

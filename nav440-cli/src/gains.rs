@@ -28,12 +28,11 @@
 
 use crate::error::{Error, Result};
 use crate::rust_literal::{bank_gains_literal, literal, use_line};
-use crate::search::{for_each_searched_family, Scorer, Search, SearchVisitor};
-use estimators::ConfigError;
 use estimators::{
     for_each_family, AveFamily, BankConfig, BankGains, Family, FamilyVisitor, ObserverSwitch,
     FAMILIES, FAMILY_COUNT,
 };
+use estimators::{ConfigError, Gains as _};
 use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde::ser::{SerializeStruct, Serializer};
 use serde::{Deserialize, Serialize};
@@ -756,31 +755,28 @@ impl FamilyGains {
         &self,
         h: f32,
     ) -> std::result::Result<(), (&'static str, Option<String>, ConfigError)> {
-        /// A scorer that only builds the law.
+        /// Only builds the law.
         struct Builds;
-        impl Scorer for Builds {
-            type Score = ();
-            fn law<L: estimators::Law<Num = f32>>(&self, _: L) {}
-            fn tracker(&self, _: estimators::KalmanNoise) {}
+        impl estimators::LawVisitor for Builds {
+            type Output = ();
+            fn law<L: estimators::Law<Num = f32>>(self, _: L) {}
+            fn tracker(self, _: estimators::KalmanNoise) {}
         }
         struct Check<'a>(&'a FamilyGains, f32, Option<(&'static str, ConfigError)>);
-        impl SearchVisitor for Check<'_> {
-            fn family<F: Family>(&mut self, column: usize)
-            where
-                F::Gains: Search,
-            {
+        impl FamilyVisitor for Check<'_> {
+            fn family<F: Family>(&mut self, column: usize) {
                 if self.2.is_some() {
                     return;
                 }
                 if let Some(g) = self.0.get_at::<F>(column) {
-                    if let Err(e) = g.score(self.1, &Builds) {
+                    if let Err(e) = g.build(self.1, Builds) {
                         self.2 = Some((F::NAME, e));
                     }
                 }
             }
         }
         let mut c = Check(self, h, None);
-        for_each_searched_family(&mut c);
+        for_each_family(&mut c);
         match c.2 {
             None => Ok(()),
             Some((name, e)) => Err((name, config_error_key(&e), e)),

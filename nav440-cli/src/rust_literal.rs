@@ -1,220 +1,396 @@
 //! The Rust source `nav440 tune --rust` writes for a firmware: each gains value as the
-//! expression that builds it ([`RustLiteral`], implemented here for the estimators crate's
-//! configuration types), the `use estimators::{..}` line those expressions need, and the
-//! shipped preset's rate tables as `estimators/src/rates.rs` holds them
-//! ([`write_rate_tables`]).
+//! expression that builds it ([`literal`]), derived from its `serde` form (the fields of every
+//! configuration type the library declares, so that a family added to the paper bank needs
+//! nothing here), the `use estimators::{..}` line those expressions need, and the shipped
+//! preset's rate tables as `estimators/src/rates.rs` holds them ([`write_rate_tables`]).
 //!
-//! Every gain is written with `{:?}`, its shortest form that reads back to the same `f32`.
+//! Every gain is written with `{:?}`, its shortest form that reads back to the same `f32`. A
+//! struct or an array is written on one line, unless it holds a struct: then one field or
+//! element per line, one level deeper (`BankGains { .. }`, the ILOs' array). An enum's
+//! variant is written by its Rust name (`DeltaMode::Leaky { sigma: 0.1 }`, which the gains
+//! file spells `leaky`).
 
 use std::fmt::{self, Write};
 
 use estimators::presets::AVE_DEFAULT;
-use estimators::{
-    AveConfig, BankGains, EdConfig, IloConfig, KalmanNoise, ObserverSwitch, RateGains, KF_DEFAULT,
-};
+use estimators::{BankGains, IloConfig, RateGains, KF_DEFAULT};
+use serde::ser::{self, Impossible, Serialize};
 
-/// Writes a value as the Rust expression that builds it: what [`bank_gains_literal`] writes
-/// for each field of a [`BankGains`] (and so what `nav440 tune --rust` prints).
-pub trait RustLiteral {
-    /// Adds the type names the expression uses to `names` (for a `use estimators::{..}`
-    /// line; a name may repeat).
-    fn rust_types(&self, names: &mut Vec<&'static str>);
-
-    /// Writes the expression. Where it breaks the line, the next line starts with `indent`
-    /// (the indentation of the line the expression starts on) plus its own indentation.
-    fn write_rust(&self, w: &mut dyn Write, indent: Indent<'_>) -> fmt::Result;
+/// A value as its Rust expression will write it: what `serde` says of it.
+#[derive(Clone, Debug, PartialEq)]
+enum Node {
+    /// A number or a boolean, as written.
+    Scalar(String),
+    /// `Name { field: .., .. }`, or for an enum's variant `Enum::Variant { .. }`.
+    Struct {
+        path: String,
+        types: Vec<&'static str>,
+        fields: Vec<(&'static str, Node)>,
+        /// A struct, not an enum's variant (what puts its container on several lines).
+        plain: bool,
+    },
+    /// `Enum::Variant`.
+    Unit { path: String, ty: &'static str },
+    /// `[.., ..]`.
+    Seq(Vec<Node>),
 }
 
-/// The indentation of a line of generated Rust: `base`, then four spaces per level.
-#[derive(Clone, Copy, Debug)]
-pub struct Indent<'a> {
-    /// What every line starts with.
-    pub base: &'a str,
-    /// Levels of four spaces after `base`.
-    pub levels: usize,
-}
+impl Node {
+    /// Whether any child is a plain struct (then `self` takes one line per child).
+    fn holds_a_struct(&self) -> bool {
+        let children: Vec<&Node> = match self {
+            Node::Struct { fields, .. } => fields.iter().map(|(_, n)| n).collect(),
+            Node::Seq(items) => items.iter().collect(),
+            _ => Vec::new(),
+        };
+        children
+            .iter()
+            .any(|c| matches!(c, Node::Struct { plain: true, .. }) || c.holds_a_struct())
+    }
 
-impl Indent<'_> {
-    /// One level deeper.
-    pub fn deeper(self) -> Self {
-        Self {
-            levels: self.levels + 1,
-            ..self
+    /// The type names the expression of every child uses (`self`'s own not included).
+    fn child_types(&self, names: &mut Vec<&'static str>) {
+        let children: Vec<&Node> = match self {
+            Node::Struct { fields, .. } => fields.iter().map(|(_, n)| n).collect(),
+            Node::Seq(items) => items.iter().collect(),
+            _ => Vec::new(),
+        };
+        for c in children {
+            match c {
+                Node::Struct { types, .. } => names.extend(types),
+                Node::Unit { ty, .. } => names.push(ty),
+                _ => {}
+            }
+            c.child_types(names);
+        }
+    }
+
+    /// Writes the expression; continuation lines start with `indent` plus four spaces per
+    /// level of nesting.
+    fn write(&self, w: &mut String, indent: &str) -> fmt::Result {
+        let deeper = format!("{indent}    ");
+        let multi = self.holds_a_struct();
+        match self {
+            Node::Scalar(s) => w.write_str(s),
+            Node::Unit { path, .. } => w.write_str(path),
+            Node::Struct { path, fields, .. } => {
+                write!(w, "{path} {{")?;
+                for (i, (name, value)) in fields.iter().enumerate() {
+                    if multi {
+                        write!(w, "\n{deeper}{name}: ")?;
+                        value.write(w, &deeper)?;
+                        w.write_str(",")?;
+                    } else {
+                        let sep = if i == 0 { " " } else { ", " };
+                        write!(w, "{sep}{name}: ")?;
+                        value.write(w, indent)?;
+                    }
+                }
+                if multi {
+                    write!(w, "\n{indent}}}")
+                } else {
+                    w.write_str(" }")
+                }
+            }
+            Node::Seq(items) => {
+                w.write_str("[")?;
+                for (i, value) in items.iter().enumerate() {
+                    if multi {
+                        write!(w, "\n{deeper}")?;
+                        value.write(w, &deeper)?;
+                        w.write_str(",")?;
+                    } else {
+                        if i > 0 {
+                            w.write_str(", ")?;
+                        }
+                        value.write(w, indent)?;
+                    }
+                }
+                if multi {
+                    write!(w, "\n{indent}]")
+                } else {
+                    w.write_str("]")
+                }
+            }
         }
     }
 }
 
-impl fmt::Display for Indent<'_> {
+/// A `serde` form that has no Rust literal here (a map, a string, a tuple variant).
+#[derive(Debug)]
+struct Unsupported(String);
+
+impl fmt::Display for Unsupported {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.base)?;
-        for _ in 0..self.levels {
-            f.write_str("    ")?;
-        }
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Unsupported {}
+
+impl ser::Error for Unsupported {
+    fn custom<T: fmt::Display>(msg: T) -> Self {
+        Unsupported(msg.to_string())
+    }
+}
+
+/// A variant's Rust name from its `serde` name (`leaky` -> `Leaky`, `zero_order` ->
+/// `ZeroOrder`; a name already in UpperCamelCase is kept).
+fn rust_variant(name: &str) -> String {
+    name.split('_')
+        .map(|part| {
+            let mut c = part.chars();
+            c.next()
+                .map(|f| f.to_uppercase().chain(c).collect::<String>())
+                .unwrap_or_default()
+        })
+        .collect()
+}
+
+/// The `serde` serializer that builds a [`Node`].
+struct ToNode;
+
+/// The elements of a sequence or tuple being serialized.
+struct SeqNode(Vec<Node>);
+
+/// The fields of a struct or struct variant being serialized.
+struct StructNode {
+    path: String,
+    types: Vec<&'static str>,
+    fields: Vec<(&'static str, Node)>,
+    plain: bool,
+}
+
+impl ser::Serializer for ToNode {
+    type Ok = Node;
+    type Error = Unsupported;
+    type SerializeSeq = SeqNode;
+    type SerializeTuple = SeqNode;
+    type SerializeTupleStruct = SeqNode;
+    type SerializeTupleVariant = Impossible<Node, Unsupported>;
+    type SerializeMap = Impossible<Node, Unsupported>;
+    type SerializeStruct = StructNode;
+    type SerializeStructVariant = StructNode;
+
+    fn serialize_bool(self, v: bool) -> Result<Node, Unsupported> {
+        Ok(Node::Scalar(v.to_string()))
+    }
+    fn serialize_i8(self, v: i8) -> Result<Node, Unsupported> {
+        Ok(Node::Scalar(v.to_string()))
+    }
+    fn serialize_i16(self, v: i16) -> Result<Node, Unsupported> {
+        Ok(Node::Scalar(v.to_string()))
+    }
+    fn serialize_i32(self, v: i32) -> Result<Node, Unsupported> {
+        Ok(Node::Scalar(v.to_string()))
+    }
+    fn serialize_i64(self, v: i64) -> Result<Node, Unsupported> {
+        Ok(Node::Scalar(v.to_string()))
+    }
+    fn serialize_u8(self, v: u8) -> Result<Node, Unsupported> {
+        Ok(Node::Scalar(v.to_string()))
+    }
+    fn serialize_u16(self, v: u16) -> Result<Node, Unsupported> {
+        Ok(Node::Scalar(v.to_string()))
+    }
+    fn serialize_u32(self, v: u32) -> Result<Node, Unsupported> {
+        Ok(Node::Scalar(v.to_string()))
+    }
+    fn serialize_u64(self, v: u64) -> Result<Node, Unsupported> {
+        Ok(Node::Scalar(v.to_string()))
+    }
+    fn serialize_f32(self, v: f32) -> Result<Node, Unsupported> {
+        Ok(Node::Scalar(format!("{v:?}")))
+    }
+    fn serialize_f64(self, v: f64) -> Result<Node, Unsupported> {
+        Ok(Node::Scalar(format!("{v:?}")))
+    }
+    fn serialize_char(self, _: char) -> Result<Node, Unsupported> {
+        Err(Unsupported("a char".into()))
+    }
+    fn serialize_str(self, _: &str) -> Result<Node, Unsupported> {
+        Err(Unsupported("a string".into()))
+    }
+    fn serialize_bytes(self, _: &[u8]) -> Result<Node, Unsupported> {
+        Err(Unsupported("bytes".into()))
+    }
+    fn serialize_none(self) -> Result<Node, Unsupported> {
+        Ok(Node::Scalar("None".into()))
+    }
+    fn serialize_some<T: ?Sized + Serialize>(self, v: &T) -> Result<Node, Unsupported> {
+        let mut s = String::from("Some(");
+        v.serialize(ToNode)?
+            .write(&mut s, "")
+            .map_err(|_| Unsupported("an option".into()))?;
+        s.push(')');
+        Ok(Node::Scalar(s))
+    }
+    fn serialize_unit(self) -> Result<Node, Unsupported> {
+        Ok(Node::Scalar("()".into()))
+    }
+    fn serialize_unit_struct(self, name: &'static str) -> Result<Node, Unsupported> {
+        Ok(Node::Unit {
+            path: name.into(),
+            ty: name,
+        })
+    }
+    fn serialize_unit_variant(
+        self,
+        name: &'static str,
+        _: u32,
+        variant: &'static str,
+    ) -> Result<Node, Unsupported> {
+        Ok(Node::Unit {
+            path: format!("{name}::{}", rust_variant(variant)),
+            ty: name,
+        })
+    }
+    fn serialize_newtype_struct<T: ?Sized + Serialize>(
+        self,
+        name: &'static str,
+        v: &T,
+    ) -> Result<Node, Unsupported> {
+        let _ = v;
+        Err(Unsupported(format!("the newtype {name}")))
+    }
+    fn serialize_newtype_variant<T: ?Sized + Serialize>(
+        self,
+        name: &'static str,
+        _: u32,
+        variant: &'static str,
+        _: &T,
+    ) -> Result<Node, Unsupported> {
+        Err(Unsupported(format!(
+            "the newtype variant {name}::{variant}"
+        )))
+    }
+    fn serialize_seq(self, len: Option<usize>) -> Result<SeqNode, Unsupported> {
+        Ok(SeqNode(Vec::with_capacity(len.unwrap_or(0))))
+    }
+    fn serialize_tuple(self, len: usize) -> Result<SeqNode, Unsupported> {
+        Ok(SeqNode(Vec::with_capacity(len)))
+    }
+    fn serialize_tuple_struct(self, name: &'static str, _: usize) -> Result<SeqNode, Unsupported> {
+        Err(Unsupported(format!("the tuple struct {name}")))
+    }
+    fn serialize_tuple_variant(
+        self,
+        name: &'static str,
+        _: u32,
+        variant: &'static str,
+        _: usize,
+    ) -> Result<Self::SerializeTupleVariant, Unsupported> {
+        Err(Unsupported(format!("the tuple variant {name}::{variant}")))
+    }
+    fn serialize_map(self, _: Option<usize>) -> Result<Self::SerializeMap, Unsupported> {
+        Err(Unsupported("a map".into()))
+    }
+    fn serialize_struct(self, name: &'static str, len: usize) -> Result<StructNode, Unsupported> {
+        Ok(StructNode {
+            path: name.into(),
+            types: vec![name],
+            fields: Vec::with_capacity(len),
+            plain: true,
+        })
+    }
+    fn serialize_struct_variant(
+        self,
+        name: &'static str,
+        _: u32,
+        variant: &'static str,
+        len: usize,
+    ) -> Result<StructNode, Unsupported> {
+        Ok(StructNode {
+            path: format!("{name}::{}", rust_variant(variant)),
+            types: vec![name],
+            fields: Vec::with_capacity(len),
+            plain: false,
+        })
+    }
+}
+
+impl ser::SerializeSeq for SeqNode {
+    type Ok = Node;
+    type Error = Unsupported;
+    fn serialize_element<T: ?Sized + Serialize>(&mut self, v: &T) -> Result<(), Unsupported> {
+        self.0.push(v.serialize(ToNode)?);
         Ok(())
     }
-}
-
-/// A bare gain (e.g. the AD's time constant, s).
-impl RustLiteral for f32 {
-    fn rust_types(&self, _: &mut Vec<&'static str>) {}
-
-    fn write_rust(&self, w: &mut dyn Write, _: Indent<'_>) -> fmt::Result {
-        write!(w, "{self:?}")
+    fn end(self) -> Result<Node, Unsupported> {
+        Ok(Node::Seq(self.0))
     }
 }
 
-/// One element per line, one level deeper than the `[`.
-impl<T: RustLiteral, const N: usize> RustLiteral for [T; N] {
-    fn rust_types(&self, names: &mut Vec<&'static str>) {
-        for x in self {
-            x.rust_types(names);
-        }
+impl ser::SerializeTuple for SeqNode {
+    type Ok = Node;
+    type Error = Unsupported;
+    fn serialize_element<T: ?Sized + Serialize>(&mut self, v: &T) -> Result<(), Unsupported> {
+        ser::SerializeSeq::serialize_element(self, v)
     }
-
-    fn write_rust(&self, w: &mut dyn Write, indent: Indent<'_>) -> fmt::Result {
-        w.write_str("[\n")?;
-        for x in self {
-            write!(w, "{}", indent.deeper())?;
-            x.write_rust(w, indent.deeper())?;
-            w.write_str(",\n")?;
-        }
-        write!(w, "{indent}]")
+    fn end(self) -> Result<Node, Unsupported> {
+        ser::SerializeSeq::end(self)
     }
 }
 
-/// On one line: `AveConfig { k: .., gamma1: .., delta: DeltaMode::.. }`.
-impl RustLiteral for AveConfig {
-    fn rust_types(&self, names: &mut Vec<&'static str>) {
-        names.extend(["AveConfig", "DeltaMode"]);
+impl ser::SerializeTupleStruct for SeqNode {
+    type Ok = Node;
+    type Error = Unsupported;
+    fn serialize_field<T: ?Sized + Serialize>(&mut self, v: &T) -> Result<(), Unsupported> {
+        ser::SerializeSeq::serialize_element(self, v)
     }
-
-    fn write_rust(&self, w: &mut dyn Write, _: Indent<'_>) -> fmt::Result {
-        write!(
-            w,
-            "AveConfig {{ k: {:?}, gamma1: {:?}, delta: DeltaMode::{:?} }}",
-            self.k, self.gamma1, self.delta
-        )
+    fn end(self) -> Result<Node, Unsupported> {
+        ser::SerializeSeq::end(self)
     }
 }
 
-/// On one line: `IloConfig { k1: .., l: .., k2: .. }`.
-impl RustLiteral for IloConfig {
-    fn rust_types(&self, names: &mut Vec<&'static str>) {
-        names.push("IloConfig");
+impl ser::SerializeStruct for StructNode {
+    type Ok = Node;
+    type Error = Unsupported;
+    fn serialize_field<T: ?Sized + Serialize>(
+        &mut self,
+        key: &'static str,
+        v: &T,
+    ) -> Result<(), Unsupported> {
+        self.fields.push((key, v.serialize(ToNode)?));
+        Ok(())
     }
-
-    fn write_rust(&self, w: &mut dyn Write, _: Indent<'_>) -> fmt::Result {
-        write!(
-            w,
-            "IloConfig {{ k1: {:?}, l: {:?}, k2: {:?} }}",
-            self.k1, self.l, self.k2
-        )
-    }
-}
-
-/// On one line: `EdConfig { lambda: .., alpha: .. }`.
-impl RustLiteral for EdConfig {
-    fn rust_types(&self, names: &mut Vec<&'static str>) {
-        names.push("EdConfig");
-    }
-
-    fn write_rust(&self, w: &mut dyn Write, _: Indent<'_>) -> fmt::Result {
-        write!(
-            w,
-            "EdConfig {{ lambda: {:?}, alpha: {:?} }}",
-            self.lambda, self.alpha
-        )
+    fn end(self) -> Result<Node, Unsupported> {
+        Ok(Node::Struct {
+            path: self.path,
+            types: self.types,
+            fields: self.fields,
+            plain: self.plain,
+        })
     }
 }
 
-/// On one line: `KalmanNoise { q: .., r: .. }`.
-impl RustLiteral for KalmanNoise {
-    fn rust_types(&self, names: &mut Vec<&'static str>) {
-        names.push("KalmanNoise");
+impl ser::SerializeStructVariant for StructNode {
+    type Ok = Node;
+    type Error = Unsupported;
+    fn serialize_field<T: ?Sized + Serialize>(
+        &mut self,
+        key: &'static str,
+        v: &T,
+    ) -> Result<(), Unsupported> {
+        ser::SerializeStruct::serialize_field(self, key, v)
     }
-
-    fn write_rust(&self, w: &mut dyn Write, _: Indent<'_>) -> fmt::Result {
-        write!(w, "KalmanNoise {{ q: {:?}, r: {:?} }}", self.q, self.r)
-    }
-}
-
-/// `BankGains { .. }` with every field spelled out on its own line, one level deeper than the
-/// `BankGains`.
-impl RustLiteral for BankGains {
-    fn rust_types(&self, names: &mut Vec<&'static str>) {
-        let BankGains {
-            ave,
-            ilo,
-            ad_t,
-            ed,
-            kf,
-        } = self;
-        ave.rust_types(names);
-        ilo.rust_types(names);
-        ad_t.rust_types(names);
-        ed.rust_types(names);
-        kf.rust_types(names);
-    }
-
-    fn write_rust(&self, w: &mut dyn Write, indent: Indent<'_>) -> fmt::Result {
-        // Every field by name: a field added to `BankGains` does not compile here until it is
-        // written too.
-        let BankGains {
-            ave,
-            ilo,
-            ad_t,
-            ed,
-            kf,
-        } = self;
-        let fields: [(&str, &dyn RustLiteral); 5] = [
-            ("ave", ave),
-            ("ilo", ilo),
-            ("ad_t", ad_t),
-            ("ed", ed),
-            ("kf", kf),
-        ];
-        let field = indent.deeper();
-        w.write_str("BankGains {\n")?;
-        for (name, value) in fields {
-            write!(w, "{field}{name}: ")?;
-            value.write_rust(w, field)?;
-            w.write_str(",\n")?;
-        }
-        write!(w, "{indent}}}")
+    fn end(self) -> Result<Node, Unsupported> {
+        ser::SerializeStruct::end(self)
     }
 }
 
-/// On one line: `ObserverSwitch { ave: .., ilo: [..], ed: .. }`.
-impl RustLiteral for ObserverSwitch {
-    fn rust_types(&self, names: &mut Vec<&'static str>) {
-        names.push("ObserverSwitch");
-    }
-
-    fn write_rust(&self, w: &mut dyn Write, _: Indent<'_>) -> fmt::Result {
-        let ObserverSwitch {
-            ave,
-            ilo: [i1, i2, i3],
-            ed,
-        } = self;
-        write!(
-            w,
-            "ObserverSwitch {{ ave: {ave:?}, ilo: [{i1:?}, {i2:?}, {i3:?}], ed: {ed:?} }}"
-        )
-    }
-}
-
-/// `value` as a Rust expression ([`RustLiteral::write_rust`]) whose continuation lines start
-/// with `indent`.
-pub fn literal(value: &dyn RustLiteral, indent: &str) -> String {
+/// `value` as a Rust expression, each line after the first starting with `indent` (plus its
+/// own indentation); empty if its `serde` form has no Rust literal here (a map, a string: no
+/// configuration type of the library has one).
+pub fn literal<T: Serialize + ?Sized>(value: &T, indent: &str) -> String {
     let mut s = String::new();
-    // Writing to a String does not fail.
-    let _ = value.write_rust(
-        &mut s,
-        Indent {
-            base: indent,
-            levels: 0,
-        },
-    );
+    match value.serialize(ToNode) {
+        // Writing to a String does not fail.
+        Ok(node) => {
+            let _ = node.write(&mut s, indent);
+        }
+        Err(_) => s.clear(),
+    }
     s
 }
 
@@ -229,7 +405,9 @@ pub fn bank_gains_literal(g: &BankGains, indent: &str) -> String {
 /// sorted.
 pub fn use_line(names: &[&str]) -> String {
     let mut types = Vec::new();
-    BankGains::PAPER_VELOCITY.rust_types(&mut types);
+    if let Ok(node) = BankGains::PAPER_VELOCITY.serialize(ToNode) {
+        node.child_types(&mut types);
+    }
     let mut all: Vec<&str> = types.into_iter().chain(names.iter().copied()).collect();
     all.sort_unstable();
     all.dedup();
@@ -347,7 +525,7 @@ fn write_ilo(w: &mut dyn Write, ilo: &[IloConfig; 3]) -> fmt::Result {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use estimators::{BankConfig, DeltaMode};
+    use estimators::{BankConfig, DeltaMode, ObserverSwitch};
 
     /// The paper's velocity gains as `nav440 tune --rust` writes them: every field on its own
     /// line, the ILOs one per line one level deeper, the paper's values in their `{:?}` form.

@@ -1,275 +1,252 @@
-//! What `nav440 tune` searches in each family's gains: the coordinates, their box, the
-//! estimator a candidate builds ([`Search`], implemented here for the estimators crate's
-//! configuration types), and the families it tunes ([`for_each_searched_family`]). The gains
-//! file's check ([`crate::gains::FamilyGains::check`]) builds each table's law the same way.
+//! What `nav440 tune` searches in each family's gains: the coordinates, their box and the
+//! one-line description of the report, derived from what the library says of every family
+//! ([`estimators::Family`], [`estimators::Gains`]), so that the tuner iterates the library's
+//! own family list ([`estimators::for_each_family`]) and a new family needs nothing here:
+//!
+//! * a family's gains are its configuration's numbers by name: the fields of its
+//!   configuration type as `serde` writes them (the keys of its gains-file table), in
+//!   declaration order; settings that are not numbers (the AVE's `deltahat` law) are kept;
+//! * the estimator a candidate builds is the library's ([`estimators::Gains::build`]), which
+//!   the tuner's objective receives as an [`estimators::LawVisitor`];
+//! * the search box of a configuration type listed in [`KNOWN`] is the one chosen for it
+//!   there (which numbers, on which scale, in which range); any other family searches each of
+//!   its numbers whose paper values (both halves) are positive, two decades either side of
+//!   them (`[lowest / 100, highest * 100]`), the others kept.
+//!
+//! The gains file's check ([`crate::gains::FamilyGains::check`]) builds each table's law the
+//! same way.
 
-use estimators::{
-    AdConfig, AdFamily, AdParams, AveConfig, AveFamily, AveParams, ConfigError, EdConfig, EdFamily,
-    EdParams, EdScheme, Family, Gains, IloConfig, IloFamily, IloParams, KalmanNoise, KfFamily, Law,
-};
+use std::any::TypeId;
 
-/// A family's gains as the tuner sees them: the gains it searches as coordinates, the box it
-/// searches them in, and the estimator a candidate builds.
-pub trait Search: Gains {
-    /// The gains the tuner searches, as coordinates (in the order of [`Self::search_box`]).
-    fn search_point(&self) -> Vec<f64>;
+use estimators::{AdConfig, AveConfig, BankGains, EdConfig, Family, IloConfig, KalmanNoise};
+use serde_json::{Map, Number, Value};
 
-    /// These gains with the searched ones set from the coordinates `x` (the others, e.g. the
-    /// AVE's `deltahat` law, kept).
-    fn with_search_point(&self, x: &[f64]) -> Self;
-
-    /// The search range `(lowest, highest)` of each coordinate of [`Self::search_point`] at
-    /// the step `h_s` (s): the gains the law accepts at that step, spanning the paper's by
-    /// two decades or more each side.
-    fn search_box(h_s: f64) -> (Vec<f64>, Vec<f64>);
-
-    /// Hands the estimator these gains build at the step `h` (s) to `scorer`, which scores it
-    /// (the tuner's objective); the error of the law's constructor if they do not build one.
-    fn score<S: Scorer>(&self, h: f32, scorer: &S) -> Result<S::Score, ConfigError>;
-
-    /// The gains on one line, `name=value` separated by spaces (e.g. `k=500 gamma1=20000`),
-    /// as the tuner's report prints them.
-    fn describe(&self) -> String;
+/// How a coordinate of the search maps to its gain.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Scale {
+    /// The coordinate is the gain.
+    Gain,
+    /// The coordinate is the gain's leak `1 - gain` (a gain within a hair of 1, searched on a
+    /// log scale through its distance to 1: the ILO's `K1`).
+    Leak,
 }
 
-/// What scores a family's candidate gains ([`Search::score`]): the tuner's objective, given
-/// the estimator the gains build.
-pub trait Scorer {
-    /// The score (e.g. a mean square error).
-    type Score;
-
-    /// Scores a law stepped at `h` between samples: its output is the velocity estimate; the
-    /// scorer may run two of it in series for the acceleration (as the bank does).
-    fn law<L: Law<Num = f32>>(&self, law: L) -> Self::Score;
-
-    /// Scores a Kalman tracker with the noise `noise` (run once per sample, the bank's
-    /// `KalmanParams`; velocity or acceleration output as the scorer needs).
-    fn tracker(&self, noise: KalmanNoise) -> Self::Score;
+/// One end of a coordinate's range.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Bound {
+    /// A fixed value.
+    At(f64),
+    /// `c / h`, `h` the step (s): a gain the law bounds by the step.
+    PerStep(f64),
 }
 
-/// Something done for every family the tuner searches: [`for_each_searched_family`] calls
-/// [`SearchVisitor::family`] once per family, in column order.
-pub trait SearchVisitor {
-    /// Called with the family `F` and its column (0-based, the order of
-    /// [`estimators::FAMILIES`]).
-    fn family<F: Family>(&mut self, column: usize)
-    where
-        F::Gains: Search;
-}
-
-/// Calls `visitor.family::<F>(column)` for each family of the paper bank, in column order:
-/// [`estimators::for_each_family`]'s list, with the bound `F::Gains: Search` (a test checks
-/// that the two lists are the same).
-pub fn for_each_searched_family<V: SearchVisitor>(visitor: &mut V) {
-    visitor.family::<AveFamily>(0);
-    visitor.family::<IloFamily<0>>(1);
-    visitor.family::<IloFamily<1>>(2);
-    visitor.family::<IloFamily<2>>(3);
-    visitor.family::<AdFamily>(4);
-    visitor.family::<EdFamily>(5);
-    visitor.family::<KfFamily>(6);
-}
-
-/// Coordinate `i` of `x` as f32, or `current` if `x` is shorter.
-fn coordinate(x: &[f64], i: usize, current: f32) -> f32 {
-    x.get(i).map_or(current, |&v| v as f32)
-}
-
-impl Search for AveConfig {
-    /// `(k, gamma1)`; the `deltahat` law is not searched.
-    fn search_point(&self) -> Vec<f64> {
-        vec![f64::from(self.k), f64::from(self.gamma1)]
-    }
-
-    fn with_search_point(&self, x: &[f64]) -> Self {
-        AveConfig {
-            k: coordinate(x, 0, self.k),
-            gamma1: coordinate(x, 1, self.gamma1),
-            delta: self.delta,
+impl Bound {
+    fn at(self, h_s: f64) -> f64 {
+        match self {
+            Bound::At(v) => v,
+            Bound::PerStep(c) => c / h_s,
         }
     }
+}
 
-    /// `k` in `[0.1, 1e5]` 1/s (tuned at low noise it reaches 10), `gamma1` in `[10, 1e8]`
-    /// 1/s^2; `AveParams::new` refuses what the step does not resolve.
-    fn search_box(_h_s: f64) -> (Vec<f64>, Vec<f64>) {
-        (vec![0.1, 10.0], vec![1e5, 1e8])
-    }
+/// A searched gain: its name (the configuration's field), its scale and its range.
+#[derive(Clone, Debug, PartialEq)]
+struct Coordinate {
+    gain: String,
+    scale: Scale,
+    lo: Bound,
+    hi: Bound,
+}
 
-    fn score<S: Scorer>(&self, h: f32, scorer: &S) -> Result<S::Score, ConfigError> {
-        Ok(scorer.law(AveParams::<f32>::new(self, h)?))
-    }
+/// The search chosen for one configuration type: the coordinates (the numbers not listed are
+/// kept) and the labels of its numbers in the report (the others by their field name).
+struct Known {
+    /// The configuration type.
+    ty: fn() -> TypeId,
+    /// Each searched gain: its field, scale, lowest and highest value.
+    coordinates: &'static [(&'static str, Scale, Bound, Bound)],
+    labels: &'static [(&'static str, &'static str)],
+}
 
-    fn describe(&self) -> String {
-        format!("k={} gamma1={}", self.k, self.gamma1)
+/// The configuration types whose search box was chosen by hand (each range spans the paper's
+/// gains by two decades or more each side, within what the law accepts at the step).
+const KNOWN: &[Known] = &[
+    // `(k, gamma1)`, the `deltahat` law not searched: `k` in `[0.1, 1e5]` 1/s (tuned at low
+    // noise it reaches 10), `gamma1` in `[10, 1e8]` 1/s^2; `AveParams::new` refuses what the
+    // step does not resolve.
+    Known {
+        ty: TypeId::of::<AveConfig>,
+        coordinates: &[
+            ("k", Scale::Gain, Bound::At(0.1), Bound::At(1e5)),
+            ("gamma1", Scale::Gain, Bound::At(10.0), Bound::At(1e8)),
+        ],
+        labels: &[],
+    },
+    // `(1 - K1, L, K2)`: `K1` through its leak on a log scale, because the best `K1` lie
+    // within 1e-3 of 1 (a leak of a few 1/s at `tau = h`); the leak in `[1e-7, 0.95]` (`K1 = 1`
+    // to f32 precision, to `K1 = 0.05`), `L` in `[0.1, 0.99 / h]` 1/s (`h L < 1`, as
+    // `IloParams::new` demands), `K2` in `[1e-3, 1e4]`.
+    Known {
+        ty: TypeId::of::<IloConfig>,
+        coordinates: &[
+            ("k1", Scale::Leak, Bound::At(1e-7), Bound::At(0.95)),
+            ("l", Scale::Gain, Bound::At(0.1), Bound::PerStep(0.99)),
+            ("k2", Scale::Gain, Bound::At(1e-3), Bound::At(1e4)),
+        ],
+        labels: &[("k1", "K1"), ("l", "L"), ("k2", "K2")],
+    },
+    // `T` in `[1e-4, 1]` s.
+    Known {
+        ty: TypeId::of::<AdConfig>,
+        coordinates: &[("t", Scale::Gain, Bound::At(1e-4), Bound::At(1.0))],
+        labels: &[("t", "T")],
+    },
+    // `lambda` in `[0.1, 1e5]` (tuned at low noise it reaches 10), `alpha` in `[10, 1e6]`
+    // (within `estimators::ED_MAX_H_ALPHA` at every step `h <= 1` s).
+    Known {
+        ty: TypeId::of::<EdConfig>,
+        coordinates: &[
+            ("lambda", Scale::Gain, Bound::At(0.1), Bound::At(1e5)),
+            ("alpha", Scale::Gain, Bound::At(10.0), Bound::At(1e6)),
+        ],
+        labels: &[],
+    },
+    // `q` in `[1, 1e12]` deg^2/s^5; only `q / r` matters for the steady-state gain, so `r` is
+    // kept.
+    Known {
+        ty: TypeId::of::<KalmanNoise>,
+        coordinates: &[("q", Scale::Gain, Bound::At(1.0), Bound::At(1e12))],
+        labels: &[],
+    },
+];
+
+/// The search chosen for `G` in [`KNOWN`], if any.
+fn known<G: 'static>() -> Option<&'static Known> {
+    KNOWN.iter().find(|k| (k.ty)() == TypeId::of::<G>())
+}
+
+/// The gains' fields as `serde` writes them (an empty map for gains that are not a struct).
+fn fields<G: serde::Serialize>(g: &G) -> Map<String, Value> {
+    match serde_json::to_value(g) {
+        Ok(Value::Object(m)) => m,
+        _ => Map::new(),
     }
 }
 
-impl Search for IloConfig {
-    /// `(1 - K1, L, K2)`: `K1` is searched as its leak on a log scale, because the best
-    /// `K1` lie within 1e-3 of 1 (a leak of a few 1/s at `tau = h`).
-    fn search_point(&self) -> Vec<f64> {
-        vec![
-            1.0 - f64::from(self.k1),
-            f64::from(self.l),
-            f64::from(self.k2),
-        ]
-    }
-
-    fn with_search_point(&self, x: &[f64]) -> Self {
-        IloConfig {
-            k1: x.first().map_or(self.k1, |&leak| (1.0 - leak) as f32),
-            l: coordinate(x, 1, self.l),
-            k2: coordinate(x, 2, self.k2),
-        }
-    }
-
-    /// The leak `1 - K1` in `[1e-7, 0.95]` (`K1 = 1` to f32 precision, to `K1 = 0.05`), `L`
-    /// in `[0.1, 0.99 / h]` 1/s (`h L < 1`, as `IloParams::new` demands), `K2` in
-    /// `[1e-3, 1e4]`.
-    fn search_box(h_s: f64) -> (Vec<f64>, Vec<f64>) {
-        (vec![1e-7, 0.1, 1e-3], vec![0.95, 0.99 / h_s, 1e4])
-    }
-
-    fn score<S: Scorer>(&self, h: f32, scorer: &S) -> Result<S::Score, ConfigError> {
-        Ok(scorer.law(IloParams::<f32, 1>::new(self, h)?))
-    }
-
-    fn describe(&self) -> String {
-        format!("K1={} L={} K2={}", self.k1, self.l, self.k2)
-    }
+/// The numbers of `g` by name, in declaration order (the fields that are numbers).
+pub fn numbers<G: serde::Serialize>(g: &G) -> Vec<(String, f64)> {
+    fields(g)
+        .into_iter()
+        .filter_map(|(k, v)| v.as_f64().map(|x| (k, x)))
+        .collect()
 }
 
-impl Search for AdConfig {
-    /// `(T)`.
-    fn search_point(&self) -> Vec<f64> {
-        vec![f64::from(self.t)]
+/// The coordinates `nav440 tune` searches for the family `F`.
+fn coordinates<F: Family>() -> Vec<Coordinate> {
+    if let Some(k) = known::<F::Gains>() {
+        return k
+            .coordinates
+            .iter()
+            .map(|&(gain, scale, lo, hi)| Coordinate {
+                gain: gain.to_string(),
+                scale,
+                lo,
+                hi,
+            })
+            .collect();
     }
-
-    fn with_search_point(&self, x: &[f64]) -> Self {
-        AdConfig {
-            t: coordinate(x, 0, self.t),
-        }
-    }
-
-    /// `T` in `[1e-4, 1]` s.
-    fn search_box(_h_s: f64) -> (Vec<f64>, Vec<f64>) {
-        (vec![1e-4], vec![1.0])
-    }
-
-    fn score<S: Scorer>(&self, h: f32, scorer: &S) -> Result<S::Score, ConfigError> {
-        Ok(scorer.law(AdParams::<f32>::new(self.t, h)?))
-    }
-
-    fn describe(&self) -> String {
-        format!("T={}", self.t)
-    }
+    let velocity = numbers(&F::get(&BankGains::PAPER_VELOCITY));
+    let acceleration = numbers(&F::get(&BankGains::PAPER_ACCELERATION));
+    velocity
+        .into_iter()
+        .zip(acceleration)
+        .filter(|((_, v), (_, a))| *v > 0.0 && *a > 0.0)
+        .map(|((gain, v), (_, a))| Coordinate {
+            gain,
+            scale: Scale::Gain,
+            lo: Bound::At(v.min(a) / 100.0),
+            hi: Bound::At(v.max(a) * 100.0),
+        })
+        .collect()
 }
 
-impl Search for EdConfig {
-    /// `(lambda, alpha)`.
-    fn search_point(&self) -> Vec<f64> {
-        vec![f64::from(self.lambda), f64::from(self.alpha)]
-    }
-
-    fn with_search_point(&self, x: &[f64]) -> Self {
-        EdConfig {
-            lambda: coordinate(x, 0, self.lambda),
-            alpha: coordinate(x, 1, self.alpha),
-        }
-    }
-
-    /// `lambda` in `[0.1, 1e5]` (tuned at low noise it reaches 10), `alpha` in `[10, 1e6]`
-    /// (within `estimators::ED_MAX_H_ALPHA` at every step `h <= 1` s).
-    fn search_box(_h_s: f64) -> (Vec<f64>, Vec<f64>) {
-        (vec![0.1, 10.0], vec![1e5, 1e6])
-    }
-
-    /// The ED with the paper's explicit Euler scheme.
-    fn score<Sc: Scorer>(&self, h: f32, scorer: &Sc) -> Result<Sc::Score, ConfigError> {
-        Ok(scorer.law(EdParams::<f32>::new(self, h, EdScheme::Euler)?))
-    }
-
-    fn describe(&self) -> String {
-        format!("lambda={} alpha={}", self.lambda, self.alpha)
-    }
+/// The gains the tuner searches in `g`, as coordinates (in the order of [`search_box`]).
+pub fn search_point<F: Family>(g: &F::Gains) -> Vec<f64> {
+    let f = fields(g);
+    coordinates::<F>()
+        .iter()
+        .map(|c| {
+            let v = f.get(&c.gain).and_then(Value::as_f64).unwrap_or(f64::NAN);
+            match c.scale {
+                Scale::Gain => v,
+                Scale::Leak => 1.0 - v,
+            }
+        })
+        .collect()
 }
 
-impl Search for KalmanNoise {
-    /// `(q)`: only `q / r` matters for the steady-state gain, so `r` is kept.
-    fn search_point(&self) -> Vec<f64> {
-        vec![f64::from(self.q)]
-    }
-
-    fn with_search_point(&self, x: &[f64]) -> Self {
-        KalmanNoise {
-            q: coordinate(x, 0, self.q),
-            r: self.r,
+/// `g` with the searched gains set from the coordinates `x` (each gain rounded to its type as
+/// a gains file reads it; the others, and any coordinate `x` lacks, kept).
+pub fn with_search_point<F: Family>(g: &F::Gains, x: &[f64]) -> F::Gains {
+    let mut f = fields(g);
+    for (c, &v) in coordinates::<F>().iter().zip(x) {
+        let v = match c.scale {
+            Scale::Gain => v,
+            Scale::Leak => 1.0 - v,
+        };
+        if let (Some(slot), Some(n)) = (f.get_mut(&c.gain), Number::from_f64(v)) {
+            *slot = Value::Number(n);
         }
     }
+    serde_json::from_value(Value::Object(f)).unwrap_or(*g)
+}
 
-    /// `q` in `[1, 1e12]` deg^2/s^5.
-    fn search_box(_h_s: f64) -> (Vec<f64>, Vec<f64>) {
-        (vec![1.0], vec![1e12])
-    }
+/// The search range `(lowest, highest)` of each coordinate of [`search_point`] at the step
+/// `h_s` (s).
+pub fn search_box<F: Family>(h_s: f64) -> (Vec<f64>, Vec<f64>) {
+    coordinates::<F>()
+        .iter()
+        .map(|c| (c.lo.at(h_s), c.hi.at(h_s)))
+        .unzip()
+}
 
-    /// The tracker (it needs the nominal sample period, which the scorer knows: it checks
-    /// the noise when it builds the tracker).
-    fn score<S: Scorer>(&self, _h: f32, scorer: &S) -> Result<S::Score, ConfigError> {
-        Ok(scorer.tracker(*self))
-    }
-
-    fn describe(&self) -> String {
-        format!("q={} r={}", self.q, self.r)
-    }
+/// The gains on one line, `name=value` separated by spaces (e.g. `k=500 gamma1=20000`), as the
+/// tuner's report prints them: every number of the gains, by its label.
+pub fn describe<G: estimators::Gains>(g: &G) -> String {
+    let labels = known::<G>().map_or(&[][..], |k| k.labels);
+    numbers(g)
+        .iter()
+        .map(|(name, v)| {
+            let label = labels
+                .iter()
+                .find(|(n, _)| n == name)
+                .map_or(name.as_str(), |(_, l)| l);
+            // The gains are f32: written as such (`0.2`, not its f64 widening).
+            format!("{label}={}", *v as f32)
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use estimators::{for_each_family, BankConfig, FamilyInfo, FamilyVisitor, FAMILIES};
-
-    /// The tuner's list is the library's: the same families, in the same columns.
-    #[test]
-    fn the_searched_families_are_the_paper_banks() {
-        struct Library(Vec<(usize, FamilyInfo)>);
-        impl FamilyVisitor for Library {
-            fn family<F: Family>(&mut self, column: usize) {
-                self.0.push((column, FamilyInfo::of::<F>()));
-            }
-        }
-        struct Searched(Vec<(usize, FamilyInfo)>);
-        impl SearchVisitor for Searched {
-            fn family<F: Family>(&mut self, column: usize)
-            where
-                F::Gains: Search,
-            {
-                self.0.push((column, FamilyInfo::of::<F>()));
-            }
-        }
-        let mut library = Library(Vec::new());
-        for_each_family(&mut library);
-        let mut searched = Searched(Vec::new());
-        for_each_searched_family(&mut searched);
-        assert_eq!(searched.0, library.0);
-        let names: Vec<_> = searched.0.iter().map(|(_, f)| f.name).collect();
-        assert_eq!(names, ["ave", "ilo1", "ilo2", "ilo3", "ad", "ed", "kf"]);
-        assert_eq!(searched.0.len(), FAMILIES.len());
-    }
+    use estimators::{
+        for_each_family, AdFamily, BankConfig, FamilyVisitor, Gains, IloFamily, LawVisitor,
+    };
 
     /// Each family's search point round-trips, and its paper gains lie in its search box.
     #[test]
     fn paper_gains_lie_in_the_search_box() {
         struct Check;
-        impl SearchVisitor for Check {
-            fn family<F: Family>(&mut self, _: usize)
-            where
-                F::Gains: Search,
-            {
+        impl FamilyVisitor for Check {
+            fn family<F: Family>(&mut self, _: usize) {
                 for half in [BankConfig::PAPER.velocity, BankConfig::PAPER.acceleration] {
                     let g = F::get(&half);
-                    let x = g.search_point();
-                    assert_eq!(g.with_search_point(&x), g, "{}", F::NAME);
-                    let (lo, hi) = F::Gains::search_box(1e-4);
+                    let x = search_point::<F>(&g);
+                    assert!(!x.is_empty(), "{}", F::NAME);
+                    assert_eq!(with_search_point::<F>(&g, &x), g, "{}", F::NAME);
+                    let (lo, hi) = search_box::<F>(1e-4);
                     assert_eq!((lo.len(), hi.len()), (x.len(), x.len()));
                     for ((v, l), h) in x.iter().zip(&lo).zip(&hi) {
                         // `K1 = 1` is the leak's lower end (1e-7) to f32 precision.
@@ -279,20 +256,44 @@ mod tests {
                 }
             }
         }
-        for_each_searched_family(&mut Check);
+        for_each_family(&mut Check);
+    }
+
+    /// The coordinates are the gains exactly (f32 widened), the ILO's `K1` through its leak,
+    /// and a point sets each gain as `as f32` does.
+    #[test]
+    fn coordinates_are_the_gains_exactly() {
+        let g = estimators::presets::ILO2_TABLE2;
+        let x = search_point::<IloFamily<1>>(&g);
+        assert_eq!(x, [1.0 - f64::from(g.k1), f64::from(g.l), f64::from(g.k2)]);
+        let p = [1e-3, 7.123456789, 0.3];
+        let i = with_search_point::<IloFamily<1>>(&g, &p);
+        assert_eq!(
+            (i.k1, i.l, i.k2),
+            ((1.0 - p[0]) as f32, p[1] as f32, p[2] as f32)
+        );
+        // A shorter point keeps the gains it does not reach.
+        let a = with_search_point::<AdFamily>(&AdConfig { t: 0.01 }, &[]);
+        assert_eq!(a.t, 0.01);
     }
 
     /// The ILO's `L` bound keeps `h L < 1` (the constructor's condition); both ends of the
     /// leak map to valid `K1` (`K1 = 1 - 1e-7` rounds to `1 - 2^-23` in f32).
     #[test]
     fn the_ilo_search_box_builds_valid_ilos() {
-        let (lo, hi) = IloConfig::search_box(1e-4);
+        struct Builds;
+        impl LawVisitor for Builds {
+            type Output = ();
+            fn law<L: estimators::Law<Num = f32>>(self, _: L) {}
+            fn tracker(self, _: KalmanNoise) {}
+        }
+        let (lo, hi) = search_box::<IloFamily<0>>(1e-4);
         assert!(hi[1] * 1e-4 < 1.0);
         let g = estimators::presets::ILO1_TABLE2;
         for c in [lo[0], hi[0]] {
-            let i = g.with_search_point(&[c, 1.0, 1.0]);
+            let i = with_search_point::<IloFamily<0>>(&g, &[c, 1.0, 1.0]);
             assert!(i.k1 > 0.0 && i.k1 < 1.0, "{}", i.k1);
-            assert!(estimators::Ilo::<f32, 1>::new(&i, 1e-4).is_ok());
+            assert!(i.build(1e-4, Builds).is_ok());
         }
     }
 
@@ -300,10 +301,58 @@ mod tests {
     #[test]
     fn describe_writes_each_gain_by_name() {
         let g = BankConfig::PAPER.velocity;
-        assert_eq!(g.ave.describe(), "k=500 gamma1=20000");
-        assert_eq!(g.ilo[1].describe(), "K1=0.9 L=5 K2=10");
-        assert_eq!(AdConfig { t: g.ad_t }.describe(), "T=0.01");
-        assert_eq!(g.ed.describe(), "lambda=700 alpha=770");
-        assert_eq!(g.kf.describe(), "q=1000000 r=0.01");
+        assert_eq!(describe(&g.ave), "k=500 gamma1=20000");
+        assert_eq!(describe(&g.ilo[1]), "K1=0.9 L=5 K2=10");
+        assert_eq!(describe(&AdConfig { t: g.ad_t }), "T=0.01");
+        assert_eq!(describe(&g.ed), "lambda=700 alpha=770");
+        assert_eq!(describe(&g.kf), "q=1000000 r=0.01");
+    }
+
+    /// A configuration type without a chosen box searches each positive number two decades
+    /// either side of its paper values, by its field name.
+    #[test]
+    fn an_unlisted_family_searches_two_decades_around_its_paper_gains() {
+        /// The AD's gains under another type: not in [`KNOWN`].
+        #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+        struct Other {
+            t: f32,
+        }
+        impl Gains for Other {
+            fn interpolate(&self, _: &Self, _: f32) -> Self {
+                *self
+            }
+            fn build<V: LawVisitor>(
+                &self,
+                h: f32,
+                to: V,
+            ) -> Result<V::Output, estimators::ConfigError> {
+                AdConfig { t: self.t }.build(h, to)
+            }
+        }
+        struct OtherFamily;
+        impl Family for OtherFamily {
+            type Gains = Other;
+            const NAME: &'static str = "other";
+            const LABEL: &'static str = "OTHER";
+            const VELOCITY: estimators::Channel = estimators::Channel::AdV;
+            const ACCELERATION: estimators::Channel = estimators::Channel::AdA;
+            const SCHEDULING: estimators::Scheduling = estimators::Scheduling::Smooth;
+            fn get(half: &BankGains) -> Other {
+                Other { t: half.ad_t }
+            }
+            fn set(half: &mut BankGains, g: Other) {
+                half.ad_t = g.t;
+            }
+        }
+        let (lo, hi) = search_box::<OtherFamily>(1e-4);
+        assert_eq!(lo, [f64::from(0.01f32) / 100.0]);
+        assert_eq!(hi, [f64::from(0.1f32) * 100.0]);
+        let g = Other { t: 0.01 };
+        assert_eq!(search_point::<OtherFamily>(&g), [f64::from(0.01f32)]);
+        assert_eq!(
+            with_search_point::<OtherFamily>(&g, &[0.5]),
+            Other { t: 0.5 }
+        );
+        assert_eq!(describe(&g), "t=0.01");
     }
 }

@@ -42,6 +42,8 @@ pub struct ScheduleLevel {
 /// value here through [`crate::Family::switch_up_mut`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct ObserverSwitch {
     /// AVE (velocity AVE and the AVE-AVE series), deg^2.
     pub ave: f32,

@@ -397,9 +397,16 @@ fn set_gains_equals_a_fresh_build() {
             let fresh =
                 <crate::PaperRows as crate::Rows<T, crate::NativeSqrt>>::build(&cfg, n0, None)
                     .unwrap();
+            type R = crate::PaperRows;
             assert_eq!(
-                format!("{:?}", bank.params()),
-                format!("{fresh:?}"),
+                format!(
+                    "{:?}",
+                    <R as crate::Rows<T, crate::NativeSqrt>>::params_debug(bank.params())
+                ),
+                format!(
+                    "{:?}",
+                    <R as crate::Rows<T, crate::NativeSqrt>>::params_debug(&fresh)
+                ),
                 "noise {v}"
             );
         }
@@ -448,7 +455,13 @@ fn a_replayed_gain_change_is_a_bank_run_with_the_new_gains() {
         }
         assert!(history.iter().any(|f| f.shift.is_some()));
         old.set_gains_replaying(&b, &history, |_| {}).unwrap();
-        assert_eq!(format!("{:?}", old.state()), format!("{:?}", fresh.state()));
+        let state = |b: &PaperBank<T>| {
+            format!(
+                "{:?}",
+                <crate::PaperRows as crate::Rows<T, crate::NativeSqrt>>::state_debug(b.state())
+            )
+        };
+        assert_eq!(state(&old), state(&fresh));
         for k in 60..160 {
             let (t, y) = wrapping_ramp(k, gap, &mut g);
             assert_eq!(
@@ -498,12 +511,15 @@ fn a_warm_retune_replays_the_changed_rows() {
         }
     }
     extern crate std;
+    let state = |s: &crate::PaperState<f32>| {
+        std::format!(
+            "{:?}",
+            <crate::PaperRows as crate::Rows<f32, crate::NativeSqrt>>::state_debug(s)
+        )
+    };
     let before = *warm.bank().state();
     warm.retune(0.01);
-    assert_eq!(
-        std::format!("{:?}", warm.bank().state()),
-        std::format!("{before:?}")
-    );
+    assert_eq!(state(warm.bank().state()), state(&before));
     warm.retune(1.0);
     cold.retune(1.0);
     for k in 50..150 {

@@ -154,13 +154,26 @@ pub trait Row<T: Real, S: SqrtFn<T>>: Channels {
     }
 }
 
-/// The rows of a bank: a tuple of [`Row`]s (implemented for tuples of 1 to 12 rows). Each
+/// The rows of a bank: a tuple of [`Row`]s (implemented for tuples of 1 to 16 rows). Each
 /// method runs every row in order.
 pub trait Rows<T: Real, S: SqrtFn<T>>: ChannelLists {
     /// Every row's law.
-    type Params: Copy + core::fmt::Debug;
+    type Params: Copy;
     /// Every row's state.
-    type State: Copy + core::fmt::Debug;
+    type State: Copy;
+    /// Writes every row's law, as a tuple's `Debug` does (`core` implements `Debug` only for
+    /// tuples of up to 12 elements).
+    fn fmt_params(p: &Self::Params, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result;
+    /// Writes every row's state, as a tuple's `Debug` does.
+    fn fmt_state(s: &Self::State, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result;
+    /// Every row's law, printable with `{:?}` ([`Self::fmt_params`]).
+    fn params_debug(p: &Self::Params) -> RowsDebug<'_, Self::Params> {
+        RowsDebug(p, Self::fmt_params)
+    }
+    /// Every row's state, printable with `{:?}` ([`Self::fmt_state`]).
+    fn state_debug(s: &Self::State) -> RowsDebug<'_, Self::State> {
+        RowsDebug(s, Self::fmt_state)
+    }
 
     /// Builds every row ([`Row::build`]; `prev`: the rows being replaced).
     fn build(
@@ -192,6 +205,19 @@ pub trait Rows<T: Real, S: SqrtFn<T>>: ChannelLists {
     );
 }
 
+/// Every row's law or state of a bank, printable with `{:?}` (as a tuple is, whatever the number
+/// of rows): [`Rows::params_debug`], [`Rows::state_debug`].
+pub struct RowsDebug<'a, X>(
+    &'a X,
+    fn(&X, &mut core::fmt::Formatter<'_>) -> core::fmt::Result,
+);
+
+impl<X> core::fmt::Debug for RowsDebug<'_, X> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        (self.1)(self.0, f)
+    }
+}
+
 /// Implements [`Channels`] and [`Rows`] for a tuple of rows.
 macro_rules! tuple_rows {
     ($($R:ident $i:tt),+) => {
@@ -202,6 +228,12 @@ macro_rules! tuple_rows {
         impl<T: Real, S: SqrtFn<T>, $($R: Row<T, S>),+> Rows<T, S> for ($($R,)+) {
             type Params = ($($R::Law,)+);
             type State = ($(<$R::Law as Law>::State,)+);
+            fn fmt_params(p: &Self::Params, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+                f.debug_tuple("")$(.field(&p.$i))+.finish()
+            }
+            fn fmt_state(s: &Self::State, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+                f.debug_tuple("")$(.field(&s.$i))+.finish()
+            }
             fn build(cfg: &BankConfig, n0: u32, prev: Option<&Self::Params>) -> Result<Self::Params, ConfigError> {
                 Ok(($($R::build(cfg, n0, prev.map(|p| &p.$i))?,)+))
             }
@@ -247,6 +279,10 @@ tuple_rows!(A 0, B 1, C 2, D 3, E 4, F 5, G 6, H 7, I 8);
 tuple_rows!(A 0, B 1, C 2, D 3, E 4, F 5, G 6, H 7, I 8, J 9);
 tuple_rows!(A 0, B 1, C 2, D 3, E 4, F 5, G 6, H 7, I 8, J 9, K 10);
 tuple_rows!(A 0, B 1, C 2, D 3, E 4, F 5, G 6, H 7, I 8, J 9, K 10, L 11);
+tuple_rows!(A 0, B 1, C 2, D 3, E 4, F 5, G 6, H 7, I 8, J 9, K 10, L 11, M 12);
+tuple_rows!(A 0, B 1, C 2, D 3, E 4, F 5, G 6, H 7, I 8, J 9, K 10, L 11, M 12, N 13);
+tuple_rows!(A 0, B 1, C 2, D 3, E 4, F 5, G 6, H 7, I 8, J 9, K 10, L 11, M 12, N 13, O 14);
+tuple_rows!(A 0, B 1, C 2, D 3, E 4, F 5, G 6, H 7, I 8, J 9, K 10, L 11, M 12, N 13, O 14, P 15);
 
 /// The number of names in `lists`.
 const fn count(lists: &[&[&str]]) -> usize {
@@ -520,8 +556,8 @@ impl<R: Rows<T, S>, const N: usize, T: Real, S: SqrtFn<T>> core::fmt::Debug for 
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("Bank")
             .field("input", &self.input)
-            .field("params", &self.params)
-            .field("state", &self.state)
+            .field("params", &R::params_debug(&self.params))
+            .field("state", &R::state_debug(&self.state))
             .finish()
     }
 }

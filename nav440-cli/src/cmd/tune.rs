@@ -240,16 +240,13 @@ fn progress(spec: &tune::TuneSpec, runs: u64) -> Progress {
 /// The number of gains each family's search covers, in column order.
 fn search_dims() -> Vec<u32> {
     struct Dims(Vec<u32>);
-    impl crate::search::SearchVisitor for Dims {
-        fn family<F: estimators::Family>(&mut self, _column: usize)
-        where
-            F::Gains: crate::search::Search,
-        {
-            let (lo, _) = <F::Gains as crate::search::Search>::search_box(1.0);
+    impl estimators::FamilyVisitor for Dims {
+        fn family<F: estimators::Family>(&mut self, _column: usize) {
+            let (lo, _) = crate::search::search_box::<F>(1.0);
             self.0.push(lo.len() as u32);
         }
     }
     let mut d = Dims(Vec::new());
-    crate::search::for_each_searched_family(&mut d);
+    estimators::for_each_family(&mut d);
     d.0
 }

@@ -4,7 +4,7 @@
 //! Method: for each family (AVE; ILO1, ILO2, ILO3 from their presets; AD; ED; KF) and each half
 //! of the bank (velocity against the measured rate; series acceleration against the AVE on the
 //! measured rate), [`crate::optim::minimise`] over every gain of the family within its valid
-//! range ([`Search::search_box`]: K1 included) of the MSE over the training time range averaged over
+//! range ([`search::search_box`]: K1 included) of the MSE over the training time range averaged over
 //! `seeds` noise seeds: a global search (coarse log grid, then Nelder-Mead of the `argmin`
 //! crate from several starts and from the paper preset) or, with `--exhaustive`, a log grid.
 //! Candidates the constructors reject (e.g. `h * L >= 1`) or that diverge count as infinite
@@ -29,11 +29,11 @@ use crate::paper::{ave_on_rate, row_mse, steps_between, REFERENCE_AVE};
 use crate::progress::Progress;
 use crate::replay::{self, EstimateOptions, Noise, Sample};
 use crate::score::Lock;
-use crate::search::{for_each_searched_family, Scorer, Search, SearchVisitor};
+use crate::search;
 use estimators::{
-    for_each_family, BankConfig, Channel, Estimator, Family, FamilyVisitor, Hold, Kalman,
-    KalmanConfig, KalmanNoise, Law, SampleAdapter, Scheduling, Series, Stateful, FAMILIES,
-    FAMILY_COUNT,
+    for_each_family, BankConfig, Channel, Estimator, Family, FamilyVisitor, Gains, Hold, Kalman,
+    KalmanConfig, KalmanNoise, Law, LawVisitor, SampleAdapter, Scheduling, Series, Stateful,
+    FAMILIES, FAMILY_COUNT,
 };
 use std::time::Instant;
 
@@ -242,19 +242,27 @@ impl Eval for Problem<'_> {
     }
 }
 
-/// One family's objective in one half ([`Search::score`] hands it the estimator to score).
+/// One family's objective in one half ([`Gains::build`] hands it the estimator to score).
 struct Objective<'a, E> {
     eval: &'a E,
     column: usize,
     acc: bool,
 }
 
-impl<E: Eval> Scorer for Objective<'_, E> {
-    type Score = f64;
-    fn law<L: Law<Num = f32>>(&self, law: L) -> f64 {
+// By hand: a derive would ask `E: Copy`.
+impl<E> Clone for Objective<'_, E> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<E> Copy for Objective<'_, E> {}
+
+impl<E: Eval> LawVisitor for Objective<'_, E> {
+    type Output = f64;
+    fn law<L: Law<Num = f32>>(self, law: L) -> f64 {
         self.eval.family(self.column, law, self.acc)
     }
-    fn tracker(&self, noise: KalmanNoise) -> f64 {
+    fn tracker(self, noise: KalmanNoise) -> f64 {
         self.eval.kf(self.column, noise.q, noise.r, self.acc)
     }
 }
@@ -417,11 +425,11 @@ struct Fit {
     secs: f64,
 }
 
-/// Minimises `f` from `x0` within the family's search box ([`Search::search_box`]) at the
+/// Minimises `f` from `x0` within the family's search box ([`search::search_box`]) at the
 /// step `h_s` (s).
-fn fit<G: Search>(method: Method, h_s: f64, x0: &[f64], f: &dyn Fn(&[f64]) -> f64) -> Fit {
+fn fit<F: Family>(method: Method, h_s: f64, x0: &[f64], f: &dyn Fn(&[f64]) -> f64) -> Fit {
     let t = Instant::now();
-    let (lo, hi) = G::search_box(h_s);
+    let (lo, hi) = search::search_box::<F>(h_s);
     let o = optim::minimise(method, x0, &lo, &hi, f);
     Fit {
         x: o.x,
@@ -432,8 +440,8 @@ fn fit<G: Search>(method: Method, h_s: f64, x0: &[f64], f: &dyn Fn(&[f64]) -> f6
 }
 
 /// Tunes one half of the bank (velocity or acceleration) starting from `start`: each family
-/// present there, over every gain it searches ([`Search::search_point`], within
-/// [`Search::search_box`]; candidates its law refuses cost infinity). Returns the gains and,
+/// present there, over every gain it searches ([`search::search_point`], within
+/// [`search::search_box`]; candidates its law refuses cost infinity). Returns the gains and,
 /// per family, (tuned MSE, evaluations, seconds).
 fn tune_family(
     p: &impl Eval,
@@ -452,11 +460,8 @@ fn tune_family(
         out: FamilyGains,
         stats: [(f64, usize, f64); FAMILY_COUNT],
     }
-    impl<E: Eval> SearchVisitor for Tune<'_, E> {
-        fn family<F: Family>(&mut self, column: usize)
-        where
-            F::Gains: Search,
-        {
+    impl<E: Eval> FamilyVisitor for Tune<'_, E> {
+        fn family<F: Family>(&mut self, column: usize) {
             if !self.families.tunes(self.acc, column) {
                 // Not tuned: no cost (NaN), left out of the score and the report.
                 self.stats[column] = (f64::NAN, 0, 0.0);
@@ -472,15 +477,17 @@ fn tune_family(
                 acc: self.acc,
             };
             let f = |x: &[f64]| {
-                let g = g0.with_search_point(x);
-                g.score(h, &objective).unwrap_or(f64::INFINITY)
+                let g = search::with_search_point::<F>(&g0, x);
+                g.build(h, objective).unwrap_or(f64::INFINITY)
             };
-            let r = fit::<F::Gains>(self.method, f64::from(h), &g0.search_point(), &f);
+            let x0 = search::search_point::<F>(&g0);
+            let r = fit::<F>(self.method, f64::from(h), &x0, &f);
             self.stats[column] = (r.cost, r.evals, r.secs);
             self.p.fitted();
             // Nothing finite to minimise: the family keeps the gains it started from.
             if r.cost.is_finite() {
-                self.out.set::<F>(Some(g0.with_search_point(&r.x)));
+                self.out
+                    .set::<F>(Some(search::with_search_point::<F>(&g0, &r.x)));
             }
         }
     }
@@ -493,7 +500,7 @@ fn tune_family(
         out: *start,
         stats: [(f64::INFINITY, 0, 0.0); FAMILY_COUNT],
     };
-    for_each_searched_family(&mut tune);
+    for_each_family(&mut tune);
     (tune.out, tune.stats)
 }
 

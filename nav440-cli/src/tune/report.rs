@@ -10,23 +10,20 @@ pub(super) fn hold_name(h: Hold) -> &'static str {
     }
 }
 
-/// The gains of column `i` in `f` on one line ([`Search::describe`]), `-` if absent.
+/// The gains of column `i` in `f` on one line ([`search::describe`]), `-` if absent.
 pub(super) fn fmt_gains(f: &FamilyGains, i: usize) -> String {
     struct Describe<'a>(&'a FamilyGains, usize, String);
-    impl SearchVisitor for Describe<'_> {
-        fn family<F: Family>(&mut self, column: usize)
-        where
-            F::Gains: Search,
-        {
+    impl FamilyVisitor for Describe<'_> {
+        fn family<F: Family>(&mut self, column: usize) {
             if column == self.1 {
                 if let Some(g) = self.0.get::<F>() {
-                    self.2 = g.describe();
+                    self.2 = search::describe(&g);
                 }
             }
         }
     }
     let mut d = Describe(f, i, String::new());
-    for_each_searched_family(&mut d);
+    for_each_family(&mut d);
     if d.2.is_empty() {
         "-".into()
     } else {
