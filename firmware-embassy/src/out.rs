@@ -46,7 +46,7 @@ pub fn pipeline() -> Pipeline {
 }
 
 /// The bank's channel names.
-const NAMES: &[&str] = <Output as EstimatorOutput>::CHANNEL_NAMES;
+const NAMES: &[&[&str]] = &[<Output as EstimatorOutput>::CHANNEL_NAMES];
 /// [`NAMES`] joined with `,` (the CSV columns), built at compile time.
 const COLUMN_BYTES: [u8; estimators::columns_len(NAMES)] = estimators::join_columns(NAMES);
 /// [`COLUMN_BYTES`] as text.

@@ -64,7 +64,7 @@ fn put_axis(dst: &mut [u8; AXIS_BYTES], a: &AxisRow<Output>) {
 }
 
 /// The bank's channel names.
-const NAMES: &[&str] = <Output as EstimatorOutput>::CHANNEL_NAMES;
+const NAMES: &[&[&str]] = &[<Output as EstimatorOutput>::CHANNEL_NAMES];
 /// [`NAMES`] joined with `,` (the CSV columns), built at compile time.
 const COLUMN_BYTES: [u8; estimators::columns_len(NAMES)] = estimators::join_columns(NAMES);
 /// [`COLUMN_BYTES`] as text.

@@ -34,44 +34,16 @@ use estimators::{EstimatorBank, EstimatorOutput, PaperOutput};
 /// The header line of the paper bank's yaw axis alone (without line terminator): the default
 /// of `nav440 estimate` (`write_header::<PaperBank<_>>(w, Axes::only(Axis::Yaw))`), built at
 /// compile time from the bank's channel names.
-pub const HEADER: &str = {
-    let (bytes, len) = (HEADER_BYTES, PAPER_YAW_HEADER.1);
-    match core::str::from_utf8(bytes.split_at(len).0) {
-        Ok(s) => s,
-        Err(_) => panic!("the channel names are not UTF-8"),
-    }
+pub const HEADER: &str = match core::str::from_utf8(&HEADER_BYTES) {
+    Ok(s) => s,
+    Err(_) => panic!("the channel names are not UTF-8"),
 };
 
-/// [`HEADER`] in a buffer, and its length.
-const PAPER_YAW_HEADER: ([u8; 256], usize) = yaw_header(PaperOutput::NAMES.as_slice());
-/// The buffer of [`PAPER_YAW_HEADER`].
-const HEADER_BYTES: &[u8] = &PAPER_YAW_HEADER.0;
-
-/// `t,yaw,yaw_rate,` and `names` joined with `,`, in a buffer of 256 bytes (a compile-time
-/// error when longer), and its length.
-const fn yaw_header(names: &[&str]) -> ([u8; 256], usize) {
-    let mut out = [0u8; 256];
-    let prefix = b"t,yaw,yaw_rate";
-    let mut n = 0;
-    while n < prefix.len() {
-        out[n] = prefix[n];
-        n += 1;
-    }
-    let mut i = 0;
-    while i < names.len() {
-        out[n] = b',';
-        n += 1;
-        let b = names[i].as_bytes();
-        let mut j = 0;
-        while j < b.len() {
-            out[n] = b[j];
-            n += 1;
-            j += 1;
-        }
-        i += 1;
-    }
-    (out, n)
-}
+/// The columns of [`HEADER`].
+const HEADER_NAMES: &[&[&str]] = &[&["t", "yaw", "yaw_rate"], PaperOutput::NAMES.as_slice()];
+/// [`HEADER`] as bytes.
+const HEADER_BYTES: [u8; estimators::columns_len(HEADER_NAMES)] =
+    estimators::join_columns(HEADER_NAMES);
 
 /// Writes the header line (without line terminator) of the rows of `axes` from the bank `B`
 /// (any `estimators::EstimatorBank`): the column names are its

@@ -388,46 +388,54 @@ impl PartialEq<Columns> for &str {
     }
 }
 
-/// The length in bytes of `names` joined with `,` (see [`join_columns`]).
-pub const fn columns_len(names: &[&str]) -> usize {
+/// The length in bytes of the names of `lists` joined with `,` (see [`join_columns`]).
+pub const fn columns_len(lists: &[&[&str]]) -> usize {
     let mut n = 0;
     let mut i = 0;
-    while i < names.len() {
-        n += names[i].len() + if i > 0 { 1 } else { 0 };
+    while i < lists.len() {
+        let mut j = 0;
+        while j < lists[i].len() {
+            n += lists[i][j].len() + if n > 0 { 1 } else { 0 };
+            j += 1;
+        }
         i += 1;
     }
     n
 }
 
-/// `names` joined with `,`, as `L` bytes ([`columns_len`] of them; a compile-time error
-/// otherwise), for a firmware that sends a concrete bank's CSV columns as one string
-/// without joining them at run time:
+/// The names of `lists`, in order, joined with `,`, as `L` bytes ([`columns_len`] of them; a
+/// compile-time error otherwise): a concrete bank's CSV columns (or a whole header line) as a
+/// `const`, for a firmware that sends them as one string without joining them at run time:
 ///
 /// ```
 /// use estimators::{columns_len, join_columns, EstimatorOutput, ProductOutput};
 ///
-/// const NAMES: &[&str] = ProductOutput::CHANNEL_NAMES;
+/// const NAMES: &[&[&str]] = &[&["t", "yaw", "yaw_rate"], ProductOutput::CHANNEL_NAMES];
 /// const BYTES: [u8; columns_len(NAMES)] = join_columns(NAMES);
-/// const COLUMNS: &str = match core::str::from_utf8(&BYTES) {
+/// const HEADER: &str = match core::str::from_utf8(&BYTES) {
 ///     Ok(s) => s,
 ///     Err(_) => panic!("channel names are UTF-8"),
 /// };
-/// assert_eq!(COLUMNS, "ilo1_v,kf_a");
+/// assert_eq!(HEADER, "t,yaw,yaw_rate,ilo1_v,kf_a");
 /// ```
-pub const fn join_columns<const L: usize>(names: &[&str]) -> [u8; L] {
+pub const fn join_columns<const L: usize>(lists: &[&[&str]]) -> [u8; L] {
     let mut out = [0u8; L];
     let mut n = 0;
     let mut i = 0;
-    while i < names.len() {
-        if i > 0 {
-            out[n] = b',';
-            n += 1;
-        }
-        let b = names[i].as_bytes();
+    while i < lists.len() {
         let mut j = 0;
-        while j < b.len() {
-            out[n] = b[j];
-            n += 1;
+        while j < lists[i].len() {
+            if n > 0 {
+                out[n] = b',';
+                n += 1;
+            }
+            let b = lists[i][j].as_bytes();
+            let mut k = 0;
+            while k < b.len() {
+                out[n] = b[k];
+                n += 1;
+                k += 1;
+            }
             j += 1;
         }
         i += 1;

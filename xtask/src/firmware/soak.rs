@@ -11,7 +11,7 @@
 //!   frozen`, and the garbage in the `skipped` counter);
 //! * the periodic counters come every 10 s of stream;
 //! * the stack high-water mark is that of a short run of the same image with one fault of
-//!   each kind, within one exception frame ([`STACK_JITTER`]).
+//!   each kind, within [`STACK_JITTER`].
 
 use super::build::build;
 use super::equivalence::compare_csv;
@@ -23,8 +23,11 @@ use std::time::{Duration, Instant};
 
 /// How far the stack high-water mark of the long run may lie above the short run's, B: where
 /// an interrupt lands decides how deep its frame stacks on `main`'s (the same short run gave
-/// 6,504 and 6,512 B), and one exception frame with the FPU state is 104 B.
-const STACK_JITTER: u64 = 128;
+/// 6,504 and 6,512 B; one exception frame with the FPU state is 104 B), and the long run's 16
+/// faults land in orders the short run's 4 do not (measured: up to 160 B above it on a loaded
+/// machine, where QEMU's timing moves). A stack that grows with stream time exceeds it within
+/// the first hours.
+const STACK_JITTER: u64 = 256;
 
 /// Packets per minute of stream at 100 Hz.
 const PACKETS_PER_MINUTE: u64 = 6_000;
