@@ -37,9 +37,9 @@ fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
 }
 
 /// The gain schedule of the noise-adaptive bank (feature `adaptive-gains`), as `nav440 tune
-/// --schedule 0.001,0.01,0.1,0.5,1 --rust` wrote it (`src/gains/schedule_fig5.rs`, the same
-/// bytes as `host-tests/data/gains/schedule_fig5.rs` beside the `schedule_fig5.toml` that
-/// `nav440 estimate --gains` reads; `host-tests/tests/firmware_gains.rs` checks). Its hold is
+/// --schedule 0.001,0.01,0.1,0.5,1 --rust` wrote it (`src/gains/schedule_fig5.rs`, the twin of
+/// the `host-tests/data/gains/schedule_fig5.toml` that `nav440 estimate --gains` reads;
+/// `host-tests/tests/schedule.rs` checks the two agree). Its hold is
 /// [`PRESET`]'s (linear; the file's header names the hold it was tuned with).
 #[cfg(feature = "adaptive-gains")]
 #[allow(missing_docs)] // generated file: its constant is documented at the `pub use` below
@@ -90,9 +90,9 @@ pub type Pipeline = nav440_pipeline::Pipeline<Bank, ConfigError, BuildFn, BANK_S
 pub const PRESET: BankConfig = BankConfig::NAV440;
 
 /// Gains tuned for the product bank by `nav440 tune --bank product --rust` (feature
-/// `tuned-gains`): `src/gains/product_fig5.rs`, the same bytes as
-/// `host-tests/data/gains/product_fig5.rs` beside the `product_fig5.toml` that `nav440
-/// estimate --bank product --gains` reads.
+/// `tuned-gains`): `src/gains/product_fig5.rs`, the twin of the
+/// `host-tests/data/gains/product_fig5.toml` that `nav440 estimate --bank product --gains`
+/// reads (`host-tests/tests/gains_snippet.rs` checks the two agree).
 #[cfg(feature = "tuned-gains")]
 #[allow(missing_docs)] // generated file: its constant is documented at the `PRESET` below
 mod tuned {

@@ -24,7 +24,7 @@ fn committed_snippet_equals_its_toml() {
 }
 
 mod product {
-    include!("../data/gains/product_fig5.rs");
+    include!("../../firmware-example/src/gains/product_fig5.rs");
 }
 
 /// The product snippet (`nav440 tune --bank product --rust`, which the `tuned-gains` firmware

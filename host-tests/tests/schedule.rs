@@ -864,11 +864,11 @@ fn run_adaptive(
         .collect()
 }
 
-/// The `--rust` output of the same run (`host-tests/data/gains/schedule_fig5.rs`, compiled
+/// The `--rust` output of the same run (`firmware-example/src/gains/schedule_fig5.rs`, compiled
 /// into the firmware's bench) holds the same schedule as the TOML file, tuned at 0.01 s
 /// (the fig5 capture's 100 Hz).
 mod snippet {
-    include!("../data/gains/schedule_fig5.rs");
+    include!("../../firmware-example/src/gains/schedule_fig5.rs");
 }
 
 #[test]
@@ -896,7 +896,11 @@ fn rust_snippet_and_toml_hold_the_same_schedule() {
         .all(|l| l.switch_up.is_some()));
     assert!(snippet::SCHEDULE[n - 1].switch_up.is_none());
     // The committed snippet is what the generator writes from the TOML file.
-    let committed = std::fs::read_to_string(data("gains/schedule_fig5.rs")).unwrap();
+    let committed = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../firmware-example/src/gains/schedule_fig5.rs"
+    ))
+    .unwrap();
     let what = "--schedule 0.001,0.01,0.1,0.5,1";
     assert_eq!(file.to_rust(what, &BankConfig::NAV440), committed);
     // Without recorded switching gains (a file written before they were): `None`, and no
