@@ -467,7 +467,10 @@ fn product_bank_from_the_library() {
         let (paper, _) = replay::estimate_csv(&bytes, &paper_opts).unwrap();
         assert_eq!(rejected, 0);
         assert_eq!(csv.lines().count(), paper.lines().count());
-        assert_eq!(csv.lines().next().unwrap(), "t,yaw,yaw_rate,ilo1_v,kf_a");
+        assert_eq!(
+            csv.lines().next().unwrap(),
+            format!("t,yaw,yaw_rate,{}", estimators::ProductOutput::CSV_COLUMNS)
+        );
         for (q, p) in csv.lines().zip(paper.lines()).skip(1) {
             let p: Vec<&str> = p.split(',').collect();
             // t, yaw, yaw_rate, ilo1_v (column 5), kf_a (column 17) of the paper CSV.

@@ -346,10 +346,12 @@ mod tests {
     fn product_rows_have_the_product_columns() {
         let mut c = Converter::default();
         let mut t = Text::default();
-        c.message("header 7 ilo1_v,kf_a", &mut t).unwrap();
+        c.message(&format!("header 7 {}", ProductOutput::CSV_COLUMNS), &mut t)
+            .unwrap();
+        let [v, a] = ProductOutput::NAMES;
         assert_eq!(
             t.csv,
-            "t,roll,roll_rate,roll_ilo1_v,roll_kf_a,pitch,pitch_rate,pitch_ilo1_v,pitch_kf_a,yaw,yaw_rate,yaw_ilo1_v,yaw_kf_a\n"
+            format!("t,roll,roll_rate,roll_{v},roll_{a},pitch,pitch_rate,pitch_{v},pitch_{a},yaw,yaw_rate,yaw_{v},yaw_{a}\n")
         );
         let mut b = 20_000u64.to_le_bytes().to_vec();
         b.extend(axis_bytes(1, 1.5, 0.0, 2.0, &[3.0, -4.5]));
