@@ -125,6 +125,14 @@ fn known<G: 'static>() -> Option<&'static Known> {
     KNOWN.iter().find(|k| (k.ty)() == TypeId::of::<G>())
 }
 
+/// A gain (an `f32`) read from a field of [`fields`], widened exactly. The number's text is
+/// read back to `f32` first: with serde_json's `arbitrary_precision` (which a crate in the
+/// same build may turn on) an `f32` field is its shortest decimal text, whose `f64` is not
+/// the `f32` widened.
+fn gain(v: &Value) -> Option<f64> {
+    v.as_f64().map(|x| f64::from(x as f32))
+}
+
 /// The gains' fields as `serde` writes them (an empty map for gains that are not a struct).
 fn fields<G: serde::Serialize>(g: &G) -> Map<String, Value> {
     match serde_json::to_value(g) {
@@ -137,7 +145,7 @@ fn fields<G: serde::Serialize>(g: &G) -> Map<String, Value> {
 pub fn numbers<G: serde::Serialize>(g: &G) -> Vec<(String, f64)> {
     fields(g)
         .into_iter()
-        .filter_map(|(k, v)| v.as_f64().map(|x| (k, x)))
+        .filter_map(|(k, v)| gain(&v).map(|x| (k, x)))
         .collect()
 }
 
@@ -176,7 +184,7 @@ pub fn search_point<F: Family>(g: &F::Gains) -> Vec<f64> {
     coordinates::<F>()
         .iter()
         .map(|c| {
-            let v = f.get(&c.gain).and_then(Value::as_f64).unwrap_or(f64::NAN);
+            let v = f.get(&c.gain).and_then(gain).unwrap_or(f64::NAN);
             match c.scale {
                 Scale::Gain => v,
                 Scale::Leak => 1.0 - v,
@@ -194,7 +202,9 @@ pub fn with_search_point<F: Family>(g: &F::Gains, x: &[f64]) -> F::Gains {
             Scale::Gain => v,
             Scale::Leak => 1.0 - v,
         };
-        if let (Some(slot), Some(n)) = (f.get_mut(&c.gain), Number::from_f64(v)) {
+        // Rounded to the gain's `f32` here, so that the text of a number (with
+        // `arbitrary_precision`) reads back to the same `f32`.
+        if let (Some(slot), Some(n)) = (f.get_mut(&c.gain), Number::from_f64(f64::from(v as f32))) {
             *slot = Value::Number(n);
         }
     }
