@@ -8,7 +8,7 @@
 //!   declaration order; settings that are not numbers (the AVE's `deltahat` law) are kept;
 //! * the estimator a candidate builds is the library's ([`estimators::Gains::build`]), which
 //!   the tuner's objective receives as an [`estimators::LawVisitor`];
-//! * the search box of a configuration type listed in [`KNOWN`] is the one chosen for it
+//! * the search box of a configuration type listed in `KNOWN` (below) is the one chosen for it
 //!   there (which numbers, on which scale, in which range); any other family searches each of
 //!   its numbers whose paper values (both halves) are positive, two decades either side of
 //!   them (`[lowest / 100, highest * 100]`), the others kept.
