@@ -19,13 +19,8 @@ mod nav440_boards;
 fn main() {
     let out = PathBuf::from(env::var_os("OUT_DIR").expect("set by cargo"));
     let fail = |e: String| -> ! { panic!("firmware-embassy: {e}") };
-    nav440_boards::validate(nav440_boards::BOARDS)
-        .unwrap_or_else(|e| fail(format!("{}: {e}", nav440_boards::DESCRIPTION_PATH)));
-    let enabled: Vec<String> = env::vars()
-        .map(|(k, _)| k)
-        .filter(|k| k.starts_with("CARGO_FEATURE_"))
-        .collect();
-    let board = nav440_boards::select_embassy(&enabled).unwrap_or_else(|e| fail(e));
+    let board =
+        nav440_boards::board_of_build(nav440_boards::select_embassy).unwrap_or_else(|e| fail(e));
     println!("cargo:rerun-if-changed=../boards/src");
     println!("cargo:rerun-if-changed=build.rs");
     if !env::var("TARGET").unwrap_or_default().starts_with("thumb") {

@@ -34,13 +34,7 @@ fn main() {
     let out = PathBuf::from(env::var_os("OUT_DIR").expect("set by cargo"));
     let target = env::var("TARGET").unwrap_or_default();
     let fail = |e: String| -> ! { panic!("firmware-example: {e}") };
-    nav440_boards::validate(nav440_boards::BOARDS)
-        .unwrap_or_else(|e| fail(format!("{}: {e}", nav440_boards::DESCRIPTION_PATH)));
-    let enabled: Vec<String> = env::vars()
-        .map(|(k, _)| k)
-        .filter(|k| k.starts_with("CARGO_FEATURE_"))
-        .collect();
-    let board = nav440_boards::select(&enabled).unwrap_or_else(|e| fail(e));
+    let board = nav440_boards::board_of_build(nav440_boards::select).unwrap_or_else(|e| fail(e));
     let board_dir = manifest.join("src").join("board");
     for m in std::iter::once(board.module()).chain(board.backend.map(str::to_owned)) {
         let path = board_dir.join(format!("{m}.rs"));

@@ -321,6 +321,21 @@ pub fn feature_env(feature: &str) -> String {
     format!("CARGO_FEATURE_{}", feature.to_uppercase().replace('-', "_"))
 }
 
+/// What a firmware's build script needs first: the description checked ([`validate`], its
+/// error prefixed with [`DESCRIPTION_PATH`]) and the board that `select` (e.g. [`select`] or
+/// [`select_embassy`]) picks from the build's enabled features (Cargo's `CARGO_FEATURE_*`
+/// environment variables).
+pub fn board_of_build(
+    select: fn(&[String]) -> Result<&'static Board, String>,
+) -> Result<&'static Board, String> {
+    validate(BOARDS).map_err(|e| format!("{DESCRIPTION_PATH}: {e}"))?;
+    let enabled: Vec<String> = std::env::vars()
+        .map(|(k, _)| k)
+        .filter(|k| k.starts_with("CARGO_FEATURE_"))
+        .collect();
+    select(&enabled)
+}
+
 /// The board of a firmware-example build whose enabled features' environment variables are
 /// `enabled` (`CARGO_FEATURE_*`): the one whose `board-*` feature is set, the default board
 /// without one; an error for two, or for a `board-*` feature without a description.
