@@ -752,13 +752,9 @@ impl<R: Rows<T, S>, const N: usize, T: Real, S: SqrtFn<T>> Bank<R, N, T, S> {
         F: FnMut(&mut R::State),
         T: 'h,
     {
-        let params = self.rebuilt(cfg)?;
-        match replay::<T, S, R, I, F>(&params, history, on_init) {
-            Some(s) => self.state = s,
-            None => R::retune_state(&params, &self.params, &mut self.state, self.input.last()),
-        }
-        self.params = params;
-        Ok(())
+        self.regain(cfg, history, on_init, |_, _, state, replayed, _| {
+            *state = *replayed
+        })
     }
 
     /// The warm gain change (what a gain schedule does on a warm start, `AdaptiveBank`) from
@@ -782,18 +778,36 @@ impl<R: Rows<T, S>, const N: usize, T: Real, S: SqrtFn<T>> Bank<R, N, T, S> {
         F: FnMut(&mut R::State),
         T: 'h,
     {
-        let params = self.rebuilt(new)?;
+        self.regain(
+            new,
+            history,
+            on_init,
+            |params, before, state, replayed, y| {
+                R::warm(params, before, state, replayed, y, old, new)
+            },
+        )
+    }
+
+    /// The gain change of [`Self::set_gains_replaying`] and [`Self::set_gains_warm_with`]:
+    /// the parameters of `cfg`, `history` replayed through them, then `take(new parameters,
+    /// old parameters, state, replayed state, last input)`; with nothing replayed (an empty
+    /// history), every row bumpless ([`Self::set_gains`]). On error nothing changes.
+    fn regain<'h, I, F>(
+        &mut self,
+        cfg: &BankConfig,
+        history: I,
+        on_init: F,
+        take: impl FnOnce(&R::Params, &R::Params, &mut R::State, &R::State, T),
+    ) -> Result<(), ConfigError>
+    where
+        I: IntoIterator<Item = &'h Fed<T>>,
+        F: FnMut(&mut R::State),
+        T: 'h,
+    {
+        let params = self.rebuilt(cfg)?;
         let y = self.input.last();
         match replay::<T, S, R, I, F>(&params, history, on_init) {
-            Some(replayed) => R::warm(
-                &params,
-                &self.params,
-                &mut self.state,
-                &replayed,
-                y,
-                old,
-                new,
-            ),
+            Some(replayed) => take(&params, &self.params, &mut self.state, &replayed, y),
             None => R::retune_state(&params, &self.params, &mut self.state, y),
         }
         self.params = params;
