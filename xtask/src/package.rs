@@ -89,11 +89,85 @@ pub fn package() -> Result<(), String> {
     ])?;
     // All three in one dry run: `nav440-pipeline` depends on the other two by version, which
     // cargo resolves against the packages it has just made (not against crates.io).
-    let mut args = vec!["publish", "--dry-run", "--allow-dirty"];
+    forget_unpacked_packages()?;
+    forget_verified_builds()?;
+    let mut args = vec![
+        "publish",
+        "--dry-run",
+        "--allow-dirty",
+        "--target-dir",
+        VERIFY_TARGET_DIR,
+    ];
     for (_, lib) in LIBRARIES {
         args.extend(["-p", lib]);
     }
     cargo(&args)
+}
+
+/// Removes the sources cargo unpacked from earlier dry runs' local registries
+/// (`$CARGO_HOME/registry/src/-<hash>/<library>-<version>`). Cargo names that directory after
+/// the path of the target directory and does not unpack a package again where the directory
+/// exists, so a second dry run from the same checkout path would verify `nav440-pipeline`
+/// against the other libraries as they were at the first one.
+fn forget_unpacked_packages() -> Result<(), String> {
+    let home = std::env::var_os("CARGO_HOME")
+        .map(std::path::PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| Path::new(&h).join(".cargo")))
+        .ok_or("neither CARGO_HOME nor HOME is set")?;
+    let Ok(registries) = std::fs::read_dir(home.join("registry").join("src")) else {
+        return Ok(());
+    };
+    for registry in registries.flatten() {
+        // A local registry's directory has no name before its hash; crates.io's has one.
+        if !registry.file_name().to_string_lossy().starts_with('-') {
+            continue;
+        }
+        let Ok(packages) = std::fs::read_dir(registry.path()) else {
+            continue;
+        };
+        for package in packages.flatten() {
+            let name = package.file_name().to_string_lossy().into_owned();
+            if LIBRARIES.iter().any(|(_, lib)| is_version_of(&name, lib)) {
+                std::fs::remove_dir_all(package.path())
+                    .map_err(|e| format!("cannot remove {}: {e}", package.path().display()))?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Where the dry run builds the packages it verifies: apart from the workspace's builds, so
+/// that [`forget_verified_builds`] touches nothing else.
+const VERIFY_TARGET_DIR: &str = "target/publish-verify";
+
+/// Removes the fingerprints of the libraries built by earlier dry runs. Cargo takes a
+/// registry package as unchanged while its name and version are, so without this it would
+/// link the libraries as an earlier dry run packaged them.
+fn forget_verified_builds() -> Result<(), String> {
+    let Ok(dir) = std::fs::read_dir(Path::new(VERIFY_TARGET_DIR).join("debug/.fingerprint")) else {
+        return Ok(());
+    };
+    for entry in dir.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let ours = LIBRARIES.iter().any(|(_, lib)| {
+            name.strip_prefix(lib)
+                .and_then(|rest| rest.strip_prefix('-'))
+                .is_some_and(|hash| hash.chars().all(|c| c.is_ascii_hexdigit()))
+        });
+        if ours {
+            std::fs::remove_dir_all(entry.path())
+                .map_err(|e| format!("cannot remove {}: {e}", entry.path().display()))?;
+        }
+    }
+    Ok(())
+}
+
+/// Whether a directory name is `<package>-<version>` for this package (`nav440-proto-0.1.0`
+/// is one of `nav440-proto`, `nav440-pipeline-0.1.0` is not).
+fn is_version_of(dir: &str, package: &str) -> bool {
+    dir.strip_prefix(package)
+        .and_then(|rest| rest.strip_prefix('-'))
+        .is_some_and(|v| v.starts_with(|c: char| c.is_ascii_digit()))
 }
 
 /// The `rust-version` of `[package]` (or `[workspace.package]`) in a manifest's text, if set
@@ -193,5 +267,8 @@ mod tests {
         );
         assert_eq!(major_minor("1.95.0"), "1.95");
         assert_eq!(major_minor("1.95"), "1.95");
+        assert!(is_version_of("nav440-proto-0.1.0", "nav440-proto"));
+        assert!(!is_version_of("nav440-proto-extra-0.1.0", "nav440-proto"));
+        assert!(!is_version_of("nav440-pipeline-0.1.0", "nav440-proto"));
     }
 }
