@@ -9,6 +9,9 @@
 //! * xtask checks every image's ELF against its board's memories ([`find`]), flashes with its
 //!   probe-rs chip and builds the boards QEMU cannot run ([`Board::qemu`]).
 //!
+//! A board firmware-example has no image of ([`Board::example`] false) is firmware-embassy's
+//! only: it has no `board-*` feature and no module.
+//!
 //! The build scripts include this file as a module (`#[path]`) instead of depending on the
 //! crate: a build-dependency would change the firmware crate's metadata hash, hence its
 //! symbol names and, through fat LTO, its code. So this crate depends on nothing but `std`.
@@ -34,6 +37,10 @@ pub struct Board {
     pub part: &'static str,
     /// Selected when no `board-*` feature is (exactly one board).
     pub default: bool,
+    /// firmware-example has an image of the board (its module `src/board/<module>.rs`, its
+    /// feature `board-<name>` unless it is the default); `false` for a board only
+    /// firmware-embassy builds for.
+    pub example: bool,
     /// The shared module of `firmware-example/src/board/` the board's module builds on.
     pub backend: Option<&'static str>,
     /// The Rust targets its images are built for (the first is CI's for a built-only board).
@@ -116,7 +123,7 @@ impl Board {
 
     /// The firmware-example feature that selects it, `None` for the default board.
     pub fn feature(&self) -> Option<String> {
-        (!self.default).then(|| format!("board-{}", self.name))
+        (self.example && !self.default).then(|| format!("board-{}", self.name))
     }
 
     /// Where the vector table must be: the flash origin, after the boot loader if any.

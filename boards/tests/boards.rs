@@ -32,6 +32,16 @@ const DATA_SHEETS: &[(&str, u64, u64, u64, u64, u64)] = &[
         128 * KIB,
         0x0800_0000,
     ),
+    // RM0351 section 2.2 (memory map) and 2.3 (SRAM), STM32L475VG: 1 MiB flash; SRAM1 is
+    // 96 KiB at 0x2000_0000 (SRAM2, 32 KiB at 0x1000_0000, is left out of the map).
+    (
+        "b-l475e-iot01a",
+        0x0800_0000,
+        1024 * KIB,
+        0x2000_0000,
+        96 * KIB,
+        0x0800_0000,
+    ),
     // RP2040 datasheet section 2.2 (XIP at 0x1000_0000, SRAM0-5 = 4 x 64 + 2 x 4 KiB); the
     // Pico's W25Q16JV is 2 MiB; the boot ROM runs 256 bytes of boot2 before the image.
     (
@@ -62,8 +72,9 @@ fn the_memories_are_the_documents() {
 fn every_board_has_its_module_and_its_backend() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../firmware-example/src/board");
     for b in all() {
-        assert!(
+        assert_eq!(
             dir.join(format!("{}.rs", b.module())).is_file(),
+            b.example,
             "{}",
             b.name
         );
@@ -153,6 +164,10 @@ fn features_select_one_board() {
     assert_eq!(chip(&["CARGO_FEATURE_STM32F411"]).unwrap(), "nucleo-f411re");
     assert_eq!(chip(&["CARGO_FEATURE_STM32F405"]).unwrap(), "stm32f405");
     assert!(chip(&[]).is_err());
+    assert_eq!(
+        chip(&["CARGO_FEATURE_STM32L475"]).unwrap(),
+        "b-l475e-iot01a"
+    );
     assert!(chip(&["CARGO_FEATURE_STM32F405", "CARGO_FEATURE_STM32F411"]).is_err());
 }
 
@@ -187,13 +202,16 @@ fn the_manifests_declare_the_described_features() {
         .filter_map(|b| b.embassy_feature.map(str::to_owned))
         .collect();
     assert_eq!(chips, described);
-    assert_eq!(described.len(), 2);
+    assert_eq!(described.len(), 3);
+    // The embassy-only board has no firmware-example feature.
+    assert_eq!(find("b-l475e-iot01a").unwrap().feature(), None);
 }
 
 const ONE: Board = Board {
     name: "a",
     part: "A",
     default: true,
+    example: true,
     backend: None,
     targets: &["thumbv7em-none-eabihf"],
     probe_chip: None,

@@ -1,10 +1,13 @@
 //! The embassy-stm32 firmware for the STM32F405 (e.g. the Netduino Plus 2 or any STM32F405RG
-//! board), or with feature `stm32f411` the NUCLEO-F411RE: embassy-executor, embassy-stm32 and
+//! board), with feature `stm32f411` the NUCLEO-F411RE, with feature `stm32l475` the
+//! B-L475E-IOT01A Discovery kit (STM32L475VG): embassy-executor, embassy-stm32 and
 //! embassy-time.
 //!
-//! 1. `embassy_stm32::init` with the default configuration (16 MHz HSI, no PLL); embassy-time
-//!    ticks from TIM2.
-//! 2. The NAV440 on USART1 (TX PA9, RX PA10, AF7) as a `BufferedUart`, interrupt-driven,
+//! 1. `embassy_stm32::init` with the chip's clock configuration ([`chip::config`]): a 16 MHz
+//!    system clock on every chip (the F4s' HSI with no PLL; on the L475 the PLL from the 4 MHz
+//!    MSI), checked against what the HAL reports. embassy-time ticks from SysTick
+//!    (`systick-timer`, 1 kHz interrupt) at that clock.
+//! 2. The NAV440 on USART1 ([`chip`]'s pins, AF7) as a `BufferedUart`, interrupt-driven,
 //!    starting at the unit's factory default of 38400 Bd.
 //! 3. `nav440_proto::boot::boot_async` over `nav440_proto::driver::AsyncDriver` configures the
 //!    unit to [`TARGET`] (A2 at 100 Hz at 57600 Bd), its reply time-outs through
@@ -34,9 +37,10 @@
 //!   stack is not painted).
 //!
 //! Build: `cargo build -p firmware-embassy --release --target thumbv7em-none-eabihf` (add
-//! `--no-default-features --features stm32f411` for the NUCLEO-F411RE); `cargo xtask
-//! embassy-stm32` lints, builds and checks both images' memory maps. Flash:
-//! `cargo xtask flash target/thumbv7em-none-eabihf/release/firmware-embassy` (probe-rs).
+//! `--no-default-features --features stm32f411` or `stm32l475` for the other boards); `cargo
+//! xtask embassy-stm32` lints, builds and checks the images' memory maps and runs the L475
+//! image on QEMU's `b-l475e-iot01a`. Flash: `cargo xtask flash
+//! target/thumbv7em-none-eabihf/release/firmware-embassy` (probe-rs).
 #![no_std]
 #![no_main]
 
@@ -51,6 +55,7 @@ use nav440_pipeline::report::{self, Flow};
 use nav440_proto::boot::{self, Options, Target};
 use nav440_proto::driver::AsyncDriver;
 use nav440_proto::Baud;
+use systick_timer::SystickDriver;
 
 mod out;
 
@@ -78,22 +83,81 @@ fn now_ms() -> u32 {
     Instant::now().as_millis() as u32
 }
 
-/// The board name in the ELF (NUL-terminated), as firmware-example's images carry it: `cargo
-/// xtask flash` and the memory-map check read the chip from it.
-#[cfg(feature = "stm32f405")]
-#[no_mangle]
-#[used]
-pub static NAV440_BOARD: [u8; 10] = *b"stm32f405\0";
+/// System clock (HCLK, SysTick's source) of every chip's [`chip::config`], Hz.
+const SYSCLK_HZ: u32 = 16_000_000;
 
-/// The board name in the ELF of the NUCLEO-F411RE image.
-#[cfg(feature = "stm32f411")]
-#[no_mangle]
-#[used]
-pub static NAV440_BOARD: [u8; 14] = *b"nucleo-f411re\0";
+/// SysTick interrupts per second: the time driver's resolution for wake-ups (1 ms).
+const SYSTICK_HZ: u32 = 1_000;
+
+embassy_time_driver::time_driver_impl!(
+    static TIME: SystickDriver<4> = SystickDriver::new(SYSCLK_HZ as u64, SYSCLK_HZ / SYSTICK_HZ - 1)
+);
+
+#[cortex_m_rt::exception]
+fn SysTick() {
+    TIME.systick_interrupt();
+}
+
+/// What differs between the chips besides USART1's pins: the clocks and the board name.
+#[cfg(any(feature = "stm32f405", feature = "stm32f411"))]
+mod chip {
+    /// 16 MHz from the HSI, no PLL (the HAL's default on the STM32F4).
+    pub fn config() -> embassy_stm32::Config {
+        embassy_stm32::Config::default()
+    }
+
+    /// The board name in the ELF (NUL-terminated), as firmware-example's images carry it:
+    /// `cargo xtask flash` and the memory-map check read the chip from it.
+    #[cfg(feature = "stm32f405")]
+    #[no_mangle]
+    #[used]
+    pub static NAV440_BOARD: [u8; 10] = *b"stm32f405\0";
+
+    /// The board name in the ELF of the NUCLEO-F411RE image.
+    #[cfg(feature = "stm32f411")]
+    #[no_mangle]
+    #[used]
+    pub static NAV440_BOARD: [u8; 14] = *b"nucleo-f411re\0";
+}
+
+/// The STM32L475VG of the B-L475E-IOT01A.
+#[cfg(feature = "stm32l475")]
+mod chip {
+    use embassy_stm32::rcc::{Pll, PllMul, PllPreDiv, PllRDiv, PllSource, Sysclk};
+
+    /// 16 MHz from the PLL: MSI 4 MHz / 1 x 32 = 128 MHz VCO, / 8 on the R output. At
+    /// 16 MHz in voltage range 1 the flash needs no wait state.
+    pub fn config() -> embassy_stm32::Config {
+        let mut c = embassy_stm32::Config::default();
+        c.rcc.pll = Some(Pll {
+            source: PllSource::MSI,
+            prediv: PllPreDiv::DIV1,
+            mul: PllMul::MUL32,
+            divp: None,
+            divq: None,
+            divr: Some(PllRDiv::DIV8),
+        });
+        c.rcc.sys = Sysclk::PLL1_R;
+        c
+    }
+
+    /// The board name in the ELF (NUL-terminated).
+    #[no_mangle]
+    #[used]
+    pub static NAV440_BOARD: [u8; 15] = *b"b-l475e-iot01a\0";
+}
 
 #[embassy_executor::main]
 async fn main(_spawner: Spawner) {
-    let p = embassy_stm32::init(embassy_stm32::Config::default());
+    let p = embassy_stm32::init(chip::config());
+    let sys = embassy_stm32::rcc::clocks(&p.RCC).sys.to_hertz();
+    if sys.map(|h| h.0) != Some(SYSCLK_HZ) {
+        defmt::panic!("system clock {} Hz, expected {=u32}", sys, SYSCLK_HZ);
+    }
+    let Some(mut core) = cortex_m::Peripherals::take() else {
+        defmt::panic!("the core peripherals are taken")
+    };
+    TIME.start(&mut core.SYST);
     defmt::println!(
         "firmware: embassy-stm32 up, USART1 at {=u32} Bd",
         POWER_UP_BAUD
@@ -101,17 +165,15 @@ async fn main(_spawner: Spawner) {
 
     let mut config = usart::Config::default();
     config.baudrate = POWER_UP_BAUD;
+    // USART1's pins (AF7): the F4 boards' PA10/PA9, the B-L475E-IOT01A's PB7/PB6.
+    #[cfg(feature = "stm32l475")]
+    let (rx, tx) = (p.PB7, p.PB6);
+    #[cfg(not(feature = "stm32l475"))]
+    let (rx, tx) = (p.PA10, p.PA9);
     let mut tx_buf = [0u8; 64];
     let mut rx_buf = [0u8; 512];
-    let mut uart = match BufferedUart::new(
-        p.USART1,
-        p.PA10,
-        p.PA9,
-        &mut tx_buf,
-        &mut rx_buf,
-        Irqs,
-        config,
-    ) {
+    let mut uart = match BufferedUart::new(p.USART1, rx, tx, &mut tx_buf, &mut rx_buf, Irqs, config)
+    {
         Ok(u) => u,
         Err(e) => defmt::panic!("USART1 configuration rejected: {}", e),
     };

@@ -117,8 +117,50 @@ fn have(program: &str) -> bool {
         .unwrap_or(false)
 }
 
+/// The major version of `qemu-system-arm` (`QEMU emulator version 10.0.2 (...)` -> 10).
+pub fn qemu_major() -> Option<u32> {
+    major_of(&qemu_version()?)
+}
+
+/// The major version in QEMU's `--version` line.
+fn major_of(line: &str) -> Option<u32> {
+    let v = line.split("version ").nth(1)?;
+    v.split('.').next()?.trim().parse().ok()
+}
+
+/// The suite Debian 12 (bookworm) has QEMU 10 in.
+const BACKPORTS: &str = "bookworm-backports";
+
+/// Where [`ensure_qemu`] adds [`BACKPORTS`] to apt's sources when none names it.
+const BACKPORTS_LIST: &str = "/etc/apt/sources.list.d/bookworm-backports.list";
+
+/// Whether this is Debian 12 (`VERSION_CODENAME=bookworm` in `/etc/os-release`).
+fn is_bookworm() -> bool {
+    std::fs::read_to_string("/etc/os-release")
+        .map(|t| t.lines().any(|l| l.trim() == "VERSION_CODENAME=bookworm"))
+        .unwrap_or(false)
+}
+
+/// Whether a file of apt's sources already names [`BACKPORTS`].
+fn backports_listed() -> bool {
+    let mut files = vec![PathBuf::from("/etc/apt/sources.list")];
+    if let Ok(dir) = std::fs::read_dir("/etc/apt/sources.list.d") {
+        files.extend(dir.flatten().map(|e| e.path()));
+    }
+    files.iter().any(|f| {
+        std::fs::read_to_string(f).is_ok_and(|t| {
+            t.lines()
+                .filter(|l| !l.trim_start().starts_with('#'))
+                .any(|l| l.contains(BACKPORTS))
+        })
+    })
+}
+
 /// Makes sure `qemu-system-arm` is runnable: installs it with apt-get (as root, or through
-/// `sudo -n`) when missing; otherwise fails with the exact command to run.
+/// `sudo -n`) when missing, on Debian 12 from [`BACKPORTS`] (QEMU 10, which has the
+/// `b-l475e-iot01a` machine; the suite is added to apt's sources when none names it);
+/// otherwise fails with the exact command to run. A QEMU already installed is kept, whatever
+/// its version (the checks that need QEMU 10 say so).
 pub fn ensure_qemu() -> Result<(), String> {
     if let Some(v) = qemu_version() {
         eprintln!("xtask: using {v}");
@@ -146,8 +188,35 @@ pub fn ensure_qemu() -> Result<(), String> {
         let (prog, rest) = all.split_first().expect("non-empty");
         crate::run_to_stderr(prog, rest, &[("DEBIAN_FRONTEND", "noninteractive")])
     };
+    let mut install = vec!["install", "-y", "--no-install-recommends"];
+    if is_bookworm() {
+        if !backports_listed() {
+            eprintln!("xtask: adding {BACKPORTS} to apt's sources ({BACKPORTS_LIST})");
+            let line = format!("deb http://deb.debian.org/debian {BACKPORTS} main\n");
+            let mut tee: Vec<&str> = sudo.to_vec();
+            tee.extend(["tee", BACKPORTS_LIST]);
+            let (prog, rest) = tee.split_first().expect("non-empty");
+            let mut child = Command::new(prog)
+                .args(rest)
+                .stdin(Stdio::piped())
+                .stdout(Stdio::null())
+                .spawn()
+                .map_err(|e| format!("cannot run tee: {e}"))?;
+            child
+                .stdin
+                .take()
+                .ok_or("tee's stdin is not piped")?
+                .write_all(line.as_bytes())
+                .map_err(|e| format!("cannot write {BACKPORTS_LIST}: {e}"))?;
+            if !child.wait().map_err(|e| e.to_string())?.success() {
+                return Err(format!("cannot write {BACKPORTS_LIST}; {hint}"));
+            }
+        }
+        install.extend(["-t", BACKPORTS]);
+    }
+    install.push(QEMU);
     apt(&["update"])
-        .and_then(|()| apt(&["install", "-y", "--no-install-recommends", QEMU]))
+        .and_then(|()| apt(&install))
         .map_err(|e| format!("installing QEMU failed ({e}); {hint}"))?;
     match qemu_version() {
         Some(v) => {
@@ -372,6 +441,17 @@ mod tests {
     use super::*;
 
     #[test]
+    fn reads_the_major_version() {
+        let v10 = "QEMU emulator version 10.0.2 (Debian 1:10.0.2+ds-2+deb13u1~bpo12+1)";
+        assert_eq!(major_of(v10), Some(10));
+        assert_eq!(
+            major_of("QEMU emulator version 7.2.22 (Debian 1:7.2+dfsg-7+deb12u18+b3)"),
+            Some(7)
+        );
+        assert_eq!(major_of("qemu-system-arm: no version"), None);
+    }
+
+    #[test]
     fn framed_input_has_magic_and_le_length() {
         let v = framed_input(&[0x55, 0x55, 0x41]).unwrap_or_default();
         assert_eq!(v, [b'N', b'4', b'L', b'P', 3, 0, 0, 0, 0x55, 0x55, 0x41]);
@@ -405,7 +485,8 @@ mod tests {
             assert!(d.qemu.contains(&r.machine), "{}", r.name);
             assert!(d.targets.contains(&r.target), "{}", r.name);
         }
-        for d in nav440_boards::all() {
+        // firmware-example's runs (firmware-embassy's QEMU run is `cargo xtask embassy-stm32`).
+        for d in nav440_boards::all().iter().filter(|d| d.example) {
             for m in d.qemu {
                 assert!(
                     runs.iter()

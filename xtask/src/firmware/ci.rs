@@ -311,7 +311,10 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
     map_check_catches_an_image_at_0(&f405)?;
     // The boards no emulator runs (`boards/src/description.rs`: no `qemu`), for their first
     // target.
-    for board in nav440_boards::all().iter().filter(|b| !b.runs_in_qemu()) {
+    for board in nav440_boards::all()
+        .iter()
+        .filter(|b| b.example && !b.runs_in_qemu())
+    {
         let (feature, target) = (board.feature(), board.targets[0]);
         let features: Vec<&str> = feature.as_deref().into_iter().collect();
         clippy_firmware(target, feature.as_deref())?;

@@ -1,20 +1,21 @@
 //! `cargo xtask embassy-stm32`: the embassy-stm32 firmware (`firmware-embassy`) for the
-//! STM32F405 and the NUCLEO-F411RE.
+//! STM32F405, the NUCLEO-F411RE and the B-L475E-IOT01A (STM32L475VG).
 //!
 //! 1. The async driver's docs show the firmware's boot code: the ```` ```rust,ignore ````
 //!    block of `nav440-proto/src/driver/asynch.rs` equals the region between the binary's
 //!    `ANCHOR: boot` and `ANCHOR_END: boot` comments, line for line (dedented).
 //! 2. Lints (`cargo fmt --check`, `cargo clippy -D warnings`) and builds the release ELF for
 //!    `thumbv7em-none-eabihf`, once per chip ([`images`]).
-//! 3. Checks each image's memory map from the ELF against its chip (`nucleo-f411re`,
-//!    `stm32f405`: vector table at `0x0800_0000`, every section inside flash or RAM) and prints
-//!    its flash and RAM.
-//! 4. QEMU 7.2's `netduinoplus2` cannot run the STM32F405 image (and QEMU has no F411 board):
-//!    the STM32F405 model has no RCC (an unimplemented device that reads 0), and
-//!    `embassy_stm32::init` waits for RCC_CR.HSIRDY.
-//!    The command runs the ELF there for a bounded time with `-d unimp` and asserts exactly
-//!    that (the HSION write, then nothing but reads of RCC_CR), so that the documented failure
-//!    mode stays true; when a QEMU models RCC the assertion fails and says so.
+//! 3. Checks each image's memory map from the ELF against its chip (vector table at
+//!    `0x0800_0000`, every section inside flash or RAM) and prints its flash and RAM.
+//! 4. Runs the images of the boards QEMU has a machine of ([`STALLS`], QEMU 10) for a
+//!    bounded time, logging the device accesses, and asserts where `embassy_stm32::init`
+//!    stops there: QEMU does not model a ready flag the HAL writes for and then waits on. On
+//!    `netduinoplus2` (STM32F405) the RCC keeps clock enables and resets only (the wait for
+//!    RCC_CR.HSIRDY); on `b-l475e-iot01a` (RCC, PLLs, GPIO and USARTs modelled) the PWR is
+//!    unimplemented (the wait for PWR_CR1.DBP, which `rcc::init` sets before it touches a
+//!    clock). When a QEMU models the device the assertion fails and says so: the image then
+//!    runs further, and the check is to become a run against `nav440 sim`.
 
 use super::{read_file, root, target_dir};
 use crate::cargo;
@@ -36,32 +37,74 @@ const MAIN: &str = "firmware-embassy/src/main.rs";
 const DOC: &str = "nav440-proto/src/driver/asynch.rs";
 /// The heading in [`DOC`] the shown block follows.
 const DOC_HEADING: &str = "//! # On embassy-stm32";
-/// QEMU's STM32F405 board.
-const MACHINE: &str = "netduinoplus2";
-/// What `-d unimp` logs when the firmware sets RCC_CR.HSION (RCC at 0x4002_3800, CR at 0).
-const HSION_WRITE: &str =
-    "RCC: unimplemented device write (size 4, offset 0x000, value 0x00000001)";
-/// What `-d unimp` logs for each read of RCC_CR (the wait for HSIRDY, bit 1).
-const CR_READ: &str = "RCC: unimplemented device read  (size 4, offset 0x000)";
-/// Consecutive [`CR_READ`] lines that make the spin certain (QEMU logs about 600,000 a second).
+/// An image QEMU runs until `embassy_stm32::init` waits on a device QEMU does not model.
+struct Stall {
+    /// The board (`boards/src/description.rs`), whose image is run.
+    board: &'static str,
+    /// Its QEMU machine.
+    machine: &'static str,
+    /// The oldest QEMU (major version) that has the machine as described.
+    min_qemu: u32,
+    /// QEMU's `-d` items.
+    log: &'static str,
+    /// What QEMU logs for the write after which the HAL waits.
+    write: &'static str,
+    /// What it logs for each read of the wait.
+    read: &'static str,
+    /// What the wait is, for messages.
+    wait: &'static str,
+}
+
+/// The boards QEMU has a machine of, and where the HAL stops there.
+const STALLS: &[Stall] = &[
+    Stall {
+        board: "stm32f405",
+        machine: "netduinoplus2",
+        min_qemu: 10,
+        // QEMU 10's STM32F4 RCC keeps what is written (RCC at 0x4002_3800) and sets no ready
+        // flag; its trace events log the accesses (QEMU prints the value after `addr:` and the
+        // offset after `val:`). CR.HSION set, then CR read until HSIRDY (bit 1).
+        log: "unimp,guest_errors,trace:stm32_rcc_read,trace:stm32_rcc_write",
+        write: "stm32_rcc_write reg write: addr: 0x1 val: 0x0",
+        read: "stm32_rcc_read reg read: addr: 0x0 val: 0x1",
+        wait: "RCC_CR.HSIRDY (QEMU's STM32F4 RCC models clock enables and resets, no oscillator)",
+    },
+    Stall {
+        board: "b-l475e-iot01a",
+        machine: "b-l475e-iot01a",
+        min_qemu: 10,
+        log: "unimp,guest_errors",
+        // PWR at 0x4000_7000: CR1.DBP (bit 8) set, then CR1 read until DBP reads back.
+        write: "PWR: unimplemented device write (size 4, offset 0x000, value 0x00000100)",
+        read: "PWR: unimplemented device read  (size 4, offset 0x000)",
+        wait: "PWR_CR1.DBP (QEMU's STM32L4x5 has no PWR)",
+    },
+];
+
+/// Consecutive wait reads that make the spin certain (QEMU logs about 250,000 a second).
 const SPIN_READS: usize = 10_000;
 /// Wall-time bound of the QEMU run.
 const QEMU_LIMIT: Duration = Duration::from_secs(10);
 
 /// The images, one per board of `boards/src/description.rs` with an `embassy_feature`: (cargo
 /// feature arguments, the board's name, which the image carries in `NAV440_BOARD`). The
-/// board QEMU runs as [`MACHINE`] (the STM32F405) last, so that the ELF left in the target
-/// directory is the one QEMU and `cargo xtask flash` take.
+/// STM32F405's last, so that the ELF left in the target directory is the one `cargo xtask
+/// flash` takes by default; each image is also kept as `firmware-embassy-<board>`.
 fn images() -> Vec<([&'static str; 3], &'static str)> {
     let mut boards: Vec<_> = nav440_boards::all()
         .iter()
         .filter_map(|b| Some((b.embassy_feature?, b)))
         .collect();
-    boards.sort_by_key(|(_, b)| b.qemu.contains(&MACHINE));
+    boards.sort_by_key(|(_, b)| b.name == "stm32f405");
     boards
         .into_iter()
         .map(|(f, b)| (["--no-default-features", "--features", f], b.name))
         .collect()
+}
+
+/// Where the image of `board` is kept.
+fn kept(elf: &Path, board: &str) -> std::path::PathBuf {
+    elf.with_file_name(format!("{CRATE}-{board}"))
 }
 
 /// Runs the steps of the module doc.
@@ -89,9 +132,13 @@ pub fn embassy_stm32() -> Result<(), String> {
             "xtask: OK: memory map of {CRATE}: board {}, {} loadable sections inside its chip's memory, vector table at {:#010x}; flash {flash} B, static RAM {ram} B",
             map.board, map.sections, map.vector_table
         );
+        std::fs::copy(&elf, kept(&elf, chip))
+            .map_err(|e| format!("cannot keep {}: {e}", elf.display()))?;
     }
-    if qemu::ensure_or_skip("the embassy-stm32 QEMU check")? {
-        qemu_lacks_rcc(&elf)?;
+    if qemu::ensure_or_skip("the embassy-stm32 QEMU checks")? {
+        for stall in STALLS {
+            stalls_in_init(stall, &kept(&elf, stall.board))?;
+        }
     }
     eprintln!(
         "xtask: embassy-stm32: all checks passed in {:.0} s",
@@ -177,21 +224,49 @@ fn check_doc_block() -> Result<(), String> {
     Ok(())
 }
 
-/// Step 4 of the module doc: QEMU `netduinoplus2` with `-d unimp,guest_errors` (logged on
-/// QEMU's stderr) until the firmware has set HSION and then read RCC_CR [`SPIN_READS`] times
-/// in a row with no other access, or [`QEMU_LIMIT`].
-fn qemu_lacks_rcc(elf: &Path) -> Result<(), String> {
+/// A QEMU log line without the `PID@SECONDS:` that starts a trace event's line.
+fn without_trace_prefix(line: &str) -> &str {
+    match line.split_once(':') {
+        Some((head, rest))
+            if head.contains('@')
+                && head
+                    .chars()
+                    .all(|c| c.is_ascii_digit() || c == '@' || c == '.') =>
+        {
+            rest
+        }
+        _ => line,
+    }
+}
+
+/// Step 4 of the module doc for one board: its QEMU machine with the stall's `-d` items
+/// (logged on QEMU's stderr) until the firmware has made the stall's write and then the
+/// stall's read [`SPIN_READS`] times in a row with no other access, or [`QEMU_LIMIT`].
+fn stalls_in_init(stall: &Stall, elf: &Path) -> Result<(), String> {
+    let machine = stall.machine;
+    match qemu::qemu_major() {
+        Some(v) if v >= stall.min_qemu => {}
+        v => {
+            return Err(format!(
+                "the {} image runs on QEMU's `{machine}` as documented from QEMU {} on; this is QEMU {}: install qemu-system-arm {}.0 or later (on Debian 12 from bookworm-backports: `cargo xtask ci` installs it where QEMU is missing)",
+                stall.board,
+                stall.min_qemu,
+                v.map_or("(none)".to_owned(), |v| v.to_string()),
+                stall.min_qemu
+            ))
+        }
+    }
     let elf_arg = elf.display().to_string();
     let args = [
         "-M",
-        MACHINE,
+        machine,
         "-nographic",
         "-monitor",
         "none",
         "-serial",
         "null",
         "-d",
-        "unimp,guest_errors",
+        stall.log,
         "-kernel",
         &elf_arg,
     ];
@@ -220,24 +295,25 @@ fn qemu_lacks_rcc(elf: &Path) -> Result<(), String> {
         })
     };
     let t = Instant::now();
-    let mut hsion_at = None;
+    let mut write_at = None;
     let mut spin = 0usize;
     let mut lines = 0usize;
     let mut last_other = String::new();
     for line in BufReader::new(stderr).lines() {
         let Ok(line) = line else { break };
         lines += 1;
-        if line == HSION_WRITE {
-            hsion_at = Some(lines);
+        let line = without_trace_prefix(&line);
+        if line == stall.write {
+            write_at = Some(lines);
             spin = 0;
-        } else if line == CR_READ && hsion_at.is_some() {
+        } else if line == stall.read && write_at.is_some() {
             spin += 1;
             if spin >= SPIN_READS {
                 break;
             }
         } else {
             spin = 0;
-            last_other = line;
+            last_other = line.to_owned();
         }
     }
     done.store(true, Ordering::Relaxed);
@@ -247,18 +323,39 @@ fn qemu_lacks_rcc(elf: &Path) -> Result<(), String> {
         .map_err(|_| "QEMU's handle is poisoned")?
         .wait()
         .map_err(|e| format!("waiting for QEMU: {e}"))?;
-    match hsion_at {
+    match write_at {
         Some(at) if spin >= SPIN_READS => {
             eprintln!(
-                "xtask: OK: QEMU {MACHINE} lacks the RCC, as documented: after `{HSION_WRITE}` (log line {at}) the firmware read RCC_CR {SPIN_READS} times in a row waiting for HSIRDY (embassy_stm32::init, {:.1} s; QEMU stopped)",
+                "xtask: OK: {} image on QEMU {machine}: embassy_stm32::init waits for {}, as documented: after `{}` (log line {at}) {SPIN_READS} reads in a row ({:.1} s; QEMU stopped)",
+                stall.board,
+                stall.wait,
+                stall.write,
                 t.elapsed().as_secs_f64()
             );
             Ok(())
         }
         _ => Err(format!(
-            "QEMU {MACHINE} did not show the documented failure mode (the HSION write {}, then {SPIN_READS} reads of RCC_CR; {spin} seen) within {} s; QEMU {status}, {lines} log lines, the last other one: `{last_other}`. If this QEMU models the RCC, run the firmware against `nav440 sim` instead and update docs/EMBASSY.md",
-            if hsion_at.is_some() { "seen" } else { "not seen" },
+            "the {} image on QEMU {machine} did not stop as documented (waiting for {}: the write {}, then {SPIN_READS} reads; {spin} seen) within {} s; QEMU {status}, {lines} log lines, the last other one: `{last_other}`. If this QEMU models the device, run the firmware against `nav440 sim` instead and update docs/EMBASSY.md",
+            stall.board,
+            stall.wait,
+            if write_at.is_some() { "seen" } else { "not seen" },
             QEMU_LIMIT.as_secs()
         )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn trace_lines_lose_their_prefix() {
+        assert_eq!(
+            without_trace_prefix(
+                "24506@1764380000.123456:stm32_rcc_read reg read: addr: 0x0 val: 0x1"
+            ),
+            STALLS[0].read
+        );
+        assert_eq!(without_trace_prefix(STALLS[1].read), STALLS[1].read);
     }
 }
