@@ -2,7 +2,10 @@
 //! `nav440 estimate` (formatted here by `nav440_pipeline::csv`, exactly as the host CLI does)
 //! on stdout, the `firmware: ...` diagnostics and counters on stderr.
 //!
-//! The frames are decoded with `defmt-decoder` from the ELF's defmt table. A `row` message
+//! The frames are decoded with `defmt-decoder` from the ELF's defmt table, here ([`Stream`],
+//! [`decode_frames`]: QEMU's semihosting output, a saved RTT log) or by probe-rs, which prints
+//! each message as text ([`decode_lines`]: `cargo xtask flash`, a saved probe-rs log); either
+//! way each message goes through one [`Converter`]. A `row` message
 //! carries one byte payload (little-endian): the sample time (u64, us) and, per estimated axis,
 //! a flag byte, the angle (f32), its f64 residual, the reference rate (f32) and the 14 channel
 //! values (f32) (`firmware-example/src/out.rs`). The values are rebuilt from their bytes, so
@@ -222,20 +225,38 @@ impl<'t> Stream<'t> {
     }
 }
 
+/// Bytes of the firmware's output a [`Read`] keeps (`raw`): a CI run's whole output, and a
+/// bounded part of a long one.
+const KEEP_BYTES: usize = 16 << 20;
+
+/// What [`spawn_reader`]'s thread read.
+#[derive(Default)]
+pub struct Read {
+    /// The collected stdout: CSV (empty when inherited), or the text of a text image.
+    pub stdout: String,
+    /// Diagnostic lines.
+    pub diag: String,
+    /// The firmware's output bytes as received (the defmt frames), at most [`KEEP_BYTES`].
+    pub raw: Vec<u8>,
+    /// More bytes than [`KEEP_BYTES`] came: `raw` is their beginning only.
+    pub raw_cut: bool,
+}
+
 /// Reads the firmware's semihosting stdout on a thread. With a defmt `table` (see [`table`])
 /// the frames are decoded: the CSV goes to this process's stdout when `inherit` (else it is
 /// collected), the diagnostics are collected. Without a table the bytes are text, copied or
-/// collected. The thread returns (collected stdout, diagnostic lines).
+/// collected.
 pub fn spawn_reader(
     mut from: impl std::io::Read + Send + 'static,
     table: Option<Table>,
     inherit: bool,
-) -> std::thread::JoinHandle<(String, String)> {
+) -> std::thread::JoinHandle<Read> {
     std::thread::spawn(move || {
         use std::io::Write as _;
         let mut stdout = String::new();
         let mut diag = String::new();
         let mut raw = Vec::new();
+        let mut raw_cut = false;
         let mut stream = table.as_ref().map(Stream::new);
         let mut buf = [0u8; 8192];
         loop {
@@ -243,13 +264,16 @@ pub fn spawn_reader(
                 Ok(0) | Err(_) => break,
                 Ok(n) => n,
             };
+            let room = KEEP_BYTES.saturating_sub(raw.len()).min(n);
+            raw_cut |= room < n;
+            if stream.is_some() || !inherit {
+                raw.extend_from_slice(&buf[..room]);
+            }
             let Some(s) = stream.as_mut() else {
                 if inherit {
                     let mut o = std::io::stdout().lock();
                     let _ = o.write_all(&buf[..n]);
                     let _ = o.flush();
-                } else {
-                    raw.extend_from_slice(&buf[..n]);
                 }
                 continue;
             };
@@ -279,8 +303,50 @@ pub fn spawn_reader(
         if table.is_none() {
             stdout = String::from_utf8_lossy(&raw).into_owned();
         }
-        (stdout, diag)
+        Read {
+            stdout,
+            diag,
+            raw,
+            raw_cut,
+        }
     })
+}
+
+/// Decodes a whole log of defmt frames (what the firmware writes to RTT's `defmt` channel or
+/// QEMU's semihosting stdout) with the ELF's table.
+pub fn decode_frames(table: &Table, bytes: &[u8]) -> Result<Text, String> {
+    let mut s = Stream::new(table);
+    let text = s.feed(bytes)?;
+    Ok(text)
+}
+
+/// The messages of a log of defmt frames as text, one line each: what probe-rs prints for
+/// them with `--log-format "{s}"`.
+pub fn frame_lines(table: &Table, bytes: &[u8]) -> Result<String, String> {
+    let mut decoder = table.new_stream_decoder();
+    decoder.received(bytes);
+    let mut lines = String::new();
+    loop {
+        match decoder.decode() {
+            Ok(frame) => {
+                lines.push_str(&frame.display_message().to_string());
+                lines.push('\n');
+            }
+            Err(DecodeError::UnexpectedEof) => return Ok(lines),
+            Err(DecodeError::Malformed) => return Err("malformed defmt frame in the log".into()),
+        }
+    }
+}
+
+/// Converts messages printed as text, one per line (probe-rs's output with `--log-format
+/// "{s}"`): the CSV and the other lines, as [`decode_frames`] gives them for the frames.
+pub fn decode_lines(text: &str) -> Result<Text, String> {
+    let mut conv = Converter::default();
+    let mut out = Text::default();
+    for line in text.lines() {
+        conv.message(line, &mut out)?;
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

@@ -176,6 +176,20 @@ enum Cmd {
         #[arg(trailing_var_arg = true, allow_hyphen_values = true)]
         rest: Vec<String>,
     },
+    /// Turns a saved log of a firmware-example image into what `cargo xtask flash` prints:
+    /// the CSV of `nav440 estimate` for the image's bank and axes on stdout, diagnostics and
+    /// counters on stderr. The log holds the defmt frames as the firmware wrote them (RTT's
+    /// `defmt` channel saved raw, or QEMU's semihosting stdout), or with `--text` the lines
+    /// `probe-rs run --log-format "{s}"` printed.
+    Decode {
+        /// The firmware ELF that wrote the log (its defmt table).
+        elf: PathBuf,
+        /// The log (default: stdin).
+        log: Option<PathBuf>,
+        /// The log is probe-rs's text, one message per line.
+        #[arg(long)]
+        text: bool,
+    },
     /// Checks firmware images' memory maps against their boards' chips (what `ci` checks for
     /// every image it builds): every loadable section inside flash or RAM, the vector table at
     /// the boot address.
@@ -199,6 +213,7 @@ fn main() -> ExitCode {
         }
         Cmd::Ci => ci(),
         Cmd::Flash { elf, rest: _ } => firmware::flash(&elf),
+        Cmd::Decode { elf, log, text } => firmware::decode(&elf, log.as_deref(), text),
         Cmd::CheckMap { elfs } => elfs.iter().try_for_each(|e| {
             let r = elf::check_memory_map(e, None)?;
             eprintln!(

@@ -117,29 +117,67 @@ fn have(program: &str) -> bool {
         .unwrap_or(false)
 }
 
-/// The major version of `qemu-system-arm` (`QEMU emulator version 10.0.2 (...)` -> 10).
-pub fn qemu_major() -> Option<u32> {
-    major_of(&qemu_version()?)
-}
-
-/// The major version in QEMU's `--version` line.
+/// The major version in QEMU's `--version` line (`QEMU emulator version 10.0.2 (...)` -> 10).
 fn major_of(line: &str) -> Option<u32> {
     let v = line.split("version ").nth(1)?;
     v.split('.').next()?.trim().parse().ok()
 }
 
+/// Makes sure `qemu-system-arm` is runnable: installs it with apt-get (as root, or through
+/// `sudo -n`) when missing; otherwise fails with the exact command to run.
+pub fn ensure_qemu() -> Result<(), String> {
+    if let Some(v) = qemu_version() {
+        eprintln!("xtask: using {v}");
+        return Ok(());
+    }
+    let hint = "install it with `sudo apt-get install qemu-system-arm` (Debian/Ubuntu), \
+                `sudo dnf install qemu-system-arm` (Fedora) or `brew install qemu` (macOS)";
+    let sudo = apt_sudo().map_err(|e| format!("`{QEMU}` not found and {e}: {hint}"))?;
+    eprintln!("xtask: `{QEMU}` not found, installing it with apt-get");
+    apt(sudo, &["update"])
+        .and_then(|()| apt(sudo, &["install", "-y", "--no-install-recommends", QEMU]))
+        .map_err(|e| format!("installing QEMU failed ({e}); {hint}"))?;
+    match qemu_version() {
+        Some(v) => {
+            eprintln!("xtask: installed {v}");
+            Ok(())
+        }
+        None => Err(format!("`{QEMU}` still not runnable after apt-get; {hint}")),
+    }
+}
+
+/// How apt-get runs here: `Ok(&[])` as root, `Ok(["sudo", "-n"])` with sudo; the reason
+/// otherwise.
+fn apt_sudo() -> Result<&'static [&'static str], String> {
+    if !have("apt-get") {
+        Err("apt-get is not available".to_owned())
+    } else if is_root() {
+        Ok(&[])
+    } else if have("sudo") {
+        Ok(&["sudo", "-n"])
+    } else {
+        Err("not root (no sudo)".to_owned())
+    }
+}
+
+/// Runs apt-get with `args` (through `sudo`), its output on stderr.
+fn apt(sudo: &[&str], args: &[&str]) -> Result<(), String> {
+    let mut all: Vec<&str> = sudo.to_vec();
+    all.push("apt-get");
+    all.extend_from_slice(args);
+    let (prog, rest) = all.split_first().expect("non-empty");
+    crate::run_to_stderr(prog, rest, &[("DEBIAN_FRONTEND", "noninteractive")])
+}
+
+/// The oldest QEMU whose STM32 machines [`qemu10`] gives: QEMU 10 has the `b-l475e-iot01a`
+/// machine with the STM32L4x5's RCC, and a `netduinoplus2` whose RCC keeps clock enables.
+pub const QEMU10_MAJOR: u32 = 10;
+
 /// The suite Debian 12 (bookworm) has QEMU 10 in.
 const BACKPORTS: &str = "bookworm-backports";
 
-/// Where [`ensure_qemu`] adds [`BACKPORTS`] to apt's sources when none names it.
+/// Where [`qemu10`] adds [`BACKPORTS`] to apt's sources when none names it.
 const BACKPORTS_LIST: &str = "/etc/apt/sources.list.d/bookworm-backports.list";
-
-/// Whether this is Debian 12 (`VERSION_CODENAME=bookworm` in `/etc/os-release`).
-fn is_bookworm() -> bool {
-    std::fs::read_to_string("/etc/os-release")
-        .map(|t| t.lines().any(|l| l.trim() == "VERSION_CODENAME=bookworm"))
-        .unwrap_or(false)
-}
 
 /// Whether a file of apt's sources already names [`BACKPORTS`].
 fn backports_listed() -> bool {
@@ -156,76 +194,98 @@ fn backports_listed() -> bool {
     })
 }
 
-/// Makes sure `qemu-system-arm` is runnable: installs it with apt-get (as root, or through
-/// `sudo -n`) when missing, on Debian 12 from [`BACKPORTS`] (QEMU 10, which has the
-/// `b-l475e-iot01a` machine; the suite is added to apt's sources when none names it);
-/// otherwise fails with the exact command to run. A QEMU already installed is kept, whatever
-/// its version (the checks that need QEMU 10 say so).
-pub fn ensure_qemu() -> Result<(), String> {
-    if let Some(v) = qemu_version() {
-        eprintln!("xtask: using {v}");
-        return Ok(());
+/// A `qemu-system-arm` of QEMU 10 or later, and its `--version` line: the system's when it is
+/// one, else a copy of Debian 12's bookworm-backports package unpacked under `dir` (fetched
+/// with `apt-get download` the first time, the suite added to apt's sources when none names
+/// it; the system's QEMU stays as it is). The copy runs with `-audio none` (see
+/// [`QEMU10_ARGS`]). Fails, saying what to install, elsewhere.
+pub fn qemu10(dir: &Path) -> Result<(PathBuf, String), String> {
+    if let Some(v) = qemu_version().filter(|v| major_of(v) >= Some(QEMU10_MAJOR)) {
+        return Ok((PathBuf::from(QEMU), v));
     }
-    let hint = "install it with `sudo apt-get install qemu-system-arm` (Debian/Ubuntu), \
-                `sudo dnf install qemu-system-arm` (Fedora) or `brew install qemu` (macOS)";
-    if !have("apt-get") {
-        return Err(format!(
-            "`{QEMU}` not found and apt-get is not available: {hint}"
-        ));
-    }
-    let sudo: &[&str] = if is_root() {
-        &[]
-    } else if have("sudo") {
-        &["sudo", "-n"]
-    } else {
-        return Err(format!("`{QEMU}` not found and not root (no sudo): {hint}"));
+    let bin = dir.join("usr/bin").join(QEMU);
+    let version = |bin: &Path| {
+        let out = Command::new(bin).arg("--version").output().ok()?;
+        let line = String::from_utf8_lossy(&out.stdout)
+            .lines()
+            .next()?
+            .to_owned();
+        (major_of(&line) >= Some(QEMU10_MAJOR)).then_some(line)
     };
-    eprintln!("xtask: `{QEMU}` not found, installing it with apt-get");
-    let apt = |args: &[&str]| -> Result<(), String> {
-        let mut all: Vec<&str> = sudo.to_vec();
-        all.push("apt-get");
-        all.extend_from_slice(args);
-        let (prog, rest) = all.split_first().expect("non-empty");
-        crate::run_to_stderr(prog, rest, &[("DEBIAN_FRONTEND", "noninteractive")])
+    if let Some(v) = version(&bin) {
+        return Ok((bin, v));
+    }
+    let have_v = qemu_version().unwrap_or_else(|| "no qemu-system-arm".to_owned());
+    let refuse = |why: String| {
+        format!(
+            "the STM32 machines need QEMU {QEMU10_MAJOR} or later; this machine has {have_v}, and {why}: install qemu-system-arm {QEMU10_MAJOR}.0 or later (Debian 12: from {BACKPORTS})"
+        )
     };
-    let mut install = vec!["install", "-y", "--no-install-recommends"];
-    if is_bookworm() {
-        if !backports_listed() {
-            eprintln!("xtask: adding {BACKPORTS} to apt's sources ({BACKPORTS_LIST})");
-            let line = format!("deb http://deb.debian.org/debian {BACKPORTS} main\n");
-            let mut tee: Vec<&str> = sudo.to_vec();
-            tee.extend(["tee", BACKPORTS_LIST]);
-            let (prog, rest) = tee.split_first().expect("non-empty");
-            let mut child = Command::new(prog)
-                .args(rest)
-                .stdin(Stdio::piped())
-                .stdout(Stdio::null())
-                .spawn()
-                .map_err(|e| format!("cannot run tee: {e}"))?;
-            child
-                .stdin
-                .take()
-                .ok_or("tee's stdin is not piped")?
-                .write_all(line.as_bytes())
-                .map_err(|e| format!("cannot write {BACKPORTS_LIST}: {e}"))?;
-            if !child.wait().map_err(|e| e.to_string())?.success() {
-                return Err(format!("cannot write {BACKPORTS_LIST}; {hint}"));
-            }
-        }
-        install.extend(["-t", BACKPORTS]);
+    let debian12 = std::fs::read_to_string("/etc/os-release")
+        .is_ok_and(|t| t.lines().any(|l| l.trim() == "VERSION_CODENAME=bookworm"));
+    if !debian12 {
+        return Err(refuse("this is not Debian 12".to_owned()));
     }
-    install.push(QEMU);
-    apt(&["update"])
-        .and_then(|()| apt(&install))
-        .map_err(|e| format!("installing QEMU failed ({e}); {hint}"))?;
-    match qemu_version() {
-        Some(v) => {
-            eprintln!("xtask: installed {v}");
-            Ok(())
+    let sudo = apt_sudo().map_err(refuse)?;
+    if !backports_listed() {
+        eprintln!("xtask: adding {BACKPORTS} to apt's sources ({BACKPORTS_LIST})");
+        let line = format!("deb http://deb.debian.org/debian {BACKPORTS} main\n");
+        let mut tee: Vec<&str> = sudo.to_vec();
+        tee.extend(["tee", BACKPORTS_LIST]);
+        let (prog, rest) = tee.split_first().expect("non-empty");
+        let mut child = Command::new(prog)
+            .args(rest)
+            .stdin(Stdio::piped())
+            .stdout(Stdio::null())
+            .spawn()
+            .map_err(|e| refuse(format!("tee cannot run: {e}")))?;
+        child
+            .stdin
+            .take()
+            .ok_or("tee's stdin is not piped")?
+            .write_all(line.as_bytes())
+            .map_err(|e| refuse(format!("{BACKPORTS_LIST} cannot be written: {e}")))?;
+        if !child.wait().map_err(|e| e.to_string())?.success() {
+            return Err(refuse(format!("{BACKPORTS_LIST} cannot be written")));
         }
-        None => Err(format!("`{QEMU}` still not runnable after apt-get; {hint}")),
     }
+    apt(sudo, &["update"]).map_err(refuse)?;
+    let download = dir.join("download");
+    std::fs::create_dir_all(&download)
+        .map_err(|e| format!("cannot create {}: {e}", download.display()))?;
+    let pkg = format!("{QEMU}/{BACKPORTS}");
+    eprintln!("+ apt-get download {pkg} (in {})", download.display());
+    let got = Command::new("apt-get")
+        .args(["download", &pkg])
+        .current_dir(&download)
+        .stdout(Stdio::from(std::io::stderr()))
+        .status()
+        .map_err(|e| refuse(format!("apt-get cannot run: {e}")))?;
+    if !got.success() {
+        return Err(refuse(format!("`apt-get download {pkg}` failed ({got})")));
+    }
+    let deb = std::fs::read_dir(&download)
+        .map_err(|e| e.to_string())?
+        .flatten()
+        .map(|e| e.path())
+        .find(|p| p.extension().is_some_and(|x| x == "deb"))
+        .ok_or_else(|| refuse("apt-get download left no .deb".to_owned()))?;
+    crate::run_to_stderr(
+        "dpkg-deb",
+        &["-x", &deb.display().to_string(), &dir.display().to_string()],
+        &[],
+    )
+    .map_err(refuse)?;
+    let _ = std::fs::remove_dir_all(&download);
+    let v = version(&bin).ok_or_else(|| refuse(format!("{} does not run", bin.display())))?;
+    eprintln!("xtask: unpacked {v} into {}", dir.display());
+    Ok((bin, v))
 }
+
+/// Arguments every run of [`qemu10`]'s binary takes: no audio back-end (a copy unpacked beside
+/// the system's QEMU 7.2 would otherwise try the system's audio modules, of another build, and
+/// warn).
+pub const QEMU10_ARGS: &[&str] = &["-audio", "none"];
 
 /// [`ensure_qemu`] for a step that runs `what` on QEMU: `Ok(true)` when QEMU is there (or
 /// installed); `Ok(false)`, said loudly, when it is not and `XTASK_SKIP_QEMU=1` (a machine where
@@ -400,7 +460,7 @@ fn run(
             Err(e) => return Err(format!("waiting for QEMU: {e}")),
         }
     };
-    let (stdout, diag) = out_reader
+    let crate::defmt_out::Read { stdout, diag, .. } = out_reader
         .map(|h| h.join().unwrap_or_default())
         .unwrap_or_default();
     // The decoded diagnostics first, then QEMU's own stderr (and text-firmware stderr).

@@ -59,6 +59,9 @@ pub struct UnitRun {
     pub stdout: String,
     /// The firmware's stderr and QEMU's messages, plus the relay's summary line.
     pub stderr: String,
+    /// The firmware's output bytes as QEMU passed them on (its defmt frames), unless longer
+    /// than the reader keeps.
+    pub raw: Option<Vec<u8>>,
     /// Bytes the unit sent.
     pub unit_bytes: u64,
     /// Wall time.
@@ -314,7 +317,7 @@ pub fn run(
                 kill(&mut child);
                 let _ = unit.shutdown(Shutdown::Both);
                 let diag = out_reader
-                    .map(|h| h.join().unwrap_or_default().1)
+                    .map(|h| h.join().unwrap_or_default().diag)
                     .unwrap_or_default();
                 let stderr = diag + &err_reader.join().unwrap_or_default();
                 return Err(format!(
@@ -333,7 +336,12 @@ pub fn run(
     drop(u1);
     let _ = fw_to_unit.join();
     let ended = unit_to_fw.join().unwrap_or(Ok(false))?;
-    let (stdout, diag) = out_reader
+    let crate::defmt_out::Read {
+        stdout,
+        diag,
+        raw,
+        raw_cut,
+    } = out_reader
         .map(|h| h.join().unwrap_or_default())
         .unwrap_or_default();
     let qemu_stderr: String = err_reader
@@ -358,6 +366,7 @@ pub fn run(
         status,
         stdout,
         stderr,
+        raw: (!raw_cut).then_some(raw),
         unit_bytes,
         elapsed: start.elapsed(),
     })

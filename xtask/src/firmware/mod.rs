@@ -32,7 +32,7 @@ pub use bench::bench;
 pub use ci::{ci_firmware, ci_steps};
 pub use demo::demo;
 pub use embassy_stm32::embassy_stm32;
-pub use flash::flash;
+pub use flash::{decode, flash};
 pub use nav440_cli::{adopt_nav440, NAV440_PROFILE};
 pub use outside::outside_firmware;
 pub use qemu_run::{qemu, unit};

@@ -176,14 +176,62 @@ fn unit_case(
             let lines = compare_csv(&r.stdout, &host).map_err(|d| {
                 format!("{what}: firmware CSV differs from `nav440 estimate` on the record: {d}")
             })?;
+            // A flashable image: its output read the ways of a real board gives the same CSV.
+            let logs = if board.name == qemu::STM32_BOARD.name {
+                format!(
+                    "; {}",
+                    saved_logs_decode(elf, &r).map_err(|e| format!("{what}: {e}"))?
+                )
+            } else {
+                String::new()
+            };
             Ok(format!(
-                "{what}: IDENTICAL to `nav440 estimate{}` on the {} bytes streamed after configuration ({lines} lines; the unit sent {} bytes in all)",
+                "{what}: IDENTICAL to `nav440 estimate{}` on the {} bytes streamed after configuration ({lines} lines; the unit sent {} bytes in all){logs}",
                 host_extra.iter().map(|a| format!(" {a}")).collect::<String>(),
                 std::fs::metadata(&record).map_or(0, |m| m.len()),
                 r.unit_bytes
             ))
         }
     }
+}
+
+/// The decoders of a flashed board's output fed the exact bytes a QEMU run of the image
+/// produced (its defmt frames): `cargo xtask decode` on them as a saved RTT log, and on the
+/// text probe-rs prints for them (`cargo xtask flash`'s path; the text is made here by
+/// defmt-decoder's rendering of each message, which is what probe-rs prints with `--log-format
+/// "{s}"`). Each must give the CSV the run printed, header and rows, and the same other lines.
+fn saved_logs_decode(elf: &Path, r: &crate::unit::UnitRun) -> Result<String, String> {
+    use crate::defmt_out::{decode_frames, decode_lines, frame_lines, table};
+    let raw = r
+        .raw
+        .as_deref()
+        .ok_or("the firmware's output was too long to keep")?;
+    let table = table(elf)?.ok_or("the image has no row message")?;
+    let frames = decode_frames(&table, raw)?;
+    let lines = frame_lines(&table, raw)?;
+    let text = decode_lines(&lines)?;
+    for (how, t) in [
+        ("as a saved RTT log", &frames),
+        ("as probe-rs's text", &text),
+    ] {
+        if t.csv != r.stdout {
+            let at = compare_csv(&t.csv, &r.stdout).err().unwrap_or_default();
+            return Err(format!(
+                "its {} output bytes decoded {how} differ from the run's CSV: {at}",
+                raw.len()
+            ));
+        }
+    }
+    if frames.diag != text.diag {
+        return Err(
+            "the diagnostics decoded from the frames and from probe-rs's text differ".into(),
+        );
+    }
+    Ok(format!(
+        "its {} output bytes give the same CSV as a saved RTT log and as probe-rs's text ({} lines)",
+        raw.len(),
+        lines.lines().count()
+    ))
 }
 
 /// Queues `case` on `board` (image `elf`) as a job of the step `group`; the host's CSV comes
