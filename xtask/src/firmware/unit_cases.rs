@@ -227,11 +227,80 @@ fn saved_logs_decode(elf: &Path, r: &crate::unit::UnitRun) -> Result<String, Str
             "the diagnostics decoded from the frames and from probe-rs's text differ".into(),
         );
     }
+    let saved = unique_path("rtt-log", "defmt")?;
+    std::fs::write(&saved, raw).map_err(|e| format!("{}: {e}", saved.display()))?;
+    let decoded = xtask_prints(
+        &["decode".as_ref(), elf.as_os_str(), saved.as_os_str()],
+        None,
+    );
+    let _ = std::fs::remove_file(&saved);
+    if decoded? != r.stdout {
+        return Err(
+            "`cargo xtask decode` on the saved output printed another CSV than the run".into(),
+        );
+    }
+    let runner = runner_prints(elf, &lines)?;
+    if runner != r.stdout {
+        let at = compare_csv(&runner, &r.stdout).err().unwrap_or_default();
+        return Err(format!(
+            "`cargo xtask flash` printed another CSV than the run: {at}"
+        ));
+    }
     Ok(format!(
-        "its {} output bytes give the same CSV as a saved RTT log and as probe-rs's text ({} lines)",
+        "its {} output bytes give the same CSV as a saved RTT log (`cargo xtask decode`), as probe-rs's text and through `cargo xtask flash` ({} lines)",
         raw.len(),
         lines.lines().count()
     ))
+}
+
+/// What `cargo xtask flash ELF` (this program's `flash`) prints on stdout when `probe-rs`
+/// prints `lines`: a stand-in `probe-rs` first on `PATH` checks the arguments the runner gives
+/// it (`run --chip CHIP --log-format {s} ELF`) and prints the lines.
+fn runner_prints(elf: &Path, lines: &str) -> Result<String, String> {
+    let dir = unique_path("fake-probe-rs", "d")?;
+    std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    std::fs::write(dir.join("log.txt"), lines).map_err(|e| e.to_string())?;
+    let script = dir.join("probe-rs");
+    std::fs::write(
+        &script,
+        "#!/bin/sh\n[ \"$1 $2 $4 $5\" = \"run --chip --log-format {s}\" ] || { echo \"probe-rs stand-in: unexpected arguments: $*\" >&2; exit 9; }\ncat \"$(dirname \"$0\")/log.txt\"\n",
+    )
+    .map_err(|e| e.to_string())?;
+    {
+        use std::os::unix::fs::PermissionsExt as _;
+        std::fs::set_permissions(&script, std::fs::Permissions::from_mode(0o755))
+            .map_err(|e| e.to_string())?;
+    }
+    let path = format!(
+        "{}:{}",
+        dir.display(),
+        std::env::var("PATH").unwrap_or_default()
+    );
+    let out = xtask_prints(&["flash".as_ref(), elf.as_os_str()], Some(&path));
+    let _ = std::fs::remove_dir_all(&dir);
+    out
+}
+
+/// What this program prints on stdout when run with `args` (and `PATH` set to `path`).
+fn xtask_prints(args: &[&std::ffi::OsStr], path: Option<&str>) -> Result<String, String> {
+    let me = std::env::current_exe().map_err(|e| e.to_string())?;
+    let mut cmd = std::process::Command::new(me);
+    cmd.args(args);
+    if let Some(p) = path {
+        cmd.env("PATH", p);
+    }
+    let what = format!("`cargo xtask {}`", args[0].to_string_lossy());
+    let out = cmd
+        .output()
+        .map_err(|e| format!("cannot run {what}: {e}"))?;
+    if !out.status.success() {
+        return Err(format!(
+            "{what} ended with {}: {}",
+            out.status,
+            String::from_utf8_lossy(&out.stderr)
+        ));
+    }
+    String::from_utf8(out.stdout).map_err(|_| format!("{what} printed no text"))
 }
 
 /// Queues `case` on `board` (image `elf`) as a job of the step `group`; the host's CSV comes
