@@ -1,5 +1,5 @@
 //! Output files and standard output: what the commands write, and the rules that keep every
-//! existing file intact until a command has succeeded (docs/RELIABILITY.md, "No file is lost").
+//! existing file intact until a command has succeeded (docs/RELIABILITY-STREAM.md, "No file is lost").
 //!
 //! * An output file is written to a temporary file in its own directory
 //!   (`.NAME.XXXXXX.nav440-tmp`, the `tempfile` crate) and renamed over the destination only

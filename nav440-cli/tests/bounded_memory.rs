@@ -1,4 +1,4 @@
-//! Bounded memory and errors that point at the cause (docs/RELIABILITY.md, "Bounded memory"):
+//! Bounded memory and errors that point at the cause (docs/RELIABILITY-STREAM.md, "Bounded memory"):
 //! each case through the real binary, asserting the exit code, the
 //! message and, for memory, that the command succeeds (or stops with its own error) under an
 //! address-space limit (`prlimit --as`) that a command holding every packet's row exceeds

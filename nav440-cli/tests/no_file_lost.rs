@@ -1,4 +1,4 @@
-//! No file is lost, no output is lost silently (docs/RELIABILITY.md, "No file is lost"): each
+//! No file is lost, no output is lost silently (docs/RELIABILITY-STREAM.md, "No file is lost"): each
 //! case through the real binary, asserting the exit code and that no file changed.
 
 use std::path::{Path, PathBuf};

@@ -40,7 +40,7 @@ const FAULTS: [(&str, &str); 3] = [
 ];
 
 /// Minutes of stream of the soak `cargo xtask ci` runs, and its fault window: 16 faults in 10
-/// minutes of stream, the same checks as an hour with 4 (docs/RELIABILITY.md).
+/// minutes of stream, the same checks as an hour with 4 (docs/RELIABILITY-STREAM.md).
 pub(super) const CI_SOAK: (f64, f64) = (10.0, 2.5);
 
 /// A small deterministic generator (splitmix64) for the injection points.
