@@ -481,22 +481,31 @@ fn config_over_a_pty_reports_the_boot_as_json() {
     stop(child);
 }
 
+/// A unit that NAKs the packet type: `config` and `live` stop at the boot with one line, exit
+/// 1; `live`'s line also says why (as an IMU440 would NAK every angle packet).
 #[test]
-fn config_over_a_pty_reports_a_nak_in_one_line() {
-    let (child, path) = start_sim(
-        "fig5_a2_100hz.bin",
-        "pty",
-        &["--timeout", "30", "--fault", "nak-config"],
-    );
-    let out = nav440(&["config", "--port", &path, "--reply-timeout", "100"]);
-    assert_eq!(out.status.code(), Some(1));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(err.lines().count(), 1, "{err}");
-    assert!(
-        err.contains("unit rejected (NAK) SF: packet type 0x0003=0x4132 (A2)"),
-        "{err}"
-    );
-    stop(child);
+fn config_and_live_over_a_pty_report_a_nak_in_one_line() {
+    for cmd in ["config", "live"] {
+        let (child, path) = start_sim(
+            "fig5_a2_100hz.bin",
+            "pty",
+            &["--timeout", "30", "--fault", "nak-config"],
+        );
+        let out = nav440(&[cmd, "--port", &path, "--reply-timeout", "100"]);
+        assert_eq!(out.status.code(), Some(1), "{cmd}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(err.lines().count(), 1, "{cmd}: {err}");
+        assert!(
+            err.contains("unit rejected (NAK) SF: packet type 0x0003=0x4132 (A2)"),
+            "{err}"
+        );
+        assert!(
+            err.contains("(the unit does not stream A2: an IMU440 streams no angle packets;"),
+            "{err}"
+        );
+        assert!(out.stdout.is_empty(), "{cmd}");
+        stop(child);
+    }
 }
 
 fn stop(mut child: Child) {
@@ -838,28 +847,6 @@ fn live_refuses_a_packet_without_angles_and_a_plot_without_a_terminal() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("--plot draws on a terminal"), "{err}");
-}
-
-/// A unit that NAKs the angle packet (as an IMU440 would): `live` stops at the boot with one
-/// line that names the packet and the reason, exit 1.
-#[test]
-fn live_on_a_unit_that_naks_the_packet_type_says_why() {
-    let (child, path) = start_sim(
-        "fig5_a2_100hz.bin",
-        "pty",
-        &["--timeout", "30", "--fault", "nak-config"],
-    );
-    let out = nav440(&["live", "--port", &path, "--reply-timeout", "100"]);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "{err}");
-    assert_eq!(err.lines().count(), 1, "{err}");
-    assert!(
-        err.contains("unit rejected (NAK) SF: packet type 0x0003=0x4132 (A2)")
-            && err.contains("(the unit does not stream A2: an IMU440 streams no angle packets;"),
-        "{err}"
-    );
-    assert!(out.stdout.is_empty());
-    stop(child);
 }
 
 /// A private tmux server (its own socket), killed when dropped.
