@@ -375,7 +375,7 @@ impl Identity {
 /// no SF or WF, so the unit's configuration is left as it was. Errors: exit 3 the port cannot
 /// be opened, 4 no answer to the ping, 1 a NAK, no ID or VR reply within the reply time-out,
 /// or a port failure.
-pub(crate) fn identify(a: &LinkArgs) -> Result<Identity> {
+pub fn identify(a: &LinkArgs) -> Result<Identity> {
     use nav440_proto::driver::Error as DriverError;
     let start = a.check()?;
     let mut d = a.open(start.unwrap_or(Baud::B57600))?;

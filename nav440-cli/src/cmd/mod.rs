@@ -243,7 +243,7 @@ pub struct EstimateArgs {
 impl EstimateArgs {
     /// The options these arguments describe (the NAV440 preset unless `--preset` or a gains
     /// file says otherwise), every number and the gains file checked.
-    pub(crate) fn options(&self) -> Result<replay::EstimateOptions> {
+    pub fn options(&self) -> Result<replay::EstimateOptions> {
         let mut opts = bank_options(&self.bank, PresetArg::Nav440)?;
         opts.noise = noise(self.noise.noise_var, self.noise.seed)?;
         opts.fixed = self.fixed;
