@@ -481,16 +481,21 @@ fn config_over_a_pty_reports_the_boot_as_json() {
     stop(child);
 }
 
+/// `nav440 sim` on the fig5 capture through a pty with `--fault FAULT` (30 s time-out).
+fn faulty_unit_on_a_pty(fault: &str) -> (Child, String) {
+    start_sim(
+        "fig5_a2_100hz.bin",
+        "pty",
+        &["--timeout", "30", "--fault", fault],
+    )
+}
+
 /// A unit that NAKs the packet type: `config` and `live` stop at the boot with one line, exit
 /// 1; `live`'s line also says why (as an IMU440 would NAK every angle packet).
 #[test]
 fn config_and_live_over_a_pty_report_a_nak_in_one_line() {
     for cmd in ["config", "live"] {
-        let (child, path) = start_sim(
-            "fig5_a2_100hz.bin",
-            "pty",
-            &["--timeout", "30", "--fault", "nak-config"],
-        );
+        let (child, path) = faulty_unit_on_a_pty("nak-config");
         let out = nav440(&[cmd, "--port", &path, "--reply-timeout", "100"]);
         assert_eq!(out.status.code(), Some(1), "{cmd}");
         let err = String::from_utf8_lossy(&out.stderr);
@@ -744,11 +749,7 @@ fn info_over_a_pty_prints_the_simulated_units_serial_number_and_version() {
 #[test]
 fn info_of_a_silent_unit_is_no_answer_exit_4() {
     for fault in ["no-answer", "dead"] {
-        let (child, path) = start_sim(
-            "fig5_a2_100hz.bin",
-            "pty",
-            &["--timeout", "30", "--fault", fault],
-        );
+        let (child, path) = faulty_unit_on_a_pty(fault);
         let t0 = std::time::Instant::now();
         let out = nav440(&[
             "info",
