@@ -9,6 +9,7 @@ pub mod decode;
 pub mod error;
 pub mod gains;
 pub mod limits;
+pub mod live_plot;
 pub mod motion;
 pub mod optim;
 pub mod output;

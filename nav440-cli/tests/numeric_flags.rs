@@ -82,6 +82,12 @@ const NUMERIC: &[(&str, &str, &str)] = &[
     ("live", "--reply-timeout", "{}"),
     ("live", "--pings", "{}"),
     ("live", "--duration", "{}"),
+    ("live", "--step", "{}"),
+    ("live", "--noise-var", "{}"),
+    ("live", "--seed", "{}"),
+    ("info", "--unit-baud", "{}"),
+    ("info", "--reply-timeout", "{}"),
+    ("info", "--pings", "{}"),
 ];
 
 /// Arguments that take a value that is not a number (paths, names, enums); positional ones by
@@ -134,6 +140,13 @@ const NOT_NUMERIC: &[(&str, &str)] = &[
     ("record", "--output"),
     ("live", "--port"),
     ("live", "--packet"),
+    ("live", "--bank"),
+    ("live", "--hold"),
+    ("live", "--preset"),
+    ("live", "--gains"),
+    ("live", "--noise-at"),
+    ("live", "--axis"),
+    ("info", "--port"),
     ("completions", "shell"),
 ];
 
@@ -200,6 +213,10 @@ const VALID: &[(&str, &str, &str, &str)] = &[
     ("config", "--pings", "MAX", "u8: 255 pings per baud"),
     ("record", "--pings", "MAX", "u8: 255 pings per baud"),
     ("live", "--pings", "MAX", "u8: 255 pings per baud"),
+    ("live", "--noise-var", "0", "no added noise"),
+    ("live", "--seed", "0", "any seed"),
+    ("live", "--seed", "MAX", "any seed"),
+    ("info", "--pings", "MAX", "u8: 255 pings per baud"),
 ];
 
 /// A valid value runs at most this long; one that starts long work (a session waiting for a
@@ -370,6 +387,7 @@ fn command_line(cmd: &str, flag: &str, value: &str, files: &Files) -> Vec<String
         "config" => vec!["config", "--port", port],
         "record" => vec!["record", "--port", port, "-o", out],
         "live" => vec!["live", "--port", port],
+        "info" => vec!["info", "--port", port],
         other => panic!("no base command line for {other}"),
     };
     // `--train` conflicts with `--window`.

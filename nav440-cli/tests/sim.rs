@@ -481,22 +481,36 @@ fn config_over_a_pty_reports_the_boot_as_json() {
     stop(child);
 }
 
-#[test]
-fn config_over_a_pty_reports_a_nak_in_one_line() {
-    let (child, path) = start_sim(
+/// `nav440 sim` on the fig5 capture through a pty with `--fault FAULT` (30 s time-out).
+fn faulty_unit_on_a_pty(fault: &str) -> (Child, String) {
+    start_sim(
         "fig5_a2_100hz.bin",
         "pty",
-        &["--timeout", "30", "--fault", "nak-config"],
-    );
-    let out = nav440(&["config", "--port", &path, "--reply-timeout", "100"]);
-    assert_eq!(out.status.code(), Some(1));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(err.lines().count(), 1, "{err}");
-    assert!(
-        err.contains("unit rejected (NAK) SF: packet type 0x0003=0x4132 (A2)"),
-        "{err}"
-    );
-    stop(child);
+        &["--timeout", "30", "--fault", fault],
+    )
+}
+
+/// A unit that NAKs the packet type: `config` and `live` stop at the boot with one line, exit
+/// 1; `live`'s line also says why (as an IMU440 would NAK every angle packet).
+#[test]
+fn config_and_live_over_a_pty_report_a_nak_in_one_line() {
+    for cmd in ["config", "live"] {
+        let (child, path) = faulty_unit_on_a_pty("nak-config");
+        let out = nav440(&[cmd, "--port", &path, "--reply-timeout", "100"]);
+        assert_eq!(out.status.code(), Some(1), "{cmd}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(err.lines().count(), 1, "{cmd}: {err}");
+        assert!(
+            err.contains("unit rejected (NAK) SF: packet type 0x0003=0x4132 (A2)"),
+            "{err}"
+        );
+        assert!(
+            err.contains("(the unit does not stream A2: an IMU440 streams no angle packets;"),
+            "{err}"
+        );
+        assert!(out.stdout.is_empty(), "{cmd}");
+        stop(child);
+    }
 }
 
 fn stop(mut child: Child) {
@@ -685,4 +699,253 @@ fn record_dash_writes_standard_output() {
         out.stdout,
         std::fs::read(data("fig5_a2_100hz.bin")).unwrap()
     );
+}
+
+// --- the unit's identity, the ports, `live` with estimate's options and its chart ---
+
+/// `nav440 info` finds the simulated unit, reads its settings and prints the ID and VR the
+/// unit model answers (`nav440_proto::unit::SERIAL_NUMBER`, `MODEL`, version 1.0.0), as text
+/// and as JSON; it sends no SF, so the unit stays at its power-up output (S1 at 20 Hz, 38400 Bd).
+#[test]
+fn info_over_a_pty_prints_the_simulated_units_serial_number_and_version() {
+    let (child, path) = start_sim("fig5_a2_100hz.bin", "pty", &["--timeout", "30"]);
+    let out = nav440(&["info", "--port", &path]);
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let serial = nav440_proto::unit::SERIAL_NUMBER;
+    let model = std::str::from_utf8(nav440_proto::unit::MODEL).unwrap();
+    assert_eq!(serial, 4_400_001);
+    for line in [
+        format!("serial number: {serial}"),
+        format!("part number:   {model}"),
+        "firmware:      1.0.0 (release candidate, build 0)".to_string(),
+        "baud:          38400 Bd (answered at 57600 Bd)".to_string(),
+        "output:        S1 at 20 Hz".to_string(),
+    ] {
+        assert!(text.lines().any(|l| l == line), "{line:?} not in\n{text}");
+    }
+    assert!(text.contains("angles:        not in S1;"), "{text}");
+    let out = nav440(&["info", "--port", &path, "--json"]);
+    assert_eq!(out.status.code(), Some(0));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["serial_number"], serial);
+    assert_eq!(v["model"], model);
+    assert_eq!(v["version"], "1.0.0");
+    assert_eq!(v["unit_baud"], 38400);
+    assert_eq!(
+        (v["packet"].as_str(), v["rate_divider"].as_u64()),
+        (Some("S1"), Some(5))
+    );
+    assert_eq!(v["carries_angles"], false);
+    stop(child);
+}
+
+/// A unit that answers nothing: `info` says so in one line, exit 4, within its time-outs.
+#[test]
+fn info_of_a_silent_unit_is_no_answer_exit_4() {
+    for fault in ["no-answer", "dead"] {
+        let (child, path) = faulty_unit_on_a_pty(fault);
+        let t0 = std::time::Instant::now();
+        let out = nav440(&[
+            "info",
+            "--port",
+            &path,
+            "--reply-timeout",
+            "50",
+            "--pings",
+            "1",
+        ]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(4), "{fault}: {err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(
+            err.contains("no answer from the unit: PK unanswered at 57600, 38400, 19200, 9600 Bd (1 x 50 ms each)"),
+            "{err}"
+        );
+        assert!(out.stdout.is_empty());
+        assert!(t0.elapsed() < Duration::from_secs(5), "{:?}", t0.elapsed());
+        stop(child);
+    }
+}
+
+/// `nav440 ports` lists the serial ports, one `DEV<TAB>KIND` line each, or says there is
+/// none; exit 0 either way.
+#[test]
+fn ports_lists_the_serial_ports_and_exits_0() {
+    let out = nav440(&["ports"]);
+    assert_eq!(out.status.code(), Some(0));
+    let text = String::from_utf8_lossy(&out.stdout);
+    let err = String::from_utf8_lossy(&out.stderr);
+    if text.is_empty() {
+        assert!(err.contains("no serial port found"), "{err}");
+    }
+    for line in text.lines() {
+        let (dev, kind) = line.split_once('\t').unwrap_or_else(|| panic!("{line:?}"));
+        assert!(dev.starts_with("/dev/") && !kind.is_empty(), "{line:?}");
+    }
+}
+
+/// `live` takes estimate's options: `--bank product --axis all` over the pty prints what
+/// `nav440 estimate --bank product --axis all` prints on the recorded bytes.
+#[test]
+fn live_with_the_product_bank_on_every_axis_prints_what_estimate_prints() {
+    let record = tmp("pty-live-product.bin");
+    let (child, path) = start_sim(
+        "sin5_a1_50hz.bin",
+        "pty",
+        &["--fast", "--record", record.to_str().unwrap()],
+    );
+    let opts = ["--bank", "product", "--axis", "all", "--hold", "zoh"];
+    let mut args = vec!["live", "--port", &path, "--rate", "50"];
+    args.extend(opts);
+    let out = nav440(&args);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(finish(child).0, 0);
+    let mut args = vec!["estimate", record.to_str().unwrap()];
+    args.extend(opts);
+    let est = nav440(&args);
+    assert_eq!(est.status.code(), Some(0));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(
+        text.lines().next(),
+        Some("t,roll,roll_rate,roll_ilo1_v,roll_kf_a,pitch,pitch_rate,pitch_ilo1_v,pitch_kf_a,yaw,yaw_rate,yaw_ilo1_v,yaw_kf_a")
+    );
+    assert!(text.lines().count() > 400, "{}", text.lines().count());
+    assert_eq!(out.stdout, est.stdout);
+}
+
+/// Usage errors of `live`, before the port is opened: a packet without angles, `--plot`
+/// without a terminal.
+#[test]
+fn live_refuses_a_packet_without_angles_and_a_plot_without_a_terminal() {
+    let out = nav440(&[
+        "live",
+        "--port",
+        "/nonexistent/tty",
+        "--packet",
+        "S1",
+        "--rate",
+        "20",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert_eq!(
+        err.trim(),
+        "nav440: --packet S1: it carries no angles, and `nav440 live` estimates from them: use \
+         one of A0, A1, A2, N0, N1, B1"
+    );
+    let out = nav440(&["live", "--port", "/nonexistent/tty", "--plot"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("--plot draws on a terminal"), "{err}");
+}
+
+/// A private tmux server (its own socket), killed when dropped.
+struct Tmux(String);
+
+impl Tmux {
+    fn cmd(&self, args: &[&str]) -> std::process::Output {
+        Command::new("tmux")
+            .args(["-L", &self.0])
+            .args(args)
+            .output()
+            .expect("tmux runs")
+    }
+    fn capture(&self) -> String {
+        String::from_utf8_lossy(&self.cmd(&["capture-pane", "-p"]).stdout).into_owned()
+    }
+}
+
+impl Drop for Tmux {
+    fn drop(&mut self) {
+        let _ = self.cmd(&["kill-server"]);
+    }
+}
+
+/// The row count on the chart's first line (`... rows N  t ...`).
+fn rows_shown(screen: &str) -> Option<u64> {
+    let first = screen.lines().next()?;
+    let rest = &first[first.find("  rows ")? + 7..];
+    rest.split_whitespace().next()?.parse().ok()
+}
+
+/// `nav440 live --plot` in a 120 x 40 tmux pane against the simulator streaming the fig5
+/// capture in wall time (35 s at 100 Hz): the chart shows its titles and legend, the row count
+/// grows between two captures of the pane, `q` quits with exit 0 and restores the screen.
+#[test]
+fn live_plot_draws_the_chart_in_a_terminal() {
+    let have = Command::new("tmux").arg("-V").output();
+    assert!(
+        have.as_ref().is_ok_and(|o| o.status.success()),
+        "tmux is needed for this test (`apt-get install tmux`; `cargo xtask ci` installs it): {have:?}"
+    );
+    let (child, path) = start_sim("fig5_a2_100hz.bin", "pty", &["--timeout", "60"]);
+    let rc = tmp("plot.rc");
+    let err = tmp("plot.err");
+    let _ = std::fs::remove_file(&rc);
+    let shell = format!(
+        "'{BIN}' live --port '{path}' --plot 2>'{}'; echo $? >'{}'; sleep 60",
+        err.display(),
+        rc.display()
+    );
+    let tmux = Tmux(format!("nav440-test-{}", std::process::id()));
+    let started = tmux.cmd(&["new-session", "-d", "-x", "120", "-y", "40", &shell]);
+    assert!(started.status.success(), "{started:?}");
+    // Wait for the chart with rows (the boot and the 16-sample warm-up come first).
+    let wait_for = |pred: &dyn Fn(&str) -> bool| {
+        let t0 = std::time::Instant::now();
+        loop {
+            let s = tmux.capture();
+            if pred(&s) || t0.elapsed() > Duration::from_secs(20) {
+                return s;
+            }
+            std::thread::sleep(Duration::from_millis(200));
+        }
+    };
+    let first = wait_for(&|s| rows_shown(s).is_some_and(|n| n >= 100));
+    let n1 = rows_shown(&first).unwrap_or_else(|| panic!("no row count on\n{first}"));
+    for text in [
+        "nav440 live",
+        "bank paper",
+        "yaw rate, deg/s",
+        "yaw acceleration, deg/s^2",
+        "rate (reference)",
+        "ilo1_v",
+        "kf_a",
+        "q: quit",
+    ] {
+        assert!(first.contains(text), "{text:?} not on the screen:\n{first}");
+    }
+    // Braille dots: the traces are drawn.
+    assert!(
+        first
+            .chars()
+            .any(|c| ('\u{2801}'..='\u{28FF}').contains(&c)),
+        "{first}"
+    );
+    let second = wait_for(&|s| rows_shown(s).is_some_and(|n| n >= n1 + 100));
+    let n2 = rows_shown(&second).unwrap_or(0);
+    assert!(n2 >= n1 + 100, "rows {n1} then {n2}:\n{second}");
+    let _ = tmux.cmd(&["send-keys", "q"]);
+    let t0 = std::time::Instant::now();
+    while !rc.exists() && t0.elapsed() < Duration::from_secs(5) {
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let code = std::fs::read_to_string(&rc).unwrap_or_default();
+    let log = std::fs::read_to_string(&err).unwrap_or_default();
+    assert_eq!(code.trim(), "0", "{log}");
+    assert!(log.contains("rows plotted"), "{log}");
+    // The screen is restored: the chart is gone.
+    assert!(!tmux.capture().contains("yaw rate, deg/s"));
+    stop(child);
 }

@@ -355,6 +355,7 @@ fn ci_steps(steps: &steps::Steps) -> Result<(), String> {
         cargo(&["clippy", "--all-targets", "--", "-D", "warnings"])
     })?;
     steps.run("clippy thumb libraries", thumb_libraries)?;
+    steps.run("tmux", qemu::ensure_tmux)?;
     steps.run("host tests", || cargo(&["test", "--all-targets"]))?;
     steps.run("doc tests", || cargo(&["test", "--doc"]))?;
     steps.run("release tests", release_tests)?;

@@ -146,6 +146,29 @@ pub fn ensure_qemu() -> Result<(), String> {
     }
 }
 
+/// Makes sure `tmux` runs (the test of `nav440 live --plot` draws its chart in a tmux pane):
+/// installs it with apt-get, as [`ensure_qemu`] installs QEMU, when missing.
+pub fn ensure_tmux() -> Result<(), String> {
+    let hint = "install it with `sudo apt-get install tmux` (Debian/Ubuntu), \
+                `sudo dnf install tmux` (Fedora) or `brew install tmux` (macOS)";
+    if !have("tmux") {
+        let sudo = apt_sudo().map_err(|e| format!("`tmux` not found and {e}: {hint}"))?;
+        eprintln!("xtask: `tmux` not found, installing it with apt-get");
+        apt(sudo, &["update"])
+            .and_then(|()| apt(sudo, &["install", "-y", "--no-install-recommends", "tmux"]))
+            .map_err(|e| format!("installing tmux failed ({e}); {hint}"))?;
+    }
+    let out = Command::new("tmux")
+        .arg("-V")
+        .output()
+        .map_err(|e| format!("`tmux -V` failed ({e}); {hint}"))?;
+    eprintln!(
+        "xtask: using {}",
+        String::from_utf8_lossy(&out.stdout).trim()
+    );
+    Ok(())
+}
+
 /// How apt-get runs here: `Ok(&[])` as root, `Ok(["sudo", "-n"])` with sudo; the reason
 /// otherwise.
 fn apt_sudo() -> Result<&'static [&'static str], String> {

@@ -14,6 +14,6 @@ pub struct Args {
 pub fn run(a: &Args) -> Result<()> {
     crate::output::check_stdout()?;
     let (_, report, t) = open_and_boot(&a.port)?;
-    let json = report_json(&a.port.port, &report, &t);
+    let json = report_json(&a.port.link.port, &report, &t);
     super::stdout_or_file(None, |w| writeln!(w, "{json}"))
 }

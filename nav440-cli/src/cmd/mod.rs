@@ -14,9 +14,11 @@ pub mod completions;
 pub mod config;
 pub mod decode;
 pub mod estimate;
+pub mod info;
 pub mod live;
 pub mod paper;
 pub mod plot;
+pub mod ports;
 pub mod record;
 pub mod sim;
 pub mod stats;
@@ -51,6 +53,8 @@ impl Cli {
             Cmd::Config(a) => config::run(&a),
             Cmd::Record(a) => record::run(&a),
             Cmd::Live(a) => live::run(&a),
+            Cmd::Info(a) => info::run(&a),
+            Cmd::Ports(a) => ports::run(&a),
             Cmd::Completions(a) => completions::run(&a),
         }
     }
@@ -80,8 +84,14 @@ enum Cmd {
     Config(config::Args),
     /// Configure a unit on a serial port, then record its stream to a file.
     Record(record::Args),
-    /// Configure a unit on a serial port, then print the estimate CSV while receiving.
+    /// Configure a unit on a serial port, then print the estimate CSV while receiving (or,
+    /// with --plot, draw a live chart in the terminal).
     Live(live::Args),
+    /// Identify the unit on a serial port: serial number, part number, firmware version and
+    /// its output settings (changes nothing).
+    Info(info::Args),
+    /// List the serial ports of this machine.
+    Ports(ports::Args),
     /// Print the shell completion script for SHELL on stdout (e.g. `nav440 completions bash >
     /// ~/.local/share/bash-completion/completions/nav440`).
     Completions(completions::Args),
@@ -146,8 +156,8 @@ pub struct BankArgs {
     /// yaw interpolated to the step grid (step; our reading of the paper's simulation).
     #[arg(long, value_enum, default_value = "sample")]
     pub(crate) noise_at: NoiseAtArg,
-    /// Estimated axis: roll, pitch, yaw (default), or all three (`estimate` only; CSV columns
-    /// prefixed with the axis name). See docs/PIPELINE.md.
+    /// Estimated axis: roll, pitch, yaw (default), or all three (`estimate` and `live` only;
+    /// CSV columns prefixed with the axis name). See docs/PIPELINE.md.
     #[arg(long, value_enum, default_value = "yaw")]
     pub(crate) axis: AxisArg,
 }
@@ -180,7 +190,7 @@ pub enum AxisArg {
     Pitch,
     /// Yaw (wraps at +-180 deg).
     Yaw,
-    /// Roll, pitch and yaw (`nav440 estimate` only).
+    /// Roll, pitch and yaw (`nav440 estimate` and `nav440 live` only).
     All,
 }
 
@@ -207,8 +217,51 @@ pub(crate) fn one_axis(opts: &replay::EstimateOptions, cmd: &str) -> Result<()> 
     }
 }
 
+/// The options of `nav440 estimate` that choose the bank and its input (`--bank`, the bank
+/// options, noise, `--fixed`), shared with `nav440 live`: both run the same
+/// [`replay::estimate_stream`] with the options [`EstimateArgs::options`] builds.
+#[derive(Args, Debug, Clone)]
+pub struct EstimateArgs {
+    /// Estimator bank: paper (the paper's 14 estimators) or product (ILO1 velocity and
+    /// Kalman acceleration, what the product firmware prints).
+    #[arg(
+        long = "bank",
+        value_enum,
+        default_value = "paper",
+        value_name = "BANK"
+    )]
+    pub(crate) bank_kind: BankArg,
+    #[command(flatten)]
+    pub(crate) bank: BankArgs,
+    #[command(flatten)]
+    pub(crate) noise: NoiseArgs,
+    /// Run the fixed-point (Q31.32) bank, as the no-FPU firmware does, instead of f32.
+    #[arg(long)]
+    pub(crate) fixed: bool,
+}
+
+impl EstimateArgs {
+    /// The options these arguments describe (the NAV440 preset unless `--preset` or a gains
+    /// file says otherwise), every number and the gains file checked.
+    pub fn options(&self) -> Result<replay::EstimateOptions> {
+        let mut opts = bank_options(&self.bank, PresetArg::Nav440)?;
+        opts.noise = noise(self.noise.noise_var, self.noise.seed)?;
+        opts.fixed = self.fixed;
+        opts.bank = self.bank_kind.into();
+        replay::check_bank_options(&opts)?;
+        Ok(opts)
+    }
+}
+
+/// Prints the warnings of an estimation on stderr, one line each.
+pub(crate) fn print_warnings(report: &replay::StreamReport) {
+    for w in report.warnings() {
+        eprintln!("nav440: warning: {w}");
+    }
+}
+
 /// Measurement noise added to yaw before estimation (the paper's protocol).
-#[derive(Args, Debug)]
+#[derive(Args, Debug, Clone)]
 pub struct NoiseArgs {
     /// Add N(0, V) deg^2 noise to yaw before estimation (0 to 1e15).
     #[arg(long, value_name = "V")]

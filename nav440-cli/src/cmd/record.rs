@@ -38,7 +38,10 @@ pub fn run(a: &Args) -> Result<()> {
     output::check_writable(&a.output)?;
     let name = output::output_name(&a.output);
     let (d, report, t) = open_and_boot(&a.port)?;
-    eprintln!("nav440 record: {}", report_json(&a.port.port, &report, &t));
+    eprintln!(
+        "nav440 record: {}",
+        report_json(&a.port.link.port, &report, &t)
+    );
     let stop = Arc::new(AtomicBool::new(false));
     {
         let stop = stop.clone();
