@@ -82,6 +82,8 @@ const NUMERIC: &[(&str, &str, &str)] = &[
     ("live", "--reply-timeout", "{}"),
     ("live", "--pings", "{}"),
     ("live", "--duration", "{}"),
+    ("rows", "--baud", "{}"),
+    ("rows", "--duration", "{}"),
 ];
 
 /// Arguments that take a value that is not a number (paths, names, enums); positional ones by
@@ -134,6 +136,8 @@ const NOT_NUMERIC: &[(&str, &str)] = &[
     ("record", "--output"),
     ("live", "--port"),
     ("live", "--packet"),
+    ("rows", "input"),
+    ("rows", "--port"),
     ("completions", "shell"),
 ];
 
@@ -370,6 +374,7 @@ fn command_line(cmd: &str, flag: &str, value: &str, files: &Files) -> Vec<String
         "config" => vec!["config", "--port", port],
         "record" => vec!["record", "--port", port, "-o", out],
         "live" => vec!["live", "--port", port],
+        "rows" => vec!["rows", "--port", port],
         other => panic!("no base command line for {other}"),
     };
     // `--train` conflicts with `--window`.

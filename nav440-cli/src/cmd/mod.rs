@@ -18,6 +18,7 @@ pub mod live;
 pub mod paper;
 pub mod plot;
 pub mod record;
+pub mod rows;
 pub mod sim;
 pub mod stats;
 pub mod synth;
@@ -51,6 +52,7 @@ impl Cli {
             Cmd::Config(a) => config::run(&a),
             Cmd::Record(a) => record::run(&a),
             Cmd::Live(a) => live::run(&a),
+            Cmd::Rows(a) => rows::run(&a),
             Cmd::Completions(a) => completions::run(&a),
         }
     }
@@ -82,6 +84,10 @@ enum Cmd {
     Record(record::Args),
     /// Configure a unit on a serial port, then print the estimate CSV while receiving.
     Live(live::Args),
+    /// Print as CSV the rows a `uart-rows` firmware sends out of its output UART (framed
+    /// binary, docs/UART-ROWS.md), from a serial port or a saved stream: the CSV `nav440
+    /// estimate` prints.
+    Rows(rows::Args),
     /// Print the shell completion script for SHELL on stdout (e.g. `nav440 completions bash >
     /// ~/.local/share/bash-completion/completions/nav440`).
     Completions(completions::Args),
