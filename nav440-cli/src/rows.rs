@@ -15,7 +15,7 @@ use nav440_pipeline::wire::{Deframer, FrameError, Layout, LayoutError, Message, 
 use crate::error::{Error, Result};
 
 /// The longest frame the reader takes, bytes (the longest row frame, the paper bank's three
-/// axes, is 240).
+/// axes, is 239).
 pub const MAX_FRAME: usize = 1024;
 
 /// Bad frames and rows reported one by one on stderr; the rest are counted.
