@@ -10,7 +10,8 @@
 //! * [`time`]: SysTick at 1 kHz, microseconds since start, `embedded_hal::delay::DelayNs`.
 //! * [`host`]: semihosting output, exit codes, the panic handler and the HardFault handler
 //!   (every failure ends the run with a non-zero exit status instead of hanging).
-//! * [`out`]: the output as defmt messages (header, one row per sample, counters).
+//! * [`out`]: the output as defmt messages (header, one row per sample, counters); with the
+//!   feature `uart-rows` also as framed binary messages out of a second UART.
 //! * [`cycles`]: instruction counting with SysTick under `qemu -icount` (see the bench binary).
 //! * [`pipeline`]: the firmware's `nav440_pipeline::Pipeline` (parser -> attitude -> BIT ->
 //!   `TimeBase` -> one `PaperBank` per axis -> CSV rows).
@@ -57,6 +58,18 @@ pub type BankSqrt = sqrt::Vsqrt;
 /// host's `libm::sqrtf`), the portable exact root otherwise.
 #[cfg(any(feature = "fixed-point", not(target_abi = "eabihf")))]
 pub type BankSqrt = estimators::NativeSqrt;
+
+#[cfg(all(
+    feature = "uart-rows",
+    any(
+        feature = "board-stm32f405",
+        feature = "board-nucleo-f411re",
+        feature = "board-rp-pico"
+    )
+))]
+compile_error!(
+    "`uart-rows`: only the QEMU mps2 boards have the rows' output UART (docs/UART-ROWS.md)"
+);
 
 #[cfg(all(feature = "bank-product", feature = "adaptive-gains"))]
 compile_error!("`bank-product` and `adaptive-gains` are two different banks: pick one");

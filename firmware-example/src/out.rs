@@ -23,6 +23,12 @@
 //! Transport: `defmt-semihosting` (frames on the semihosting stdout) on the emulated boards,
 //! `defmt-rtt` on the real board (`board-stm32f405` without `semihosting-log`), read by
 //! probe-rs.
+//!
+//! With the feature `uart-rows` the header and every row also go out of the board's rows UART
+//! (UART2 on the mps2 boards) as framed binary messages ([`nav440_pipeline::wire`]: postcard in
+//! COBS frames): a delimiter and the header frame first, then one frame per row, and the header
+//! again every [`HEADER_EVERY_ROWS`] rows, so that a reader joining the stream finds it. `nav440
+//! rows` turns them into the same CSV (docs/UART-ROWS.md).
 
 use crate::pipeline::AXES;
 use crate::{Bank, Output};
@@ -81,6 +87,11 @@ pub fn header() {
         mask |= 1 << a.index();
     }
     defmt::println!("header {=u8} {=str}", mask, COLUMNS);
+    #[cfg(feature = "uart-rows")]
+    {
+        crate::board::rows_write(&[nav440_pipeline::wire::DELIMITER]);
+        rows::header();
+    }
 }
 
 /// Sends one sample's row message: one block per axis of [`AXES`], [`NO_ESTIMATE`] for an
@@ -97,12 +108,92 @@ pub fn row(r: &Row<Output>) {
         }
     }
     defmt::println!("row {=[u8]}", &buf[..]);
+    #[cfg(feature = "uart-rows")]
+    rows::row(r);
+}
+
+/// The header frame is sent again after this many row frames (feature `uart-rows`).
+#[cfg(feature = "uart-rows")]
+pub const HEADER_EVERY_ROWS: u32 = 100;
+
+/// The rows' output UART (feature `uart-rows`): the frames and their counters.
+#[cfg(feature = "uart-rows")]
+mod rows {
+    use super::{Output, AXES, COLUMNS, HEADER_EVERY_ROWS};
+    use core::sync::atomic::{AtomicU32, Ordering};
+    use estimators::EstimatorOutput;
+    use nav440_pipeline::wire::{self, Header, Message, RowFrame};
+    use nav440_pipeline::Row;
+
+    /// The longest frame: a row's ([`wire::max_row_frame_bytes`]) or the header's (its columns,
+    /// a few bytes of fields, COBS's overhead and the delimiter).
+    const FRAME_BYTES: usize = {
+        let row = wire::max_row_frame_bytes(AXES.len(), <Output as EstimatorOutput>::CHANNELS);
+        let header = COLUMNS.len() + 8 + COLUMNS.len().div_ceil(254) + 1;
+        if row > header {
+            row
+        } else {
+            header
+        }
+    };
+
+    /// Frames sent, bytes sent, frames that did not encode (0: the buffer fits every frame).
+    static FRAMES: AtomicU32 = AtomicU32::new(0);
+    static BYTES: AtomicU32 = AtomicU32::new(0);
+    static ENCODE_ERRORS: AtomicU32 = AtomicU32::new(0);
+    /// Row frames since the last header frame.
+    static SINCE_HEADER: AtomicU32 = AtomicU32::new(0);
+
+    /// Single-core increment that works on thumbv6m (no atomic read-modify-write); only the
+    /// main thread sends.
+    fn add(c: &AtomicU32, n: u32) {
+        c.store(c.load(Ordering::Relaxed).wrapping_add(n), Ordering::Relaxed);
+    }
+
+    fn send(m: &Message<'_>) {
+        let mut buf = [0u8; FRAME_BYTES];
+        match wire::encode(m, &mut buf) {
+            Ok(frame) => {
+                crate::board::rows_write(frame);
+                add(&FRAMES, 1);
+                add(&BYTES, frame.len() as u32);
+            }
+            Err(_) => add(&ENCODE_ERRORS, 1),
+        }
+    }
+
+    /// The header frame.
+    pub(super) fn header() {
+        send(&Message::Header(Header::new(AXES, COLUMNS)));
+        SINCE_HEADER.store(0, Ordering::Relaxed);
+    }
+
+    /// One row's frame (and the header after [`HEADER_EVERY_ROWS`] rows).
+    pub(super) fn row(r: &Row<Output>) {
+        if SINCE_HEADER.load(Ordering::Relaxed) >= HEADER_EVERY_ROWS {
+            header();
+        }
+        send(&Message::Row(RowFrame::from_row(r, AXES)));
+        add(&SINCE_HEADER, 1);
+    }
+
+    /// The counters line of the rows UART.
+    pub(super) fn summary() {
+        defmt::println!(
+            "firmware: uart rows: rows_frames={=u32} rows_bytes={=u32} rows_encode_errors={=u32}",
+            FRAMES.load(Ordering::Relaxed),
+            BYTES.load(Ordering::Relaxed),
+            ENCODE_ERRORS.load(Ordering::Relaxed)
+        );
+    }
 }
 
 /// Sends the counters line ([`nav440_pipeline::report::summary`], the same in every firmware)
 /// of `pipe` with `uart`'s overruns and stalls, `unit_bytes` (bytes the unit sent, or received
 /// so far) and the stack's high-water mark ([`crate::stack::peak`]).
 pub fn summary(pipe: &crate::pipeline::Pipeline, uart: &crate::uart::Uart0, unit_bytes: u64) {
+    #[cfg(feature = "uart-rows")]
+    rows::summary();
     nav440_pipeline::report::summary(
         pipe,
         uart.overruns(),

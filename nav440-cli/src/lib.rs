@@ -19,6 +19,7 @@ pub mod plots;
 pub mod progress;
 pub mod raw_sample;
 pub mod replay;
+pub mod rows;
 pub mod rust_literal;
 pub mod score;
 pub mod search;

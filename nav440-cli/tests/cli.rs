@@ -1125,7 +1125,7 @@ fn durations_and_time_outs_are_checked_before_any_side_effect() {
     let out = d.join("rec.bin");
     let cap = data("fig5_a2_100hz.bin");
     for v in ["nan", "inf", "-1", "0", "1e20", "1.7976931348623157e308"] {
-        for cmd in ["record", "live"] {
+        for cmd in ["record", "live", "rows"] {
             let duration = format!("--duration={v}");
             let mut args = vec![cmd, "--port", "/dev/nav440-no-such-port", duration.as_str()];
             if cmd == "record" {

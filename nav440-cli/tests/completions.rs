@@ -21,6 +21,7 @@ const COMMANDS: &[&str] = &[
     "config",
     "record",
     "live",
+    "rows",
     "completions",
 ];
 

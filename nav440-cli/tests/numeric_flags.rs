@@ -88,6 +88,8 @@ const NUMERIC: &[(&str, &str, &str)] = &[
     ("info", "--unit-baud", "{}"),
     ("info", "--reply-timeout", "{}"),
     ("info", "--pings", "{}"),
+    ("rows", "--baud", "{}"),
+    ("rows", "--duration", "{}"),
 ];
 
 /// Arguments that take a value that is not a number (paths, names, enums); positional ones by
@@ -147,6 +149,8 @@ const NOT_NUMERIC: &[(&str, &str)] = &[
     ("live", "--noise-at"),
     ("live", "--axis"),
     ("info", "--port"),
+    ("rows", "input"),
+    ("rows", "--port"),
     ("completions", "shell"),
 ];
 
@@ -388,6 +392,7 @@ fn command_line(cmd: &str, flag: &str, value: &str, files: &Files) -> Vec<String
         "record" => vec!["record", "--port", port, "-o", out],
         "live" => vec!["live", "--port", port],
         "info" => vec!["info", "--port", port],
+        "rows" => vec!["rows", "--port", port],
         other => panic!("no base command line for {other}"),
     };
     // `--train` conflicts with `--window`.

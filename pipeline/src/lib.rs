@@ -56,6 +56,8 @@ mod pipeline;
 pub mod report;
 mod sample;
 pub mod watch;
+#[cfg(feature = "wire")]
+pub mod wire;
 
 pub use axis::{Axes, Axis};
 pub use pipeline::{

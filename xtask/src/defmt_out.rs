@@ -9,11 +9,11 @@
 //! carries one byte payload (little-endian): the sample time (u64, us) and, per estimated axis,
 //! a flag byte, the angle (f32), its f64 residual, the reference rate (f32) and the 14 channel
 //! values (f32) (`firmware-example/src/out.rs`). The values are rebuilt from their bytes, so
-//! they are the exact bits the firmware sent.
+//! they are the exact bits the firmware sent, and written by `nav440_pipeline::wire::Layout`,
+//! as `nav440 rows` writes the rows of the firmware's output UART.
 
 use defmt_decoder::{DecodeError, StreamDecoder, Table};
-use estimators::{BankOutput, ChannelLists, EstimatorOutput, PaperOutput, ProductOutput};
-use nav440_pipeline::{csv, Axes, Axis, AxisRow, Row};
+use nav440_pipeline::wire::{AxisFrame, Layout, LayoutError, RowFrame};
 use std::path::Path;
 
 /// The format string of the firmware's row message.
@@ -28,47 +28,12 @@ pub fn table(elf: &Path) -> Result<Option<Table>, String> {
     Ok(table.filter(|t| t.raw_symbols().any(|s| s.contains(ROW_FORMAT))))
 }
 
-/// A bank output the host can rebuild from a row payload's values.
-trait FromValues: EstimatorOutput {
-    /// The output with the angle `angle` + `residual` (deg) and the channel values `values`
-    /// (exactly `CHANNELS` of them).
-    fn from_values(angle: f32, residual: f64, values: &[f32]) -> Self;
-}
-
-impl<R: ChannelLists, const N: usize> FromValues for BankOutput<R, N> {
-    fn from_values(angle: f32, residual: f64, values: &[f32]) -> Self {
-        let mut v = [0.0; N];
-        v.copy_from_slice(values);
-        Self::new(angle, residual, v)
-    }
-}
-
-/// The banks a firmware may run, known by their channel names (the header message's).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum BankKind {
-    /// The paper bank (also the noise-adaptive bank's output).
-    Paper,
-    /// The product bank.
-    Product,
-}
-
-impl BankKind {
-    fn from_columns(columns: &str) -> Option<Self> {
-        if columns == PaperOutput::CSV_COLUMNS {
-            Some(Self::Paper)
-        } else if columns == ProductOutput::CSV_COLUMNS {
-            Some(Self::Product)
-        } else {
-            None
-        }
-    }
-}
-
 /// Turns decoded messages into CSV text and diagnostic lines.
 #[derive(Default)]
 pub struct Converter {
-    /// The rows' axes and bank, from the header message.
-    layout: Option<(Axes, BankKind)>,
+    /// The rows' axes and bank, from the header message (`nav440_pipeline::wire::Layout`, which
+    /// also writes the rows of the firmware's output UART for `nav440 rows`).
+    layout: Option<Layout>,
 }
 
 /// What a chunk of frames gave.
@@ -87,40 +52,26 @@ impl Converter {
             let bad = || format!("bad header message `{msg}`");
             let (mask, columns) = rest.trim().split_once(' ').ok_or_else(bad)?;
             let mask: u8 = mask.parse().map_err(|_| bad())?;
-            let kind = BankKind::from_columns(columns).ok_or_else(|| {
-                format!(
+            let layout = Layout::from_parts(mask, columns).map_err(|e| match e {
+                LayoutError::UnknownBank => format!(
                     "the firmware runs a bank this decoder does not know (channels `{columns}`)"
-                )
+                ),
+                e => format!("{e}: `{msg}`"),
             })?;
-            let mut axes = Axes::NONE;
-            for a in Axis::ALL {
-                if mask & (1 << a.index()) != 0 {
-                    axes = axes.with(a);
-                }
-            }
-            match kind {
-                BankKind::Paper => csv::write_header_of::<PaperOutput>(&mut out.csv, axes),
-                BankKind::Product => csv::write_header_of::<ProductOutput>(&mut out.csv, axes),
-            }
-            .map_err(|_| "header".to_owned())?;
+            layout
+                .write_header(&mut out.csv)
+                .map_err(|_| "header".to_owned())?;
             out.csv.push('\n');
-            self.layout = Some((axes, kind));
+            self.layout = Some(layout);
         } else if let Some(rest) = msg.strip_prefix("row ") {
-            let (axes, kind) = self
+            let layout = self
                 .layout
                 .ok_or_else(|| format!("row before the header: `{msg}`"))?;
             let bad = || format!("bad row message `{msg}`");
-            match kind {
-                BankKind::Paper => {
-                    let row = parse_row::<PaperOutput>(rest, axes).ok_or_else(bad)?;
-                    csv::write_row(&mut out.csv, &row, axes)
-                }
-                BankKind::Product => {
-                    let row = parse_row::<ProductOutput>(rest, axes).ok_or_else(bad)?;
-                    csv::write_row(&mut out.csv, &row, axes)
-                }
-            }
-            .map_err(|_| "row".to_owned())?;
+            let row = parse_row(rest, &layout).ok_or_else(bad)?;
+            layout
+                .write_row(&mut out.csv, &row)
+                .map_err(|e| format!("{e}: `{msg}`"))?;
             out.csv.push('\n');
         } else {
             out.diag.push_str(msg);
@@ -140,30 +91,33 @@ const fn axis_bytes(channels: usize) -> usize {
     1 + 4 + 8 + 4 + 4 * channels
 }
 
-/// Parses `[B, B, ...]` (the display of a row message's byte payload after `row `).
-fn parse_row<O: FromValues>(s: &str, axes: Axes) -> Option<Row<O>> {
+/// Parses `[B, B, ...]` (the display of a row message's byte payload after `row `) into the
+/// row's values.
+fn parse_row(s: &str, layout: &Layout) -> Option<RowFrame> {
     let list = s.trim().strip_prefix('[')?.strip_suffix(']')?;
     let bytes = list
         .split(", ")
         .map(|b| b.parse::<u8>().ok())
         .collect::<Option<Vec<u8>>>()?;
-    let per_axis = axis_bytes(O::CHANNELS);
-    if bytes.len() != 8 + per_axis * axes.len() {
+    let channels = layout.bank.channels();
+    let per_axis = axis_bytes(channels);
+    if bytes.len() != 8 + per_axis * layout.axes.len() {
         return None;
     }
     let (t, rest) = bytes.split_first_chunk::<8>()?;
-    let mut row = Row {
-        t_us: u64::from_le_bytes(*t),
-        axes: [None; 3],
-    };
-    for (axis, b) in axes.iter().zip(rest.chunks_exact(per_axis)) {
+    let mut axes = heapless::Vec::new();
+    for b in rest.chunks_exact(per_axis) {
         // Flag bit 1: the axis has no estimate in this row (roll and yaw near gimbal lock).
-        row.axes[axis.index()] = match b.first()? & NO_ESTIMATE {
-            0 => Some(parse_axis(b)?),
+        let axis = match b.first()? & NO_ESTIMATE {
+            0 => Some(parse_axis(b, channels)?),
             _ => None,
         };
+        axes.push(axis).ok()?;
     }
-    Some(row)
+    Some(RowFrame {
+        t_us: u64::from_le_bytes(*t),
+        axes,
+    })
 }
 
 /// The `N` bytes at `b[at..]`.
@@ -171,22 +125,25 @@ fn take<const N: usize>(b: &[u8], at: usize) -> Option<[u8; N]> {
     b.get(at..at + N)?.try_into().ok()
 }
 
-/// Parses one axis: flags, angle, residual, reference, the channel values.
-fn parse_axis<O: FromValues>(b: &[u8]) -> Option<AxisRow<O>> {
+/// Parses one axis: flags, angle, residual, reference, `channels` values.
+fn parse_axis(b: &[u8], channels: usize) -> Option<AxisFrame> {
     let angle = f32::from_le_bytes(take(b, 1)?);
     let residual = f64::from_le_bytes(take(b, 5)?);
     let reference = f32::from_le_bytes(take(b, 13)?);
-    let values = b
-        .get(17..)?
-        .chunks_exact(4)
-        .map(|v| f32::from_le_bytes([v[0], v[1], v[2], v[3]]))
-        .collect::<Vec<f32>>();
-    if values.len() != O::CHANNELS {
+    let mut values = heapless::Vec::new();
+    for v in b.get(17..)?.chunks_exact(4) {
+        values
+            .push(f32::from_le_bytes([v[0], v[1], v[2], v[3]]))
+            .ok()?;
+    }
+    if values.len() != channels {
         return None;
     }
-    Some(AxisRow {
+    Some(AxisFrame {
+        angle_deg: angle,
+        residual_deg: residual,
         reference_deg_s: (b[0] & 1 != 0).then_some(reference),
-        out: O::from_values(angle, residual, &values),
+        values,
     })
 }
 
@@ -352,6 +309,8 @@ pub fn decode_lines(text: &str) -> Result<Text, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use estimators::{PaperOutput, ProductOutput};
+    use nav440_pipeline::csv;
 
     /// The payload bytes of one axis (layout of `firmware-example/src/out.rs`).
     fn axis_bytes(flags: u8, angle: f32, residual: f64, reference: f32, vals: &[f32]) -> Vec<u8> {

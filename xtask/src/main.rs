@@ -101,6 +101,11 @@ enum Cmd {
         /// (STM32F405, the real-board profile `board-stm32f405`).
         #[arg(long, default_value = "an386", value_parser = qemu::unit_board)]
         board: Board,
+        /// Build the image with the feature `uart-rows` and write its output UART (UART2: the
+        /// rows as framed binary messages) to FILE; `nav440 rows FILE` prints their CSV (mps2
+        /// boards).
+        #[arg(long, value_name = "FILE")]
+        rows: Option<PathBuf>,
     },
     /// FILE replayed through the firmware in QEMU (no unit; N4LP length prefix): CSV on
     /// stdout, counters on stderr.
@@ -202,8 +207,12 @@ enum Cmd {
 
 fn main() -> ExitCode {
     let result = match Cli::parse().command {
-        Cmd::Unit { connect, board } => {
-            return match firmware::unit(board, &connect) {
+        Cmd::Unit {
+            connect,
+            board,
+            rows,
+        } => {
+            return match firmware::unit(board, &connect, rows.as_deref()) {
                 Ok(code) => ExitCode::from(code),
                 Err(e) => {
                     eprintln!("xtask: {e}");
@@ -391,10 +400,12 @@ fn build_beside_the_pool(steps: &steps::Steps, pool: &pool::Pool) -> Result<(), 
 }
 
 /// Clippy `-D warnings` of the no_std libraries on every thumb target, without and with their
-/// `defmt` feature: type-checking them for a target without `std` proves they are `no_std`
-/// (the firmware images, built for the same three targets, compile them to code).
+/// `defmt` feature (and the pipeline's `wire`): type-checking them for a target without `std`
+/// proves they are `no_std` (the firmware images, built for the same three targets, compile
+/// them to code).
 fn thumb_libraries() -> Result<(), String> {
-    let defmt: Vec<String> = NO_STD_CRATES.iter().map(|k| format!("{k}/defmt")).collect();
+    let mut defmt: Vec<String> = NO_STD_CRATES.iter().map(|k| format!("{k}/defmt")).collect();
+    defmt.push("nav440-pipeline/wire".to_owned());
     let defmt = defmt.join(",");
     for target in THUMB_TARGETS {
         for features in [None, Some(defmt.as_str())] {

@@ -12,7 +12,8 @@
 //!   bytes, so where a run ends never depends on the host's speed.
 //!
 //! The firmware's semihosting stdout (the estimate CSV) and stderr (diagnostics, counters)
-//! are QEMU's; its exit status is QEMU's exit code.
+//! are QEMU's; its exit status is QEMU's exit code. A `uart-rows` image's third UART (UART2 on
+//! the mps2 boards: the rows as framed binary messages) goes to a file ([`run_with_rows`]).
 
 use crate::qemu::{self, Board};
 use std::io::{Read, Write};
@@ -186,6 +187,20 @@ pub fn run(
     inherit_stdout: bool,
     timeout: Duration,
 ) -> Result<UnitRun, String> {
+    run_with_rows(board, elf, addr, work, inherit_stdout, timeout, None)
+}
+
+/// [`run`], with the board's third UART (a `uart-rows` image's output UART, UART2 on the mps2
+/// boards) written to the file `rows` (QEMU's `-chardev file`; complete once QEMU has exited).
+pub fn run_with_rows(
+    board: &Board,
+    elf: &Path,
+    addr: &str,
+    work: &Path,
+    inherit_stdout: bool,
+    timeout: Duration,
+    rows: Option<&Path>,
+) -> Result<UnitRun, String> {
     let s0 = socket_path(work, "u0");
     let s1 = socket_path(work, "u1");
     let _ = std::fs::remove_file(&s0);
@@ -201,6 +216,15 @@ pub fn run(
         "-serial".to_owned(),
         "chardev:u1".to_owned(),
     ]);
+    if let Some(rows) = rows {
+        // QEMU gives its `-serial` options to the UARTs in order: this one is the third.
+        args.extend([
+            "-chardev".to_owned(),
+            format!("file,id=u2,path={}", rows.display()),
+            "-serial".to_owned(),
+            "chardev:u2".to_owned(),
+        ]);
+    }
     eprintln!("+ qemu-system-arm {}", args.join(" "));
     let start = Instant::now();
     let mut child = Command::new("qemu-system-arm")

@@ -6,7 +6,10 @@
 //!
 //! Registers of the CMSDK APB UARTs of the QEMU `mps2-an385`/`mps2-an386` boards: UART0
 //! (base `0x4000_4000`, RX interrupt = IRQ 0) carries the NAV440 link, UART1 (base
-//! `0x4000_5000`, polled) the harness's control channel; APB clock 25 MHz.
+//! `0x4000_5000`, polled) the harness's control channel, and with the feature `uart-rows`
+//! UART2 (base `0x4000_6000`, transmit only, polled) the rows as framed binary messages
+//! (docs/UART-ROWS.md); APB clock 25 MHz. QEMU connects its `-serial` options to UART0,
+//! UART1, UART2, ... in order.
 //!
 //! CMSDK APB UART TRM: DATA +0x0, STATE +0x4 (bit0 TX full, bit1 RX full, bit2 TX overrun,
 //! bit3 RX overrun; write 1 to clear an overrun bit), CTRL +0x8 (bit0 TX enable, bit1 RX
@@ -31,6 +34,13 @@ pub fn host_present() -> bool {
 const BASE: usize = 0x4000_4000;
 /// UART1: the control channel (see [`Control`]).
 const CONTROL_BASE: usize = 0x4000_5000;
+/// UART2: the rows' output UART (feature `uart-rows`, see [`rows_write`]).
+#[cfg(feature = "uart-rows")]
+const ROWS_BASE: usize = 0x4000_6000;
+/// The line rate of the rows' output UART, Bd: the paper bank's three-axis rows at 100 Hz take
+/// about 23,900 B/s, 239,000 Bd with 8N1 (docs/UART-ROWS.md); QEMU's model ignores the rate.
+#[cfg(feature = "uart-rows")]
+pub const ROWS_BAUD: u32 = 921_600;
 const DATA: usize = 0x00;
 const STATE: usize = 0x04;
 const CTRL: usize = 0x08;
@@ -52,7 +62,7 @@ pub const PCLK_HZ: u32 = 25_000_000;
 pub const RX_IRQ: u16 = 0;
 
 fn read_at(base: usize, offset: usize) -> u32 {
-    // SAFETY: base is UART0 or UART1 and offset one of the registers listed above: a valid,
+    // SAFETY: base is UART0, UART1 or UART2 and offset one of the registers listed above: a valid,
     // aligned MMIO word on the mps2 boards; reading has no side effect besides the documented
     // one (reading DATA pops the received byte), which the callers intend.
     unsafe { core::ptr::read_volatile((base + offset) as *const u32) }
@@ -101,6 +111,11 @@ pub fn init(baud: u32) -> Option<Parts> {
     write_reg(CTRL, CTRL_TX_EN | CTRL_RX_EN | CTRL_RX_IE);
     write_at(CONTROL_BASE, BAUDDIV, bauddiv(115_200));
     write_at(CONTROL_BASE, CTRL, CTRL_RX_EN);
+    #[cfg(feature = "uart-rows")]
+    {
+        write_at(ROWS_BASE, BAUDDIV, bauddiv(ROWS_BAUD));
+        write_at(ROWS_BASE, CTRL, CTRL_TX_EN);
+    }
     Some(Parts {
         tx: Tx { _private: () },
         control: Control { _private: () },
@@ -152,6 +167,17 @@ impl Control {
         } else {
             None
         }
+    }
+}
+
+/// Sends `bytes` out of UART2, the rows' output UART (feature `uart-rows`): polled and
+/// blocking, each byte once the transmit register is free. Under QEMU the register empties at
+/// once; on a chip a row frame of N bytes takes N x 10 / [`ROWS_BAUD`] s (239 bytes: 2.6 ms).
+#[cfg(feature = "uart-rows")]
+pub fn rows_write(bytes: &[u8]) {
+    for &b in bytes {
+        while read_at(ROWS_BASE, STATE) & STATE_TX_FULL != 0 {}
+        write_at(ROWS_BASE, DATA, u32::from(b));
     }
 }
 

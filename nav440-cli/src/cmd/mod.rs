@@ -20,6 +20,7 @@ pub mod paper;
 pub mod plot;
 pub mod ports;
 pub mod record;
+pub mod rows;
 pub mod sim;
 pub mod stats;
 pub mod synth;
@@ -55,6 +56,7 @@ impl Cli {
             Cmd::Live(a) => live::run(&a),
             Cmd::Info(a) => info::run(&a),
             Cmd::Ports(a) => ports::run(&a),
+            Cmd::Rows(a) => rows::run(&a),
             Cmd::Completions(a) => completions::run(&a),
         }
     }
@@ -92,6 +94,10 @@ enum Cmd {
     Info(info::Args),
     /// List the serial ports of this machine.
     Ports(ports::Args),
+    /// Print as CSV the rows a `uart-rows` firmware sends out of its output UART (framed
+    /// binary, docs/UART-ROWS.md), from a serial port or a saved stream: the CSV `nav440
+    /// estimate` prints.
+    Rows(rows::Args),
     /// Print the shell completion script for SHELL on stdout (e.g. `nav440 completions bash >
     /// ~/.local/share/bash-completion/completions/nav440`).
     Completions(completions::Args),

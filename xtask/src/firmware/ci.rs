@@ -14,10 +14,10 @@ use super::nav440_cli::{adaptive_host_args, firmware_host_args, nav440_synth, sm
 use super::qemu_run::counter;
 use super::size::size;
 use super::soak::CI_SOAK;
-use super::unit_cases::{short_capture, unit_ci};
+use super::unit_cases::{short_capture, uart_rows_ci, unit_ci};
 use super::{
     read_file, root, work_dir, BankChoice, ADAPTIVE, BENCH_BIN, FW_BIN, ONE_AXIS, PRODUCT,
-    STM32_FEATURE, TUNED, TUNED_GAINS,
+    STM32_FEATURE, TUNED, TUNED_GAINS, UART_ROWS,
 };
 use crate::pool::Pool;
 use crate::qemu::{self, Board, Output};
@@ -320,10 +320,22 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
         clippy_firmware(target, feature.as_deref())?;
         check_map(&build(target, &features, FW_BIN)?, board.name)?;
     }
+    // The rows also out of a second UART (feature `uart-rows`, the mps2 boards' UART2): linted
+    // on the M4F and thumbv6m, the M4F image's map checked; it runs among the unit runs.
+    for board in [qemu::BOARDS[0], qemu::BOARDS[2]] {
+        clippy_firmware(board.target, Some(UART_ROWS))?;
+    }
+    check_map(
+        &build(qemu::BOARDS[0].target, &[UART_ROWS], FW_BIN)?,
+        "mps2",
+    )?;
     // The firmware against the simulated unit: boot, configure, stream, estimate, faults
     // (builds the STM32F405 product image too).
     if qemu_ok {
         unit_ci(pool, &data_captures(), &short_capture(), None)?;
+        // The rows out of the output UART (feature `uart-rows`): `nav440 rows` on its bytes
+        // prints the CSV of `nav440 estimate` (a tumble: rows without roll and yaw too).
+        uart_rows_ci(pool, &[short_capture(), tumble.clone()])?;
         // The soak: 10 minutes of stream with 16 faults (`cargo xtask soak --hours H` for
         // long runs by hand).
         let (minutes, window) = CI_SOAK;

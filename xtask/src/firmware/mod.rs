@@ -61,6 +61,10 @@ const PRODUCT: &str = "bank-product";
 /// Feature of the one-axis (yaw) firmware.
 const ONE_AXIS: &str = "one-axis";
 
+/// Feature of the firmware that also sends the rows out of a second UART as framed binary
+/// messages (`nav440_pipeline::wire`; `nav440 rows` reads them).
+const UART_ROWS: &str = "uart-rows";
+
 /// Feature of the firmware with noise-adaptive gains (`estimators::AdaptiveBank`).
 const ADAPTIVE: &str = "adaptive-gains";
 /// The firmware feature of the product bank with the tuned gains of

@@ -2,7 +2,7 @@
 //! a unit on TCP (`cargo xtask unit`), and the counters the firmware prints at the end.
 
 use super::build::{build, build_profile, SMALL_PROFILE};
-use super::{read_file, work_dir, BankChoice, ADAPTIVE, FW_BIN, ONE_AXIS};
+use super::{read_file, work_dir, BankChoice, ADAPTIVE, FW_BIN, ONE_AXIS, UART_ROWS};
 use crate::qemu::{self, Board, Output};
 use crate::unit;
 use std::path::Path;
@@ -69,15 +69,39 @@ pub(super) fn run_unit(
     unit::run(board, elf, addr, &work_dir()?, inherit_stdout, timeout)
 }
 
-/// `cargo xtask unit --connect tcp:HOST:PORT [--board B]`: returns the firmware's exit status.
-pub fn unit(board: Board, addr: &str) -> Result<u8, String> {
+/// [`run_unit`] with the board's third UART (a `uart-rows` image's output UART) written to
+/// the file `rows`.
+pub(super) fn run_unit_rows(
+    board: &Board,
+    elf: &Path,
+    addr: &str,
+    timeout: Duration,
+    rows: &Path,
+) -> Result<unit::UnitRun, String> {
+    unit::run_with_rows(board, elf, addr, &work_dir()?, false, timeout, Some(rows))
+}
+
+/// `cargo xtask unit --connect tcp:HOST:PORT [--board B] [--rows FILE]`: returns the
+/// firmware's exit status. With `rows` the image is built with the feature `uart-rows` and its
+/// output UART (UART2) is written to that file (`nav440 rows FILE` prints its CSV).
+pub fn unit(board: Board, addr: &str, rows: Option<&Path>) -> Result<u8, String> {
     qemu::ensure_qemu()?;
-    let elf = build(board.target, board.features, FW_BIN)?;
+    let mut features = board.features.to_vec();
+    if rows.is_some() {
+        if board.name == qemu::STM32_BOARD.name {
+            return Err(format!(
+                "--rows: the {} image has no output UART (the mps2 boards have it: docs/UART-ROWS.md)",
+                board.name
+            ));
+        }
+        features.push(UART_ROWS);
+    }
+    let elf = build(board.target, &features, FW_BIN)?;
     let timeout = std::env::var("XTASK_UNIT_TIMEOUT")
         .ok()
         .and_then(|v| v.parse().ok())
         .map_or(Duration::from_secs(3600), Duration::from_secs);
-    let r = run_unit(&board, &elf, addr, true, timeout)?;
+    let r = unit::run_with_rows(&board, &elf, addr, &work_dir()?, true, timeout, rows)?;
     eprint!("{}", r.stderr);
     match r.code() {
         Some(c) => Ok(u8::try_from(c).unwrap_or(1)),

@@ -6,8 +6,8 @@ use super::build::build;
 use super::captures::{data_captures, rate_drop_capture, PERIOD_CHANGE};
 use super::equivalence::compare_csv;
 use super::nav440_cli::{firmware_host_args, host_estimate, nav440_bin, Sim, FIRMWARE_AXIS};
-use super::qemu_run::{counter, counters, run_unit, unit_timeout};
-use super::{root, unique_path, BankChoice, FW, FW_BIN, STM32_FEATURE};
+use super::qemu_run::{counter, counters, run_unit, run_unit_rows, unit_timeout};
+use super::{root, unique_path, BankChoice, FW, FW_BIN, STM32_FEATURE, UART_ROWS};
 use crate::cargo;
 use crate::pool::Pool;
 use crate::qemu::{self, Board};
@@ -478,6 +478,118 @@ pub(super) fn unit_ci(
     Ok(())
 }
 
+/// The board of the output-UART runs: the M4F (its UART2 is the rows' output UART).
+const UART_ROWS_BOARD: &str = "an386";
+
+/// The `uart-rows` image on [`UART_ROWS_BOARD`] against `nav440 sim` on each of `captures`,
+/// each run a job of the unit runs' step: its output UART (UART2) written to a file, `nav440
+/// rows` on that file must print the CSV of `nav440 estimate` on what the unit streamed after
+/// configuration, byte for byte, and so must the image's defmt rows. The image is built here.
+pub(super) fn uart_rows_ci(pool: &Pool, captures: &[PathBuf]) -> Result<(), String> {
+    let board = qemu::board(UART_ROWS_BOARD)?;
+    let elf = build(board.target, &[UART_ROWS], FW_BIN)?;
+    let nav440 = nav440_bin()?;
+    let host: Vec<String> = firmware_host_args(board.target, BankChoice::Paper)
+        .into_iter()
+        .map(str::to_owned)
+        .collect();
+    for capture in captures {
+        let (elf, nav440, capture, host) =
+            (elf.clone(), nav440.clone(), capture.clone(), host.clone());
+        let label = format!(
+            "uart-rows ({}) on {}",
+            capture
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            board.name
+        );
+        pool.spawn(UNIT_STEP, label, move || {
+            let t = std::time::Instant::now();
+            let extra: Vec<&str> = host.iter().map(String::as_str).collect();
+            let ok = uart_rows_case(&board, &elf, &nav440, &capture, &extra)?;
+            eprintln!(
+                "xtask: {UNIT_STEP} OK ({:.1} s): {ok}",
+                t.elapsed().as_secs_f64()
+            );
+            Ok(())
+        });
+    }
+    Ok(())
+}
+
+/// One run of [`uart_rows_ci`]; Ok(description) or Err(what went wrong).
+fn uart_rows_case(
+    board: &Board,
+    elf: &Path,
+    nav440: &Path,
+    capture: &Path,
+    host_extra: &[&str],
+) -> Result<String, String> {
+    let what = format!("uart-rows on {} ({})", board.name, capture.display());
+    let record = unique_path(&format!("ci-uart-rows-{}-record", board.name), "bin")?;
+    let rows_file = unique_path(&format!("ci-uart-rows-{}-uart2", board.name), "bin")?;
+    let sim = Sim::start(
+        nav440,
+        capture,
+        Some(&record),
+        &["--fast", "--timeout", SIM_TIMEOUT],
+    )?;
+    let bytes = std::fs::metadata(capture).map_or(0, |m| m.len() as usize);
+    let run = run_unit_rows(board, elf, &sim.addr, unit_timeout(bytes), &rows_file);
+    let sim_status = sim.wait(Duration::from_secs(30));
+    let r = run.map_err(|e| format!("{what}: {e}"))?;
+    if r.code() != Some(0) {
+        return Err(format!(
+            "{what}: firmware exit status {:?}:\n{}",
+            r.code(),
+            r.stderr
+        ));
+    }
+    match sim_status {
+        Ok(s) if s.success() => {}
+        other => return Err(format!("{what}: nav440 sim ended with {other:?}")),
+    }
+    let host = host_estimate(&record, host_extra)?;
+    compare_csv(&r.stdout, &host)
+        .map_err(|d| format!("{what}: the defmt rows' CSV differs from `nav440 estimate`: {d}"))?;
+    let uart2 = std::fs::metadata(&rows_file).map_or(0, |m| m.len());
+    let rows_args = ["rows".to_owned(), rows_file.display().to_string()];
+    eprintln!("+ {} {}", nav440.display(), rows_args.join(" "));
+    let o = std::process::Command::new(nav440)
+        .args(&rows_args)
+        .output()
+        .map_err(|e| format!("{what}: cannot run {}: {e}", nav440.display()))?;
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    if !o.status.success() || !stderr.is_empty() {
+        return Err(format!(
+            "{what}: `nav440 rows` on the {uart2} bytes of UART2 ended with {} and said:\n{stderr}",
+            o.status
+        ));
+    }
+    let csv = String::from_utf8(o.stdout)
+        .map_err(|_| format!("{what}: `nav440 rows` printed non-UTF-8"))?;
+    let lines = compare_csv(&csv, &host).map_err(|d| {
+        format!("{what}: `nav440 rows` on UART2 differs from `nav440 estimate` on the record: {d}")
+    })?;
+    // Every row and header went out as one frame, and none failed to encode.
+    let c = counters(&r.stderr);
+    let frames = counter(&c, "rows_frames").unwrap_or(0);
+    let headers = (lines as u64).saturating_sub(1).div_ceil(100).max(1);
+    if counter(&c, "rows_encode_errors") != Some(0) || frames != lines as u64 - 1 + headers {
+        return Err(format!(
+            "{what}: the firmware counted {frames} frames on UART2 ({lines} CSV lines, {headers} headers expected):\n{}",
+            r.stderr
+        ));
+    }
+    let _ = std::fs::remove_file(&rows_file);
+    Ok(format!(
+        "{what}: `nav440 rows` on the {uart2} bytes of UART2 ({frames} frames) IDENTICAL to `nav440 estimate{}` on the {} bytes streamed after configuration ({lines} lines), and so are the defmt rows",
+        host_extra.iter().map(|a| format!(" {a}")).collect::<String>(),
+        std::fs::metadata(&record).map_or(0, |m| m.len()),
+    ))
+}
+
 /// The step of the embassy example's runs in `cargo xtask ci`'s table.
 pub(super) const EMBASSY_STEP: &str = "embassy example runs (pool)";
 
@@ -603,6 +715,9 @@ pub fn ci_unit(only: Option<Board>) -> Result<(), String> {
     let start = std::time::Instant::now();
     let pool = Pool::new(super::POOL_THREADS, crate::steps::Steps::new(&root()))?;
     unit_ci(&pool, &data_captures(), &short_capture(), only)?;
+    if only.is_none_or(|b| b.name == UART_ROWS_BOARD) {
+        uart_rows_ci(&pool, &[short_capture()])?;
+    }
     pool.wait()?;
     eprintln!(
         "xtask: firmware against nav440 sim: every case passed in {:.0} s",
