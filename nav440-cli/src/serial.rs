@@ -273,10 +273,25 @@ pub(crate) fn stream_until(
     let pending = d.pending_bytes().to_vec();
     let SerialIo(mut port) = d.release();
     let end = duration.map(|s| Instant::now() + Duration::from_secs_f64(s));
-    let mut total = pending.len() as u64;
+    let total = pending.len() as u64;
     if !on_bytes(&pending)? {
         return Ok(total);
     }
+    Ok(total + read_until(&mut *port, "serial port", end, stop, on_bytes)?)
+}
+
+/// Reads `port` until `end`, the end of the stream (the port closed, or hung up) or `stop`,
+/// giving every chunk to `on_bytes` (which stops the reading with `Ok(false)`); the bytes
+/// read. A read time-out only lets `end` and `stop` be checked; another error is `what`
+/// failing.
+pub(crate) fn read_until(
+    port: &mut dyn Read,
+    what: &str,
+    end: Option<Instant>,
+    stop: Option<&std::sync::atomic::AtomicBool>,
+    mut on_bytes: impl FnMut(&[u8]) -> Result<bool>,
+) -> Result<u64> {
+    let mut total = 0;
     let mut buf = [0u8; 1024];
     loop {
         if end.is_some_and(|e| Instant::now() >= e)
@@ -302,7 +317,7 @@ pub(crate) fn stream_until(
             Err(e) if e.raw_os_error() == Some(5) || e.kind() == std::io::ErrorKind::BrokenPipe => {
                 return Ok(total)
             }
-            Err(e) => return Err(Error::Other(format!("serial port failed: {e}"))),
+            Err(e) => return Err(Error::Other(format!("{what} failed: {e}"))),
         }
     }
 }

@@ -1,7 +1,6 @@
 //! `nav440 rows`: the rows a `uart-rows` firmware sends out of its output UART, read from a
 //! serial port or a saved stream, printed as the CSV of `nav440 estimate` ([`crate::rows`]).
 
-use std::io::Read;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -96,28 +95,12 @@ fn read_port(
             .map_err(|e| Error::Other(format!("cannot handle SIGINT/SIGTERM: {e}")))?;
     }
     let end = duration.map(|s| Instant::now() + Duration::from_secs_f64(s));
-    let mut buf = [0u8; 4096];
-    loop {
-        if end.is_some_and(|e| Instant::now() >= e) || stop.load(Ordering::Relaxed) {
-            return Ok(());
-        }
-        match p.read(&mut buf) {
-            Ok(0) => return Ok(()),
-            Ok(n) => {
-                if !feed(&buf[..n])? {
-                    return Ok(());
-                }
-            }
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    std::io::ErrorKind::TimedOut | std::io::ErrorKind::Interrupted
-                ) => {}
-            // Hang-up: the other end of a pseudo-terminal closed, a USB adapter was unplugged.
-            Err(e) if e.raw_os_error() == Some(5) || e.kind() == std::io::ErrorKind::BrokenPipe => {
-                return Ok(())
-            }
-            Err(e) => return Err(Error::Other(format!("serial port {port} failed: {e}"))),
-        }
-    }
+    crate::serial::read_until(
+        &mut *p,
+        &format!("serial port {port}"),
+        end,
+        Some(&stop),
+        feed,
+    )?;
+    Ok(())
 }
