@@ -166,19 +166,29 @@ impl<'t> Stream<'t> {
     pub fn feed(&mut self, bytes: &[u8]) -> Result<Text, String> {
         self.decoder.received(bytes);
         let mut text = Text::default();
-        loop {
-            match self.decoder.decode() {
-                Ok(frame) => {
-                    let msg = frame.display_message().to_string();
-                    self.conv.message(&msg, &mut text)?;
-                }
-                Err(DecodeError::UnexpectedEof) => break,
-                Err(DecodeError::Malformed) => {
-                    return Err("malformed defmt frame in the firmware's output".into())
-                }
-            }
-        }
+        let conv = &mut self.conv;
+        messages(
+            &mut *self.decoder,
+            "malformed defmt frame in the firmware's output",
+            |msg| conv.message(msg, &mut text),
+        )?;
         Ok(text)
+    }
+}
+
+/// Gives `each` the text (`Frame::display_message`) of every frame `decoder` holds complete;
+/// a malformed frame is the error `malformed`.
+fn messages(
+    decoder: &mut (dyn StreamDecoder + '_),
+    malformed: &str,
+    mut each: impl FnMut(&str) -> Result<(), String>,
+) -> Result<(), String> {
+    loop {
+        match decoder.decode() {
+            Ok(frame) => each(&frame.display_message().to_string())?,
+            Err(DecodeError::UnexpectedEof) => return Ok(()),
+            Err(DecodeError::Malformed) => return Err(malformed.to_owned()),
+        }
     }
 }
 
@@ -272,9 +282,7 @@ pub fn spawn_reader(
 /// Decodes a whole log of defmt frames (what the firmware writes to RTT's `defmt` channel or
 /// QEMU's semihosting stdout) with the ELF's table.
 pub fn decode_frames(table: &Table, bytes: &[u8]) -> Result<Text, String> {
-    let mut s = Stream::new(table);
-    let text = s.feed(bytes)?;
-    Ok(text)
+    Stream::new(table).feed(bytes)
 }
 
 /// The messages of a log of defmt frames as text, one line each: what probe-rs prints for
@@ -283,16 +291,12 @@ pub fn frame_lines(table: &Table, bytes: &[u8]) -> Result<String, String> {
     let mut decoder = table.new_stream_decoder();
     decoder.received(bytes);
     let mut lines = String::new();
-    loop {
-        match decoder.decode() {
-            Ok(frame) => {
-                lines.push_str(&frame.display_message().to_string());
-                lines.push('\n');
-            }
-            Err(DecodeError::UnexpectedEof) => return Ok(lines),
-            Err(DecodeError::Malformed) => return Err("malformed defmt frame in the log".into()),
-        }
-    }
+    messages(&mut *decoder, "malformed defmt frame in the log", |msg| {
+        lines.push_str(msg);
+        lines.push('\n');
+        Ok(())
+    })?;
+    Ok(lines)
 }
 
 /// Converts messages printed as text, one per line (probe-rs's output with `--log-format
