@@ -128,6 +128,50 @@ fn rows_print_the_csv_of_estimate() {
     let _ = std::fs::remove_dir_all(&d);
 }
 
+/// Over a serial port (one end of a pseudo-terminal pair, both ends raw): the CSV is
+/// `nav440 estimate --axis all`'s, nothing on stderr, and the other end's hang-up ends the run
+/// with exit 0, before `--duration` would.
+#[test]
+fn rows_over_a_port_print_the_csv_and_end_at_the_hang_up() {
+    use serialport::SerialPort as _;
+    let capture = data("sin5_a2_25hz_weekwrap.bin");
+    let expected = estimate_all(&capture);
+    let (master, slave) = serialport::TTYPort::pair().unwrap();
+    // Copies that close on exec: `pair` leaves its descriptors inheritable, and a copy of the
+    // writing end in the child would keep the hang-up from ever coming.
+    let (mut writer, reader) = (
+        master.try_clone_native().unwrap(),
+        slave.try_clone_native().unwrap(),
+    );
+    drop((master, slave));
+    let name = reader.name().unwrap();
+    let started = std::time::Instant::now();
+    let child = Command::new(BIN)
+        .args(["rows", "--port", &name, "--duration", "60"])
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The port is opened before the first byte comes, as a UART's stream is joined.
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    writer.write_all(&frames_of(&capture).concat()).unwrap();
+    writer.flush().unwrap();
+    // Until the pseudo-terminal's buffer is read out; then the hang-up.
+    while writer.bytes_to_write().unwrap() > 0 {
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    drop(reader);
+    drop(writer);
+    let o = child.wait_with_output().unwrap();
+    // Ended by the hang-up, not by `--duration`.
+    assert!(started.elapsed() < std::time::Duration::from_secs(60));
+    assert_eq!(String::from_utf8_lossy(&o.stderr), "");
+    assert!(o.status.success());
+    assert_eq!(String::from_utf8(o.stdout).unwrap(), expected);
+}
+
 /// A stream joined mid-frame, with garbage and a corrupted frame: the rows after each are
 /// printed, every bad frame is reported on stderr, what was skipped is counted, exit 0.
 #[test]
