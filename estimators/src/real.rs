@@ -76,7 +76,7 @@ impl Neg for Fx {
 
 impl Mul for Fx {
     type Output = Fx;
-    #[inline(always)]
+    #[inline]
     fn mul(self, o: Fx) -> Fx {
         Fx::from_bits(fx_mul(self.to_bits(), o.to_bits()))
     }
