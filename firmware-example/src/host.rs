@@ -18,6 +18,57 @@ pub fn stdout(bytes: &[u8]) {
     }
 }
 
+/// A diagnostic line for the host's standard error, built without `core::fmt` (the fault and
+/// panic handlers are in every image; `core::fmt` would add about 4 KB to the smallest one).
+/// Text beyond its 160 bytes is dropped.
+struct Line {
+    buf: [u8; 160],
+    len: usize,
+}
+
+impl Line {
+    fn new() -> Self {
+        Self {
+            buf: [0; 160],
+            len: 0,
+        }
+    }
+
+    fn str(&mut self, s: &str) -> &mut Self {
+        self.bytes(s.as_bytes())
+    }
+
+    fn bytes(&mut self, b: &[u8]) -> &mut Self {
+        let n = b.len().min(self.buf.len() - self.len);
+        self.buf[self.len..self.len + n].copy_from_slice(&b[..n]);
+        self.len += n;
+        self
+    }
+
+    /// `v` in decimal.
+    fn dec(&mut self, v: u32) -> &mut Self {
+        let mut b = itoa::Buffer::new();
+        self.str(b.format(v))
+    }
+
+    /// `v` as `0x` and eight lower-case hex digits.
+    fn hex(&mut self, v: u32) -> &mut Self {
+        let mut d = *b"0x00000000";
+        for (i, c) in d[2..].iter_mut().enumerate() {
+            *c = b"0123456789abcdef"[((v >> (28 - 4 * i)) & 0xF) as usize];
+        }
+        self.bytes(&d)
+    }
+
+    /// Writes the line and a newline to the host's standard error.
+    fn send(&mut self) {
+        self.str("\n");
+        if let Ok(mut err) = hio::hstderr() {
+            let _ = err.write_all(&self.buf[..self.len]);
+        }
+    }
+}
+
 /// Writes formatted text to the host's standard error (counters, diagnostics).
 pub fn stderr(args: core::fmt::Arguments<'_>) {
     if let Ok(mut err) = hio::hstderr() {
@@ -90,7 +141,22 @@ pub fn park() -> ! {
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo<'_>) -> ! {
     cortex_m::interrupt::disable();
-    stderr(format_args!("firmware: panic: {info}\n"));
+    // `panicked at FILE:LINE:COL` and the message when it is a plain string (a message with
+    // arguments would need `core::fmt`).
+    let mut line = Line::new();
+    line.str("firmware: panic: panicked");
+    if let Some(at) = info.location() {
+        line.str(" at ")
+            .str(at.file())
+            .str(":")
+            .dec(at.line())
+            .str(":")
+            .dec(at.column());
+    }
+    if let Some(msg) = info.message().as_str() {
+        line.str(": ").str(msg);
+    }
+    line.send();
     exit(false)
 }
 
@@ -101,11 +167,12 @@ unsafe fn HardFault(frame: &ExceptionFrame) -> ! {
     if !crate::board::host_present() {
         park()
     }
-    stderr(format_args!(
-        "firmware: HardFault at pc={:#010x} lr={:#010x}\n",
-        frame.pc(),
-        frame.lr()
-    ));
+    Line::new()
+        .str("firmware: HardFault at pc=")
+        .hex(frame.pc())
+        .str(" lr=")
+        .hex(frame.lr())
+        .send();
     exit(false)
 }
 
@@ -114,7 +181,12 @@ unsafe fn DefaultHandler(irqn: i16) {
     if irqn == crate::uart::RX_IRQ as i16 {
         crate::uart::on_rx_interrupt();
     } else {
-        stderr(format_args!("firmware: unexpected exception/IRQ {irqn}\n"));
+        let mut line = Line::new();
+        line.str("firmware: unexpected exception/IRQ ");
+        if irqn < 0 {
+            line.str("-");
+        }
+        line.dec(u32::from(irqn.unsigned_abs())).send();
         exit(false)
     }
 }

@@ -172,15 +172,9 @@ fn configure(uart: Uart0, delay: &mut time::Delay) -> (Uart0, Report, Pending) {
                 return (uart, report, pending);
             }
             Err(e) => {
-                // The error's Display text (the documented diagnostic; formatted only on
-                // this failure path).
-                let mut text: heapless::String<256> = heapless::String::new();
-                let _ = core::fmt::Write::write_fmt(&mut text, format_args!("{e}"));
-                defmt::println!(
-                    "firmware: boot attempt {=u32} failed: {=str}",
-                    attempt,
-                    text.as_str()
-                );
+                // The error's diagnostic text, the same as its `Display` (rendered by the
+                // host from defmt: no `core::fmt` in the image).
+                defmt::println!("firmware: boot attempt {=u32} failed: {}", attempt, e);
                 if !board::RETRY_FOREVER {
                     fail(boot_status(&e))
                 }

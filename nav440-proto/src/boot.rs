@@ -49,6 +49,9 @@ use crate::driver::{
     block_on, AsyncDriver, AsyncLink, BlockingLink, Driver, Engine, Error, Link, Port,
 };
 use crate::encode::EncodeError;
+#[cfg(feature = "defmt")]
+use crate::text::Defmt;
+use crate::text::Text;
 use crate::types::{Baud, FieldId, PacketRate, PacketType};
 use crate::FRAME_OVERHEAD;
 
@@ -229,17 +232,24 @@ impl Bauds {
     }
 }
 
-impl fmt::Display for Bauds {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+impl Bauds {
+    /// `57600, 38400 Bd`: the bauds in search order.
+    fn text<W: Text + ?Sized>(&self, w: &mut W) -> fmt::Result {
         let mut first = true;
         for b in SEARCH_ORDER.iter().filter(|b| self.contains(**b)) {
             if !first {
-                f.write_str(", ")?;
+                w.str(", ")?;
             }
-            write!(f, "{}", b.bits_per_second())?;
+            w.dec(b.bits_per_second())?;
             first = false;
         }
-        f.write_str(" Bd")
+        w.str(" Bd")
+    }
+}
+
+impl fmt::Display for Bauds {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.text(f)
     }
 }
 
@@ -296,7 +306,7 @@ impl FieldList {
 }
 
 /// Writes `value` of field `id` with its meaning, e.g. `packet type 0x0003=0x4132 (A2)`.
-fn write_field(f: &mut fmt::Formatter<'_>, id: FieldId, value: Option<u16>) -> fmt::Result {
+fn write_field<W: Text + ?Sized>(w: &mut W, id: FieldId, value: Option<u16>) -> fmt::Result {
     let name = match id.0 {
         0x0001 => "rate divider",
         0x0002 => "baud",
@@ -304,32 +314,56 @@ fn write_field(f: &mut fmt::Formatter<'_>, id: FieldId, value: Option<u16>) -> f
         0x0007 => "orientation",
         _ => "field",
     };
-    write!(f, "{name} 0x{:04X}=", id.0)?;
+    w.str(name)?;
+    w.str(" 0x")?;
+    w.hex4(id.0)?;
+    w.str("=")?;
     let Some(v) = value else {
-        return f.write_str("(missing)");
+        return w.str("(missing)");
     };
     match id.0 {
-        0x0001 => match PacketRate::from_divider(v) {
-            Some(PacketRate::Quiet) => write!(f, "{v} (quiet)"),
-            Some(r) => write!(f, "{v} ({} Hz)", 100 / r.divider()),
-            None => write!(f, "{v} (undefined)"),
-        },
-        0x0002 => match Baud::from_code(v) {
-            Some(b) => write!(f, "{v} ({} Bd)", b.bits_per_second()),
-            None => write!(f, "{v} (undefined)"),
-        },
-        0x0003 => write!(f, "0x{v:04X} ({})", PacketType::from_code(v)),
-        _ => write!(f, "{v}"),
+        0x0001 => {
+            w.dec(v.into())?;
+            match PacketRate::from_divider(v) {
+                Some(PacketRate::Quiet) => w.str(" (quiet)"),
+                Some(r) => {
+                    w.str(" (")?;
+                    w.dec((100 / r.divider()).into())?;
+                    w.str(" Hz)")
+                }
+                None => w.str(" (undefined)"),
+            }
+        }
+        0x0002 => {
+            w.dec(v.into())?;
+            match Baud::from_code(v) {
+                Some(b) => {
+                    w.str(" (")?;
+                    w.dec(b.bits_per_second())?;
+                    w.str(" Bd)")
+                }
+                None => w.str(" (undefined)"),
+            }
+        }
+        0x0003 => {
+            w.str("0x")?;
+            w.hex4(v)?;
+            w.str(" (")?;
+            w.str(PacketType::from_code(v).name())?;
+            w.str(")")
+        }
+        _ => w.dec(v.into()),
     }
 }
 
-impl fmt::Display for FieldList {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+impl FieldList {
+    /// The fields with their meanings (see [`write_field`]), or `fields 0x0001, 0x0002` for IDs.
+    fn text<W: Text + ?Sized>(&self, w: &mut W) -> fmt::Result {
         if self.ids_only {
-            f.write_str("fields")?;
+            w.str("fields")?;
         }
         for (i, (id, v)) in self.iter().enumerate() {
-            f.write_str(if i > 0 {
+            w.str(if i > 0 {
                 ", "
             } else if self.ids_only {
                 " "
@@ -337,18 +371,25 @@ impl fmt::Display for FieldList {
                 ""
             })?;
             if self.ids_only {
-                write!(f, "0x{:04X}", id.0)?;
+                w.str("0x")?;
+                w.hex4(id.0)?;
             } else {
-                write_field(f, id, Some(v))?;
+                write_field(w, id, Some(v))?;
             }
         }
         Ok(())
     }
 }
 
-/// Why the boot sequence failed. `Display` gives one diagnostic line (no newline).
+impl fmt::Display for FieldList {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.text(f)
+    }
+}
+
+/// Why the boot sequence failed. `Display` and `defmt::Format` give the same diagnostic line
+/// (no newline).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum BootError<E> {
     /// The unit did not answer `request` at any baud tried.
     NoAnswer {
@@ -402,56 +443,98 @@ pub enum BootError<E> {
     Encode(EncodeError),
 }
 
-impl<E: fmt::Debug> fmt::Display for BootError<E> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+impl<E> BootError<E> {
+    /// The diagnostic line, but for the serial port's error `E`, which `serial` writes.
+    fn text<W: Text + ?Sized>(
+        &self,
+        w: &mut W,
+        serial: impl FnOnce(&mut W, &E) -> fmt::Result,
+    ) -> fmt::Result {
         match self {
             BootError::NoAnswer {
                 request,
                 tried,
                 attempts,
                 timeout_ms,
-            } => write!(
-                f,
-                "no answer from the unit: {request} unanswered at {tried} \
-                 ({attempts} x {timeout_ms} ms each)"
-            ),
-            BootError::Nak { request, fields } if fields.is_empty() => {
-                let what = if *request == PacketType::PK {
-                    "ping"
-                } else {
-                    "request without fields"
-                };
-                write!(f, "unit rejected (NAK) {request} ({what})")
+            } => {
+                w.str("no answer from the unit: ")?;
+                w.str(request.name())?;
+                w.str(" unanswered at ")?;
+                tried.text(w)?;
+                w.str(" (")?;
+                w.dec((*attempts).into())?;
+                w.str(" x ")?;
+                w.dec(*timeout_ms)?;
+                w.str(" ms each)")
             }
             BootError::Nak { request, fields } => {
-                write!(f, "unit rejected (NAK) {request}: {fields}")
+                w.str("unit rejected (NAK) ")?;
+                w.str(request.name())?;
+                if fields.is_empty() {
+                    w.str(if *request == PacketType::PK {
+                        " (ping)"
+                    } else {
+                        " (request without fields)"
+                    })
+                } else {
+                    w.str(": ")?;
+                    fields.text(w)
+                }
             }
             BootError::NotAccepted {
                 request,
                 fields,
                 accepted,
-            } => write!(
-                f,
-                "unit accepted only {accepted} of the fields of {request}: {fields}"
-            ),
+            } => {
+                w.str("unit accepted only ")?;
+                w.dec((*accepted).into())?;
+                w.str(" of the fields of ")?;
+                w.str(request.name())?;
+                w.str(": ")?;
+                fields.text(w)
+            }
             BootError::WrongReadBack {
                 field,
                 expected,
                 got,
             } => {
-                f.write_str("wrong read-back (GF): expected ")?;
-                write_field(f, *field, Some(*expected))?;
-                f.write_str(", got ")?;
-                write_field(f, *field, *got)
+                w.str("wrong read-back (GF): expected ")?;
+                write_field(w, *field, Some(*expected))?;
+                w.str(", got ")?;
+                write_field(w, *field, *got)
             }
             BootError::UndefinedValue { field, value } => {
-                f.write_str("the unit's configuration (GF) holds an undefined value: ")?;
-                write_field(f, *field, Some(*value))
+                w.str("the unit's configuration (GF) holds an undefined value: ")?;
+                write_field(w, *field, Some(*value))
             }
-            BootError::Serial(e) => write!(f, "serial port error: {e:?}"),
-            BootError::WriteZero => f.write_str("serial port error: it accepted no byte"),
-            BootError::Encode(e) => write!(f, "request could not be encoded: {e}"),
+            BootError::Serial(e) => {
+                w.str("serial port error: ")?;
+                serial(w, e)
+            }
+            BootError::WriteZero => w.str("serial port error: it accepted no byte"),
+            BootError::Encode(e) => {
+                w.str("request could not be encoded: ")?;
+                e.text(w)
+            }
         }
+    }
+}
+
+impl<E: fmt::Debug> fmt::Display for BootError<E> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.text(f, |f, e| write!(f, "{e:?}"))
+    }
+}
+
+/// The same line as `Display` (the serial port's error as its `defmt::Format`), so a firmware
+/// prints it without `core::fmt`.
+#[cfg(feature = "defmt")]
+impl<E: defmt::Format> defmt::Format for BootError<E> {
+    fn format(&self, f: defmt::Formatter<'_>) {
+        let _ = self.text(&mut Defmt(f), |w, e| {
+            defmt::write!(w.0, "{:?}", e);
+            Ok(())
+        });
     }
 }
 

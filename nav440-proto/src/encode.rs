@@ -3,6 +3,7 @@
 use crate::crc16::{Crc16Table, DefaultCrcTable};
 use crate::packets::{DecodeError, FieldIds, FieldValues};
 use crate::parser::Frame;
+use crate::text::Text;
 use crate::types::{FieldId, PacketType};
 use crate::{FRAME_OVERHEAD, MAX_PAYLOAD, PREAMBLE_BYTE};
 
@@ -22,17 +23,30 @@ pub enum EncodeError {
     },
 }
 
-impl core::fmt::Display for EncodeError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+impl EncodeError {
+    /// The diagnostic line (see [`Text`]).
+    pub(crate) fn text<W: Text + ?Sized>(&self, w: &mut W) -> core::fmt::Result {
+        let n = |v: usize| u32::try_from(v).unwrap_or(u32::MAX);
         match self {
-            EncodeError::PayloadTooLong { len } => write!(
-                f,
-                "payload of {len} bytes exceeds the maximum of {MAX_PAYLOAD} bytes"
-            ),
+            EncodeError::PayloadTooLong { len } => {
+                w.str("payload of ")?;
+                w.dec(n(*len))?;
+                w.str(" bytes exceeds the maximum of ")?;
+                w.dec(n(MAX_PAYLOAD))?;
+                w.str(" bytes")
+            }
             EncodeError::BufferTooSmall { needed } => {
-                write!(f, "output buffer too small: the frame needs {needed} bytes")
+                w.str("output buffer too small: the frame needs ")?;
+                w.dec(n(*needed))?;
+                w.str(" bytes")
             }
         }
+    }
+}
+
+impl core::fmt::Display for EncodeError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        self.text(f)
     }
 }
 

@@ -74,6 +74,7 @@ pub mod driver;
 pub mod encode;
 pub mod packets;
 pub mod parser;
+mod text;
 pub mod types;
 pub mod unit;
 
