@@ -4,7 +4,7 @@
 //! crate hold the same figures as literals): `kib` is what the chip has, `link_kib` what the
 //! memory map gives the linker when that is less.
 
-use super::{Board, BootLoader, Region, Uart};
+use super::{Board, BootLoader, Image, Region, Uart};
 
 /// Every board; [`crate::validate`] checks the list on every firmware build.
 pub const BOARDS: &[Board] = &[
@@ -43,6 +43,7 @@ pub const BOARDS: &[Board] = &[
             link_kib: Some(128),
         },
         boot_loader: None,
+        ci_image: Image::PAPER,
     },
     Board {
         name: "stm32f405",
@@ -74,6 +75,7 @@ pub const BOARDS: &[Board] = &[
             link_kib: None,
         },
         boot_loader: None,
+        ci_image: Image::PAPER,
     },
     Board {
         name: "nucleo-f411re",
@@ -104,6 +106,7 @@ pub const BOARDS: &[Board] = &[
             link_kib: None,
         },
         boot_loader: None,
+        ci_image: Image::PAPER,
     },
     Board {
         name: "b-l475e-iot01a",
@@ -135,6 +138,48 @@ pub const BOARDS: &[Board] = &[
             link_kib: None,
         },
         boot_loader: None,
+        ci_image: Image::PAPER,
+    },
+    Board {
+        name: "nucleo-g031k8",
+        part: "STM32G031K8 on the NUCLEO-G031K8 (RM0444: 64 KiB flash at 0x0800_0000, 8 KiB SRAM at 0x2000_0000)",
+        default: false,
+        example: true,
+        backend: None,
+        targets: &["thumbv6m-none-eabi"],
+        probe_chip: Some("STM32G031K8Tx"),
+        qemu: &[],
+        embassy_feature: None,
+        uart: Uart {
+            peripheral: "USART1",
+            tx: Some("PB6 (D1)"),
+            rx: Some("PB7 (D0)"),
+            function: Some("AF0"),
+        },
+        // A board one can buy, for a part one would ship: the K8 has 64 KiB of flash, the
+        // linker gets 32 KiB, the flash of the STM32G031K6 (same family, package and 8 KiB of
+        // SRAM, DS12992). An image that links here, and passes the map check (the ELF against
+        // the K8's 64 KiB and against the 32 KiB budget), fits a 32 KiB / 8 KiB part.
+        flash: Region {
+            name: "flash",
+            origin: 0x0800_0000,
+            kib: 64,
+            link_kib: Some(32),
+        },
+        ram: Region {
+            name: "SRAM",
+            origin: 0x2000_0000,
+            kib: 8,
+            link_kib: None,
+        },
+        boot_loader: None,
+        // The image the small part is for: the product bank, profile `small`. The paper bank's
+        // can never fit 32 KiB. Not in CI until the product image fits the 32 KiB budget.
+        ci_image: Image {
+            features: &["bank-product"],
+            profile: "small",
+            in_ci: false,
+        },
     },
     Board {
         name: "rp-pico",
@@ -173,5 +218,6 @@ pub const BOARDS: &[Board] = &[
             section: ".boot2",
             symbol: "BOOT2_FIRMWARE",
         }),
+        ci_image: Image::PAPER,
     },
 ];

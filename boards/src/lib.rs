@@ -59,6 +59,28 @@ pub struct Board {
     pub ram: Region,
     /// A boot loader at the start of flash, before the vector table.
     pub boot_loader: Option<BootLoader>,
+    /// The image `cargo xtask ci` builds, lints and map-checks for a board no emulator runs.
+    pub ci_image: Image,
+}
+
+/// A firmware-example image of a board: what it is built with beside `board-<name>`.
+#[derive(Clone, Copy, Debug)]
+pub struct Image {
+    /// firmware-example features (the bank, the axes), beside the board's feature.
+    pub features: &'static [&'static str],
+    /// The cargo profile (`release`, `small`).
+    pub profile: &'static str,
+    /// `cargo xtask ci` builds and checks it; `false` leaves it out, with a line saying so.
+    pub in_ci: bool,
+}
+
+impl Image {
+    /// The firmware's default image: the paper bank, three axes, profile `release`.
+    pub const PAPER: Image = Image {
+        features: &[],
+        profile: "release",
+        in_ci: true,
+    };
 }
 
 /// The UART the NAV440 is wired to.
@@ -112,6 +134,12 @@ impl Region {
     /// Whether `len` bytes from `start` lie inside the chip's range.
     pub fn contains(&self, start: u64, len: u64) -> bool {
         start >= self.origin && start.saturating_add(len) <= self.origin + self.length()
+    }
+
+    /// Whether `len` bytes from `start` lie inside what the memory map gives the linker
+    /// ([`Self::link_length`] from the origin).
+    pub fn link_contains(&self, start: u64, len: u64) -> bool {
+        start >= self.origin && start.saturating_add(len) <= self.origin + self.link_length()
     }
 }
 

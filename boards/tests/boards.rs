@@ -1,8 +1,8 @@
 //! The description against the chips' documents, the generated maps and the selection rules.
 
 use nav440_boards::{
-    all, feature_env, find, select, select_embassy, validate, Board, BootLoader, Region, Uart,
-    BOARDS,
+    all, feature_env, find, select, select_embassy, validate, Board, BootLoader, Image, Region,
+    Uart, BOARDS,
 };
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -40,6 +40,16 @@ const DATA_SHEETS: &[(&str, u64, u64, u64, u64, u64)] = &[
         1024 * KIB,
         0x2000_0000,
         96 * KIB,
+        0x0800_0000,
+    ),
+    // RM0444 section 2.2 (memory map) and DS12992 (STM32G031x4/x6/x8), STM32G031K8: 64 KiB
+    // flash, 8 KiB SRAM.
+    (
+        "nucleo-g031k8",
+        0x0800_0000,
+        64 * KIB,
+        0x2000_0000,
+        8 * KIB,
         0x0800_0000,
     ),
     // RP2040 datasheet section 2.2 (XIP at 0x1000_0000, SRAM0-5 = 4 x 64 + 2 x 4 KiB); the
@@ -93,6 +103,15 @@ fn the_maps_hold_the_linked_memories() {
     assert!(!f405.contains("SECTIONS"));
     let f411 = find("nucleo-f411re").unwrap().linker_map();
     assert!(f411.contains("  FLASH : ORIGIN = 0x08000000, LENGTH = 512K\n"));
+    // The NUCLEO-G031K8: the linker gets the STM32G031K6's 32 KiB of flash, the real 8 KiB.
+    let g031 = find("nucleo-g031k8").unwrap();
+    assert_eq!(
+        (g031.flash.link_length(), g031.ram.link_length()),
+        (32 * KIB, 8 * KIB)
+    );
+    let g031 = g031.linker_map();
+    assert!(g031.contains("  FLASH : ORIGIN = 0x08000000, LENGTH = 32K\n"));
+    assert!(g031.contains("  RAM   : ORIGIN = 0x20000000, LENGTH = 8K\n"));
     // The emulated boards' map is an STM32F405-sized part at 0.
     let mps2 = find("mps2").unwrap().linker_map();
     assert!(mps2.contains("  FLASH : ORIGIN = 0x00000000, LENGTH = 1024K\n"));
@@ -193,6 +212,7 @@ fn the_manifests_declare_the_described_features() {
     let described: BTreeSet<String> = all().iter().filter_map(Board::feature).collect();
     assert_eq!(board_features, described);
     assert!(described.contains("board-rp-pico"));
+    assert!(described.contains("board-nucleo-g031k8"));
     let chips: BTreeSet<String> = features_of("firmware-embassy/Cargo.toml")
         .into_iter()
         .filter(|f| f != "default")
@@ -236,6 +256,7 @@ const ONE: Board = Board {
         link_kib: None,
     },
     boot_loader: None,
+    ci_image: Image::PAPER,
 };
 
 #[test]
@@ -289,4 +310,25 @@ fn regions_contain_exactly_their_range() {
     assert!(!r.contains(0x07ff_fffc, 8));
     assert!(r.contains(0x0800_03fc, 4));
     assert!(!r.contains(0, 4));
+    let small = Region {
+        link_kib: Some(1),
+        kib: 2,
+        ..r
+    };
+    assert!(small.contains(0x0800_0400, 4) && !small.link_contains(0x0800_0400, 4));
+    assert!(small.link_contains(0x0800_03fc, 4));
+}
+
+#[test]
+fn the_built_only_boards_images() {
+    // The small part's image is the product bank at profile `small`; the others the default.
+    let g031 = find("nucleo-g031k8").unwrap().ci_image;
+    assert_eq!(
+        (g031.features, g031.profile),
+        (&["bank-product"][..], "small")
+    );
+    for name in ["nucleo-f411re", "rp-pico"] {
+        let i = find(name).unwrap().ci_image;
+        assert_eq!((i.features, i.profile, i.in_ci), (&[][..], "release", true));
+    }
 }

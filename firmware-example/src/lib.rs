@@ -64,7 +64,8 @@ pub type BankSqrt = estimators::NativeSqrt;
     any(
         feature = "board-stm32f405",
         feature = "board-nucleo-f411re",
-        feature = "board-rp-pico"
+        feature = "board-rp-pico",
+        feature = "board-nucleo-g031k8"
     )
 ))]
 compile_error!(

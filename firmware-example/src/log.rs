@@ -20,9 +20,9 @@ use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 /// three paper-bank axes is 227 bytes); a longer frame is handed on in pieces of this size.
 const FRAME_BUFFER: usize = 512;
 
-/// Bytes of the RTT up-channel's buffer.
+/// Bytes of the RTT up-channel's buffer: the board's.
 #[cfg(feature = "rtt")]
-const RTT_BUFFER: usize = 4096;
+const RTT_BUFFER: usize = crate::board::RTT_BUFFER;
 
 #[defmt::global_logger]
 struct Logger;

@@ -63,8 +63,9 @@ pub struct MapReport {
 /// Checks `path` against its board's chip: the image names its board (and it is `expect`
 /// when given); every allocated section lies inside the chip's flash or RAM (by its run-time
 /// address), every loadable segment's load address with file bytes inside flash, and
-/// `.vector_table` starts at the chip's boot address. The error names the section or segment
-/// and its addresses. The report lists the float formatting symbols the image links.
+/// `.vector_table` starts at the chip's boot address; where the description gives the linker
+/// less of a memory than the chip has (`link_kib`), the sections in it and the load ranges lie
+/// inside that part. The error names the section or segment and its addresses. The report lists the float formatting symbols the image links.
 pub fn check_memory_map(path: &Path, expect: Option<&str>) -> Result<MapReport, String> {
     let data = read(path)?;
     let elf = parse(path, &data)?;
@@ -123,6 +124,11 @@ fn check_sections(
                 chip.ram.kib
             ));
         }
+        for r in [&chip.flash, &chip.ram] {
+            if r.link_kib.is_some() && r.contains(start, len) && !r.link_contains(start, len) {
+                return Err(over_budget(&shown, "section", name, start, len, chip, r));
+            }
+        }
         if name == ".vector_table" {
             vector_table = Some(start);
         }
@@ -149,6 +155,18 @@ fn check_sections(
                 chip.flash.kib
             ));
         }
+        if !chip.flash.link_contains(load, file_len) {
+            let what = format!("at run address {run:#010x}");
+            return Err(over_budget(
+                &shown,
+                "loadable segment",
+                &what,
+                load,
+                file_len,
+                chip,
+                &chip.flash,
+            ));
+        }
     }
     let vector_table =
         vector_table.ok_or_else(|| format!("{shown}: the image has no .vector_table section"))?;
@@ -165,6 +183,28 @@ fn check_sections(
         vector_table,
         float_symbols: float_symbols_in(elf),
     })
+}
+
+/// The error for `len` bytes at `start` (a section or a segment's load range) inside the
+/// chip's region `r` but past the part of it the board's description gives the linker
+/// (`link_kib`: the budget of a smaller part the image must fit).
+fn over_budget(
+    shown: &std::path::Display<'_>,
+    kind: &str,
+    name: &str,
+    start: u64,
+    len: u64,
+    chip: &Board,
+    r: &nav440_boards::Region,
+) -> String {
+    format!(
+        "{shown}: {kind} {name} at {start:#010x}..{:#010x} ends {} bytes past the {} KiB of {}'s {} its description gives the linker (link_kib)",
+        start + len,
+        (start + len).saturating_sub(r.origin + r.link_length()),
+        r.link_length() >> 10,
+        chip.name,
+        r.name
+    )
 }
 
 /// Parts of the (mangled) symbol names of `core::fmt`'s float formatting (`Display`, `Debug`

@@ -64,6 +64,8 @@ pub const RETRY_PAUSE_MS: u32 = 1000;
 pub const REPLAY: bool = false;
 /// defmt frames go to RTT.
 pub const RTT: bool = true;
+/// Bytes of the RTT up-channel's buffer.
+pub const RTT_BUFFER: usize = 4096;
 
 /// Never emulated: no semihosting host (a semihosting call without a debugger faults).
 pub fn host_present() -> bool {

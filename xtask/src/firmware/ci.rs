@@ -3,7 +3,7 @@
 //! capture, the unit runs, the failure exits, the bench and the sizes.
 
 use super::build::{
-    adaptive_boards, build, build_bins, build_small, clippy_firmware, small_boards,
+    adaptive_boards, build, build_bins, build_profile, build_small, clippy_firmware, small_boards,
 };
 use super::captures::{
     bit_fail_capture, bundled_capture, data_captures, false_header_capture, rate_change_capture,
@@ -16,7 +16,7 @@ use super::size::size;
 use super::soak::CI_SOAK;
 use super::unit_cases::{short_capture, uart_rows_ci, unit_ci};
 use super::{
-    read_file, root, work_dir, BankChoice, ADAPTIVE, BENCH_BIN, FW_BIN, ONE_AXIS, PRODUCT,
+    read_file, root, work_dir, BankChoice, ADAPTIVE, BENCH_BIN, FW, FW_BIN, ONE_AXIS, PRODUCT,
     STM32_FEATURE, TUNED, TUNED_GAINS, UART_ROWS,
 };
 use crate::pool::Pool;
@@ -310,15 +310,29 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
     check_map(&f405, "stm32f405")?;
     map_check_catches_an_image_at_0(&f405)?;
     // The boards no emulator runs (`boards/src/description.rs`: no `qemu`), for their first
-    // target.
+    // target, each as its description's `ci_image` (features, profile): linted, and built and
+    // map-checked unless the description leaves the image out (`in_ci`).
     for board in nav440_boards::all()
         .iter()
         .filter(|b| b.example && !b.runs_in_qemu())
     {
-        let (feature, target) = (board.feature(), board.targets[0]);
-        let features: Vec<&str> = feature.as_deref().into_iter().collect();
-        clippy_firmware(target, feature.as_deref())?;
-        check_map(&build(target, &features, FW_BIN)?, board.name)?;
+        let (feature, target, image) = (board.feature(), board.targets[0], board.ci_image);
+        let mut features: Vec<&str> = feature.as_deref().into_iter().collect();
+        features.extend(image.features);
+        // Linted always (clippy does not link); built and map-checked when `in_ci`.
+        clippy_firmware(target, Some(&features.join(",")))?;
+        if !image.in_ci {
+            eprintln!(
+                "xtask: SKIPPED: board {}: its image is not built in CI (ci_image.in_ci false in {}): cargo build -p {FW} --target {target} --profile {} --features {} --bin {FW_BIN}",
+                board.name,
+                nav440_boards::DESCRIPTION_PATH,
+                image.profile,
+                features.join(",")
+            );
+            continue;
+        }
+        let elf = build_profile(target, &features, FW_BIN, image.profile)?;
+        check_map(&elf, board.name)?;
     }
     // The rows also out of a second UART (feature `uart-rows`, the mps2 boards' UART2): linted
     // on the M4F and thumbv6m, the M4F image's map checked; it runs among the unit runs.
