@@ -1,15 +1,18 @@
 //! The firmware's output as defmt messages: no text formatting on the MCU.
 //!
 //! * [`header`]: once per run, the estimated axes (`AXES`, as a bit mask roll=1, pitch=2,
-//!   yaw=4) and the bank's channel names (its CSV columns, e.g. `ilo1_v,kf_a`); the host writes
-//!   the CSV header line of `nav440 estimate --bank ... --axis ...` from them.
+//!   yaw=4) and the bank's channel names (its CSV columns, e.g. `ilo1_v,kf_a`), preceded by
+//!   `body_rate` when the rows carry the body rates (feature `no-reference`,
+//!   `nav440_pipeline::RateColumn::header_names`); the host writes the CSV header line of
+//!   `nav440 estimate --bank ... --axis ... [--no-reference]` from them.
 //! * [`row`]: one message per sample, `row {=[u8]}`: one packed byte payload (little-endian),
 //!   the sample time (u64, us since the first sample), then per estimated axis (roll, pitch,
 //!   yaw order) [`AXIS_BYTES`] bytes: a flag byte (bit 0: a reference rate is present; bit 1,
 //!   [`NO_ESTIMATE`]: the axis has no estimate in this row, near gimbal lock, and the rest of
 //!   the block is 0), the
 //!   unwrapped angle (deg, f32), its f64 residual (deg, 0 while f32 holds the angle), the
-//!   reference rate (deg/s, f32; 0 when absent) and the bank's channel values (in the order of
+//!   rate column (Euler reference or body rate, deg/s, f32; 0 when absent) and the bank's
+//!   channel values (in the order of
 //!   its names, f32: 14 for the paper bank, 2 for the product bank). One argument, so the transport gets one write for the
 //!   whole payload (one semihosting call instead of one per value).
 //! * [`summary`]: the counters line; it and the other diagnostics, the stream watchdog's
@@ -69,8 +72,11 @@ fn put_axis(dst: &mut [u8; AXIS_BYTES], a: &AxisRow<Output>) {
     }
 }
 
-/// The bank's channel names.
-const NAMES: &[&[&str]] = &[<Output as EstimatorOutput>::CHANNEL_NAMES];
+/// The rate column's marker (none for the Euler reference) and the bank's channel names.
+const NAMES: &[&[&str]] = &[
+    <crate::pipeline::Reference as nav440_pipeline::Reference>::COLUMN.header_names(),
+    <Output as EstimatorOutput>::CHANNEL_NAMES,
+];
 /// [`NAMES`] joined with `,` (the CSV columns), built at compile time.
 const COLUMN_BYTES: [u8; estimators::columns_len(NAMES)] = estimators::join_columns(NAMES);
 /// [`COLUMN_BYTES`] as text.
@@ -80,7 +86,8 @@ const COLUMNS: &str = match core::str::from_utf8(&COLUMN_BYTES) {
 };
 
 /// Sends the header message: the axes of the rows (bit mask roll=1, pitch=2, yaw=4) and the
-/// bank's channel names (its CSV columns, comma-separated).
+/// bank's channel names (its CSV columns, comma-separated), after `body_rate` for rows with
+/// the body rates.
 pub fn header() {
     let mut mask = 0u8;
     for a in AXES.iter() {

@@ -5,6 +5,9 @@
 //! one bank per axis (`BankConfig::NAV440`: h = 1e-4 s, linear hold, gains tuned for the packet rate) -> one CSV row per
 //! sample, formatted by `nav440_pipeline::csv` exactly as the host does. See
 //! docs/PIPELINE.md and docs/RELIABILITY.md.
+//!
+//! Each row's rate column is [`Reference`]'s: the Euler reference rate by default, the body
+//! rates with the feature `no-reference` (no trigonometry linked).
 
 use estimators::BankConfig;
 pub use nav440_pipeline::{Axes, Axis, CsvLine, ROW_CAPACITY};
@@ -80,8 +83,19 @@ pub type BuildFn = fn(Axis, &BankConfig) -> Result<Bank, ConfigError>;
 /// `one-axis` instead of three).
 pub const BANK_SLOTS: usize = AXES.len();
 
+/// The rows' rate column: the Euler reference rate (`<axis>_rate`, the default).
+#[cfg(not(feature = "no-reference"))]
+pub type Reference = nav440_pipeline::EulerReference;
+/// The rows' rate column (feature `no-reference`): the unit's body rate about each axis
+/// (`<axis>_body_rate`, deg/s as sent; `nav440 estimate --no-reference` prints the same CSV).
+#[cfg(feature = "no-reference")]
+pub type Reference = nav440_pipeline::BodyRates;
+
+/// The firmware's pipeline with the rate column `R` (the bench measures both).
+pub type PipelineWith<R> = nav440_pipeline::Pipeline<Bank, ConfigError, BuildFn, BANK_SLOTS, R>;
+
 /// The firmware's pipeline.
-pub type Pipeline = nav440_pipeline::Pipeline<Bank, ConfigError, BuildFn, BANK_SLOTS>;
+pub type Pipeline = PipelineWith<Reference>;
 
 /// The bank preset the firmware runs: the one `nav440 estimate` runs by default
 /// (`BankConfig::NAV440`; the paper's presets are `BankConfig::PAPER`, `nav440 estimate
@@ -120,10 +134,20 @@ pub fn check() -> Result<(), ConfigError> {
 /// constructor is out of line for the same reason, see `Estimation::with_slots`).
 #[inline(always)]
 pub fn new() -> Pipeline {
-    Pipeline::with_slots(AXES, PRESET, build_bank)
+    new_with()
+}
+
+/// [`new`] with the rate column `R` instead of [`Reference`].
+#[inline(always)]
+pub fn new_with<R: nav440_pipeline::Reference>() -> PipelineWith<R> {
+    PipelineWith::with_slots(AXES, PRESET, build_bank)
 }
 
 /// Writes the CSV header line of [`AXES`] (without line terminator).
 pub fn write_header(w: &mut impl core::fmt::Write) -> core::fmt::Result {
-    nav440_pipeline::csv::write_header::<Bank>(w, AXES)
+    nav440_pipeline::csv::write_header_for::<crate::Output>(
+        w,
+        AXES,
+        <Reference as nav440_pipeline::Reference>::COLUMN,
+    )
 }

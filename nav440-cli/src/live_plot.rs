@@ -146,19 +146,23 @@ impl Series {
         }
     }
 
-    /// `t,yaw,yaw_rate,ilo1_v,...,kf_a,...`, or with every axis `t,roll,roll_rate,roll_ilo1_v,...`.
+    /// `t,yaw,yaw_rate,ilo1_v,...,kf_a,...`, or with every axis `t,roll,roll_rate,roll_ilo1_v,...`;
+    /// with `--no-reference` `<axis>_body_rate` in place of `<axis>_rate`.
     fn header(&mut self, fields: &[&str]) {
         self.header_seen = true;
         let col = |name: &str| fields.iter().position(|f| *f == name);
         for axis in ["roll", "pitch", "yaw"] {
-            let Some(rate) = col(&format!("{axis}_rate")) else {
+            let rate = col(&format!("{axis}_rate"))
+                .map(|c| ("rate (reference)", c))
+                .or_else(|| col(&format!("{axis}_body_rate")).map(|c| ("body rate", c)));
+            let Some((rate_label, rate)) = rate else {
                 continue;
             };
             let pick = |name: &str| col(&format!("{axis}_{name}")).or_else(|| col(name));
             if let (Some(v), Some(acc)) = (pick("ilo1_v"), pick("kf_a")) {
                 self.axes.push(AxisTraces {
                     axis,
-                    rate: Trace::new("rate (reference)", rate),
+                    rate: Trace::new(rate_label, rate),
                     velocity: Trace::new("ilo1_v", v),
                     acceleration: Trace::new("kf_a", acc),
                 });
@@ -331,5 +335,16 @@ mod tests {
         assert!(s.axes[0].velocity.points.is_empty());
         assert_eq!(s.axes[1].velocity.points.back(), Some(&(0.01, 2.0)));
         assert_eq!(s.axes[1].acceleration.points.back(), Some(&(0.01, 3.0)));
+    }
+
+    /// `--no-reference`: the body-rate column is the rate trace, labelled as such.
+    #[test]
+    fn body_rate_columns() {
+        let mut s = Series::new();
+        s.feed(b"t,yaw,yaw_body_rate,ilo1_v,kf_a\n0.01,1.0,30.0,29.5,0.1\n");
+        assert_eq!(s.axes(), ["yaw"]);
+        let a = &s.axes[0];
+        assert_eq!((a.rate.name, a.rate.column), ("body rate", 2));
+        assert_eq!(a.rate.points.back(), Some(&(0.01, 30.0)));
     }
 }

@@ -1,12 +1,17 @@
 //! The CSV rows shared by the host CLI (`nav440 estimate`) and the firmware, so the two
 //! outputs compare byte for byte.
 //!
-//! The columns come from the bank: per axis the angle, its reference rate, then one column
-//! per channel of the bank's output ([`EstimatorOutput::CHANNEL_NAMES`], in order). One axis:
+//! The columns come from the bank: per axis the angle, its rate column, then one column per
+//! channel of the bank's output ([`EstimatorOutput::CHANNEL_NAMES`], in order). One axis:
 //! `t,yaw,yaw_rate,<channels>` (`roll`, `roll_rate` or `pitch`, `pitch_rate` in place of
 //! `yaw`, `yaw_rate` for those axes). Several axes: `t`, then for each axis in the order
 //! roll, pitch, yaw its columns prefixed with the axis name (`roll,roll_rate,roll_<channel>,
 //! ...,pitch,...`).
+//!
+//! The rate column is the Euler reference rate, `<axis>_rate`, or in a pipeline whose
+//! [`crate::Reference`] is [`crate::BodyRates`] the unit's body rate about the axis,
+//! `<axis>_body_rate` (`t,yaw,yaw_body_rate,<channels>`; [`write_header_for`] with
+//! [`RateColumn::Body`]); the values are written alike (deg/s, empty when absent).
 //!
 //! * The paper bank (`estimators::PaperBank`, the default of `nav440 estimate`): the 7
 //!   velocity estimates (`ave_v, ilo1_v, ilo2_v, ilo3_v, ad_v, ed_v, kf_v`) and the 7
@@ -16,8 +21,8 @@
 //!   `t,roll,roll_rate,roll_ilo1_v,roll_kf_a,pitch,...,yaw_kf_a`.
 //!
 //! ```
-//! use estimators::{Fx, PaperBank, ProductBank};
-//! use nav440_pipeline::{csv, Axes, Axis};
+//! use estimators::{Fx, PaperBank, ProductBank, ProductOutput};
+//! use nav440_pipeline::{csv, Axes, Axis, RateColumn};
 //!
 //! let mut s = String::new();
 //! csv::write_header::<ProductBank<Fx>>(&mut s, Axes::only(Axis::Yaw)).unwrap();
@@ -25,9 +30,13 @@
 //! s.clear();
 //! csv::write_header::<PaperBank<f32>>(&mut s, Axes::only(Axis::Yaw)).unwrap();
 //! assert_eq!(s, csv::HEADER);
+//! s.clear();
+//! csv::write_header_for::<ProductOutput>(&mut s, Axes::only(Axis::Yaw), RateColumn::Body)
+//!     .unwrap();
+//! assert_eq!(s, "t,yaw,yaw_body_rate,ilo1_v,kf_a");
 //! ```
 
-use crate::{Axes, AxisRow, Row};
+use crate::{Axes, AxisRow, RateColumn, Row};
 use core::fmt::Write;
 use estimators::{EstimatorBank, EstimatorOutput, PaperOutput};
 
@@ -46,8 +55,9 @@ const HEADER_BYTES: [u8; estimators::columns_len(HEADER_NAMES)] =
     estimators::join_columns(HEADER_NAMES);
 
 /// Writes the header line (without line terminator) of the rows of `axes` from the bank `B`
-/// (any `estimators::EstimatorBank`): the column names are its
-/// output's channel names ([`EstimatorOutput::CHANNEL_NAMES`]).
+/// (any `estimators::EstimatorBank`) with the Euler reference rate (`<axis>_rate`): the
+/// column names are its output's channel names ([`EstimatorOutput::CHANNEL_NAMES`]). Another
+/// rate column: [`write_header_for`].
 pub fn write_header<B: EstimatorBank + ?Sized>(
     w: &mut impl Write,
     axes: Axes,
@@ -57,11 +67,23 @@ pub fn write_header<B: EstimatorBank + ?Sized>(
 
 /// [`write_header`] named by the bank's output type `O` instead of the bank.
 pub fn write_header_of<O: EstimatorOutput>(w: &mut impl Write, axes: Axes) -> core::fmt::Result {
+    write_header_for::<O>(w, axes, RateColumn::Euler)
+}
+
+/// [`write_header_of`] with the rate column `rate`: `<axis>_rate` ([`RateColumn::Euler`]) or
+/// `<axis>_body_rate` ([`RateColumn::Body`]) after each axis's angle, the axis name prefixed
+/// for one axis as for several (a pipeline's is [`crate::Pipeline::rate_column`]).
+pub fn write_header_for<O: EstimatorOutput>(
+    w: &mut impl Write,
+    axes: Axes,
+    rate: RateColumn,
+) -> core::fmt::Result {
     w.write_str("t")?;
     let prefixed = axes.len() > 1;
+    let suffix = rate.suffix();
     for axis in axes.iter() {
         let name = axis.name();
-        write!(w, ",{name},{name}_rate")?;
+        write!(w, ",{name},{name}_{suffix}")?;
         for col in O::CHANNEL_NAMES {
             if prefixed {
                 write!(w, ",{name}_{col}")?;
@@ -86,7 +108,8 @@ pub fn write_time<W: Write>(w: &mut W, t_us: u64) -> core::fmt::Result {
 ///   holds it exactly (`residual_deg() == 0`), else the exact f64 value
 ///   `unwrapped_deg + residual_deg` (f64 Display), so the column stays exact for any number
 ///   of turns;
-/// * the reference rate (deg/s), empty when there is none (near gimbal lock);
+/// * the rate column (deg/s: the reference rate or the body rate), empty when there is none
+///   (the Euler reference near gimbal lock, a body rate the packet does not send);
 /// * then `out.values()` in channel order ([`EstimatorOutput::CHANNEL_NAMES`]; the paper
 ///   bank's: the 7 velocities, then the 7 accelerations),
 ///
@@ -143,7 +166,7 @@ mod tests {
 
     use super::*;
     use crate::Axis;
-    use estimators::{Fx, PaperBank, PaperOutput, ProductBank};
+    use estimators::{Fx, PaperBank, PaperOutput, ProductBank, ProductOutput};
 
     fn header(axes: Axes) -> heapless::String<1024> {
         let mut s = heapless::String::new();
@@ -202,6 +225,40 @@ mod tests {
         s.clear();
         write_row(&mut s, &row, Axes::ALL).unwrap();
         assert_eq!(s.as_str(), "0.0200,,,,,,,,,-10.5,3,12.25,-0.5");
+    }
+
+    /// The body-rate headers: `<axis>_body_rate` in place of `<axis>_rate`, the axis name
+    /// prefixed for one axis alone as for all; nothing else changes.
+    #[test]
+    fn body_rate_headers() {
+        let body = |axes| {
+            let mut s = heapless::String::<1024>::new();
+            write_header_for::<ProductOutput>(&mut s, axes, RateColumn::Body).unwrap();
+            s
+        };
+        assert_eq!(
+            body(Axes::only(Axis::Yaw)).as_str(),
+            "t,yaw,yaw_body_rate,ilo1_v,kf_a"
+        );
+        assert_eq!(
+            body(Axes::only(Axis::Roll)).as_str(),
+            "t,roll,roll_body_rate,ilo1_v,kf_a"
+        );
+        assert_eq!(
+            body(Axes::ALL).as_str(),
+            "t,roll,roll_body_rate,roll_ilo1_v,roll_kf_a,pitch,pitch_body_rate,pitch_ilo1_v,pitch_kf_a,yaw,yaw_body_rate,yaw_ilo1_v,yaw_kf_a"
+        );
+        for axes in [Axes::only(Axis::Pitch), Axes::ALL] {
+            let mut paper = heapless::String::<1024>::new();
+            write_header_for::<PaperOutput>(&mut paper, axes, RateColumn::Body).unwrap();
+            assert_eq!(
+                paper.as_str(),
+                header(axes).replace("_rate", "_body_rate").as_str()
+            );
+            let mut euler = heapless::String::<1024>::new();
+            write_header_for::<PaperOutput>(&mut euler, axes, RateColumn::Euler).unwrap();
+            assert_eq!(euler, header(axes));
+        }
     }
 
     /// The header contracts: the paper bank's yaw header is [`HEADER`]; one other axis renames

@@ -5,8 +5,12 @@
 //! not estimated, and counted) -> clock (`nav440_proto::TimeBase`: time faults counted) ->
 //! warm-up and the nominal-period rule ([`period`]) -> one estimator bank per selected
 //! [`Axis`] (any `estimators::EstimatorBank`, e.g. `PaperBank` or `ProductBank`; roll and yaw
-//! unwrapped at +-180 deg, pitch not) -> [`Row`] with each angle's reference rate from the
-//! Euler kinematics ([`euler`]) -> CSV ([`csv`], the columns named by the bank).
+//! unwrapped at +-180 deg, pitch not) -> [`Row`] with each angle's rate column -> CSV
+//! ([`csv`], the columns named by the bank).
+//!
+//! The rate column is a type parameter of the pipeline ([`Reference`]): the reference rate
+//! from the Euler kinematics ([`EulerReference`], [`euler`]; the default) or, for an image that
+//! must not link the trigonometry, the unit's body rate about each axis ([`BodyRates`]).
 //!
 //! Both binaries call [`Pipeline`] (the host with its own bank type for noise and fixed
 //! point), so their rows agree by construction; the CI's byte-for-byte diff
@@ -52,6 +56,7 @@ pub mod csv;
 pub mod euler;
 pub mod period;
 mod pipeline;
+mod reference;
 #[cfg(feature = "defmt")]
 pub mod report;
 mod sample;
@@ -64,6 +69,7 @@ pub use pipeline::{
     adaptive_axis_bank, axis_bank, axis_config, AxisRow, Counters, CsvLine, Estimation, Pipeline,
     Rejections, Row, ROW_CAPACITY,
 };
+pub use reference::{BodyRates, EulerReference, RateColumn, Reference};
 pub use sample::{attitude, Attitude, FrameSeen, FrontCounters, Frontend, Sample};
 
 /// The examples of the crate README, compiled and run as doc tests.

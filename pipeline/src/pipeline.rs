@@ -31,12 +31,19 @@
 //! samples, and their banks would ring for a second after each pass. They are not fed there:
 //! the row carries no roll and yaw fields (empty CSV fields; the pitch is estimated as
 //! always), and the first sample below the limit restarts their banks from itself, as a new
-//! time epoch does ([`Counters::near_lock`], [`Counters::lock_passes`]).
+//! time epoch does ([`Counters::near_lock`], [`Counters::lock_passes`]). The pause is the same
+//! whatever the rows' rate column ([`Reference`]): it follows the pitch angle.
+//!
+//! The rate column of each axis is chosen by the type parameter `R: Reference` of
+//! [`Estimation`] and [`Pipeline`] (default [`EulerReference`]: the Euler reference rate;
+//! [`crate::BodyRates`]: the unit's body rate, without the trigonometry).
 
 use crate::period::{PeriodEstimator, WARMUP_SAMPLES};
+use crate::reference::{EulerReference, Reference};
 use crate::sample::{Frontend, Sample};
 use crate::watch::{Event, StreamWatch};
 use crate::{Axes, Axis};
+use core::marker::PhantomData;
 use estimators::{
     AdaptiveBank, AdaptiveConfig, Bank, BankConfig, EstimatorBank, EstimatorOutput, GainSchedule,
     PaperOutput, Real, Rows, SampleError, SqrtFn, Wrap,
@@ -74,12 +81,14 @@ pub fn adaptive_axis_bank<T: Real, S: SqrtFn<T>>(
     AdaptiveBank::new(&axis_config(axis, cfg), schedule, &AdaptiveConfig::DEFAULT)
 }
 
-/// One axis of a row: the reference rate and the bank's output `O` (e.g.
+/// One axis of a row: the rate column and the bank's output `O` (e.g.
 /// `estimators::PaperOutput`, the default, or `estimators::ProductOutput`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AxisRow<O = PaperOutput> {
-    /// The angle's reference rate from the Euler kinematics, deg/s (`None` near gimbal lock,
-    /// see [`crate::euler`]).
+    /// The axis's rate column, deg/s, as the pipeline's [`Reference`] gives it: the angle's
+    /// reference rate from the Euler kinematics ([`EulerReference`]; `None` near gimbal lock,
+    /// see [`crate::euler`]) or the unit's body rate about the axis ([`crate::BodyRates`];
+    /// `None` when not sent).
     pub reference_deg_s: Option<f32>,
     /// Unwrapped angle (deg) and the bank's channels (velocities in deg/s, accelerations in
     /// deg/s^2).
@@ -177,7 +186,10 @@ enum Phase {
 /// order, so a one-axis firmware sets `N = 1` and holds one bank instead of three (RAM on a
 /// small MCU). Axes beyond the first `N` of the selection are not estimated (see
 /// [`Estimation::with_slots`]).
-pub struct Estimation<B, E, F, const N: usize = 3> {
+///
+/// `R` (default [`EulerReference`]) is the rows' rate column ([`Reference`], zero-sized):
+/// `Estimation<B, E, F, 3, BodyRates>` gives the body rates and links no Euler kinematics.
+pub struct Estimation<B, E, F, const N: usize = 3, R = EulerReference> {
     axes: Axes,
     cfg: BankConfig,
     build: F,
@@ -193,9 +205,10 @@ pub struct Estimation<B, E, F, const N: usize = 3> {
     counters: Counters,
     /// The last sample was near gimbal lock: the roll and yaw banks restart at the next one.
     in_lock: bool,
+    reference: PhantomData<R>,
 }
 
-impl<B, E, F, const N: usize> core::fmt::Debug for Estimation<B, E, F, N> {
+impl<B, E, F, const N: usize, R> core::fmt::Debug for Estimation<B, E, F, N, R> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("Estimation")
             .field("axes", &self.axes)
@@ -204,12 +217,19 @@ impl<B, E, F, const N: usize> core::fmt::Debug for Estimation<B, E, F, N> {
     }
 }
 
-impl<B: EstimatorBank, E: Clone, F: FnMut(Axis, &BankConfig) -> Result<B, E>, const N: usize>
-    Estimation<B, E, F, N>
+impl<
+        B: EstimatorBank,
+        E: Clone,
+        F: FnMut(Axis, &BankConfig) -> Result<B, E>,
+        const N: usize,
+        R: Reference,
+    > Estimation<B, E, F, N, R>
 {
     /// A back end with `N` bank slots for `axes`, the configuration `cfg` (its sample period
     /// is replaced by the measured one) and the bank constructor `build`. Only the first `N`
-    /// selected axes (CSV order) are kept ([`Estimation::axes`] tells which).
+    /// selected axes (CSV order) are kept ([`Estimation::axes`] tells which). `N` and the
+    /// rate column `R` come from the type the caller names (e.g. `let e: Estimation<_, _, _,
+    /// 3, BodyRates> = Estimation::with_slots(..)`).
     // Out of line: the value is then written straight into the caller's place; inlined, the
     // compiler builds it in a temporary and copies it, bank slots included (a second
     // pipeline-sized stack frame on a small MCU).
@@ -230,6 +250,7 @@ impl<B: EstimatorBank, E: Clone, F: FnMut(Axis, &BankConfig) -> Result<B, E>, co
             built: None,
             counters: Counters::default(),
             in_lock: false,
+            reference: PhantomData,
         }
     }
 
@@ -274,7 +295,7 @@ impl<B: EstimatorBank, E: Clone, F: FnMut(Axis, &BankConfig) -> Result<B, E>, co
         }
         match self.phase {
             Phase::Running => {
-                run_sample(
+                run_sample::<B, R>(
                     &mut self.banks,
                     self.axes,
                     &mut self.counters,
@@ -345,7 +366,7 @@ impl<B: EstimatorBank, E: Clone, F: FnMut(Axis, &BankConfig) -> Result<B, E>, co
         }
         self.built = Some(cfg);
         for s in &self.held {
-            run_sample(
+            run_sample::<B, R>(
                 &mut self.banks,
                 self.axes,
                 &mut self.counters,
@@ -369,17 +390,19 @@ impl<B: EstimatorBank, E: Clone, F: FnMut(Axis, &BankConfig) -> Result<B, E>, co
 
 impl<B: EstimatorBank, E: Clone, F: FnMut(Axis, &BankConfig) -> Result<B, E>> Estimation<B, E, F> {
     /// A back end for `axes` (any of the three) with the configuration `cfg` (its sample
-    /// period is replaced by the measured one) and the bank constructor `build`.
+    /// period is replaced by the measured one) and the bank constructor `build`, whose rows
+    /// carry the Euler reference rates (another [`Reference`]: [`Estimation::with_slots`]).
     pub fn new(axes: Axes, cfg: BankConfig, build: F) -> Self {
         Self::with_slots(axes, cfg, build)
     }
 }
 
-/// Runs one sample through every selected axis's bank and emits its row. Near gimbal lock
-/// the roll and yaw banks are skipped (their fields stay `None`); the first sample after it
-/// reaches them as the start of a new epoch (`in_lock` carries the state between samples).
+/// Runs one sample through every selected axis's bank and emits its row, with `R`'s rate
+/// column. Near gimbal lock the roll and yaw banks are skipped (their fields stay `None`); the
+/// first sample after it reaches them as the start of a new epoch (`in_lock` carries the state
+/// between samples).
 #[inline(never)]
-fn run_sample<B: EstimatorBank>(
+fn run_sample<B: EstimatorBank, R: Reference>(
     banks: &mut [B],
     axes: Axes,
     counters: &mut Counters,
@@ -387,7 +410,7 @@ fn run_sample<B: EstimatorBank>(
     s: &Sample,
     emit: &mut dyn FnMut(&Row<B::Output>),
 ) {
-    let refs = s.references();
+    let refs = R::rates_deg_s(s.angles_deg, s.rates_deg_s);
     let mut row: Row<B::Output> = Row {
         t_us: s.t_us,
         axes: [None; 3],
@@ -458,15 +481,31 @@ pub type CsvLine = heapless::String<ROW_CAPACITY>;
 /// [`Estimation`] (warm-up/period -> banks -> rows), and on a device the stream watchdog
 /// ([`StreamWatch`], armed by [`Pipeline::watch`]) fed with the front end's frames. The
 /// firmware runs it as is; `nav440 estimate` runs it with its own bank type (noise, fixed
-/// point) and no watch. `N`: the bank slots (see [`Estimation`]).
-pub struct Pipeline<B, E, F, const N: usize = 3> {
+/// point) and no watch. `N`: the bank slots, `R`: the rows' rate column (default the Euler
+/// reference rate; see [`Estimation`]).
+///
+/// ```
+/// use estimators::{BankConfig, ProductBank};
+/// use nav440_pipeline::{axis_bank, csv, Axes, Axis, BodyRates, Pipeline};
+///
+/// // The product bank on all axes, rows with the body rates instead of the Euler reference.
+/// type Build = fn(Axis, &BankConfig) -> Result<ProductBank<f32>, estimators::ConfigError>;
+/// let build: Build = |axis, cfg| axis_bank(axis, cfg);
+/// let pipe: Pipeline<_, _, Build, 3, BodyRates> =
+///     Pipeline::with_slots(Axes::ALL, BankConfig::NAV440, build);
+/// let mut header = String::new();
+/// csv::write_header_for::<estimators::ProductOutput>(&mut header, Axes::only(Axis::Yaw), pipe.rate_column())
+///     .unwrap();
+/// assert_eq!(header, "t,yaw,yaw_body_rate,ilo1_v,kf_a");
+/// ```
+pub struct Pipeline<B, E, F, const N: usize = 3, R = EulerReference> {
     front: Frontend,
-    est: Estimation<B, E, F, N>,
+    est: Estimation<B, E, F, N, R>,
     format_errors: u64,
     watch: Option<StreamWatch>,
 }
 
-impl<B, E, F, const N: usize> core::fmt::Debug for Pipeline<B, E, F, N> {
+impl<B, E, F, const N: usize, R> core::fmt::Debug for Pipeline<B, E, F, N, R> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("Pipeline")
             .field("front", &self.front)
@@ -476,11 +515,16 @@ impl<B, E, F, const N: usize> core::fmt::Debug for Pipeline<B, E, F, N> {
     }
 }
 
-impl<B: EstimatorBank, E: Clone, F: FnMut(Axis, &BankConfig) -> Result<B, E>, const N: usize>
-    Pipeline<B, E, F, N>
+impl<
+        B: EstimatorBank,
+        E: Clone,
+        F: FnMut(Axis, &BankConfig) -> Result<B, E>,
+        const N: usize,
+        R: Reference,
+    > Pipeline<B, E, F, N, R>
 {
-    /// A pipeline with `N` bank slots estimating the first `N` of `axes` (see
-    /// [`Estimation::with_slots`]).
+    /// A pipeline with `N` bank slots estimating the first `N` of `axes`, rows with the rate
+    /// column `R` (see [`Estimation::with_slots`]).
     pub fn with_slots(axes: Axes, cfg: BankConfig, build: F) -> Self {
         Self {
             front: Frontend::new(),
@@ -599,8 +643,14 @@ impl<B: EstimatorBank, E: Clone, F: FnMut(Axis, &BankConfig) -> Result<B, E>, co
     }
 
     /// The back end (counters, banks).
-    pub fn estimation(&self) -> &Estimation<B, E, F, N> {
+    pub fn estimation(&self) -> &Estimation<B, E, F, N, R> {
         &self.est
+    }
+
+    /// The rows' rate column (`R::COLUMN`): what the CSV header names it
+    /// ([`crate::csv::write_header_for`]).
+    pub fn rate_column(&self) -> crate::RateColumn {
+        R::COLUMN
     }
 
     /// Rows that did not fit [`CsvLine`] (never expected; counted, not hidden).
@@ -643,7 +693,8 @@ impl<B: EstimatorBank, E: Clone, F: FnMut(Axis, &BankConfig) -> Result<B, E>, co
 }
 
 impl<B: EstimatorBank, E: Clone, F: FnMut(Axis, &BankConfig) -> Result<B, E>> Pipeline<B, E, F> {
-    /// A pipeline estimating `axes` (any of the three; see [`Estimation::new`]).
+    /// A pipeline estimating `axes` (any of the three; see [`Estimation::new`]), rows with the
+    /// Euler reference rates (another [`Reference`]: [`Pipeline::with_slots`]).
     pub fn new(axes: Axes, cfg: BankConfig, build: F) -> Self {
         Self::with_slots(axes, cfg, build)
     }

@@ -42,8 +42,9 @@ pub fn feed<
     E: Clone,
     F: FnMut(crate::Axis, &estimators::BankConfig) -> Result<B, E>,
     const N: usize,
+    R: crate::Reference,
 >(
-    pipe: &mut Pipeline<B, E, F, N>,
+    pipe: &mut Pipeline<B, E, F, N, R>,
     bytes: &[u8],
     now_ms: u32,
     emit: &mut dyn FnMut(&Row<B::Output>),
@@ -75,8 +76,9 @@ pub fn finish<
     E: Clone,
     F: FnMut(crate::Axis, &estimators::BankConfig) -> Result<B, E>,
     const N: usize,
+    R: crate::Reference,
 >(
-    pipe: &mut Pipeline<B, E, F, N>,
+    pipe: &mut Pipeline<B, E, F, N, R>,
     emit: &mut dyn FnMut(&Row<B::Output>),
 ) -> Result<(), E> {
     let changes = pipe.estimation().counters().period_changes;
@@ -93,8 +95,9 @@ pub fn silence<
     E: Clone,
     F: FnMut(crate::Axis, &estimators::BankConfig) -> Result<B, E>,
     const N: usize,
+    R: crate::Reference,
 >(
-    pipe: &mut Pipeline<B, E, F, N>,
+    pipe: &mut Pipeline<B, E, F, N, R>,
     now_ms: u32,
 ) -> bool {
     match pipe.poll_watch(now_ms) {
@@ -154,8 +157,9 @@ pub fn period_change<
     E: Clone,
     F: FnMut(crate::Axis, &estimators::BankConfig) -> Result<B, E>,
     const N: usize,
+    R: crate::Reference,
 >(
-    pipe: &Pipeline<B, E, F, N>,
+    pipe: &Pipeline<B, E, F, N, R>,
     before: u32,
 ) {
     if pipe.estimation().counters().period_changes != before {
@@ -180,8 +184,9 @@ pub fn summary<
     E: Clone,
     F: FnMut(crate::Axis, &estimators::BankConfig) -> Result<B, E>,
     const N: usize,
+    R: crate::Reference,
 >(
-    pipe: &Pipeline<B, E, F, N>,
+    pipe: &Pipeline<B, E, F, N, R>,
     uart_overruns: u32,
     uart_stalls: u32,
     unit_bytes: u64,

@@ -12,12 +12,14 @@
 //!
 //! * [`Header`]: the format version ([`VERSION`]), the estimated axes as a mask (roll = 1,
 //!   pitch = 2, yaw = 4) and the bank's channel names joined with `,` (its CSV columns, e.g.
-//!   `ilo1_v,kf_a`).
+//!   `ilo1_v,kf_a`), preceded by `body_rate,` when the rows carry the unit's body rates
+//!   instead of the Euler reference rates ([`crate::RateColumn::header_names`]; a pipeline
+//!   with [`crate::BodyRates`]).
 //! * [`RowFrame`]: the sample time (us since the first sample) and one entry per estimated axis
 //!   in the order roll, pitch, yaw: `None` when the row has no estimate for the axis (near
 //!   gimbal lock), else an [`AxisFrame`]: the unwrapped angle (deg, f32), its f64 residual (deg),
-//!   the reference rate (deg/s, `None` when absent) and the bank's channel values (f32: deg/s,
-//!   deg/s^2).
+//!   the rate column (deg/s, `None` when absent: the Euler reference rate, or the body rate
+//!   when the header says so) and the bank's channel values (f32: deg/s, deg/s^2).
 //!
 //! The values are the exact bits the pipeline computed, so [`Layout::write_row`] (through
 //! [`crate::csv::write_row`]) prints the text `nav440 estimate` prints.
@@ -46,7 +48,7 @@
 //! assert_eq!(deframer.counters().frames, 1);
 //! ```
 
-use crate::{csv, Axes, Axis, AxisRow, Row};
+use crate::{csv, Axes, Axis, AxisRow, RateColumn, Row};
 use core::fmt::{self, Write};
 use estimators::{BankOutput, ChannelLists, EstimatorOutput, PaperOutput, ProductOutput};
 use serde::{Deserialize, Serialize};
@@ -82,7 +84,8 @@ pub struct Header<'a> {
     pub version: u8,
     /// The estimated axes, a bit mask: roll = 1, pitch = 2, yaw = 4 ([`axes_mask`]).
     pub axes: u8,
-    /// The bank's channel names joined with `,` (`EstimatorOutput::CSV_COLUMNS`).
+    /// The bank's channel names joined with `,` (`EstimatorOutput::CSV_COLUMNS`), preceded
+    /// by `body_rate,` for rows with the body rates ([`RateColumn::header_names`]).
     pub columns: &'a str,
 }
 
@@ -114,7 +117,8 @@ pub struct AxisFrame {
     pub angle_deg: f32,
     /// What f32 rounding took off the angle, deg (0 while f32 holds it).
     pub residual_deg: f64,
-    /// The Euler-kinematics reference rate, deg/s (`None` when there is none).
+    /// The rate column, deg/s (`None` when there is none): the Euler-kinematics reference
+    /// rate, or the body rate about the axis when the header names `body_rate`.
     pub reference_deg_s: Option<f32>,
     /// The bank's channel values in its channel order (deg/s, deg/s^2).
     pub values: heapless::Vec<f32, MAX_CHANNELS>,
@@ -474,13 +478,15 @@ impl fmt::Display for RowError {
     }
 }
 
-/// The rows' axes and bank, from a header: writes the CSV of the rows.
+/// The rows' axes, bank and rate column, from a header: writes the CSV of the rows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Layout {
     /// The estimated axes.
     pub axes: Axes,
     /// The bank.
     pub bank: BankKind,
+    /// The rate column after each angle (`<axis>_rate` or `<axis>_body_rate`).
+    pub rate: RateColumn,
 }
 
 impl Layout {
@@ -492,22 +498,26 @@ impl Layout {
         Self::from_parts(h.axes, h.columns)
     }
 
-    /// The layout of the axes `mask` ([`mask_axes`]) and the columns `columns`.
+    /// The layout of the axes `mask` ([`mask_axes`]) and the columns `columns` (the bank's
+    /// channel names, after `body_rate,` for rows with the body rates:
+    /// [`RateColumn::split_header`]).
     pub fn from_parts(mask: u8, columns: &str) -> Result<Self, LayoutError> {
         let axes = mask_axes(mask);
         if axes.is_empty() {
             return Err(LayoutError::NoAxis);
         }
-        let bank = BankKind::from_columns(columns).ok_or(LayoutError::UnknownBank)?;
-        Ok(Layout { axes, bank })
+        let (rate, channels) = RateColumn::split_header(columns);
+        let bank = BankKind::from_columns(channels).ok_or(LayoutError::UnknownBank)?;
+        Ok(Layout { axes, bank, rate })
     }
 
     /// Writes the CSV header line (without line terminator): `nav440 estimate`'s for these
-    /// axes and bank ([`csv::write_header_of`]).
+    /// axes, bank and rate column ([`csv::write_header_for`]; `--no-reference` for
+    /// [`RateColumn::Body`]).
     pub fn write_header(&self, w: &mut impl Write) -> fmt::Result {
         match self.bank {
-            BankKind::Paper => csv::write_header_of::<PaperOutput>(w, self.axes),
-            BankKind::Product => csv::write_header_of::<ProductOutput>(w, self.axes),
+            BankKind::Paper => csv::write_header_for::<PaperOutput>(w, self.axes, self.rate),
+            BankKind::Product => csv::write_header_for::<ProductOutput>(w, self.axes, self.rate),
         }
     }
 
@@ -746,6 +756,44 @@ mod tests {
             let (_, c) = read(&noise, chunk);
             assert_eq!(c.bytes, 4000);
         }
+    }
+
+    /// A header whose columns start with `body_rate`: the rows' rate column is the body rate,
+    /// the CSV header names it `<axis>_body_rate`, the rows are written alike.
+    #[test]
+    fn body_rate_header() {
+        let cols = std::format!("body_rate,{}", ProductOutput::CSV_COLUMNS);
+        let header = Header::new(Axes::ALL, &cols);
+        let (got, _) = read(&stream(&header, &[]), 64);
+        assert_eq!(got, [Ok(std::format!("{:?}", Message::Header(header)))]);
+        let layout = Layout::from_header(&header).unwrap();
+        assert_eq!(
+            (layout.bank, layout.rate),
+            (BankKind::Product, RateColumn::Body)
+        );
+        let mut text = String::new();
+        layout.write_header(&mut text).unwrap();
+        assert_eq!(
+            text,
+            "t,roll,roll_body_rate,roll_ilo1_v,roll_kf_a,pitch,pitch_body_rate,pitch_ilo1_v,pitch_kf_a,yaw,yaw_body_rate,yaw_ilo1_v,yaw_kf_a"
+        );
+        text.clear();
+        let rows = product_rows();
+        layout.write_row(&mut text, &rows[1]).unwrap();
+        let product = std::format!("{}", ProductOutput::CSV_COLUMNS);
+        let euler = Layout::from_parts(7, &product).unwrap();
+        assert_eq!(euler.rate, RateColumn::Euler);
+        let mut same = String::new();
+        euler.write_row(&mut same, &rows[1]).unwrap();
+        assert_eq!(text, same);
+        // Yaw alone, paper bank.
+        let paper = std::format!("body_rate,{}", PaperOutput::CSV_COLUMNS);
+        let mut text = String::new();
+        Layout::from_parts(4, &paper)
+            .unwrap()
+            .write_header(&mut text)
+            .unwrap();
+        assert_eq!(text, csv::HEADER.replace("yaw_rate", "yaw_body_rate"));
     }
 
     /// A row that does not fit the header is an error, not a line.

@@ -7,8 +7,9 @@
 //! each message as text ([`decode_lines`]: `cargo xtask flash`, a saved probe-rs log); either
 //! way each message goes through one [`Converter`]. A `row` message
 //! carries one byte payload (little-endian): the sample time (u64, us) and, per estimated axis,
-//! a flag byte, the angle (f32), its f64 residual, the reference rate (f32) and the 14 channel
-//! values (f32) (`firmware-example/src/out.rs`). The values are rebuilt from their bytes, so
+//! a flag byte, the angle (f32), its f64 residual, the rate column (f32: the Euler reference
+//! rate, or the body rate when the header names `body_rate`) and the 14 channel values (f32)
+//! (`firmware-example/src/out.rs`). The values are rebuilt from their bytes, so
 //! they are the exact bits the firmware sent, and written by `nav440_pipeline::wire::Layout`,
 //! as `nav440 rows` writes the rows of the firmware's output UART.
 
@@ -399,5 +400,43 @@ mod tests {
         assert!(Converter::default()
             .message("header 4 foo_v", &mut Text::default())
             .is_err());
+    }
+
+    /// The header of an image without the Euler reference (feature `no-reference`) names
+    /// `body_rate` before the channels: the CSV header of `nav440 estimate --no-reference`,
+    /// rows written alike (hand-written expected text).
+    #[test]
+    fn body_rate_header_names_the_body_rate_columns() {
+        let mut c = Converter::default();
+        let mut t = Text::default();
+        c.message(
+            &format!("header 7 body_rate,{}", ProductOutput::CSV_COLUMNS),
+            &mut t,
+        )
+        .unwrap();
+        assert_eq!(
+            t.csv,
+            "t,roll,roll_body_rate,roll_ilo1_v,roll_kf_a,pitch,pitch_body_rate,pitch_ilo1_v,pitch_kf_a,yaw,yaw_body_rate,yaw_ilo1_v,yaw_kf_a\n"
+        );
+        let mut b = 20_000u64.to_le_bytes().to_vec();
+        b.extend(axis_bytes(1, 1.5, 0.0, 2.0, &[3.0, -4.5]));
+        b.extend(axis_bytes(1, -2.0, 0.0, -0.5, &[0.25, 8.0]));
+        b.extend(axis_bytes(2, 0.0, 0.0, 0.0, &[0.0; 2]));
+        c.message(&format!("row {b:?}"), &mut t).unwrap();
+        assert_eq!(
+            t.csv.lines().nth(1),
+            Some("0.0200,1.5,2,3,-4.5,-2,-0.5,0.25,8,,,,")
+        );
+        let mut t = Text::default();
+        Converter::default()
+            .message(
+                &format!("header 4 body_rate,{}", PaperOutput::CSV_COLUMNS),
+                &mut t,
+            )
+            .unwrap();
+        assert_eq!(
+            t.csv,
+            format!("{}\n", csv::HEADER.replace("yaw_rate", "yaw_body_rate"))
+        );
     }
 }

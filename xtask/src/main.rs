@@ -129,6 +129,11 @@ enum Cmd {
         /// the CSV of `nav440 estimate --bank ...`.
         #[arg(long, value_enum, default_value = "paper")]
         bank: firmware::BankChoice,
+        /// The firmware without the Euler reference (feature `no-reference`: each axis's
+        /// rate column is the unit's body rate, `<axis>_body_rate`), printing the CSV of
+        /// `nav440 estimate --no-reference`.
+        #[arg(long)]
+        no_reference: bool,
     },
     /// Instructions per estimator update, bank update, parsed byte, transmitted byte and boot
     /// sequence (QEMU -icount + SysTick).
@@ -244,7 +249,8 @@ fn main() -> ExitCode {
             small,
             adaptive,
             bank,
-        } => firmware::qemu(board, &file, small, adaptive, bank),
+            no_reference,
+        } => firmware::qemu(board, &file, small, adaptive, bank, no_reference),
         Cmd::Bench { board, small, bank } => firmware::bench(board, small, bank),
         Cmd::Size { components: false } => firmware::size(),
         Cmd::Size { components: true } => firmware::size_components(),

@@ -156,16 +156,13 @@ fn frames_mean<R>(
     total as f32 / SAMPLES as f32
 }
 
-/// Instructions per A2 frame through the firmware's whole pipeline (`pipeline::new()`:
-/// parser, attitude and BIT, clock, one bank per axis of `pipeline::AXES` with the Euler
-/// reference, the defmt row message) with its stream watchdog armed for A2 at 100 Hz
-/// (`Pipeline::feed_watched`, as the firmware streams), after the period warm-up and
+/// Mean instructions per A2 frame through the firmware's whole pipeline with the rate column
+/// `R` (`pipeline::new_with`: parser, attitude and BIT, clock, one bank per axis of
+/// `pipeline::AXES`, `R`'s rates, the defmt row message) with its stream watchdog armed for A2
+/// at 100 Hz (`Pipeline::feed_watched`, as the firmware streams), after the period warm-up and
 /// [`WARMUP`] more frames.
-fn pipeline_per_frame(c: &Counter, overhead: u64) {
-    if firmware_example::pipeline::check().is_err() {
-        fail("the pipeline")
-    }
-    let mut pipe = firmware_example::pipeline::new();
+fn pipeline_frames<R: nav440_pipeline::Reference>(c: &Counter, overhead: u64) -> f32 {
+    let mut pipe = firmware_example::pipeline::new_with::<R>();
     pipe.watch(
         nav440_proto::PacketType::A2,
         nav440_proto::PacketRate::Hz100,
@@ -199,12 +196,28 @@ fn pipeline_per_frame(c: &Counter, overhead: u64) {
     if rows < SAMPLES {
         fail("a row per pipeline frame");
     }
+    per_frame
+}
+
+/// Instructions per A2 frame through the firmware's whole pipeline ([`pipeline_frames`]) with
+/// the Euler reference and without it (the body rates, feature `no-reference`), and its parts.
+fn pipeline_per_frame(c: &Counter, overhead: u64) {
+    if firmware_example::pipeline::check().is_err() {
+        fail("the pipeline")
+    }
     line(
         "instr",
         "pipeline, A2 frame: parse+clock+AXES banks+Euler+defmt row+watch",
-        per_frame,
+        pipeline_frames::<nav440_pipeline::EulerReference>(c, overhead),
         "sample",
     );
+    line(
+        "instr",
+        "pipeline without reference, A2 frame: body rates, no Euler",
+        pipeline_frames::<nav440_pipeline::BodyRates>(c, overhead),
+        "sample",
+    );
+    let warm = nav440_pipeline::period::WARMUP_SAMPLES as u32 + WARMUP;
     // Its parts: the front end alone (parser, attitude packet, BIT, clock) and the Euler
     // reference rates of one sample (soft-float trigonometry without an FPU).
     let mut front = nav440_pipeline::Frontend::new();

@@ -244,6 +244,11 @@ pub struct EstimateArgs {
     /// Run the fixed-point (Q31.32) bank, as the no-FPU firmware does, instead of f32.
     #[arg(long)]
     pub(crate) fixed: bool,
+    /// No Euler reference: each axis's rate column is the unit's body rate about it (roll p,
+    /// pitch q, yaw r, deg/s as sent), named `<axis>_body_rate`, as the firmware built with
+    /// the feature `no-reference` prints. The estimates do not change.
+    #[arg(long)]
+    pub(crate) no_reference: bool,
 }
 
 impl EstimateArgs {
@@ -254,6 +259,9 @@ impl EstimateArgs {
         opts.noise = noise(self.noise.noise_var, self.noise.seed)?;
         opts.fixed = self.fixed;
         opts.bank = self.bank_kind.into();
+        if self.no_reference {
+            opts.rate_column = replay::RateColumn::Body;
+        }
         replay::check_bank_options(&opts)?;
         Ok(opts)
     }
@@ -350,6 +358,7 @@ pub(crate) fn bank_options(
         axes: b.axis.into(),
         schedule,
         bank: replay::BankKind::Paper,
+        rate_column: replay::RateColumn::Euler,
     })
 }
 

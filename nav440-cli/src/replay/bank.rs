@@ -336,11 +336,20 @@ pub(crate) fn build_fn<B: EstimatorBank + 'static>(
     Box::new(move |axis, cfg| HostBank::new(axis, &opts, cfg, build))
 }
 
-/// `nav440 estimate`'s pipeline: `nav440_pipeline::Pipeline` with the host's banks.
-pub(crate) type HostPipeline<B> = Pipeline<HostBank<B>, String, BuildFn<B>>;
+/// `nav440 estimate`'s pipeline: `nav440_pipeline::Pipeline` with the host's banks and the
+/// rate column `R` (the Euler reference by default).
+pub(crate) type HostPipeline<B, R = nav440_pipeline::EulerReference> =
+    Pipeline<HostBank<B>, String, BuildFn<B>, 3, R>;
 
-/// The options' bank is one the row APIs run (the paper bank's).
+/// The options' bank is one the row APIs run (the paper bank's), with the Euler reference
+/// they score against.
 pub(crate) fn check_paper_bank(opts: &EstimateOptions) -> Result<()> {
+    if opts.rate_column != RateColumn::Euler {
+        return Err(Error::Usage(
+            "--no-reference is for `nav440 estimate` and `nav440 live` only (their CSV); this command scores against the Euler reference"
+                .into(),
+        ));
+    }
     match opts.bank {
         BankKind::Paper => Ok(()),
         k => Err(Error::Usage(format!(

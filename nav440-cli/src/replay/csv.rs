@@ -78,19 +78,31 @@ pub fn csv_header(axes: Axes) -> String {
     csv_header_of::<PaperOutput>(axes)
 }
 
-/// The CSV header line of `axes` for the bank `kind` (`nav440 estimate --bank`).
+/// The CSV header line of `axes` for the bank `kind` (`nav440 estimate --bank`), with the
+/// Euler reference's `<axis>_rate` columns.
 pub fn bank_csv_header(kind: BankKind, axes: Axes) -> String {
+    bank_csv_header_for(kind, axes, RateColumn::Euler)
+}
+
+/// [`bank_csv_header`] with the rate column `rate` (`--no-reference`: [`RateColumn::Body`],
+/// `<axis>_body_rate`).
+pub fn bank_csv_header_for(kind: BankKind, axes: Axes, rate: RateColumn) -> String {
     match kind {
-        BankKind::Paper => csv_header_of::<PaperOutput>(axes),
-        BankKind::Product => csv_header_of::<ProductOutput>(axes),
+        BankKind::Paper => csv_header_for::<PaperOutput>(axes, rate),
+        BankKind::Product => csv_header_for::<ProductOutput>(axes, rate),
     }
 }
 
 /// The CSV header line of `axes` for a bank of output `O` (`nav440_pipeline::csv`).
 pub(crate) fn csv_header_of<O: EstimatorOutput>(axes: Axes) -> String {
+    csv_header_for::<O>(axes, RateColumn::Euler)
+}
+
+/// [`csv_header_of`] with the rate column `rate`.
+pub(crate) fn csv_header_for<O: EstimatorOutput>(axes: Axes, rate: RateColumn) -> String {
     let mut s = String::new();
     // Writing into a String cannot fail.
-    let _ = nav440_pipeline::csv::write_header_of::<O>(&mut s, axes);
+    let _ = nav440_pipeline::csv::write_header_for::<O>(&mut s, axes, rate);
     s
 }
 
@@ -146,29 +158,48 @@ pub fn estimate_csv(bytes: &[u8], opts: &EstimateOptions) -> Result<(String, usi
 /// is not an error: the stream stops quietly).
 ///
 /// The bank is [`EstimateOptions::bank`]'s (`--bank`); the CSV's columns are its channels.
+/// The rate column is [`EstimateOptions::rate_column`]'s (`--no-reference`: the body rates,
+/// through a pipeline with `nav440_pipeline::BodyRates`, as the `no-reference` firmware runs).
 pub fn estimate_stream<'a, W: std::io::Write + ?Sized>(
     input: impl IntoChunks<'a>,
     opts: &EstimateOptions,
     w: &mut W,
 ) -> Result<StreamReport> {
+    use nav440_pipeline::{BodyRates, EulerReference};
     check_bank_options(opts)?;
-    match opts.bank {
-        BankKind::Paper => stream_bank(input, opts, w, paper_bank),
-        BankKind::Product => stream_bank(input, opts, w, product_bank),
+    match (opts.bank, opts.rate_column) {
+        (BankKind::Paper, RateColumn::Euler) => {
+            stream_bank::<_, _, EulerReference>(input, opts, w, paper_bank)
+        }
+        (BankKind::Product, RateColumn::Euler) => {
+            stream_bank::<_, _, EulerReference>(input, opts, w, product_bank)
+        }
+        (BankKind::Paper, RateColumn::Body) => {
+            stream_bank::<_, _, BodyRates>(input, opts, w, paper_bank)
+        }
+        (BankKind::Product, RateColumn::Body) => {
+            stream_bank::<_, _, BodyRates>(input, opts, w, product_bank)
+        }
     }
 }
 
-/// [`estimate_stream`] with the banks `build` builds.
-pub(crate) fn stream_bank<'a, B: EstimatorBank + 'static, W: std::io::Write + ?Sized>(
+/// [`estimate_stream`] with the banks `build` builds and the rate column `R`.
+pub(crate) fn stream_bank<
+    'a,
+    B: EstimatorBank + 'static,
+    W: std::io::Write + ?Sized,
+    R: nav440_pipeline::Reference,
+>(
     input: impl IntoChunks<'a>,
     opts: &EstimateOptions,
     w: &mut W,
     build: BuildBank<B>,
 ) -> Result<StreamReport> {
     NoiseGen::new(opts.noise, Axis::Yaw)?;
-    let mut pipe: HostPipeline<B> =
-        Pipeline::new(opts.axes, opts.bank_config(), build_fn(opts, build));
-    let mut sink = CsvSink::new(w, opts.axes, csv_header_of::<B::Output>(opts.axes));
+    let mut pipe: HostPipeline<B, R> =
+        Pipeline::with_slots(opts.axes, opts.bank_config(), build_fn(opts, build));
+    let header = csv_header_for::<B::Output>(opts.axes, pipe.rate_column());
+    let mut sink = CsvSink::new(w, opts.axes, header);
     let mut period = None;
     input.chunks(&mut |chunk| {
         let res = pipe.feed(chunk, &mut |r| sink.row(r));

@@ -36,7 +36,7 @@ use rand_distr::{Distribution, Normal};
 use std::collections::BTreeMap;
 use std::path::Path;
 
-pub use nav440_pipeline::{Axes, Axis, AxisRow, Rejections, Row, Sample};
+pub use nav440_pipeline::{Axes, Axis, AxisRow, RateColumn, Rejections, Row, Sample};
 
 /// What a run of the bank gives: rows and the counts of samples it did not turn into rows.
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -39,6 +39,13 @@ pub struct EstimateOptions {
     /// row APIs ([`Estimation`], [`estimate_rows`], ...) are the paper bank's and refuse
     /// another (a usage error).
     pub bank: BankKind,
+    /// The rows' rate column after each angle (`--no-reference`: [`RateColumn::Body`], the
+    /// unit's body rate about the axis in deg/s, column `<axis>_body_rate`, as the firmware
+    /// built with `no-reference` prints; default [`RateColumn::Euler`], the Euler reference
+    /// rate `<axis>_rate`). Only [`estimate_stream`] (and [`estimate_csv`]) print another
+    /// column than the Euler reference; the row APIs score against it and refuse another (a
+    /// usage error).
+    pub rate_column: RateColumn,
 }
 
 /// Which estimator bank `nav440 estimate` runs (`--bank`).
@@ -92,6 +99,7 @@ impl Default for EstimateOptions {
             axes: Axes::only(Axis::Yaw),
             schedule: None,
             bank: BankKind::Paper,
+            rate_column: RateColumn::Euler,
         }
     }
 }

@@ -12,12 +12,12 @@ use super::captures::{
 use super::equivalence::{equivalence, equivalence_csv, equivalence_full, peak_of, peak_velocity};
 use super::nav440_cli::{adaptive_host_args, firmware_host_args, nav440_synth, small_host_args};
 use super::qemu_run::counter;
-use super::size::size;
+use super::size::{build_noref, euler_symbols, size, NOREF_BOARD};
 use super::soak::CI_SOAK;
 use super::unit_cases::{short_capture, uart_rows_ci, unit_ci};
 use super::{
-    read_file, root, work_dir, BankChoice, ADAPTIVE, BENCH_BIN, FW, FW_BIN, ONE_AXIS, PRODUCT,
-    STM32_FEATURE, TUNED, TUNED_GAINS, UART_ROWS,
+    read_file, root, work_dir, BankChoice, ADAPTIVE, BENCH_BIN, FW, FW_BIN, NO_REFERENCE,
+    NO_REFERENCE_ARG, ONE_AXIS, PRODUCT, STM32_FEATURE, TUNED, TUNED_GAINS, UART_ROWS,
 };
 use crate::pool::Pool;
 use crate::qemu::{self, Board, Output};
@@ -384,6 +384,61 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
                 });
             }
             queue_rate_drop(pool, *board, &elf, &rate_drop, &host);
+        }
+        if board.name == NOREF_BOARD.name && euler_symbols(&elf)?.is_empty() {
+            return Err(format!(
+                "{}: no sincosf or euler_rates_deg found: the check of the no-reference image below would prove nothing",
+                elf.display()
+            ));
+        }
+    }
+    // The product firmware without the Euler reference (feature `no-reference`; thumbv6m,
+    // profile `small`, the image `cargo xtask size` lists as `product-thumbv6m-3axis-small-noref`):
+    // it links no Euler kinematics (no `sincosf`, no `euler_rates_deg`; the product image above
+    // does) and prints the CSV of `nav440 estimate --bank product --axis all --fixed
+    // --no-reference`, byte for byte, on every capture; on the tumble it pauses near gimbal
+    // lock as the images with the reference do.
+    let no_reference = format!("{PRODUCT},{NO_REFERENCE}");
+    clippy_firmware(NOREF_BOARD.target, Some(&no_reference))?;
+    let noref = build_noref()?;
+    check_map(&noref, "mps2")?;
+    let linked = euler_symbols(&noref)?;
+    if !linked.is_empty() {
+        return Err(format!(
+            "{} (feature `{NO_REFERENCE}`) links the Euler kinematics: {}",
+            noref.display(),
+            linked.join(", ")
+        ));
+    }
+    eprintln!(
+        "xtask: OK: {} links no sincosf and no euler_rates_deg",
+        noref.display()
+    );
+    if qemu_ok {
+        let mut host = firmware_host_args(NOREF_BOARD.target, BankChoice::Product);
+        host.push(NO_REFERENCE_ARG);
+        for capture in captures.iter().filter(|c| **c != rate_drop) {
+            let what = format!(
+                "{} on {} (no reference)",
+                capture.display(),
+                NOREF_BOARD.name
+            );
+            let tb = *capture == tumble;
+            spawn_equivalence(
+                pool,
+                EQUIVALENCE_STEP,
+                NOREF_BOARD,
+                &noref,
+                capture,
+                &host,
+                move |c| {
+                    if tb {
+                        expect_counter(c, "near_lock", 45, &what)?;
+                        expect_counter(c, "lock_passes", 2, &what)?;
+                    }
+                    Ok(())
+                },
+            );
         }
     }
     // The product firmware with the gains `nav440 tune --bank product --rust` wrote (feature

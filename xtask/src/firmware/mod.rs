@@ -58,6 +58,13 @@ const STM32_FEATURE: &str = "board-stm32f405";
 /// The firmware feature of the product bank.
 const PRODUCT: &str = "bank-product";
 
+/// Feature of the firmware without the Euler reference (rows with the body rates, no
+/// trigonometry linked; `nav440 estimate --no-reference` prints its CSV).
+const NO_REFERENCE: &str = "no-reference";
+
+/// The `nav440 estimate` flag that prints the CSV of a [`NO_REFERENCE`] image.
+const NO_REFERENCE_ARG: &str = "--no-reference";
+
 /// Feature of the one-axis (yaw) firmware.
 const ONE_AXIS: &str = "one-axis";
 

@@ -2,7 +2,7 @@
 //! a unit on TCP (`cargo xtask unit`), and the counters the firmware prints at the end.
 
 use super::build::{build, build_profile, SMALL_PROFILE};
-use super::{read_file, work_dir, BankChoice, ADAPTIVE, FW_BIN, ONE_AXIS, UART_ROWS};
+use super::{read_file, work_dir, BankChoice, ADAPTIVE, FW_BIN, NO_REFERENCE, ONE_AXIS, UART_ROWS};
 use crate::qemu::{self, Board, Output};
 use crate::unit;
 use std::path::Path;
@@ -109,18 +109,22 @@ pub fn unit(board: Board, addr: &str, rows: Option<&Path>) -> Result<u8, String>
     }
 }
 
-/// `cargo xtask qemu FILE [--board B] [--small | --adaptive]`.
+/// `cargo xtask qemu FILE [--board B] [--small | --adaptive] [--bank B] [--no-reference]`.
 pub fn qemu(
     board: Board,
     file: &Path,
     small: bool,
     adaptive: bool,
     bank: BankChoice,
+    no_reference: bool,
 ) -> Result<(), String> {
     qemu::ensure_qemu()?;
     let mut features: Vec<&str> = bank.features().to_vec();
     if adaptive {
         features.push(ADAPTIVE);
+    }
+    if no_reference {
+        features.push(NO_REFERENCE);
     }
     let elf = if small {
         features.push(ONE_AXIS);

@@ -4,7 +4,7 @@
 use super::bench::run_bench;
 use super::build::{build, build_profile, build_small, small_boards, SMALL_PROFILE};
 use super::qemu_run::{counter, counters, run_capture};
-use super::{root, BankChoice, FW_BIN, ONE_AXIS};
+use super::{root, BankChoice, FW_BIN, NO_REFERENCE, ONE_AXIS, PRODUCT};
 use crate::qemu::{self, Output};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -14,6 +14,11 @@ use std::process::Command;
 /// the paper bank on the M4F fits half of a 96 KiB budget.
 const FOOTPRINT_GOALS: &[(&str, u64, Option<u64>)] = &[
     ("product-thumbv6m-3axis-small", 16 * 1024, Some(4 * 1024)),
+    (
+        "product-thumbv6m-3axis-small-noref",
+        16 * 1024,
+        Some(4 * 1024),
+    ),
     ("product-thumbv6m-3axis", 16 * 1024, Some(4 * 1024)),
     ("product-thumbv7em-3axis-small", 16 * 1024, None),
     ("product-thumbv7em-3axis", 16 * 1024, None),
@@ -90,6 +95,10 @@ pub fn size_components() -> Result<(), String> {
             )?,
         ));
     }
+    elfs.push((
+        image_name("product", NOREF_BOARD.target, 3, NOREF_SUFFIX),
+        build_noref()?,
+    ));
     for (target, elf) in elfs {
         let (t, d, _) = sizes(&size_tool, &elf)?;
         let o = Command::new(&nm)
@@ -150,6 +159,54 @@ pub fn size_components() -> Result<(), String> {
 
 fn llvm_size() -> Result<PathBuf, String> {
     llvm_tool("llvm-size")
+}
+
+/// The board of the product image without the Euler reference (thumbv6m on the mps2-an385).
+pub(super) const NOREF_BOARD: qemu::Board = qemu::BOARDS[2];
+
+/// The image name suffix of the product image without the Euler reference.
+const NOREF_SUFFIX: &str = "-small-noref";
+
+/// Builds the product image without the Euler reference (features `bank-product`,
+/// `no-reference`; thumbv6m, profile `small`): the one `size` lists and `ci` compares with
+/// `nav440 estimate --no-reference`.
+pub(super) fn build_noref() -> Result<PathBuf, String> {
+    build_profile(
+        NOREF_BOARD.target,
+        &[PRODUCT, NO_REFERENCE],
+        FW_BIN,
+        SMALL_PROFILE,
+    )
+}
+
+/// The names of the symbols an ELF defines (`llvm-nm --defined-only -C`), one per line.
+pub(super) fn defined_symbols(elf: &Path) -> Result<Vec<String>, String> {
+    let nm = llvm_tool("llvm-nm")?;
+    let o = Command::new(&nm)
+        .args(["--defined-only", "-C"])
+        .arg(elf)
+        .output()
+        .map_err(|e| format!("cannot run {}: {e}", nm.display()))?;
+    if !o.status.success() {
+        return Err(format!(
+            "llvm-nm {} failed: {}",
+            elf.display(),
+            String::from_utf8_lossy(&o.stderr)
+        ));
+    }
+    Ok(String::from_utf8_lossy(&o.stdout)
+        .lines()
+        .filter_map(|l| l.splitn(3, ' ').nth(2).map(str::to_owned))
+        .collect())
+}
+
+/// The Euler kinematics' symbols (`nav440_pipeline::euler::euler_rates_deg`, `libm`'s
+/// `sincosf`) among the symbols of `elf`.
+pub(super) fn euler_symbols(elf: &Path) -> Result<Vec<String>, String> {
+    Ok(defined_symbols(elf)?
+        .into_iter()
+        .filter(|s| s.contains("sincosf") || s.contains("euler_rates_deg"))
+        .collect())
 }
 
 /// A tool of rustup's `llvm-tools` component (pinned in rust-toolchain.toml).
@@ -261,15 +318,24 @@ pub fn size() -> Result<(), String> {
             0,
         ));
     }
-    println!("== firmware size (llvm-size, {FW_BIN}; release profile unless `small`) ==");
+    // The product firmware without the Euler reference (feature `no-reference`), thumbv6m,
+    // `small`.
+    builds.push((
+        image_name("product", NOREF_BOARD.target, 3, NOREF_SUFFIX),
+        NOREF_BOARD,
+        build_noref()?,
+        0,
+        0,
+    ));
+    println!("== firmware size (llvm-size, {FW_BIN}; release profile unless `small`; `-noref`: feature `no-reference`) ==");
     println!(
-        "{:<28} {:>9} {:>7} {:>7} {:>13} {:>15}",
+        "{:<34} {:>9} {:>7} {:>7} {:>13} {:>15}",
         "image", "text", "data", "bss", "flash (t+d)", "static RAM (d+b)"
     );
     for (label, _, elf, flash, ram) in &mut builds {
         let (t, d, b) = sizes(&tool, elf)?;
         println!(
-            "{label:<28} {t:>9} {d:>7} {b:>7} {:>13} {:>15}",
+            "{label:<34} {t:>9} {d:>7} {b:>7} {:>13} {:>15}",
             t + d,
             d + b
         );
@@ -375,6 +441,10 @@ mod tests {
         assert_eq!(
             image_name("paper", "thumbv7em-none-eabihf", 1, "-small"),
             "paper-thumbv7em-1axis-small"
+        );
+        assert_eq!(
+            image_name("product", NOREF_BOARD.target, 3, NOREF_SUFFIX),
+            "product-thumbv6m-3axis-small-noref"
         );
     }
 }
