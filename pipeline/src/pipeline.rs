@@ -348,20 +348,24 @@ impl<
                 }
             }
         } else if cfg.sample_period_s != base.sample_period_s {
-            // Another period after a new epoch: every bank again, for it.
-            let mut fresh: heapless::Vec<B, N> = heapless::Vec::new();
-            for axis in self.axes.iter().take(N) {
+            // Another period after a new epoch: every bank again, for it, one at a time in
+            // its slot (one bank on the stack, not `N`: the small parts' RAM).
+            let mut failed = None;
+            for (axis, slot) in self.axes.iter().zip(self.banks.iter_mut()) {
                 match (self.build)(axis, &cfg) {
-                    Ok(b) => {
-                        let _ = fresh.push(b);
+                    Ok(mut b) => {
+                        b.take_over(slot);
+                        *slot = b;
                     }
-                    Err(e) => return Err(self.fail(e)),
+                    Err(e) => {
+                        failed = Some(e);
+                        break;
+                    }
                 }
             }
-            for (new, old) in fresh.iter_mut().zip(self.banks.drain(..)) {
-                new.take_over(&old);
+            if let Some(e) = failed {
+                return Err(self.fail(e));
             }
-            self.banks = fresh;
             self.counters.period_changes = self.counters.period_changes.saturating_add(1);
         }
         self.built = Some(cfg);
