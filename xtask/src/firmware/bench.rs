@@ -16,8 +16,11 @@ const SAMPLE_RATE_HZ: f64 = 100.0;
 /// wait-state flash through the ART accelerator). Only an estimate: QEMU counts instructions.
 const ASSUMED_CPI: f64 = 1.5;
 
-/// Instructions per A2 frame of the product firmware's pipeline (three axes) on thumbv6m.
+/// Instructions per A2 frame of the product firmware's pipeline (three axes) on thumbv6m,
+/// with the Euler reference rates.
 const PRODUCT_PIPELINE_GOAL: f64 = 20_000.0;
+/// The same without the reference (feature `no-reference`: the rows carry the body rates).
+const PRODUCT_PIPELINE_NOREF_GOAL: f64 = 8_000.0;
 
 /// One measurement line of the bench firmware: `instr<TAB>label<TAB>count<TAB>unit`.
 pub(super) struct Measure {
@@ -202,16 +205,20 @@ fn report(board: Board, small: bool, bank: BankChoice, m: &[Measure]) -> String 
     // The product firmware's pipeline on a Cortex-M0+: 20,000 instructions per A2 frame for
     // three axes is 4 % of a 48 MHz core at 100 Hz.
     if bank == BankChoice::Product && board.target == "thumbv6m-none-eabi" && !small {
-        for (label, what) in [
-            ("pipeline, A2 frame", ""),
-            ("pipeline without reference", " without the Euler reference"),
+        for (label, what, goal) in [
+            ("pipeline, A2 frame", "", PRODUCT_PIPELINE_GOAL),
+            (
+                "pipeline without reference",
+                " without the Euler reference",
+                PRODUCT_PIPELINE_NOREF_GOAL,
+            ),
         ] {
             if let Some(p) = m.iter().find(|x| x.label.starts_with(label)) {
                 let _ = writeln!(
                     out,
-                    "goal: product pipeline{what} per A2 frame, three axes, thumbv6m <= {PRODUCT_PIPELINE_GOAL} instructions -> {:.0}: {}",
+                    "goal: product pipeline{what} per A2 frame, three axes, thumbv6m <= {goal} instructions -> {:.0}: {}",
                     p.instr,
-                    if p.instr <= PRODUCT_PIPELINE_GOAL { "met" } else { "NOT met" }
+                    if p.instr <= goal { "met" } else { "NOT met" }
                 );
             }
         }
