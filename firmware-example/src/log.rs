@@ -12,13 +12,95 @@
 //! A board image with RTT therefore prints through both under QEMU and through RTT alone on a
 //! chip: CI runs the very ELF that is flashed. [`init`] sets the RTT channel up (call it first
 //! in `main`; frames before it only reach the semihosting host).
+//!
+//! [`in_place`] lends a word-aligned payload buffer that sits right after a few bytes of room:
+//! when a message's last argument is that payload (`{=[u8]}`), the logger writes the frame's
+//! first bytes (the message's index and the slice's length) into the room before it and hands
+//! the frame on from there, without copying the payload (the row message of
+//! [`crate::out::row`]).
 
 use core::cell::UnsafeCell;
+use core::ptr::addr_of_mut;
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
-/// Bytes of the frame buffer: the largest frame the firmware sends in one piece (a row of
-/// three paper-bank axes is 227 bytes); a longer frame is handed on in pieces of this size.
+/// Bytes of the frame buffer: the largest frame the firmware copies and sends in one piece; a
+/// longer frame is handed on in pieces of this size.
 const FRAME_BUFFER: usize = 512;
+
+/// Words of the [`in_place`] payload buffer: the firmware's longest row message
+/// ([`crate::out::ROW_WORDS`]).
+pub const PAYLOAD_WORDS: usize = crate::out::ROW_WORDS;
+
+/// Bytes of room before the [`in_place`] payload: each frame starts there, and a frame whose
+/// first `HEAD` bytes (the row message's index, 2 bytes, and its slice's length, 4) are followed
+/// by the lent payload is handed on from there in one piece.
+const HEAD: usize = 6;
+
+/// The [`in_place`] buffer: the room for a frame's first bytes, then the payload (word-aligned).
+#[repr(C)]
+struct Placed {
+    pad: [u8; 4 - HEAD % 4],
+    head: [u8; HEAD],
+    payload: [u32; PAYLOAD_WORDS],
+}
+
+struct PlacedCell(UnsafeCell<Placed>);
+
+// SAFETY: the payload is only lent by `in_place` while `PLACED_BUSY` is set (one lender at a
+// time), and the head is only written and read by the logger, inside its critical section.
+unsafe impl Sync for PlacedCell {}
+
+static PLACED: PlacedCell = PlacedCell(UnsafeCell::new(Placed {
+    pad: [0; 4 - HEAD % 4],
+    head: [0; HEAD],
+    payload: [0; PAYLOAD_WORDS],
+}));
+
+/// The [`in_place`] payload is lent.
+static PLACED_BUSY: AtomicBool = AtomicBool::new(false);
+
+/// The first byte of the head room (the payload follows its `HEAD` bytes).
+fn head_ptr() -> *mut u8 {
+    // SAFETY: a field of the static, no reference made.
+    unsafe { addr_of_mut!((*PLACED.0.get()).head).cast::<u8>() }
+}
+
+/// The first byte of the [`in_place`] payload.
+fn placed_payload() -> *const u8 {
+    // SAFETY: a field of the static, no reference made.
+    unsafe { addr_of_mut!((*PLACED.0.get()).payload).cast::<u8>() }
+}
+
+// The payload follows the head room.
+const _: () =
+    assert!(core::mem::offset_of!(Placed, payload) == core::mem::offset_of!(Placed, head) + HEAD);
+
+/// Lends the payload buffer to `fill`, which returns the payload's length in bytes, then gives
+/// those bytes to `send`. When `send` logs them as a defmt message's last argument
+/// (`{=[u8]}`), the logger hands the frame on from this buffer: the payload is not copied.
+/// Re-entered (an interrupt sending while the main thread fills the buffer), the payload goes
+/// through a buffer on the stack and is copied as any argument.
+pub fn in_place(fill: impl FnOnce(&mut [u32; PAYLOAD_WORDS]) -> usize, send: impl FnOnce(&[u8])) {
+    let mut local = core::mem::MaybeUninit::<[u32; PAYLOAD_WORDS]>::uninit();
+    // Load and store, not a swap (thumbv6m has none): an interrupt between them runs to its
+    // end, clearing the flag, before this thread goes on.
+    let busy = PLACED_BUSY.load(Ordering::Relaxed);
+    let words: &mut [u32; PAYLOAD_WORDS] = if busy {
+        local.write([0; PAYLOAD_WORDS])
+    } else {
+        PLACED_BUSY.store(true, Ordering::Relaxed);
+        // SAFETY: the flag was clear: no other reference to the payload exists until it is
+        // cleared below; the logger touches the head only.
+        unsafe { &mut *addr_of_mut!((*PLACED.0.get()).payload) }
+    };
+    let n = fill(words).min(4 * PAYLOAD_WORDS);
+    // SAFETY: `n` bytes of the words, which are initialised and outlive `bytes`.
+    let bytes = unsafe { core::slice::from_raw_parts(words.as_ptr().cast::<u8>(), n) };
+    send(bytes);
+    if !busy {
+        PLACED_BUSY.store(false, Ordering::Relaxed);
+    }
+}
 
 /// Bytes of the RTT up-channel's buffer: the board's.
 #[cfg(feature = "rtt")]
@@ -29,7 +111,14 @@ struct Logger;
 
 /// Where the encoded bytes go: the frame buffer and the RTT channel.
 struct Sink {
-    frame: heapless::Vec<u8, FRAME_BUFFER>,
+    frame: [u8; FRAME_BUFFER],
+    /// Bytes in `frame`.
+    len: usize,
+    /// Bytes in the head room (the frame so far while `frame` is empty).
+    head: usize,
+    /// Bytes of the lent [`in_place`] payload after a full head room (the frame is the head
+    /// room and the payload), or `None`.
+    placed: Option<usize>,
     /// The semihosting stdout, opened on the first frame that goes there.
     stdout: Option<cortex_m_semihosting::hio::HostStream>,
     #[cfg(feature = "rtt")]
@@ -55,7 +144,10 @@ static STATE: Shared = Shared(UnsafeCell::new(State {
     restore: critical_section::RestoreState::invalid(),
     encoder: defmt::Encoder::new(),
     sink: Sink {
-        frame: heapless::Vec::new(),
+        frame: [0; FRAME_BUFFER],
+        len: 0,
+        head: 0,
+        placed: None,
         stdout: None,
         #[cfg(feature = "rtt")]
         rtt: None,
@@ -96,15 +188,28 @@ pub fn init() {
 }
 
 impl Sink {
-    /// Hands the buffered bytes on to the transports and empties the buffer.
+    /// Bytes of the frame held from the head room on: the head room's and the placed
+    /// payload's.
+    fn held(&self) -> usize {
+        self.head + self.placed.unwrap_or(0)
+    }
+
+    /// Hands the frame on to the transports and empties the buffers.
     fn hand_on(&mut self) {
-        if self.frame.is_empty() {
+        let frame = if self.len != 0 {
+            &self.frame[..self.len]
+        } else {
+            // SAFETY: the head room's `self.head` bytes, then (when placed, `self.head == HEAD`)
+            // the payload lent by `in_place`, still lent: the logger is held inside its `send`.
+            unsafe { core::slice::from_raw_parts(head_ptr(), self.held()) }
+        };
+        if frame.is_empty() {
             return;
         }
         #[cfg(feature = "rtt")]
         if let Some(ch) = self.rtt.as_mut() {
             // NoBlockSkip writes all or nothing.
-            if ch.write(&self.frame) == 0 {
+            if ch.write(frame) == 0 {
                 RTT_DROPPED.store(
                     RTT_DROPPED.load(Ordering::Relaxed).wrapping_add(1),
                     Ordering::Relaxed,
@@ -117,20 +222,61 @@ impl Sink {
             }
             if let Some(out) = self.stdout.as_mut() {
                 // Nothing useful can be done if the host rejects output.
-                let _ = out.write_all(&self.frame);
+                let _ = out.write_all(frame);
             }
         }
-        self.frame.clear();
+        self.len = 0;
+        self.head = 0;
+        self.placed = None;
     }
 
-    /// Appends encoded bytes to the frame buffer, handing full buffers on.
-    fn put(&mut self, mut bytes: &[u8]) {
+    /// Appends encoded bytes to the frame: its first [`HEAD`] bytes into the head room, the
+    /// [`in_place`] payload right after a full head room (not copied), anything else into the
+    /// frame buffer (after what the head room holds), handing full buffers on.
+    fn put(&mut self, bytes: &[u8]) {
+        if self.len == 0 {
+            if self.placed.is_none() {
+                let at = self.head;
+                if at == HEAD && bytes.as_ptr() == placed_payload() {
+                    self.placed = Some(bytes.len());
+                    return;
+                }
+                if at + bytes.len() <= HEAD {
+                    // SAFETY: the head room is only touched by the logger (held).
+                    let head = unsafe { &mut *addr_of_mut!((*PLACED.0.get()).head) };
+                    // Short copies of a known length: no call to `memcpy`.
+                    match bytes.len() {
+                        2 => head[at..at + 2].copy_from_slice(&bytes[..2]),
+                        4 => head[at..at + 4].copy_from_slice(&bytes[..4]),
+                        n => head[at..at + n].copy_from_slice(bytes),
+                    }
+                    self.head = at + bytes.len();
+                    return;
+                }
+            }
+            // The frame goes on in the frame buffer, after what the head room holds.
+            let n = self.held();
+            self.head = 0;
+            self.placed = None;
+            if n != 0 {
+                // SAFETY: as in `hand_on` (copied before anything writes the head room again).
+                self.copy(unsafe { core::slice::from_raw_parts(head_ptr(), n) });
+            }
+        }
+        self.copy(bytes);
+    }
+
+    /// Copies bytes into the frame buffer, handing full buffers on.
+    fn copy(&mut self, mut bytes: &[u8]) {
         while !bytes.is_empty() {
-            let room = FRAME_BUFFER - self.frame.len();
+            let room = FRAME_BUFFER - self.len;
             let (now, later) = bytes.split_at(room.min(bytes.len()));
-            // Cannot fail: `now` fits the room left.
-            let _ = self.frame.extend_from_slice(now);
-            if self.frame.is_full() {
+            let at = self.len;
+            if let Some(dst) = self.frame.get_mut(at..at + now.len()) {
+                dst.copy_from_slice(now);
+            }
+            self.len = at + now.len();
+            if self.len == FRAME_BUFFER {
                 self.hand_on();
             }
             bytes = later;

@@ -5,16 +5,18 @@
 //!   `body_rate` when the rows carry the body rates (feature `no-reference`,
 //!   `nav440_pipeline::RateColumn::header_names`); the host writes the CSV header line of
 //!   `nav440 estimate --bank ... --axis ... [--no-reference]` from them.
-//! * [`row`]: one message per sample, `row {=[u8]}`: one packed byte payload (little-endian),
-//!   the sample time (u64, us since the first sample), then per estimated axis (roll, pitch,
-//!   yaw order) [`AXIS_BYTES`] bytes: a flag byte (bit 0: a reference rate is present; bit 1,
-//!   [`NO_ESTIMATE`]: the axis has no estimate in this row, near gimbal lock, and the rest of
-//!   the block is 0), the
-//!   unwrapped angle (deg, f32), its f64 residual (deg, 0 while f32 holds the angle), the
-//!   rate column (Euler reference or body rate, deg/s, f32; 0 when absent) and the bank's
-//!   channel values (in the order of
-//!   its names, f32: 14 for the paper bank, 2 for the product bank). One argument, so the transport gets one write for the
-//!   whole payload (one semihosting call instead of one per value).
+//! * [`row`]: one message per sample, `row {=[u8]}`: one byte payload of little-endian 32-bit
+//!   words: the sample time (u64, us since the first sample, low word first), a flags word (one
+//!   byte per axis of `AXES`, in roll, pitch, yaw order: bit 0, [`RATE`]: the rate column is
+//!   present; bit 1, [`NO_ESTIMATE`]: the axis has no estimate in this row, near gimbal lock,
+//!   and no block follows for it; bit 2, [`RESIDUAL`]: the block ends with the residual), then
+//!   per axis with an estimate a block: the unwrapped angle (deg, f32), the rate column (Euler
+//!   reference or body rate, deg/s, f32; 0 when absent), the bank's channel values (in the
+//!   order of its names, f32: 14 for the paper bank, 2 for the product bank) and, only while
+//!   the f32 angle does not hold the angle exactly, its residual (deg, f64; 0 otherwise). The
+//!   payload is packed in place in the logger's word-aligned buffer
+//!   ([`crate::log::in_place`]), which hands the frame on without copying it: one write to
+//!   the transport for the whole message (one semihosting call instead of one per value).
 //! * [`summary`]: the counters line; it and the other diagnostics, the stream watchdog's
 //!   included, are the `firmware: ...` messages of `nav440_pipeline::report`, shared with the
 //!   embassy firmware (see `main.rs`).
@@ -23,9 +25,8 @@
 //! turns each `row` message back into the exact `f32`/`f64` bits and formats the line with
 //! `nav440_pipeline::csv`, so the CSV equals `nav440 estimate`'s byte for byte.
 //!
-//! Transport: `defmt-semihosting` (frames on the semihosting stdout) on the emulated boards,
-//! `defmt-rtt` on the real board (`board-stm32f405` without `semihosting-log`), read by
-//! probe-rs.
+//! Transport: the defmt global logger of [`crate::log`]: the semihosting stdout on the
+//! emulated boards, RTT on the real boards, read by probe-rs.
 //!
 //! With the feature `uart-rows` the header and every row also go out of the board's rows UART
 //! (UART2 on the mps2 boards) as framed binary messages ([`nav440_pipeline::wire`]: postcard in
@@ -41,35 +42,82 @@ use nav440_pipeline::{AxisRow, Row};
 /// Marker of the row message (the host finds it in the ELF's defmt table).
 pub const ROW_TAG: &str = "row";
 
-/// Flag bit of an axis block: no estimate for the axis in this row (roll and yaw while the
-/// pitch is at or beyond the gimbal-lock limit, `nav440_pipeline::euler::near_lock`).
+/// Flag bit of an axis: the rate column is present.
+pub const RATE: u8 = 1;
+
+/// Flag bit of an axis: no estimate for the axis in this row (roll and yaw while the pitch is
+/// at or beyond the gimbal-lock limit, `nav440_pipeline::euler::near_lock`); no block follows.
 pub const NO_ESTIMATE: u8 = 2;
 
-/// Bytes of one axis in a [`row`] payload: flags (1), angle (f32), residual (f64), reference
-/// rate (f32), the channel values (f32 each).
-pub const AXIS_BYTES: usize = 1 + 4 + 8 + 4 + 4 * <Bank as EstimatorBank>::CHANNELS;
+/// Flag bit of an axis: its block ends with the angle's f64 residual (not 0).
+pub const RESIDUAL: u8 = 4;
 
-/// Bytes of a [`row`] payload with the axes of [`AXES`]: the time (u64) and one
-/// [`AXIS_BYTES`] block per axis.
-pub const ROW_BYTES: usize = 8 + AXIS_BYTES * AXES.len();
+/// Words of an axis block without the residual: the angle, the rate column, the channels.
+pub const AXIS_WORDS: usize = 2 + <Bank as EstimatorBank>::CHANNELS;
 
-/// Copies `v` to `dst[at..]` (constant offsets: no bounds check left after inlining).
+/// Words of the longest [`row`] payload: the time, the flags, an [`AXIS_WORDS`] block and a
+/// residual (2 words) per axis of [`AXES`].
+pub const ROW_WORDS: usize = 3 + (AXIS_WORDS + 2) * AXES.len();
+
+const _: () = assert!(AXES.len() <= 4, "one flags byte per axis in a word");
+const _: () = assert!(
+    cfg!(target_endian = "little"),
+    "the payload's words are stored as they are in memory"
+);
+
+/// Packs one axis's block at `w[..]` (see the module doc); returns its flags and its words.
 #[inline(always)]
-fn put<const N: usize>(dst: &mut [u8; AXIS_BYTES], at: usize, v: [u8; N]) {
-    dst[at..at + N].copy_from_slice(&v);
+fn put_axis(w: &mut [u32; AXIS_WORDS + 2], a: &AxisRow<Output>) -> (u8, usize) {
+    let o = &a.out;
+    let mut flags = 0;
+    w[0] = o.unwrapped_deg().to_bits();
+    w[1] = match a.reference_deg_s {
+        Some(v) => {
+            flags |= RATE;
+            v.to_bits()
+        }
+        None => 0,
+    };
+    for (d, v) in w[2..AXIS_WORDS].iter_mut().zip(o.values().iter()) {
+        *d = v.to_bits();
+    }
+    // Sent while its bits are not 0 (a -0.0 too: the host gets the very bits).
+    let residual = o.residual_deg().to_bits();
+    if residual == 0 {
+        return (flags, AXIS_WORDS);
+    }
+    w[AXIS_WORDS] = residual as u32;
+    w[AXIS_WORDS + 1] = (residual >> 32) as u32;
+    (flags | RESIDUAL, AXIS_WORDS + 2)
 }
 
-/// Packs one axis (see the module doc for the layout).
+/// Packs a row's payload into `w` (see the module doc); returns its length in bytes.
 #[inline(always)]
-fn put_axis(dst: &mut [u8; AXIS_BYTES], a: &AxisRow<Output>) {
-    let o = &a.out;
-    dst[0] = u8::from(a.reference_deg_s.is_some());
-    put(dst, 1, o.unwrapped_deg().to_le_bytes());
-    put(dst, 5, o.residual_deg().to_le_bytes());
-    put(dst, 13, a.reference_deg_s.unwrap_or(0.0).to_le_bytes());
-    for (i, v) in o.values().iter().enumerate() {
-        put(dst, 17 + 4 * i, v.to_le_bytes());
+fn pack(r: &Row<Output>, w: &mut [u32; crate::log::PAYLOAD_WORDS]) -> usize {
+    w[0] = r.t_us as u32;
+    w[1] = (r.t_us >> 32) as u32;
+    let mut flags = 0u32;
+    let mut at = 3;
+    for (i, axis) in AXES.iter().enumerate() {
+        let f = match r.axis(axis) {
+            Some(a) => {
+                // `at` + a block with the residual stays within `ROW_WORDS`.
+                let Some(block) = w
+                    .get_mut(at..at + AXIS_WORDS + 2)
+                    .and_then(|b| <&mut [u32; AXIS_WORDS + 2]>::try_from(b).ok())
+                else {
+                    break;
+                };
+                let (f, n) = put_axis(block, a);
+                at += n;
+                f
+            }
+            None => NO_ESTIMATE,
+        };
+        flags |= u32::from(f) << (8 * i);
     }
+    w[2] = flags;
+    4 * at
 }
 
 /// The rate column's marker (none for the Euler reference) and the bank's channel names.
@@ -101,20 +149,13 @@ pub fn header() {
     }
 }
 
-/// Sends one sample's row message: one block per axis of [`AXES`], [`NO_ESTIMATE`] for an
-/// axis the row has no estimate for.
+/// Sends one sample's row message: a block per axis of [`AXES`] with an estimate,
+/// [`NO_ESTIMATE`] in the flags of an axis without.
 pub fn row(r: &Row<Output>) {
-    let mut buf = [0u8; ROW_BYTES];
-    let (time, rest) = buf.split_at_mut(8);
-    time.copy_from_slice(&r.t_us.to_le_bytes());
-    let (blocks, _) = rest.as_chunks_mut::<AXIS_BYTES>();
-    for (dst, axis) in blocks.iter_mut().zip(AXES.iter()) {
-        match r.axis(axis) {
-            Some(a) => put_axis(dst, a),
-            None => dst[0] = NO_ESTIMATE,
-        }
-    }
-    defmt::println!("row {=[u8]}", &buf[..]);
+    crate::log::in_place(
+        |w| pack(r, w),
+        |payload| defmt::println!("row {=[u8]}", payload),
+    );
     #[cfg(feature = "uart-rows")]
     rows::row(r);
 }

@@ -6,10 +6,11 @@
 //! [`decode_frames`]: QEMU's semihosting output, a saved RTT log) or by probe-rs, which prints
 //! each message as text ([`decode_lines`]: `cargo xtask flash`, a saved probe-rs log); either
 //! way each message goes through one [`Converter`]. A `row` message
-//! carries one byte payload (little-endian): the sample time (u64, us) and, per estimated axis,
-//! a flag byte, the angle (f32), its f64 residual, the rate column (f32: the Euler reference
-//! rate, or the body rate when the header names `body_rate`) and the 14 channel values (f32)
-//! (`firmware-example/src/out.rs`). The values are rebuilt from their bytes, so
+//! carries one byte payload of little-endian 32-bit words (`firmware-example/src/out.rs`): the
+//! sample time (u64, us), a flags word (a byte per estimated axis), then per axis with an
+//! estimate the angle (f32), the rate column (f32: the Euler reference rate, or the body rate
+//! when the header names `body_rate`), the bank's channel values (f32) and, when its flags say
+//! so, the angle's f64 residual. The values are rebuilt from their bytes, so
 //! they are the exact bits the firmware sent, and written by `nav440_pipeline::wire::Layout`,
 //! as `nav440 rows` writes the rows of the firmware's output UART.
 
@@ -82,15 +83,16 @@ impl Converter {
     }
 }
 
-/// Flag bit of an axis block: the axis has no estimate in the row (the firmware's
-/// `out::NO_ESTIMATE`).
+/// Flag bit of an axis: the rate column is present (the firmware's `out::RATE`).
+const RATE: u8 = 1;
+
+/// Flag bit of an axis: the axis has no estimate in the row, and no block follows for it (the
+/// firmware's `out::NO_ESTIMATE`).
 const NO_ESTIMATE: u8 = 2;
 
-/// Bytes of one axis in a row payload of a bank with `channels` channels: flags, angle
-/// (f32), residual (f64), reference (f32), the channel values (f32).
-const fn axis_bytes(channels: usize) -> usize {
-    1 + 4 + 8 + 4 + 4 * channels
-}
+/// Flag bit of an axis: its block ends with the angle's f64 residual (the firmware's
+/// `out::RESIDUAL`).
+const RESIDUAL: u8 = 4;
 
 /// Parses `[B, B, ...]` (the display of a row message's byte payload after `row `) into the
 /// row's values.
@@ -101,24 +103,25 @@ fn parse_row(s: &str, layout: &Layout) -> Option<RowFrame> {
         .map(|b| b.parse::<u8>().ok())
         .collect::<Option<Vec<u8>>>()?;
     let channels = layout.bank.channels();
-    let per_axis = axis_bytes(channels);
-    if bytes.len() != 8 + per_axis * layout.axes.len() {
-        return None;
-    }
-    let (t, rest) = bytes.split_first_chunk::<8>()?;
+    let t = u64::from_le_bytes(take(&bytes, 0)?);
+    let flags: [u8; 4] = take(&bytes, 8)?;
+    let mut at = 12;
     let mut axes = heapless::Vec::new();
-    for b in rest.chunks_exact(per_axis) {
+    for &f in flags.get(..layout.axes.len())? {
         // Flag bit 1: the axis has no estimate in this row (roll and yaw near gimbal lock).
-        let axis = match b.first()? & NO_ESTIMATE {
-            0 => Some(parse_axis(b, channels)?),
-            _ => None,
+        let axis = if f & NO_ESTIMATE != 0 {
+            None
+        } else {
+            let (axis, n) = parse_axis(bytes.get(at..)?, f, channels)?;
+            at += n;
+            Some(axis)
         };
         axes.push(axis).ok()?;
     }
-    Some(RowFrame {
-        t_us: u64::from_le_bytes(*t),
-        axes,
-    })
+    if at != bytes.len() || flags[layout.axes.len()..].iter().any(|&f| f != 0) {
+        return None;
+    }
+    Some(RowFrame { t_us: t, axes })
 }
 
 /// The `N` bytes at `b[at..]`.
@@ -126,26 +129,30 @@ fn take<const N: usize>(b: &[u8], at: usize) -> Option<[u8; N]> {
     b.get(at..at + N)?.try_into().ok()
 }
 
-/// Parses one axis: flags, angle, residual, reference, `channels` values.
-fn parse_axis(b: &[u8], channels: usize) -> Option<AxisFrame> {
-    let angle = f32::from_le_bytes(take(b, 1)?);
-    let residual = f64::from_le_bytes(take(b, 5)?);
-    let reference = f32::from_le_bytes(take(b, 13)?);
+/// Parses the block of an axis with the flags `flags` at the start of `b`: the angle, the rate
+/// column, `channels` values, the residual when flagged; returns it and its length in bytes.
+fn parse_axis(b: &[u8], flags: u8, channels: usize) -> Option<(AxisFrame, usize)> {
+    let angle = f32::from_le_bytes(take(b, 0)?);
+    let reference = f32::from_le_bytes(take(b, 4)?);
+    let end = 8 + 4 * channels;
     let mut values = heapless::Vec::new();
-    for v in b.get(17..)?.chunks_exact(4) {
+    for v in b.get(8..end)?.chunks_exact(4) {
         values
             .push(f32::from_le_bytes([v[0], v[1], v[2], v[3]]))
             .ok()?;
     }
-    if values.len() != channels {
-        return None;
-    }
-    Some(AxisFrame {
+    let (residual, n) = if flags & RESIDUAL != 0 {
+        (f64::from_le_bytes(take(b, end)?), end + 8)
+    } else {
+        (0.0, end)
+    };
+    let axis = AxisFrame {
         angle_deg: angle,
         residual_deg: residual,
-        reference_deg_s: (b[0] & 1 != 0).then_some(reference),
+        reference_deg_s: (flags & RATE != 0).then_some(reference),
         values,
-    })
+    };
+    Some((axis, n))
 }
 
 /// Decodes a stream of defmt frames chunk by chunk.
@@ -317,15 +324,31 @@ mod tests {
     use estimators::{PaperOutput, ProductOutput};
     use nav440_pipeline::csv;
 
-    /// The payload bytes of one axis (layout of `firmware-example/src/out.rs`).
-    fn axis_bytes(flags: u8, angle: f32, residual: f64, reference: f32, vals: &[f32]) -> Vec<u8> {
-        let mut b = vec![flags];
-        b.extend(angle.to_le_bytes());
-        b.extend(residual.to_le_bytes());
-        b.extend(reference.to_le_bytes());
-        for v in vals {
-            b.extend(v.to_le_bytes());
+    /// One axis of a test row: flags, angle, residual, reference, channel values.
+    type TestAxis<'a> = (u8, f32, f64, f32, &'a [f32]);
+
+    /// The payload of a row message (layout of `firmware-example/src/out.rs`): the time, the
+    /// flags word, the blocks of the axes with an estimate.
+    fn payload(t_us: u64, axes: &[TestAxis<'_>]) -> Vec<u8> {
+        let mut b = t_us.to_le_bytes().to_vec();
+        let mut flags = [0u8; 4];
+        let mut blocks = Vec::new();
+        for (i, &(f, angle, residual, reference, vals)) in axes.iter().enumerate() {
+            flags[i] = f;
+            if f & NO_ESTIMATE != 0 {
+                continue;
+            }
+            blocks.extend(angle.to_le_bytes());
+            blocks.extend(reference.to_le_bytes());
+            for v in vals {
+                blocks.extend(v.to_le_bytes());
+            }
+            if f & RESIDUAL != 0 {
+                blocks.extend(residual.to_le_bytes());
+            }
         }
+        b.extend(flags);
+        b.extend(blocks);
         b
     }
 
@@ -344,9 +367,10 @@ mod tests {
             0.5, 1e-5, -2.25, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0, 11.0, 12.0, 13.0,
         ];
         let msg = |t_us: u64, flags: u8, reference: f32| {
-            let mut b = t_us.to_le_bytes().to_vec();
-            b.extend(axis_bytes(flags, 12.5, 0.0, reference, &vals));
-            format!("row {b:?}")
+            format!(
+                "row {:?}",
+                payload(t_us, &[(flags, 12.5, 0.0, reference, &vals)])
+            )
         };
         c.message(&msg(10000, 1, -0.75), &mut t).unwrap();
         c.message(&msg(10049, 0, 0.0), &mut t).unwrap();
@@ -359,11 +383,22 @@ mod tests {
             lines[2],
             "0.0100,12.5,,0.5,0.00001,-2.25,3,4,5,6,7,8,9,10,11,12,13"
         );
-        // Flag bit 1: no estimate (near gimbal lock): the axis's fields are empty.
-        let mut b = 10100u64.to_le_bytes().to_vec();
-        b.extend(axis_bytes(2, 0.0, 0.0, 0.0, &[0.0; 14]));
+        // Flag bit 1: no estimate (near gimbal lock): no block, the axis's fields are empty.
+        let b = payload(10100, &[(2, 0.0, 0.0, 0.0, &[])]);
+        assert_eq!(b.len(), 12);
         c.message(&format!("row {b:?}"), &mut t).unwrap();
         assert_eq!(t.csv.lines().nth(3), Some("0.0101,,,,,,,,,,,,,,,,"));
+        // Flag bit 2: the block ends with the residual; the angle is their exact f64 sum.
+        let b = payload(10200, &[(1 | 4, 16_777_216.0, 0.5, 1.0, &vals)]);
+        c.message(&format!("row {b:?}"), &mut t).unwrap();
+        assert_eq!(
+            t.csv.lines().nth(4),
+            Some("0.0102,16777216.5,1,0.5,0.00001,-2.25,3,4,5,6,7,8,9,10,11,12,13")
+        );
+        // Without the flag the same bytes are 8 too many.
+        let mut b = payload(10200, &[(1, 16_777_216.0, 0.0, 1.0, &vals)]);
+        b.extend(0.5f64.to_le_bytes());
+        assert!(c.message(&format!("row {b:?}"), &mut t).is_err());
         c.message("firmware: bytes=3", &mut t).unwrap();
         assert_eq!(t.diag, "firmware: bytes=3\n");
         // A payload of the wrong length is an error, not a row.
@@ -383,18 +418,28 @@ mod tests {
             t.csv,
             format!("t,roll,roll_rate,roll_{v},roll_{a},pitch,pitch_rate,pitch_{v},pitch_{a},yaw,yaw_rate,yaw_{v},yaw_{a}\n")
         );
-        let mut b = 20_000u64.to_le_bytes().to_vec();
-        b.extend(axis_bytes(1, 1.5, 0.0, 2.0, &[3.0, -4.5]));
-        b.extend(axis_bytes(0, -2.0, 0.0, 0.0, &[0.25, 8.0]));
-        b.extend(axis_bytes(1, 170.0, 0.0, 30.0, &[29.5, 1e-3]));
+        let b = payload(
+            20_000,
+            &[
+                (1, 1.5, 0.0, 2.0, &[3.0, -4.5]),
+                (0, -2.0, 0.0, 0.0, &[0.25, 8.0]),
+                (1, 170.0, 0.0, 30.0, &[29.5, 1e-3]),
+            ],
+        );
         c.message(&format!("row {b:?}"), &mut t).unwrap();
         assert_eq!(
             t.csv.lines().nth(1),
             Some("0.0200,1.5,2,3,-4.5,-2,,0.25,8,170,30,29.5,0.001")
         );
         // A paper-sized axis block is not a product row.
-        let mut long = 0u64.to_le_bytes().to_vec();
-        long.extend(axis_bytes(1, 1.5, 0.0, 2.0, &[0.0; 14]));
+        let long = payload(
+            0,
+            &[
+                (1, 1.5, 0.0, 2.0, &[0.0; 14]),
+                (2, 0.0, 0.0, 0.0, &[]),
+                (2, 0.0, 0.0, 0.0, &[]),
+            ],
+        );
         assert!(c.message(&format!("row {long:?}"), &mut t).is_err());
         // An unknown bank is refused at the header.
         assert!(Converter::default()
@@ -418,10 +463,14 @@ mod tests {
             t.csv,
             "t,roll,roll_body_rate,roll_ilo1_v,roll_kf_a,pitch,pitch_body_rate,pitch_ilo1_v,pitch_kf_a,yaw,yaw_body_rate,yaw_ilo1_v,yaw_kf_a\n"
         );
-        let mut b = 20_000u64.to_le_bytes().to_vec();
-        b.extend(axis_bytes(1, 1.5, 0.0, 2.0, &[3.0, -4.5]));
-        b.extend(axis_bytes(1, -2.0, 0.0, -0.5, &[0.25, 8.0]));
-        b.extend(axis_bytes(2, 0.0, 0.0, 0.0, &[0.0; 2]));
+        let b = payload(
+            20_000,
+            &[
+                (1, 1.5, 0.0, 2.0, &[3.0, -4.5]),
+                (1, -2.0, 0.0, -0.5, &[0.25, 8.0]),
+                (2, 0.0, 0.0, 0.0, &[]),
+            ],
+        );
         c.message(&format!("row {b:?}"), &mut t).unwrap();
         assert_eq!(
             t.csv.lines().nth(1),
