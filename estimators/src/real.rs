@@ -280,6 +280,98 @@ fn fx_mul_wide(a: i64, b: i64) -> i64 {
     }
 }
 
+/// The raw Q31.32 value of `x`: rounded to the nearest (ties to even), saturated to the
+/// range by the sign, NaN to 0 (what `I32F32::checked_from_num` gives where it succeeds, and
+/// the saturation [`Real::from_f32`] documents where it fails). Integer operations only: on a
+/// core without an FPU it costs a few shifts instead of `fixed`'s generic conversion.
+#[inline]
+pub fn fx_from_f32(x: f32) -> i64 {
+    let bits = x.to_bits();
+    let negative = bits >> 31 != 0;
+    let exp = ((bits >> 23) & 0xFF) as i32;
+    if exp == 0xFF {
+        // NaN gives 0, an infinity saturates.
+        return if bits & 0x7F_FFFF != 0 {
+            0
+        } else if negative {
+            i64::MIN
+        } else {
+            i64::MAX
+        };
+    }
+    if exp == 0 {
+        // Zero or subnormal (below 2^-126): rounds to 0.
+        return 0;
+    }
+    let m = u64::from((bits & 0x7F_FFFF) | 0x80_0000);
+    // |x| = m 2^(exp - 150), raw = |x| 2^32 = m 2^(exp - 118).
+    let shift = exp - 118;
+    let mag = if shift >= 0 {
+        if shift > 40 {
+            return if negative { i64::MIN } else { i64::MAX };
+        }
+        let v = m << shift;
+        if v > (1u64 << 63) || (v == 1u64 << 63 && !negative) {
+            return if negative { i64::MIN } else { i64::MAX };
+        }
+        v
+    } else {
+        let k = (-shift) as u32;
+        if k > 24 {
+            // Below half the resolution (m < 2^24 <= 2^(k - 1)).
+            return 0;
+        }
+        let q = m >> k;
+        let r = m & ((1u64 << k) - 1);
+        let half = 1u64 << (k - 1);
+        if r > half || (r == half && q & 1 == 1) {
+            q + 1
+        } else {
+            q
+        }
+    };
+    if negative {
+        // `mag <= 2^63`: the negation of 2^63 is `i64::MIN`.
+        (mag as i64).wrapping_neg()
+    } else {
+        mag as i64
+    }
+}
+
+/// The `f32` nearest to the raw Q31.32 value `raw` (ties to even), as `fixed`'s
+/// `to_num::<f32>` gives it. Integer operations only.
+#[inline]
+pub fn fx_to_f32(raw: i64) -> f32 {
+    if raw == 0 {
+        return 0.0;
+    }
+    let sign = if raw < 0 { 1u32 << 31 } else { 0 };
+    let mag = raw.unsigned_abs();
+    // The leading one at bit `p`: |x| = mag 2^-32 in [2^(p - 32), 2^(p - 31)), a normal f32.
+    let p = 63 - mag.leading_zeros();
+    let (mut q, mut p) = if p <= 23 {
+        (mag << (23 - p), p)
+    } else {
+        let k = p - 23;
+        let q = mag >> k;
+        let r = mag & ((1u64 << k) - 1);
+        let half = 1u64 << (k - 1);
+        let q = if r > half || (r == half && q & 1 == 1) {
+            q + 1
+        } else {
+            q
+        };
+        (q, p)
+    };
+    if q == 1 << 24 {
+        // Rounded up to the next power of two.
+        q >>= 1;
+        p += 1;
+    }
+    // Biased exponent: (p - 32) + 127.
+    f32::from_bits(sign | ((p + 95) << 23) | (q as u32 & 0x7F_FFFF))
+}
+
 /// `1 / sqrt(X)` in Q1.31 at the middle of each eighth of `X` in `[1, 4)` (`X = (i + 0.5) / 8`
 /// for `i = 8 .. 31`): the start of [`isqrt64`]'s Newton iteration (about 5 bits).
 const RSQRT_SEED: [u32; 24] = [
@@ -595,14 +687,11 @@ impl Real for Fx {
             None => Fx(I32F32::MAX),
         }
     }
+    /// `fixed`'s `checked_from_num` (nearest, ties to even), saturating by the sign, NaN to 0:
+    /// [`fx_from_f32`].
     #[inline]
     fn from_f32(x: f32) -> Self {
-        match I32F32::checked_from_num(x) {
-            Some(v) => Fx(v),
-            None if x.is_nan() => Self::ZERO,
-            None if x.is_sign_negative() => Fx(I32F32::MIN),
-            None => Fx(I32F32::MAX),
-        }
+        Fx::from_bits(fx_from_f32(x))
     }
     fn from_f64_q28(x: f64) -> Self {
         if x.abs() < 8.0 {
@@ -616,9 +705,10 @@ impl Real for Fx {
     fn from_i32(x: i32) -> Self {
         Fx(I32F32::from_num(x))
     }
+    /// `fixed`'s `to_num::<f32>` (nearest, ties to even): [`fx_to_f32`].
     #[inline]
     fn to_f32(self) -> f32 {
-        self.0.to_num::<f32>()
+        fx_to_f32(self.to_bits())
     }
     #[inline]
     fn to_f64(self) -> f64 {
@@ -682,6 +772,55 @@ impl<T: Real> SqrtFn<T> for NativeSqrt {
 mod tests {
     use super::*;
     use fixed::Saturating;
+
+    /// `fixed`'s conversions with the saturation `Real::from_f32` documents: the reference
+    /// the integer-only [`fx_from_f32`] must equal.
+    fn from_f32_by_fixed(x: f32) -> i64 {
+        match I32F32::checked_from_num(x) {
+            Some(v) => v.to_bits(),
+            None if x.is_nan() => 0,
+            None if x.is_sign_negative() => i64::MIN,
+            None => i64::MAX,
+        }
+    }
+
+    /// Every exponent with the mantissas around rounding ties, and random bit patterns: the
+    /// integer conversion equals `fixed`'s, both ways.
+    #[test]
+    fn f32_conversions_equal_fixeds() {
+        let check_from = |b: u32| {
+            let x = f32::from_bits(b);
+            assert_eq!(fx_from_f32(x), from_f32_by_fixed(x), "{x:e} ({b:#010x})");
+        };
+        let check_to = |r: i64| {
+            let want = I32F32::from_bits(r).to_num::<f32>();
+            assert_eq!(fx_to_f32(r).to_bits(), want.to_bits(), "{r}");
+        };
+        for exp in 0..=255u32 {
+            for man in [0u32, 1, 2, 3, 0x40_0000, 0x7F_FFFF, 0x7F_FFFE, 0x55_5555, 0x2A_AAAA] {
+                for sign in [0u32, 1 << 31] {
+                    check_from(sign | (exp << 23) | man);
+                }
+            }
+        }
+        for r in [0, 1, -1, i64::MIN, i64::MAX, i64::MIN + 1] {
+            check_to(r);
+        }
+        for p in 0..63 {
+            for d in [-1i64, 0, 1] {
+                check_to((1i64 << p) + d);
+                check_to(-(1i64 << p) + d);
+                // Ties: a one in the last kept place's half.
+                check_to((1i64 << p) | ((1i64 << p) >> 25) | d);
+            }
+        }
+        let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+        for _ in 0..2_000_000 {
+            check_from(rng.next() as u32);
+            check_to(rng.next() as i64 >> (rng.next() % 64));
+            check_to(rng.raw());
+        }
+    }
 
     /// xorshift64* values with a random number of significant bits (small and large values).
     struct Rng(u64);
