@@ -797,7 +797,9 @@ mod tests {
             assert_eq!(fx_to_f32(r).to_bits(), want.to_bits(), "{r}");
         };
         for exp in 0..=255u32 {
-            for man in [0u32, 1, 2, 3, 0x40_0000, 0x7F_FFFF, 0x7F_FFFE, 0x55_5555, 0x2A_AAAA] {
+            for man in [
+                0u32, 1, 2, 3, 0x40_0000, 0x7F_FFFF, 0x7F_FFFE, 0x55_5555, 0x2A_AAAA,
+            ] {
                 for sign in [0u32, 1 << 31] {
                     check_from(sign | (exp << 23) | man);
                 }

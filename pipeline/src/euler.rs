@@ -26,7 +26,10 @@ pub const PITCH_LIMIT_DEG: f32 = 80.0;
 /// the body's motion. The pipeline does not feed the roll and yaw banks there and restarts them
 /// when the pitch returns below the limit.
 pub fn near_lock(pitch_deg: f32) -> bool {
-    pitch_deg.abs() >= PITCH_LIMIT_DEG
+    // `|pitch| >= limit` on the bit patterns (ordered like the magnitudes of non-NaN floats):
+    // the same answer as the float comparison without a soft-float call on an FPU-less core.
+    let a = pitch_deg.to_bits() & 0x7FFF_FFFF;
+    a >= PITCH_LIMIT_DEG.to_bits() && a <= f32::INFINITY.to_bits()
 }
 
 /// Degrees to radians in `f32`.
@@ -110,6 +113,26 @@ mod tests {
         assert!(close(r[0], 5.0, 1e-5));
         assert!(close(r[1], -7.0, 1e-5));
         assert!(close(r[2], -11.0, 1e-5));
+    }
+
+    /// `near_lock` on the bit patterns gives the float comparison: every exponent with edge
+    /// mantissas, both signs, NaN, the infinities and the limit's neighbours.
+    #[test]
+    fn near_lock_is_the_float_comparison() {
+        let limit = PITCH_LIMIT_DEG.to_bits();
+        let check = |b: u32| {
+            for x in [f32::from_bits(b), -f32::from_bits(b)] {
+                assert_eq!(near_lock(x), x.abs() >= PITCH_LIMIT_DEG, "{x:e}");
+            }
+        };
+        for e in 0..=255u32 {
+            for m in [0u32, 1, 0x40_0000, 0x7F_FFFF] {
+                check((e << 23) | m);
+            }
+        }
+        for b in [limit - 1, limit, limit + 1] {
+            check(b);
+        }
     }
 
     /// Beyond the pitch limit: roll and yaw rates are not given, the pitch rate is.

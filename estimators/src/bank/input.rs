@@ -124,11 +124,15 @@ impl<T: Real> BankInput<T> {
     /// Checks and classifies one sample (`t_us` µs, `angle_deg` deg); see [`PaperBank::update`](crate::PaperBank::update).
     #[inline(always)]
     pub fn accept(&mut self, t_us: u64, angle_deg: f32) -> Result<Accepted<T>, SampleError> {
-        if !angle_deg.is_finite() {
-            return Err(SampleError::NotFinite);
-        }
-        if !(-Self::MAX_ABS_DEG..=Self::MAX_ABS_DEG).contains(&angle_deg) {
-            return Err(SampleError::OutOfRange);
+        // `|angle| <= MAX_ABS_DEG` on the bit patterns (ordered like the magnitudes of
+        // non-NaN floats; NaN and the infinities are above): no soft-float comparison on an
+        // FPU-less core.
+        if angle_deg.to_bits() & 0x7FFF_FFFF > Self::MAX_ABS_DEG.to_bits() {
+            return Err(if angle_deg.is_finite() {
+                SampleError::OutOfRange
+            } else {
+                SampleError::NotFinite
+            });
         }
         let tick = self.clock.tick(t_us)?;
         // The laws run in a local frame whose origin is the unwrapper's current multiple of
