@@ -129,7 +129,11 @@ fn service_rx(cs: CriticalSection<'_>) {
     if hw::take_overrun() {
         bump(&OVERRUNS);
     }
-    let mut producer = PRODUCER.borrow_ref_mut(cs);
+    // Never borrowed twice (one critical section at a time); `try_borrow_mut` keeps the
+    // `BorrowMutError` text, which nothing prints, out of the image.
+    let Ok(mut producer) = PRODUCER.borrow(cs).try_borrow_mut() else {
+        return;
+    };
     let Some(producer) = producer.as_mut() else {
         return;
     };
@@ -212,7 +216,12 @@ impl Board {
         let queue: &'static mut Queue<u8, { RX_QUEUE_BYTES + 1 }> =
             cortex_m::singleton!(: Queue<u8, { RX_QUEUE_BYTES + 1 }> = Queue::new())?;
         let (producer, consumer) = queue.split();
-        critical_section::with(|cs| PRODUCER.borrow(cs).replace(Some(producer)));
+        critical_section::with(|cs| {
+            // Not borrowed: the interrupt that borrows it is not enabled yet.
+            if let Ok(mut slot) = PRODUCER.borrow(cs).try_borrow_mut() {
+                *slot = Some(producer);
+            }
+        });
         let parts = hw::init(baud)?;
         // SAFETY: the handler for this IRQ only touches PRODUCER (behind a critical section),
         // the atomics above and the UART's registers, so unmasking it cannot break a critical

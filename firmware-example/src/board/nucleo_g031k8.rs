@@ -25,7 +25,7 @@
 //! only way the reference manual allows (RM0444, USART_BRR: writable when UE = 0); stm32g0xx-hal
 //! 0.2 has no call for it (its `Serial` cannot be released and rebuilt).
 
-use core::cell::RefCell;
+use core::cell::Cell;
 use critical_section::Mutex;
 use stm32g0xx_hal::{
     pac,
@@ -36,8 +36,10 @@ use stm32g0xx_hal::{
 
 type Nav = pac::USART1;
 
-/// The HAL's receive half of USART1, read by the RX interrupt.
-static RX: Mutex<RefCell<Option<Rx<Nav, FullConfig>>>> = Mutex::new(RefCell::new(None));
+/// The HAL's receive half of USART1, read by the RX interrupt. A `Cell` (taken and put back
+/// inside one critical section) rather than a `RefCell`: no borrow can fail, so the image
+/// links no borrow-error text that nothing would print.
+static RX: Mutex<Cell<Option<Rx<Nav, FullConfig>>>> = Mutex::new(Cell::new(None));
 
 /// Reply time-out of each boot request, ms.
 pub const REPLY_TIMEOUT_MS: u32 = 1000;
@@ -116,7 +118,7 @@ pub fn init(baud: u32) -> Option<Parts> {
         .ok()?;
     let (tx, mut rx) = nav.split();
     rx.listen();
-    critical_section::with(|cs| RX.borrow(cs).replace(Some(rx)));
+    critical_section::with(|cs| RX.borrow(cs).set(Some(rx)));
     Some(Parts {
         tx: Tx { tx, usart_clock },
         control: Control,
@@ -182,7 +184,13 @@ impl Control {
 
 /// A received byte waits in the RX FIFO (RXFNE).
 pub fn rx_full() -> bool {
-    critical_section::with(|cs| RX.borrow_ref(cs).as_ref().is_some_and(|rx| rx.is_rxne()))
+    critical_section::with(|cs| {
+        let slot = RX.borrow(cs);
+        let rx = slot.take();
+        let full = rx.as_ref().is_some_and(|rx| rx.is_rxne());
+        slot.set(rx);
+        full
+    })
 }
 
 /// Pops one received byte through the HAL. An overrun (a byte arrived with the FIFO full) is
@@ -191,11 +199,11 @@ pub fn rx_full() -> bool {
 /// here.
 pub fn poll_rx() -> crate::uart::RxPoll {
     critical_section::with(|cs| {
-        let mut rx = RX.borrow_ref_mut(cs);
-        let Some(rx) = rx.as_mut() else {
+        let slot = RX.borrow(cs);
+        let Some(mut rx) = slot.take() else {
             return crate::uart::RxPoll::Empty;
         };
-        match rx.read() {
+        let got = match rx.read() {
             Ok(b) => crate::uart::RxPoll::Byte(b),
             Err(nb::Error::WouldBlock) => crate::uart::RxPoll::Empty,
             Err(nb::Error::Other(stm32g0xx_hal::serial::Error::Overrun)) => {
@@ -207,7 +215,9 @@ pub fn poll_rx() -> crate::uart::RxPoll {
                 }
                 crate::uart::RxPoll::Lost
             }
-        }
+        };
+        slot.set(Some(rx));
+        got
     })
 }
 
