@@ -725,6 +725,23 @@ fn main() -> ! {
 
     // The whole pipeline as the firmware runs it (pipeline::AXES: all three axes).
     pipeline_per_frame(&c, overhead);
+    // Building one axis's bank as the pipeline does after the warm-up (the firmware's preset
+    // at its nominal period): the time the stream waits for each bank, once per start and
+    // per period change (below 2^24 SysTick ticks, about 10 million instructions).
+    let mut total = 0u64;
+    for _ in 0..3 {
+        let (n, r) = c.measure(firmware_example::pipeline::check);
+        if r.is_err() {
+            fail("the firmware's bank")
+        }
+        total += n.saturating_sub(overhead);
+    }
+    line(
+        "instr",
+        "bank construction, one axis",
+        total as f32 / 3.0,
+        "call",
+    );
     adaptive_bank(&c, overhead, &BankConfig::NAV440);
 
     // Parser per byte: a stream of A2 frames (the capture's packet type), and the CRC alone.
