@@ -285,7 +285,7 @@ fn fx_mul_wide(a: i64, b: i64) -> i64 {
 /// the saturation [`Real::from_f32`] documents where it fails). Integer operations only: on a
 /// core without an FPU it costs a few shifts instead of `fixed`'s generic conversion.
 #[inline]
-pub fn fx_from_f32(x: f32) -> i64 {
+pub(crate) fn fx_from_f32(x: f32) -> i64 {
     let bits = x.to_bits();
     let negative = bits >> 31 != 0;
     let exp = ((bits >> 23) & 0xFF) as i32;
@@ -341,7 +341,7 @@ pub fn fx_from_f32(x: f32) -> i64 {
 /// The `f32` nearest to the raw Q31.32 value `raw` (ties to even), as `fixed`'s
 /// `to_num::<f32>` gives it. Integer operations only.
 #[inline]
-pub fn fx_to_f32(raw: i64) -> f32 {
+pub(crate) fn fx_to_f32(raw: i64) -> f32 {
     if raw == 0 {
         return 0.0;
     }
@@ -687,8 +687,8 @@ impl Real for Fx {
             None => Fx(I32F32::MAX),
         }
     }
-    /// `fixed`'s `checked_from_num` (nearest, ties to even), saturating by the sign, NaN to 0:
-    /// [`fx_from_f32`].
+    /// `fixed`'s `checked_from_num` (nearest, ties to even), saturating by the sign, NaN to 0,
+    /// computed with integer operations only.
     #[inline]
     fn from_f32(x: f32) -> Self {
         Fx::from_bits(fx_from_f32(x))
@@ -705,7 +705,8 @@ impl Real for Fx {
     fn from_i32(x: i32) -> Self {
         Fx(I32F32::from_num(x))
     }
-    /// `fixed`'s `to_num::<f32>` (nearest, ties to even): [`fx_to_f32`].
+    /// `fixed`'s `to_num::<f32>` (nearest, ties to even), computed with integer operations
+    /// only.
     #[inline]
     fn to_f32(self) -> f32 {
         fx_to_f32(self.to_bits())
