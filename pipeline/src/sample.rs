@@ -2,7 +2,7 @@
 //! N0, N1, B1) -> BIT check -> clock (`nav440_proto::TimeBase`) -> timed [`Sample`]s.
 
 use crate::bit::BitCounts;
-use crate::euler::euler_rates_deg;
+use crate::reference::{EulerReference, Reference};
 use crate::Axis;
 use nav440_proto::{
     Bit, Frame, Packet, PacketType, Parser, TimeBase, TimeFaults, TimeStamp, Timed,
@@ -93,7 +93,7 @@ impl Sample {
 
     /// The reference rates of roll, pitch, yaw (deg/s), see [`crate::euler`].
     pub fn references(&self) -> [Option<f32>; 3] {
-        euler_rates_deg(self.angles_deg[0], self.angles_deg[1], self.rates_deg_s)
+        EulerReference::rates_deg_s(self.angles_deg, self.rates_deg_s)
     }
 
     fn from_timed(t: Timed<Payload>) -> Self {

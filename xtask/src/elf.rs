@@ -219,11 +219,22 @@ const FLOAT_FMT: &[&str] = &[
 /// The symbols of `elf` that belong to `core::fmt`'s float formatting (none expected in a
 /// firmware image: it sends raw bits and the host formats them).
 fn float_symbols_in(elf: &object::File<'_>) -> Vec<String> {
+    symbols_with(elf, FLOAT_FMT)
+}
+
+/// The (mangled) names of the symbols of `elf` that contain one of `parts`.
+fn symbols_with(elf: &object::File<'_>, parts: &[&str]) -> Vec<String> {
     elf.symbols()
         .filter_map(|s| s.name().ok())
-        .filter(|n| FLOAT_FMT.iter().any(|f| n.contains(f)))
+        .filter(|n| parts.iter().any(|f| n.contains(f)))
         .map(str::to_owned)
         .collect()
+}
+
+/// The (mangled) names of the symbols of the ELF at `path` that contain one of `parts`.
+pub fn symbols_containing(path: &Path, parts: &[&str]) -> Result<Vec<String>, String> {
+    let data = read(path)?;
+    Ok(symbols_with(&parse(path, &data)?, parts))
 }
 
 /// Little-endian `u32` at `at`.

@@ -179,34 +179,10 @@ pub(super) fn build_noref() -> Result<PathBuf, String> {
     )
 }
 
-/// The names of the symbols an ELF defines (`llvm-nm --defined-only -C`), one per line.
-pub(super) fn defined_symbols(elf: &Path) -> Result<Vec<String>, String> {
-    let nm = llvm_tool("llvm-nm")?;
-    let o = Command::new(&nm)
-        .args(["--defined-only", "-C"])
-        .arg(elf)
-        .output()
-        .map_err(|e| format!("cannot run {}: {e}", nm.display()))?;
-    if !o.status.success() {
-        return Err(format!(
-            "llvm-nm {} failed: {}",
-            elf.display(),
-            String::from_utf8_lossy(&o.stderr)
-        ));
-    }
-    Ok(String::from_utf8_lossy(&o.stdout)
-        .lines()
-        .filter_map(|l| l.splitn(3, ' ').nth(2).map(str::to_owned))
-        .collect())
-}
-
 /// The Euler kinematics' symbols (`nav440_pipeline::euler::euler_rates_deg`, `libm`'s
 /// `sincosf`) among the symbols of `elf`.
 pub(super) fn euler_symbols(elf: &Path) -> Result<Vec<String>, String> {
-    Ok(defined_symbols(elf)?
-        .into_iter()
-        .filter(|s| s.contains("sincosf") || s.contains("euler_rates_deg"))
-        .collect())
+    crate::elf::symbols_containing(elf, &["sincosf", "euler_rates_deg"])
 }
 
 /// A tool of rustup's `llvm-tools` component (pinned in rust-toolchain.toml).
