@@ -181,12 +181,20 @@ unsafe fn DefaultHandler(irqn: i16) {
     if irqn == crate::uart::RX_IRQ as i16 {
         crate::uart::on_rx_interrupt();
     } else {
-        let mut line = Line::new();
-        line.str("firmware: unexpected exception/IRQ ");
-        if irqn < 0 {
-            line.str("-");
-        }
-        line.dec(u32::from(irqn.unsigned_abs())).send();
-        exit(false)
+        unexpected_irq(irqn)
     }
+}
+
+/// Reports an interrupt nothing handles and exits. Out of line, so the line buffer is not in
+/// the frame every receive interrupt stacks on `main`'s (the soak's stack bound counts it).
+#[cold]
+#[inline(never)]
+fn unexpected_irq(irqn: i16) -> ! {
+    let mut line = Line::new();
+    line.str("firmware: unexpected exception/IRQ ");
+    if irqn < 0 {
+        line.str("-");
+    }
+    line.dec(u32::from(irqn.unsigned_abs())).send();
+    exit(false)
 }
