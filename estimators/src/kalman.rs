@@ -76,7 +76,7 @@ pub struct KalmanConfig {
 /// ```
 ///
 /// The steady-state gain `K = [alpha, beta/dt0, 2 gamma/dt0^2]` solves the discrete Riccati
-/// equation (iterated once at construction in `f64`). Per update over `dt` (the sample
+/// equation (solved once at construction in `f64`, see [`steady_state_gain`]). Per update over `dt` (the sample
 /// interval when `dt <= dt0`, else each of its `k = ceil(dt / dt0)` sub-steps `dt / k`, with
 /// the input `y` linearly interpolated from the previous measurement; see the
 /// [module documentation](self)):
@@ -99,8 +99,8 @@ pub struct Kalman<T: Real> {
 }
 
 impl<T: Real> Kalman<T> {
-    /// Builds the tracker; the Riccati iteration runs here (at most 2000 iterations of 3x3
-    /// `f64` algebra). Errors: non-positive or non-finite `dt`, `q`, `r`.
+    /// Builds the tracker; the Riccati equation is solved here (at most 64 doubling
+    /// iterations of 3x3 `f64` algebra, see [`steady_state_gain`]). Errors: non-positive or non-finite `dt`, `q`, `r`.
     pub fn new(cfg: &KalmanConfig) -> Result<Self, ConfigError> {
         let dt = positive("dt", f64::from(cfg.dt))?;
         let q = positive("q", f64::from(cfg.q))?;
@@ -401,68 +401,105 @@ impl<T: Real> Law for KalmanParams<T> {
 
 type M3 = [[f64; 3]; 3];
 
+const IDENTITY: M3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
 fn mat_mul(a: &M3, b: &M3) -> M3 {
     let mut c = [[0.0; 3]; 3];
-    for (i, row) in c.iter_mut().enumerate() {
-        for (j, x) in row.iter_mut().enumerate() {
-            *x = (0..3).map(|k| a[i][k] * b[k][j]).sum();
+    for (ci, ai) in c.iter_mut().zip(a) {
+        for (x, bk) in ai.iter().zip(b) {
+            for (cij, bkj) in ci.iter_mut().zip(bk) {
+                *cij += x * bkj;
+            }
+        }
+    }
+    c
+}
+
+fn mat_add(a: &M3, b: &M3) -> M3 {
+    let mut c = *a;
+    for (ci, bi) in c.iter_mut().zip(b) {
+        for (x, y) in ci.iter_mut().zip(bi) {
+            *x += y;
         }
     }
     c
 }
 
 fn transpose(a: &M3) -> M3 {
-    let mut t = [[0.0; 3]; 3];
-    for (i, row) in t.iter_mut().enumerate() {
-        for (j, x) in row.iter_mut().enumerate() {
-            *x = a[j][i];
-        }
-    }
-    t
+    let [[a00, a01, a02], [a10, a11, a12], [a20, a21, a22]] = *a;
+    [[a00, a10, a20], [a01, a11, a21], [a02, a12, a22]]
 }
 
-/// Steady-state Kalman gain of the constant-acceleration model (see [`Kalman`]).
+/// The inverse by cofactors (`None` when singular or not finite).
+fn inverse(m: &M3) -> Option<M3> {
+    let [[a, b, c], [d, e, f], [g, h, i]] = *m;
+    let (c00, c01, c02) = (e * i - f * h, f * g - d * i, d * h - e * g);
+    let det = a * c00 + b * c01 + c * c02;
+    if !(det.is_finite() && det != 0.0) {
+        return None;
+    }
+    let k = 1.0 / det;
+    Some([
+        [c00 * k, (c * h - b * i) * k, (b * f - c * e) * k],
+        [c01 * k, (a * i - c * g) * k, (c * d - a * f) * k],
+        [c02 * k, (b * g - a * h) * k, (a * e - b * d) * k],
+    ])
+}
+
+/// Steady-state Kalman gain of the constant-acceleration model (see [`Kalman`]),
+/// `K = P H' / (H P H' + r)` with `P` the predicted covariance that solves the filter's
+/// discrete algebraic Riccati equation
+///
+/// ```text
+/// P = F P F' - F P H' (H P H' + r)^-1 H P F' + Q
+/// ```
+///
+/// by the structure-preserving doubling algorithm (Chu, Fan and Lin, 2005), the dual form:
+/// `A0 = F'`, `G0 = H' H / r`, `H0 = Q`, then
+///
+/// ```text
+/// W = (I + Gk Hk)^-1,  A(k+1) = Ak W Ak,  G(k+1) = Gk + Ak W Gk Ak',  H(k+1) = Hk + Ak' Hk W Ak
+/// ```
+///
+/// `Hk` is the Riccati recursion from `P = Q` after `2^k` steps, so it converges
+/// quadratically: 8 iterations at 100 Hz with the default noise model, at most 14 from 1 kHz
+/// to 2 Hz with `q / r` from 1e2 to 1e12 (where the recursion step by step needs 66, and up to
+/// hundreds of thousands). Stops when no entry of `Hk` changes by more than 1e-15 of itself,
+/// after at most 64 iterations.
 pub fn steady_state_gain(dt: f64, q: f64, r: f64) -> [f64; 3] {
-    let f: M3 = [[1.0, dt, dt * dt / 2.0], [0.0, 1.0, dt], [0.0, 0.0, 1.0]];
     let d2 = dt * dt;
     let d3 = d2 * dt;
     let d4 = d3 * dt;
     let d5 = d4 * dt;
-    let qm: M3 = [
+    let mut h: M3 = [
         [q * d5 / 20.0, q * d4 / 8.0, q * d3 / 6.0],
         [q * d4 / 8.0, q * d3 / 3.0, q * d2 / 2.0],
         [q * d3 / 6.0, q * d2 / 2.0, q * dt],
     ];
-    let ft = transpose(&f);
-    let mut p = qm;
-    let mut k = [0.0; 3];
-    for _ in 0..2000 {
-        // predict
-        let mut pp = mat_mul(&mat_mul(&f, &p), &ft);
-        for (row, qr) in pp.iter_mut().zip(qm.iter()) {
-            for (x, qv) in row.iter_mut().zip(qr.iter()) {
-                *x += qv;
-            }
-        }
-        // update
-        let s = pp[0][0] + r;
-        let kn = [pp[0][0] / s, pp[1][0] / s, pp[2][0] / s];
-        let mut pn = pp;
-        for i in 0..3 {
-            for j in 0..3 {
-                pn[i][j] = pp[i][j] - kn[i] * pp[0][j];
-            }
-        }
-        let change = (0..3)
-            .map(|i| libm::fabs(kn[i] - k[i]) / (libm::fabs(kn[i]) + 1e-300))
-            .fold(0.0, f64::max);
-        k = kn;
-        p = pn;
-        if change < 1e-13 {
+    let mut a: M3 = transpose(&[[1.0, dt, d2 / 2.0], [0.0, 1.0, dt], [0.0, 0.0, 1.0]]);
+    let mut g: M3 = [[1.0 / r, 0.0, 0.0], [0.0; 3], [0.0; 3]];
+    for _ in 0..64 {
+        let Some(w) = inverse(&mat_add(&IDENTITY, &mat_mul(&g, &h))) else {
+            break;
+        };
+        let aw = mat_mul(&a, &w);
+        let at = transpose(&a);
+        let g_next = mat_add(&g, &mat_mul(&mat_mul(&aw, &g), &at));
+        let h_next = mat_add(&h, &mat_mul(&mat_mul(&at, &h), &mat_mul(&w, &a)));
+        a = mat_mul(&aw, &a);
+        let settled = h_next
+            .iter()
+            .flatten()
+            .zip(h.iter().flatten())
+            .all(|(n, o)| libm::fabs(n - o) <= 1e-15 * libm::fabs(*n));
+        g = g_next;
+        h = h_next;
+        if settled {
             break;
         }
     }
-    k
+    let s = h[0][0] + r;
+    [h[0][0] / s, h[1][0] / s, h[2][0] / s]
 }
 
 /// Noise model of the Kalman tracker in a bank half

@@ -389,7 +389,7 @@ mod schedule {
 /// `update` with the gains held (the noise estimate's cost over the whole bank), and per call
 /// of `retune` (interpolating the schedule and rebuilding every law's coefficients), which
 /// the bank does at most once per `AdaptiveConfig::retune_every` samples.
-fn adaptive_bank(c: &Counter, overhead: u64, cfg: &BankConfig) {
+fn adaptive_bank(c: &mut Counter, overhead: u64, cfg: &BankConfig) {
     use estimators::{AdaptiveBank, AdaptiveConfig, GainSchedule};
     let sched =
         GainSchedule::new(&schedule::SCHEDULE).and_then(|s| match schedule::SCHEDULE_PERIOD_S {
@@ -430,7 +430,7 @@ fn adaptive_bank(c: &Counter, overhead: u64, cfg: &BankConfig) {
         let mut total = 0u64;
         for k in 0..SAMPLES {
             let v = if k % 2 == 0 { a } else { b };
-            let (n, ()) = c.measure(|| black_box(&mut bank).retune(black_box(v)));
+            let (n, ()) = c.measure_long(|| black_box(&mut bank).retune(black_box(v)));
             total += n.saturating_sub(overhead);
         }
         line("instr", label, total as f32 / SAMPLES as f32, "call");
@@ -561,7 +561,7 @@ fn main() -> ! {
     let Some(p) = cortex_m::Peripherals::take() else {
         fail("peripherals")
     };
-    let c = Counter::new(p.SYST);
+    let mut c = Counter::new(p.SYST);
     let overhead = c.overhead();
     let cfg = BankConfig::default();
     let h = cfg.h;
@@ -730,7 +730,7 @@ fn main() -> ! {
     // per period change (below 2^24 SysTick ticks, about 10 million instructions).
     let mut total = 0u64;
     for _ in 0..3 {
-        let (n, r) = c.measure(firmware_example::pipeline::check);
+        let (n, r) = c.measure_long(firmware_example::pipeline::check);
         if r.is_err() {
             fail("the firmware's bank")
         }
@@ -742,7 +742,7 @@ fn main() -> ! {
         total as f32 / 3.0,
         "call",
     );
-    adaptive_bank(&c, overhead, &BankConfig::NAV440);
+    adaptive_bank(&mut c, overhead, &BankConfig::NAV440);
 
     // Parser per byte: a stream of A2 frames (the capture's packet type), and the CRC alone.
     let mut stream = [0u8; 37 * 64];
