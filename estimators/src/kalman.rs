@@ -431,6 +431,7 @@ fn transpose(a: &M3) -> M3 {
 }
 
 /// The inverse by cofactors (`None` when singular or not finite).
+#[inline(never)]
 fn inverse(m: &M3) -> Option<M3> {
     let [[a, b, c], [d, e, f], [g, h, i]] = *m;
     let (c00, c01, c02) = (e * i - f * h, f * g - d * i, d * h - e * g);
@@ -466,6 +467,7 @@ fn inverse(m: &M3) -> Option<M3> {
 /// to 2 Hz with `q / r` from 1e2 to 1e12 (where the recursion step by step needs 66, and up to
 /// hundreds of thousands). Stops when no entry of `Hk` changes by more than 1e-15 of itself,
 /// after at most 64 iterations.
+#[inline(never)]
 pub fn steady_state_gain(dt: f64, q: f64, r: f64) -> [f64; 3] {
     let d2 = dt * dt;
     let d3 = d2 * dt;

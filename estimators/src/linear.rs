@@ -181,6 +181,7 @@ fn scaled(a: &Vector, k: f64) -> Vector {
 /// ```
 ///
 /// Equal to `n` Euler steps of the law up to rounding.
+#[inline(never)]
 fn n_step_map<E: LinearLaw>(law: &E, n: u32, hold: Hold) -> (Mat, Vector) {
     let mut m: Mat = [[0.0; LIN_MAX]; LIN_MAX];
     for i in 0..E::DIM.min(LIN_MAX) {
