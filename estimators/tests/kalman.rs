@@ -98,8 +98,9 @@ fn riccati_by_matrices(dt: f64, q: f64, r: f64) -> [f64; 3] {
     k
 }
 
-/// The tracker's gain (the Riccati equation solved by doubling) equals the textbook recursion
-/// run to its fixed point to 1e-12 relative, at the unit's packet rates (100 Hz to 2 Hz) and
+/// The tracker's gain (the recursion on the six distinct covariance entries, stopped at a
+/// 1e-13 relative change) equals the textbook recursion run to its fixed point to 1e-10
+/// relative, at the unit's packet rates (100 Hz to 2 Hz) and
 /// with `q / r` from 1e3 to 1e11 around the shipped gains.
 #[test]
 fn steady_state_gain_equals_the_matrix_recursion() {
@@ -112,7 +113,7 @@ fn steady_state_gain_equals_the_matrix_recursion() {
                 let slow = riccati_by_matrices(f64::from(dt), f64::from(q), f64::from(r));
                 for (a, b) in fast.iter().zip(slow) {
                     assert!(
-                        (a - b).abs() <= 1e-12 * b.abs(),
+                        (a - b).abs() <= 1e-10 * b.abs(),
                         "dt={dt} q={q} r={r}: {fast:?} vs {slow:?}"
                     );
                 }
