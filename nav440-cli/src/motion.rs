@@ -70,15 +70,30 @@ pub enum ProfileKind {
     /// +90 and -90 deg and its Euler roll and yaw swing fast there (gimbal lock) while the
     /// body rates stay below about 120 deg/s. Three-axis motion; see [`tumble`].
     Tumble,
+    /// A hand turning the unit in strokes and holding it still between them: raised-cosine
+    /// rate pulses of 40-300 deg/s (either sign) lasting 0.4-1.5 s, pauses of 0.2-1.5 s, drawn
+    /// from a seed; |acc| <= 300 pi / 0.4 = 2,356 deg/s^2. See [`PulseSpec::HAND`].
+    Hand,
+    /// A fast sine in yaw: `x = A (1 - cos wt)`, 2 Hz, |rate| <= 400 deg/s, |acc| <= 5,027
+    /// deg/s^2 (beyond the paper's 2,000).
+    FastSine,
+    /// Violent strokes beyond the paper's bounds: rate pulses of 300-600 deg/s lasting
+    /// 0.1-0.35 s with pauses of 0-0.4 s, the first one 600 deg/s over 0.15 s (|acc| 12,566
+    /// deg/s^2), so every run reaches 600 deg/s and more than 10,000 deg/s^2. See
+    /// [`PulseSpec::VIOLENT`].
+    Violent,
 }
 
 impl ProfileKind {
     /// All profiles, for help texts.
-    pub const ALL: [ProfileKind; 4] = [
+    pub const ALL: [ProfileKind; 7] = [
         ProfileKind::Fig5,
         ProfileKind::Spin,
         ProfileKind::Sin5,
         ProfileKind::Tumble,
+        ProfileKind::Hand,
+        ProfileKind::FastSine,
+        ProfileKind::Violent,
     ];
 
     /// The CLI name of the profile.
@@ -88,6 +103,9 @@ impl ProfileKind {
             ProfileKind::Spin => "spin",
             ProfileKind::Sin5 => "sin5",
             ProfileKind::Tumble => "tumble",
+            ProfileKind::Hand => "hand",
+            ProfileKind::FastSine => "fast-sine",
+            ProfileKind::Violent => "violent",
         }
     }
 }
@@ -104,7 +122,11 @@ impl FromStr for ProfileKind {
         ProfileKind::ALL
             .into_iter()
             .find(|p| p.name() == s)
-            .ok_or_else(|| format!("unknown profile `{s}` (expected fig5, spin, sin5 or tumble)"))
+            .ok_or_else(|| {
+                format!(
+                    "unknown profile `{s}` (expected fig5, spin, sin5, tumble, hand, fast-sine or violent)"
+                )
+            })
     }
 }
 
@@ -128,6 +150,100 @@ pub const SPIN_MOD_DEG_S: f64 = 100.0;
 /// Spin rate modulation frequency, Hz.
 pub const SPIN_MOD_HZ: f64 = 0.2;
 
+/// Frequency of [`ProfileKind::FastSine`], Hz.
+pub const FAST_SINE_HZ: f64 = 2.0;
+/// Peak rate of [`ProfileKind::FastSine`], deg/s.
+pub const FAST_SINE_RATE_DEG_S: f64 = 400.0;
+
+/// How a pulse profile ([`ProfileKind::Hand`], [`ProfileKind::Violent`]) draws its strokes:
+/// each stroke's rate is a raised-cosine pulse `v(u) = A (1 - cos(2 pi u / T)) / 2` over its
+/// duration `T` (zero rate, acceleration and jerk-free start at both ends), followed by a
+/// pause at rest.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PulseSpec {
+    /// Range of the peak rate |A|, deg/s (the sign is drawn too).
+    pub amp_deg_s: (f64, f64),
+    /// Range of the stroke duration T, s.
+    pub dur_s: (f64, f64),
+    /// Range of the pause after a stroke, s.
+    pub pause_s: (f64, f64),
+    /// The first stroke `(A deg/s, T s)`, if fixed (so a short run reaches the bounds).
+    pub first: Option<(f64, f64)>,
+}
+
+impl PulseSpec {
+    /// [`ProfileKind::Hand`].
+    pub const HAND: PulseSpec = PulseSpec {
+        amp_deg_s: (40.0, 300.0),
+        dur_s: (0.4, 1.5),
+        pause_s: (0.2, 1.5),
+        first: None,
+    };
+    /// [`ProfileKind::Violent`].
+    pub const VIOLENT: PulseSpec = PulseSpec {
+        amp_deg_s: (300.0, 600.0),
+        dur_s: (0.1, 0.35),
+        pause_s: (0.0, 0.4),
+        first: Some((600.0, 0.15)),
+    };
+}
+
+/// One stroke of a pulse profile: start (s), duration (s), peak rate (deg/s), and the angle
+/// at its start (deg).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Stroke {
+    t0: f64,
+    dur: f64,
+    amp: f64,
+    x0: f64,
+}
+
+/// Draws the strokes of `spec` covering `duration_s`, the first after a pause of 0.5 s.
+fn strokes(spec: &PulseSpec, duration_s: f64, seed: u64) -> Vec<Stroke> {
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+    let mut out = Vec::new();
+    let (mut t, mut x) = (0.5, 0.0);
+    while t < duration_s {
+        let (amp, dur) = match (out.is_empty(), spec.first) {
+            (true, Some(first)) => first,
+            _ => {
+                let a = rng.random_range(spec.amp_deg_s.0..=spec.amp_deg_s.1);
+                let sign = if rng.random_bool(0.5) { 1.0 } else { -1.0 };
+                (sign * a, rng.random_range(spec.dur_s.0..=spec.dur_s.1))
+            }
+        };
+        out.push(Stroke {
+            t0: t,
+            dur,
+            amp,
+            x0: x,
+        });
+        // the angle a stroke adds: the integral of its pulse, A T / 2
+        x += amp * dur / 2.0;
+        t += dur + rng.random_range(spec.pause_s.0..=spec.pause_s.1);
+    }
+    out
+}
+
+/// The motion of `strokes` at `t`: at rest between strokes.
+fn pulse_at(strokes: &[Stroke], t: f64) -> MotionPoint {
+    let i = strokes.partition_point(|s| s.t0 <= t);
+    let Some(s) = i.checked_sub(1).and_then(|i| strokes.get(i)) else {
+        return MotionPoint::level(0.0, 0.0, 0.0);
+    };
+    let u = t - s.t0;
+    if u >= s.dur {
+        return MotionPoint::level(s.x0 + s.amp * s.dur / 2.0, 0.0, 0.0);
+    }
+    let w = 2.0 * PI / s.dur;
+    let (sin, cos) = (w * u).sin_cos();
+    MotionPoint::level(
+        s.x0 + s.amp / 2.0 * (u - sin / w),
+        s.amp / 2.0 * (1.0 - cos),
+        s.amp / 2.0 * w * sin,
+    )
+}
+
 /// Motion samples of a sweep every `dt` s over `duration_s` s, both ends included (what
 /// [`Profile::peaks`] and [`Profile::rms_acc`] evaluate).
 pub fn sample_count(duration_s: f64, dt: f64) -> u64 {
@@ -140,13 +256,16 @@ pub struct Profile {
     kind: ProfileKind,
     /// Fig5 only: (amplitude deg, angular frequency rad/s, phase rad) per component.
     components: Vec<(f64, f64, f64)>,
+    /// Hand and violent only: the strokes, in time order.
+    strokes: Vec<Stroke>,
     duration_s: f64,
     /// Advanced by every motion sample of the set-up, [`Self::peaks`] and [`Self::rms_acc`].
     progress: Progress,
 }
 
 impl Profile {
-    /// Builds a profile of `duration_s` seconds. `seed` only matters for `Fig5` (its shape).
+    /// Builds a profile of `duration_s` seconds. `seed` only matters for `Fig5`, `Hand` and
+    /// `Violent` (their shape).
     pub fn new(kind: ProfileKind, duration_s: f64, seed: u64) -> Self {
         Self::with_progress(kind, duration_s, seed, &Progress::hidden())
     }
@@ -162,6 +281,11 @@ impl Profile {
         let mut p = Profile {
             kind,
             components: Vec::new(),
+            strokes: match kind {
+                ProfileKind::Hand => strokes(&PulseSpec::HAND, duration_s, seed),
+                ProfileKind::Violent => strokes(&PulseSpec::VIOLENT, duration_s, seed),
+                _ => Vec::new(),
+            },
             duration_s,
             progress: progress.clone(),
         };
@@ -260,6 +384,13 @@ impl Profile {
                 )
             }
             ProfileKind::Tumble => tumble::at(t),
+            ProfileKind::Hand | ProfileKind::Violent => pulse_at(&self.strokes, t),
+            ProfileKind::FastSine => {
+                let w = 2.0 * PI * FAST_SINE_HZ;
+                let a = FAST_SINE_RATE_DEG_S / w;
+                let (sin, cos) = (w * t).sin_cos();
+                MotionPoint::level(a * (1.0 - cos), a * w * sin, a * w * w * cos)
+            }
             ProfileKind::Fig5 => {
                 // s(t) = sum a_i (sin(w_i t + p_i) - sin p_i): zero at t = 0; window e(t) ramps the
                 // motion in and out smoothly, so x = e s, x' = e' s + e s', x'' = e'' s + 2 e' s' + e s''.
@@ -352,6 +483,59 @@ mod tests {
                 "seed {seed}: {y} {r} {a}"
             );
         }
+    }
+
+    /// The pulse profiles keep their bounds and reach them: the violent one 600 deg/s and more
+    /// than 10,000 deg/s^2 in every run, the hand one at most 300 deg/s and 2,356 deg/s^2, at
+    /// rest a fifth of the time or more; the fast sine 400 deg/s and 5,027 deg/s^2.
+    #[test]
+    fn pulse_and_fast_profiles_keep_their_bounds() {
+        for seed in 0..10 {
+            let v = Profile::new(ProfileKind::Violent, 20.0, seed);
+            let (_, r, a) = v.peaks(0.0005);
+            assert!(
+                (599.0..=600.0).contains(&r),
+                "violent seed {seed}: rate {r}"
+            );
+            assert!(
+                a > 10_000.0 && a <= 600.0 * PI / 0.1,
+                "violent seed {seed}: acc {a}"
+            );
+            let h = Profile::new(ProfileKind::Hand, 60.0, seed);
+            let (_, r, a) = h.peaks(0.0005);
+            assert!(r > 40.0 && r <= 300.0, "hand seed {seed}: rate {r}");
+            assert!(a <= 300.0 * PI / 0.4 + 1e-9, "hand seed {seed}: acc {a}");
+            let still = (0..60_000)
+                .filter(|i| h.at(*i as f64 * 0.001).rate_deg_s == 0.0)
+                .count();
+            assert!(
+                still >= 12_000,
+                "hand seed {seed}: at rest {still} ms of 60,000"
+            );
+        }
+        let (_, r, a) = Profile::new(ProfileKind::FastSine, 2.0, 0).peaks(0.0001);
+        assert!(
+            (r - 400.0).abs() < 0.01 && (a - 400.0 * 4.0 * PI).abs() < 0.1,
+            "{r} {a}"
+        );
+    }
+
+    /// A stroke adds `A T / 2` to the angle: at rest after it, the angle equals the numerical
+    /// integral of the rate (trapezoids every 0.1 ms).
+    #[test]
+    fn pulse_angle_is_the_integral_of_the_rate() {
+        let p = Profile::new(ProfileKind::Hand, 20.0, 3);
+        let dt = 1e-4;
+        let mut x = 0.0;
+        for i in 0..200_000 {
+            let t = i as f64 * dt;
+            x += (p.at(t).rate_deg_s + p.at(t + dt).rate_deg_s) / 2.0 * dt;
+        }
+        assert!(
+            (x - p.at(20.0).yaw_deg).abs() < 1e-6,
+            "{x} vs {}",
+            p.at(20.0).yaw_deg
+        );
     }
 
     #[test]

@@ -1187,3 +1187,36 @@ fn sim_refuses_a_non_loopback_listen_address_unless_told() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("no host connected before --timeout"), "{err}");
 }
+
+/// The violent profile's packets carry its rate to 600 deg/s (within the protocol's +-630
+/// deg/s, LSB 1260/2^16) and its strokes beyond 10,000 deg/s^2: the body-rate column of
+/// `estimate --no-reference` is what the packets hold. An unknown profile names the known ones.
+#[test]
+fn synth_violent_reaches_600_deg_s_in_the_packets() {
+    let d = scratch("violent");
+    let cap = d.join("violent.bin");
+    let s = json(&ok(&[
+        "synth",
+        "--profile",
+        "violent",
+        "--duration",
+        "5",
+        "-o",
+        p(&cap),
+    ]));
+    assert!((s["peak_rate_deg_s"].as_f64().unwrap() - 600.0).abs() < 1.0);
+    assert!(s["peak_acc_deg_s2"].as_f64().unwrap() > 10_000.0);
+    let csv = ok(&["estimate", p(&cap), "--no-reference"]);
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = header.iter().position(|c| *c == "yaw_body_rate").unwrap();
+    let peak = lines
+        .map(|l| l.split(',').nth(col).unwrap().parse::<f64>().unwrap().abs())
+        .fold(0.0, f64::max);
+    // The first stroke, 600 deg/s over 0.15 s, sampled at 100 Hz: some packet lies within
+    // 5 ms of its peak, 600 (1 + cos(2 pi 0.005 / 0.15)) / 2 = 593.4 deg/s (less half an LSB).
+    assert!((593.3..=600.0 + 1260.0 / 65536.0).contains(&peak), "{peak}");
+    let (code, err) = fails(&["synth", "--profile", "wobble", "-o", p(&cap)]);
+    assert_eq!(code, 2);
+    assert!(err.contains("hand, fast-sine or violent"), "{err}");
+}

@@ -12,7 +12,9 @@ use crate::synth;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Motion profile: fig5 (paper Fig. 5-like hand rotation), spin (many turns), sin5 (section 3.2),
-    /// tumble (a hand-held unit nodding through pitch +-90 deg: three axes, gimbal lock).
+    /// tumble (a hand-held unit nodding through pitch +-90 deg: three axes, gimbal lock), hand
+    /// (strokes of 40-300 deg/s with pauses), fast-sine (2 Hz, 400 deg/s), violent (strokes to
+    /// 600 deg/s and over 10,000 deg/s^2).
     #[arg(long, default_value = "fig5")]
     profile: ProfileKind,
     /// Packet type: A1, A2 or N1.
@@ -24,7 +26,7 @@ pub struct Args {
     /// Duration, s (0 to 10000: the capture is built in memory).
     #[arg(long, default_value_t = 35.0)]
     duration: f64,
-    /// Seed of the motion shape (fig5).
+    /// Seed of the motion shape (fig5, hand, violent).
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// timeITOW of the first packet, ms: a time of week (0 to 604799999).
