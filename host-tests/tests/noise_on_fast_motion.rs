@@ -104,3 +104,48 @@ fn motion_beyond_the_papers_bounds() {
         }
     }
 }
+
+/// How fast the estimate (time constant 0.5 s, `AdaptiveConfig::DEFAULT`) follows a switch of
+/// the noise at 15 s, on every yaw motion: up from 0.01 to 0.5 deg^2 (first time it reaches
+/// 0.4) and down from 0.5 to 0.01 (first time it falls to 0.012). The clip (a term counts at
+/// most 9 times the estimate) bounds the rise to a factor `1 + 8 dt / tau` = 1.16 per sample,
+/// 25 samples for 40x; the terms that stay below the clip make it 0.69 s. The fall is the
+/// exponential decay of the excess. Measured: up 0.69 s and down 2.29 to 2.35 s on every
+/// motion; asserted: up within 1 s and down within 3 s, so the motion does not slow it.
+#[test]
+fn lag_after_a_noise_switch() {
+    let cases = [
+        (ProfileKind::Fig5, 1, "fig5"),
+        (ProfileKind::Spin, 1, "spin"),
+        (ProfileKind::Hand, 1, "hand"),
+        (ProfileKind::FastSine, 1, "fast sine"),
+        (ProfileKind::Violent, 1, "violent"),
+    ];
+    const SWITCH_US: u64 = 15_000_000;
+    for (profile, seed, name) in cases {
+        let samples = a2_samples(profile, seed, 100, 25.0).unwrap();
+        let lag = |from: f64, to: f64| {
+            let a = noisy_angle(&samples, Axis::Yaw, Some(Noise { var: from, seed: 1 })).unwrap();
+            let b = noisy_angle(&samples, Axis::Yaw, Some(Noise { var: to, seed: 2 })).unwrap();
+            let mut est = NoiseEstimator::new(0.5, 0.01).unwrap();
+            for (k, s) in samples.iter().enumerate() {
+                let y = if s.t_us < SWITCH_US { a[k] } else { b[k] };
+                est.update(s.t_us, y);
+                let v = f64::from(est.variance().unwrap_or(0.0));
+                let reached = if to > from {
+                    v >= 0.8 * to
+                } else {
+                    v <= 1.2 * to
+                };
+                if s.t_us >= SWITCH_US && reached {
+                    return (s.t_us - SWITCH_US) as f64 * 1e-6;
+                }
+            }
+            f64::INFINITY
+        };
+        let (up, down) = (lag(0.01, 0.5), lag(0.5, 0.01));
+        eprintln!("{name:10} noise 0.01 -> 0.5 deg^2: {up:.2} s; 0.5 -> 0.01: {down:.2} s");
+        assert!(up <= 1.0, "{name}: up {up} s");
+        assert!(down <= 3.0, "{name}: down {down} s");
+    }
+}
