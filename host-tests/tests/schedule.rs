@@ -46,6 +46,9 @@ use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 use std::sync::OnceLock;
 
+mod runs;
+use runs::{mse_over, schedule};
+
 /// Capture length and switch time, s.
 const END_S: f64 = 20.0;
 const SWITCH_S: f64 = 10.0;
@@ -93,36 +96,6 @@ fn mse(samples: &[Sample], opts: &EstimateOptions) -> [[f64; estimators::FAMILY_
     [m[0], m[1], m[2]]
 }
 
-/// Velocity MSE per family over each range (s), against the motion's analytic rate.
-fn mse_over(
-    samples: &[Sample],
-    opts: &EstimateOptions,
-    ranges: &[(f64, f64)],
-) -> Vec<[f64; estimators::FAMILY_COUNT]> {
-    let (rows, rejected) = replay::estimate(samples, opts).unwrap();
-    assert_eq!(rejected, 0);
-    let t: Vec<u64> = rows.iter().map(|r| r.t_us).collect();
-    let reference: Vec<f32> = rows
-        .iter()
-        .map(|r| r.axis(Axis::Yaw).unwrap().reference_deg_s.unwrap())
-        .collect();
-    let velocities: Vec<[f32; estimators::FAMILY_COUNT]> = rows
-        .iter()
-        .map(|r| r.axis(Axis::Yaw).unwrap().out.velocities())
-        .collect();
-    ranges
-        .iter()
-        .map(|range| {
-            let mut o = [0.0; estimators::FAMILY_COUNT];
-            for (i, o) in o.iter_mut().enumerate() {
-                let est: Vec<f32> = velocities.iter().map(|v| v[i]).collect();
-                *o = mse_range(&t, &est, &reference, *range);
-            }
-            o
-        })
-        .collect()
-}
-
 /// The samples of a 30 s synthetic A2 capture of `profile` (motion seed 21) at `rate_hz` with
 /// constant N(0, `var_deg2`) yaw noise (noise seed 5): `nav440 synth --profile PROFILE --rate
 /// RATE --duration 30 --seed 21 --yaw-noise VAR --noise-seed 5`.
@@ -157,21 +130,6 @@ fn fixed(cfg: BankConfig) -> EstimateOptions {
 /// schedule_fig5.toml`).
 fn schedule_fig5() -> (gains::ScheduleFile, EstimateOptions) {
     schedule("gains/schedule_fig5.toml")
-}
-
-/// The schedule file `data/NAME` and the options that run it (`nav440 estimate FILE --gains
-/// NAME`).
-fn schedule(name: &str) -> (gains::ScheduleFile, EstimateOptions) {
-    let Loaded::Schedule(file) = gains::load_any(&data(name)).unwrap() else {
-        panic!("not a schedule file");
-    };
-    let opts = EstimateOptions {
-        hold: file.hold().unwrap(),
-        config: Some(BankConfig::NAV440),
-        schedule: Some(file.schedule(&BankConfig::NAV440).unwrap()),
-        ..Default::default()
-    };
-    (file, opts)
 }
 
 /// The gains tuned for the first half (0.01 deg^2) and for the second (0.5 deg^2), tuned
