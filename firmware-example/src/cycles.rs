@@ -42,8 +42,8 @@ impl Counter {
 
     /// Instructions corresponding to `ticks` under `-icount shift=6` (40 ns ticks, 64 ns
     /// instructions), rounded to nearest.
-    pub fn instructions(ticks: u32) -> u64 {
-        (u64::from(ticks) * 40 + 32) / 64
+    pub fn instructions(ticks: u64) -> u64 {
+        (ticks * 40 + 32) / 64
     }
 
     /// Runs `f` once and returns the instructions it took (including a constant overhead of
@@ -53,7 +53,7 @@ impl Counter {
         let start = self.now();
         let r = f();
         let end = self.now();
-        (Self::instructions(Self::ticks(start, end)), r)
+        (Self::instructions(u64::from(Self::ticks(start, end))), r)
     }
 
     /// [`Self::measure`] for a region that may exceed 2^24 ticks: the SysTick interrupt is on
@@ -69,7 +69,7 @@ impl Counter {
         let wraps = u64::from(w1.wrapping_sub(w0));
         let ticks =
             (wraps * (u64::from(MAX_TICKS) + 1) + u64::from(c0)).saturating_sub(u64::from(c1));
-        ((ticks * 40 + 32) / 64, r)
+        (Self::instructions(ticks), r)
     }
 
     /// The wrap count and the counter, read consistently (again when a wrap came between).
