@@ -51,6 +51,7 @@ fn main() {
     println!("cargo:rerun-if-changed={}", dispatch.display());
     println!("cargo:rerun-if-changed=../boards/src");
     println!("cargo:rerun-if-changed=build.rs");
+    println!("cargo::rustc-check-cfg=cfg(prebuilt_banks)");
     if !target.starts_with("thumb") {
         // Host builds (e.g. `cargo clippy --workspace` by mistake) get no linker script.
         return;
@@ -73,4 +74,81 @@ fn main() {
     println!("cargo:rustc-link-arg-bins=-Tlink.x");
     // The defmt table (interned format strings) the host decoder reads from the ELF.
     println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
+    if let Some(table) = prebuilt_banks() {
+        fs::write(out.join("banks.rs"), table).expect("OUT_DIR writable");
+        println!("cargo:rustc-cfg=prebuilt_banks");
+    }
+}
+
+/// The product images' banks, built here on the host: `Some(source)` of the table `BANKS`
+/// for an image with the feature `bank-product` and the shipped preset (neither
+/// `tuned-gains` nor `adaptive-gains`); `None` for every other image, which builds its banks
+/// itself. The banks are in the image's number type: `Fx` with the `fixed-point` feature or
+/// on a target without an FPU, `f32` otherwise (`src/lib.rs`, `Num`).
+///
+/// One entry per NAV440 packet rate (`PacketRate`, dividers 1 to 50 of 100 Hz) and per kind
+/// of axis (wrapping at +-180 deg or not): the key is the nominal period as the pipeline's
+/// period rule gives it for that rate (`PeriodEstimator` over a steady stream, an `f32` in s,
+/// by its bits), the value the bank `nav440_pipeline::axis_bank` builds for it with the
+/// preset's gains for that rate (`BankConfig::NAV440.with_nav440_gains()`, what
+/// `src/pipeline.rs` builds without the table), as postcard bytes (`estimators`' `serde`
+/// form: the input stage and the laws). The same `Bank::new` runs in the host tools, in IEEE
+/// `f64` as here, so a bank read back equals the one `nav440 estimate --bank product`
+/// (`--fixed`) builds.
+fn prebuilt_banks() -> Option<String> {
+    let feature = |f: &str| env::var_os(format!("CARGO_FEATURE_{f}")).is_some();
+    if !feature("BANK_PRODUCT") || feature("TUNED_GAINS") || feature("ADAPTIVE_GAINS") {
+        return None;
+    }
+    let fixed =
+        feature("FIXED_POINT") || env::var("CARGO_CFG_TARGET_ABI").as_deref() != Ok("eabihf");
+    Some(if fixed {
+        bank_table::<estimators::Fx>()
+    } else {
+        bank_table::<f32>()
+    })
+}
+
+/// The source of the table of [`prebuilt_banks`] for banks in `T`.
+fn bank_table<T: estimators::Real + serde::Serialize>() -> String {
+    use estimators::{BankConfig, ProductBank};
+    use nav440_pipeline::{period::PeriodEstimator, period::WARMUP_SAMPLES, Axis};
+    use std::fmt::Write;
+
+    let mut entries = Vec::new();
+    for divider in 1..=50u16 {
+        let Some(rate) = nav440_proto::PacketRate::from_divider(divider) else {
+            continue;
+        };
+        // 100 Hz / divider: a period of 10 ms x divider, in us.
+        let period_us = 10_000 * u64::from(divider);
+        let times = (0..WARMUP_SAMPLES as u64).map(|k| k * period_us);
+        let cfg = PeriodEstimator::from_times(times)
+            .apply(BankConfig::NAV440)
+            .with_nav440_gains();
+        for axis in [Axis::Yaw, Axis::Pitch] {
+            let bank: ProductBank<T> = nav440_pipeline::axis_bank(axis, &cfg)
+                .unwrap_or_else(|e| panic!("firmware-example: the bank at {rate:?}: {e}"));
+            let bytes = postcard::to_stdvec(&bank).expect("a bank serializes");
+            entries.push((cfg.sample_period_s, axis.wraps(), bytes));
+        }
+    }
+    let mut src = String::from(
+        "/// The product banks build.rs built (`prebuilt_banks`): (the nominal period's `f32` \
+         /// bits, the axis wraps at +-180 deg, the bank's postcard bytes).\n",
+    );
+    let _ = writeln!(
+        src,
+        "pub static BANKS: [(u32, bool, &[u8]); {}] = [",
+        entries.len()
+    );
+    for (period_s, wraps, bytes) in entries {
+        let _ = writeln!(
+            src,
+            "    // {period_s} s\n    ({:#010x}, {wraps}, &{bytes:?}),",
+            period_s.to_bits()
+        );
+    }
+    src.push_str("];\n");
+    src
 }

@@ -22,6 +22,7 @@ pub enum Tick {
 /// `max_gap` gives [`Tick::Gap`]. A timestamp not later than the previous one is refused and
 /// leaves the clock unchanged.
 #[derive(Clone, Copy, Debug)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SampleClock {
     h_us: u64,
     max_gap_us: u64,

@@ -34,6 +34,10 @@ pub enum ConfigError {
     /// The nominal sample period is more than `10^6` steps `h` (the closed-form maps and the
     /// step count of one interval are limited to that).
     SamplePeriodTooLong,
+    /// The image holds no bank built for this nominal sample period: a firmware whose banks
+    /// were built on the host at build time has them for the NAV440's packet rates only
+    /// (docs/FOOTPRINT.md).
+    SamplePeriodNotPrebuilt,
     /// A gain schedule needs 1 to `MAX_LEVELS` levels with strictly increasing noise
     /// variances > 0.
     ScheduleLevels,
@@ -77,6 +81,9 @@ impl core::fmt::Display for ConfigError {
             ),
             Self::SamplePeriodTooShort => f.write_str("sample period must be at least h"),
             Self::SamplePeriodTooLong => f.write_str("sample period must be at most 1e6 steps h"),
+            Self::SamplePeriodNotPrebuilt => f.write_str(
+                "no bank was built for this sample period: the image holds banks for the NAV440's packet rates only",
+            ),
             Self::ScheduleLevels => f.write_str(
                 "a gain schedule needs 1 to 8 levels with noise variances > 0, strictly increasing",
             ),

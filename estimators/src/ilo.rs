@@ -48,6 +48,7 @@ impl IloConfig {
 /// Output: `v` (deg/s for `y` in deg). `D = 0` does not compile. The validated coefficients
 /// ([`crate::Law`]); the state is [`IloState`].
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct IloParams<T: Real, const D: usize> {
     hl: T,
     h: T,

@@ -237,6 +237,7 @@ pub enum KalmanOutput {
 /// `k >` [`MAX_SUBSTEPS`]: the state is re-initialised at `y_new` (a bank's gap rule acts
 /// before). One [`Law::step`] is one predict + update with `dt = h`. State: [`KalmanState`].
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct KalmanParams<T: Real> {
     k: [T; 3],
     h: T,

@@ -48,6 +48,14 @@ pub trait LinearLaw: Law {
 /// RAM (parameters): the inner law plus `(LIN_MAX^2 + LIN_MAX)` words of `T` and the
 /// `n`/mode tag.
 #[derive(Clone, Copy, Debug)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(
+    feature = "serde",
+    serde(bound(
+        serialize = "E: serde::Serialize, E::Num: serde::Serialize",
+        deserialize = "E: serde::Deserialize<'de>, E::Num: serde::Deserialize<'de>"
+    ))
+)]
 pub struct ClosedForm<E: LinearLaw> {
     inner: E,
     n: u32,

@@ -29,7 +29,7 @@ pub type ConfigError = estimators::ConfigError;
 /// Builds an axis's bank for the measured packet period (out of line: the constructor is
 /// large): with [`FOLLOW_RATE`], the shipped preset's gains for that period
 /// (`BankConfig::with_nav440_gains`, as `nav440 estimate` does).
-#[cfg(not(feature = "adaptive-gains"))]
+#[cfg(not(any(feature = "adaptive-gains", prebuilt_banks)))]
 #[inline(never)]
 fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
     if FOLLOW_RATE {
@@ -37,6 +37,31 @@ fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
     } else {
         nav440_pipeline::axis_bank(axis, cfg)
     }
+}
+
+/// The banks build.rs built on the host for the fixed-point product images (`banks.rs` in
+/// `OUT_DIR`, see `prebuilt_banks` in build.rs).
+#[cfg(prebuilt_banks)]
+mod prebuilt {
+    include!(concat!(env!("OUT_DIR"), "/banks.rs"));
+}
+
+/// An axis's bank for the measured packet period, read back from the table build.rs built on
+/// the host ([`prebuilt`]: the bank [`PRESET`] with [`FOLLOW_RATE`] gives, for each NAV440
+/// packet rate): integer operations only, no floating-point construction linked. A period
+/// that is not one of the NAV440's rates is [`ConfigError::SamplePeriodNotPrebuilt`] (the
+/// firmware reports it and stops, docs/FOOTPRINT.md); `nav440 estimate` builds a bank for
+/// any period.
+#[cfg(prebuilt_banks)]
+#[inline(never)]
+fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
+    let key = cfg.sample_period_s.to_bits();
+    let (_, _, bytes) = prebuilt::BANKS
+        .iter()
+        .find(|(k, wraps, _)| *k == key && *wraps == axis.wraps())
+        .ok_or(ConfigError::SamplePeriodNotPrebuilt)?;
+    // Cannot fail: the bytes are the serialized form of this very type (build.rs).
+    postcard::from_bytes(bytes).map_err(|_| ConfigError::SamplePeriodNotPrebuilt)
 }
 
 /// The gain schedule of the noise-adaptive bank (feature `adaptive-gains`), as `nav440 tune

@@ -70,6 +70,7 @@ pub struct Accepted<T: Real> {
 /// The input stage every generated bank shares: input checks, sample clock (gap rule),
 /// unwrapping into a local frame (per [`Wrap`]), the previous sample and the re-init count.
 #[derive(Clone, Copy, Debug)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct BankInput<T: Real> {
     clock: SampleClock,
     hold: Hold,

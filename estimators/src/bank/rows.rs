@@ -570,6 +570,59 @@ impl<R: Rows<T, S>, const N: usize, T: Real, S: SqrtFn<T>> core::fmt::Debug for 
     }
 }
 
+/// What a bank's serialized form holds (feature `serde`): its input stage and every row's law.
+#[cfg(feature = "serde")]
+#[derive(serde::Serialize, serde::Deserialize)]
+#[serde(bound(
+    serialize = "T: serde::Serialize, R::Params: serde::Serialize",
+    deserialize = "T: serde::Deserialize<'de>, R::Params: serde::Deserialize<'de>"
+))]
+struct BankParts<R: Rows<T, S>, T: Real, S: SqrtFn<T>> {
+    input: BankInput<T>,
+    params: R::Params,
+}
+
+/// A bank serializes as what building it computed (feature `serde`): the input stage (step,
+/// gap rule, hold, unwrapping) and every row's law (gains, closed-form maps, the Kalman's
+/// gain), not the laws' state. So a bank built on a host (`Bank::new`, with `f64` and `libm`)
+/// can be stored, and read back on a device with integer operations only: the device's
+/// firmware holds such a table of banks, one per packet period (docs/FOOTPRINT.md).
+#[cfg(feature = "serde")]
+impl<R: Rows<T, S>, const N: usize, T: Real + serde::Serialize, S: SqrtFn<T>> serde::Serialize
+    for Bank<R, N, T, S>
+where
+    R::Params: serde::Serialize,
+{
+    fn serialize<Z: serde::Serializer>(&self, z: Z) -> Result<Z::Ok, Z::Error> {
+        BankParts::<R, T, S> {
+            input: self.input,
+            params: self.params,
+        }
+        .serialize(z)
+    }
+}
+
+/// Read back, the bank is restarted ([`Bank::restart`]): its laws at rest, the next sample
+/// treated as the first. A bank serialized straight after [`Bank::new`] reads back equal to
+/// it.
+#[cfg(feature = "serde")]
+impl<'de, R: Rows<T, S>, const N: usize, T: Real + serde::Deserialize<'de>, S: SqrtFn<T>>
+    serde::Deserialize<'de> for Bank<R, N, T, S>
+where
+    R::Params: serde::Deserialize<'de>,
+{
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let parts = BankParts::<R, T, S>::deserialize(d)?;
+        let mut bank = Self {
+            input: parts.input,
+            state: R::init(&parts.params, T::ZERO),
+            params: parts.params,
+        };
+        bank.restart();
+        Ok(bank)
+    }
+}
+
 /// Every row's state after replaying `history` (what the laws were fed, oldest first, see
 /// [`Bank::update_fed`]) through the parameters `p`: started at rest at the first entry's
 /// input (`init`, then `on_init`), re-initialised where the history was (`Feed::Reset`, then

@@ -118,6 +118,40 @@ pub(super) fn rate_drop_capture(tag: &str) -> Result<PathBuf, String> {
     Ok(out)
 }
 
+/// The packet period of [`off_rate_capture`], ms: 30 ms (33.3 Hz), not one of the NAV440's
+/// rates (100 Hz / 1, 2, 4, 5, 10, 20, 25, 50).
+pub(super) const OFF_RATE_MS: u32 = 30;
+
+/// What the product firmware prints when its table of banks built on the host has none for
+/// the measured packet period (`estimators::ConfigError::SamplePeriodNotPrebuilt`, through
+/// firmware-example's `bank_failed`).
+pub(super) const NOT_PREBUILT: &str = "SamplePeriodNotPrebuilt";
+
+/// Writes `ci-off-rate.bin`: 100 A2 packets [`OFF_RATE_MS`] apart (a unit turning at 30
+/// deg/s), a packet period the product images' table of banks does not hold.
+pub(super) fn off_rate_capture() -> Result<PathBuf, String> {
+    let mut out = Vec::new();
+    for k in 0..100u32 {
+        let t_ms = k * OFF_RATE_MS;
+        let yaw_deg = 30.0 * f64::from(t_ms) * 1e-3;
+        let fields = nav440_proto::A2Fields {
+            // 2^16 LSB per turn; 30 deg/s at 1260/2^16 deg/s per LSB.
+            yaw_true: (yaw_deg * 65536.0 / 360.0).round() as i16,
+            rate_z: (30.0 * 65536.0 / 1260.0f64).round() as i16,
+            time_itow: 100_000 + t_ms,
+            ..Default::default()
+        };
+        let mut buf = [0u8; nav440_proto::MAX_FRAME];
+        let n = fields
+            .encode(&mut buf)
+            .map_err(|e| format!("cannot encode an A2 frame: {e:?}"))?;
+        out.extend_from_slice(buf.get(..n).unwrap_or_default());
+    }
+    let path = work_dir()?.join("ci-off-rate.bin");
+    std::fs::write(&path, &out).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    Ok(path)
+}
+
 /// Packets (frame indices) of the bundled A2 capture whose BIT word becomes 0x0009
 /// (masterFail + softwareError) in the BIT-failure capture of `ci-firmware`.
 pub(super) const BIT_FAILED_FRAMES: std::ops::RangeInclusive<usize> = 1000..=1100;

@@ -6,8 +6,9 @@ use super::build::{
     adaptive_boards, build, build_bins, build_profile, build_small, clippy_firmware, small_boards,
 };
 use super::captures::{
-    bit_fail_capture, bundled_capture, data_captures, false_header_capture, rate_change_capture,
-    rate_drop_capture, BIT_FAILED_FRAMES, FALSE_HEADER, PERIOD_CHANGE, SPIN_20HZ,
+    bit_fail_capture, bundled_capture, data_captures, false_header_capture, off_rate_capture,
+    rate_change_capture, rate_drop_capture, BIT_FAILED_FRAMES, FALSE_HEADER, NOT_PREBUILT,
+    OFF_RATE_MS, PERIOD_CHANGE, SPIN_20HZ,
 };
 use super::equivalence::{equivalence, equivalence_csv, equivalence_full, peak_of, peak_velocity};
 use super::nav440_cli::{adaptive_host_args, firmware_host_args, nav440_synth, small_host_args};
@@ -440,6 +441,42 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
                 },
             );
         }
+    }
+    // Its banks come from the table build.rs built on the host, one per NAV440 packet rate:
+    // at a period that is none of them it stops with the error, and never estimates with a
+    // bank built for another period.
+    if qemu_ok {
+        let off_rate = off_rate_capture()?;
+        let (elf, board) = (noref.clone(), NOREF_BOARD);
+        pool.spawn(
+            CHECKS_STEP,
+            "a packet period without a prebuilt bank".into(),
+            move || {
+                let bytes = qemu::framed_input(&read_file(&off_rate)?)?;
+                let path = qemu::input_path(&work_dir()?, "offrate");
+                let r = qemu::run_uart(
+                    &board,
+                    &elf,
+                    &path,
+                    &bytes,
+                    Output::Capture,
+                    Duration::from_secs(60),
+                );
+                let _ = std::fs::remove_file(&path);
+                match r {
+                    Err(e) if e.contains(NOT_PREBUILT) => {
+                        eprintln!(
+                            "xtask: OK: a packet period of {OFF_RATE_MS} ms ends the product image with exit status 1 ({NOT_PREBUILT})"
+                        );
+                        Ok(())
+                    }
+                    Err(e) => Err(format!("unexpected failure at a {OFF_RATE_MS} ms period: {e}")),
+                    Ok(_) => Err(format!(
+                        "the product image estimated at a {OFF_RATE_MS} ms period, for which it holds no bank"
+                    )),
+                }
+            },
+        );
     }
     // The product firmware with the gains `nav440 tune --bank product --rust` wrote (feature
     // `tuned-gains`), on the M4F board (the feature changes only the preset; the product bank

@@ -1,0 +1,114 @@
+//! A product bank read back from its serialized form (the table of banks the fixed-point
+//! firmware images carry, built by `firmware-example/build.rs` on the host) is the bank
+//! `Bank::new` builds: the same parameters and state, and bit for bit the same outputs on a
+//! stream with turns, a gap and a rate change. Checked for every NAV440 packet rate, both
+//! kinds of axis (wrapping at +-180 deg or not), in `Fx` and in `f32`.
+
+use estimators::{BankConfig, Fx, ProductBank, Real};
+use nav440_pipeline::period::{PeriodEstimator, WARMUP_SAMPLES};
+use nav440_pipeline::{axis_bank, Axis};
+
+/// The dividers of the NAV440's packet rates (100 Hz / divider), `nav440_proto::PacketRate`.
+fn dividers() -> impl Iterator<Item = u16> {
+    (1..=50u16).filter(|&d| {
+        nav440_proto::PacketRate::from_divider(d)
+            .is_some_and(|r| r != nav440_proto::PacketRate::Quiet)
+    })
+}
+
+/// The shipped preset for the period the firmware's warm-up measures at `divider`.
+fn config(divider: u16) -> BankConfig {
+    let period_us = 10_000 * u64::from(divider);
+    PeriodEstimator::from_times((0..WARMUP_SAMPLES as u64).map(|k| k * period_us))
+        .apply(BankConfig::NAV440)
+        .with_nav440_gains()
+}
+
+/// Feeds both banks the same samples and asserts equal outputs, bit for bit: a yaw turning
+/// at 400 deg/s (wrapping every 0.9 s), a gap of 30 periods, then twice the packet rate.
+fn assert_same_run<T: Real>(a: &mut ProductBank<T>, b: &mut ProductBank<T>, period_us: u64) {
+    let mut t = 0u64;
+    for k in 0..600u64 {
+        t += if k == 300 {
+            30 * period_us
+        } else if k > 400 {
+            period_us / 2
+        } else {
+            period_us
+        };
+        let unwrapped = 400.0 * t as f64 * 1e-6 + 7.0 * (t as f64 * 3e-6).sin();
+        let wrapped = ((unwrapped + 180.0).rem_euclid(360.0) - 180.0) as f32;
+        let (x, y) = (a.update(t, wrapped), b.update(t, wrapped));
+        match (x, y) {
+            (Ok(x), Ok(y)) => {
+                let bits = |v: &[f32]| v.iter().map(|f| f.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&x.values), bits(&y.values), "sample {k}");
+                assert_eq!(
+                    x.unwrapped_deg.to_bits(),
+                    y.unwrapped_deg.to_bits(),
+                    "sample {k}"
+                );
+                assert_eq!(
+                    x.residual_deg.to_bits(),
+                    y.residual_deg.to_bits(),
+                    "sample {k}"
+                );
+            }
+            (x, y) => assert_eq!(x.map(|_| ()), y.map(|_| ()), "sample {k}"),
+        }
+    }
+}
+
+fn round_trip<T: Real + serde::Serialize + for<'de> serde::Deserialize<'de>>() {
+    for divider in dividers() {
+        let cfg = config(divider);
+        for axis in [Axis::Yaw, Axis::Pitch] {
+            let built: ProductBank<T> = axis_bank(axis, &cfg).unwrap();
+            let bytes = postcard::to_stdvec(&built).unwrap();
+            let mut read: ProductBank<T> = postcard::from_bytes(&bytes).unwrap();
+            assert_eq!(
+                format!("{read:?}"),
+                format!("{built:?}"),
+                "{divider} {axis:?}"
+            );
+            // What a table entry costs in flash (build.rs stores one per rate and axis kind).
+            assert!(bytes.len() <= 160, "{} bytes", bytes.len());
+            let mut fresh = built;
+            assert_same_run(&mut fresh, &mut read, 10_000 * u64::from(divider));
+            // A bank that has run serializes its laws, not their state: it reads back
+            // restarted (`Bank::restart`; the input stage keeps its re-init count).
+            let after = postcard::to_stdvec(&fresh).unwrap();
+            let again: ProductBank<T> = postcard::from_bytes(&after).unwrap();
+            fresh.restart();
+            assert_eq!(
+                format!("{again:?}"),
+                format!("{fresh:?}"),
+                "{divider} {axis:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn fixed_point_banks_read_back_equal() {
+    round_trip::<Fx>();
+}
+
+#[test]
+fn f32_banks_read_back_equal() {
+    round_trip::<f32>();
+}
+
+#[test]
+fn the_firmware_table_keys_are_the_period_rule_s() {
+    // build.rs keys the table by the bits of `PeriodEstimator::period_s` over a steady stream;
+    // the firmware looks up `BankConfig::sample_period_s`, which the pipeline sets from the
+    // same rule (`PeriodEstimator::apply`). Both are `us as f32 * 1e-6`.
+    for divider in dividers() {
+        let us = 10_000 * u64::from(divider);
+        assert_eq!(
+            config(divider).sample_period_s.to_bits(),
+            (us as f32 * 1e-6).to_bits()
+        );
+    }
+}
