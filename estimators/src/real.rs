@@ -354,6 +354,88 @@ pub(crate) fn fx_from_f32(x: f32) -> i64 {
     }
 }
 
+/// [`Real::unwrapped_angle`] in `f64` (soft-float on Cortex-M: out of line, taken only after
+/// a turn).
+#[cold]
+#[inline(never)]
+fn unwrapped_angle_f64<T: Real>(turns: i64, wrapped: T) -> (f32, f64) {
+    let exact = turns as f64 * 360.0 + wrapped.to_f64();
+    let rounded = exact as f32;
+    (rounded, exact - f64::from(rounded))
+}
+
+/// [`Real::unwrapped_angle`] for [`Fx`]: integer operations only. Without a turn the angle
+/// is the raw value itself; its `f32` rounding is [`fx_to_f32`] and the residual is 0
+/// whenever the value is an `f32` (the usual case: the banks' input is an `f32`).
+#[inline]
+fn fx_unwrapped_angle(turns: i64, wrapped: i64) -> (f32, f64) {
+    if turns == 0 {
+        let r = fx_to_f32(wrapped);
+        if fx_from_f32(r) == wrapped {
+            return (r, 0.0);
+        }
+    }
+    fx_unwrapped_angle_wide(turns, wrapped)
+}
+
+/// [`fx_unwrapped_angle`] after a turn (or with a residual), in 128-bit integers: the exact
+/// angle `(360 turns) 2^32 + wrapped` in units of 2^-32 deg, its nearest `f32` and the
+/// nearest `f64` to the residual (exact for any angle below 2^40 deg).
+#[cold]
+#[inline(never)]
+fn fx_unwrapped_angle_wide(turns: i64, wrapped: i64) -> (f32, f64) {
+    let exact = i128::from(turns) * (360i128 << 32) + i128::from(wrapped);
+    let (rounded, back) = q32_nearest::<24>(exact);
+    let (residual, _) = q32_nearest::<53>(exact - back);
+    (f32::from_bits(rounded as u32), f64::from_bits(residual))
+}
+
+/// The float with a `P`-bit significand (24: `f32`, 53: `f64`) nearest to `x 2^-32` (ties to
+/// even): its bits, and its value again in units of 2^-32 (exact: every such float with
+/// `|x| >= 1` is a multiple of 2^-32 here, as the ones below are exact). Integer operations
+/// only; `x = 0` gives `+0`.
+fn q32_nearest<const P: u32>(x: i128) -> (u64, i128) {
+    if x == 0 {
+        return (0, 0);
+    }
+    let (sign, fraction_bits, bias) = if P == 24 {
+        (1u64 << 31, 23u32, 127i32)
+    } else {
+        (1u64 << 63, 52, 1023)
+    };
+    let neg = x < 0;
+    let mag = x.unsigned_abs();
+    // The leading one at bit `p`: |x 2^-32| in [2^(p - 32), 2^(p - 31)).
+    let mut p = 127 - mag.leading_zeros();
+    let mut q = if p < P {
+        mag << (P - 1 - p)
+    } else {
+        let k = p + 1 - P;
+        let q = mag >> k;
+        let r = mag & ((1u128 << k) - 1);
+        let half = if k == 0 { 0 } else { 1u128 << (k - 1) };
+        if k > 0 && (r > half || (r == half && q & 1 == 1)) {
+            q + 1
+        } else {
+            q
+        }
+    };
+    if q == 1u128 << P {
+        // Rounded up to the next power of two.
+        q >>= 1;
+        p += 1;
+    }
+    // The value q 2^(p + 1 - P) in units of 2^-32.
+    let shift = p as i32 + 1 - P as i32;
+    let back = if shift >= 0 { q << shift } else { q >> -shift };
+    let back = if neg { -(back as i128) } else { back as i128 };
+    let exponent = (p as i32 - 32 + bias) as u64;
+    let bits = (if neg { sign } else { 0 })
+        | (exponent << fraction_bits)
+        | (q as u64 & ((1u64 << fraction_bits) - 1));
+    (bits, back)
+}
+
 /// The `f32` nearest to the raw Q31.32 value `raw` (ties to even), as `fixed`'s
 /// `to_num::<f32>` gives it. Integer operations only.
 #[inline]
@@ -564,6 +646,25 @@ pub trait Real:
     /// `self / n` for an integer `n >= 1` (`n = 0` returns `self`); integer division for fixed
     /// point, so it never needs an FPU.
     fn div_int(self, n: u32) -> Self;
+    /// The angle `360 turns + wrapped` (deg) as its `f32` rounding (nearest, ties to even) and
+    /// the exact residual `exact - rounding` in `f64` (what a bank reports as its unwrapped
+    /// angle). The default computes in `f64` (exact while the angle fits its 53 bits: below
+    /// 2^21 deg for [`Fx`]'s 32 fractional bits) with a fast path when `turns = 0` and the
+    /// wrapped value is an `f32`; [`Fx`] computes it with integer operations only, exactly
+    /// for any angle.
+    #[inline]
+    fn unwrapped_angle(turns: i64, wrapped: Self) -> (f32, f64) {
+        if turns == 0 {
+            // Fast path (no f64 on a single-precision core): the wrapped value is exactly an
+            // f32 (checked by the round trip), so the residual is 0. `+ 0.0` maps -0 to +0 as
+            // the f64 sum below does.
+            let r = wrapped.to_f32() + 0.0;
+            if Self::from_f32(r) == wrapped {
+                return (r, 0.0);
+            }
+        }
+        unwrapped_angle_f64(turns, wrapped)
+    }
     /// The sign: -1, 0 or +1.
     fn sgn(self) -> Self {
         if self > Self::ZERO {
@@ -746,6 +847,12 @@ impl Real for Fx {
     fn ed_sqrt(self) -> Self {
         Fx::from_bits(crate::fxk::sqrt_fast(self.to_bits()) as i64)
     }
+    /// Integer operations only ([`fx_unwrapped_angle`]): exact for any angle, and the same
+    /// values as the default's `f64` below 2^21 deg.
+    #[inline]
+    fn unwrapped_angle(turns: i64, wrapped: Self) -> (f32, f64) {
+        fx_unwrapped_angle(turns, wrapped.to_bits())
+    }
     #[inline]
     fn div_int(self, n: u32) -> Self {
         if n == 0 {
@@ -838,6 +945,65 @@ mod tests {
             check_from(rng.next() as u32);
             check_to(rng.next() as i64 >> (rng.next() % 64));
             check_to(rng.raw());
+        }
+    }
+
+    /// The integer unwrapped angle equals the `f64` computation (the default of
+    /// `Real::unwrapped_angle`, the independent reference) wherever that is exact: every
+    /// angle below 2^21 deg. Turn counts up to +-5,000, wrapped values of every magnitude
+    /// up to 2^18 deg (so the sum stays below 2^21 deg), ties of the f32 rounding
+    /// included; and far beyond, `rounding + residual` is the exact angle to the residual's
+    /// own rounding (its relative error below 2^-52).
+    #[test]
+    fn unwrapped_angle_equals_the_f64_computation() {
+        let check = |turns: i64, raw: i64| {
+            let want = unwrapped_angle_f64(turns, Fx::from_bits(raw));
+            let got = fx_unwrapped_angle(turns, raw);
+            assert_eq!(got.0.to_bits(), want.0.to_bits(), "{turns} {raw}");
+            assert_eq!(got.1.to_bits(), want.1.to_bits(), "{turns} {raw}");
+        };
+        let mut rng = Rng(0x2545_F491_4F6C_DD1D);
+        // |raw| < 2^50: |wrapped| < 2^18 deg, and 5,000 turns are 1.8e6 deg: below 2^21 deg.
+        let wrapped = |rng: &mut Rng| rng.raw() >> 14;
+        for turns in [0i64, 1, -1, 2, -3, 17, 2_912, -2_912, 5_000, -5_000] {
+            check(turns, 0);
+            check(turns, 1);
+            check(turns, -1);
+            for p in 0..50 {
+                for d in [-1i64, 0, 1] {
+                    check(turns, (1i64 << p) + d);
+                    check(turns, -(1i64 << p) + d);
+                    check(turns, (1i64 << p) | ((1i64 << p) >> 25) | d);
+                }
+            }
+            for _ in 0..20_000 {
+                check(turns, wrapped(&mut rng));
+            }
+        }
+        for _ in 0..200_000 {
+            let turns = (rng.next() % 10_001) as i64 - 5_000;
+            // 180 deg at most: what a bank's local frame holds.
+            let raw = (rng.next() as i64) >> 23;
+            check(turns, raw);
+        }
+        // A million turns (360 million deg): the f64 sum is no longer exact; the integer one
+        // is, so its rounding and residual add up to the angle to within the residual's
+        // rounding.
+        for turns in [1_000_000i64, -7_654_321, 1 << 40] {
+            let raw = 0x0000_0001_2345_6789;
+            let (r, res) = fx_unwrapped_angle(turns, raw);
+            let exact = i128::from(turns) * (360i128 << 32) + i128::from(raw);
+            let r_q32 = (f64::from(r) * 4_294_967_296.0) as i128; // exact: r is a multiple of 2^-32
+            let res_q32 = res * 4_294_967_296.0;
+            let err = (exact - r_q32) as f64 - res_q32;
+            assert!(
+                err.abs() <= res_q32.abs() * 2f64.powi(-52),
+                "{turns}: {err}"
+            );
+            assert!(
+                (f64::from(r) - exact as f64 / 4_294_967_296.0).abs()
+                    <= f64::from(r).abs() * 2f64.powi(-24)
+            );
         }
     }
 

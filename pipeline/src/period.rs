@@ -10,7 +10,8 @@
 //!   everything after through it);
 //! * the nominal period is the upper median of their intervals (`d[len / 2]` of the sorted
 //!   intervals, in whole microseconds; a non-increasing time stamp counts as a 0 us interval),
-//!   converted as `us as f32 * 1e-6` seconds;
+//!   converted as `us as f32 * 1e-6` seconds ([`seconds`]: those bits, computed with integer
+//!   operations only, so that a core without an FPU links no soft-float routine for it);
 //! * a stream shorter than the warm-up uses the intervals it has; with fewer than two samples
 //!   there is no interval and the configuration keeps its own period
 //!   ([`PeriodEstimator::apply`]).
@@ -37,6 +38,53 @@
 //! ```
 
 use estimators::BankConfig;
+
+/// `us as f32 * 1e-6` (s), bit for bit, computed with integer operations only: both roundings
+/// of the float expression (`us` to `f32`, then the product with the `f32` nearest to 1e-6)
+/// to nearest, ties to even. The period rule's conversion ([module documentation](self)).
+///
+/// ```
+/// use nav440_pipeline::period::seconds;
+/// for us in [1, 59, 10_000, 20_000, 16_777_217, u64::MAX] {
+///     assert_eq!(seconds(us).to_bits(), (us as f32 * 1e-6).to_bits());
+/// }
+/// ```
+pub fn seconds(us: u64) -> f32 {
+    /// The bits of the `f32` nearest to 1e-6: significand `2^23 + fraction`, exponent.
+    const MICRO: u32 = 0x3586_37BD;
+    if us == 0 {
+        return 0.0;
+    }
+    // `us as f32`: the significand `mx` (24 bits) and exponent `ex`, `us ~ mx 2^ex`.
+    let (mx, ex) = nearest_24(us);
+    let my = u64::from(MICRO & 0x007F_FFFF | 0x0080_0000);
+    let ey = (MICRO >> 23) as i32 - 127 - 23;
+    // The exact product (< 2^48) rounded to 24 bits: `q 2^e`.
+    let (q, e) = nearest_24(mx * my);
+    let exponent = (e + ex + ey + 23 + 127) as u32;
+    f32::from_bits(exponent << 23 | (q as u32 & 0x007F_FFFF))
+}
+
+/// `x > 0` rounded to a 24-bit significand, to nearest, ties to even: `(q, e)` with `x ~ q
+/// 2^e` and `2^23 <= q < 2^24`.
+fn nearest_24(x: u64) -> (u64, i32) {
+    let p = 63 - x.leading_zeros();
+    if p <= 23 {
+        return (x << (23 - p), p as i32 - 23);
+    }
+    let k = p - 23;
+    let (q, r, half) = (x >> k, x & ((1u64 << k) - 1), 1u64 << (k - 1));
+    let q = if r > half || (r == half && q & 1 == 1) {
+        q + 1
+    } else {
+        q
+    };
+    if q == 1 << 24 {
+        (q >> 1, k as i32 + 1)
+    } else {
+        (q, k as i32)
+    }
+}
 
 /// Number of samples whose time stamps decide the nominal period (0.16 s at 100 Hz, 0.8 s at
 /// 20 Hz).
@@ -109,14 +157,20 @@ impl PeriodEstimator {
         self.samples >= WARMUP_SAMPLES
     }
 
-    /// Nominal period, s: the upper median of the recorded intervals (`d[len / 2]` of the
-    /// sorted intervals, `us as f32 * 1e-6`). `None` with fewer than two samples recorded.
-    pub fn period_s(&self) -> Option<f32> {
+    /// Nominal period, us: the upper median of the recorded intervals (`d[len / 2]` of the
+    /// sorted intervals). `None` with fewer than two samples recorded.
+    pub fn period_us(&self) -> Option<u64> {
         let n = self.samples.saturating_sub(1).min(INTERVALS);
         let mut sorted = self.intervals_us;
         let d = sorted.get_mut(..n)?;
         d.sort_unstable();
-        d.get(d.len() / 2).map(|&us| us as f32 * 1e-6)
+        d.get(d.len() / 2).copied()
+    }
+
+    /// Nominal period, s: [`PeriodEstimator::period_us`] converted by [`seconds`] (`us as f32
+    /// * 1e-6`). `None` with fewer than two samples recorded.
+    pub fn period_s(&self) -> Option<f32> {
+        self.period_us().map(seconds)
     }
 
     /// `cfg` with [`BankConfig::sample_period_s`] set to [`PeriodEstimator::period_s`], or
@@ -125,6 +179,29 @@ impl PeriodEstimator {
         BankConfig {
             sample_period_s: self.period_s().unwrap_or(cfg.sample_period_s),
             ..cfg
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::seconds;
+
+    /// [`seconds`] gives the bits of the float expression it replaces (the independent
+    /// reference: the host's FPU) for every period below 2^25 us (33.6 s; both roundings
+    /// exercised from 2^24 us on) and for random ones of every magnitude.
+    #[test]
+    fn seconds_is_the_float_expression() {
+        for us in 0..1u64 << 25 {
+            assert_eq!(seconds(us).to_bits(), (us as f32 * 1e-6).to_bits(), "{us}");
+        }
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        for _ in 0..1_000_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let us = x >> (x % 64);
+            assert_eq!(seconds(us).to_bits(), (us as f32 * 1e-6).to_bits(), "{us}");
         }
     }
 }

@@ -202,6 +202,9 @@ pub struct Estimation<B, E, F, const N: usize = 3, R = EulerReference> {
     failed: Option<E>,
     /// The configuration the banks were built with (`None` before the first build).
     built: Option<BankConfig>,
+    /// The measured period the banks were built for, us (`None` before the first build, or
+    /// when they run the configuration's own period: fewer than two samples).
+    built_us: Option<u64>,
     counters: Counters,
     /// The last sample was near gimbal lock: the roll and yaw banks restart at the next one.
     in_lock: bool,
@@ -248,6 +251,7 @@ impl<
             banks: heapless::Vec::new(),
             failed: None,
             built: None,
+            built_us: None,
             counters: Counters::default(),
             in_lock: false,
             reference: PhantomData,
@@ -268,6 +272,13 @@ impl<
     /// one measured at the start or at the last epoch whose period changed.
     pub fn period_s(&self) -> Option<f32> {
         self.built.map(|c| c.sample_period_s)
+    }
+
+    /// [`Estimation::period_s`] as the period rule measured it, us (`None` before the banks
+    /// are built, or when they run the configuration's own period: a stream of fewer than
+    /// two samples).
+    pub fn period_us(&self) -> Option<u64> {
+        self.built_us
     }
 
     /// The bank of `axis`, once built (`None` before, after a failed build, or for an axis
@@ -335,7 +346,8 @@ impl<
         }
         // Fewer than two samples: the period in use (at the start, the configuration's).
         let base = self.built.unwrap_or(self.cfg);
-        let cfg = PeriodEstimator::from_times(self.held.iter().map(|s| s.t_us)).apply(base);
+        let period = PeriodEstimator::from_times(self.held.iter().map(|s| s.t_us));
+        let cfg = period.apply(base);
         self.phase = Phase::Running;
         if self.built.is_none() {
             for axis in self.axes.iter().take(N) {
@@ -347,7 +359,9 @@ impl<
                     Err(e) => return Err(self.fail(e)),
                 }
             }
-        } else if cfg.sample_period_s != base.sample_period_s {
+        } else if cfg.sample_period_s.to_bits() != base.sample_period_s.to_bits() {
+            // (Compared by their bits: periods are finite and >= 0, so this is `!=` without a
+            // float comparison.)
             // Another period after a new epoch: every bank again, for it, one at a time in
             // its slot (one bank on the stack, not `N`: the small parts' RAM).
             let mut failed = None;
@@ -369,6 +383,7 @@ impl<
             self.counters.period_changes = self.counters.period_changes.saturating_add(1);
         }
         self.built = Some(cfg);
+        self.built_us = period.period_us().or(self.built_us);
         for s in &self.held {
             run_sample::<B, R>(
                 &mut self.banks,

@@ -130,12 +130,12 @@ pub fn fault(e: &Event) {
             frames
         ),
         Event::RateMismatch {
-            measured_hz,
-            configured_hz,
+            measured_us,
+            configured_us,
         } => defmt::println!(
-            "firmware: packet rate differs from the configuration: {=f32} Hz measured, {=f32} Hz configured",
-            measured_hz,
-            configured_hz
+            "firmware: packet rate differs from the configuration: a period of {=u32} us measured, {=u32} us configured",
+            measured_us,
+            configured_us
         ),
         Event::ForeignType { got, configured } => defmt::println!(
             "firmware: {=str} frame received, {=str} configured",
@@ -165,7 +165,9 @@ pub fn period_change<
     if pipe.estimation().counters().period_changes != before {
         defmt::println!(
             "firmware: new time epoch at another packet rate: nominal sample period now {=u32} us; banks rebuilt",
-            pipe.estimation().period_s().map_or(0, |p| (p * 1e6) as u32)
+            pipe.estimation()
+                .period_us()
+                .map_or(0, |us| u32::try_from(us).unwrap_or(u32::MAX))
         );
     }
 }

@@ -10,7 +10,7 @@
 //! * **frozen time stamps**: [`PERIODS`] frames in a row of the configured type repeating
 //!   one time stamp, and the first new stamp after such a run;
 //! * **another packet rate**: the period of the first [`WARMUP_SAMPLES`](crate::period::WARMUP_SAMPLES) time stamps differs
-//!   from the configured one by more than [`RATE_TOLERANCE`] (once);
+//!   from the configured one by more than [`RATE_TOLERANCE_PERCENT`] % (once);
 //! * **another packet type**: a frame of a type other than the configured one (once; after a
 //!   configuration this means the unit reset or was reconfigured);
 //! * **periodic counters**: every [`COUNTER_INTERVAL_S`] s of stream time (counted in frames
@@ -26,9 +26,10 @@ use nav440_proto::{PacketRate, PacketType, TimeStamp};
 pub const MIN_SILENCE_MS: u32 = 500;
 /// Nominal periods of silence, or of frames with a frozen time stamp, before a report.
 pub const PERIODS: u32 = 25;
-/// Relative difference between the measured and the configured packet period above which
-/// the rate is reported as different (0.2: 20 %).
-pub const RATE_TOLERANCE: f32 = 0.2;
+/// Difference between the measured and the configured packet period, in percent of the
+/// configured one, above which the rate is reported as different (compared in whole
+/// microseconds: no floating point).
+pub const RATE_TOLERANCE_PERCENT: u32 = 20;
 /// Stream time between two periodic counter reports, s.
 pub const COUNTER_INTERVAL_S: u32 = 10;
 
@@ -56,12 +57,13 @@ pub enum Event {
         /// Frames of the run (the first of the repeated stamp included).
         frames: u32,
     },
-    /// The measured packet rate differs from the configured one.
+    /// The measured packet rate differs from the configured one: their periods.
     RateMismatch {
-        /// Rate from the first [`WARMUP_SAMPLES`](crate::period::WARMUP_SAMPLES) time stamps, Hz.
-        measured_hz: f32,
-        /// The configured rate, Hz.
-        configured_hz: f32,
+        /// Period from the first [`WARMUP_SAMPLES`](crate::period::WARMUP_SAMPLES) time
+        /// stamps (their upper median interval, [`PeriodEstimator::period_us`]), us.
+        measured_us: u32,
+        /// The configured rate's period, us (10,000 us at 100 Hz).
+        configured_us: u32,
     },
     /// A frame of another type than the configured one.
     ForeignType {
@@ -179,12 +181,13 @@ impl StreamWatch {
             self.period.push(u64::from(stamp_ms(stamp)) * 1000);
             if self.period.is_complete() {
                 self.rate_checked = true;
-                if let Some(p) = self.period.period_s().filter(|p| *p > 0.0) {
-                    let configured_s = self.period_ms() as f32 * 1e-3;
-                    if ((p - configured_s) / configured_s).abs() > RATE_TOLERANCE {
+                if let Some(p) = self.period.period_us().filter(|p| *p > 0) {
+                    let configured = u64::from(self.period_ms()) * 1000;
+                    if p.abs_diff(configured) * 100 > configured * u64::from(RATE_TOLERANCE_PERCENT)
+                    {
                         on_event(Event::RateMismatch {
-                            measured_hz: 1.0 / p,
-                            configured_hz: self.rate.hz(),
+                            measured_us: u32::try_from(p).unwrap_or(u32::MAX),
+                            configured_us: u32::try_from(configured).unwrap_or(u32::MAX),
                         });
                     }
                 }

@@ -210,17 +210,32 @@ fn another_rate_is_reported_once_with_both_values() {
         vec![(
             15,
             Event::RateMismatch {
-                measured_hz: 200.0,
-                configured_hz: 100.0
+                measured_us: 5_000,
+                configured_us: 10_000
             }
         )]
     );
     // The banks run at the measured period, as without the watch.
     assert_eq!(p.estimation().period_s(), Some(0.005));
-    // 10 % off (11 ms) is within the tolerance.
-    let mut p = watched_100hz();
-    let stamps: Vec<u32> = (0..100).map(|k| 11 * k).collect();
-    assert_eq!(run(&mut p, &stamps, 0), vec![]);
+    assert_eq!(p.estimation().period_us(), Some(5_000));
+    // 10 % off (11 ms) and 20 % off (12 ms, the tolerance itself) are within the tolerance;
+    // 30 % (13 ms) is not.
+    for (ms, reported) in [(11, false), (12, false), (13, true), (8, false), (7, true)] {
+        let mut p = watched_100hz();
+        let stamps: Vec<u32> = (0..100).map(|k| ms * k).collect();
+        let want = reported.then_some((
+            15,
+            Event::RateMismatch {
+                measured_us: ms * 1000,
+                configured_us: 10_000,
+            },
+        ));
+        assert_eq!(
+            run(&mut p, &stamps, 0),
+            want.into_iter().collect::<Vec<_>>(),
+            "{ms} ms"
+        );
+    }
 }
 
 #[test]

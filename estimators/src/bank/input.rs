@@ -4,28 +4,11 @@ use super::{BankConfig, Wrap};
 use crate::adapter::{SampleClock, Tick};
 use crate::{ConfigError, Hold, Real, SampleError, Unwrapper};
 
-/// The unwrapped input `360 turns + wrapped` (deg) as (f32 rounding, exact residual in f64).
+/// The unwrapped input `360 turns + wrapped` (deg) as (f32 rounding, exact residual in f64):
+/// [`Real::unwrapped_angle`].
 #[inline]
 fn exact_angle<T: Real>(turns: i64, wrapped: T) -> (f32, f64) {
-    if turns == 0 {
-        // Fast path (no soft-float f64 on an FPU-less or single-precision core): the wrapped
-        // value is exactly an f32 (checked by the round trip), so the residual is 0. `+ 0.0`
-        // maps -0 to +0 as the f64 sum below does.
-        let r = wrapped.to_f32() + 0.0;
-        if T::from_f32(r) == wrapped {
-            return (r, 0.0);
-        }
-    }
-    exact_angle_f64(turns, wrapped)
-}
-
-/// [`exact_angle`] in f64 (soft-float on Cortex-M: out of line, taken only after a turn).
-#[cold]
-#[inline(never)]
-fn exact_angle_f64<T: Real>(turns: i64, wrapped: T) -> (f32, f64) {
-    let exact = turns as f64 * 360.0 + wrapped.to_f64();
-    let rounded = exact as f32;
-    (rounded, exact - f64::from(rounded))
+    T::unwrapped_angle(turns, wrapped)
 }
 
 /// What [`BankInput::accept`] decided for one accepted sample.

@@ -34,6 +34,37 @@ pub mod scale {
     pub const DVEL_M_S: f32 = 200.0 / 4_294_967_296.0;
     /// Delta angle (S2, I4), rad per LSB (7*pi/2^32).
     pub const DANGLE_RAD: f32 = 7.0 * PI / 4_294_967_296.0;
+
+    /// An angle field in deg: `raw * 360/2^16` = `raw * 45 * 2^-13`, exact in `f32`, computed
+    /// with integer operations only (the same bits as `raw as f32 * ANGLE_DEG`, which is exact
+    /// too): no soft-float routine on a core without an FPU.
+    #[inline]
+    pub fn angle_deg(raw: i16) -> f32 {
+        dyadic_f32(i32::from(raw) * 45, -13)
+    }
+
+    /// An angular rate field in deg/s: `raw * 1260/2^16` = `raw * 315 * 2^-14`, exact in
+    /// `f32`, with integer operations only (the bits of `raw as f32 * RATE_DEG_S`).
+    #[inline]
+    pub fn rate_deg_s(raw: i16) -> f32 {
+        dyadic_f32(i32::from(raw) * 315, -14)
+    }
+
+    /// `m * 2^e` as an `f32` built from its bits: exact for `|m| < 2^24` and a result in the
+    /// normal range (the callers' `m` and `e` keep it there); `m = 0` gives `+0.0`.
+    #[inline]
+    fn dyadic_f32(m: i32, e: i32) -> f32 {
+        if m == 0 {
+            return 0.0;
+        }
+        let sign = if m < 0 { 0x8000_0000 } else { 0 };
+        let a = m.unsigned_abs();
+        // The leading one's position, at most 23 (|m| < 2^24).
+        let msb = 31 - a.leading_zeros();
+        let fraction = (a << (23 - msb)) & 0x007F_FFFF;
+        let exponent = (msb as i32 + e + 127) as u32;
+        f32::from_bits(sign | exponent << 23 | fraction)
+    }
 }
 
 /// A physical unit of a field value.
@@ -353,6 +384,18 @@ macro_rules! si_accessor {
     };
 }
 
+/// An SI accessor computed exactly with integer operations by `$conv` (`scale::angle_deg`,
+/// `scale::rate_deg_s`): the degree accessors, which the pipeline reads on every packet.
+macro_rules! exact_accessor {
+    ($f:ident, $name:ident, $conv:path, $unit:literal, $lsb:literal) => {
+        #[doc = concat!("`", stringify!($f), "` in ", $unit, " (", $lsb, " per LSB; exact, integer operations only).")]
+        #[inline]
+        pub fn $name(&self) -> f32 {
+            $conv(self.$f())
+        }
+    };
+}
+
 /// The compile-time side of a field kind. Arms per kind: `@ty` (wire type), `@kind`
 /// ([`Kind`] value), `@doc` (the wire paragraph of the raw accessor's doc) and `@si` (the SI
 /// accessors, whose names the table gives). Adding a kind: one arm of each, plus a [`Kind`]
@@ -411,11 +454,11 @@ macro_rules! kind {
 
     (@si angle, $f:ident, [$rad:ident, $deg:ident]) => {
         si_accessor!($f, $rad, f32, scale::ANGLE_RAD, "rad", "2*pi/2^16 rad");
-        si_accessor!($f, $deg, f32, scale::ANGLE_DEG, "deg", "360/2^16 deg");
+        exact_accessor!($f, $deg, scale::angle_deg, "deg", "360/2^16 deg");
     };
     (@si rate, $f:ident, [$rad_s:ident, $deg_s:ident]) => {
         si_accessor!($f, $rad_s, f32, scale::RATE_RAD_S, "rad/s", "7*pi/2^16 rad/s");
-        si_accessor!($f, $deg_s, f32, scale::RATE_DEG_S, "deg/s", "1260/2^16 deg/s");
+        exact_accessor!($f, $deg_s, scale::rate_deg_s, "deg/s", "1260/2^16 deg/s");
     };
     (@si accel, $f:ident, [$g:ident]) => {
         si_accessor!($f, $g, f32, scale::ACCEL_G, "g", "20/2^16 g");

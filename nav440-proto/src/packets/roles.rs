@@ -81,12 +81,12 @@ const fn once(slot: Option<usize>, off: usize) -> Option<usize> {
 
 #[inline(always)]
 fn angle_deg(p: &[u8], off: usize) -> f32 {
-    i16::read(p, off) as f32 * scale::ANGLE_DEG
+    scale::angle_deg(i16::read(p, off))
 }
 
 #[inline(always)]
 fn rate_deg_s(p: &[u8], off: usize) -> f32 {
-    i16::read(p, off) as f32 * scale::RATE_DEG_S
+    scale::rate_deg_s(i16::read(p, off))
 }
 
 impl Roles {

@@ -13,7 +13,7 @@ use super::captures::{
 use super::equivalence::{equivalence, equivalence_csv, equivalence_full, peak_of, peak_velocity};
 use super::nav440_cli::{adaptive_host_args, firmware_host_args, nav440_synth, small_host_args};
 use super::qemu_run::counter;
-use super::size::{build_noref, euler_symbols, size, NOREF_BOARD};
+use super::size::{build_noref, euler_symbols, size, soft_float_symbols, NOREF_BOARD};
 use super::soak::CI_SOAK;
 use super::unit_cases::{short_capture, uart_rows_ci, unit_ci};
 use super::{
@@ -392,6 +392,13 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
                 elf.display()
             ));
         }
+        // The float-free check below sees soft float where it is linked: with the reference.
+        if board.name == NOREF_BOARD.name && soft_float_symbols(&elf)?.is_empty() {
+            return Err(format!(
+                "{}: no soft-float symbol found: the float-free check of the no-reference image below would prove nothing",
+                elf.display()
+            ));
+        }
     }
     // The product firmware without the Euler reference (feature `no-reference`; thumbv6m,
     // profile `small`, the image `cargo xtask size` lists as `product-thumbv6m-3axis-small-noref`):
@@ -413,6 +420,21 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
     }
     eprintln!(
         "xtask: OK: {} links no sincosf and no euler_rates_deg",
+        noref.display()
+    );
+    // Nor any floating point: from the packet's integers to the row, integer operations
+    // only (the banks read from the table build.rs built on the host).
+    let float = soft_float_symbols(&noref)?;
+    if !float.is_empty() {
+        return Err(format!(
+            "{} (features `{PRODUCT}`, `{NO_REFERENCE}`) must be float-free and links {} soft-float or libm symbols: {}",
+            noref.display(),
+            float.len(),
+            float.join(", ")
+        ));
+    }
+    eprintln!(
+        "xtask: OK: {} links no soft-float and no libm routine",
         noref.display()
     );
     if qemu_ok {

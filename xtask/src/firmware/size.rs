@@ -185,6 +185,31 @@ pub(super) fn euler_symbols(elf: &Path) -> Result<Vec<String>, String> {
     crate::elf::symbols_containing(elf, &["sincosf", "euler_rates_deg"])
 }
 
+/// Parts of the names of the soft-float routines (`compiler_builtins`' `f32`/`f64` arithmetic,
+/// comparisons and conversions, by their AEABI names and their own) and of `libm`.
+const SOFT_FLOAT: &[&str] = &[
+    "__aeabi_f",
+    "__aeabi_d",
+    "__aeabi_i2f",
+    "__aeabi_ui2f",
+    "__aeabi_l2f",
+    "__aeabi_ul2f",
+    "__aeabi_i2d",
+    "__aeabi_ui2d",
+    "__aeabi_l2d",
+    "__aeabi_ul2d",
+    "compiler_builtins5float",
+    "compiler_builtins::float",
+    "libm",
+];
+
+/// The soft-float and `libm` symbols among the symbols of `elf` (none in the product image
+/// without the Euler reference: its path from the packet's integers to the row is
+/// float-free).
+pub(super) fn soft_float_symbols(elf: &Path) -> Result<Vec<String>, String> {
+    crate::elf::symbols_containing(elf, SOFT_FLOAT)
+}
+
 /// A tool of rustup's `llvm-tools` component (pinned in rust-toolchain.toml).
 fn llvm_tool(name: &str) -> Result<PathBuf, String> {
     let out = |args: &[&str]| -> Result<String, String> {
@@ -375,6 +400,15 @@ pub fn size() -> Result<(), String> {
                 None => println!("RAM goal of {label}: no stack measurement (QEMU missing)"),
             }
         }
+    }
+    // The float-free product image (CI fails it when it links any).
+    for (label, _, elf, _, _) in builds.iter().filter(|(l, ..)| l.ends_with(NOREF_SUFFIX)) {
+        let float = soft_float_symbols(elf)?;
+        println!(
+            "no floating point: {label}: {} soft-float or libm symbols: {}",
+            float.len(),
+            if float.is_empty() { "met" } else { "NOT met" }
+        );
     }
     if qemu::qemu_available() {
         let (_, ram_f32) = run_bench(&qemu::BOARDS[0], false, BankChoice::Paper)?;

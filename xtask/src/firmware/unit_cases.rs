@@ -430,7 +430,7 @@ pub(super) fn unit_ci(
             (
                 "double-rate",
                 &["--fast", "--fault", "double-rate"][..],
-                "firmware: packet rate differs from the configuration: 200.0 Hz measured, 100.0 Hz configured",
+                "firmware: packet rate differs from the configuration: a period of 5000 us measured, 10000 us configured",
             ),
         ] {
             cases.push(UnitCase {
