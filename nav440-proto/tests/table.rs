@@ -73,31 +73,6 @@ fn kinds_scale_by_the_protocol_document() {
     }
 }
 
-/// The degree accessors build their `f32` from integers; every raw value gives the exact
-/// value of the document's scale (360/2^16 deg, 1260/2^16 deg/s, computed here in `f64`,
-/// where it is exact) and the bits of the float product `raw as f32 * scale`.
-#[test]
-fn degree_conversions_are_exact_for_every_raw_value() {
-    for raw in i16::MIN..=i16::MAX {
-        let angle = scale::angle_deg(raw);
-        assert_eq!(f64::from(angle), f64::from(raw) * 360.0 / 65536.0, "{raw}");
-        assert_eq!(
-            angle.to_bits(),
-            (raw as f32 * scale::ANGLE_DEG).to_bits(),
-            "{raw}"
-        );
-        let rate = scale::rate_deg_s(raw);
-        assert_eq!(f64::from(rate), f64::from(raw) * 1260.0 / 65536.0, "{raw}");
-        assert_eq!(
-            rate.to_bits(),
-            (raw as f32 * scale::RATE_DEG_S).to_bits(),
-            "{raw}"
-        );
-    }
-    // Zero is +0, as the float product of +0.
-    assert_eq!(scale::angle_deg(0).to_bits(), 0);
-}
-
 #[test]
 fn units_have_their_symbols() {
     let want = [

@@ -35,25 +35,40 @@ pub mod scale {
     /// Delta angle (S2, I4), rad per LSB (7*pi/2^32).
     pub const DANGLE_RAD: f32 = 7.0 * PI / 4_294_967_296.0;
 
-    /// An angle field in deg: `raw * 360/2^16` = `raw * 45 * 2^-13`, exact in `f32`, computed
-    /// with integer operations only (the same bits as `raw as f32 * ANGLE_DEG`, which is exact
-    /// too): no soft-float routine on a core without an FPU.
+    /// An angle field in deg: `raw * 360/2^16` = `raw * 45 * 2^-13`, exact in `f32`. On a
+    /// bare-metal target without hardware floating point (an ABI other than `eabihf`) it is
+    /// built with integer operations only, so no soft-float routine is linked; elsewhere it is
+    /// the float product `raw as f32 * ANGLE_DEG`, also exact: the same bits either way.
     #[inline]
     pub fn angle_deg(raw: i16) -> f32 {
-        dyadic_f32(i32::from(raw) * 45, -13)
+        if INTEGER_ONLY {
+            dyadic_f32(i32::from(raw) * 45, -13)
+        } else {
+            f32::from(raw) * ANGLE_DEG
+        }
     }
 
     /// An angular rate field in deg/s: `raw * 1260/2^16` = `raw * 315 * 2^-14`, exact in
-    /// `f32`, with integer operations only (the bits of `raw as f32 * RATE_DEG_S`).
+    /// `f32`; integer operations only where [`angle_deg`] uses them (the bits of `raw as f32 *
+    /// RATE_DEG_S`).
     #[inline]
     pub fn rate_deg_s(raw: i16) -> f32 {
-        dyadic_f32(i32::from(raw) * 315, -14)
+        if INTEGER_ONLY {
+            dyadic_f32(i32::from(raw) * 315, -14)
+        } else {
+            f32::from(raw) * RATE_DEG_S
+        }
     }
 
+    /// A bare-metal target without hardware floating point: the degree conversions use
+    /// integer operations.
+    const INTEGER_ONLY: bool = cfg!(all(target_os = "none", not(target_abi = "eabihf")));
+
     /// `m * 2^e` as an `f32` built from its bits: exact for `|m| < 2^24` and a result in the
-    /// normal range (the callers' `m` and `e` keep it there); `m = 0` gives `+0.0`.
-    #[inline]
-    fn dyadic_f32(m: i32, e: i32) -> f32 {
+    /// normal range (the callers' `m` and `e` keep it there); `m = 0` gives `+0.0`. Out of
+    /// line: one copy for every accessor.
+    #[inline(never)]
+    pub(crate) fn dyadic_f32(m: i32, e: i32) -> f32 {
         if m == 0 {
             return 0.0;
         }
@@ -518,4 +533,26 @@ macro_rules! kind {
         }
     };
     (@role_methods $f:ident $($role:ident)?) => {};
+}
+
+#[cfg(test)]
+mod tests {
+    use super::scale;
+
+    /// The integer conversion of the targets without an FPU gives, for every raw value, the
+    /// exact value of the document's scale (360/2^16 deg, 1260/2^16 deg/s, computed in `f64`,
+    /// where it is exact) and the bits of the float product the other targets compute.
+    #[test]
+    fn degree_conversions_are_exact_for_every_raw_value() {
+        for raw in i16::MIN..=i16::MAX {
+            let angle = scale::dyadic_f32(i32::from(raw) * 45, -13);
+            assert_eq!(f64::from(angle), f64::from(raw) * 360.0 / 65536.0, "{raw}");
+            assert_eq!(angle.to_bits(), scale::angle_deg(raw).to_bits(), "{raw}");
+            let rate = scale::dyadic_f32(i32::from(raw) * 315, -14);
+            assert_eq!(f64::from(rate), f64::from(raw) * 1260.0 / 65536.0, "{raw}");
+            assert_eq!(rate.to_bits(), scale::rate_deg_s(raw).to_bits(), "{raw}");
+        }
+        // Zero is +0, as the float product of +0.
+        assert_eq!(scale::dyadic_f32(0, -13).to_bits(), 0);
+    }
 }
