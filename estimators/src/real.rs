@@ -378,63 +378,58 @@ fn fx_unwrapped_angle(turns: i64, wrapped: i64) -> (f32, f64) {
     fx_unwrapped_angle_wide(turns, wrapped)
 }
 
-/// [`fx_unwrapped_angle`] after a turn (or with a residual): the exact angle `(360 turns)
-/// 2^32 + wrapped` in units of 2^-32 deg, saturated to [`Fx`]'s range (+-2^31 deg, 6 million
-/// turns, as every `Fx` value saturates), its nearest `f32` and the nearest `f64` to the
-/// residual (exact: the residual has at most 40 significant bits).
+/// [`fx_unwrapped_angle`] after a turn (or with a residual), in 128-bit integers: the exact
+/// angle `(360 turns) 2^32 + wrapped` in units of 2^-32 deg, its nearest `f32` and the
+/// nearest `f64` to the residual (exact for any angle below 2^40 deg).
 #[cold]
 #[inline(never)]
 fn fx_unwrapped_angle_wide(turns: i64, wrapped: i64) -> (f32, f64) {
-    let exact = turns.saturating_mul(360 << 32).saturating_add(wrapped);
-    let (rounded, back) = q32_nearest::<24>(exact);
-    let (residual, _) = q32_nearest::<53>(exact.saturating_sub(back));
+    let exact = i128::from(turns) * (360i128 << 32) + i128::from(wrapped);
+    let (rounded, back) = q32_nearest(exact, 24);
+    let (residual, _) = q32_nearest(exact - back, 53);
     (f32::from_bits(rounded as u32), f64::from_bits(residual))
 }
 
-/// The float with a `P`-bit significand (24: `f32`, 53: `f64`) nearest to `x 2^-32` (ties to
-/// even): its bits, and its value again in units of 2^-32 (exact: every such float with
-/// `|x| >= 1` is a multiple of 2^-32 here, as the ones below are exact; a rounding up to 2^63
-/// saturates). Integer operations only; `x = 0` gives `+0`.
-fn q32_nearest<const P: u32>(x: i64) -> (u64, i64) {
+/// The float with a `precision`-bit significand (24: `f32`, otherwise 53: `f64`) nearest to
+/// `x 2^-32` (ties to even): its bits, and its value again in units of 2^-32 (exact: every
+/// such float with `|x| >= 1` is a multiple of 2^-32 here, as the ones below are exact).
+/// Integer operations only; `x = 0` gives `+0`. One out-of-line copy for both precisions.
+#[inline(never)]
+fn q32_nearest(x: i128, precision: u32) -> (u64, i128) {
     if x == 0 {
         return (0, 0);
     }
-    let (sign, fraction_bits, bias) = if P == 24 {
-        (1u64 << 31, 23u32, 127i32)
+    let (sign, fraction_bits, bias, precision) = if precision == 24 {
+        (1u64 << 31, 23u32, 127i32, 24u32)
     } else {
-        (1u64 << 63, 52, 1023)
+        (1u64 << 63, 52, 1023, 53)
     };
     let neg = x < 0;
     let mag = x.unsigned_abs();
     // The leading one at bit `p`: |x 2^-32| in [2^(p - 32), 2^(p - 31)).
-    let mut p = 63 - mag.leading_zeros();
-    let mut q = if p < P {
-        mag << (P - 1 - p)
+    let mut p = 127 - mag.leading_zeros();
+    let mut q = if p < precision {
+        mag << (precision - 1 - p)
     } else {
-        let k = p + 1 - P;
+        let k = p + 1 - precision;
         let q = mag >> k;
-        let r = mag & ((1u64 << k) - 1);
-        let half = if k == 0 { 0 } else { 1u64 << (k - 1) };
+        let r = mag & ((1u128 << k) - 1);
+        let half = if k == 0 { 0 } else { 1u128 << (k - 1) };
         if k > 0 && (r > half || (r == half && q & 1 == 1)) {
             q + 1
         } else {
             q
         }
     };
-    if q == 1u64 << P {
+    if q == 1u128 << precision {
         // Rounded up to the next power of two.
         q >>= 1;
         p += 1;
     }
-    // The value q 2^(p + 1 - P) in units of 2^-32.
-    let shift = p as i32 + 1 - P as i32;
-    let back = if shift >= 0 {
-        q.checked_shl(shift as u32).unwrap_or(u64::MAX)
-    } else {
-        q >> -shift
-    };
-    let back = i64::try_from(back).unwrap_or(i64::MAX);
-    let back = if neg { -back } else { back };
+    // The value q 2^(p + 1 - precision) in units of 2^-32.
+    let shift = p as i32 + 1 - precision as i32;
+    let back = if shift >= 0 { q << shift } else { q >> -shift };
+    let back = if neg { -(back as i128) } else { back as i128 };
     let exponent = (p as i32 - 32 + bias) as u64;
     let bits = (if neg { sign } else { 0 })
         | (exponent << fraction_bits)
@@ -657,7 +652,7 @@ pub trait Real:
     /// angle). The default computes in `f64` (exact while the angle fits its 53 bits: below
     /// 2^21 deg for [`Fx`]'s 32 fractional bits) with a fast path when `turns = 0` and the
     /// wrapped value is an `f32`; [`Fx`] computes it with integer operations only, exactly
-    /// within its range (an angle beyond +-2^31 deg saturates there).
+    /// at any turn count.
     #[inline]
     fn unwrapped_angle(turns: i64, wrapped: Self) -> (f32, f64) {
         if turns == 0 {
@@ -853,8 +848,8 @@ impl Real for Fx {
     fn ed_sqrt(self) -> Self {
         Fx::from_bits(crate::fxk::sqrt_fast(self.to_bits()) as i64)
     }
-    /// Integer operations only ([`fx_unwrapped_angle`]): exact within `Fx`'s range (saturating
-    /// at +-2^31 deg beyond it), and the same values as the default's `f64` below 2^21 deg.
+    /// Integer operations only ([`fx_unwrapped_angle`]): exact at any turn count, and the
+    /// same values as the default's `f64` wherever that is exact (below 2^21 deg at least).
     #[inline]
     fn unwrapped_angle(turns: i64, wrapped: Self) -> (f32, f64) {
         fx_unwrapped_angle(turns, wrapped.to_bits())
@@ -995,7 +990,7 @@ mod tests {
         // A million turns (360 million deg): the f64 sum is no longer exact; the integer one
         // is, so its rounding and residual add up to the angle to within the residual's
         // rounding.
-        for turns in [1_000_000i64, -5_000_000] {
+        for turns in [1_000_000i64, -7_654_321, 1 << 40] {
             let raw = 0x0000_0001_2345_6789;
             let (r, res) = fx_unwrapped_angle(turns, raw);
             let exact = i128::from(turns) * (360i128 << 32) + i128::from(raw);
