@@ -39,9 +39,12 @@
 
 use estimators::BankConfig;
 
-/// `us as f32 * 1e-6` (s), bit for bit, computed with integer operations only: both roundings
-/// of the float expression (`us` to `f32`, then the product with the `f32` nearest to 1e-6)
-/// to nearest, ties to even. The period rule's conversion ([module documentation](self)).
+/// `us as f32 * 1e-6` (s), bit for bit: the period rule's conversion ([module
+/// documentation](self)). On a bare-metal target without hardware floating point (an ABI
+/// other than `eabihf`) it is computed with integer operations only (both roundings of the
+/// float expression, `us` to `f32` and the product with the `f32` nearest to 1e-6, to
+/// nearest, ties to even), so no soft-float routine is linked; elsewhere it is the float
+/// expression itself.
 ///
 /// ```
 /// use nav440_pipeline::period::seconds;
@@ -50,6 +53,15 @@ use estimators::BankConfig;
 /// }
 /// ```
 pub fn seconds(us: u64) -> f32 {
+    if cfg!(all(target_os = "none", not(target_abi = "eabihf"))) {
+        seconds_integer(us)
+    } else {
+        us as f32 * 1e-6
+    }
+}
+
+/// [`seconds`] with integer operations only.
+fn seconds_integer(us: u64) -> f32 {
     /// The bits of the `f32` nearest to 1e-6: significand `2^23 + fraction`, exponent.
     const MICRO: u32 = 0x3586_37BD;
     if us == 0 {
@@ -185,9 +197,9 @@ impl PeriodEstimator {
 
 #[cfg(test)]
 mod tests {
-    use super::seconds;
+    use super::seconds_integer as seconds;
 
-    /// [`seconds`] gives the bits of the float expression it replaces (the independent
+    /// The integer [`super::seconds`] gives the bits of the float expression (the independent
     /// reference: the host's FPU) for every period below 2^25 us (33.6 s; both roundings
     /// exercised from 2^24 us on) and for random ones of every magnitude.
     #[test]
