@@ -848,8 +848,9 @@ impl Real for Fx {
     fn ed_sqrt(self) -> Self {
         Fx::from_bits(crate::fxk::sqrt_fast(self.to_bits()) as i64)
     }
-    /// Integer operations only ([`fx_unwrapped_angle`]): exact at any turn count, and the
-    /// same values as the default's `f64` wherever that is exact (below 2^21 deg at least).
+    /// Integer operations only (128-bit ones for an angle after a turn): exact at any turn
+    /// count, and the same values as the default's `f64` wherever that is exact (below 2^21
+    /// deg at least).
     #[inline]
     fn unwrapped_angle(turns: i64, wrapped: Self) -> (f32, f64) {
         fx_unwrapped_angle(turns, wrapped.to_bits())
