@@ -39,8 +39,8 @@ fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
     }
 }
 
-/// The banks build.rs built on the host for the fixed-point product images (`banks.rs` in
-/// `OUT_DIR`, see `prebuilt_banks` in build.rs).
+/// The banks build.rs built on the host for the product images with the shipped preset
+/// (`banks.rs` in `OUT_DIR`, see `prebuilt_banks` in build.rs), in the image's number type.
 #[cfg(prebuilt_banks)]
 mod prebuilt {
     include!(concat!(env!("OUT_DIR"), "/banks.rs"));

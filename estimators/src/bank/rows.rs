@@ -605,6 +605,11 @@ where
 /// Read back, the bank is restarted ([`Bank::restart`]): its laws at rest, the next sample
 /// treated as the first. A bank serialized straight after [`Bank::new`] reads back equal to
 /// it.
+///
+/// The form is not validated again when it is read: read only what a `Bank` of the same type
+/// and crate version serialized (a table built with the image, as the project's firmware
+/// does). Bytes from elsewhere can give a bank whose parameters [`Bank::new`] would have
+/// refused (a step of 0 us, an unstable gain), and such a bank can panic or diverge.
 #[cfg(feature = "serde")]
 impl<'de, R: Rows<T, S>, const N: usize, T: Real + serde::Deserialize<'de>, S: SqrtFn<T>>
     serde::Deserialize<'de> for Bank<R, N, T, S>
