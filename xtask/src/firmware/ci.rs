@@ -468,36 +468,17 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
     // at a period that is none of them it stops with the error, and never estimates with a
     // bank built for another period.
     if qemu_ok {
-        let off_rate = off_rate_capture()?;
-        let (elf, board) = (noref.clone(), NOREF_BOARD);
-        pool.spawn(
-            CHECKS_STEP,
-            "a packet period without a prebuilt bank".into(),
-            move || {
-                let bytes = qemu::framed_input(&read_file(&off_rate)?)?;
-                let path = qemu::input_path(&work_dir()?, "offrate");
-                let r = qemu::run_uart(
-                    &board,
-                    &elf,
-                    &path,
-                    &bytes,
-                    Output::Capture,
-                    Duration::from_secs(60),
-                );
-                let _ = std::fs::remove_file(&path);
-                match r {
-                    Err(e) if e.contains(NOT_PREBUILT) => {
-                        eprintln!(
-                            "xtask: OK: a packet period of {OFF_RATE_MS} ms ends the product image with exit status 1 ({NOT_PREBUILT})"
-                        );
-                        Ok(())
-                    }
-                    Err(e) => Err(format!("unexpected failure at a {OFF_RATE_MS} ms period: {e}")),
-                    Ok(_) => Err(format!(
-                        "the product image estimated at a {OFF_RATE_MS} ms period, for which it holds no bank"
-                    )),
-                }
-            },
+        let input = qemu::framed_input(&read_file(&off_rate_capture()?)?)?;
+        spawn_expected_failure(
+            pool,
+            NOREF_BOARD,
+            &noref,
+            input,
+            "offrate",
+            NOT_PREBUILT,
+            format!(
+                "a packet period of {OFF_RATE_MS} ms, for which the product image holds no bank,"
+            ),
         );
     }
     // The product firmware with the gains `nav440 tune --bank product --rust` wrote (feature
@@ -673,6 +654,41 @@ fn queue_adaptive(pool: &Pool, board: Board, elf: &Path, switch: &Path, bundled:
     );
 }
 
+/// Queues a run of `elf` on `board` fed `input` through its UART (replay mode; `tag` names
+/// the input file) that must end with a non-zero exit status whose message contains
+/// `needle`; `what` names the case in the job's messages.
+fn spawn_expected_failure(
+    pool: &Pool,
+    board: Board,
+    elf: &Path,
+    input: Vec<u8>,
+    tag: &'static str,
+    needle: &'static str,
+    what: String,
+) {
+    let elf = elf.to_path_buf();
+    pool.spawn(CHECKS_STEP, what.clone(), move || {
+        let path = qemu::input_path(&work_dir()?, tag);
+        let r = qemu::run_uart(
+            &board,
+            &elf,
+            &path,
+            &input,
+            Output::Capture,
+            Duration::from_secs(60),
+        );
+        let _ = std::fs::remove_file(&path);
+        match r {
+            Err(e) if e.contains(needle) => {
+                eprintln!("xtask: OK: {what} ends the firmware with exit status 1 ({needle})");
+                Ok(())
+            }
+            Err(e) => Err(format!("unexpected failure with {what}: {e}")),
+            Ok(_) => Err(format!("{what} was accepted (exit status 0)")),
+        }
+    });
+}
+
 /// The failure exits, as jobs: input without the length prefix (exit 1, never a hang), a panic
 /// (exit 1 with its message), a hard-float image on the FPU-less board (a HardFault exit).
 fn queue_failure_exits(
@@ -682,30 +698,14 @@ fn queue_failure_exits(
     bundled: &Path,
 ) -> Result<(), String> {
     let raw = read_file(bundled)?;
-    let (elf, board) = (m4f.to_path_buf(), m4f_board);
-    pool.spawn(
-        CHECKS_STEP,
+    spawn_expected_failure(
+        pool,
+        m4f_board,
+        m4f,
+        raw.get(..4096).unwrap_or(&raw).to_vec(),
+        "noprefix",
+        "N4LP",
         "input without the length prefix".into(),
-        move || {
-            let path = qemu::input_path(&work_dir()?, "noprefix");
-            let r = qemu::run_uart(
-                &board,
-                &elf,
-                &path,
-                raw.get(..4096).unwrap_or(&raw),
-                Output::Capture,
-                Duration::from_secs(60),
-            );
-            let _ = std::fs::remove_file(&path);
-            match r {
-                Err(e) if e.contains("N4LP") => {
-                    eprintln!("xtask: OK: input without the length prefix ends with exit status 1");
-                    Ok(())
-                }
-                Err(e) => Err(format!("unexpected failure of the no-prefix check: {e}")),
-                Ok(_) => Err("input without the length prefix was accepted".into()),
-            }
-        },
     );
     let panic_elf = build(m4f_board.target, &[], "panic_check")?;
     pool.spawn(
