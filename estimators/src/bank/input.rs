@@ -4,13 +4,6 @@ use super::{BankConfig, Wrap};
 use crate::adapter::{SampleClock, Tick};
 use crate::{ConfigError, Hold, Real, SampleError, Unwrapper};
 
-/// The unwrapped input `360 turns + wrapped` (deg) as (f32 rounding, exact residual in f64):
-/// [`Real::unwrapped_angle`].
-#[inline]
-fn exact_angle<T: Real>(turns: i64, wrapped: T) -> (f32, f64) {
-    T::unwrapped_angle(turns, wrapped)
-}
-
 /// What [`BankInput::accept`] decided for one accepted sample.
 #[derive(Clone, Copy, Debug)]
 pub enum Feed<T: Real> {
@@ -140,7 +133,7 @@ impl<T: Real> BankInput<T> {
                 turns
             }
         };
-        let angle = exact_angle(turns, y);
+        let angle = T::unwrapped_angle(turns, y);
         let feed = match tick {
             Tick::Init => Feed::Reset(y),
             Tick::Gap => {

@@ -35,28 +35,32 @@ pub mod scale {
     /// Delta angle (S2, I4), rad per LSB (7*pi/2^32).
     pub const DANGLE_RAD: f32 = 7.0 * PI / 4_294_967_296.0;
 
-    /// An angle field in deg: `raw * 360/2^16` = `raw * 45 * 2^-13`, exact in `f32`. On a
-    /// bare-metal target without hardware floating point (an ABI other than `eabihf`) it is
-    /// built with integer operations only, so no soft-float routine is linked; elsewhere it is
-    /// the float product `raw as f32 * ANGLE_DEG`, also exact: the same bits either way.
+    /// An angle field in deg: `raw * 360/2^16` = `raw * 45 * 2^-13`, exact in `f32` and the
+    /// same bits on every target: built with integer operations only on a bare-metal target without
+    /// hardware floating point (an ABI other than `eabihf`): no soft-float routine is linked.
     #[inline]
     pub fn angle_deg(raw: i16) -> f32 {
-        if INTEGER_ONLY {
-            dyadic_f32(i32::from(raw) * 45, -13)
-        } else {
-            f32::from(raw) * ANGLE_DEG
-        }
+        exact(raw, 45, -13, ANGLE_DEG)
     }
 
-    /// An angular rate field in deg/s: `raw * 1260/2^16` = `raw * 315 * 2^-14`, exact in
-    /// `f32`; integer operations only where [`angle_deg`] uses them (the bits of `raw as f32 *
-    /// RATE_DEG_S`).
+    /// An angular rate field in deg/s: `raw * 1260/2^16` = `raw * 315 * 2^-14`, exact in `f32`,
+    /// built as [`angle_deg`] is.
     #[inline]
     pub fn rate_deg_s(raw: i16) -> f32 {
+        exact(raw, 315, -14, RATE_DEG_S)
+    }
+
+    /// `raw * lsb` where `lsb = m 2^e` exactly and `|raw m| < 2^24`, so that the product is
+    /// exact in `f32`. On a bare-metal target without hardware floating point (an ABI other
+    /// than `eabihf`) it is built from the integers' bits ([`dyadic_f32`]), so no soft-float
+    /// routine is linked; elsewhere it is the float product `raw as f32 * lsb`, also exact:
+    /// the same bits either way.
+    #[inline]
+    fn exact(raw: i16, m: i32, e: i32, lsb: f32) -> f32 {
         if INTEGER_ONLY {
-            dyadic_f32(i32::from(raw) * 315, -14)
+            dyadic_f32(i32::from(raw) * m, e)
         } else {
-            f32::from(raw) * RATE_DEG_S
+            f32::from(raw) * lsb
         }
     }
 
