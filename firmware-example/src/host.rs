@@ -136,7 +136,38 @@ pub fn park() -> ! {
     }
 }
 
-// The boards with RTT output use panic-probe's handler instead.
+/// Set by the first panic: a panic while reporting one (the logger taken when the first came)
+/// goes straight to the fault instead of recursing.
+#[cfg(feature = "rtt")]
+static PANICKING: core::sync::atomic::AtomicBool = core::sync::atomic::AtomicBool::new(false);
+
+/// The boards with RTT output: `firmware: panic: panicked at FILE:LINE:COL: MESSAGE` as a
+/// defmt message (no `core::fmt`: the message when it is a plain string), then a HardFault
+/// (`UDF`), which probe-rs reports with the backtrace and where the core parks.
+#[cfg(feature = "rtt")]
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo<'_>) -> ! {
+    use core::sync::atomic::Ordering;
+    cortex_m::interrupt::disable();
+    // Interrupts are off: a load/store pair (thumbv6m has no atomic swap) cannot be raced.
+    if !PANICKING.load(Ordering::Relaxed) {
+        PANICKING.store(true, Ordering::Relaxed);
+        let (file, line, column) = info
+            .location()
+            .map_or(("(unknown)", 0, 0), |l| (l.file(), l.line(), l.column()));
+        let message = info.message().as_str().unwrap_or("(formatted message)");
+        defmt::println!(
+            "firmware: panic: panicked at {=str}:{=u32}:{=u32}: {=str}",
+            file,
+            line,
+            column,
+            message
+        );
+    }
+    cortex_m::asm::udf()
+}
+
+/// The semihosting boards: the same line on the host's standard error, then exit status 1.
 #[cfg(not(feature = "rtt"))]
 #[panic_handler]
 fn panic(info: &core::panic::PanicInfo<'_>) -> ! {

@@ -8,7 +8,8 @@
 //!   ([`uart::EndMessage`]).
 //! * [`log`]: the defmt transport (RTT for a probe, semihosting for QEMU).
 //! * [`time`]: SysTick at 1 kHz, microseconds since start, `embedded_hal::delay::DelayNs`.
-//! * [`host`]: semihosting output, exit codes, the panic handler and the HardFault handler
+//! * [`host`]: semihosting output, exit codes, the panic handler (every board) and the
+//!   HardFault handler
 //!   (every failure ends the run with a non-zero exit status instead of hanging).
 //! * [`out`]: the output as defmt messages (header, one row per sample, counters); with the
 //!   feature `uart-rows` also as framed binary messages out of a second UART.
@@ -21,11 +22,6 @@
 //! This is the only crate of the workspace with `unsafe` (register access, the stack scan, the
 //! `VSQRT` instruction, NVIC unmasking); every `unsafe` block carries a `// SAFETY:` comment.
 #![no_std]
-
-// Boards with RTT output use panic-probe's handler (the panic message through defmt, then a
-// fault that probe-rs reports); the others `host`'s (message and exit status to QEMU).
-#[cfg(feature = "rtt")]
-use panic_probe as _;
 
 pub mod board;
 pub mod cycles;
