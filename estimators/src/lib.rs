@@ -51,7 +51,7 @@
 //!   leave the state unchanged; invalid parameters return [`ConfigError`] at construction.
 //!
 //! ```
-//! use estimators::{BankConfig, Channel, Fx, PaperBank};
+//! use estimators::{BankConfig, Channel, EstimatorOutput, Fx, PaperBank};
 //!
 //! // The paper's bank: AVE, ILO1-3, AD, ED, Kalman; acceleration by series connections.
 //! let mut bank = PaperBank::<f32>::new(&BankConfig::default()).unwrap();
@@ -64,9 +64,10 @@
 //!     let out_fx = fixed.update(t_us, yaw).unwrap();
 //!     if k == 199 {
 //!         assert!((out[Channel::AveV] - 30.0).abs() < 0.1); // AVE velocity, deg/s
-//!         assert!((out_fx[Channel::AveV] - 30.0).abs() < 0.1);
+//!         // A fixed-point output holds raw `Fx` values; `channel` reads one as f32.
+//!         assert!((out_fx.channel(Channel::AveV) - 30.0).abs() < 0.1);
 //!         assert!(out[Channel::AveA].abs() < 1.0); // AVE-AVE acceleration, deg/s^2
-//!         assert!((out.unwrapped_deg - 59.7).abs() < 1e-3); // unwrapped yaw, deg
+//!         assert!((out.unwrapped_deg() - 59.7).abs() < 1e-3); // unwrapped yaw, deg
 //!     }
 //! }
 //! // Bad input leaves the state unchanged and is reported.
@@ -133,7 +134,7 @@ pub use pair::{VelAcc, VelAccState};
 pub use rates::RateGains;
 pub use real::{Fx, NativeSqrt, Real, SqrtFn};
 pub use series::{Series, SeriesState};
-pub use traits::{EstimatorBank, EstimatorOutput};
+pub use traits::{EstimatorBank, EstimatorOutput, Values};
 pub use unwrap::Unwrapper;
 
 /// The examples of the crate README, compiled and run as doc tests.

@@ -666,6 +666,25 @@ pub trait Real:
         }
         unwrapped_angle_f64(turns, wrapped)
     }
+    /// How a bank's output ([`crate::BankOutput`]) holds a channel's value: `f32` for the
+    /// float types (rounded when the bank computes it), the number itself for [`Fx`] (rounded
+    /// to `f32` only when it is read, [`Real::output_value_f32`]: a device sends the raw bits
+    /// and the host rounds them, with the same result).
+    type OutputValue: Copy + Debug + PartialEq + Default;
+    /// How a bank's output holds its unwrapped angle: the `f32` rounding and its `f64`
+    /// residual for the float types ([`Real::unwrapped_angle`], computed when the bank runs),
+    /// the turn count and the wrapped value for [`Fx`] (rounded only when read).
+    type OutputAngle: Copy + Debug + PartialEq + Default;
+    /// `self` as an output holds it.
+    fn output_value(self) -> Self::OutputValue;
+    /// An output's value as `f32`, deg/s or deg/s^2 (for [`Fx`]: [`Real::to_f32`], nearest,
+    /// ties to even).
+    fn output_value_f32(v: Self::OutputValue) -> f32;
+    /// The angle `360 turns + wrapped` (deg) as an output holds it.
+    fn output_angle(turns: i64, wrapped: Self) -> Self::OutputAngle;
+    /// An output's angle as [`Real::unwrapped_angle`] gives it: the `f32` rounding and the
+    /// residual, deg.
+    fn output_angle_f32(a: Self::OutputAngle) -> (f32, f64);
     /// The sign: -1, 0 or +1.
     fn sgn(self) -> Self {
         if self > Self::ZERO {
@@ -718,6 +737,24 @@ macro_rules! float_real {
             const ONE: Self = 1.0;
             const AVE_STEP_FACTOR: u32 = 1;
             type Coarse<X: Copy + Debug + PartialEq> = core::marker::PhantomData<X>;
+            type OutputValue = f32;
+            type OutputAngle = (f32, f64);
+            #[inline(always)]
+            fn output_value(self) -> f32 {
+                self.to_f32()
+            }
+            #[inline(always)]
+            fn output_value_f32(v: f32) -> f32 {
+                v
+            }
+            #[inline(always)]
+            fn output_angle(turns: i64, wrapped: Self) -> (f32, f64) {
+                Self::unwrapped_angle(turns, wrapped)
+            }
+            #[inline(always)]
+            fn output_angle_f32(a: (f32, f64)) -> (f32, f64) {
+                a
+            }
             #[inline(always)]
             fn coarse_new<X: Copy + Debug + PartialEq>(_x: Option<X>) -> Self::Coarse<X> {
                 core::marker::PhantomData
@@ -778,6 +815,26 @@ impl Real for Fx {
     const ONE: Self = Fx(I32F32::ONE);
     const AVE_STEP_FACTOR: u32 = 2;
     type Coarse<X: Copy + Debug + PartialEq> = Option<X>;
+    /// The raw number: an `Fx` bank's output is rounded to `f32` only when read.
+    type OutputValue = Fx;
+    /// The turn count and the wrapped angle.
+    type OutputAngle = (i64, Fx);
+    #[inline(always)]
+    fn output_value(self) -> Fx {
+        self
+    }
+    #[inline]
+    fn output_value_f32(v: Fx) -> f32 {
+        v.to_f32()
+    }
+    #[inline(always)]
+    fn output_angle(turns: i64, wrapped: Self) -> (i64, Fx) {
+        (turns, wrapped)
+    }
+    #[inline]
+    fn output_angle_f32((turns, wrapped): (i64, Fx)) -> (f32, f64) {
+        Self::unwrapped_angle(turns, wrapped)
+    }
     #[inline(always)]
     fn coarse_new<X: Copy + Debug + PartialEq>(x: Option<X>) -> Self::Coarse<X> {
         x

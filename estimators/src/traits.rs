@@ -16,7 +16,7 @@ use crate::{Columns, SampleError};
 /// `[u8; 4 * <ProductOutput as EstimatorOutput>::CHANNELS]` (or through the bank,
 /// `<ProductBank<Fx> as EstimatorBank>::CHANNELS`).
 ///
-/// Invariant: `CHANNEL_NAMES.len() == CHANNELS`, `values().len() == CHANNELS`, and
+/// Invariant: `CHANNEL_NAMES.len() == CHANNELS`, `value(i)` is a channel's for `i < CHANNELS`, and
 /// `CSV_COLUMNS` is `CHANNEL_NAMES` joined with `,` ([`crate::BankOutput`] satisfies it by
 /// construction).
 ///
@@ -37,15 +37,52 @@ pub trait EstimatorOutput: Copy + core::fmt::Debug + PartialEq {
     /// `unwrapped_deg() as f64 + residual_deg()` (0 while f32 holds it exactly).
     fn residual_deg(&self) -> f64;
 
-    /// The channels' values in [`Self::CHANNEL_NAMES`] order: velocities in deg/s,
-    /// accelerations in deg/s^2 (per input unit when the input is not in degrees).
-    fn values(&self) -> &[f32];
+    /// The value of channel `channel` ([`Self::CHANNEL_NAMES`] order) as `f32`: a velocity in
+    /// deg/s or an acceleration in deg/s^2 (per input unit when the input is not in degrees);
+    /// NaN past the last channel. A fixed-point bank's output holds the raw numbers and rounds
+    /// them here (nearest, ties to even).
+    fn value(&self, channel: usize) -> f32;
+
+    /// The channels' values in [`Self::CHANNEL_NAMES`] order, as `f32` ([`Self::value`]).
+    fn values(&self) -> Values<'_, Self>
+    where
+        Self: Sized,
+    {
+        Values { out: self, next: 0 }
+    }
 
     /// The exact unwrapped angle, deg (`unwrapped_deg() + residual_deg()` in f64).
     fn unwrapped_deg_f64(&self) -> f64 {
         f64::from(self.unwrapped_deg()) + self.residual_deg()
     }
 }
+
+/// The channels' values of an [`EstimatorOutput`] as `f32`, in channel order
+/// ([`EstimatorOutput::values`]).
+#[derive(Clone, Debug)]
+pub struct Values<'a, O> {
+    out: &'a O,
+    next: usize,
+}
+
+impl<O: EstimatorOutput> Iterator for Values<'_, O> {
+    type Item = f32;
+
+    fn next(&mut self) -> Option<f32> {
+        if self.next >= O::CHANNELS {
+            return None;
+        }
+        self.next += 1;
+        Some(self.out.value(self.next - 1))
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        let n = O::CHANNELS.saturating_sub(self.next);
+        (n, Some(n))
+    }
+}
+
+impl<O: EstimatorOutput> ExactSizeIterator for Values<'_, O> {}
 
 /// An estimator bank for one angle: timed samples in, one [`EstimatorOutput`] per accepted
 /// sample out.

@@ -2,6 +2,7 @@
 //! fixed point vs f32, the CSV row.
 
 use estimators::presets::*;
+use estimators::EstimatorOutput as _;
 use estimators::{
     Ad, BankConfig, ClosedForm, Estimator, Fx, Hold, Ilo, IloConfig, PaperBank, PaperOutput, Real,
     SampleAdapter, SampleError, Series, Unwrapper,
@@ -54,16 +55,16 @@ fn ilo_ramp_gain(c: &IloConfig) -> f64 {
 fn ramp_check<T: Real>(rate: f64) {
     let mut bank = PaperBank::<T>::new(&BankConfig::default()).unwrap();
     let y0 = 170.0;
-    let mut out = PaperOutput::default();
+    let mut out = PaperOutput::<T>::default();
     for k in 0..=1000u64 {
         let t = k as f64 * 0.01;
         let yaw = wrap180(y0 + rate * t);
         out = bank.update(k * 10_000, yaw as f32).unwrap();
         let unwrapped = y0 + rate * t;
         assert!(
-            (f64::from(out.unwrapped_deg) - unwrapped).abs() < 1e-3 * unwrapped.abs().max(1.0),
+            (f64::from(out.unwrapped_deg()) - unwrapped).abs() < 1e-3 * unwrapped.abs().max(1.0),
             "{} vs {unwrapped}",
-            out.unwrapped_deg
+            out.unwrapped_deg()
         );
     }
     let v = out.velocities().map(f64::from);
@@ -93,9 +94,9 @@ fn ramp_check<T: Real>(rate: f64) {
     // Acceleration of a ramp: 0 (ED-ED excluded: chatter of the first stage is its input)
     for i in [0, 1, 2, 3, 4, 6] {
         assert!(
-            out[estimators::Channel::ACCELERATION[i]].abs() < 1.0,
+            out.channel(estimators::Channel::ACCELERATION[i]).abs() < 1.0,
             "acc[{i}] = {}",
-            out[estimators::Channel::ACCELERATION[i]]
+            out.channel(estimators::Channel::ACCELERATION[i])
         );
     }
 }
@@ -126,7 +127,7 @@ fn gap_handling() {
     let first = bank.update(0, 12.5).unwrap();
     assert_eq!(
         first,
-        PaperOutput::new(12.5, 0.0, [0.0; estimators::Channel::COUNT])
+        <PaperOutput>::new(12.5, 0.0, [0.0; estimators::Channel::COUNT])
     );
     bank.restart();
     let mut t_us = 0u64;
@@ -262,7 +263,7 @@ fn zoh_bias_vs_linear() {
             ..BankConfig::default()
         };
         let mut bank = PaperBank::<f64>::new(&cfg).unwrap();
-        let mut out = PaperOutput::default();
+        let mut out = PaperOutput::<f64>::default();
         for k in 0..=300u64 {
             out = bank
                 .update(k * 10_000, (rate * k as f64 * 0.01) as f32)
@@ -389,7 +390,7 @@ fn experiment_seed<T: Real>(
     (0..=n)
         .map(|k| {
             let y = profile(k as f64 * 0.01).0 + noise_var.sqrt() * g.next();
-            bank.update(k * 10_000, wrap180(y) as f32).unwrap()
+            bank.update(k * 10_000, wrap180(y) as f32).unwrap().to_f32()
         })
         .collect()
 }

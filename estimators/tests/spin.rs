@@ -1,6 +1,7 @@
 //! Unbounded spin: the unwrapped yaw stays exact, and the estimates unaffected, at any number
 //! of turns (10^7 turns here), in f32 and Q31.32.
 
+use estimators::EstimatorOutput as _;
 use estimators::{BankConfig, Fx, PaperBank, Real, Unwrapper};
 
 /// NAV440 yaw LSB = 360/2^16 deg = 45/8192 deg (exact in f32 for any 16-bit count).
@@ -76,12 +77,12 @@ fn bank_at_ten_million_turns<T: Real>() {
         let exact = turns as f64 * 360.0 + lsb_to_deg(counts);
         // The exact unwrapped yaw (f32 rounding + f64 residual; the CSV's yaw column, whose
         // text is checked in nav440-pipeline's csv tests).
-        let got = f64::from(ob.unwrapped_deg) + ob.residual_deg;
+        let got = f64::from(ob.unwrapped_deg()) + ob.residual_deg();
         assert_eq!(got, exact, "row {k}");
         let exact_a = lsb_to_deg(counts);
-        assert_eq!(f64::from(oa.unwrapped_deg) + oa.residual_deg, exact_a);
+        assert_eq!(f64::from(oa.unwrapped_deg()) + oa.residual_deg(), exact_a);
         if f64::from(exact_a as f32) == exact_a {
-            assert_eq!(oa.residual_deg, 0.0);
+            assert_eq!(oa.residual_deg(), 0.0);
         }
     }
 }

@@ -111,7 +111,7 @@ fn run<B: EstimatorBank>(bank: &mut B, times: &[u64]) -> (f64, f64, String) {
     let mut worst = String::new();
     for &t in times {
         let out = bank.update(t, input(t)).expect("a valid sample");
-        for (name, &v) in names.iter().zip(out.values()) {
+        for (name, v) in names.iter().zip(out.values()) {
             let v = f64::from(v).abs();
             assert!(v.is_finite(), "{name} not finite at t = {t} us");
             let m = if name.ends_with("_v") {

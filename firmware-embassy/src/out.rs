@@ -66,7 +66,9 @@ pub fn row(r: &Row) {
     for (block, axis) in v.chunks_exact_mut(AXIS_VALUES).zip(Axis::ALL) {
         if let Some(a) = r.axis(axis) {
             block[0] = a.out.unwrapped_deg();
-            block[1..].copy_from_slice(a.out.values());
+            for (d, v) in block[1..].iter_mut().zip(a.out.values()) {
+                *d = v;
+            }
         }
     }
     defmt::println!("row {=u64} {=[?]}", r.t_us, &v[..]);

@@ -1,20 +1,29 @@
 //! The firmware's output as defmt messages: no text formatting on the MCU.
 //!
 //! * [`header`]: once per run, the estimated axes (`AXES`, as a bit mask roll=1, pitch=2,
-//!   yaw=4) and the bank's channel names (its CSV columns, e.g. `ilo1_v,kf_a`), preceded by
-//!   `body_rate` when the rows carry the body rates (feature `no-reference`,
-//!   `nav440_pipeline::RateColumn::header_names`); the host writes the CSV header line of
-//!   `nav440 estimate --bank ... --axis ... [--no-reference]` from them.
+//!   yaw=4), the number format of the rows ([`RowNumber::NAME`]: `f32`, or `fx` for the
+//!   fixed-point banks' raw Q31.32 values) and the bank's channel names (its CSV columns, e.g.
+//!   `ilo1_v,kf_a`), preceded by `body_rate` when the rows carry the body rates (feature
+//!   `no-reference`, `nav440_pipeline::RateColumn::header_names`); the host writes the CSV
+//!   header line of `nav440 estimate --bank ... --axis ... [--no-reference]` from them.
 //! * [`row`]: one message per sample, `row {=[u8]}`: one byte payload of little-endian 32-bit
 //!   words: the sample time (u64, us since the first sample, low word first), a flags word (one
 //!   byte per axis of `AXES`, in roll, pitch, yaw order: bit 0, [`RATE`]: the rate column is
 //!   present; bit 1, [`NO_ESTIMATE`]: the axis has no estimate in this row, near gimbal lock,
-//!   and no block follows for it; bit 2, [`RESIDUAL`]: the block ends with the residual), then
-//!   per axis with an estimate a block: the unwrapped angle (deg, f32), the rate column (Euler
-//!   reference or body rate, deg/s, f32; 0 when absent), the bank's channel values (in the
-//!   order of its names, f32: 14 for the paper bank, 2 for the product bank) and, only while
-//!   the f32 angle does not hold the angle exactly, its residual (deg, f64; 0 otherwise). The
-//!   payload is packed in place in the logger's word-aligned buffer
+//!   and no block follows for it; bit 2, [`RESIDUAL`], or bit 3, [`TURNS`]: the block ends
+//!   with a tail of two words), then per axis with an estimate a block, its numbers as the
+//!   bank's output holds them ([`RowNumber`]):
+//!   * `f32` rows: the unwrapped angle (deg, f32), the rate column (Euler reference or body
+//!     rate, deg/s, f32; 0 when absent), the bank's channel values (in the order of its names,
+//!     f32: 14 for the paper bank, 2 for the product bank) and, only while the f32 angle does
+//!     not hold the angle exactly, its residual (deg, f64; [`RESIDUAL`]);
+//!   * `fx` rows (`estimators::Fx` banks, the targets without an FPU): the wrapped angle (deg,
+//!     Q31.32 raw bits, two words), the rate column (f32), the channel values (Q31.32, two
+//!     words each) and, only after a turn, the unwrapper's turn count (i64; [`TURNS`]). The
+//!     host rounds them as `nav440 estimate --fixed` does (`Real::output_value_f32`,
+//!     `Real::output_angle_f32`): the device converts nothing.
+//!
+//!   The payload is packed in place in the logger's word-aligned buffer
 //!   ([`crate::log::in_place`]), which hands the frame on without copying it: one write to
 //!   the transport for the whole message (one semihosting call instead of one per value).
 //! * [`summary`]: the counters line; it and the other diagnostics, the stream watchdog's
@@ -22,7 +31,8 @@
 //!   embassy firmware (see `main.rs`).
 //!
 //! The host (`cargo xtask qemu/demo/unit`, through `defmt-decoder` and the ELF's defmt table)
-//! turns each `row` message back into the exact `f32`/`f64` bits and formats the line with
+//! turns each `row` message back into the exact `f32`/`f64` bits (rounding an `fx` row's raw
+//! values as the host's fixed-point bank does) and formats the line with
 //! `nav440_pipeline::csv`, so the CSV equals `nav440 estimate`'s byte for byte.
 //!
 //! Transport: the defmt global logger of [`crate::log`]: the semihosting stdout on the
@@ -35,8 +45,8 @@
 //! rows` turns them into the same CSV (docs/UART-ROWS.md).
 
 use crate::pipeline::AXES;
-use crate::{Bank, Output};
-use estimators::{EstimatorBank, EstimatorOutput};
+use crate::{Bank, Num, Output};
+use estimators::{EstimatorBank, EstimatorOutput, Fx, Real};
 use nav440_pipeline::{AxisRow, Row};
 
 /// Marker of the row message (the host finds it in the ELF's defmt table).
@@ -49,14 +59,65 @@ pub const RATE: u8 = 1;
 /// at or beyond the gimbal-lock limit, `nav440_pipeline::euler::near_lock`); no block follows.
 pub const NO_ESTIMATE: u8 = 2;
 
-/// Flag bit of an axis: its block ends with the angle's f64 residual (not 0).
+/// Flag bit of an axis (`f32` rows): its block ends with the angle's f64 residual (not 0).
 pub const RESIDUAL: u8 = 4;
 
-/// Words of an axis block without the residual: the angle, the rate column, the channels.
-pub const AXIS_WORDS: usize = 2 + <Bank as EstimatorBank>::CHANNELS;
+/// Flag bit of an axis (`fx` rows): its block ends with the unwrapper's turn count (i64, not
+/// 0).
+pub const TURNS: u8 = 8;
+
+/// How a row carries the bank's numbers ([`Num`]): what the bank's output holds
+/// (`estimators::Real::OutputValue`, `OutputAngle`), as it holds it, so that the device
+/// converts nothing.
+pub trait RowNumber: Real {
+    /// The number format's name in the header message: `f32` or `fx` (Q31.32).
+    const NAME: &'static str;
+    /// Words of one value: 1 (`f32` bits) or 2 (`Fx`'s raw bits, low word first).
+    const WORDS: usize;
+    /// Writes `v` at `w[..WORDS]`.
+    fn put_value(v: Self::OutputValue, w: &mut [u32]);
+    /// Writes the angle's words (`WORDS` of them) at `w`; returns the tail (residual or turn
+    /// count, two words) and its flag when it is not 0.
+    fn put_angle(a: Self::OutputAngle, w: &mut [u32]) -> Option<(u64, u8)>;
+}
+
+impl RowNumber for f32 {
+    const NAME: &'static str = "f32";
+    const WORDS: usize = 1;
+    #[inline(always)]
+    fn put_value(v: f32, w: &mut [u32]) {
+        w[0] = v.to_bits();
+    }
+    #[inline(always)]
+    fn put_angle((angle, residual): (f32, f64), w: &mut [u32]) -> Option<(u64, u8)> {
+        w[0] = angle.to_bits();
+        // Sent while its bits are not 0 (a -0.0 too: the host gets the very bits).
+        let r = residual.to_bits();
+        (r != 0).then_some((r, RESIDUAL))
+    }
+}
+
+impl RowNumber for Fx {
+    const NAME: &'static str = "fx";
+    const WORDS: usize = 2;
+    #[inline(always)]
+    fn put_value(v: Fx, w: &mut [u32]) {
+        let b = v.to_bits();
+        w[0] = b as u32;
+        w[1] = (b >> 32) as u32;
+    }
+    #[inline(always)]
+    fn put_angle((turns, wrapped): (i64, Fx), w: &mut [u32]) -> Option<(u64, u8)> {
+        Self::put_value(wrapped, w);
+        (turns != 0).then_some((turns as u64, TURNS))
+    }
+}
+
+/// Words of an axis block without its tail: the angle, the rate column, the channels.
+pub const AXIS_WORDS: usize = Num::WORDS + 1 + Num::WORDS * <Bank as EstimatorBank>::CHANNELS;
 
 /// Words of the longest [`row`] payload: the time, the flags, an [`AXIS_WORDS`] block and a
-/// residual (2 words) per axis of [`AXES`].
+/// tail (2 words) per axis of [`AXES`].
 pub const ROW_WORDS: usize = 3 + (AXIS_WORDS + 2) * AXES.len();
 
 const _: () = assert!(AXES.len() <= 4, "one flags byte per axis in a word");
@@ -70,25 +131,26 @@ const _: () = assert!(
 fn put_axis(w: &mut [u32; AXIS_WORDS + 2], a: &AxisRow<Output>) -> (u8, usize) {
     let o = &a.out;
     let mut flags = 0;
-    w[0] = o.unwrapped_deg().to_bits();
-    w[1] = match a.reference_deg_s {
+    let tail = Num::put_angle(o.angle, &mut w[..Num::WORDS]);
+    w[Num::WORDS] = match a.reference_deg_s {
         Some(v) => {
             flags |= RATE;
             v.to_bits()
         }
         None => 0,
     };
-    for (d, v) in w[2..AXIS_WORDS].iter_mut().zip(o.values().iter()) {
-        *d = v.to_bits();
+    for (d, &v) in w[Num::WORDS + 1..AXIS_WORDS]
+        .chunks_exact_mut(Num::WORDS)
+        .zip(o.values.iter())
+    {
+        Num::put_value(v, d);
     }
-    // Sent while its bits are not 0 (a -0.0 too: the host gets the very bits).
-    let residual = o.residual_deg().to_bits();
-    if residual == 0 {
+    let Some((t, flag)) = tail else {
         return (flags, AXIS_WORDS);
-    }
-    w[AXIS_WORDS] = residual as u32;
-    w[AXIS_WORDS + 1] = (residual >> 32) as u32;
-    (flags | RESIDUAL, AXIS_WORDS + 2)
+    };
+    w[AXIS_WORDS] = t as u32;
+    w[AXIS_WORDS + 1] = (t >> 32) as u32;
+    (flags | flag, AXIS_WORDS + 2)
 }
 
 /// Packs a row's payload into `w` (see the module doc); returns its length in bytes.
@@ -141,7 +203,7 @@ pub fn header() {
     for a in AXES.iter() {
         mask |= 1 << a.index();
     }
-    defmt::println!("header {=u8} {=str}", mask, COLUMNS);
+    defmt::println!("header {=u8} {=str} {=str}", mask, Num::NAME, COLUMNS);
     #[cfg(feature = "uart-rows")]
     {
         crate::board::rows_write(&[nav440_pipeline::wire::DELIMITER]);

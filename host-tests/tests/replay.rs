@@ -6,6 +6,7 @@
 
 mod common;
 
+use estimators::EstimatorOutput as _;
 use nav440_cli::corrupt::Corruption;
 use nav440_cli::motion::{Profile, ProfileKind};
 use nav440_cli::replay::{self, Axis, EstimateOptions, Noise};
@@ -177,7 +178,7 @@ fn spin_is_unwrapped_through_many_turns() {
     for r in &rows {
         let m = motion.at(r.t_us as f64 * 1e-6);
         assert!(
-            (f64::from(r.axis(Axis::Yaw).unwrap().out.unwrapped_deg) - m.yaw_deg).abs() < 0.01,
+            (f64::from(r.axis(Axis::Yaw).unwrap().out.unwrapped_deg()) - m.yaw_deg).abs() < 0.01,
             "t={}",
             r.t_us
         );
@@ -469,7 +470,10 @@ fn product_bank_from_the_library() {
         assert_eq!(csv.lines().count(), paper.lines().count());
         assert_eq!(
             csv.lines().next().unwrap(),
-            format!("t,yaw,yaw_rate,{}", estimators::ProductOutput::CSV_COLUMNS)
+            format!(
+                "t,yaw,yaw_rate,{}",
+                <estimators::ProductOutput>::CSV_COLUMNS
+            )
         );
         for (q, p) in csv.lines().zip(paper.lines()).skip(1) {
             let p: Vec<&str> = p.split(',').collect();

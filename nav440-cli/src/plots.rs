@@ -155,7 +155,9 @@ pub fn panels(
                 f64::NAN
             }
         };
-        let mut values = vec![out.map_or(f64::NAN, |o| f64::from(o.unwrapped_deg))];
+        let mut values = vec![out.map_or(f64::NAN, |o| {
+            f64::from(estimators::EstimatorOutput::unwrapped_deg(&o))
+        })];
         for (channels, reference) in [
             (&estimators::Channel::VELOCITY, rate_ref),
             (&estimators::Channel::ACCELERATION, acc_ref),

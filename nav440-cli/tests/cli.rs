@@ -996,7 +996,7 @@ fn estimate_product_bank_prints_the_paper_banks_ilo1_v_and_kf_a() {
     let cap = p(&cap);
     let gains = p(&gains);
     // The product bank's columns (checked against a literal in estimators/tests/table.rs).
-    let [v, a] = estimators::ProductOutput::NAMES;
+    let [v, a] = <estimators::ProductOutput>::NAMES;
     let yaw_header = format!("t,yaw,yaw_rate,{v},{a}");
     let all_header = format!("t,roll,roll_rate,roll_{v},roll_{a},pitch,pitch_rate,pitch_{v},pitch_{a},yaw,yaw_rate,yaw_{v},yaw_{a}");
     let cases: [&[&str]; 7] = [

@@ -68,7 +68,7 @@ fn frames_of(capture: &Path) -> Vec<Vec<u8>> {
         ..EstimateOptions::default()
     };
     let (rows, _) = replay::estimate_rows(&samples, &opts).unwrap();
-    let columns = PaperOutput::CSV_COLUMNS.to_string();
+    let columns = <PaperOutput>::CSV_COLUMNS.to_string();
     let header = Message::Header(Header::new(Axes::ALL, &columns));
     let mut buf = [0u8; 1024];
     let mut frames = vec![vec![wire::DELIMITER]];
@@ -255,7 +255,7 @@ fn rows_without_a_header_are_an_error() {
     );
     assert_eq!(o.status.code(), Some(4));
     // A header of another format version.
-    let columns = PaperOutput::CSV_COLUMNS.to_string();
+    let columns = <PaperOutput>::CSV_COLUMNS.to_string();
     let mut h = Header::new(Axes::ALL, &columns);
     h.version = wire::VERSION + 1;
     let mut buf = [0u8; 256];

@@ -49,7 +49,7 @@ pub const HEADER: &str = match core::str::from_utf8(&HEADER_BYTES) {
 };
 
 /// The columns of [`HEADER`].
-const HEADER_NAMES: &[&[&str]] = &[&["t", "yaw", "yaw_rate"], PaperOutput::NAMES.as_slice()];
+const HEADER_NAMES: &[&[&str]] = &[&["t", "yaw", "yaw_rate"], <PaperOutput>::NAMES.as_slice()];
 /// [`HEADER`] as bytes.
 const HEADER_BYTES: [u8; estimators::columns_len(HEADER_NAMES)] =
     estimators::join_columns(HEADER_NAMES);
@@ -185,7 +185,7 @@ mod tests {
     /// against a literal in `estimators/tests/table.rs`).
     #[test]
     fn product_headers() {
-        let cols = estimators::ProductOutput::NAMES;
+        let cols = <estimators::ProductOutput>::NAMES;
         assert_eq!(cols.len(), 2);
         let (v, a) = (cols[0], cols[1]);
         let yaw = std::format!("t,yaw,yaw_rate,{v},{a}");
@@ -212,7 +212,7 @@ mod tests {
     /// 4 empty fields.
     #[test]
     fn product_row() {
-        let out = estimators::ProductOutput::new(-10.5, 0.0, [12.25, -0.5]);
+        let out = <estimators::ProductOutput>::new(-10.5, 0.0, [12.25, -0.5]);
         let mut axes = [None; 3];
         axes[Axis::Yaw.index()] = Some(AxisRow {
             reference_deg_s: Some(3.0),
@@ -280,7 +280,7 @@ mod tests {
             cols.by_ref().take(3).collect::<heapless::Vec<_, 3>>(),
             ["t", "yaw", "yaw_rate"]
         );
-        assert!(cols.eq(PaperOutput::NAMES.iter().copied()));
+        assert!(cols.eq(<PaperOutput>::NAMES.iter().copied()));
         let all = header(Axes::ALL);
         let cols: heapless::Vec<&str, 64> = all.split(',').collect();
         assert_eq!(cols.len(), 1 + 3 * 16);
@@ -293,7 +293,7 @@ mod tests {
 
     #[test]
     fn time_and_empty_reference() {
-        let out = PaperOutput::new(
+        let out = <PaperOutput>::new(
             1.5,
             0.0,
             [

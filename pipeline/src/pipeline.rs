@@ -111,6 +111,20 @@ impl<O> Row<O> {
     pub fn axis(&self, axis: Axis) -> Option<&AxisRow<O>> {
         self.axes[axis.index()].as_ref()
     }
+
+    /// The same row with every axis's output mapped by `f` (e.g. `BankOutput::to_f32`, the
+    /// output held as `f32` whatever the bank's number type).
+    pub fn map<P>(&self, mut f: impl FnMut(&O) -> P) -> Row<P> {
+        Row {
+            t_us: self.t_us,
+            axes: self.axes.each_ref().map(|a| {
+                a.as_ref().map(|a| AxisRow {
+                    reference_deg_s: a.reference_deg_s,
+                    out: f(&a.out),
+                })
+            }),
+        }
+    }
 }
 
 /// Samples the banks refused (they give no row), by reason.

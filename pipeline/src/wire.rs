@@ -30,7 +30,7 @@
 //! use estimators::{EstimatorOutput, ProductOutput};
 //!
 //! // The sender: a delimiter, the header frame, then the rows.
-//! let columns = ProductOutput::CSV_COLUMNS.to_string();
+//! let columns = <ProductOutput>::CSV_COLUMNS.to_string();
 //! let header = Message::Header(Header::new(Axes::only(Axis::Yaw), &columns));
 //! let mut stream = vec![wire::DELIMITER];
 //! let mut buf = [0u8; 256];
@@ -62,8 +62,8 @@ pub const DELIMITER: u8 = 0;
 /// The most channel values an [`AxisFrame`] holds: the paper bank's 14.
 pub const MAX_CHANNELS: usize = 14;
 
-const _: () = assert!(PaperOutput::CHANNELS <= MAX_CHANNELS);
-const _: () = assert!(ProductOutput::CHANNELS <= MAX_CHANNELS);
+const _: () = assert!(<PaperOutput>::CHANNELS <= MAX_CHANNELS);
+const _: () = assert!(<ProductOutput>::CHANNELS <= MAX_CHANNELS);
 
 /// One frame's content.
 // No heap to box the row into; a message lives on the stack for one frame.
@@ -127,11 +127,9 @@ pub struct AxisFrame {
 impl AxisFrame {
     /// The frame of one axis of a pipeline row.
     pub fn from_axis<O: EstimatorOutput>(a: &AxisRow<O>) -> Self {
-        let mut values = heapless::Vec::new();
-        // Cannot fail: a bank has at most MAX_CHANNELS channels (checked above for the banks
-        // the receiver knows; another bank's extra values are cut and the receiver refuses
-        // its columns).
-        let _ = values.extend_from_slice(&a.out.values()[..a.out.values().len().min(MAX_CHANNELS)]);
+        // A bank has at most MAX_CHANNELS channels (checked above for the banks the receiver
+        // knows; another bank's extra values are cut and the receiver refuses its columns).
+        let values = a.out.values().take(MAX_CHANNELS).collect();
         AxisFrame {
             angle_deg: a.out.unwrapped_deg(),
             residual_deg: a.out.residual_deg(),
@@ -399,9 +397,9 @@ pub enum BankKind {
 impl BankKind {
     /// The bank whose columns are `columns`.
     pub fn from_columns(columns: &str) -> Option<Self> {
-        if columns == PaperOutput::CSV_COLUMNS {
+        if columns == <PaperOutput>::CSV_COLUMNS {
             Some(Self::Paper)
-        } else if columns == ProductOutput::CSV_COLUMNS {
+        } else if columns == <ProductOutput>::CSV_COLUMNS {
             Some(Self::Product)
         } else {
             None
@@ -411,8 +409,8 @@ impl BankKind {
     /// Its number of channels.
     pub fn channels(self) -> usize {
         match self {
-            Self::Paper => PaperOutput::CHANNELS,
-            Self::Product => ProductOutput::CHANNELS,
+            Self::Paper => <PaperOutput>::CHANNELS,
+            Self::Product => <ProductOutput>::CHANNELS,
         }
     }
 }
@@ -638,7 +636,7 @@ mod tests {
     /// the pipeline's text for the same row (`csv::write_row`).
     #[test]
     fn round_trip_and_csv() {
-        let cols = std::format!("{}", ProductOutput::CSV_COLUMNS);
+        let cols = std::format!("{}", <ProductOutput>::CSV_COLUMNS);
         let header = Header::new(Axes::ALL, &cols);
         assert_eq!(header.axes, 7);
         let rows = product_rows();
@@ -684,11 +682,11 @@ mod tests {
         };
         pipeline_row.axes[0] = Some(AxisRow {
             reference_deg_s: Some(-0.75),
-            out: ProductOutput::new(1.5, 0.0, [1e-5, 3.0]),
+            out: <ProductOutput>::new(1.5, 0.0, [1e-5, 3.0]),
         });
         pipeline_row.axes[2] = Some(AxisRow {
             reference_deg_s: None,
-            out: ProductOutput::new(170.0, 0.0, [f32::MIN_POSITIVE, -0.0]),
+            out: <ProductOutput>::new(170.0, 0.0, [f32::MIN_POSITIVE, -0.0]),
         });
         let mut expected = String::new();
         csv::write_row(&mut expected, &pipeline_row, layout.axes).unwrap();
@@ -702,7 +700,7 @@ mod tests {
     /// frames after each are read.
     #[test]
     fn resync_after_garbage() {
-        let cols = std::format!("{}", ProductOutput::CSV_COLUMNS);
+        let cols = std::format!("{}", <ProductOutput>::CSV_COLUMNS);
         let header = Header::new(Axes::ALL, &cols);
         let mut rows = product_rows();
         for r in &mut rows {
@@ -762,7 +760,7 @@ mod tests {
     /// the CSV header names it `<axis>_body_rate`, the rows are written alike.
     #[test]
     fn body_rate_header() {
-        let cols = std::format!("body_rate,{}", ProductOutput::CSV_COLUMNS);
+        let cols = std::format!("body_rate,{}", <ProductOutput>::CSV_COLUMNS);
         let header = Header::new(Axes::ALL, &cols);
         let (got, _) = read(&stream(&header, &[]), 64);
         assert_eq!(got, [Ok(std::format!("{:?}", Message::Header(header)))]);
@@ -780,14 +778,14 @@ mod tests {
         text.clear();
         let rows = product_rows();
         layout.write_row(&mut text, &rows[1]).unwrap();
-        let product = std::format!("{}", ProductOutput::CSV_COLUMNS);
+        let product = std::format!("{}", <ProductOutput>::CSV_COLUMNS);
         let euler = Layout::from_parts(7, &product).unwrap();
         assert_eq!(euler.rate, RateColumn::Euler);
         let mut same = String::new();
         euler.write_row(&mut same, &rows[1]).unwrap();
         assert_eq!(text, same);
         // Yaw alone, paper bank.
-        let paper = std::format!("body_rate,{}", PaperOutput::CSV_COLUMNS);
+        let paper = std::format!("body_rate,{}", <PaperOutput>::CSV_COLUMNS);
         let mut text = String::new();
         Layout::from_parts(4, &paper)
             .unwrap()
@@ -799,7 +797,7 @@ mod tests {
     /// A row that does not fit the header is an error, not a line.
     #[test]
     fn rows_must_fit_the_header() {
-        let paper = std::format!("{}", PaperOutput::CSV_COLUMNS);
+        let paper = std::format!("{}", <PaperOutput>::CSV_COLUMNS);
         let layout = Layout::from_parts(4, &paper).unwrap();
         assert_eq!(layout.bank, BankKind::Paper);
         let rows = product_rows();

@@ -18,9 +18,9 @@ fn row(t_us: u64, reference: Option<f32>, out: PaperOutput) -> Row {
 fn csv_row_format() {
     assert_eq!(
         csv::HEADER,
-        format!("t,yaw,yaw_rate,{}", PaperOutput::CSV_COLUMNS)
+        format!("t,yaw,yaw_rate,{}", <PaperOutput>::CSV_COLUMNS)
     );
-    let out = PaperOutput::new(
+    let out = <PaperOutput>::new(
         -361.5,
         0.0,
         [
@@ -50,7 +50,7 @@ fn csv_row_format() {
     let mut s = String::new();
     csv::write_row(
         &mut s,
-        &row(35_000_000_049, Some(0.0), PaperOutput::default()),
+        &row(35_000_000_049, Some(0.0), <PaperOutput>::default()),
         yaw,
     )
     .unwrap();
@@ -58,13 +58,13 @@ fn csv_row_format() {
     assert_eq!(s.matches(',').count(), 16);
     // No reference (near gimbal lock): an empty field.
     let mut s = String::new();
-    csv::write_row(&mut s, &row(0, None, PaperOutput::default()), yaw).unwrap();
+    csv::write_row(&mut s, &row(0, None, <PaperOutput>::default()), yaw).unwrap();
     assert!(s.starts_with("0.0000,0,,0,"), "{s}");
     // All axes: t + 3 x 16 fields; an axis the row lacks gives 16 empty fields.
     let mut s = String::new();
     csv::write_row(
         &mut s,
-        &row(0, Some(1.0), PaperOutput::default()),
+        &row(0, Some(1.0), <PaperOutput>::default()),
         Axes::ALL,
     )
     .unwrap();

@@ -62,9 +62,9 @@ fn roll_and_yaw_skip_the_lock_and_restart_after_it() {
     // The first sample after the lock re-initialises the yaw bank: every channel reports 0
     // and the angle is the sample's own (no turn was made).
     let first = rows[LOCK.end as usize].axis(Axis::Yaw).unwrap();
-    assert!(first.out.values().iter().all(|&v| v == 0.0), "{first:?}");
+    assert!(first.out.values().all(|v| v == 0.0), "{first:?}");
     assert_eq!(
-        first.out.unwrapped_deg,
+        first.out.unwrapped_deg(),
         sample(LOCK.end).angles_deg[2],
         "restart angle"
     );

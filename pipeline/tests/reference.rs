@@ -199,5 +199,5 @@ fn the_gimbal_lock_pause_is_the_same_with_body_rates() {
     }
     // The first sample after the lock restarts the yaw bank: every channel 0.
     let first = body[120].axis(Axis::Yaw).unwrap();
-    assert!(first.out.values().iter().all(|&v| v == 0.0));
+    assert!(first.out.values().all(|v| v == 0.0));
 }

@@ -8,13 +8,19 @@
 //! way each message goes through one [`Converter`]. A `row` message
 //! carries one byte payload of little-endian 32-bit words (`firmware-example/src/out.rs`): the
 //! sample time (u64, us), a flags word (a byte per estimated axis), then per axis with an
-//! estimate the angle (f32), the rate column (f32: the Euler reference rate, or the body rate
-//! when the header names `body_rate`), the bank's channel values (f32) and, when its flags say
-//! so, the angle's f64 residual. The values are rebuilt from their bytes, so
-//! they are the exact bits the firmware sent, and written by `nav440_pipeline::wire::Layout`,
-//! as `nav440 rows` writes the rows of the firmware's output UART.
+//! estimate a block whose numbers are in the format the header names: `f32` rows carry the
+//! angle (f32), the rate column (f32: the Euler reference rate, or the body rate when the
+//! header names `body_rate`), the bank's channel values (f32) and, when its flags say so, the
+//! angle's f64 residual; `fx` rows (the fixed-point banks) the wrapped angle (Q31.32 raw
+//! bits), the rate column (f32), the channel values (Q31.32) and, when its flags say so, the
+//! turn count (i64), which are rounded here as `nav440 estimate --fixed` rounds them
+//! (`estimators::Real::output_angle_f32`, `output_value_f32`). The values are rebuilt from
+//! their bytes, so they are the exact bits the firmware's bank computed, and written by
+//! `nav440_pipeline::wire::Layout`, as `nav440 rows` writes the rows of the firmware's output
+//! UART.
 
 use defmt_decoder::{DecodeError, StreamDecoder, Table};
+use estimators::{Fx, Real};
 use nav440_pipeline::wire::{AxisFrame, Layout, LayoutError, RowFrame};
 use std::path::Path;
 
@@ -36,6 +42,8 @@ pub struct Converter {
     /// The rows' axes and bank, from the header message (`nav440_pipeline::wire::Layout`, which
     /// also writes the rows of the firmware's output UART for `nav440 rows`).
     layout: Option<Layout>,
+    /// The rows carry raw `Fx` values (the header's number format `fx`), not `f32`.
+    fx: bool,
 }
 
 /// What a chunk of frames gave.
@@ -52,14 +60,26 @@ impl Converter {
     pub fn message(&mut self, msg: &str, out: &mut Text) -> Result<(), String> {
         if let Some(rest) = msg.strip_prefix("header ") {
             let bad = || format!("bad header message `{msg}`");
-            let (mask, columns) = rest.trim().split_once(' ').ok_or_else(bad)?;
+            // `header MASK NUMBER COLUMNS`
+            let mut parts = rest.trim().splitn(3, ' ');
+            let (Some(mask), Some(number), Some(columns)) =
+                (parts.next(), parts.next(), parts.next())
+            else {
+                return Err(bad());
+            };
             let mask: u8 = mask.parse().map_err(|_| bad())?;
+            let fx = match number {
+                "f32" => false,
+                "fx" => true,
+                _ => return Err(format!("unknown number format `{number}` in `{msg}`")),
+            };
             let layout = Layout::from_parts(mask, columns).map_err(|e| match e {
                 LayoutError::UnknownBank => format!(
                     "the firmware runs a bank this decoder does not know (channels `{columns}`)"
                 ),
                 e => format!("{e}: `{msg}`"),
             })?;
+            self.fx = fx;
             layout
                 .write_header(&mut out.csv)
                 .map_err(|_| "header".to_owned())?;
@@ -70,7 +90,7 @@ impl Converter {
                 .layout
                 .ok_or_else(|| format!("row before the header: `{msg}`"))?;
             let bad = || format!("bad row message `{msg}`");
-            let row = parse_row(rest, &layout).ok_or_else(bad)?;
+            let row = parse_row(rest, &layout, self.fx).ok_or_else(bad)?;
             layout
                 .write_row(&mut out.csv, &row)
                 .map_err(|e| format!("{e}: `{msg}`"))?;
@@ -90,13 +110,17 @@ const RATE: u8 = 1;
 /// firmware's `out::NO_ESTIMATE`).
 const NO_ESTIMATE: u8 = 2;
 
-/// Flag bit of an axis: its block ends with the angle's f64 residual (the firmware's
-/// `out::RESIDUAL`).
+/// Flag bit of an axis (`f32` rows): its block ends with the angle's f64 residual (the
+/// firmware's `out::RESIDUAL`).
 const RESIDUAL: u8 = 4;
 
+/// Flag bit of an axis (`fx` rows): its block ends with the turn count (the firmware's
+/// `out::TURNS`).
+const TURNS: u8 = 8;
+
 /// Parses `[B, B, ...]` (the display of a row message's byte payload after `row `) into the
-/// row's values.
-fn parse_row(s: &str, layout: &Layout) -> Option<RowFrame> {
+/// row's values (`fx`: the blocks carry raw `Fx` values).
+fn parse_row(s: &str, layout: &Layout, fx: bool) -> Option<RowFrame> {
     let list = s.trim().strip_prefix('[')?.strip_suffix(']')?;
     let bytes = list
         .split(", ")
@@ -112,7 +136,7 @@ fn parse_row(s: &str, layout: &Layout) -> Option<RowFrame> {
         let axis = if f & NO_ESTIMATE != 0 {
             None
         } else {
-            let (axis, n) = parse_axis(bytes.get(at..)?, f, channels)?;
+            let (axis, n) = parse_axis(bytes.get(at..)?, f, channels, fx)?;
             at += n;
             Some(axis)
         };
@@ -130,29 +154,50 @@ fn take<const N: usize>(b: &[u8], at: usize) -> Option<[u8; N]> {
 }
 
 /// Parses the block of an axis with the flags `flags` at the start of `b`: the angle, the rate
-/// column, `channels` values, the residual when flagged; returns it and its length in bytes.
-fn parse_axis(b: &[u8], flags: u8, channels: usize) -> Option<(AxisFrame, usize)> {
-    let angle = f32::from_le_bytes(take(b, 0)?);
-    let reference = f32::from_le_bytes(take(b, 4)?);
-    let end = 8 + 4 * channels;
-    let mut values = heapless::Vec::new();
-    for v in b.get(8..end)?.chunks_exact(4) {
-        values
-            .push(f32::from_le_bytes([v[0], v[1], v[2], v[3]]))
-            .ok()?;
-    }
-    let (residual, n) = if flags & RESIDUAL != 0 {
-        (f64::from_le_bytes(take(b, end)?), end + 8)
+/// column, `channels` values, the tail when flagged; returns it and its length in bytes. `f32`
+/// rows: the angle and values as `f32`, the tail the angle's f64 residual ([`RESIDUAL`]); `fx`
+/// rows: the wrapped angle and values as Q31.32 raw bits, the tail the turn count ([`TURNS`]),
+/// rounded as the host's fixed-point bank rounds them.
+fn parse_axis(b: &[u8], flags: u8, channels: usize, fx: bool) -> Option<(AxisFrame, usize)> {
+    let (width, tail_flag, other_flag) = if fx {
+        (8, TURNS, RESIDUAL)
     } else {
-        (0.0, end)
+        (4, RESIDUAL, TURNS)
+    };
+    if flags & other_flag != 0 {
+        return None;
+    }
+    let raw = |at: usize| take(b, at).map(|w| Fx::from_bits(i64::from_le_bytes(w)));
+    let value = |at: usize| {
+        if fx {
+            raw(at).map(Fx::output_value_f32)
+        } else {
+            take(b, at).map(f32::from_le_bytes)
+        }
+    };
+    let reference = f32::from_le_bytes(take(b, width)?);
+    let end = width + 4 + width * channels;
+    let mut values = heapless::Vec::new();
+    for at in (width + 4..end).step_by(width) {
+        values.push(value(at)?).ok()?;
+    }
+    let tail: Option<[u8; 8]> = match flags & tail_flag {
+        0 => None,
+        _ => Some(take(b, end)?),
+    };
+    let (angle_deg, residual_deg) = if fx {
+        let turns = tail.map_or(0, i64::from_le_bytes);
+        Fx::output_angle_f32((turns, raw(0)?))
+    } else {
+        (value(0)?, tail.map_or(0.0, f64::from_le_bytes))
     };
     let axis = AxisFrame {
-        angle_deg: angle,
-        residual_deg: residual,
+        angle_deg,
+        residual_deg,
         reference_deg_s: (flags & RATE != 0).then_some(reference),
         values,
     };
-    Some((axis, n))
+    Some((axis, end + if tail.is_some() { 8 } else { 0 }))
 }
 
 /// Decodes a stream of defmt frames chunk by chunk.
@@ -324,6 +369,14 @@ mod tests {
     use estimators::{PaperOutput, ProductOutput};
     use nav440_pipeline::csv;
 
+    /// A converter that has taken the header message `header` (and the text it wrote).
+    fn started(header: &str) -> (Converter, Text) {
+        let mut c = Converter::default();
+        let mut t = Text::default();
+        c.message(header, &mut t).unwrap();
+        (c, t)
+    }
+
     /// One axis of a test row: flags, angle, residual, reference, channel values.
     type TestAxis<'a> = (u8, f32, f64, f32, &'a [f32]);
 
@@ -358,10 +411,7 @@ mod tests {
     /// empty reference field when flag bit 0 is clear).
     #[test]
     fn row_message_becomes_csv_line() {
-        let mut c = Converter::default();
-        let mut t = Text::default();
-        c.message(&format!("header 4 {}", PaperOutput::CSV_COLUMNS), &mut t)
-            .unwrap();
+        let (mut c, mut t) = started(&format!("header 4 f32 {}", <PaperOutput>::CSV_COLUMNS));
         assert_eq!(t.csv, format!("{}\n", csv::HEADER));
         let vals = [
             0.5, 1e-5, -2.25, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0, 11.0, 12.0, 13.0,
@@ -409,11 +459,8 @@ mod tests {
     /// axis (hand-written expected text, the contract of `nav440 estimate --bank product`).
     #[test]
     fn product_rows_have_the_product_columns() {
-        let mut c = Converter::default();
-        let mut t = Text::default();
-        c.message(&format!("header 7 {}", ProductOutput::CSV_COLUMNS), &mut t)
-            .unwrap();
-        let [v, a] = ProductOutput::NAMES;
+        let (mut c, mut t) = started(&format!("header 7 f32 {}", <ProductOutput>::CSV_COLUMNS));
+        let [v, a] = <ProductOutput>::NAMES;
         assert_eq!(
             t.csv,
             format!("t,roll,roll_rate,roll_{v},roll_{a},pitch,pitch_rate,pitch_{v},pitch_{a},yaw,yaw_rate,yaw_{v},yaw_{a}\n")
@@ -443,7 +490,7 @@ mod tests {
         assert!(c.message(&format!("row {long:?}"), &mut t).is_err());
         // An unknown bank is refused at the header.
         assert!(Converter::default()
-            .message("header 4 foo_v", &mut Text::default())
+            .message("header 4 f32 foo_v", &mut Text::default())
             .is_err());
     }
 
@@ -452,13 +499,10 @@ mod tests {
     /// rows written alike (hand-written expected text).
     #[test]
     fn body_rate_header_names_the_body_rate_columns() {
-        let mut c = Converter::default();
-        let mut t = Text::default();
-        c.message(
-            &format!("header 7 body_rate,{}", ProductOutput::CSV_COLUMNS),
-            &mut t,
-        )
-        .unwrap();
+        let (mut c, mut t) = started(&format!(
+            "header 7 f32 body_rate,{}",
+            <ProductOutput>::CSV_COLUMNS
+        ));
         assert_eq!(
             t.csv,
             "t,roll,roll_body_rate,roll_ilo1_v,roll_kf_a,pitch,pitch_body_rate,pitch_ilo1_v,pitch_kf_a,yaw,yaw_body_rate,yaw_ilo1_v,yaw_kf_a\n"
@@ -479,7 +523,7 @@ mod tests {
         let mut t = Text::default();
         Converter::default()
             .message(
-                &format!("header 4 body_rate,{}", PaperOutput::CSV_COLUMNS),
+                &format!("header 4 f32 body_rate,{}", <PaperOutput>::CSV_COLUMNS),
                 &mut t,
             )
             .unwrap();
@@ -487,5 +531,47 @@ mod tests {
             t.csv,
             format!("{}\n", csv::HEADER.replace("yaw_rate", "yaw_body_rate"))
         );
+    }
+
+    /// An `fx` row (a fixed-point image's): raw Q31.32 values rounded here as the host's
+    /// fixed-point bank rounds them, checked against hand-computed text: 1 + 2^-32 rounds to
+    /// the f32 1 (nearest), and as the angle it is exact in the CSV (the f64 sum
+    /// 1.0000000002328306, Python's `repr(1 + 2**-32)`); 170 deg after 2 turns is 890.
+    #[test]
+    fn fx_rows_are_rounded_as_the_host_rounds_them() {
+        let (mut c, mut t) = started(&format!("header 4 fx {}", <ProductOutput>::CSV_COLUMNS));
+        assert_eq!(t.csv, "t,yaw,yaw_rate,ilo1_v,kf_a\n");
+        let q = |x: f64| ((x * 4_294_967_296.0) as i64).to_le_bytes();
+        let row = |flags: u8, wrapped: [u8; 8], turns: Option<i64>| {
+            let mut b = 30_000u64.to_le_bytes().to_vec();
+            b.extend([flags, 0, 0, 0]);
+            b.extend(wrapped);
+            b.extend(29.5f32.to_le_bytes());
+            b.extend(((1i64 << 32) + 1).to_le_bytes());
+            b.extend(q(-4.5));
+            if let Some(n) = turns {
+                b.extend(n.to_le_bytes());
+            }
+            format!("row {b:?}")
+        };
+        c.message(&row(1, ((1i64 << 32) + 1).to_le_bytes(), None), &mut t)
+            .unwrap();
+        c.message(&row(1 | TURNS, q(170.0), Some(2)), &mut t)
+            .unwrap();
+        let lines: Vec<&str> = t.csv.lines().collect();
+        assert_eq!(lines[1], "0.0300,1.0000000002328306,29.5,1,-4.5");
+        assert_eq!(lines[2], "0.0300,890,29.5,1,-4.5");
+        // A turn count without its flag is 8 bytes too many; an f32 row's residual flag is
+        // not an fx row's.
+        let mut bad = row(1, q(170.0), None);
+        bad.insert_str(bad.len() - 1, ", 0, 0, 0, 0, 0, 0, 0, 0");
+        assert!(c.message(&bad, &mut t).is_err());
+        assert!(c
+            .message(&row(1 | RESIDUAL, q(1.0), Some(0)), &mut t)
+            .is_err());
+        // An unknown number format is refused at the header.
+        assert!(Converter::default()
+            .message("header 4 f16 ilo1_v,kf_a", &mut Text::default())
+            .is_err());
     }
 }

@@ -137,7 +137,7 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
 
     /// Feeds one sample (as [`PaperBank::update`]); the noise estimate is updated with it and
     /// the gains follow it (see the type).
-    pub fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<PaperOutput, SampleError> {
+    pub fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<PaperOutput<T>, SampleError> {
         let (out, fed) = self.bank.update_fed(t_us, angle_deg)?;
         if self.cfg.replay_samples > 0 {
             self.history.write(fed);
@@ -267,10 +267,10 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
 /// The noise-adaptive bank as a bank: the paper bank's channels and output
 /// ([`PaperOutput`]); `update` is [`AdaptiveBank::update`] (the gains follow the noise).
 impl<T: Real, S: SqrtFn<T>> crate::EstimatorBank for AdaptiveBank<T, S> {
-    type Output = PaperOutput;
+    type Output = PaperOutput<T>;
 
     #[inline]
-    fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<PaperOutput, SampleError> {
+    fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<PaperOutput<T>, SampleError> {
         AdaptiveBank::update(self, t_us, angle_deg)
     }
 

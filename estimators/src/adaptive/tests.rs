@@ -579,7 +579,7 @@ fn gains_are_interpolated_geometrically_in_the_noise() {
 fn ramp_across_a_gain_change<T: Real>(
     a: &BankConfig,
     b: &BankConfig,
-    mut check: impl FnMut(u64, [f32; crate::FAMILY_COUNT], &crate::PaperOutput),
+    mut check: impl FnMut(u64, [f32; crate::FAMILY_COUNT], &crate::PaperOutput<T>),
 ) {
     let mut bank = PaperBank::<T>::new(a).unwrap();
     let y = |k: u64| (30.0 * k as f64 * 0.01) as f32;

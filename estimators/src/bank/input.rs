@@ -39,8 +39,8 @@ pub struct Accepted<T: Real> {
     pub shift: Option<T>,
     /// What to do with the laws.
     pub feed: Feed<T>,
-    /// The unwrapped angle, deg: (f32 rounding, exact residual), see [`PaperOutput`](crate::PaperOutput).
-    pub angle: (f32, f64),
+    /// The unwrapped angle as the number type holds it in an output ([`Real::OutputAngle`]).
+    pub angle: T::OutputAngle,
 }
 
 /// The input stage every generated bank shares: input checks, sample clock (gap rule),
@@ -133,7 +133,7 @@ impl<T: Real> BankInput<T> {
                 turns
             }
         };
-        let angle = T::unwrapped_angle(turns, y);
+        let angle = T::output_angle(turns, y);
         let feed = match tick {
             Tick::Init => Feed::Reset(y),
             Tick::Gap => {

@@ -176,7 +176,7 @@ impl<T: Real, S: SqrtFn<T>> Row<T, S> for AveRow {
         ave_pair(cfg)
     }
     #[inline]
-    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_>) {
+    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_, T>) {
         out.velocity(law.velocity(s));
         out.acceleration(law.acceleration(s));
     }
@@ -207,7 +207,7 @@ impl<T: Real, S: SqrtFn<T>, const I: usize> Row<T, S> for IloV<I> {
         ilo_v(cfg, I, n0, prev)
     }
     #[inline]
-    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_>) {
+    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_, T>) {
         out.velocity(law.output(s));
     }
     fn warm(old: &BankConfig, new: &BankConfig) -> Warm {
@@ -236,7 +236,7 @@ impl<T: Real, S: SqrtFn<T>, const I: usize> Row<T, S> for IloA<I> {
         ilo_a(cfg, I, n0, prev)
     }
     #[inline]
-    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_>) {
+    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_, T>) {
         out.acceleration(law.output(s));
     }
     fn warm(old: &BankConfig, new: &BankConfig) -> Warm {
@@ -264,7 +264,7 @@ impl<T: Real, S: SqrtFn<T>> Row<T, S> for AdV {
         ad_v(cfg, n0, prev)
     }
     #[inline]
-    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_>) {
+    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_, T>) {
         out.velocity(law.output(s));
     }
     fn warm(old: &BankConfig, new: &BankConfig) -> Warm {
@@ -292,7 +292,7 @@ impl<T: Real, S: SqrtFn<T>> Row<T, S> for AdA {
         ad_a(cfg, n0, prev)
     }
     #[inline]
-    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_>) {
+    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_, T>) {
         out.acceleration(law.output(s));
     }
     fn warm(old: &BankConfig, new: &BankConfig) -> Warm {
@@ -317,7 +317,7 @@ impl<T: Real, S: SqrtFn<T>> Row<T, S> for EdRow {
         ed_pair(cfg)
     }
     #[inline]
-    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_>) {
+    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_, T>) {
         out.velocity(law.velocity(s));
         out.acceleration(law.acceleration(s));
     }
@@ -344,7 +344,7 @@ impl<T: Real, S: SqrtFn<T>> Row<T, S> for KfV {
         kalman(cfg, &cfg.velocity, KalmanOutput::Velocity)
     }
     #[inline]
-    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_>) {
+    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_, T>) {
         out.velocity(law.velocity(s));
     }
     fn warm(old: &BankConfig, new: &BankConfig) -> Warm {
@@ -368,7 +368,7 @@ impl<T: Real, S: SqrtFn<T>> Row<T, S> for KfA {
         kalman(cfg, &cfg.acceleration, KalmanOutput::Acceleration)
     }
     #[inline]
-    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_>) {
+    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_, T>) {
         out.acceleration(law.acceleration(s));
     }
     fn warm(old: &BankConfig, new: &BankConfig) -> Warm {
@@ -404,7 +404,7 @@ pub type PaperRows = (
 /// instruction with identical results).
 pub type PaperBank<T, S = crate::NativeSqrt> = Bank<PaperRows, { Channel::COUNT }, T, S>;
 /// The output of [`PaperBank`], indexed by [`Channel`].
-pub type PaperOutput = BankOutput<PaperRows, { Channel::COUNT }>;
+pub type PaperOutput<T = f32> = BankOutput<PaperRows, { Channel::COUNT }, T>;
 /// The parameters of every row of [`PaperBank`] (validated once; shareable between axes).
 pub type PaperParams<T, S = crate::NativeSqrt> = <PaperRows as Rows<T, S>>::Params;
 /// The state of every row of [`PaperBank`].
@@ -454,7 +454,7 @@ impl Channel {
     /// The number of channels.
     pub const COUNT: usize = Self::ALL.len();
     /// The CSV column names, in order (the rows' channels, [`PaperRows`]).
-    pub const NAMES: [&'static str; Self::COUNT] = PaperOutput::NAMES;
+    pub const NAMES: [&'static str; Self::COUNT] = <PaperOutput>::NAMES;
 
     /// The channel's CSV column name.
     pub const fn name(self) -> &'static str {
@@ -467,22 +467,29 @@ impl Channel {
     }
 }
 
-impl core::ops::Index<Channel> for PaperOutput {
-    type Output = f32;
-    fn index(&self, c: Channel) -> &f32 {
+/// The channel's value as the output holds it (`f32` for the float types, the raw number for
+/// [`Fx`](crate::Fx); [`EstimatorOutput::value`](crate::EstimatorOutput::value) reads it as `f32`).
+impl<T: Real> core::ops::Index<Channel> for PaperOutput<T> {
+    type Output = T::OutputValue;
+    fn index(&self, c: Channel) -> &T::OutputValue {
         &self.values[c as usize]
     }
 }
 
-impl PaperOutput {
-    /// The velocities, deg/s, one per family in [`Channel::VELOCITY`] order.
-    pub fn velocities(&self) -> [f32; FAMILY_COUNT] {
-        Channel::VELOCITY.map(|c| self[c])
+impl<T: Real> PaperOutput<T> {
+    /// The value of channel `c` as `f32` (deg/s or deg/s^2).
+    pub fn channel(&self, c: Channel) -> f32 {
+        T::output_value_f32(self[c])
     }
 
-    /// The accelerations, deg/s^2, one per family in [`Channel::ACCELERATION`] order.
+    /// The velocities as `f32`, deg/s, one per family in [`Channel::VELOCITY`] order.
+    pub fn velocities(&self) -> [f32; FAMILY_COUNT] {
+        Channel::VELOCITY.map(|c| T::output_value_f32(self[c]))
+    }
+
+    /// The accelerations as `f32`, deg/s^2, one per family in [`Channel::ACCELERATION`] order.
     pub fn accelerations(&self) -> [f32; FAMILY_COUNT] {
-        Channel::ACCELERATION.map(|c| self[c])
+        Channel::ACCELERATION.map(|c| T::output_value_f32(self[c]))
     }
 }
 

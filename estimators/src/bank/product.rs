@@ -14,7 +14,7 @@ pub type ProductRows = (IloV<0>, KfA);
 /// other estimators names its own tuple of rows ([`crate::Row`]).
 pub type ProductBank<T, S = crate::NativeSqrt> = Bank<ProductRows, { ProductChannel::COUNT }, T, S>;
 /// The output of [`ProductBank`], indexed by [`ProductChannel`].
-pub type ProductOutput = BankOutput<ProductRows, { ProductChannel::COUNT }>;
+pub type ProductOutput<T = f32> = BankOutput<ProductRows, { ProductChannel::COUNT }, T>;
 
 /// The parameters of both rows of [`ProductBank`].
 pub type ProductParams<T, S = crate::NativeSqrt> = <ProductRows as Rows<T, S>>::Params;
@@ -38,13 +38,22 @@ impl ProductChannel {
 
     /// The channel's CSV column name.
     pub const fn name(self) -> &'static str {
-        ProductOutput::NAMES[self as usize]
+        <ProductOutput>::NAMES[self as usize]
     }
 }
 
-impl core::ops::Index<ProductChannel> for ProductOutput {
-    type Output = f32;
-    fn index(&self, c: ProductChannel) -> &f32 {
+/// The channel's value as the output holds it (`f32` for the float types, the raw number for
+/// [`Fx`](crate::Fx); [`EstimatorOutput::value`](crate::EstimatorOutput::value) reads it as `f32`).
+impl<T: crate::Real> core::ops::Index<ProductChannel> for ProductOutput<T> {
+    type Output = T::OutputValue;
+    fn index(&self, c: ProductChannel) -> &T::OutputValue {
         &self.values[c as usize]
+    }
+}
+
+impl<T: crate::Real> ProductOutput<T> {
+    /// The value of channel `c` as `f32` (deg/s or deg/s^2).
+    pub fn channel(&self, c: ProductChannel) -> f32 {
+        T::output_value_f32(self[c])
     }
 }

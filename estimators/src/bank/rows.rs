@@ -25,7 +25,7 @@
 //!     fn build(cfg: &BankConfig, n0: u32, _: Option<&Self::Law>) -> Result<Self::Law, ConfigError> {
 //!         Ok(ClosedForm::new(AdParams::new(cfg.velocity.ad_t, cfg.h)?, n0, cfg.hold))
 //!     }
-//!     fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_>) {
+//!     fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_, T>) {
 //!         out.velocity(law.output(s));
 //!     }
 //!     fn warm(old: &BankConfig, new: &BankConfig) -> Warm {
@@ -101,27 +101,28 @@ impl Warm {
 }
 
 /// Where a row writes its values ([`Row::values`]): the next velocity and the next
-/// acceleration slot of the bank's output.
+/// acceleration slot of the bank's output, held as the number type holds outputs
+/// ([`Real::OutputValue`]: `f32` for the float types, the number itself for [`crate::Fx`]).
 #[derive(Debug)]
-pub struct RowValues<'a> {
-    velocity: core::slice::IterMut<'a, f32>,
-    acceleration: core::slice::IterMut<'a, f32>,
+pub struct RowValues<'a, T: Real> {
+    velocity: core::slice::IterMut<'a, T::OutputValue>,
+    acceleration: core::slice::IterMut<'a, T::OutputValue>,
 }
 
-impl RowValues<'_> {
+impl<T: Real> RowValues<'_, T> {
     /// Writes the row's next velocity channel, deg/s.
     #[inline(always)]
-    pub fn velocity<T: Real>(&mut self, x: T) {
+    pub fn velocity(&mut self, x: T) {
         if let Some(v) = self.velocity.next() {
-            *v = x.to_f32();
+            *v = x.output_value();
         }
     }
 
     /// Writes the row's next acceleration channel, deg/s^2.
     #[inline(always)]
-    pub fn acceleration<T: Real>(&mut self, x: T) {
+    pub fn acceleration(&mut self, x: T) {
         if let Some(v) = self.acceleration.next() {
-            *v = x.to_f32();
+            *v = x.output_value();
         }
     }
 }
@@ -144,7 +145,7 @@ pub trait Row<T: Real, S: SqrtFn<T>>: Channels {
     /// Writes the row's channels' values of state `s`: one [`RowValues::velocity`] per name of
     /// [`Channels::VELOCITY`] and one [`RowValues::acceleration`] per name of
     /// [`Channels::ACCELERATION`], in order.
-    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_>);
+    fn values(law: &Self::Law, s: &<Self::Law as Law>::State, out: &mut RowValues<'_, T>);
 
     /// How the row takes a warm gain change from the gains of `old` to those of `new`. The
     /// default: moved bumplessly, whatever changed.
@@ -190,7 +191,7 @@ pub trait Rows<T: Real, S: SqrtFn<T>>: ChannelLists {
     /// Bumpless gain change of every row from the parameters `old` ([`Law::retune_state`]).
     fn retune_state(p: &Self::Params, old: &Self::Params, s: &mut Self::State, y: T);
     /// Writes every row's values.
-    fn values(p: &Self::Params, s: &Self::State, out: &mut RowValues<'_>);
+    fn values(p: &Self::Params, s: &Self::State, out: &mut RowValues<'_, T>);
     /// The warm gain change of every row ([`Row::warm`]): `p` the new parameters, `before`
     /// the old ones, `replayed` the state replayed through `p`, `y` the last input.
     #[allow(clippy::too_many_arguments)]
@@ -253,7 +254,7 @@ macro_rules! tuple_rows {
                 $(p.$i.retune_state(&old.$i, &mut s.$i, y);)+
             }
             #[inline]
-            fn values(p: &Self::Params, s: &Self::State, out: &mut RowValues<'_>) {
+            fn values(p: &Self::Params, s: &Self::State, out: &mut RowValues<'_, T>) {
                 $($R::values(&p.$i, &s.$i, out);)+
             }
             fn warm(p: &Self::Params, before: &Self::Params, s: &mut Self::State, replayed: &Self::State, y: T, old: &BankConfig, new: &BankConfig) {
@@ -410,7 +411,7 @@ pub const fn columns_len(lists: &[&[&str]]) -> usize {
 /// ```
 /// use estimators::{columns_len, join_columns, EstimatorOutput, ProductOutput};
 ///
-/// const NAMES: &[&[&str]] = &[&["t", "yaw", "yaw_rate"], ProductOutput::CHANNEL_NAMES];
+/// const NAMES: &[&[&str]] = &[&["t", "yaw", "yaw_rate"], <ProductOutput>::CHANNEL_NAMES];
 /// const BYTES: [u8; columns_len(NAMES)] = join_columns(NAMES);
 /// const HEADER: &str = match core::str::from_utf8(&BYTES) {
 ///     Ok(s) => s,
@@ -444,63 +445,72 @@ pub const fn join_columns<const L: usize>(lists: &[&[&str]]) -> [u8; L] {
     out
 }
 
-/// One output of a bank of rows `R` with `N` channels: the unwrapped input angle and one
-/// value per channel (velocities in deg/s, then accelerations in deg/s^2, see [`Channels`]).
-pub struct BankOutput<R, const N: usize> {
-    /// The unwrapped angle, deg, rounded to f32 (see `residual_deg`).
-    pub unwrapped_deg: f32,
-    /// What f32 rounding took off the unwrapped angle, deg: the exact unwrapped angle is
-    /// `unwrapped_deg as f64 + residual_deg` (0 while f32 holds it).
-    pub residual_deg: f64,
-    /// The channels' values, in the order of [`EstimatorOutput::CHANNEL_NAMES`].
-    pub values: [f32; N],
+/// One output of a bank of rows `R` with `N` channels, number type `T`: the unwrapped input
+/// angle and one value per channel (velocities in deg/s, then accelerations in deg/s^2, see
+/// [`Channels`]), held as `T` holds outputs: rounded to `f32` for the float types, raw for
+/// [`crate::Fx`] ([`Real::OutputValue`], [`Real::OutputAngle`]). [`EstimatorOutput`] reads
+/// both as `f32` (and the angle's `f64` residual) either way, with the same values.
+pub struct BankOutput<R, const N: usize, T: Real = f32> {
+    /// The unwrapped angle as `T` holds it: `(f32 rounding, f64 residual)` for the float types,
+    /// `(turns, wrapped angle)` for [`crate::Fx`]; read it with
+    /// [`EstimatorOutput::unwrapped_deg`] and [`EstimatorOutput::residual_deg`].
+    pub angle: T::OutputAngle,
+    /// The channels' values, in the order of [`EstimatorOutput::CHANNEL_NAMES`], as `T` holds
+    /// them (`f32` for the float types; read as `f32` with [`EstimatorOutput::values`]).
+    pub values: [T::OutputValue; N],
     rows: PhantomData<fn() -> R>,
 }
 
-impl<R, const N: usize> Clone for BankOutput<R, N> {
+impl<R, const N: usize, T: Real> Clone for BankOutput<R, N, T> {
     fn clone(&self) -> Self {
         *self
     }
 }
 
-impl<R, const N: usize> Copy for BankOutput<R, N> {}
+impl<R, const N: usize, T: Real> Copy for BankOutput<R, N, T> {}
 
-impl<R, const N: usize> PartialEq for BankOutput<R, N> {
+impl<R, const N: usize, T: Real> PartialEq for BankOutput<R, N, T> {
     fn eq(&self, other: &Self) -> bool {
-        (self.unwrapped_deg, self.residual_deg, self.values)
-            == (other.unwrapped_deg, other.residual_deg, other.values)
+        (self.angle, self.values) == (other.angle, other.values)
     }
 }
 
-impl<R, const N: usize> core::fmt::Debug for BankOutput<R, N> {
+impl<R, const N: usize, T: Real> core::fmt::Debug for BankOutput<R, N, T> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("BankOutput")
-            .field("unwrapped_deg", &self.unwrapped_deg)
-            .field("residual_deg", &self.residual_deg)
+            .field("angle", &self.angle)
             .field("values", &self.values)
             .finish()
     }
 }
 
-impl<R, const N: usize> Default for BankOutput<R, N> {
+impl<R, const N: usize, T: Real> Default for BankOutput<R, N, T> {
     fn default() -> Self {
-        Self::new(0.0, 0.0, [0.0; N])
+        Self::from_parts(T::OutputAngle::default(), [T::OutputValue::default(); N])
     }
 }
 
-impl<R, const N: usize> BankOutput<R, N> {
-    /// An output of these values.
+impl<R, const N: usize> BankOutput<R, N, f32> {
+    /// An output of these values: the unwrapped angle's `f32` rounding and residual (deg) and
+    /// the channels' values.
     pub const fn new(unwrapped_deg: f32, residual_deg: f64, values: [f32; N]) -> Self {
+        Self::from_parts((unwrapped_deg, residual_deg), values)
+    }
+}
+
+impl<R, const N: usize, T: Real> BankOutput<R, N, T> {
+    /// An output of these parts, as `T` holds them ([`BankOutput::angle`],
+    /// [`BankOutput::values`]).
+    pub const fn from_parts(angle: T::OutputAngle, values: [T::OutputValue; N]) -> Self {
         Self {
-            unwrapped_deg,
-            residual_deg,
+            angle,
             values,
             rows: PhantomData,
         }
     }
 }
 
-impl<R: ChannelLists, const N: usize> BankOutput<R, N> {
+impl<R: ChannelLists, const N: usize, T: Real> BankOutput<R, N, T> {
     /// The channels' names, velocities then accelerations.
     pub const NAMES: [&'static str; N] = flatten::<N>(R::VELOCITY, R::ACCELERATION);
     /// The CSV columns: [`Self::NAMES`] joined with `,` when displayed.
@@ -508,34 +518,46 @@ impl<R: ChannelLists, const N: usize> BankOutput<R, N> {
     /// The number of velocity channels (the first of [`Self::NAMES`]).
     pub const VELOCITIES: usize = count(R::VELOCITY);
 
-    /// `(name, value)` pairs in CSV order.
+    /// `(name, value)` pairs in CSV order, the values as `f32`.
     pub fn iter(&self) -> impl Iterator<Item = (&'static str, f32)> + '_ {
-        Self::NAMES.iter().copied().zip(self.values.iter().copied())
+        Self::NAMES
+            .iter()
+            .copied()
+            .zip(self.values.iter().map(|&v| T::output_value_f32(v)))
     }
 
-    /// The value of the channel named `name`, if the bank has it.
+    /// The value of the channel named `name` as `f32`, if the bank has it.
     pub fn get(&self, name: &str) -> Option<f32> {
         self.iter().find(|(n, _)| *n == name).map(|(_, v)| v)
     }
+
+    /// The same output held as `f32` ([`EstimatorOutput`]'s values): what a host compares or
+    /// stores, whatever the number type.
+    pub fn to_f32(&self) -> BankOutput<R, N, f32> {
+        let (angle, residual) = T::output_angle_f32(self.angle);
+        BankOutput::new(angle, residual, self.values.map(|v| T::output_value_f32(v)))
+    }
 }
 
-impl<R: ChannelLists, const N: usize> EstimatorOutput for BankOutput<R, N> {
+impl<R: ChannelLists, const N: usize, T: Real> EstimatorOutput for BankOutput<R, N, T> {
     const CHANNELS: usize = N;
     const CHANNEL_NAMES: &'static [&'static str] = &Self::NAMES;
 
     #[inline]
     fn unwrapped_deg(&self) -> f32 {
-        self.unwrapped_deg
+        T::output_angle_f32(self.angle).0
     }
 
     #[inline]
     fn residual_deg(&self) -> f64 {
-        self.residual_deg
+        T::output_angle_f32(self.angle).1
     }
 
     #[inline]
-    fn values(&self) -> &[f32] {
-        &self.values
+    fn value(&self, channel: usize) -> f32 {
+        self.values
+            .get(channel)
+            .map_or(f32::NAN, |&v| T::output_value_f32(v))
     }
 }
 
@@ -700,7 +722,11 @@ impl<R: Rows<T, S>, const N: usize, T: Real, S: SqrtFn<T>> Bank<R, N, T, S> {
     /// `SampleError::OutOfRange` for `|angle_deg|` above `MAX_ABS_DEG`,
     /// `SampleError::NonIncreasingTime` for `t_us` not later than the previous sample.
     #[inline]
-    pub fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<BankOutput<R, N>, SampleError> {
+    pub fn update(
+        &mut self,
+        t_us: u64,
+        angle_deg: f32,
+    ) -> Result<BankOutput<R, N, T>, SampleError> {
         self.update_fed(t_us, angle_deg).map(|(out, _)| out)
     }
 
@@ -711,18 +737,18 @@ impl<R: Rows<T, S>, const N: usize, T: Real, S: SqrtFn<T>> Bank<R, N, T, S> {
         &mut self,
         t_us: u64,
         angle_deg: f32,
-    ) -> Result<(BankOutput<R, N>, Fed<T>), SampleError> {
+    ) -> Result<(BankOutput<R, N, T>, Fed<T>), SampleError> {
         let a = self.input.accept(t_us, angle_deg)?;
         if let Some(d) = a.shift {
             R::translate(&self.params, &mut self.state, d);
         }
-        let mut values = [0.0; N];
+        let mut values = [T::OutputValue::default(); N];
         match a.feed {
             Feed::Reset(y) => self.state = R::init(&self.params, y),
             Feed::Advance { y_prev, y, n, hold } => {
                 R::advance(&self.params, &mut self.state, y_prev, y, n, hold);
                 let (velocity, acceleration) =
-                    values.split_at_mut(BankOutput::<R, N>::VELOCITIES.min(N));
+                    values.split_at_mut(BankOutput::<R, N, T>::VELOCITIES.min(N));
                 let mut out = RowValues {
                     velocity: velocity.iter_mut(),
                     acceleration: acceleration.iter_mut(),
@@ -730,7 +756,7 @@ impl<R: Rows<T, S>, const N: usize, T: Real, S: SqrtFn<T>> Bank<R, N, T, S> {
                 R::values(&self.params, &self.state, &mut out);
             }
         }
-        let out = BankOutput::new(a.angle.0, a.angle.1, values);
+        let out = BankOutput::from_parts(a.angle, values);
         Ok((
             out,
             Fed {
@@ -889,7 +915,7 @@ impl<R: Rows<T, S>, const N: usize, T: Real, S: SqrtFn<T>> Bank<R, N, T, S> {
 }
 
 impl<R: Rows<T, S>, const N: usize, T: Real, S: SqrtFn<T>> EstimatorBank for Bank<R, N, T, S> {
-    type Output = BankOutput<R, N>;
+    type Output = BankOutput<R, N, T>;
 
     #[inline]
     fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<Self::Output, SampleError> {

@@ -13,13 +13,34 @@ pub enum Either<A, B> {
     B(B),
 }
 
-impl<A: EstimatorBank, B: EstimatorBank<Output = A::Output>> EstimatorBank for Either<A, B> {
+/// A bank output as the output `O` of another bank of the same rows: a fixed-point bank's
+/// output (raw `Fx` values) as the `f32` bank's, so that [`Either`] of the two has one output.
+pub trait IntoOutput<O> {
+    /// The output as `O` (the values `EstimatorOutput` reads, unchanged).
+    fn into_output(self) -> O;
+}
+
+impl<R, const N: usize, T: estimators::Real> IntoOutput<estimators::BankOutput<R, N, f32>>
+    for estimators::BankOutput<R, N, T>
+where
+    R: estimators::ChannelLists,
+{
+    fn into_output(self) -> estimators::BankOutput<R, N, f32> {
+        self.to_f32()
+    }
+}
+
+impl<A: EstimatorBank, B: EstimatorBank> EstimatorBank for Either<A, B>
+where
+    A::Output: IntoOutput<A::Output>,
+    B::Output: IntoOutput<A::Output>,
+{
     type Output = A::Output;
 
     fn update(&mut self, t_us: u64, angle_deg: f32) -> std::result::Result<A::Output, SampleError> {
         match self {
             Either::A(b) => b.update(t_us, angle_deg),
-            Either::B(b) => b.update(t_us, angle_deg),
+            Either::B(b) => b.update(t_us, angle_deg).map(IntoOutput::into_output),
         }
     }
 

@@ -152,8 +152,40 @@ pub(super) fn prepare(
         let (m, _) = run_built(&board, &elf)?;
         let report = report(board, small, bank, &m);
         print!("{report}");
-        Ok(())
+        let broken = guards(board, small, bank, &m);
+        if broken.is_empty() {
+            Ok(())
+        } else {
+            Err(format!("bench guards broken: {}", broken.join("; ")))
+        }
     })
+}
+
+/// The speed goals that are met and so are guards: a run past one fails `cargo xtask bench`
+/// (and CI, which runs the product bench on thumbv6m). The product pipeline without the Euler
+/// reference on thumbv6m (<= [`PRODUCT_PIPELINE_NOREF_GOAL`] per A2 frame) and the output
+/// stage (<= [`OUTPUT_GOAL`] per sample, every bench that measures it). Returns the broken
+/// ones.
+fn guards(board: Board, small: bool, bank: BankChoice, m: &[Measure]) -> Vec<String> {
+    let mut broken = Vec::new();
+    let find = |prefix: &str| m.iter().find(|x| x.label.starts_with(prefix));
+    if bank == BankChoice::Product && board.target == "thumbv6m-none-eabi" && !small {
+        match find("pipeline without reference") {
+            Some(p) if p.instr > PRODUCT_PIPELINE_NOREF_GOAL => broken.push(format!(
+                "product pipeline without the reference, thumbv6m: {:.0} instructions per A2 frame, guard {PRODUCT_PIPELINE_NOREF_GOAL:.0}",
+                p.instr
+            )),
+            Some(_) => {}
+            None => broken.push("no measurement of the pipeline without the reference".into()),
+        }
+    }
+    if let Some(o) = find("defmt row message").filter(|o| o.instr > OUTPUT_GOAL) {
+        broken.push(format!(
+            "output stage: {:.0} instructions per sample, guard {OUTPUT_GOAL:.0}",
+            o.instr
+        ));
+    }
+    broken
 }
 
 /// The bench's report: its table and goals.
