@@ -354,6 +354,38 @@ pub(crate) fn fx_from_f32(x: f32) -> i64 {
     }
 }
 
+/// The raw bits of `raw * 2^exp2` in Q31.32 ([`Real::from_scaled`] for [`Fx`]): `raw` shifted
+/// by `exp2 + 32`, saturated when it leaves the range, rounded to nearest (ties to even) when
+/// bits fall off.
+#[inline]
+fn fx_from_scaled(raw: i32, exp2: i32) -> i64 {
+    let shift = exp2 + 32;
+    let raw = i64::from(raw);
+    if shift >= 0 {
+        let k = shift.min(63) as u32;
+        let v = raw.wrapping_shl(k);
+        if v >> k == raw {
+            return v;
+        }
+        return if raw > 0 {
+            i64::MAX
+        } else if raw < 0 {
+            i64::MIN
+        } else {
+            0
+        };
+    }
+    let k = (-shift).min(40) as u32;
+    let q = raw >> k;
+    let r = raw - (q << k);
+    let half = 1i64 << (k - 1);
+    if r > half || (r == half && q & 1 == 1) {
+        q + 1
+    } else {
+        q
+    }
+}
+
 /// [`Real::unwrapped_angle`] in `f64` (soft-float on Cortex-M: out of line, taken only after
 /// a turn).
 #[cold]
@@ -625,6 +657,13 @@ pub trait Real:
     }
     /// Converts from an integer (saturating for fixed point).
     fn from_i32(x: i32) -> Self;
+    /// `raw * 2^exp2` (a sensor's fixed-point reading): exact while the type holds it (the
+    /// float types for `|raw| < 2^24` and a normal result; [`Fx`] for `exp2 >= -32`, saturating
+    /// beyond its range, and rounded to nearest, ties to even, below 2^-32), and then the same
+    /// value as [`Real::from_f32`] of it. No conversion through `f32` for [`Fx`].
+    fn from_scaled(raw: i32, exp2: i32) -> Self;
+    /// Neither NaN nor infinite (always true for [`Fx`]).
+    fn is_finite(self) -> bool;
     /// Converts to `f32` (rounding to nearest for fixed point, via soft-float conversion only).
     fn to_f32(self) -> f32;
     /// Converts to `f64`.
@@ -729,9 +768,10 @@ pub trait Real:
 }
 
 /// `Real` for a float type `$t`: every law stepped at `h` (no coarse step, nothing stored
-/// for it), conversions by `as` (exact where they widen), `libm`'s `$abs` and `$sqrt`.
+/// for it), conversions by `as` (exact where they widen), `libm`'s `$abs` and `$sqrt`, `$pow2`
+/// the type's power of two.
 macro_rules! float_real {
-    ($t:ty, $abs:path, $sqrt:path) => {
+    ($t:ty, $abs:path, $sqrt:path, $pow2:path) => {
         impl Real for $t {
             const ZERO: Self = 0.0;
             const ONE: Self = 1.0;
@@ -776,6 +816,14 @@ macro_rules! float_real {
                 x as $t
             }
             #[inline]
+            fn from_scaled(raw: i32, exp2: i32) -> Self {
+                (raw as $t) * $pow2(exp2)
+            }
+            #[inline]
+            fn is_finite(self) -> bool {
+                <$t>::is_finite(self)
+            }
+            #[inline]
             fn to_f32(self) -> f32 {
                 self as f32
             }
@@ -807,8 +855,20 @@ macro_rules! float_real {
     };
 }
 
-float_real!(f32, libm::fabsf, libm::sqrtf);
-float_real!(f64, libm::fabs, libm::sqrt);
+/// `2^e` for `e` in the normal range (clamped to it), from its bits.
+#[inline(always)]
+fn pow2_f32(e: i32) -> f32 {
+    f32::from_bits(((e.clamp(-126, 127) + 127) as u32) << 23)
+}
+
+/// `2^e` for `e` in the normal range (clamped to it), from its bits.
+#[inline(always)]
+fn pow2_f64(e: i32) -> f64 {
+    f64::from_bits(((e.clamp(-1022, 1023) + 1023) as u64) << 52)
+}
+
+float_real!(f32, libm::fabsf, libm::sqrtf, pow2_f32);
+float_real!(f64, libm::fabs, libm::sqrt, pow2_f64);
 
 impl Real for Fx {
     const ZERO: Self = Fx(I32F32::ZERO);
@@ -879,6 +939,16 @@ impl Real for Fx {
     #[inline]
     fn from_i32(x: i32) -> Self {
         Fx(I32F32::from_num(x))
+    }
+    /// A shift: exact for `exp2 >= -32` (saturating beyond the range), nearest (ties to even)
+    /// below.
+    #[inline]
+    fn from_scaled(raw: i32, exp2: i32) -> Self {
+        Fx::from_bits(fx_from_scaled(raw, exp2))
+    }
+    #[inline(always)]
+    fn is_finite(self) -> bool {
+        true
     }
     /// `fixed`'s `to_num::<f32>` (nearest, ties to even), computed with integer operations
     /// only.
@@ -1063,6 +1133,43 @@ mod tests {
                 (f64::from(r) - exact as f64 / 4_294_967_296.0).abs()
                     <= f64::from(r).abs() * 2f64.powi(-24)
             );
+        }
+    }
+
+    /// `from_scaled(raw, exp2)` is `from_f32` of the same value wherever `f32` holds it
+    /// exactly (`|raw| < 2^24`, a normal result), for `Fx`, `f32` and `f64`: every NAV440
+    /// angle field (`45 raw * 2^-13`, all 65,536), and 200,000 random pairs with `exp2` from
+    /// -60 to 8 (for `Fx` below 2^-32 that is its nearest-even rounding, beyond its range its
+    /// saturation). The `f32` value is built independently, as `raw as f64 * 2^exp2` (exact
+    /// in `f64`) rounded to `f32`.
+    #[test]
+    fn from_scaled_is_from_f32_of_the_exact_value() {
+        fn check(raw: i32, exp2: i32) {
+            let exact = f64::from(raw) * 2f64.powi(exp2);
+            let x = exact as f32;
+            if f64::from(x) != exact || (x != 0.0 && !x.is_normal()) {
+                return;
+            }
+            assert_eq!(
+                Fx::from_scaled(raw, exp2),
+                Fx::from_f32(x),
+                "{raw} 2^{exp2}"
+            );
+            assert_eq!(
+                f32::from_scaled(raw, exp2).to_bits(),
+                x.to_bits(),
+                "{raw} 2^{exp2}"
+            );
+            assert_eq!(f64::from_scaled(raw, exp2), f64::from(x), "{raw} 2^{exp2}");
+        }
+        for a in i16::MIN..=i16::MAX {
+            check(i32::from(a) * 45, -13);
+        }
+        let mut g = Rng(0x5EED_0F5C_A1ED);
+        for _ in 0..200_000 {
+            let raw = (g.next() >> 40) as i32 - (1 << 23);
+            let exp2 = (g.next() % 69) as i32 - 60;
+            check(raw, exp2);
         }
     }
 

@@ -114,6 +114,21 @@ pub trait EstimatorBank {
     /// [`SampleError::NonIncreasingTime`] for a time not later than the previous sample's.
     fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<Self::Output, SampleError>;
 
+    /// [`Self::update`] with the angle `raw * 2^exp2` deg, a sensor's fixed-point reading (a
+    /// NAV440 angle field `a`, 360/2^16 deg per LSB, is `raw = 45 a`, `exp2 = -13`). The same
+    /// output as `update` of that angle as `f32` where `f32` holds it exactly (`|raw| <
+    /// 2^24`); a [`crate::Bank`] converts it to its number type directly
+    /// ([`crate::Real::from_scaled`]), so a fixed-point bank's input takes no `f32` on the
+    /// way. The default goes through `f32` (`raw` rounded to it when `|raw| >= 2^24`).
+    fn update_scaled(
+        &mut self,
+        t_us: u64,
+        raw: i32,
+        exp2: i32,
+    ) -> Result<Self::Output, SampleError> {
+        self.update(t_us, <f32 as crate::Real>::from_scaled(raw, exp2))
+    }
+
     /// Starts a new epoch (a confirmed time jump): the next sample re-initialises every
     /// estimator from itself, whatever its time; the unwrapped angle keeps its turns. Not
     /// counted in [`Self::reinit_count`].

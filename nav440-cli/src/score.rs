@@ -102,12 +102,8 @@ mod tests {
     use super::*;
 
     fn s(k: u64, pitch: f32) -> Sample {
-        Sample {
-            t_us: k * 100_000,
-            angles_deg: [0.0, pitch, 0.0],
-            rates_deg_s: [0.0; 3],
-            new_epoch: false,
-        }
+        let raw = (f64::from(pitch) * 65536.0 / 360.0).round() as i16;
+        Sample::from_raw(k * 100_000, [0, raw, 0], [0.0; 3], false)
     }
 
     /// 10 Hz: samples 3 and 4 near the lock; 5..=14 (the 1 s after sample 4) settle.

@@ -479,7 +479,9 @@ fn run_sample<B: EstimatorBank, R: Reference>(
         if input.new_epoch {
             bank.new_epoch();
         }
-        match bank.update(input.t_us, s.angle(axis)) {
+        // The packet's integer angle, `45 raw * 2^-13` deg: exact in the bank's number type.
+        let (mult, exp2) = nav440_proto::scale::ANGLE_DEG_SCALED;
+        match bank.update_scaled(input.t_us, i32::from(s.angles_raw[i]) * mult, exp2) {
             Ok(out) => {
                 row.axes[i] = Some(AxisRow {
                     reference_deg_s: refs[i],

@@ -15,6 +15,9 @@ pub struct Attitude {
     pub time: TimeStamp,
     /// Roll, pitch, yaw as sent (A0/A1: magnetic yaw; A2/N0/N1: true yaw; B1: yaw), deg.
     pub angles_deg: [f32; 3],
+    /// The same angles as the packet's integers, 360/2^16 deg per LSB (`angles_deg` is their
+    /// exact value, `nav440_proto::scale::angle_deg`).
+    pub angles_raw: [i16; 3],
     /// Body rates p, q, r (x, y, z; corrected), deg/s (B1 sends r only: p, q are NaN).
     pub rates_deg_s: [f32; 3],
     /// The BIT status word.
@@ -27,27 +30,28 @@ pub fn attitude(packet: &Packet<'_>) -> Option<Attitude> {
     macro_rules! att {
         ($p:expr, $yaw:ident) => {
             (
-                [$p.roll_deg(), $p.pitch_deg(), $p.$yaw()],
+                [$p.roll(), $p.pitch(), $p.$yaw()],
                 [$p.rate_x_deg_s(), $p.rate_y_deg_s(), $p.rate_z_deg_s()],
             )
         };
     }
-    let (angles_deg, rates_deg_s) = match packet {
-        Packet::A0(p) => att!(p, yaw_mag_deg),
-        Packet::A1(p) => att!(p, yaw_mag_deg),
-        Packet::A2(p) => att!(p, yaw_true_deg),
-        Packet::N0(p) => att!(p, yaw_true_deg),
-        Packet::N1(p) => att!(p, yaw_true_deg),
+    let (angles_raw, rates_deg_s) = match packet {
+        Packet::A0(p) => att!(p, yaw_mag),
+        Packet::A1(p) => att!(p, yaw_mag),
+        Packet::A2(p) => att!(p, yaw_true),
+        Packet::N0(p) => att!(p, yaw_true),
+        Packet::N1(p) => att!(p, yaw_true),
         // B1 carries the z rate only: p and q unknown (NaN), so its reference rates are empty.
         Packet::B1(p) => (
-            [p.roll_deg(), p.pitch_deg(), p.yaw_deg()],
+            [p.roll(), p.pitch(), p.yaw()],
             [f32::NAN, f32::NAN, p.rate_z_deg_s()],
         ),
         _ => return None,
     };
     Some(Attitude {
         time: packet.time(),
-        angles_deg,
+        angles_deg: angles_raw.map(nav440_proto::scale::angle_deg),
+        angles_raw,
         rates_deg_s,
         bit: packet.bit().unwrap_or_default(),
     })
@@ -61,6 +65,11 @@ pub struct Sample {
     pub t_us: u64,
     /// Roll, pitch, yaw as sent (wrapped), deg.
     pub angles_deg: [f32; 3],
+    /// The same angles as the packet's integers, 360/2^16 deg per LSB: `angles_deg` is their
+    /// exact value ([`Sample::from_raw`] keeps the two together). The banks take these
+    /// (`EstimatorBank::update_scaled`), so a fixed-point bank's input is converted without
+    /// `f32`.
+    pub angles_raw: [i16; 3],
     /// Body rates p, q, r as sent, deg/s.
     pub rates_deg_s: [f32; 3],
     /// First sample of a new time epoch (a confirmed backward jump of the time stamps, or the
@@ -96,18 +105,37 @@ impl Sample {
         EulerReference::rates_deg_s(self.angles_deg, self.rates_deg_s)
     }
 
+    /// A sample of the angles `angles_raw` (360/2^16 deg per LSB; `angles_deg` their exact
+    /// value) and the body rates `rates_deg_s`, at `t_us`.
+    pub fn from_raw(
+        t_us: u64,
+        angles_raw: [i16; 3],
+        rates_deg_s: [f32; 3],
+        new_epoch: bool,
+    ) -> Self {
+        Sample {
+            t_us,
+            angles_deg: angles_raw.map(nav440_proto::scale::angle_deg),
+            angles_raw,
+            rates_deg_s,
+            new_epoch,
+        }
+    }
+
     fn from_timed(t: Timed<Payload>) -> Self {
         Sample {
             t_us: t.t_us,
             angles_deg: t.payload.0,
+            angles_raw: t.payload.2,
             rates_deg_s: t.payload.1,
             new_epoch: t.new_epoch,
         }
     }
 }
 
-/// What rides through the time base with each time stamp.
-type Payload = ([f32; 3], [f32; 3]);
+/// What rides through the time base with each time stamp: the angles (deg), the body rates
+/// (deg/s), the angles as sent.
+type Payload = ([f32; 3], [f32; 3], [i16; 3]);
 
 /// Counters of the front end. Every counter saturates. Invariant: `attitude_packets =
 /// bit.failed + samples + time faults' discarded + duplicates` (plus one sample held by the
@@ -179,7 +207,7 @@ fn on_frame(
     if counters.bit.check(a.bit) {
         return;
     }
-    for t in clock.update(a.time, (a.angles_deg, a.rates_deg_s)) {
+    for t in clock.update(a.time, (a.angles_deg, a.rates_deg_s, a.angles_raw)) {
         counters.samples = counters.samples.saturating_add(1);
         out(Sample::from_timed(t));
     }

@@ -15,12 +15,14 @@ fn sample(k: u64) -> Sample {
     let t = k as f32 * 0.01;
     let pitch = if LOCK.contains(&k) { 85.0 } else { 30.0 };
     let yaw = (YAW_RATE * t + 180.0).rem_euclid(360.0) - 180.0;
-    Sample {
-        t_us: k * 10_000,
-        angles_deg: [10.0, pitch, yaw],
-        rates_deg_s: [0.0, 0.0, YAW_RATE],
-        new_epoch: false,
-    }
+    // The angles as a packet sends them (360/2^16 deg per LSB).
+    let raw = |deg: f32| (f64::from(deg) * 65536.0 / 360.0).round() as i16;
+    Sample::from_raw(
+        k * 10_000,
+        [raw(10.0), raw(pitch), raw(yaw)],
+        [0.0, 0.0, YAW_RATE],
+        false,
+    )
 }
 
 fn run(axes: Axes) -> (Vec<Row<PaperOutput>>, Counters) {

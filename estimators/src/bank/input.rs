@@ -60,6 +60,8 @@ impl<T: Real> BankInput<T> {
     /// Largest accepted `|angle|`, deg (2778 turns). Beyond it f32 resolves the angle to no
     /// better than 0.06 deg, and values near `f32::MAX` would overflow the states.
     pub const MAX_ABS_DEG: f32 = 1.0e6;
+    /// [`Self::MAX_ABS_DEG`] as an integer.
+    const MAX_ABS_DEG_I32: i32 = 1_000_000;
 
     /// Validates the step, period and gap rule of `cfg`; returns the input stage and the
     /// number of steps per nominal sample period the closed-form maps are built for (0 when
@@ -111,13 +113,33 @@ impl<T: Real> BankInput<T> {
                 SampleError::NotFinite
             });
         }
+        self.accept_checked(t_us, T::from_f32(angle_deg))
+    }
+
+    /// [`Self::accept`] for an angle `y` already in the number type (deg): the same checks
+    /// (`|y|` at most [`Self::MAX_ABS_DEG`]), the same result as `accept` of the `f32` it equals.
+    #[inline(always)]
+    pub fn accept_value(&mut self, t_us: u64, y: T) -> Result<Accepted<T>, SampleError> {
+        let max = T::from_i32(Self::MAX_ABS_DEG_I32);
+        if y <= max && y >= -max {
+            return self.accept_checked(t_us, y);
+        }
+        Err(if y.is_finite() {
+            SampleError::OutOfRange
+        } else {
+            SampleError::NotFinite
+        })
+    }
+
+    /// [`Self::accept`] after the angle's checks.
+    #[inline(always)]
+    fn accept_checked(&mut self, t_us: u64, y: T) -> Result<Accepted<T>, SampleError> {
         let tick = self.clock.tick(t_us)?;
         // The laws run in a local frame whose origin is the unwrapper's current multiple of
         // 360 deg: they see the wrapped angle, so f32 states stay within about +-180 deg (full
         // f32 resolution) however many turns the unwrapped angle makes. When the offset
         // changes, every law is translated into the new frame (exact: the laws are invariant
         // to input offsets, see `Estimator::translate`).
-        let y = T::from_f32(angle_deg);
         let mut shift = None;
         let turns = match self.wrap {
             Wrap::None => 0,

@@ -739,6 +739,25 @@ impl<R: Rows<T, S>, const N: usize, T: Real, S: SqrtFn<T>> Bank<R, N, T, S> {
         angle_deg: f32,
     ) -> Result<(BankOutput<R, N, T>, Fed<T>), SampleError> {
         let a = self.input.accept(t_us, angle_deg)?;
+        Ok(self.feed(a))
+    }
+
+    /// [`Self::update`] for an angle `angle` already in the number type, deg (what
+    /// [`EstimatorBank::update_scaled`] feeds): the same checks, and the same output as
+    /// `update` of the `f32` it equals.
+    #[inline]
+    pub fn update_value(
+        &mut self,
+        t_us: u64,
+        angle: T,
+    ) -> Result<BankOutput<R, N, T>, SampleError> {
+        let a = self.input.accept_value(t_us, angle)?;
+        Ok(self.feed(a).0)
+    }
+
+    /// Runs the laws on an accepted sample.
+    #[inline(always)]
+    fn feed(&mut self, a: super::input::Accepted<T>) -> (BankOutput<R, N, T>, Fed<T>) {
         if let Some(d) = a.shift {
             R::translate(&self.params, &mut self.state, d);
         }
@@ -757,13 +776,13 @@ impl<R: Rows<T, S>, const N: usize, T: Real, S: SqrtFn<T>> Bank<R, N, T, S> {
             }
         }
         let out = BankOutput::from_parts(a.angle, values);
-        Ok((
+        (
             out,
             Fed {
                 shift: a.shift,
                 feed: a.feed,
             },
-        ))
+        )
     }
 
     /// How many times a gap longer than the gap rule re-initialised the bank.
@@ -920,6 +939,17 @@ impl<R: Rows<T, S>, const N: usize, T: Real, S: SqrtFn<T>> EstimatorBank for Ban
     #[inline]
     fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<Self::Output, SampleError> {
         Bank::update(self, t_us, angle_deg)
+    }
+
+    /// The angle converted to `T` directly ([`Real::from_scaled`]), not through `f32`.
+    #[inline]
+    fn update_scaled(
+        &mut self,
+        t_us: u64,
+        raw: i32,
+        exp2: i32,
+    ) -> Result<Self::Output, SampleError> {
+        self.update_value(t_us, T::from_scaled(raw, exp2))
     }
 
     fn new_epoch(&mut self) {

@@ -35,12 +35,18 @@ pub mod scale {
     /// Delta angle (S2, I4), rad per LSB (7*pi/2^32).
     pub const DANGLE_RAD: f32 = 7.0 * PI / 4_294_967_296.0;
 
+    /// An angle field's value in deg as an integer and a power of two: `raw * 360/2^16` deg is
+    /// `(raw * ANGLE_DEG_SCALED.0) * 2^ANGLE_DEG_SCALED.1` = `45 raw * 2^-13` exactly. What a
+    /// fixed-point consumer converts without a float on the way
+    /// (`estimators::EstimatorBank::update_scaled`).
+    pub const ANGLE_DEG_SCALED: (i32, i32) = (45, -13);
+
     /// An angle field in deg: `raw * 360/2^16` = `raw * 45 * 2^-13`, exact in `f32` and the
     /// same bits on every target: built with integer operations only on a bare-metal target without
     /// hardware floating point (an ABI other than `eabihf`): no soft-float routine is linked.
     #[inline]
     pub fn angle_deg(raw: i16) -> f32 {
-        exact(raw, 45, -13, ANGLE_DEG)
+        exact(raw, ANGLE_DEG_SCALED.0, ANGLE_DEG_SCALED.1, ANGLE_DEG)
     }
 
     /// An angular rate field in deg/s: `raw * 1260/2^16` = `raw * 315 * 2^-14`, exact in `f32`,
