@@ -132,7 +132,7 @@ pub use law::{Law, Stateful};
 pub use linear::{ClosedForm, LinearLaw};
 pub use pair::{VelAcc, VelAccState};
 pub use rates::RateGains;
-pub use real::{Fx, NativeSqrt, Real, SqrtFn};
+pub use real::{f32_scaled, Fx, NativeSqrt, Real, SqrtFn};
 pub use series::{Series, SeriesState};
 pub use traits::{EstimatorBank, EstimatorOutput, Values};
 pub use unwrap::Unwrapper;

@@ -354,12 +354,51 @@ pub(crate) fn fx_from_f32(x: f32) -> i64 {
     }
 }
 
+/// A finite `f32` as `(m, e)` with `x = m * 2^e` exactly and `|m| < 2^24` (what
+/// [`crate::EstimatorBank::update_scaled`] takes); `None` for NaN and the infinities. Both
+/// zeros give `(0, -149)`. Integer operations only.
+#[inline]
+pub fn f32_scaled(x: f32) -> Option<(i32, i32)> {
+    let b = x.to_bits();
+    let exp = ((b >> 23) & 0xFF) as i32;
+    if exp == 0xFF {
+        return None;
+    }
+    let frac = (b & 0x007F_FFFF) as i32;
+    let (m, e) = if exp == 0 {
+        (frac, -149)
+    } else {
+        (frac | 0x0080_0000, exp - 150)
+    };
+    Some((if b >> 31 == 0 { m } else { -m }, e))
+}
+
 /// The raw bits of `raw * 2^exp2` in Q31.32 ([`Real::from_scaled`] for [`Fx`]): `raw` shifted
 /// by `exp2 + 32`, saturated when it leaves the range, rounded to nearest (ties to even) when
 /// bits fall off.
-#[inline]
+#[inline(always)]
 fn fx_from_scaled(raw: i32, exp2: i32) -> i64 {
     let shift = exp2 + 32;
+    // |raw| < 2^31: a shift by at most 32 stays within i64 (the usual case: a sensor's LSB
+    // between 2^-32 and 1). Built from 32-bit shifts (a 64-bit shift by a variable is a
+    // library call on the Cortex-M0): the low word `raw << shift`, the high word the bits
+    // shifted out, sign-extended.
+    if (0..32).contains(&shift) {
+        let lo = (raw as u32) << shift;
+        let hi = if shift == 0 {
+            raw >> 31
+        } else {
+            raw >> (32 - shift)
+        };
+        return (i64::from(hi) << 32) | i64::from(lo);
+    }
+    fx_from_scaled_wide(raw, shift)
+}
+
+/// [`fx_from_scaled`] for a shift outside `0..=32`.
+#[cold]
+#[inline(never)]
+fn fx_from_scaled_wide(raw: i32, shift: i32) -> i64 {
     let raw = i64::from(raw);
     if shift >= 0 {
         let k = shift.min(63) as u32;
@@ -769,9 +808,9 @@ pub trait Real:
 
 /// `Real` for a float type `$t`: every law stepped at `h` (no coarse step, nothing stored
 /// for it), conversions by `as` (exact where they widen), `libm`'s `$abs` and `$sqrt`, `$pow2`
-/// the type's power of two.
+/// the type's power of two (normal from `2^$min_exp` up).
 macro_rules! float_real {
-    ($t:ty, $abs:path, $sqrt:path, $pow2:path) => {
+    ($t:ty, $abs:path, $sqrt:path, $pow2:path, $min_exp:expr) => {
         impl Real for $t {
             const ZERO: Self = 0.0;
             const ONE: Self = 1.0;
@@ -817,7 +856,11 @@ macro_rules! float_real {
             }
             #[inline]
             fn from_scaled(raw: i32, exp2: i32) -> Self {
-                (raw as $t) * $pow2(exp2)
+                // Two exact steps when 2^exp2 itself is below the normal range (a subnormal
+                // result): `raw 2^e1` is exact and normal, the second product exact when the
+                // result is representable.
+                let e1 = exp2.max($min_exp);
+                (raw as $t) * $pow2(e1) * $pow2(exp2 - e1)
             }
             #[inline]
             fn is_finite(self) -> bool {
@@ -867,8 +910,8 @@ fn pow2_f64(e: i32) -> f64 {
     f64::from_bits(((e.clamp(-1022, 1023) + 1023) as u64) << 52)
 }
 
-float_real!(f32, libm::fabsf, libm::sqrtf, pow2_f32);
-float_real!(f64, libm::fabs, libm::sqrt, pow2_f64);
+float_real!(f32, libm::fabsf, libm::sqrtf, pow2_f32, -126);
+float_real!(f64, libm::fabs, libm::sqrt, pow2_f64, -1022);
 
 impl Real for Fx {
     const ZERO: Self = Fx(I32F32::ZERO);
@@ -1164,6 +1207,33 @@ mod tests {
         }
         for a in i16::MIN..=i16::MAX {
             check(i32::from(a) * 45, -13);
+        }
+        // Every f32's decomposition, subnormals and the extremes included: `from_scaled` of
+        // it is `from_f32` of it (the zeros as +0).
+        let mut g = Rng(0xDEC0_4405_E5CA_1ED0);
+        let edges = [
+            f32::MIN_POSITIVE,
+            1e-45,
+            -1e-45,
+            1e-40,
+            f32::MAX,
+            f32::MIN,
+            0.0,
+            1e6,
+            -179.99,
+        ];
+        for x in edges
+            .into_iter()
+            .chain((0..200_000).map(|_| f32::from_bits(g.next() as u32)))
+        {
+            let Some((m, e)) = f32_scaled(x) else {
+                assert!(!x.is_finite(), "{x}");
+                continue;
+            };
+            assert_eq!(f64::from(m) * 2f64.powi(e), f64::from(x), "{x}");
+            assert_eq!(Fx::from_scaled(m, e), Fx::from_f32(x), "{x}");
+            assert_eq!(f32::from_scaled(m, e).to_bits(), (x + 0.0).to_bits(), "{x}");
+            assert_eq!(f64::from_scaled(m, e), f64::from(x), "{x}");
         }
         let mut g = Rng(0x5EED_0F5C_A1ED);
         for _ in 0..200_000 {

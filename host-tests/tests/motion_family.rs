@@ -186,7 +186,7 @@ fn a_noise_switch_on_each_motion() {
             .zip(&angle)
             .map(|(s, y)| {
                 let mut o = *s;
-                o.angles_deg[Axis::Yaw.index()] = *y;
+                o.set_angle_deg(Axis::Yaw, *y);
                 o
             })
             .collect();

@@ -75,14 +75,14 @@ fn with_noise(samples: &[Sample], seed: u64, var_at: impl Fn(f64) -> f64) -> Vec
         .iter()
         .map(|s| {
             let noise = Normal::new(0.0, var_at(s.t_s()).sqrt()).unwrap();
-            let mut y = f64::from(s.angles_deg[2]) + noise.sample(&mut rng);
+            let mut y = f64::from(s.angles_deg()[2]) + noise.sample(&mut rng);
             if y > 180.0 {
                 y -= 360.0;
             } else if y <= -180.0 {
                 y += 360.0;
             }
             let mut o = *s;
-            o.angles_deg[2] = y as f32;
+            o.set_angle_deg(Axis::Yaw, y as f32);
             o
         })
         .collect()
@@ -817,7 +817,7 @@ fn run_adaptive(
                     switched = true;
                 }
             }
-            bank.update(s.t_us, s.angles_deg[2]).unwrap()
+            bank.update(s.t_us, s.angles_deg()[2]).unwrap()
         })
         .collect()
 }

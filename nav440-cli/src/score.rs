@@ -102,8 +102,7 @@ mod tests {
     use super::*;
 
     fn s(k: u64, pitch: f32) -> Sample {
-        let raw = (f64::from(pitch) * 65536.0 / 360.0).round() as i16;
-        Sample::from_raw(k * 100_000, [0, raw, 0], [0.0; 3], false)
+        Sample::new(k * 100_000, [0.0, pitch, 0.0], [0.0; 3], false)
     }
 
     /// 10 Hz: samples 3 and 4 near the lock; 5..=14 (the 1 s after sample 4) settle.

@@ -536,7 +536,7 @@ mod tests {
             assert_eq!(s.t_us, k as u64 * 10_000);
             let m = motion.at(k as f64 * 0.01);
             let want = [m.roll_deg, m.pitch_deg, m.yaw_deg];
-            for (ax, (got, w)) in s.angles_deg.iter().zip(want).enumerate() {
+            for (ax, (got, w)) in s.angles_deg().iter().zip(want).enumerate() {
                 let d = (f64::from(*got) - w + 180.0).rem_euclid(360.0) - 180.0;
                 assert!(
                     d.abs() <= ANGLE_LSB_DEG / 2.0 + 2e-5,
@@ -550,7 +550,7 @@ mod tests {
                     "rate {ax} at {k}: {d}"
                 );
             }
-            max_pitch = max_pitch.max(f64::from(s.angles_deg[1]).abs());
+            max_pitch = max_pitch.max(f64::from(s.angles_deg()[1]).abs());
             max_pq = max_pq.max(f64::from(
                 s.rates_deg_s[0].abs().max(s.rates_deg_s[1].abs()),
             ));

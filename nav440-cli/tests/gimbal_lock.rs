@@ -33,7 +33,7 @@ fn after_and_other(
     let mut sums = [(0.0, 0usize, 0.0, 0usize); FAMILY_COUNT];
     let mut last_lock: Option<u64> = None;
     for (k, s) in samples.iter().enumerate() {
-        if near_lock(s.angles_deg[1]) {
+        if near_lock(s.angles_deg()[1]) {
             last_lock = Some(s.t_us);
             continue;
         }
@@ -60,7 +60,7 @@ fn roll_and_yaw_recover_within_a_second_of_each_pass() {
     let samples = tumble();
     let locked = samples
         .iter()
-        .filter(|s| near_lock(s.angles_deg[1]))
+        .filter(|s| near_lock(s.angles_deg()[1]))
         .count();
     assert_eq!(locked, 136, "the profile's passes");
     let opts = EstimateOptions {
@@ -74,7 +74,7 @@ fn roll_and_yaw_recover_within_a_second_of_each_pass() {
     for axis in [Axis::Roll, Axis::Yaw] {
         // The pipeline: no estimate near the lock, restart after it.
         for (r, s) in rows.iter().zip(&samples) {
-            assert_eq!(r.axis(axis).is_none(), near_lock(s.angles_deg[1]));
+            assert_eq!(r.axis(axis).is_none(), near_lock(s.angles_deg()[1]));
         }
         let ours = after_and_other(&samples, axis, |k| {
             rows[k].axis(axis).map(|a| a.out.velocities())

@@ -443,7 +443,7 @@ fn run_sample<B: EstimatorBank, R: Reference>(
     s: &Sample,
     emit: &mut dyn FnMut(&Row<B::Output>),
 ) {
-    let refs = R::rates_deg_s(s.angles_deg, s.rates_deg_s);
+    let refs = R::rates_deg_s(s.angles_deg(), s.rates_deg_s);
     let mut row: Row<B::Output> = Row {
         t_us: s.t_us,
         axes: [None; 3],
@@ -479,9 +479,20 @@ fn run_sample<B: EstimatorBank, R: Reference>(
         if input.new_epoch {
             bank.new_epoch();
         }
-        // The packet's integer angle, `45 raw * 2^-13` deg: exact in the bank's number type.
-        let (mult, exp2) = nav440_proto::scale::ANGLE_DEG_SCALED;
-        match bank.update_scaled(input.t_us, i32::from(s.angles_raw[i]) * mult, exp2) {
+        // The packet's integer angle, `45 raw * 2^-13` deg, or an edited sample's degrees as
+        // the same form: exact in the bank's number type, one input path.
+        let scaled = match s.angles_raw() {
+            Some(raw) => {
+                let (mult, exp2) = nav440_proto::scale::ANGLE_DEG_SCALED;
+                Some((i32::from(raw[i]) * mult, exp2))
+            }
+            None => estimators::f32_scaled(s.angle(axis)),
+        };
+        let out = match scaled {
+            Some((m, e)) => bank.update_scaled(input.t_us, m, e),
+            None => Err(SampleError::NotFinite),
+        };
+        match out {
             Ok(out) => {
                 row.axes[i] = Some(AxisRow {
                     reference_deg_s: refs[i],

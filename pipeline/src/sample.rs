@@ -63,13 +63,12 @@ pub struct Sample {
     /// Time since the first sample, us (timeITOW / GPSITOW through `nav440_proto::TimeBase`:
     /// wraps handled, strictly increasing within an epoch).
     pub t_us: u64,
-    /// Roll, pitch, yaw as sent (wrapped), deg.
-    pub angles_deg: [f32; 3],
-    /// The same angles as the packet's integers, 360/2^16 deg per LSB: `angles_deg` is their
-    /// exact value ([`Sample::from_raw`] keeps the two together). The banks take these
-    /// (`EstimatorBank::update_scaled`), so a fixed-point bank's input is converted without
-    /// `f32`.
-    pub angles_raw: [i16; 3],
+    /// Roll, pitch, yaw (wrapped), deg ([`Sample::angles_deg`]).
+    pub(crate) angles_deg: [f32; 3],
+    /// The same angles as the packet's integers (360/2^16 deg per LSB) while they are the
+    /// packet's: `None` once an angle was set otherwise ([`Sample::set_angle_deg`]), so the
+    /// two never disagree ([`Sample::angles_raw`]).
+    pub(crate) angles_raw: Option<[i16; 3]>,
     /// Body rates p, q, r as sent, deg/s.
     pub rates_deg_s: [f32; 3],
     /// First sample of a new time epoch (a confirmed backward jump of the time stamps, or the
@@ -86,6 +85,40 @@ impl Sample {
     /// The angle of `axis`, deg.
     pub fn angle(&self, axis: Axis) -> f32 {
         self.angles_deg[axis.index()]
+    }
+
+    /// Roll, pitch, yaw (wrapped), deg.
+    pub fn angles_deg(&self) -> [f32; 3] {
+        self.angles_deg
+    }
+
+    /// The angles as the packet's integers (360/2^16 deg per LSB; [`Sample::angles_deg`] is
+    /// their exact value), `None` once an angle was set otherwise. The pipeline feeds the
+    /// banks these when it has them (`EstimatorBank::update_scaled`: a fixed-point bank's
+    /// input then takes no `f32`), otherwise [`Sample::angle`] in the same form
+    /// (`estimators::f32_scaled`, exact; a NaN or infinite angle is rejected as
+    /// `SampleError::NotFinite` without reaching the bank).
+    pub fn angles_raw(&self) -> Option<[i16; 3]> {
+        self.angles_raw
+    }
+
+    /// Sets the angle of `axis` to `deg` (e.g. with added noise): the sample no longer holds
+    /// the packet's integers ([`Sample::angles_raw`] is `None`).
+    pub fn set_angle_deg(&mut self, axis: Axis, deg: f32) {
+        self.angles_deg[axis.index()] = deg;
+        self.angles_raw = None;
+    }
+
+    /// A sample of the angles `angles_deg` (deg, not a packet's integers) and the body rates
+    /// `rates_deg_s`, at `t_us`.
+    pub fn new(t_us: u64, angles_deg: [f32; 3], rates_deg_s: [f32; 3], new_epoch: bool) -> Self {
+        Sample {
+            t_us,
+            angles_deg,
+            angles_raw: None,
+            rates_deg_s,
+            new_epoch,
+        }
     }
 
     /// The reference rate of `axis` (the angle's derivative by the Euler kinematics, deg/s;
@@ -116,7 +149,7 @@ impl Sample {
         Sample {
             t_us,
             angles_deg: angles_raw.map(nav440_proto::scale::angle_deg),
-            angles_raw,
+            angles_raw: Some(angles_raw),
             rates_deg_s,
             new_epoch,
         }
@@ -126,7 +159,7 @@ impl Sample {
         Sample {
             t_us: t.t_us,
             angles_deg: t.payload.0,
-            angles_raw: t.payload.2,
+            angles_raw: Some(t.payload.2),
             rates_deg_s: t.payload.1,
             new_epoch: t.new_epoch,
         }

@@ -15,14 +15,7 @@ fn sample(k: u64) -> Sample {
     let t = k as f32 * 0.01;
     let pitch = if LOCK.contains(&k) { 85.0 } else { 30.0 };
     let yaw = (YAW_RATE * t + 180.0).rem_euclid(360.0) - 180.0;
-    // The angles as a packet sends them (360/2^16 deg per LSB).
-    let raw = |deg: f32| (f64::from(deg) * 65536.0 / 360.0).round() as i16;
-    Sample::from_raw(
-        k * 10_000,
-        [raw(10.0), raw(pitch), raw(yaw)],
-        [0.0, 0.0, YAW_RATE],
-        false,
-    )
+    Sample::new(k * 10_000, [10.0, pitch, yaw], [0.0, 0.0, YAW_RATE], false)
 }
 
 fn run(axes: Axes) -> (Vec<Row<PaperOutput>>, Counters) {
@@ -67,7 +60,7 @@ fn roll_and_yaw_skip_the_lock_and_restart_after_it() {
     assert!(first.out.values().all(|v| v == 0.0), "{first:?}");
     assert_eq!(
         first.out.unwrapped_deg(),
-        sample(LOCK.end).angles_deg[2],
+        sample(LOCK.end).angles_deg()[2],
         "restart angle"
     );
     // Just before the lock the AD velocity follows the 20 deg/s turn, and it does again 1 s
@@ -101,7 +94,7 @@ fn every_pass_is_counted_and_a_lock_at_the_end_is_not() {
     for k in 0..300u64 {
         let mut s = sample(k);
         let locked = (50..60).contains(&k) || (150..160).contains(&k) || k >= 290;
-        s.angles_deg[1] = if locked { -88.0 } else { 0.0 };
+        s.set_angle_deg(Axis::Pitch, if locked { -88.0 } else { 0.0 });
         est.push(s, &mut |_| rows += 1).unwrap();
     }
     est.finish(&mut |_| rows += 1).unwrap();

@@ -178,3 +178,52 @@ fn product_csv_lines() {
     const BYTES: usize = 4 * <ProductBank<Fx> as estimators::EstimatorBank>::CHANNELS;
     assert_eq!([0u8; BYTES].len(), 8);
 }
+
+/// The banks' two inputs agree: a capture's samples as the front end gives them (the packet's
+/// integers, `Sample::angles_raw`, fed with `update_scaled`) and the same samples rebuilt from
+/// their degrees (`Sample::new`: no integers, fed with `update`) give the same rows bit for
+/// bit, paper and product banks, `f32` and `Fx`, every axis. Setting an angle drops the
+/// integers, so an edited sample is never fed the packet's angle.
+#[test]
+fn integer_and_degree_angles_give_the_same_rows() {
+    use nav440_pipeline::{Estimation, Frontend, Sample};
+    fn rows_of<R: Rows<T, NativeSqrt>, const N: usize, T: Real>(
+        samples: &[Sample],
+    ) -> Vec<Row<BankOutput<R, N, T>>> {
+        let build = |axis: Axis, cfg: &BankConfig| -> Result<Bank<R, N, T>, ConfigError> {
+            axis_bank(axis, cfg)
+        };
+        let mut est = Estimation::new(Axes::ALL, BankConfig::NAV440, build);
+        let mut out = Vec::new();
+        for s in samples {
+            est.push(*s, &mut |r| out.push(*r)).unwrap();
+        }
+        est.finish(&mut |r| out.push(*r)).unwrap();
+        out
+    }
+    let mut packets = Vec::new();
+    let mut front = Frontend::new();
+    front.feed(&capture(), |s| packets.push(s));
+    front.finish(|s| packets.push(s));
+    assert!(packets.iter().all(|s| s.angles_raw().is_some()));
+    let degrees: Vec<Sample> = packets
+        .iter()
+        .map(|s| Sample::new(s.t_us, s.angles_deg(), s.rates_deg_s, s.new_epoch))
+        .collect();
+    assert_eq!(
+        rows_of::<ProductRows, 2, Fx>(&packets),
+        rows_of::<ProductRows, 2, Fx>(&degrees)
+    );
+    assert_eq!(
+        rows_of::<PaperRows, 14, Fx>(&packets),
+        rows_of::<PaperRows, 14, Fx>(&degrees)
+    );
+    assert_eq!(
+        rows_of::<ProductRows, 2, f32>(&packets),
+        rows_of::<ProductRows, 2, f32>(&degrees)
+    );
+    let mut edited = packets[0];
+    edited.set_angle_deg(Axis::Yaw, 1.0);
+    assert_eq!(edited.angles_raw(), None);
+    assert_eq!(edited.angle(Axis::Yaw), 1.0);
+}
