@@ -302,55 +302,12 @@ fn fx_mul_wide(a: i64, b: i64) -> i64 {
 /// core without an FPU it costs a few shifts instead of `fixed`'s generic conversion.
 #[inline]
 pub(crate) fn fx_from_f32(x: f32) -> i64 {
-    let bits = x.to_bits();
-    let negative = bits >> 31 != 0;
-    let exp = ((bits >> 23) & 0xFF) as i32;
-    if exp == 0xFF {
-        // NaN gives 0, an infinity saturates.
-        return if bits & 0x7F_FFFF != 0 {
-            0
-        } else if negative {
-            i64::MIN
-        } else {
-            i64::MAX
-        };
-    }
-    if exp == 0 {
-        // Zero or subnormal (below 2^-126): rounds to 0.
-        return 0;
-    }
-    let m = u64::from((bits & 0x7F_FFFF) | 0x80_0000);
-    // |x| = m 2^(exp - 150), raw = |x| 2^32 = m 2^(exp - 118).
-    let shift = exp - 118;
-    let mag = if shift >= 0 {
-        if shift > 40 {
-            return if negative { i64::MIN } else { i64::MAX };
-        }
-        let v = m << shift;
-        if v > (1u64 << 63) || (v == 1u64 << 63 && !negative) {
-            return if negative { i64::MIN } else { i64::MAX };
-        }
-        v
-    } else {
-        let k = (-shift) as u32;
-        if k > 24 {
-            // Below half the resolution (m < 2^24 <= 2^(k - 1)).
-            return 0;
-        }
-        let q = m >> k;
-        let r = m & ((1u64 << k) - 1);
-        let half = 1u64 << (k - 1);
-        if r > half || (r == half && q & 1 == 1) {
-            q + 1
-        } else {
-            q
-        }
-    };
-    if negative {
-        // `mag <= 2^63`: the negation of 2^63 is `i64::MIN`.
-        (mag as i64).wrapping_neg()
-    } else {
-        mag as i64
+    match f32_scaled(x) {
+        Some((m, e)) => fx_from_scaled(m, e),
+        // NaN gives 0, an infinity saturates by its sign.
+        None if x.to_bits() & 0x007F_FFFF != 0 => 0,
+        None if x.to_bits() >> 31 != 0 => i64::MIN,
+        None => i64::MAX,
     }
 }
 

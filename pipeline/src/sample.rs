@@ -13,10 +13,8 @@ use nav440_proto::{
 pub struct Attitude {
     /// The packet's time stamp.
     pub time: TimeStamp,
-    /// Roll, pitch, yaw as sent (A0/A1: magnetic yaw; A2/N0/N1: true yaw; B1: yaw), deg.
-    pub angles_deg: [f32; 3],
-    /// The same angles as the packet's integers, 360/2^16 deg per LSB (`angles_deg` is their
-    /// exact value, `nav440_proto::scale::angle_deg`).
+    /// Roll, pitch, yaw as sent (A0/A1: magnetic yaw; A2/N0/N1: true yaw; B1: yaw), the
+    /// packet's integers, 360/2^16 deg per LSB ([`Attitude::angles_deg`] in degrees).
     pub angles_raw: [i16; 3],
     /// Body rates p, q, r (x, y, z; corrected), deg/s (B1 sends r only: p, q are NaN).
     pub rates_deg_s: [f32; 3],
@@ -50,11 +48,18 @@ pub fn attitude(packet: &Packet<'_>) -> Option<Attitude> {
     };
     Some(Attitude {
         time: packet.time(),
-        angles_deg: angles_raw.map(nav440_proto::scale::angle_deg),
         angles_raw,
         rates_deg_s,
         bit: packet.bit().unwrap_or_default(),
     })
+}
+
+impl Attitude {
+    /// Roll, pitch, yaw in deg: the exact values of [`Attitude::angles_raw`]
+    /// (`nav440_proto::scale::angle_deg`).
+    pub fn angles_deg(&self) -> [f32; 3] {
+        self.angles_raw.map(nav440_proto::scale::angle_deg)
+    }
 }
 
 /// One timed attitude sample.
@@ -156,19 +161,14 @@ impl Sample {
     }
 
     fn from_timed(t: Timed<Payload>) -> Self {
-        Sample {
-            t_us: t.t_us,
-            angles_deg: t.payload.0,
-            angles_raw: Some(t.payload.2),
-            rates_deg_s: t.payload.1,
-            new_epoch: t.new_epoch,
-        }
+        let (angles_raw, rates_deg_s) = t.payload;
+        Self::from_raw(t.t_us, angles_raw, rates_deg_s, t.new_epoch)
     }
 }
 
-/// What rides through the time base with each time stamp: the angles (deg), the body rates
-/// (deg/s), the angles as sent.
-type Payload = ([f32; 3], [f32; 3], [i16; 3]);
+/// What rides through the time base with each time stamp: the angles as sent (360/2^16 deg
+/// per LSB), the body rates (deg/s).
+type Payload = ([i16; 3], [f32; 3]);
 
 /// Counters of the front end. Every counter saturates. Invariant: `attitude_packets =
 /// bit.failed + samples + time faults' discarded + duplicates` (plus one sample held by the
@@ -240,7 +240,7 @@ fn on_frame(
     if counters.bit.check(a.bit) {
         return;
     }
-    for t in clock.update(a.time, (a.angles_deg, a.rates_deg_s, a.angles_raw)) {
+    for t in clock.update(a.time, (a.angles_raw, a.rates_deg_s)) {
         counters.samples = counters.samples.saturating_add(1);
         out(Sample::from_timed(t));
     }
