@@ -74,6 +74,9 @@ fn main() {
     println!("cargo:rustc-link-arg-bins=-Tlink.x");
     // The defmt table (interned format strings) the host decoder reads from the ELF.
     println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
+    // Identical code folding: functions that compile to the same bytes (monomorphisations
+    // that differ only in types of one layout) are linked once.
+    println!("cargo:rustc-link-arg-bins=--icf=all");
     if let Some(table) = prebuilt_banks() {
         fs::write(out.join("banks.rs"), table).expect("OUT_DIR writable");
         println!("cargo:rustc-cfg=prebuilt_banks");
