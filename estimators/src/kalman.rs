@@ -120,6 +120,18 @@ impl<T: Real> Kalman<T> {
         self.k
     }
 
+    /// Changes the noise model to `q`, `r` (as [`KalmanConfig`]; the nominal period stays),
+    /// keeping the state: the estimates go on from where they are with the new steady-state
+    /// gain (bumpless). The Riccati recursion runs here, as in [`Self::new`]. Errors (nothing
+    /// changed): non-positive or non-finite `q`, `r`.
+    pub fn set_noise(&mut self, q: f32, r: f32) -> Result<(), ConfigError> {
+        let q = positive("q", f64::from(q))?;
+        let r = positive("r", f64::from(r))?;
+        let k = steady_state_gain(self.dt0.to_f64(), q, r);
+        self.k = [T::from_f64(k[0]), T::from_f64(k[1]), T::from_f64(k[2])];
+        Ok(())
+    }
+
     /// Starts at position `y0` with zero velocity and acceleration.
     pub fn reset(&mut self, y0: T) {
         self.s = KalmanState {

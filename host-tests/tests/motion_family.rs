@@ -216,6 +216,26 @@ fn a_noise_switch_on_each_motion() {
                     .collect::<String>()
             );
         }
+        // The Kalman that follows its own noise and jerk estimates (estimators::AdaptiveKalman,
+        // fed the packets' rate): below the backward difference in both halves.
+        let online =
+            HALVES.map(|h| adaptive_kalman_mse(&samples, &angle, &reference, &reference, h).0);
+        println!(
+            "{:<38} {:>15} {:>w$}{:>17}",
+            format!("{label} (AdaptiveKalman)"),
+            format!("{:.0} | {:.0}", bd[0], bd[1]),
+            "",
+            format!("{:.0} | {:.0}", online[0], online[1]),
+            w = 17 * (COLUMNS.len() - 1)
+        );
+        for h in 0..2 {
+            assert!(
+                online[h] < bd[h],
+                "{label} half {h}: AdaptiveKalman {} BD {}",
+                online[h],
+                bd[h]
+            );
+        }
     }
 }
 
@@ -275,26 +295,50 @@ fn gains_tuned_on_each_motion() {
     }
 }
 
-/// The lag of [`jerk_power`]'s second differences, in samples (50 ms at 100 Hz).
-const JERK_LAG: usize = 5;
-
-/// The motion's jerk power (deg/s^3)^2 over [`RANGE`], from the rate alone: the mean square of
-/// the rate's second difference at lag [`JERK_LAG`], `(r_k - 2 r_(k-L) + r_(k-2L)) / (L dt)^2`.
-/// A lag of 50 ms keeps the rate's quantisation (1260/2^16 deg/s) below 6 deg/s^3, and a
-/// unit's gyro noise well below the motions' jerk.
+/// The motion's jerk power (deg/s^3)^2 over [`RANGE`], from the rate alone, as a device
+/// measures it: `estimators::JerkEstimator` (the mean square of the rate's second difference
+/// at a lag of 50 ms) fed the rate over that span, with a time constant longer than the run
+/// (so the plain mean). A lag of 50 ms keeps the rate's quantisation (1260/2^16 deg/s) below
+/// 6 deg/s^3, and a unit's gyro noise well below the motions' jerk.
 fn jerk_power(samples: &[replay::Sample], rate: &[f64]) -> f64 {
-    let lag_s = JERK_LAG as f64 * DT_S;
-    let (mut sum, mut n) = (0.0, 0usize);
-    for k in 2 * JERK_LAG..samples.len() {
-        let t = samples[k].t_us as f64 * 1e-6;
-        if t < RANGE.0 || t > RANGE.1 {
-            continue;
+    let mut e = estimators::JerkEstimator::new(1e9, DT_S as f32).unwrap();
+    for (s, r) in samples.iter().zip(rate) {
+        let t = s.t_us as f64 * 1e-6;
+        if t >= RANGE.0 - 0.1 && t <= RANGE.1 {
+            e.update(s.t_us, *r as f32);
         }
-        let j = (rate[k] - 2.0 * rate[k - JERK_LAG] + rate[k - 2 * JERK_LAG]) / (lag_s * lag_s);
-        sum += j * j;
-        n += 1;
     }
-    sum / n as f64
+    f64::from(e.power().unwrap())
+}
+
+/// The velocity MSE (deg/s)^2 over `range` of `estimators::AdaptiveKalman` (its defaults:
+/// `kappa` from fig5) run online on the angle `noisy` (deg, wrapped; unwrapped here) with the
+/// rate `rate` (deg/s), against `reference`: the noise and the jerk it follows are its own
+/// estimates, nothing known in advance. Also returns how many times it changed its gain.
+fn adaptive_kalman_mse(
+    samples: &[replay::Sample],
+    noisy: &[f32],
+    rate: &[f64],
+    reference: &[f64],
+    range: (f64, f64),
+) -> (f64, u32) {
+    let mut k = estimators::AdaptiveKalman::<f32>::new(&estimators::AdaptiveKalmanConfig::at(0.01))
+        .unwrap();
+    let (mut sum, mut n) = (0.0, 0usize);
+    for (((s, y), r), v) in samples
+        .iter()
+        .zip(unwrap_deg(noisy))
+        .zip(rate)
+        .zip(reference)
+    {
+        k.update(s.t_us, y, Some(*r as f32));
+        let t = s.t_us as f64 * 1e-6;
+        if t >= range.0 && t <= range.1 {
+            sum += (f64::from(k.velocity()) - v).powi(2);
+            n += 1;
+        }
+    }
+    (sum / n as f64, k.retune_count())
 }
 
 /// The velocity families this measurement tunes: ILO1 and the Kalman (columns of
@@ -342,12 +386,28 @@ fn tuned_velocity(samples: &[replay::Sample], var: f64) -> BankConfig {
 fn the_motions_jerk_as_a_second_index() {
     let fig5 = a2_samples(ProfileKind::Fig5, 1, 100, 30.0).unwrap();
     let j_fig5 = jerk_power(&fig5, &reference(&fig5));
+    // The Kalman whose `q` follows the jerk: `q = kappa J`, `r = V`, with `kappa` from the
+    // Kalman tuned on fig5 at 0.1 deg^2 (its gain depends on `q / r` alone).
+    let kf_fig5 = tuned_velocity(&fig5, 0.1).velocity.kf;
+    let kappa = f64::from(kf_fig5.q / kf_fig5.r) * 0.1 / j_fig5;
     println!(
-        "velocity MSE (deg/s)^2: gains tuned on fig5 at V_eq = V x J_fig5 / J (index) / gains tuned on the motion at V; J: jerk power from the rate at a lag of {JERK_LAG} samples; fig5's {j_fig5:.4e} (deg/s^3)^2"
+        "kappa = {kappa:.4} s (q / r = {:.4e} /s^5 at 0.1 deg^2 on fig5)",
+        kf_fig5.q / kf_fig5.r
     );
     println!(
-        "{:<28} {:>10} {:>5} {:>10} {:>7} {:>22} {:>22}",
-        "motion", "J", "V", "V_eq", "BD", "ILO1 index / tuned", "KF index / tuned"
+        "velocity MSE (deg/s)^2: gains tuned on fig5 at V_eq = V x J_fig5 / J (index) / gains tuned on the motion at V; J: jerk power from the rate (estimators::JerkEstimator, lag 50 ms); fig5's {j_fig5:.4e} (deg/s^3)^2"
+    );
+    println!(
+        "{:<28} {:>10} {:>5} {:>10} {:>7} {:>22} {:>22} {:>16} {:>22}",
+        "motion",
+        "J",
+        "V",
+        "V_eq",
+        "BD",
+        "ILO1 index / tuned",
+        "KF index / tuned",
+        "KF q = kappa J",
+        "AdaptiveKalman (gain changes)"
     );
     for (profile, seed, label) in MOTIONS {
         let samples = a2_samples(profile, seed, 100, 30.0).unwrap();
@@ -360,6 +420,15 @@ fn the_motions_jerk_as_a_second_index() {
             let on_motion = tuned_velocity(&samples, var);
             let (index, _) = bank_mse(&samples, by_index, var, 1, RANGE).unwrap();
             let (tuned, _) = bank_mse(&samples, on_motion, var, 1, RANGE).unwrap();
+            let mut follows = BankConfig::NAV440;
+            follows.velocity.kf = estimators::KalmanNoise {
+                q: (kappa * j) as f32,
+                r: var as f32,
+            };
+            let (follows, _) = bank_mse(&samples, follows, var, 1, RANGE).unwrap();
+            let noisy = noisy_angle(&samples, Axis::Yaw, Some(Noise { var, seed: 1 })).unwrap();
+            let (online, retunes) =
+                adaptive_kalman_mse(&samples, &noisy, &reference, &reference, RANGE);
             let cell = |c: usize| {
                 format!(
                     "{:.1} / {:.1} ({:.2}x)",
@@ -369,14 +438,27 @@ fn the_motions_jerk_as_a_second_index() {
                 )
             };
             println!(
-                "{label:<28} {j:>10.3e} {var:>5} {v_eq:>10.3e} {bd:>7.0} {:>22} {:>22}",
+                "{label:<28} {j:>10.3e} {var:>5} {v_eq:>10.3e} {bd:>7.0} {:>22} {:>22} {:>16} {:>22}",
                 cell(ILO1),
-                cell(KF)
+                cell(KF),
+                format!("{:.1} ({:.2}x)", follows[KF], follows[KF] / tuned[KF]),
+                format!("{:.1} ({:.2}x, {retunes})", online, online / tuned[KF])
             );
             assert!(
                 index[KF] <= 1.5 * tuned[KF] && index[KF] < bd,
                 "{label} {var}: KF by the index {} tuned {} BD {bd}",
                 index[KF],
+                tuned[KF]
+            );
+            assert!(
+                online <= 1.5 * tuned[KF] && online < bd,
+                "{label} {var}: AdaptiveKalman {online} tuned {} BD {bd}",
+                tuned[KF]
+            );
+            assert!(
+                follows[KF] <= 1.5 * tuned[KF] && follows[KF] < bd,
+                "{label} {var}: KF with q = kappa J {} tuned {} BD {bd}",
+                follows[KF],
                 tuned[KF]
             );
         }

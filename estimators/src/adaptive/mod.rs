@@ -10,11 +10,15 @@
 //! [`AdaptiveConfig::retune_every`] samples, and only when the estimate moved by more than
 //! the factor [`AdaptiveConfig::retune_ratio`] from the level the current gains were made for.
 
+mod jerk;
+mod kalman;
 mod noise;
 mod schedule;
 #[cfg(test)]
 mod tests;
 
+pub use jerk::*;
+pub use kalman::*;
 pub use noise::*;
 pub use schedule::*;
 
