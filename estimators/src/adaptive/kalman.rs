@@ -205,8 +205,13 @@ mod tests {
     /// follows `A w cos(w t)` closely (a light filter).
     #[test]
     fn follows_a_clean_sine_and_its_jerk() {
+        follows_a_clean_sine::<f32>();
+        follows_a_clean_sine::<crate::Fx>();
+    }
+
+    fn follows_a_clean_sine<T: Real>() {
         let cfg = AdaptiveKalmanConfig::at(0.01);
-        let mut k = AdaptiveKalman::<f32>::new(&cfg).unwrap();
+        let mut k = AdaptiveKalman::<T>::new(&cfg).unwrap();
         let (a, w) = (90.0f64, 2.0 * core::f64::consts::PI);
         let mut worst = 0.0f64;
         for n in 0..3000u64 {
@@ -215,7 +220,7 @@ mod tests {
             let rate = a * w * (w * t).cos();
             k.update(n * 10_000, angle as f32, Some(rate as f32));
             if t > 10.0 {
-                worst = worst.max((f64::from(k.velocity()) - rate).abs());
+                worst = worst.max((k.velocity().to_f64() - rate).abs());
             }
         }
         let (v, j) = k.estimates();
