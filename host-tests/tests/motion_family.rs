@@ -21,7 +21,7 @@
 use estimators::{BankConfig, Hold};
 use nav440_cli::motion::ProfileKind;
 use nav440_cli::optim::Method;
-use nav440_cli::paper::COLUMNS;
+use nav440_cli::paper::{ave_on_rate, COLUMNS, REFERENCE_AVE};
 use nav440_cli::replay::{self, noisy_angle, unwrap_deg, Axis, EstimateOptions, Noise};
 use nav440_cli::synth::a2_samples;
 use nav440_cli::tune::{bank_mse, tune_with, Families, TuneSpec};
@@ -311,10 +311,49 @@ fn jerk_power(samples: &[replay::Sample], rate: &[f64]) -> f64 {
     f64::from(e.power().unwrap())
 }
 
-/// The velocity MSE (deg/s)^2 over `range` of `estimators::AdaptiveKalman` (its defaults:
-/// `kappa` from fig5) run online on the angle `noisy` (deg, wrapped; unwrapped here) with the
-/// rate `rate` (deg/s), against `reference`: the noise and the jerk it follows are its own
-/// estimates, nothing known in advance. Also returns how many times it changed its gain.
+/// `estimators::AdaptiveKalman` (its defaults but `kappa`, s) run online on the angle `noisy`
+/// (deg, wrapped; unwrapped here) with the rate `rate` (deg/s): the noise and the jerk it
+/// follows are its own estimates, nothing known in advance. Its velocity (deg/s) and
+/// acceleration (deg/s^2) at each sample, and how many times it changed its gain.
+fn adaptive_kalman(
+    samples: &[replay::Sample],
+    noisy: &[f32],
+    rate: &[f64],
+    kappa_s: f32,
+) -> (Vec<(f64, f64)>, u32) {
+    let mut k = estimators::AdaptiveKalman::<f32>::new(&estimators::AdaptiveKalmanConfig {
+        kappa_s,
+        ..estimators::AdaptiveKalmanConfig::at(DT_S as f32)
+    })
+    .unwrap();
+    let out = samples
+        .iter()
+        .zip(unwrap_deg(noisy))
+        .zip(rate)
+        .map(|((s, y), r)| {
+            k.update(s.t_us, y, Some(*r as f32));
+            (f64::from(k.velocity()), f64::from(k.acceleration()))
+        })
+        .collect();
+    (out, k.retune_count())
+}
+
+/// The MSE over `range` (s) of `values` (one per sample) against `reference` (one per sample;
+/// a NaN reference sample is left out).
+fn mse_of(samples: &[replay::Sample], values: &[f64], reference: &[f64], range: (f64, f64)) -> f64 {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for ((s, x), r) in samples.iter().zip(values).zip(reference) {
+        let t = s.t_us as f64 * 1e-6;
+        if t >= range.0 && t <= range.1 && r.is_finite() {
+            sum += (x - r).powi(2);
+            n += 1;
+        }
+    }
+    sum / n as f64
+}
+
+/// The velocity MSE (deg/s)^2 over `range` of [`adaptive_kalman`] with its default `kappa`,
+/// against `reference`.
 fn adaptive_kalman_mse(
     samples: &[replay::Sample],
     noisy: &[f32],
@@ -322,23 +361,14 @@ fn adaptive_kalman_mse(
     reference: &[f64],
     range: (f64, f64),
 ) -> (f64, u32) {
-    let mut k = estimators::AdaptiveKalman::<f32>::new(&estimators::AdaptiveKalmanConfig::at(0.01))
-        .unwrap();
-    let (mut sum, mut n) = (0.0, 0usize);
-    for (((s, y), r), v) in samples
-        .iter()
-        .zip(unwrap_deg(noisy))
-        .zip(rate)
-        .zip(reference)
-    {
-        k.update(s.t_us, y, Some(*r as f32));
-        let t = s.t_us as f64 * 1e-6;
-        if t >= range.0 && t <= range.1 {
-            sum += (f64::from(k.velocity()) - v).powi(2);
-            n += 1;
-        }
-    }
-    (sum / n as f64, k.retune_count())
+    let (out, retunes) = adaptive_kalman(
+        samples,
+        noisy,
+        rate,
+        estimators::AdaptiveKalmanConfig::KAPPA_FIG5_S,
+    );
+    let v: Vec<f64> = out.iter().map(|o| o.0).collect();
+    (mse_of(samples, &v, reference, range), retunes)
 }
 
 /// The velocity families this measurement tunes: ILO1 and the Kalman (columns of
@@ -346,12 +376,13 @@ fn adaptive_kalman_mse(
 const ILO1: usize = 1;
 const KF: usize = 6;
 
-/// ILO1 and the Kalman, velocity only, tuned on `samples` at noise `var` (one seed, linear
-/// hold, [`RANGE`]), as a bank configuration.
+/// ILO1 and the Kalman (velocity), and the Kalman (acceleration), tuned on `samples` at noise
+/// `var` (one seed, linear hold, [`RANGE`]), as a bank configuration.
 fn tuned_velocity(samples: &[replay::Sample], var: f64) -> BankConfig {
     let mut families = [[false; COLUMNS.len()]; 2];
     families[0][ILO1] = true;
     families[0][KF] = true;
+    families[1][KF] = true;
     tune_with(
         samples,
         &EstimateOptions::default(),
@@ -388,17 +419,20 @@ fn the_motions_jerk_as_a_second_index() {
     let j_fig5 = jerk_power(&fig5, &reference(&fig5));
     // The Kalman whose `q` follows the jerk: `q = kappa J`, `r = V`, with `kappa` from the
     // Kalman tuned on fig5 at 0.1 deg^2 (its gain depends on `q / r` alone).
-    let kf_fig5 = tuned_velocity(&fig5, 0.1).velocity.kf;
-    let kappa = f64::from(kf_fig5.q / kf_fig5.r) * 0.1 / j_fig5;
+    let fig5_tuned = tuned_velocity(&fig5, 0.1);
+    let kappa_of = |kf: estimators::KalmanNoise| f64::from(kf.q / kf.r) * 0.1 / j_fig5;
+    let kappa = kappa_of(fig5_tuned.velocity.kf);
+    // The acceleration's Kalman is tuned on its own (its best `q` differs).
+    let kappa_a = kappa_of(fig5_tuned.acceleration.kf);
     println!(
-        "kappa = {kappa:.4} s (q / r = {:.4e} /s^5 at 0.1 deg^2 on fig5)",
-        kf_fig5.q / kf_fig5.r
+        "kappa = {kappa:.4} s (q / r = {:.4e} /s^5 at 0.1 deg^2 on fig5); for the acceleration {kappa_a:.4} s",
+        fig5_tuned.velocity.kf.q / fig5_tuned.velocity.kf.r
     );
     println!(
         "velocity MSE (deg/s)^2: gains tuned on fig5 at V_eq = V x J_fig5 / J (index) / gains tuned on the motion at V; J: jerk power from the rate (estimators::JerkEstimator, lag 50 ms); fig5's {j_fig5:.4e} (deg/s^3)^2"
     );
     println!(
-        "{:<28} {:>10} {:>5} {:>10} {:>7} {:>22} {:>22} {:>16} {:>22}",
+        "{:<28} {:>10} {:>5} {:>10} {:>7} {:>22} {:>22} {:>16} {:>22}   {}",
         "motion",
         "J",
         "V",
@@ -407,28 +441,46 @@ fn the_motions_jerk_as_a_second_index() {
         "ILO1 index / tuned",
         "KF index / tuned",
         "KF q = kappa J",
-        "AdaptiveKalman (gain changes)"
+        "AdaptiveKalman (gain changes)",
+        "acc: KF tuned, q = kappa_a J, AdaptiveKalman (deg/s^2)^2"
     );
     for (profile, seed, label) in MOTIONS {
         let samples = a2_samples(profile, seed, 100, 30.0).unwrap();
         let reference = reference(&samples);
         let j = jerk_power(&samples, &reference);
+        // The acceleration reference bank_mse scores against.
+        let acc_ref: Vec<f64> = ave_on_rate(
+            &samples,
+            &REFERENCE_AVE,
+            &EstimateOptions::default().paper_law(),
+        )
+        .unwrap()
+        .into_iter()
+        .map(f64::from)
+        .collect();
         for var in NOISE {
             let (bd, _) = backward_difference(&samples, &reference, var);
             let v_eq = var * j_fig5 / j;
             let by_index = tuned_velocity(&fig5, v_eq);
             let on_motion = tuned_velocity(&samples, var);
             let (index, _) = bank_mse(&samples, by_index, var, 1, RANGE).unwrap();
-            let (tuned, _) = bank_mse(&samples, on_motion, var, 1, RANGE).unwrap();
+            let (tuned, tuned_a) = bank_mse(&samples, on_motion, var, 1, RANGE).unwrap();
             let mut follows = BankConfig::NAV440;
             follows.velocity.kf = estimators::KalmanNoise {
                 q: (kappa * j) as f32,
                 r: var as f32,
             };
-            let (follows, _) = bank_mse(&samples, follows, var, 1, RANGE).unwrap();
+            follows.acceleration.kf = estimators::KalmanNoise {
+                q: (kappa_a * j) as f32,
+                r: var as f32,
+            };
+            let (follows, follows_a) = bank_mse(&samples, follows, var, 1, RANGE).unwrap();
             let noisy = noisy_angle(&samples, Axis::Yaw, Some(Noise { var, seed: 1 })).unwrap();
             let (online, retunes) =
                 adaptive_kalman_mse(&samples, &noisy, &reference, &reference, RANGE);
+            let (out_a, _) = adaptive_kalman(&samples, &noisy, &reference, kappa_a as f32);
+            let out_a: Vec<f64> = out_a.iter().map(|o| o.1).collect();
+            let online_a = mse_of(&samples, &out_a, &acc_ref, RANGE);
             let cell = |c: usize| {
                 format!(
                     "{:.1} / {:.1} ({:.2}x)",
@@ -438,11 +490,16 @@ fn the_motions_jerk_as_a_second_index() {
                 )
             };
             println!(
-                "{label:<28} {j:>10.3e} {var:>5} {v_eq:>10.3e} {bd:>7.0} {:>22} {:>22} {:>16} {:>22}",
+                "{label:<28} {j:>10.3e} {var:>5} {v_eq:>10.3e} {bd:>7.0} {:>22} {:>22} {:>16} {:>22}   {:.0}, {:.0} ({:.2}x), {:.0} ({:.2}x)",
                 cell(ILO1),
                 cell(KF),
                 format!("{:.1} ({:.2}x)", follows[KF], follows[KF] / tuned[KF]),
-                format!("{:.1} ({:.2}x, {retunes})", online, online / tuned[KF])
+                format!("{:.1} ({:.2}x, {retunes})", online, online / tuned[KF]),
+                tuned_a[KF],
+                follows_a[KF],
+                follows_a[KF] / tuned_a[KF],
+                online_a,
+                online_a / tuned_a[KF]
             );
             assert!(
                 index[KF] <= 1.5 * tuned[KF] && index[KF] < bd,
