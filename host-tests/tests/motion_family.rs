@@ -432,7 +432,7 @@ fn the_motions_jerk_as_a_second_index() {
         "velocity MSE (deg/s)^2: gains tuned on fig5 at V_eq = V x J_fig5 / J (index) / gains tuned on the motion at V; J: jerk power from the rate (estimators::JerkEstimator, lag 50 ms); fig5's {j_fig5:.4e} (deg/s^3)^2"
     );
     println!(
-        "{:<28} {:>10} {:>5} {:>10} {:>7} {:>22} {:>22} {:>16} {:>22}   {}",
+        "{:<28} {:>10} {:>5} {:>10} {:>7} {:>22} {:>22} {:>16} {:>22}   acc: KF tuned, q = kappa_a J, AdaptiveKalman (deg/s^2)^2",
         "motion",
         "J",
         "V",
@@ -441,8 +441,7 @@ fn the_motions_jerk_as_a_second_index() {
         "ILO1 index / tuned",
         "KF index / tuned",
         "KF q = kappa J",
-        "AdaptiveKalman (gain changes)",
-        "acc: KF tuned, q = kappa_a J, AdaptiveKalman (deg/s^2)^2"
+        "AdaptiveKalman (gain changes)"
     );
     for (profile, seed, label) in MOTIONS {
         let samples = a2_samples(profile, seed, 100, 30.0).unwrap();
