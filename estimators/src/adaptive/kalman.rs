@@ -120,9 +120,9 @@ impl<T: Real> AdaptiveKalman<T> {
 
     /// Takes the angle `angle_deg` (deg, continuous) measured at `t_us` (µs, increasing) and
     /// the rate about the axis at that time (deg/s, `None` if not measured). A time not later
-    /// than the previous one, or a non-finite angle, is ignored.
+    /// than the previous one, or a non-finite angle, is ignored: nothing changes.
     pub fn update(&mut self, t_us: u64, angle_deg: f32, rate_deg_s: Option<f32>) {
-        if !angle_deg.is_finite() {
+        if !angle_deg.is_finite() || self.t_prev.is_some_and(|tp| t_us <= tp) {
             return;
         }
         if let Some(r) = rate_deg_s {
@@ -132,11 +132,10 @@ impl<T: Real> AdaptiveKalman<T> {
         let y = T::from_f32(angle_deg);
         match self.t_prev {
             None => self.kf.reset(y),
-            Some(tp) if t_us > tp => {
+            Some(tp) => {
                 let dt = T::from_f64((t_us - tp) as f64 * 1e-6);
                 self.kf.update(y, dt);
             }
-            Some(_) => return,
         }
         self.t_prev = Some(t_us);
         self.since = self.since.saturating_add(1);
@@ -259,6 +258,37 @@ mod tests {
         assert_eq!(q, 1e6);
         assert!((r / 0.12 - 1.0).abs() < 0.35, "{r}");
         assert_eq!(k.estimates().1, None);
+    }
+
+    /// A repeated or earlier time stamp and a NaN angle change nothing.
+    #[test]
+    fn a_sample_out_of_order_changes_nothing() {
+        let mut k = AdaptiveKalman::<f32>::new(&AdaptiveKalmanConfig::at(0.01)).unwrap();
+        for n in 0..100u64 {
+            k.update(n * 10_000, n as f32 * 0.5, Some(50.0));
+        }
+        let mut twin = k;
+        let before = (
+            k.velocity(),
+            k.acceleration(),
+            k.estimates(),
+            k.noise_model(),
+        );
+        k.update(99 * 10_000, 1000.0, Some(1e6));
+        k.update(50 * 10_000, -1000.0, Some(-1e6));
+        k.update(100 * 10_000, f32::NAN, Some(1e6));
+        let after = (
+            k.velocity(),
+            k.acceleration(),
+            k.estimates(),
+            k.noise_model(),
+        );
+        assert_eq!(before, after);
+        // The next good sample goes on as if those had not come.
+        k.update(100 * 10_000, 50.0, Some(50.0));
+        twin.update(100 * 10_000, 50.0, Some(50.0));
+        assert_eq!(k.velocity(), twin.velocity());
+        assert_ne!(k.velocity(), before.0);
     }
 
     #[test]
