@@ -258,21 +258,7 @@ fn gains_tuned_on_each_motion() {
         let reference = reference(&samples);
         for var in NOISE {
             let (bd, _) = backward_difference(&samples, &reference, var);
-            let res = tune_with(
-                &samples,
-                &EstimateOptions::default(),
-                &TuneSpec {
-                    noise_var: var,
-                    seeds: 1,
-                    train: RANGE,
-                    test: None,
-                    method: Method::Search,
-                    holds: vec![Hold::Linear],
-                    families: Families::ALL,
-                },
-            )
-            .unwrap();
-            let tuned = res.gains.apply(BankConfig::NAV440);
+            let tuned = tuned(&samples, var, Families::ALL);
             let (shipped, _) = bank_mse(&samples, BankConfig::NAV440, var, 1, RANGE).unwrap();
             let (after, _) = bank_mse(&samples, tuned, var, 1, RANGE).unwrap();
             // Tuning searched from the shipped set's neighbourhood among others: the tuned

@@ -96,8 +96,7 @@ impl JerkEstimator {
         }
         if let Some(tp) = self.t_prev.replace(t_us) {
             let dt = t_us.saturating_sub(tp);
-            let steady = self.dt_prev > 0 && 4 * dt.abs_diff(self.dt_prev) <= self.dt_prev;
-            if !steady || dt == 0 {
+            if !super::steady_interval(dt, self.dt_prev) {
                 self.filled = 0;
             }
             self.dt_prev = dt;
@@ -109,9 +108,7 @@ impl JerkEstimator {
         if self.filled > 2 * self.lag {
             let at = |back: usize| self.rates[(self.head + n - back) % n];
             let j = (at(0) - 2.0 * at(self.lag) + at(2 * self.lag)) * self.scale;
-            self.count = self.count.saturating_add(1);
-            let w = (1.0 / self.count as f32).max(self.alpha);
-            self.power += w * (j * j - self.power);
+            super::mean_step(&mut self.power, &mut self.count, self.alpha, j * j);
         }
     }
 

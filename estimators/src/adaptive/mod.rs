@@ -25,6 +25,21 @@ pub use schedule::*;
 use crate::bank::{BankConfig, PaperBank, PaperOutput};
 use crate::{ConfigError, NativeSqrt, Real, SampleError, SqrtFn};
 
+/// Whether a sample interval `dt` (µs) continues a steady stream whose previous interval was
+/// `dt_prev` (µs; 0: none yet): within a quarter of it. A lost packet, a gap, a new epoch or
+/// a repeated time (0) is not; the noise and jerk estimators then restart their differences.
+fn steady_interval(dt: u64, dt_prev: u64) -> bool {
+    dt_prev > 0 && 4 * dt.abs_diff(dt_prev) <= dt_prev
+}
+
+/// Takes the term `x` into the exponentially weighted mean `mean` of `count` terms so far:
+/// weight `1 / count` (a plain mean while it starts), at least `alpha` (`dt / tau`).
+fn mean_step(mean: &mut f32, count: &mut u32, alpha: f32, x: f32) {
+    *count = count.saturating_add(1);
+    let w = (1.0 / *count as f32).max(alpha);
+    *mean += w * (x - *mean);
+}
+
 /// How an [`AdaptiveBank`] follows the noise.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

@@ -82,7 +82,7 @@ impl NoiseEstimator {
             return;
         };
         let dt = t_us.saturating_sub(tp);
-        let steady = self.dt_prev > 0 && 4 * dt.abs_diff(self.dt_prev) <= self.dt_prev;
+        let steady = super::steady_interval(dt, self.dt_prev);
         self.dt_prev = dt;
         let mut d = angle_deg - yp;
         if d > 180.0 {
@@ -90,7 +90,7 @@ impl NoiseEstimator {
         } else if d < -180.0 {
             d += 360.0;
         }
-        if !steady || dt == 0 {
+        if !steady {
             self.nd = 0;
         }
         if self.nd >= 2 {
@@ -100,9 +100,7 @@ impl NoiseEstimator {
             if self.count >= 8 && x > clip {
                 x = clip;
             }
-            self.count = self.count.saturating_add(1);
-            let w = (1.0 / self.count as f32).max(self.alpha);
-            self.var += w * (x - self.var);
+            super::mean_step(&mut self.var, &mut self.count, self.alpha, x);
         }
         self.d = [d, self.d[0]];
         self.nd = (self.nd + 1).min(2);
