@@ -10,8 +10,14 @@
 //! amplify every error of q, r and the angles by 1 / cos theta. Beyond [`PITCH_LIMIT_DEG`] they
 //! are not given (`None`: an empty CSV field, left out of every MSE); the pitch rate is defined
 //! at any pitch. The same limit decides where the roll and yaw banks are not fed
-//! ([`near_lock`], see `crate::Estimation`). Computed in `f32` with `libm` on every target, so the host and the firmware
-//! give the same bits. A level unit (roll = pitch = 0) gives exactly p, q, r.
+//! ([`near_lock`], see `crate::Estimation`).
+//!
+//! The sine and cosine come from an integer CORDIC (`idsp::cos_sin`, 30 rotations on a 32-bit
+//! phase; [`sin_cos_deg`]), the rest is `f32`: the same bits on the host and on every firmware
+//! target, and no `f64` on the way (a Cortex-M0+ has no FPU; `libm`'s `sincosf` computes its
+//! kernels in soft `f64`). The sine and cosine are within 3.3e-7 of the true values at any
+//! angle a packet sends (+-180 deg), 1/290 of what its 16-bit angle LSB (0.0055 deg,
+//! 9.6e-5 rad) already leaves open. A level unit (roll = pitch = 0) gives exactly p, q, r.
 
 use crate::Axis;
 
@@ -32,8 +38,43 @@ pub fn near_lock(pitch_deg: f32) -> bool {
     a >= PITCH_LIMIT_DEG.to_bits() && a <= f32::INFINITY.to_bits()
 }
 
-/// Degrees to radians in `f32`.
-const DEG_TO_RAD: f32 = core::f32::consts::PI / 180.0;
+/// Phase units (1/2^31 half-turns, `idsp`'s CORDIC phase) per degree.
+const PHASE_PER_DEG: f32 = 2_147_483_648.0 / 180.0;
+
+/// The CORDIC's input amplitude: 2^30 / its gain (1.6468), so that its outputs are the cosine
+/// and sine times 2^30 (a cosine of 1 fits `i32` with a factor 2 to spare).
+const CORDIC_AMPLITUDE: i32 = ((1u32 << 30) as f64 / idsp::CORDIC_CIRCULAR_GAIN) as i32;
+
+/// 2^-30 in `f32`: the CORDIC's outputs as values in [-1, 1] (exact scaling).
+const OUTPUT_SCALE: f32 = 1.0 / 1_073_741_824.0;
+
+/// Sine and cosine of `deg` (degrees, finite), `f32`, without `f64` or `libm`.
+///
+/// The angle becomes a 32-bit phase (1/2^31 half-turns; one `f32` product, truncated, wrapped
+/// to a turn), which `idsp::cos_sin`'s CORDIC rotates in integers; its outputs are scaled
+/// exactly into `f32`. Error: at most 5e-8 on each (the CORDIC and the `f32` rounding), plus
+/// what the product's rounding moves the angle (at most 9e-8 of it in radians, as `deg * PI /
+/// 180` in `f32` moves it), checked against `f64` over every 16-bit packet angle in the
+/// tests. Exact at the multiples of 90 deg: sin 0 = 0 and cos 0 = 1.
+///
+/// Never inlined: one copy serves both angles, and the firmware's ELF checks find the
+/// kinematics in an image by this name.
+#[inline(never)]
+pub fn sin_cos_deg(deg: f32) -> (f32, f32) {
+    // A packet's angle is within +-180 deg: the product is within +-2^31, and an `i64` holds
+    // any other finite one's turns (saturating beyond 4e11 deg, where `f32` has no turn
+    // resolution left anyway). Wrapping to `i32` takes whole turns off.
+    let phase = (deg * PHASE_PER_DEG) as i64 as i32;
+    match phase {
+        0 => return (0.0, 1.0),
+        0x4000_0000 => return (1.0, 0.0),
+        i32::MIN => return (0.0, -1.0),
+        -0x4000_0000 => return (-1.0, 0.0),
+        _ => {}
+    }
+    let (c, s) = idsp::cos_sin(CORDIC_AMPLITUDE, 0, phase);
+    (s as f32 * OUTPUT_SCALE, c as f32 * OUTPUT_SCALE)
+}
 
 /// Euler-angle rates (deg/s) of roll, pitch, yaw (indexed by [`Axis::index`]) from the roll
 /// and pitch angles (deg) and the body rates `p, q, r` (deg/s). Roll and yaw rates are `None`
@@ -44,15 +85,13 @@ pub fn euler_rates_deg(roll_deg: f32, pitch_deg: f32, pqr_deg_s: [f32; 3]) -> [O
     if !(roll_deg.is_finite() && q.is_finite() && r.is_finite()) {
         return [None; 3];
     }
-    let phi = roll_deg * DEG_TO_RAD;
-    let (sp, cp) = libm::sincosf(phi);
+    let (sp, cp) = sin_cos_deg(roll_deg);
     let q_sin_r_cos = q * sp + r * cp;
     let pitch_rate = q * cp - r * sp;
     if !pitch_deg.is_finite() || near_lock(pitch_deg) {
         return [None, Some(pitch_rate), None];
     }
-    let theta = pitch_deg * DEG_TO_RAD;
-    let (st, ct) = libm::sincosf(theta);
+    let (st, ct) = sin_cos_deg(pitch_deg);
     let roll_rate = p.is_finite().then(|| p + q_sin_r_cos * st / ct);
     let yaw_rate = q_sin_r_cos / ct;
     [roll_rate, Some(pitch_rate), Some(yaw_rate)]
@@ -65,25 +104,52 @@ pub fn euler_rate_deg(axis: Axis, angles_deg: [f32; 3], pqr_deg_s: [f32; 3]) -> 
 
 #[cfg(test)]
 mod tests {
+    extern crate std;
+
     use super::*;
 
     fn close(a: Option<f32>, b: f64, tol: f64) -> bool {
         a.is_some_and(|a| (f64::from(a) - b).abs() <= tol)
     }
 
-    /// Level: exactly the body rates.
-    /// `sincosf` (one argument reduction for both) returns exactly `sinf` and `cosf`: checked
-    /// here on every 64th f32 of +-4 rad (+-229 deg; every f32 of that range was compared
-    /// once, 2.16e9 values, none differed), so the reference column is the same text as with
-    /// the two calls.
+    /// `sin_cos_deg` against `f64` at every angle a packet can send (`raw * 360 / 2^16` deg,
+    /// exact in `f32`) and at the `f32` angles of +-720 deg in steps of about 0.01 deg: each
+    /// within 5e-8 (the CORDIC and the `f32` result) plus 9e-8 of the angle in radians (the
+    /// phase product's rounding). The worst case is 0.84 of that bound.
     #[test]
-    fn sincosf_is_sinf_and_cosf() {
-        for bits in (0u32..=0x4080_0000).step_by(64) {
-            for x in [f32::from_bits(bits), -f32::from_bits(bits)] {
-                let (s, c) = libm::sincosf(x);
-                assert_eq!(s.to_bits(), libm::sinf(x).to_bits(), "sin {x}");
-                assert_eq!(c.to_bits(), libm::cosf(x).to_bits(), "cos {x}");
-            }
+    fn sin_cos_deg_is_within_its_bound_of_f64() {
+        let mut worst = 0.0f64;
+        let mut check = |deg: f32| {
+            let (s, c) = sin_cos_deg(deg);
+            let (es, ec) = (f64::from(deg).to_radians()).sin_cos();
+            let bound = 5e-8 + 9e-8 * f64::from(deg).to_radians().abs();
+            let err = (f64::from(s) - es).abs().max((f64::from(c) - ec).abs());
+            assert!(err <= bound, "{deg} deg: ({s}, {c}) against ({es}, {ec})");
+            worst = worst.max(err / bound);
+        };
+        for raw in i16::MIN..=i16::MAX {
+            check(f32::from(raw) * 360.0 / 65_536.0);
+        }
+        for k in -72_000..=72_000 {
+            check(k as f32 * 0.01);
+        }
+        std::println!("worst error / bound: {worst}");
+    }
+
+    /// The multiples of 90 deg give the exact values, any number of turns away.
+    #[test]
+    fn sin_cos_deg_is_exact_at_the_right_angles() {
+        for (deg, want) in [
+            (0.0, (0.0, 1.0)),
+            (90.0, (1.0, 0.0)),
+            (180.0, (0.0, -1.0)),
+            (-180.0, (0.0, -1.0)),
+            (-90.0, (-1.0, 0.0)),
+            (270.0, (-1.0, 0.0)),
+            (360.0, (0.0, 1.0)),
+            (-720.0, (0.0, 1.0)),
+        ] {
+            assert_eq!(sin_cos_deg(deg), want, "{deg} deg");
         }
     }
 

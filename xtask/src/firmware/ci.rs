@@ -388,7 +388,7 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
         }
         if board.name == NOREF_BOARD.name && euler_symbols(&elf)?.is_empty() {
             return Err(format!(
-                "{}: no sincosf or euler_rates_deg found: the check of the no-reference image below would prove nothing",
+                "{}: no Euler kinematics (euler_rates_deg, sin_cos_deg) found: the check of the no-reference image below would prove nothing",
                 elf.display()
             ));
         }
@@ -402,7 +402,7 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
     }
     // The product firmware without the Euler reference (feature `no-reference`; thumbv6m,
     // profile `small`, the image `cargo xtask size` lists as `product-thumbv6m-3axis-small-noref`):
-    // it links no Euler kinematics (no `sincosf`, no `euler_rates_deg`; the product image above
+    // it links no Euler kinematics (no `euler_rates_deg`, no sine or cosine; the product image above
     // does) and prints the CSV of `nav440 estimate --bank product --axis all --fixed
     // --no-reference`, byte for byte, on every capture; on the tumble it pauses near gimbal
     // lock as the images with the reference do.
@@ -419,7 +419,7 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
         ));
     }
     eprintln!(
-        "xtask: OK: {} links no sincosf and no euler_rates_deg",
+        "xtask: OK: {} links no Euler kinematics (no sine, cosine or euler_rates_deg)",
         noref.display()
     );
     // Nor any floating point: from the packet's integers to the row, integer operations

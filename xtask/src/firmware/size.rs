@@ -179,10 +179,10 @@ pub(super) fn build_noref() -> Result<PathBuf, String> {
     )
 }
 
-/// The Euler kinematics' symbols (`nav440_pipeline::euler::euler_rates_deg`, `libm`'s
-/// `sincosf`) among the symbols of `elf`.
+/// The Euler kinematics' symbols (`nav440_pipeline::euler`'s `euler_rates_deg` and
+/// `sin_cos_deg`, `idsp`'s CORDIC, `libm`'s `sincosf`) among the symbols of `elf`.
 pub(super) fn euler_symbols(elf: &Path) -> Result<Vec<String>, String> {
-    crate::elf::symbols_containing(elf, &["sincosf", "euler_rates_deg"])
+    crate::elf::symbols_containing(elf, &["euler_rates_deg", "sin_cos_deg", "idsp", "sincosf"])
 }
 
 /// Parts of the names of the soft-float routines (`compiler_builtins`' `f32`/`f64` arithmetic,
