@@ -89,15 +89,16 @@ fn main() {
 /// itself. The banks are in the image's number type: `Fx` with the `fixed-point` feature or
 /// on a target without an FPU, `f32` otherwise (`src/lib.rs`, `Num`).
 ///
-/// One entry per NAV440 packet rate (`PacketRate`, dividers 1 to 50 of 100 Hz) and per kind
-/// of axis (wrapping at +-180 deg or not): the key is the nominal period as the pipeline's
-/// period rule gives it for that rate (`PeriodEstimator` over a steady stream, an `f32` in s,
-/// by its bits), the value the bank `nav440_pipeline::axis_bank` builds for it with the
-/// preset's gains for that rate (`BankConfig::NAV440.with_nav440_gains()`, what
+/// One entry per NAV440 packet rate (`PacketRate`, dividers 1 to 50 of 100 Hz): the key is
+/// the nominal period as the pipeline's period rule gives it for that rate
+/// (`PeriodEstimator` over a steady stream, an `f32` in s, by its bits), the value the bank
+/// `nav440_pipeline::axis_bank` builds for it for an axis that wraps at +-180 deg (yaw), with
+/// the preset's gains for that rate (`BankConfig::NAV440.with_nav440_gains()`, what
 /// `src/pipeline.rs` builds without the table), as postcard bytes (`estimators`' `serde`
-/// form: the input stage and the laws). The same `Bank::new` runs in the host tools, in IEEE
-/// `f64` as here, so a bank read back equals the one `nav440 estimate --bank product`
-/// (`--fixed`) builds.
+/// form: the input stage and the laws). An axis that does not wrap (pitch) reads the same
+/// entry back and switches its unwrapping off (`Bank::with_wrap`: the laws do not depend on
+/// it). The same `Bank::new` runs in the host tools, in IEEE `f64` as here, so a bank read
+/// back equals the one `nav440 estimate --bank product` (`--fixed`) builds.
 fn prebuilt_banks() -> Option<String> {
     let feature = |f: &str| env::var_os(format!("CARGO_FEATURE_{f}")).is_some();
     if !feature("BANK_PRODUCT") || feature("TUNED_GAINS") || feature("ADAPTIVE_GAINS") {
@@ -129,26 +130,24 @@ fn bank_table<T: estimators::Real + serde::Serialize>() -> String {
         let cfg = PeriodEstimator::from_times(times)
             .apply(BankConfig::NAV440)
             .with_nav440_gains();
-        for axis in [Axis::Yaw, Axis::Pitch] {
-            let bank: ProductBank<T> = nav440_pipeline::axis_bank(axis, &cfg)
-                .unwrap_or_else(|e| panic!("firmware-example: the bank at {rate:?}: {e}"));
-            let bytes = postcard::to_stdvec(&bank).expect("a bank serializes");
-            entries.push((cfg.sample_period_s, axis.wraps(), bytes));
-        }
+        let bank: ProductBank<T> = nav440_pipeline::axis_bank(Axis::Yaw, &cfg)
+            .unwrap_or_else(|e| panic!("firmware-example: the bank at {rate:?}: {e}"));
+        let bytes = postcard::to_stdvec(&bank).expect("a bank serializes");
+        entries.push((cfg.sample_period_s, bytes));
     }
     let mut src = String::from(
         "/// The product banks build.rs built (`prebuilt_banks`): (the nominal period's `f32` \
-         /// bits, the axis wraps at +-180 deg, the bank's postcard bytes).\n",
+         /// bits, the postcard bytes of the bank of an axis that wraps at +-180 deg).\n",
     );
     let _ = writeln!(
         src,
-        "pub static BANKS: [(u32, bool, &[u8]); {}] = [",
+        "pub static BANKS: [(u32, &[u8]); {}] = [",
         entries.len()
     );
-    for (period_s, wraps, bytes) in entries {
+    for (period_s, bytes) in entries {
         let _ = writeln!(
             src,
-            "    // {period_s} s\n    ({:#010x}, {wraps}, &{bytes:?}),",
+            "    // {period_s} s\n    ({:#010x}, &{bytes:?}),",
             period_s.to_bits()
         );
     }

@@ -56,12 +56,19 @@ mod prebuilt {
 #[inline(never)]
 fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
     let key = cfg.sample_period_s.to_bits();
-    let (_, _, bytes) = prebuilt::BANKS
+    let (_, bytes) = prebuilt::BANKS
         .iter()
-        .find(|(k, wraps, _)| *k == key && *wraps == axis.wraps())
+        .find(|(k, _)| *k == key)
         .ok_or(ConfigError::SamplePeriodNotPrebuilt)?;
     // Cannot fail: the bytes are the serialized form of this very type (build.rs).
-    postcard::from_bytes(bytes).map_err(|_| ConfigError::SamplePeriodNotPrebuilt)
+    let bank: Bank =
+        postcard::from_bytes(bytes).map_err(|_| ConfigError::SamplePeriodNotPrebuilt)?;
+    // The table holds the banks of the axes that wrap; the others unwrap nothing.
+    Ok(if axis.wraps() {
+        bank
+    } else {
+        bank.with_wrap(estimators::Wrap::None)
+    })
 }
 
 /// The gain schedule of the noise-adaptive bank (feature `adaptive-gains`), as `nav440 tune

@@ -2,7 +2,9 @@
 //! firmware images carry, built by `firmware-example/build.rs` on the host) is the bank
 //! `Bank::new` builds: the same parameters and state, and bit for bit the same outputs on a
 //! stream with turns, a gap and a rate change. Checked for every NAV440 packet rate, both
-//! kinds of axis (wrapping at +-180 deg or not), in `Fx` and in `f32`.
+//! kinds of axis (wrapping at +-180 deg or not), in `Fx` and in `f32`. The table holds the
+//! wrapping axes' banks only: one read back and switched to `Wrap::None` (`Bank::with_wrap`)
+//! is the bank built for pitch.
 
 use estimators::{BankConfig, Fx, ProductBank, Real};
 use nav440_pipeline::period::{PeriodEstimator, WARMUP_SAMPLES};
@@ -84,14 +86,47 @@ fn round_trip<T: Real + serde::Serialize + for<'de> serde::Deserialize<'de>>() {
     }
 }
 
+/// The bank of an axis that wraps, read back and switched to no unwrapping
+/// (`Bank::with_wrap`, what the firmware does for pitch), is the bank built for pitch: the
+/// same parameters, state and configuration, and bit for bit the same outputs on a pitch that
+/// swings within +-90 deg with a gap and a rate change.
+fn with_wrap_is_the_pitch_bank<T: Real + serde::Serialize + for<'de> serde::Deserialize<'de>>() {
+    for divider in dividers() {
+        let cfg = config(divider);
+        let yaw: ProductBank<T> = axis_bank(Axis::Yaw, &cfg).unwrap();
+        let mut pitch: ProductBank<T> = axis_bank(Axis::Pitch, &cfg).unwrap();
+        let bytes = postcard::to_stdvec(&yaw).unwrap();
+        let read: ProductBank<T> = postcard::from_bytes(&bytes).unwrap();
+        let mut switched = read.with_wrap(estimators::Wrap::None);
+        assert_eq!(format!("{switched:?}"), format!("{pitch:?}"), "{divider}");
+        assert_ne!(format!("{read:?}"), format!("{pitch:?}"), "{divider}");
+        let period_us = 10_000 * u64::from(divider);
+        let mut t = 0u64;
+        for k in 0..600u64 {
+            t += if k == 300 {
+                30 * period_us
+            } else if k > 400 {
+                period_us / 2
+            } else {
+                period_us
+            };
+            let angle = (85.0 * (t as f64 * 2e-6).sin()) as f32;
+            let (x, y) = (switched.update(t, angle), pitch.update(t, angle));
+            assert_eq!(x, y, "{divider}: sample {k}");
+        }
+    }
+}
+
 #[test]
 fn fixed_point_banks_read_back_equal() {
     round_trip::<Fx>();
+    with_wrap_is_the_pitch_bank::<Fx>();
 }
 
 #[test]
 fn f32_banks_read_back_equal() {
     round_trip::<f32>();
+    with_wrap_is_the_pitch_bank::<f32>();
 }
 
 #[test]

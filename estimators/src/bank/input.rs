@@ -207,4 +207,10 @@ impl<T: Real> BankInput<T> {
         self.unwrap = Unwrapper::new();
         self.y_prev = T::ZERO;
     }
+
+    /// Unwraps per `wrap` from now on ([`BankConfig::wrap`]), restarted ([`Self::restart`]).
+    pub fn set_wrap(&mut self, wrap: Wrap) {
+        self.wrap = wrap;
+        self.restart();
+    }
 }
