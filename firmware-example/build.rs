@@ -96,7 +96,7 @@ fn main() {
 /// the preset's gains for that rate (`BankConfig::NAV440.with_nav440_gains()`, what
 /// `src/pipeline.rs` builds without the table), as postcard bytes (`estimators`' `serde`
 /// form: the input stage and the laws). An axis that does not wrap (pitch) reads the same
-/// entry back and switches its unwrapping off (`Bank::with_wrap`: the laws do not depend on
+/// entry back and switches its unwrapping off (`Bank::set_wrap`: the laws do not depend on
 /// it). The same `Bank::new` runs in the host tools, in IEEE `f64` as here, so a bank read
 /// back equals the one `nav440 estimate --bank product` (`--fixed`) builds.
 fn prebuilt_banks() -> Option<String> {

@@ -61,14 +61,13 @@ fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
         .find(|(k, _)| *k == key)
         .ok_or(ConfigError::SamplePeriodNotPrebuilt)?;
     // Cannot fail: the bytes are the serialized form of this very type (build.rs).
-    let bank: Bank =
+    let mut bank: Bank =
         postcard::from_bytes(bytes).map_err(|_| ConfigError::SamplePeriodNotPrebuilt)?;
     // The table holds the banks of the axes that wrap; the others unwrap nothing.
-    Ok(if axis.wraps() {
-        bank
-    } else {
-        bank.with_wrap(estimators::Wrap::None)
-    })
+    if !axis.wraps() {
+        bank.set_wrap(estimators::Wrap::None);
+    }
+    Ok(bank)
 }
 
 /// The gain schedule of the noise-adaptive bank (feature `adaptive-gains`), as `nav440 tune

@@ -3,7 +3,7 @@
 //! `Bank::new` builds: the same parameters and state, and bit for bit the same outputs on a
 //! stream with turns, a gap and a rate change. Checked for every NAV440 packet rate, both
 //! kinds of axis (wrapping at +-180 deg or not), in `Fx` and in `f32`. The table holds the
-//! wrapping axes' banks only: one read back and switched to `Wrap::None` (`Bank::with_wrap`)
+//! wrapping axes' banks only: one read back and switched to `Wrap::None` (`Bank::set_wrap`)
 //! is the bank built for pitch.
 
 use estimators::{BankConfig, Fx, ProductBank, Real};
@@ -87,17 +87,18 @@ fn round_trip<T: Real + serde::Serialize + for<'de> serde::Deserialize<'de>>() {
 }
 
 /// The bank of an axis that wraps, read back and switched to no unwrapping
-/// (`Bank::with_wrap`, what the firmware does for pitch), is the bank built for pitch: the
+/// (`Bank::set_wrap`, what the firmware does for pitch), is the bank built for pitch: the
 /// same parameters, state and configuration, and bit for bit the same outputs on a pitch that
 /// swings within +-90 deg with a gap and a rate change.
-fn with_wrap_is_the_pitch_bank<T: Real + serde::Serialize + for<'de> serde::Deserialize<'de>>() {
+fn set_wrap_is_the_pitch_bank<T: Real + serde::Serialize + for<'de> serde::Deserialize<'de>>() {
     for divider in dividers() {
         let cfg = config(divider);
         let yaw: ProductBank<T> = axis_bank(Axis::Yaw, &cfg).unwrap();
         let mut pitch: ProductBank<T> = axis_bank(Axis::Pitch, &cfg).unwrap();
         let bytes = postcard::to_stdvec(&yaw).unwrap();
         let read: ProductBank<T> = postcard::from_bytes(&bytes).unwrap();
-        let mut switched = read.with_wrap(estimators::Wrap::None);
+        let mut switched = read;
+        switched.set_wrap(estimators::Wrap::None);
         assert_eq!(format!("{switched:?}"), format!("{pitch:?}"), "{divider}");
         assert_ne!(format!("{read:?}"), format!("{pitch:?}"), "{divider}");
         let period_us = 10_000 * u64::from(divider);
@@ -120,13 +121,13 @@ fn with_wrap_is_the_pitch_bank<T: Real + serde::Serialize + for<'de> serde::Dese
 #[test]
 fn fixed_point_banks_read_back_equal() {
     round_trip::<Fx>();
-    with_wrap_is_the_pitch_bank::<Fx>();
+    set_wrap_is_the_pitch_bank::<Fx>();
 }
 
 #[test]
 fn f32_banks_read_back_equal() {
     round_trip::<f32>();
-    with_wrap_is_the_pitch_bank::<f32>();
+    set_wrap_is_the_pitch_bank::<f32>();
 }
 
 #[test]

@@ -816,14 +816,13 @@ impl<R: Rows<T, S>, const N: usize, T: Real, S: SqrtFn<T>> Bank<R, N, T, S> {
         self.state = R::init(&self.params, T::ZERO);
     }
 
-    /// This bank unwrapping its input per `wrap` ([`BankConfig::wrap`]), restarted: the bank
-    /// [`Bank::new`] builds from the same configuration with that `wrap` (the laws do not
-    /// depend on it). One stored bank thus serves the axes that wrap at +-180 deg and those
-    /// that do not (the firmware's table of banks, docs/FOOTPRINT.md).
-    pub fn with_wrap(mut self, wrap: Wrap) -> Self {
+    /// Unwraps the input per `wrap` from now on ([`BankConfig::wrap`]) and restarts: the bank
+    /// is then the one [`Bank::new`] builds from the same configuration with that `wrap` (the
+    /// laws do not depend on it). One stored bank thus serves the axes that wrap at +-180 deg
+    /// and those that do not (the firmware's table of banks, docs/FOOTPRINT.md).
+    pub fn set_wrap(&mut self, wrap: Wrap) {
         self.input.set_wrap(wrap);
         self.state = R::init(&self.params, T::ZERO);
-        self
     }
 
     /// The parameters of `cfg`, each row's builder seeing the row it replaces.
