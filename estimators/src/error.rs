@@ -41,6 +41,10 @@ pub enum ConfigError {
     /// A gain schedule needs 1 to `MAX_LEVELS` levels with strictly increasing noise
     /// variances > 0.
     ScheduleLevels,
+    /// Per-sample observer poles that ILO1 cannot take ([`crate::IloConfig::per_sample`]): the
+    /// damping is not in `(0, 1)`, the damped frequency is not below the Nyquist frequency
+    /// `pi / dt`, or the gains it needs break the Euler step's bound.
+    ObserverPoles,
 }
 
 /// A sample that [`crate::PaperBank::update`] (or [`crate::SampleAdapter`]) refuses. The state is
@@ -86,6 +90,9 @@ impl core::fmt::Display for ConfigError {
             ),
             Self::ScheduleLevels => f.write_str(
                 "a gain schedule needs 1 to 8 levels with noise variances > 0, strictly increasing",
+            ),
+            Self::ObserverPoles => f.write_str(
+                "per-sample observer poles need a damping in (0, 1), a damped frequency below pi / dt and h * L < 1",
             ),
         }
     }

@@ -26,6 +26,57 @@ pub struct IloConfig {
 }
 
 impl IloConfig {
+    /// ILO1's gains (`K1 = 1`, learning delay `tau = h`) whose dynamics seen at the samples are
+    /// those of the second-order observer `s^2 + 2 zeta wn s + wn^2` sampled every `dt_s`:
+    /// the one-step map of the `N = round(dt_s / h_s)` Euler steps of one sample has the
+    /// eigenvalues `exp(s dt)` of its poles `s = -zeta wn +- i wn sqrt(1 - zeta^2)`.
+    ///
+    /// Within one step the observer turns `2 pi / dt` rad/s faster than that: its poles are
+    /// the sampled ones' first alias, `s + i 2 pi / dt`, whose `N`-th power of the step's
+    /// eigenvalue `exp(h (s + i 2 pi / dt))` is the same `exp(s dt)`. That alias is where ILO1
+    /// tuned on a motion lands (the shipped and tuned sets with `K2` of 36 to 3,900): at the
+    /// same per-sample poles it follows a motion more closely than the observer without the
+    /// alias (docs/MOTION-FAMILY.md, "ILO1 as a one-gain observer"). With the step's
+    /// eigenvalues `mu`, `mu bar`, the Euler step's matrix (on `xhat` and the delayed `v`) has
+    /// the trace `2 - h (L + K2)` and the determinant `1 - h L`, so the gains are exact:
+    /// `L = (1 - |mu|^2) / h` and `K2 = (2 - 2 Re(mu)) / h - L`.
+    ///
+    /// `wn_rad_s > 0` (rad/s), `0 < zeta < 1`, the damped frequency below `pi / dt_s`; `h_s`
+    /// and `dt_s` in s with `dt_s >= h_s`. Computed in `f64` (`libm`).
+    pub fn per_sample(wn_rad_s: f64, zeta: f64, h_s: f64, dt_s: f64) -> Result<Self, ConfigError> {
+        let wn = positive("wn", wn_rad_s)?;
+        let h = positive("h", h_s)?;
+        let dt = positive("dt", dt_s)?;
+        if !zeta.is_finite() {
+            return Err(ConfigError::NotFinite("zeta"));
+        }
+        let steps = libm::round(dt / h);
+        if steps < 1.0 {
+            return Err(ConfigError::SamplePeriodTooShort);
+        }
+        let dt = steps * h;
+        if !(zeta > 0.0 && zeta < 1.0) {
+            return Err(ConfigError::ObserverPoles);
+        }
+        let wd = wn * libm::sqrt(1.0 - zeta * zeta);
+        if wd * dt >= core::f64::consts::PI {
+            return Err(ConfigError::ObserverPoles);
+        }
+        // The step's eigenvalue: exp(h (-zeta wn + i (wd + 2 pi / dt))).
+        let radius = libm::exp(-zeta * wn * h);
+        let angle = (wd + 2.0 * core::f64::consts::PI / dt) * h;
+        let l = (1.0 - radius * radius) / h;
+        let k2 = (2.0 - 2.0 * radius * libm::cos(angle)) / h - l;
+        if !(h * l < 1.0 && k2 > 0.0) {
+            return Err(ConfigError::ObserverPoles);
+        }
+        Ok(Self {
+            k1: 1.0,
+            l: l as f32,
+            k2: k2 as f32,
+        })
+    }
+
     /// Gains from `(K1, L, Q)` by Theorem 3.1 for the scalar case `A = 0, C = F = 1`:
     /// `(-L) P + P (-L) = -Q` gives `P = Q / (2L)` and `P F = K2 C` gives `K2 = Q / (2L)`.
     pub const fn from_lq(k1: f32, l: f32, q: f32) -> Self {
@@ -269,5 +320,117 @@ impl Gains for IloConfig {
     /// [`IloParams`] with `D = 1` (learning delay `tau = h`), as in the bank.
     fn build<V: LawVisitor>(&self, h: f32, to: V) -> Result<V::Output, ConfigError> {
         Ok(to.law(IloParams::<f32, 1>::new(self, h)?))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The one-sample map of `n` Euler steps of ILO1 (`tau = h`) on the state `(xhat, v)` with
+    /// the input held at 0, multiplied out step by step, and its eigenvalues.
+    fn sample_map_eigenvalues(c: &IloConfig, h: f64, n: u32) -> [(f64, f64); 2] {
+        let (k1, l, k2) = (f64::from(c.k1), f64::from(c.l), f64::from(c.k2));
+        // One step: v' = K1 v - K2 x; x' = x + h (-L x + v').
+        let m = [[1.0 - h * l - h * k2, h * k1], [-k2, k1]];
+        let mut p = [[1.0, 0.0], [0.0, 1.0]];
+        for _ in 0..n {
+            p = [
+                [
+                    m[0][0] * p[0][0] + m[0][1] * p[1][0],
+                    m[0][0] * p[0][1] + m[0][1] * p[1][1],
+                ],
+                [
+                    m[1][0] * p[0][0] + m[1][1] * p[1][0],
+                    m[1][0] * p[0][1] + m[1][1] * p[1][1],
+                ],
+            ];
+        }
+        let (tr, det) = (p[0][0] + p[1][1], p[0][0] * p[1][1] - p[0][1] * p[1][0]);
+        let disc = tr * tr / 4.0 - det;
+        assert!(disc < 0.0, "complex poles expected: {disc}");
+        let im = libm::sqrt(-disc);
+        [(tr / 2.0, im), (tr / 2.0, -im)]
+    }
+
+    /// `per_sample` places the sampled poles where asked: the map of one sample's 100 steps has
+    /// the eigenvalues `exp(s dt)` (to 1e-6, the gains being `f32`), at bandwidths from 5 to
+    /// 250 rad/s and dampings from 0.1 to 0.7, at 100 Hz and at 20 Hz.
+    #[test]
+    fn per_sample_places_the_sampled_poles() {
+        for (h, dt) in [(1e-4, 0.01), (1e-4, 0.05)] {
+            let n = libm::round(dt / h) as u32;
+            for wn in [5.0, 20.0, 60.0, 250.0] {
+                for zeta in [0.1, 0.2, 0.45, 0.7] {
+                    let wd = wn * libm::sqrt(1.0 - zeta * zeta);
+                    if wd * dt >= core::f64::consts::PI {
+                        assert_eq!(
+                            IloConfig::per_sample(wn, zeta, h, dt),
+                            Err(ConfigError::ObserverPoles)
+                        );
+                        continue;
+                    }
+                    let c = IloConfig::per_sample(wn, zeta, h, dt).unwrap();
+                    assert_eq!(c.k1, 1.0);
+                    let r = libm::exp(-zeta * wn * dt);
+                    let want = (r * libm::cos(wd * dt), r * libm::sin(wd * dt));
+                    let got = sample_map_eigenvalues(&c, h, n);
+                    let d = (got[0].0 - want.0).abs() + (got[0].1.abs() - want.1).abs();
+                    assert!(d < 1e-6, "wn {wn} zeta {zeta} dt {dt}: {got:?} vs {want:?}");
+                }
+            }
+        }
+    }
+
+    /// ILO1 tuned on fig5 at 0.01 deg^2 (`nav440 tune`: `K1` 0.99952, `L` 5.867, `K2` 43.66) is
+    /// such an observer: its 100-step map's poles (33 rad/s, damping 0.16) given to
+    /// `per_sample` give back its `K2` within 1 %, and its `L` plus its leak `(1 - K1) / h`
+    /// within 2 %.
+    #[test]
+    fn per_sample_matches_a_tuned_set() {
+        let tuned = IloConfig {
+            k1: 0.999_518_16,
+            l: 5.866_687_3,
+            k2: 43.662_82,
+        };
+        let (h, dt) = (1e-4, 0.01);
+        let [(re, im), _] = sample_map_eigenvalues(&tuned, h, 100);
+        // s = ln(z) / dt.
+        let (sr, si) = (
+            libm::log(libm::hypot(re, im)) / dt,
+            libm::atan2(im, re) / dt,
+        );
+        let wn = libm::hypot(sr, si);
+        let zeta = -sr / wn;
+        assert!(
+            (wn - 33.2).abs() < 0.5 && (zeta - 0.16).abs() < 0.01,
+            "{wn} {zeta}"
+        );
+        let c = IloConfig::per_sample(wn, zeta, h, dt).unwrap();
+        let leak = (1.0 - f64::from(tuned.k1)) / h;
+        assert!(
+            (f64::from(c.k2) / f64::from(tuned.k2) - 1.0).abs() < 0.01,
+            "{c:?}"
+        );
+        assert!(
+            (f64::from(c.l) / (f64::from(tuned.l) + leak) - 1.0).abs() < 0.02,
+            "{c:?}"
+        );
+    }
+
+    #[test]
+    fn per_sample_refuses_what_it_cannot_place() {
+        let ok = |wn, zeta| IloConfig::per_sample(wn, zeta, 1e-4, 0.01);
+        assert_eq!(ok(0.0, 0.2), Err(ConfigError::NotPositive("wn")));
+        assert_eq!(ok(f64::NAN, 0.2), Err(ConfigError::NotFinite("wn")));
+        assert_eq!(ok(30.0, 0.0), Err(ConfigError::ObserverPoles));
+        assert_eq!(ok(30.0, 1.0), Err(ConfigError::ObserverPoles));
+        assert_eq!(ok(30.0, f64::NAN), Err(ConfigError::NotFinite("zeta")));
+        // Damped frequency at Nyquist (pi / dt = 314 rad/s).
+        assert_eq!(ok(400.0, 0.1), Err(ConfigError::ObserverPoles));
+        assert_eq!(
+            IloConfig::per_sample(30.0, 0.2, 1e-4, 1e-5),
+            Err(ConfigError::SamplePeriodTooShort)
+        );
     }
 }
