@@ -21,7 +21,8 @@
 //! `ilo1_as_a_one_gain_observer` (ignored, about 90 s) asks the same of ILO1 as a second-order
 //! observer with one bandwidth (docs/MOTION-FAMILY.md, "ILO1 as a one-gain observer");
 //! `ilo1_by_the_jerk_index` (ignored, about 70 s) picks ILO1's per-sample poles by the jerk
-//! index (docs/MOTION-FAMILY.md, "ILO1 by the jerk index").
+//! index, and `an_online_ilo1_by_the_jerk_index` (ignored, about 70 s) does it online from
+//! the bank's own estimates (docs/MOTION-FAMILY.md, "ILO1 by the jerk index").
 
 use estimators::{BankConfig, Hold};
 use nav440_cli::motion::ProfileKind;
@@ -653,27 +654,7 @@ fn ilo1_as_a_one_gain_observer() {
 #[test]
 #[ignore = "16 tunings of ILO1 and a grid on fig5 (about 70 s in release): cargo test --release -p host-tests --test motion_family ilo1_by -- --ignored --nocapture"]
 fn ilo1_by_the_jerk_index() {
-    let ilo1 = |wn: f64| {
-        let mut cfg = BankConfig::NAV440;
-        cfg.velocity.ilo[0] =
-            estimators::IloConfig::per_sample(wn, ILO1_ZETA, f64::from(cfg.h), DT_S).unwrap();
-        cfg
-    };
-    let index = |j: f64, var: f64| (j / (var * DT_S)).powf(1.0 / 6.0);
-    let fig5 = a2_samples(ProfileKind::Fig5, 1, 100, 30.0).unwrap();
-    let j_fig5 = jerk_power(&fig5, &reference(&fig5));
-    let (mut best, mut wn_best) = (f64::INFINITY, 0.0);
-    for i in 0..60 {
-        let wn = 10.0 * 10f64.powf(f64::from(i) / 59.0);
-        let (m, _) = bank_mse(&fig5, ilo1(wn), 0.1, 1, RANGE).unwrap();
-        if m[ILO1] < best {
-            (best, wn_best) = (m[ILO1], wn);
-        }
-    }
-    let c = wn_best / index(j_fig5, 0.1);
-    println!(
-        "zeta {ILO1_ZETA}: on fig5 at 0.1 deg^2 the best wn is {wn_best:.1} rad/s (MSE {best:.1}): c = {c:.4}"
-    );
+    let c = ilo1_index_c();
     let mut within = 0;
     for (profile, seed, label) in MOTIONS {
         let samples = a2_samples(profile, seed, 100, 30.0).unwrap();
@@ -691,8 +672,8 @@ fn ilo1_by_the_jerk_index() {
                 RANGE,
             )
             .unwrap();
-            let wn = c * index(j, var);
-            let (by_index, _) = bank_mse(&samples, ilo1(wn), var, 1, RANGE).unwrap();
+            let wn = c * ilo1_index(j, var);
+            let (by_index, _) = bank_mse(&samples, ilo1_at(wn), var, 1, RANGE).unwrap();
             let ratio = by_index[ILO1] / tuned[ILO1];
             println!(
                 "{label:<28} {var:>5}: wn {wn:>6.1} rad/s, ILO1 by the index {:>7.1}, tuned {:>7.1} ({ratio:.2}x), BD {bd:.0}",
@@ -712,3 +693,125 @@ fn ilo1_by_the_jerk_index() {
 
 /// The damping of [`ilo1_by_the_jerk_index`]'s per-sample poles.
 const ILO1_ZETA: f64 = 0.25;
+
+/// The shipped preset with ILO1's per-sample poles at `wn` rad/s and [`ILO1_ZETA`]
+/// (`estimators::IloConfig::per_sample`).
+fn ilo1_at(wn: f64) -> BankConfig {
+    let mut cfg = BankConfig::NAV440;
+    cfg.velocity.ilo[0] =
+        estimators::IloConfig::per_sample(wn, ILO1_ZETA, f64::from(cfg.h), DT_S).unwrap();
+    cfg
+}
+
+/// The jerk index of ILO1's bandwidth, `(J / (V dt))^(1/6)`, for the jerk power `j`
+/// ((deg/s^3)^2) and the noise variance `var` (deg^2).
+fn ilo1_index(j: f64, var: f64) -> f64 {
+    (j / (var * DT_S)).powf(1.0 / 6.0)
+}
+
+/// `c` of `wn = c (J / (V dt))^(1/6)`: the best `wn` of a grid (10 to 100 rad/s, 60 steps) on
+/// fig5 at 0.1 deg^2 over fig5's index there.
+fn ilo1_index_c() -> f64 {
+    let fig5 = a2_samples(ProfileKind::Fig5, 1, 100, 30.0).unwrap();
+    let j_fig5 = jerk_power(&fig5, &reference(&fig5));
+    let (mut best, mut wn_best) = (f64::INFINITY, 0.0);
+    for i in 0..60 {
+        let wn = 10.0 * 10f64.powf(f64::from(i) / 59.0);
+        let (m, _) = bank_mse(&fig5, ilo1_at(wn), 0.1, 1, RANGE).unwrap();
+        if m[ILO1] < best {
+            (best, wn_best) = (m[ILO1], wn);
+        }
+    }
+    let c = wn_best / ilo1_index(j_fig5, 0.1);
+    println!(
+        "zeta {ILO1_ZETA}: on fig5 at 0.1 deg^2 the best wn is {wn_best:.1} rad/s (MSE {best:.1}): c = {c:.4}"
+    );
+    c
+}
+
+/// ILO1 online, by the jerk index, as a device would run it: a product bank (`f32`) on the
+/// noisy angle, whose ILO1 is set every 20 samples to `per_sample` at
+/// `wn = c (J / (V dt))^(1/6)` from its own noise estimate (`NoiseEstimator`, 0.5 s) and jerk
+/// estimate (`JerkEstimator`, fed the rate) when `wn` moved by more than 1.2x (`set_gains`:
+/// bumpless). Starts at fig5's `wn` for 0.1 deg^2. Its velocity MSE over [`RANGE`] and the
+/// number of gain changes.
+fn online_ilo1(
+    samples: &[replay::Sample],
+    noisy: &[f32],
+    rate: &[f64],
+    reference: &[f64],
+    c: f64,
+) -> (f64, u32) {
+    let mut noise = estimators::NoiseEstimator::new(0.5, DT_S as f32).unwrap();
+    let mut jerk =
+        estimators::JerkEstimator::new(estimators::JerkEstimator::DEFAULT_TAU_S, DT_S as f32)
+            .unwrap();
+    let mut wn = 25.5;
+    let mut cfg = ilo1_at(wn);
+    let mut bank = estimators::ProductBank::<f32>::new(&cfg).unwrap();
+    let (mut changes, mut since) = (0u32, 0u32);
+    let unwrapped = unwrap_deg(noisy);
+    let mut v = Vec::with_capacity(samples.len());
+    for (((s, y), y_cont), r) in samples.iter().zip(noisy).zip(&unwrapped).zip(rate) {
+        noise.update(s.t_us, *y_cont);
+        jerk.update(s.t_us, *r as f32);
+        let out = bank.update(s.t_us, *y).unwrap().to_f32();
+        v.push(f64::from(out.values[0]));
+        since += 1;
+        if since >= 20 {
+            since = 0;
+            if let (Some(var), Some(j)) = (noise.variance(), jerk.power()) {
+                let want =
+                    (c * ilo1_index(f64::from(j), f64::from(var).max(2.5e-6))).clamp(2.0, 250.0);
+                if (want / wn).ln().abs() > 1.2f64.ln() {
+                    wn = want;
+                    cfg = ilo1_at(wn);
+                    bank.set_gains(&cfg).unwrap();
+                    changes += 1;
+                }
+            }
+        }
+    }
+    (mse_of(samples, &v, reference, RANGE), changes)
+}
+
+/// [`online_ilo1`] on every motion and noise level against ILO1 tuned on the motion and the
+/// backward difference: printed; asserted below the backward difference and within 2x of the
+/// tuned ILO1 (docs/MOTION-FAMILY.md, "ILO1 by the jerk index").
+#[test]
+#[ignore = "16 tunings of ILO1 and a grid on fig5 (about 70 s in release): cargo test --release -p host-tests --test motion_family online_ilo1 -- --ignored --nocapture"]
+fn an_online_ilo1_by_the_jerk_index() {
+    let c = ilo1_index_c();
+    let mut within = 0;
+    for (profile, seed, label) in MOTIONS {
+        let samples = a2_samples(profile, seed, 100, 30.0).unwrap();
+        let reference = reference(&samples);
+        for var in NOISE {
+            let (bd, _) = backward_difference(&samples, &reference, var);
+            let mut families = [[false; COLUMNS.len()]; 2];
+            families[0][ILO1] = true;
+            let (tuned, _) = bank_mse(
+                &samples,
+                tuned(&samples, var, Families(families)),
+                var,
+                1,
+                RANGE,
+            )
+            .unwrap();
+            let noisy = noisy_angle(&samples, Axis::Yaw, Some(Noise { var, seed: 1 })).unwrap();
+            let (online, changes) = online_ilo1(&samples, &noisy, &reference, &reference, c);
+            let ratio = online / tuned[ILO1];
+            println!(
+                "{label:<28} {var:>5}: online ILO1 {online:>7.1} ({changes} gain changes), tuned {:>7.1} ({ratio:.2}x), BD {bd:.0}",
+                tuned[ILO1]
+            );
+            assert!(
+                online < bd && ratio <= 2.0,
+                "{label} {var}: {online} tuned {} BD {bd}",
+                tuned[ILO1]
+            );
+            within += usize::from(ratio <= 1.5);
+        }
+    }
+    println!("within 1.5x of the tuned ILO1: {within} of 15 cells");
+}
