@@ -399,6 +399,13 @@ fn tuned_velocity(samples: &[replay::Sample], var: f64) -> BankConfig {
     tuned(samples, var, Families(families))
 }
 
+/// ILO1 (velocity) alone tuned on `samples` at noise `var` ([`tuned`]).
+fn tuned_ilo1(samples: &[replay::Sample], var: f64) -> BankConfig {
+    let mut families = [[false; COLUMNS.len()]; 2];
+    families[0][ILO1] = true;
+    tuned(samples, var, Families(families))
+}
+
 /// The Kalman velocity alone tuned on `samples` at noise `var` ([`tuned`]).
 fn tuned_kalman(samples: &[replay::Sample], var: f64) -> BankConfig {
     let mut families = [[false; COLUMNS.len()]; 2];
@@ -600,9 +607,7 @@ fn ilo1_as_a_one_gain_observer() {
         let a = accel_power(&samples, &reference);
         for var in NOISE {
             let (bd, _) = backward_difference(&samples, &reference, var);
-            let mut families = [[false; COLUMNS.len()]; 2];
-            families[0][ILO1] = true;
-            let t = tuned(&samples, var, Families(families));
+            let t = tuned_ilo1(&samples, var);
             let (tm, _) = bank_mse(&samples, t, var, 1, RANGE).unwrap();
             let ilo = t.velocity.ilo[0];
             let index = (a / (var * DT_S)).powf(0.25);
@@ -655,40 +660,17 @@ fn ilo1_as_a_one_gain_observer() {
 #[ignore = "16 tunings of ILO1 and a grid on fig5 (about 70 s in release): cargo test --release -p host-tests --test motion_family ilo1_by -- --ignored --nocapture"]
 fn ilo1_by_the_jerk_index() {
     let c = ilo1_index_c();
-    let mut within = 0;
-    for (profile, seed, label) in MOTIONS {
-        let samples = a2_samples(profile, seed, 100, 30.0).unwrap();
-        let reference = reference(&samples);
-        let j = jerk_power(&samples, &reference);
-        for var in NOISE {
-            let (bd, _) = backward_difference(&samples, &reference, var);
-            let mut families = [[false; COLUMNS.len()]; 2];
-            families[0][ILO1] = true;
-            let (tuned, _) = bank_mse(
-                &samples,
-                tuned(&samples, var, Families(families)),
-                var,
-                1,
-                RANGE,
-            )
-            .unwrap();
-            let wn = c * ilo1_index(j, var);
-            let (by_index, _) = bank_mse(&samples, ilo1_at(wn), var, 1, RANGE).unwrap();
-            let ratio = by_index[ILO1] / tuned[ILO1];
-            println!(
-                "{label:<28} {var:>5}: wn {wn:>6.1} rad/s, ILO1 by the index {:>7.1}, tuned {:>7.1} ({ratio:.2}x), BD {bd:.0}",
-                by_index[ILO1], tuned[ILO1]
-            );
-            assert!(
-                by_index[ILO1] < bd && ratio <= 2.0,
-                "{label} {var}: {} tuned {} BD {bd}",
-                by_index[ILO1],
-                tuned[ILO1]
-            );
-            within += usize::from(ratio <= 1.5);
-        }
-    }
-    println!("within 1.5x of the tuned ILO1: {within} of 15 cells");
+    against_the_tuned_ilo1(|samples, reference, var| {
+        let wn = c * ilo1_index(jerk_power(samples, reference), var);
+        let (by_index, _) = bank_mse(samples, ilo1_at(wn), var, 1, RANGE).unwrap();
+        (
+            by_index[ILO1],
+            format!(
+                "wn {wn:>6.1} rad/s, ILO1 by the index {:>7.1}",
+                by_index[ILO1]
+            ),
+        )
+    });
 }
 
 /// The damping of [`ilo1_by_the_jerk_index`]'s per-sample poles.
@@ -782,32 +764,37 @@ fn online_ilo1(
 #[ignore = "16 tunings of ILO1 and a grid on fig5 (about 70 s in release): cargo test --release -p host-tests --test motion_family online_ilo1 -- --ignored --nocapture"]
 fn an_online_ilo1_by_the_jerk_index() {
     let c = ilo1_index_c();
+    against_the_tuned_ilo1(|samples, reference, var| {
+        let noisy = noisy_angle(samples, Axis::Yaw, Some(Noise { var, seed: 1 })).unwrap();
+        let (online, changes) = online_ilo1(samples, &noisy, reference, reference, c);
+        (
+            online,
+            format!("online ILO1 {online:>7.1} ({changes} gain changes)"),
+        )
+    });
+}
+
+/// For every motion and noise level: `mse(samples, reference, var)` (a velocity MSE and its
+/// description) against ILO1 tuned on that motion at that noise and the backward difference,
+/// printed; asserted below the backward difference and within 2x of the tuned ILO1. Prints
+/// how many cells are within 1.5x.
+fn against_the_tuned_ilo1(mut mse: impl FnMut(&[replay::Sample], &[f64], f64) -> (f64, String)) {
     let mut within = 0;
     for (profile, seed, label) in MOTIONS {
         let samples = a2_samples(profile, seed, 100, 30.0).unwrap();
         let reference = reference(&samples);
         for var in NOISE {
             let (bd, _) = backward_difference(&samples, &reference, var);
-            let mut families = [[false; COLUMNS.len()]; 2];
-            families[0][ILO1] = true;
-            let (tuned, _) = bank_mse(
-                &samples,
-                tuned(&samples, var, Families(families)),
-                var,
-                1,
-                RANGE,
-            )
-            .unwrap();
-            let noisy = noisy_angle(&samples, Axis::Yaw, Some(Noise { var, seed: 1 })).unwrap();
-            let (online, changes) = online_ilo1(&samples, &noisy, &reference, &reference, c);
-            let ratio = online / tuned[ILO1];
+            let (tuned, _) = bank_mse(&samples, tuned_ilo1(&samples, var), var, 1, RANGE).unwrap();
+            let (m, what) = mse(&samples, &reference, var);
+            let ratio = m / tuned[ILO1];
             println!(
-                "{label:<28} {var:>5}: online ILO1 {online:>7.1} ({changes} gain changes), tuned {:>7.1} ({ratio:.2}x), BD {bd:.0}",
+                "{label:<28} {var:>5}: {what}, tuned {:>7.1} ({ratio:.2}x), BD {bd:.0}",
                 tuned[ILO1]
             );
             assert!(
-                online < bd && ratio <= 2.0,
-                "{label} {var}: {online} tuned {} BD {bd}",
+                m < bd && ratio <= 2.0,
+                "{label} {var}: {m} tuned {} BD {bd}",
                 tuned[ILO1]
             );
             within += usize::from(ratio <= 1.5);

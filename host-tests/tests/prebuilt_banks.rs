@@ -26,9 +26,20 @@ fn config(divider: u16) -> BankConfig {
         .with_nav440_gains()
 }
 
-/// Feeds both banks the same samples and asserts equal outputs, bit for bit: a yaw turning
-/// at 400 deg/s (wrapping every 0.9 s), a gap of 30 periods, then twice the packet rate.
-fn assert_same_run<T: Real>(a: &mut ProductBank<T>, b: &mut ProductBank<T>, period_us: u64) {
+/// A yaw turning at 400 deg/s (wrapping every 0.9 s), deg, at `t_us`.
+fn turning_yaw(t_us: u64) -> f32 {
+    let unwrapped = 400.0 * t_us as f64 * 1e-6 + 7.0 * (t_us as f64 * 3e-6).sin();
+    ((unwrapped + 180.0).rem_euclid(360.0) - 180.0) as f32
+}
+
+/// Feeds both banks the same samples, `angle(t_us)` deg, and asserts equal outputs, bit for
+/// bit: 300 packet periods, a gap of 30 periods, then twice the packet rate.
+fn assert_same_run<T: Real>(
+    a: &mut ProductBank<T>,
+    b: &mut ProductBank<T>,
+    period_us: u64,
+    angle: impl Fn(u64) -> f32,
+) {
     let mut t = 0u64;
     for k in 0..600u64 {
         t += if k == 300 {
@@ -38,9 +49,8 @@ fn assert_same_run<T: Real>(a: &mut ProductBank<T>, b: &mut ProductBank<T>, peri
         } else {
             period_us
         };
-        let unwrapped = 400.0 * t as f64 * 1e-6 + 7.0 * (t as f64 * 3e-6).sin();
-        let wrapped = ((unwrapped + 180.0).rem_euclid(360.0) - 180.0) as f32;
-        let (x, y) = (a.update(t, wrapped), b.update(t, wrapped));
+        let y = angle(t);
+        let (x, y) = (a.update(t, y), b.update(t, y));
         match (x, y) {
             (Ok(x), Ok(y)) => {
                 // The outputs as the bank holds them (raw for `Fx`), then as `f32` bits.
@@ -71,7 +81,12 @@ fn round_trip<T: Real + serde::Serialize + for<'de> serde::Deserialize<'de>>() {
             // What a table entry costs in flash (build.rs stores one per rate and axis kind).
             assert!(bytes.len() <= 160, "{} bytes", bytes.len());
             let mut fresh = built;
-            assert_same_run(&mut fresh, &mut read, 10_000 * u64::from(divider));
+            assert_same_run(
+                &mut fresh,
+                &mut read,
+                10_000 * u64::from(divider),
+                turning_yaw,
+            );
             // A bank that has run serializes its laws, not their state: it reads back
             // restarted (`Bank::restart`; the input stage keeps its re-init count).
             let after = postcard::to_stdvec(&fresh).unwrap();
@@ -89,7 +104,7 @@ fn round_trip<T: Real + serde::Serialize + for<'de> serde::Deserialize<'de>>() {
 /// The bank of an axis that wraps, read back and switched to no unwrapping
 /// (`Bank::set_wrap`, what the firmware does for pitch), is the bank built for pitch: the
 /// same parameters, state and configuration, and bit for bit the same outputs on a pitch that
-/// swings within +-90 deg with a gap and a rate change.
+/// swings within +-90 deg with a gap and a rate change ([`assert_same_run`]).
 fn set_wrap_is_the_pitch_bank<T: Real + serde::Serialize + for<'de> serde::Deserialize<'de>>() {
     for divider in dividers() {
         let cfg = config(divider);
@@ -101,20 +116,12 @@ fn set_wrap_is_the_pitch_bank<T: Real + serde::Serialize + for<'de> serde::Deser
         switched.set_wrap(estimators::Wrap::None);
         assert_eq!(format!("{switched:?}"), format!("{pitch:?}"), "{divider}");
         assert_ne!(format!("{read:?}"), format!("{pitch:?}"), "{divider}");
-        let period_us = 10_000 * u64::from(divider);
-        let mut t = 0u64;
-        for k in 0..600u64 {
-            t += if k == 300 {
-                30 * period_us
-            } else if k > 400 {
-                period_us / 2
-            } else {
-                period_us
-            };
-            let angle = (85.0 * (t as f64 * 2e-6).sin()) as f32;
-            let (x, y) = (switched.update(t, angle), pitch.update(t, angle));
-            assert_eq!(x, y, "{divider}: sample {k}");
-        }
+        assert_same_run(
+            &mut switched,
+            &mut pitch,
+            10_000 * u64::from(divider),
+            |t| (85.0 * (t as f64 * 2e-6).sin()) as f32,
+        );
     }
 }
 
