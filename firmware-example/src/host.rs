@@ -39,8 +39,9 @@ impl Line {
     }
 
     fn bytes(&mut self, b: &[u8]) -> &mut Self {
-        let n = b.len().min(self.buf.len() - self.len);
-        self.buf[self.len..self.len + n].copy_from_slice(&b[..n]);
+        let room = self.buf.get_mut(self.len..).unwrap_or(&mut []);
+        let n = b.len().min(room.len());
+        crate::copy_bytes(room, b);
         self.len += n;
         self
     }
@@ -64,7 +65,7 @@ impl Line {
     fn send(&mut self) {
         self.str("\n");
         if let Ok(mut err) = hio::hstderr() {
-            let _ = err.write_all(&self.buf[..self.len]);
+            let _ = err.write_all(self.buf.get(..self.len).unwrap_or(&[]));
         }
     }
 }

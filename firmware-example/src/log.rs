@@ -197,7 +197,7 @@ impl Sink {
     /// Hands the frame on to the transports and empties the buffers.
     fn hand_on(&mut self) {
         let frame = if self.len != 0 {
-            &self.frame[..self.len]
+            self.frame.get(..self.len).unwrap_or(&[])
         } else {
             // SAFETY: the head room's `self.head` bytes, then (when placed, `self.head == HEAD`)
             // the payload lent by `in_place`, still lent: the logger is held inside its `send`.
@@ -245,10 +245,11 @@ impl Sink {
                     // SAFETY: the head room is only touched by the logger (held).
                     let head = unsafe { &mut *addr_of_mut!((*PLACED.0.get()).head) };
                     // Short copies of a known length: no call to `memcpy`.
-                    match bytes.len() {
-                        2 => head[at..at + 2].copy_from_slice(&bytes[..2]),
-                        4 => head[at..at + 4].copy_from_slice(&bytes[..4]),
-                        n => head[at..at + n].copy_from_slice(bytes),
+                    let room = head.get_mut(at..).unwrap_or(&mut []);
+                    match bytes {
+                        [_, _] => crate::copy_bytes(room, bytes.get(..2).unwrap_or(&[])),
+                        [_, _, _, _] => crate::copy_bytes(room, bytes.get(..4).unwrap_or(&[])),
+                        _ => crate::copy_bytes(room, bytes),
                     }
                     self.head = at + bytes.len();
                     return;
@@ -272,9 +273,7 @@ impl Sink {
             let room = FRAME_BUFFER - self.len;
             let (now, later) = bytes.split_at(room.min(bytes.len()));
             let at = self.len;
-            if let Some(dst) = self.frame.get_mut(at..at + now.len()) {
-                dst.copy_from_slice(now);
-            }
+            crate::copy_bytes(self.frame.get_mut(at..).unwrap_or(&mut []), now);
             self.len = at + now.len();
             if self.len == FRAME_BUFFER {
                 self.hand_on();

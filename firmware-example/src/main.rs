@@ -258,14 +258,14 @@ fn stream(
         if uart.read_ready().unwrap_or(false) {
             let room = total.map_or(buf.len() as u64, |n| n - read);
             let want = (buf.len() as u64).min(room) as usize;
-            let n = match uart.read(&mut buf[..want]) {
+            let n = match uart.read(buf.get_mut(..want).unwrap_or(&mut [])) {
                 Ok(n) => n,
                 Err(e) => {
                     defmt::println!("firmware: UART error: {}", e);
                     fail(Status::Internal)
                 }
             };
-            let flow = process(pipe, &buf[..n]);
+            let flow = process(pipe, buf.get(..n).unwrap_or(&[]));
             if !after(pipe, &uart, flow) {
                 return uart;
             }

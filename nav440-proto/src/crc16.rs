@@ -117,7 +117,7 @@ impl Crc16Table for Table<16> {
             let k = 48 - msg.len();
             let mut block = [0u8; 48];
             if let Some(dst) = block.get_mut(k..) {
-                dst.copy_from_slice(msg);
+                crate::copy_bytes(dst, msg);
             }
             let mut d = CRC_T16.digest_with_initial(init_before_zero_bytes(k));
             d.update(&block);
@@ -127,7 +127,7 @@ impl Crc16Table for Table<16> {
         let (head, rest) = msg.split_at((16 - k).min(msg.len()));
         let mut first = [0u8; 16];
         if let Some(dst) = first.get_mut(k..k + head.len()) {
-            dst.copy_from_slice(head);
+            crate::copy_bytes(dst, head);
         }
         let mut d = CRC_T16.digest_with_initial(init_before_zero_bytes(k));
         d.update(first.get(..k + head.len()).unwrap_or(&first));

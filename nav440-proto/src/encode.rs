@@ -5,7 +5,7 @@ use crate::packets::{DecodeError, FieldIds, FieldValues};
 use crate::parser::Frame;
 use crate::text::Text;
 use crate::types::{FieldId, PacketType};
-use crate::{FRAME_OVERHEAD, MAX_PAYLOAD, PREAMBLE_BYTE};
+use crate::{copy_bytes, FRAME_OVERHEAD, MAX_PAYLOAD, PREAMBLE_BYTE};
 
 /// Why a frame could not be encoded.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -68,13 +68,16 @@ pub fn encode_with(
         return Err(EncodeError::BufferTooSmall { needed: total });
     };
     let (head, rest) = frame.split_at_mut(5);
-    head.copy_from_slice(&[PREAMBLE_BYTE, PREAMBLE_BYTE, t.0[0], t.0[1], len as u8]);
+    copy_bytes(
+        head,
+        &[PREAMBLE_BYTE, PREAMBLE_BYTE, t.0[0], t.0[1], len as u8],
+    );
     let (payload, _) = rest.split_at_mut(len);
     payload.fill(0);
     fill(payload);
     let crc = DefaultCrcTable::checksum(frame.get(2..5 + len).unwrap_or(&[]));
     if let Some(c) = frame.get_mut(5 + len..) {
-        c.copy_from_slice(&crc.to_be_bytes());
+        copy_bytes(c, &crc.to_be_bytes());
     }
     Ok(total)
 }
@@ -82,7 +85,7 @@ pub fn encode_with(
 /// Writes a whole frame (preamble `55 55`, type, length, payload, CRC MSB first) into `out`;
 /// returns its length in bytes (payload length + 7).
 pub fn encode_frame(t: PacketType, payload: &[u8], out: &mut [u8]) -> Result<usize, EncodeError> {
-    encode_with(t, payload.len(), out, |p| p.copy_from_slice(payload))
+    encode_with(t, payload.len(), out, |p| copy_bytes(p, payload))
 }
 
 /// Re-encodes a parsed frame byte for byte.
@@ -145,7 +148,10 @@ pub mod command {
                 .chunks_exact_mut(4)
                 .zip(fields)
             {
-                c.copy_from_slice(&[(id.0 >> 8) as u8, id.0 as u8, (v >> 8) as u8, *v as u8]);
+                copy_bytes(
+                    c,
+                    &[(id.0 >> 8) as u8, id.0 as u8, (v >> 8) as u8, *v as u8],
+                );
             }
         })
     }
@@ -165,7 +171,7 @@ pub mod command {
                 .chunks_exact_mut(2)
                 .zip(ids)
             {
-                c.copy_from_slice(&id.0.to_be_bytes());
+                copy_bytes(c, &id.0.to_be_bytes());
             }
         })
     }

@@ -310,12 +310,12 @@ impl<C: Crc16Table> Parser<C> {
                 &mut on_frame,
             );
             let consumed = consumed.min(self.len);
-            self.buf.copy_within(consumed..self.len, 0);
+            shift_out(&mut self.buf, consumed, self.len);
             self.len -= consumed;
             if self.len > 0 {
                 // An incomplete candidate at the end: drop its first byte, rescan the rest.
                 self.stats.skipped_bytes += 1;
-                self.buf.copy_within(1..self.len, 0);
+                shift_out(&mut self.buf, 1, self.len);
                 self.len -= 1;
             }
         }
@@ -363,7 +363,7 @@ impl<C: Crc16Table> Parser<C> {
             }
             let (head, tail) = input.split_at(take);
             if let Some(dst) = self.buf.get_mut(self.len..self.len + take) {
-                dst.copy_from_slice(head);
+                crate::copy_bytes(dst, head);
             } else {
                 // Unreachable: need <= MAX_FRAME. Count as skipped rather than panic.
                 self.stats.skipped_bytes += (self.len + take) as u64;
@@ -383,7 +383,7 @@ impl<C: Crc16Table> Parser<C> {
                 &mut self.stats,
                 &mut on_frame,
             );
-            self.buf.copy_within(consumed.min(self.len)..self.len, 0);
+            shift_out(&mut self.buf, consumed.min(self.len), self.len);
             self.len -= consumed.min(self.len);
             if stop {
                 let n = taken(input);
@@ -399,7 +399,7 @@ impl<C: Crc16Table> Parser<C> {
             let tail = input.get(consumed..).unwrap_or(&[]);
             match self.buf.get_mut(..tail.len()) {
                 Some(dst) => {
-                    dst.copy_from_slice(tail);
+                    crate::copy_bytes(dst, tail);
                     self.len = tail.len();
                 }
                 None => {
@@ -412,5 +412,18 @@ impl<C: Crc16Table> Parser<C> {
         };
         self.stats.bytes += n as u64;
         n
+    }
+}
+
+/// Moves `buf[n..len]` to the front of `buf` (drops the first `n` of `len` buffered bytes).
+/// A forward byte loop: the move always goes down, so no `memmove` is needed for it.
+fn shift_out(buf: &mut [u8], n: usize, len: usize) {
+    let len = len.min(buf.len());
+    for i in n..len {
+        if let Some(&b) = buf.get(i) {
+            if let Some(d) = buf.get_mut(i - n) {
+                *d = b;
+            }
+        }
     }
 }
