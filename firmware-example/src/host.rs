@@ -41,7 +41,7 @@ impl Line {
     fn bytes(&mut self, b: &[u8]) -> &mut Self {
         let room = self.buf.get_mut(self.len..).unwrap_or(&mut []);
         let n = b.len().min(room.len());
-        crate::copy_bytes(room, b);
+        crate::copy_bytes(room, b.get(..n).unwrap_or(&[]));
         self.len += n;
         self
     }

@@ -86,9 +86,9 @@ pub type Bank = estimators::AdaptiveBank<Num, BankSqrt>;
 /// What [`Bank`] gives per sample (the channels and their names come from it).
 pub type Output = <Bank as estimators::EstimatorBank>::Output;
 
-/// Copies `src` to the start of `dst`, as many bytes as the shorter holds. Unlike
-/// `copy_from_slice` it has no panic path, whose message would link `core`'s number
-/// formatting (about 1 KB) into every image.
+/// Copies `src` to the start of `dst` (nothing when `dst` is shorter: the firmware's copies fit
+/// by construction). Unlike `copy_from_slice` on a range, it has no panic path, whose message
+/// would link `core`'s number formatting (about 1 KB) into every image.
 #[inline]
 pub fn copy_bytes(dst: &mut [u8], src: &[u8]) {
     for (d, s) in dst.iter_mut().zip(src) {

@@ -246,10 +246,10 @@ impl Sink {
                     let head = unsafe { &mut *addr_of_mut!((*PLACED.0.get()).head) };
                     // Short copies of a known length: no call to `memcpy`.
                     let room = head.get_mut(at..).unwrap_or(&mut []);
-                    match bytes {
-                        [_, _] => crate::copy_bytes(room, bytes.get(..2).unwrap_or(&[])),
-                        [_, _, _, _] => crate::copy_bytes(room, bytes.get(..4).unwrap_or(&[])),
-                        _ => crate::copy_bytes(room, bytes),
+                    match (bytes, room) {
+                        (&[a, b], [c, d, ..]) => (*c, *d) = (a, b),
+                        (&[a, b, c, d], [e, f, g, h, ..]) => (*e, *f, *g, *h) = (a, b, c, d),
+                        (bytes, room) => crate::copy_bytes(room, bytes),
                     }
                     self.head = at + bytes.len();
                     return;

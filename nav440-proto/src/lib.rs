@@ -106,9 +106,9 @@ pub const PREAMBLE: [u8; 2] = [PREAMBLE_BYTE, PREAMBLE_BYTE];
 #[doc = include_str!("../README.md")]
 pub struct ReadmeDoctests;
 
-/// Copies `src` to the start of `dst`, as many bytes as the shorter holds. The crate's copies
-/// have equal lengths by construction; unlike `copy_from_slice`, this one has no panic path
-/// (whose message would link `core`'s number formatting into a firmware).
+/// Copies `src` to the start of `dst` (nothing when `dst` is shorter: the crate's copies fit by
+/// construction). Unlike `copy_from_slice` on a range, it has no panic path, whose message
+/// would link `core`'s number formatting into a firmware.
 #[inline]
 pub(crate) fn copy_bytes(dst: &mut [u8], src: &[u8]) {
     for (d, s) in dst.iter_mut().zip(src) {
