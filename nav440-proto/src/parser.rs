@@ -342,6 +342,16 @@ impl<C: Crc16Table> Parser<C> {
         bytes: &[u8],
         mut on_frame: impl FnMut(Frame<'_>) -> ControlFlow<()>,
     ) -> usize {
+        self.feed_until_dyn(bytes, &mut on_frame)
+    }
+
+    /// [`feed_until`](Self::feed_until) for any callback: one copy of the code per CRC
+    /// implementation, not one per caller's closure.
+    fn feed_until_dyn(
+        &mut self,
+        bytes: &[u8],
+        mut on_frame: &mut dyn FnMut(Frame<'_>) -> ControlFlow<()>,
+    ) -> usize {
         let mut input = bytes;
         let taken = |input: &[u8]| bytes.len() - input.len();
         // 1. Complete (or reject) the buffered candidate using as few input bytes as needed.
