@@ -104,8 +104,9 @@ mod unwrap;
 pub use ad::{Ad, AdConfig, AdFamily, AdParams, AdState};
 pub use adapter::{SampleAdapter, SampleClock, Tick};
 pub use adaptive::{
-    AdaptiveBank, AdaptiveConfig, AdaptiveKalman, AdaptiveKalmanConfig, AveDeltahat, Blend,
-    GainSchedule, JerkEstimator, NoiseEstimator, ObserverSwitch, ScheduleLevel,
+    AdaptiveBank, AdaptiveConfig, AdaptiveKalman, AdaptiveKalmanConfig, AdaptiveProductBank,
+    AdaptiveProductConfig, AveDeltahat, Blend, GainSchedule, JerkEstimator, NoiseEstimator,
+    ObserverSwitch, ScheduleLevel,
 };
 pub use ave::{
     Ave, AveConfig, AveFamily, AveParams, AveState, DeltaLaw, DeltaMode, COARSE_STABILITY_MARGIN,

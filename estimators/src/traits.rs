@@ -129,6 +129,16 @@ pub trait EstimatorBank {
         self.update(t_us, <f32 as crate::Real>::from_scaled(raw, exp2))
     }
 
+    /// The rate about the bank's axis at `t_us` (deg/s), measured by a gyro (the unit's body
+    /// rate about the axis, or the Euler rate built from its rates), given before
+    /// [`Self::update`] of the same sample. A bank that follows the motion
+    /// ([`crate::AdaptiveProductBank`]) estimates the motion's jerk from it; the default
+    /// ignores it.
+    #[inline]
+    fn observe_rate(&mut self, t_us: u64, rate_deg_s: f32) {
+        let _ = (t_us, rate_deg_s);
+    }
+
     /// Starts a new epoch (a confirmed time jump): the next sample re-initialises every
     /// estimator from itself, whatever its time; the unwrapped angle keeps its turns. Not
     /// counted in [`Self::reinit_count`].

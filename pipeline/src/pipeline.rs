@@ -45,8 +45,9 @@ use crate::watch::{Event, StreamWatch};
 use crate::{Axes, Axis};
 use core::marker::PhantomData;
 use estimators::{
-    AdaptiveBank, AdaptiveConfig, Bank, BankConfig, EstimatorBank, EstimatorOutput, GainSchedule,
-    PaperOutput, Real, Rows, SampleError, SqrtFn, Wrap,
+    AdaptiveBank, AdaptiveConfig, AdaptiveProductBank, AdaptiveProductConfig, Bank, BankConfig,
+    EstimatorBank, EstimatorOutput, GainSchedule, PaperOutput, Real, Rows, SampleError, SqrtFn,
+    Wrap,
 };
 use nav440_proto::{PacketRate, PacketType};
 
@@ -79,6 +80,17 @@ pub fn adaptive_axis_bank<T: Real, S: SqrtFn<T>>(
     schedule: &GainSchedule,
 ) -> Result<AdaptiveBank<T, S>, estimators::ConfigError> {
     AdaptiveBank::new(&axis_config(axis, cfg), schedule, &AdaptiveConfig::DEFAULT)
+}
+
+/// The motion-adaptive product bank of one axis (what `nav440 estimate --bank product
+/// --follow` runs): `AdaptiveProductBank::new` with `cfg` (unwrapping as [`axis_bank`]) and
+/// [`AdaptiveProductConfig::DEFAULT`]. The pipeline gives it each row's rate about the axis
+/// ([`EstimatorBank::observe_rate`]).
+pub fn adaptive_product_axis_bank<T: Real, S: SqrtFn<T>>(
+    axis: Axis,
+    cfg: &BankConfig,
+) -> Result<AdaptiveProductBank<T, S>, estimators::ConfigError> {
+    AdaptiveProductBank::new(&axis_config(axis, cfg), &AdaptiveProductConfig::DEFAULT)
 }
 
 /// One axis of a row: the rate column and the bank's output `O` (e.g.
@@ -478,6 +490,11 @@ fn run_sample<B: EstimatorBank, R: Reference>(
         };
         if input.new_epoch {
             bank.new_epoch();
+        }
+        // The row's rate about the axis, for a bank that follows the motion (a no-op for the
+        // others).
+        if let Some(rate) = refs[i] {
+            bank.observe_rate(input.t_us, rate);
         }
         // The packet's integer angle, `45 raw * 2^-13` deg, or an edited sample's degrees as
         // the same form: exact in the bank's number type, one input path.

@@ -54,11 +54,11 @@ impl AdaptiveKalmanConfig {
 
 /// The smallest and largest `q dt^5 / r` the noise model takes (the range over which the
 /// tracker's sub-stepped loop is documented stable, [`crate::kalman`]).
-const LAMBDA_RANGE: (f32, f32) = (9.094_947e-13, 1.073_741_8e9); // 2^-40, 2^30
+pub(super) const LAMBDA_RANGE: (f32, f32) = (9.094_947e-13, 1.073_741_8e9); // 2^-40, 2^30
 
 /// The least noise variance taken as `r`, deg^2: the quantisation of a NAV440 angle
 /// (one LSB of 360/2^16 deg, `LSB^2 / 12` = 2.5e-6) is the noise of an angle that has none.
-const R_FLOOR: f32 = 2.5e-6;
+pub(super) const R_FLOOR: f32 = 2.5e-6;
 
 /// The constant-acceleration Kalman tracker ([`Kalman`]) whose noise model follows what it
 /// measures: `r` the angle's noise variance ([`NoiseEstimator`], from the angle's third

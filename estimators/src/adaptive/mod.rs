@@ -13,6 +13,7 @@
 mod jerk;
 mod kalman;
 mod noise;
+mod product;
 mod schedule;
 #[cfg(test)]
 mod tests;
@@ -20,6 +21,7 @@ mod tests;
 pub use jerk::*;
 pub use kalman::*;
 pub use noise::*;
+pub use product::*;
 pub use schedule::*;
 
 use crate::bank::{BankConfig, PaperBank, PaperOutput};

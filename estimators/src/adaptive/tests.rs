@@ -710,3 +710,132 @@ fn adaptive_bank_follows_the_noise() {
     );
     assert!(b.retune_count() >= 1 && u64::from(b.retune_count()) <= n / 20);
 }
+
+/// A sine of `amp` deg at `hz` Hz sampled at 100 Hz, with N(0, `var`) noise on the angle
+/// (wrapped to +-180 deg): `(t_us, angle, rate)`.
+fn noisy_sine(k: u64, amp: f64, hz: f64, var: f64, g: &mut Gauss) -> (u64, f32, f32) {
+    let t = k as f64 * 0.01;
+    let w = 2.0 * core::f64::consts::PI * hz;
+    let y = amp * libm::sin(w * t) + var.sqrt() * g.next();
+    let wrapped = y - 360.0 * libm::round(y / 360.0);
+    (
+        k * 10_000,
+        wrapped as f32,
+        (amp * w * libm::cos(w * t)) as f32,
+    )
+}
+
+/// What [`AdaptiveProductConfig`] refuses.
+#[test]
+fn adaptive_product_config_is_checked() {
+    let cfg = crate::BankConfig::NAV440;
+    let with = |f: fn(&mut AdaptiveProductConfig)| {
+        let mut c = AdaptiveProductConfig::DEFAULT;
+        f(&mut c);
+        AdaptiveProductBank::<f32>::new(&cfg, &c).map(|_| ())
+    };
+    assert_eq!(with(|_| {}), Ok(()));
+    assert_eq!(
+        with(|c| c.ilo1_c = f32::NAN),
+        Err(ConfigError::NotFinite("ilo1_c"))
+    );
+    assert_eq!(
+        with(|c| c.kappa_s = 0.0),
+        Err(ConfigError::NotPositive("kappa_s"))
+    );
+    assert_eq!(with(|c| c.ilo1_zeta = 1.0), Err(ConfigError::ObserverPoles));
+    assert_eq!(
+        with(|c| c.ilo1_ratio = 0.9),
+        Err(ConfigError::NotPositive("ilo1_ratio"))
+    );
+    assert!(
+        with(|c| c.noise_tau_s = -1.0).is_err(),
+        "a negative time constant"
+    );
+}
+
+/// Without a rate the gains never move: the output is the plain product bank's, bit for bit.
+#[test]
+fn without_a_rate_the_adaptive_product_bank_is_the_product_bank() {
+    fn check<T: Real>() {
+        let cfg = crate::BankConfig::NAV440;
+        let mut a = AdaptiveProductBank::<T>::new(&cfg, &AdaptiveProductConfig::DEFAULT).unwrap();
+        let mut b = crate::ProductBank::<T>::new(&cfg).unwrap();
+        let mut g = Gauss::new(11);
+        for k in 0..2000 {
+            let (t, y, _) = noisy_sine(k, 200.0, 1.0, 0.1, &mut g);
+            let (oa, ob) = (a.update(t, y).unwrap(), b.update(t, y).unwrap());
+            assert_eq!(oa, ob, "sample {k}");
+        }
+        assert_eq!(a.retune_count(), 0);
+        assert_eq!(a.ilo1_wn(), None);
+        assert!(a.estimates().0.is_some() && a.estimates().1.is_none());
+    }
+    check::<f32>();
+    check::<crate::Fx>();
+}
+
+/// With the rate, ILO1's bandwidth is the rule's for the bank's own estimates, computed here
+/// again from them: `wn = c (J / (V dt))^(1/6)` within the retune ratio (it moves only when
+/// the rule moved by more), and the Kalman's `q / r` is `kappa J / V` within its ratio. A
+/// faster motion (8x the jerk power at the same noise) gets a bandwidth 8^(1/6) = 1.41 times
+/// higher, within the ratio.
+#[test]
+fn the_adaptive_product_bank_follows_its_estimates() {
+    let cfg = crate::BankConfig::NAV440;
+    let f = AdaptiveProductConfig::DEFAULT;
+    let run = |amp: f64| {
+        let mut a = AdaptiveProductBank::<f32>::new(&cfg, &f).unwrap();
+        let mut g = Gauss::new(12);
+        for k in 0..3000 {
+            let (t, y, r) = noisy_sine(k, amp, 1.0, 0.1, &mut g);
+            a.observe_rate(t, r);
+            a.update(t, y).unwrap();
+        }
+        let (v, j) = a.estimates();
+        let (v, j) = (f64::from(v.unwrap()), f64::from(j.unwrap()));
+        let rule = f64::from(f.ilo1_c) * libm::pow(j / (v * 0.01), 1.0 / 6.0);
+        let wn = a.ilo1_wn().unwrap();
+        assert!(
+            wn / rule <= 1.2 && rule / wn <= 1.2,
+            "amplitude {amp}: wn {wn} rule {rule}"
+        );
+        let kf = a.config().acceleration.kf;
+        let q_over_r = f64::from(f.kappa_s) * j / v;
+        let ratio = f64::from(kf.q / kf.r) / q_over_r;
+        assert!(
+            (1.0 / 1.5..=1.5).contains(&ratio),
+            "amplitude {amp}: q/r ratio {ratio}"
+        );
+        assert!(a.retune_count() >= 1);
+        (rule, wn)
+    };
+    let (slow, _) = run(100.0);
+    let (fast, _) = run(100.0 * 8f64.sqrt());
+    let r = fast / slow / 8f64.powf(1.0 / 6.0);
+    assert!((0.9..1.1).contains(&r), "{r}");
+}
+
+/// The angle given as a sensor's integers (`update_scaled`) gives the same outputs as the
+/// same angle as `f32`, in `Fx` (an angle that `f32` holds exactly).
+#[test]
+fn the_adaptive_product_bank_takes_scaled_angles() {
+    use crate::EstimatorBank;
+    let cfg = crate::BankConfig::NAV440;
+    let f = AdaptiveProductConfig::DEFAULT;
+    let mut a = AdaptiveProductBank::<crate::Fx>::new(&cfg, &f).unwrap();
+    let mut b = AdaptiveProductBank::<crate::Fx>::new(&cfg, &f).unwrap();
+    let mut g = Gauss::new(13);
+    for k in 0..2000 {
+        let (t, y, r) = noisy_sine(k, 150.0, 2.0, 0.1, &mut g);
+        // The NAV440's angle LSB, 360/2^16 deg = 45 * 2^-13.
+        let lsb = libm::round(f64::from(y) / (360.0 / 65536.0)) as i32;
+        let y = (f64::from(lsb) * 360.0 / 65536.0) as f32;
+        a.observe_rate(t, r);
+        b.observe_rate(t, r);
+        let oa = EstimatorBank::update_scaled(&mut a, t, 45 * lsb, -13).unwrap();
+        let ob = EstimatorBank::update(&mut b, t, y).unwrap();
+        assert_eq!(oa, ob, "sample {k}");
+    }
+    assert!(a.retune_count() >= 1);
+}

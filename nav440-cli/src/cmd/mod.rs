@@ -249,6 +249,12 @@ pub struct EstimateArgs {
     /// the feature `no-reference` prints. The estimates do not change.
     #[arg(long)]
     pub(crate) no_reference: bool,
+    /// With `--bank product`: the gains follow the angle's measured noise and the motion's
+    /// jerk (from each row's rate about the axis) instead of staying fixed
+    /// (`estimators::AdaptiveProductBank`, docs/ADAPTIVE-GAINS.md). One sample per packet
+    /// (`--noise-at sample`).
+    #[arg(long)]
+    pub(crate) follow: bool,
 }
 
 impl EstimateArgs {
@@ -262,6 +268,7 @@ impl EstimateArgs {
         if self.no_reference {
             opts.rate_column = replay::RateColumn::Body;
         }
+        opts.follow_motion = self.follow;
         replay::check_bank_options(&opts)?;
         Ok(opts)
     }
@@ -359,6 +366,7 @@ pub(crate) fn bank_options(
         schedule,
         bank: replay::BankKind::Paper,
         rate_column: replay::RateColumn::Euler,
+        follow_motion: false,
     })
 }
 

@@ -44,6 +44,27 @@ where
         }
     }
 
+    fn update_scaled(
+        &mut self,
+        t_us: u64,
+        raw: i32,
+        exp2: i32,
+    ) -> std::result::Result<A::Output, SampleError> {
+        match self {
+            Either::A(b) => b.update_scaled(t_us, raw, exp2),
+            Either::B(b) => b
+                .update_scaled(t_us, raw, exp2)
+                .map(IntoOutput::into_output),
+        }
+    }
+
+    fn observe_rate(&mut self, t_us: u64, rate_deg_s: f32) {
+        match self {
+            Either::A(b) => b.observe_rate(t_us, rate_deg_s),
+            Either::B(b) => b.observe_rate(t_us, rate_deg_s),
+        }
+    }
+
     fn new_epoch(&mut self) {
         match self {
             Either::A(b) => b.new_epoch(),
@@ -74,22 +95,27 @@ pub type PaperHostBank = Either<
     Either<PaperBank<f32>, PaperBank<Fx>>,
     Either<estimators::AdaptiveBank<f32>, estimators::AdaptiveBank<Fx>>,
 >;
-/// The product bank as the host runs it: f32 or `Fx`.
-pub type ProductHostBank = Either<ProductBank<f32>, ProductBank<Fx>>;
+/// The product bank as the host runs it: fixed gains (f32 or `Fx`) or gains that follow the
+/// noise and the motion (`--follow`: `estimators::AdaptiveProductBank`, f32 or `Fx`).
+pub type ProductHostBank = Either<
+    Either<ProductBank<f32>, ProductBank<Fx>>,
+    Either<estimators::AdaptiveProductBank<f32>, estimators::AdaptiveProductBank<Fx>>,
+>;
 
 /// A built host bank: the bank, and for a noise-adaptive bank whose schedule was tuned at
 /// another sample period (`AdaptiveBank::period_fits`): (the schedule's period, the bank's), s.
 pub type BuiltBank<B> = (B, Option<(f32, f32)>);
 
-/// How the host builds the bank `B` of `axis` for `cfg` (through `nav440_pipeline::axis_bank`
-/// or `adaptive_axis_bank`, which set the axis's unwrapping): `fixed` selects `Fx`, `schedule`
-/// the noise-adaptive bank. Errors are the CLI's messages. [`paper_bank`] and
-/// [`product_bank`].
+/// How the host builds the bank `B` of `axis` for `cfg` and the options (through
+/// `nav440_pipeline::axis_bank`, `adaptive_axis_bank` or `adaptive_product_axis_bank`, which
+/// set the axis's unwrapping): [`EstimateOptions::fixed`] selects `Fx`,
+/// [`EstimateOptions::schedule`] the noise-adaptive paper bank,
+/// [`EstimateOptions::follow_motion`] the motion-adaptive product bank. Errors are the CLI's
+/// messages. [`paper_bank`] and [`product_bank`].
 pub type BuildBank<B> = fn(
     axis: Axis,
     cfg: &BankConfig,
-    fixed: bool,
-    schedule: Option<&GainSchedule>,
+    opts: &EstimateOptions,
 ) -> std::result::Result<BuiltBank<B>, String>;
 
 /// The CLI's message for a configuration the bank refuses.
@@ -116,11 +142,14 @@ pub(crate) fn misfit(fits: bool, tuned: &GainSchedule, run: f32) -> Option<(f32,
 pub fn paper_bank(
     axis: Axis,
     cfg: &BankConfig,
-    fixed: bool,
-    schedule: Option<&GainSchedule>,
+    opts: &EstimateOptions,
 ) -> std::result::Result<BuiltBank<PaperHostBank>, String> {
     let bad = |e| bad_config(cfg, e);
-    if let Some(sched) = schedule {
+    let fixed = opts.fixed;
+    if opts.follow_motion {
+        return Err(FOLLOW_PAPER.to_string());
+    }
+    if let Some(sched) = opts.schedule.as_ref() {
         return Ok(if fixed {
             let b: estimators::AdaptiveBank<Fx> =
                 adaptive_axis_bank(axis, cfg, sched).map_err(bad)?;
@@ -145,19 +174,27 @@ pub fn paper_bank(
 pub fn product_bank(
     axis: Axis,
     cfg: &BankConfig,
-    fixed: bool,
-    schedule: Option<&GainSchedule>,
+    opts: &EstimateOptions,
 ) -> std::result::Result<BuiltBank<ProductHostBank>, String> {
-    if schedule.is_some() {
+    if opts.schedule.is_some() {
         return Err(PRODUCT_SCHEDULE.to_string());
     }
     let bad = |e| bad_config(cfg, e);
-    Ok(if fixed {
-        (Either::B(axis_bank(axis, cfg).map_err(bad)?), None)
-    } else {
-        (Either::A(axis_bank(axis, cfg).map_err(bad)?), None)
-    })
+    let bank = match (opts.follow_motion, opts.fixed) {
+        (false, false) => Either::A(Either::A(axis_bank(axis, cfg).map_err(bad)?)),
+        (false, true) => Either::A(Either::B(axis_bank(axis, cfg).map_err(bad)?)),
+        (true, false) => Either::B(Either::A(
+            adaptive_product_axis_bank(axis, cfg).map_err(bad)?,
+        )),
+        (true, true) => Either::B(Either::B(
+            adaptive_product_axis_bank(axis, cfg).map_err(bad)?,
+        )),
+    };
+    Ok((bank, None))
 }
+
+/// Why the paper bank refuses `--follow`.
+pub(crate) const FOLLOW_PAPER: &str = "--follow makes the product bank's gains follow the noise and the motion (estimators::AdaptiveProductBank): use it with --bank product";
 
 /// Why `--bank product` refuses a gain schedule.
 pub(crate) const PRODUCT_SCHEDULE: &str = "--bank product runs fixed gains; a gain schedule (a --gains file written by `nav440 tune --schedule`) runs the noise-adaptive paper bank: use --bank paper, or a fixed gains file";
@@ -253,7 +290,7 @@ impl<B: EstimatorBank> HostBank<B> {
         } else {
             None
         };
-        let (bank, misfit) = build(axis, &cfg, opts.fixed, opts.schedule.as_ref())?;
+        let (bank, misfit) = build(axis, &cfg, opts)?;
         Ok(HostBank {
             bank,
             new_epoch: false,
@@ -320,6 +357,11 @@ impl<B: EstimatorBank> EstimatorBank for HostBank<B> {
         }
     }
 
+    /// The rate goes to the bank as it is (the noise is the angle's).
+    fn observe_rate(&mut self, t_us: u64, rate_deg_s: f32) {
+        self.bank.observe_rate(t_us, rate_deg_s);
+    }
+
     fn new_epoch(&mut self) {
         self.new_epoch = true;
     }
@@ -380,11 +422,20 @@ pub(crate) fn check_paper_bank(opts: &EstimateOptions) -> Result<()> {
     }
 }
 
-/// The options' bank accepts the options: a gain schedule needs the paper bank (a usage
-/// error otherwise).
+/// The options' bank accepts the options: a gain schedule needs the paper bank, `--follow`
+/// the product bank and one sample per packet (a usage error otherwise).
 pub fn check_bank_options(opts: &EstimateOptions) -> Result<()> {
     if opts.bank == BankKind::Product && opts.schedule.is_some() {
         return Err(Error::Usage(PRODUCT_SCHEDULE.to_string()));
     }
+    if opts.follow_motion && opts.bank != BankKind::Product {
+        return Err(Error::Usage(FOLLOW_PAPER.to_string()));
+    }
+    if opts.follow_motion && opts.noise_at == NoiseAt::Step {
+        return Err(Error::Usage(FOLLOW_STEP.to_string()));
+    }
     Ok(())
 }
+
+/// Why `--follow` refuses `--noise-at step`.
+pub(crate) const FOLLOW_STEP: &str = "--follow estimates the noise and the jerk from one sample per packet; --noise-at step feeds the bank every observer step: use --noise-at sample";

@@ -46,6 +46,10 @@ pub struct EstimateOptions {
     /// column than the Euler reference; the row APIs score against it and refuse another (a
     /// usage error).
     pub rate_column: RateColumn,
+    /// The product bank's gains follow the measured noise and the motion's jerk (`--follow`:
+    /// `estimators::AdaptiveProductBank`, fed each row's rate about the axis; product bank
+    /// only, one sample per packet). Default `false`: fixed gains.
+    pub follow_motion: bool,
 }
 
 /// Which estimator bank `nav440 estimate` runs (`--bank`).
@@ -100,6 +104,7 @@ impl Default for EstimateOptions {
             schedule: None,
             bank: BankKind::Paper,
             rate_column: RateColumn::Euler,
+            follow_motion: false,
         }
     }
 }

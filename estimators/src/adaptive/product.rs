@@ -1,0 +1,337 @@
+//! [`AdaptiveProductBank`]: the product bank whose gains follow the measured noise and the
+//! motion's jerk.
+
+use super::kalman::{LAMBDA_RANGE, R_FLOOR};
+use super::{AdaptiveKalmanConfig, JerkEstimator, NoiseEstimator};
+use crate::{
+    BankConfig, ConfigError, EstimatorOutput, IloConfig, KalmanNoise, NativeSqrt, ProductBank,
+    ProductOutput, Real, SampleError, SqrtFn,
+};
+
+/// How an [`AdaptiveProductBank`] follows the noise and the motion.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct AdaptiveProductConfig {
+    /// `c` of ILO1's bandwidth `wn = c (J / (V dt))^(1/6)` (rad/s, with `J` in
+    /// (deg/s^3)^2, `V` in deg^2 and `dt` in s; finite, > 0). Default
+    /// [`Self::ILO1_C_FIG5`].
+    pub ilo1_c: f32,
+    /// The damping of ILO1's per-sample poles, in (0, 1) (default [`Self::ILO1_ZETA`]).
+    pub ilo1_zeta: f32,
+    /// `kappa`, s: the acceleration Kalman's process noise is `q = kappa J` (deg^2/s^5), its
+    /// measurement noise `r = V` (finite, > 0). Default
+    /// [`AdaptiveKalmanConfig::KAPPA_FIG5_S`].
+    pub kappa_s: f32,
+    /// Time constant of the noise estimate, s ([`NoiseEstimator`]; default 0.5).
+    pub noise_tau_s: f32,
+    /// Time constant of the jerk estimate, s ([`JerkEstimator`]; default
+    /// [`JerkEstimator::DEFAULT_TAU_S`]).
+    pub jerk_tau_s: f32,
+    /// The gains are reconsidered every this many samples (default 20: 0.2 s at 100 Hz) ...
+    pub retune_every: u32,
+    /// ... and changed when ILO1's `wn` moved by more than this factor either way (default
+    /// 1.2) ...
+    pub ilo1_ratio: f32,
+    /// ... or the Kalman's `q / r` by more than this one (default 1.5; both >= 1).
+    pub kalman_ratio: f32,
+}
+
+impl AdaptiveProductConfig {
+    /// `c` from ILO1 on the synthetic fig5 motion (the paper's Fig. 5) at 0.1 deg^2: the
+    /// best `wn` of a grid there (25.5 rad/s) over fig5's index (`host-tests`
+    /// `motion_family::ilo1_by_the_jerk_index`, docs/MOTION-FAMILY.md).
+    pub const ILO1_C_FIG5: f32 = 0.649;
+    /// The damping of ILO1's per-sample poles that holds on every motion of
+    /// docs/MOTION-FAMILY.md (the tuned sets' lie between 0.14 and 0.34).
+    pub const ILO1_ZETA: f32 = 0.25;
+
+    /// The defaults (see the fields).
+    pub const DEFAULT: Self = Self {
+        ilo1_c: Self::ILO1_C_FIG5,
+        ilo1_zeta: Self::ILO1_ZETA,
+        kappa_s: AdaptiveKalmanConfig::KAPPA_FIG5_S,
+        noise_tau_s: 0.5,
+        jerk_tau_s: JerkEstimator::DEFAULT_TAU_S,
+        retune_every: 20,
+        ilo1_ratio: 1.2,
+        kalman_ratio: 1.5,
+    };
+
+    fn validate(&self) -> Result<(), ConfigError> {
+        let all = [
+            ("ilo1_c", self.ilo1_c),
+            ("ilo1_zeta", self.ilo1_zeta),
+            ("kappa_s", self.kappa_s),
+            ("ilo1_ratio", self.ilo1_ratio),
+            ("kalman_ratio", self.kalman_ratio),
+        ];
+        for (name, v) in all {
+            if !v.is_finite() {
+                return Err(ConfigError::NotFinite(name));
+            }
+            if v <= 0.0 {
+                return Err(ConfigError::NotPositive(name));
+            }
+        }
+        if self.ilo1_zeta >= 1.0 {
+            return Err(ConfigError::ObserverPoles);
+        }
+        if self.ilo1_ratio < 1.0 {
+            return Err(ConfigError::NotPositive("ilo1_ratio"));
+        }
+        if self.kalman_ratio < 1.0 {
+            return Err(ConfigError::NotPositive("kalman_ratio"));
+        }
+        Ok(())
+    }
+}
+
+impl Default for AdaptiveProductConfig {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// The lowest ILO1 bandwidth taken, rad/s.
+const WN_MIN: f64 = 2.0;
+
+/// The product bank ([`ProductBank`]: ILO1 velocity, Kalman acceleration) whose gains follow
+/// what it measures: the angle's noise variance `V` ([`NoiseEstimator`], from the unwrapped
+/// angle) and the motion's jerk power `J` ([`JerkEstimator`], from the rate a gyro measures
+/// about the axis, given with [`Self::observe_rate`]).
+///
+/// - ILO1 is [`IloConfig::per_sample`] at `wn = c (J / (V dt))^(1/6)` and the damping
+///   [`AdaptiveProductConfig::ilo1_zeta`] (`wn` within 2 rad/s and 80 % of the Nyquist
+///   frequency).
+/// - The Kalman's noise model is `q = kappa J`, `r = V` (`q dt^5 / r` within
+///   `[2^-40, 2^30]`), as [`crate::AdaptiveKalman`]'s.
+///
+/// Tuned once on the paper's motion, that rule keeps ILO1 below the backward difference of
+/// the angle and within 2x of ILO1 tuned on each of five motions, from a slow spin to
+/// strokes of 600 deg/s, at noise from 0.01 to 0.5 deg^2 (docs/MOTION-FAMILY.md, "ILO1 by the
+/// jerk index"), where fixed gains lose to the backward difference on the fast ones.
+///
+/// It starts with the gains of the configuration it is built with; every
+/// [`AdaptiveProductConfig::retune_every`] samples, once both estimates exist, it moves the
+/// gains to the rule's when `wn` or `q / r` moved by more than their ratios
+/// ([`ProductBank::set_gains`]: bumpless). Without a rate the gains stay. Each change
+/// rebuilds ILO1's closed-form map and the Kalman's gain in `f64` (about as much as building
+/// the bank), so it suits a host or a core with the time for it.
+///
+/// The output, the channels and the errors are [`ProductBank`]'s.
+#[derive(Clone, Debug)]
+pub struct AdaptiveProductBank<T: Real, S: SqrtFn<T> = NativeSqrt> {
+    bank: ProductBank<T, S>,
+    cfg: BankConfig,
+    follow: AdaptiveProductConfig,
+    noise: NoiseEstimator,
+    jerk: JerkEstimator,
+    /// The current rule's ILO1 bandwidth, rad/s (`None`: the initial gains), and `q / r`.
+    wn: Option<f64>,
+    q_over_r: Option<f32>,
+    since: u32,
+    retunes: u32,
+    ilo1_retunes: u32,
+}
+
+impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
+    /// A bank built from `cfg` ([`ProductBank::new`]) that follows the noise and the motion
+    /// as `follow` says.
+    pub fn new(cfg: &BankConfig, follow: &AdaptiveProductConfig) -> Result<Self, ConfigError> {
+        follow.validate()?;
+        Ok(Self {
+            bank: ProductBank::new(cfg)?,
+            cfg: *cfg,
+            follow: *follow,
+            noise: NoiseEstimator::new(follow.noise_tau_s, cfg.sample_period_s)?,
+            jerk: JerkEstimator::new(follow.jerk_tau_s, cfg.sample_period_s)?,
+            wn: None,
+            q_over_r: None,
+            since: 0,
+            retunes: 0,
+            ilo1_retunes: 0,
+        })
+    }
+
+    /// The rate about the bank's axis at `t_us` (deg/s): what the jerk estimate is made of.
+    /// Give it before [`Self::update`] of the same sample.
+    pub fn observe_rate(&mut self, t_us: u64, rate_deg_s: f32) {
+        if rate_deg_s.is_finite() {
+            self.jerk.update(t_us, rate_deg_s);
+        }
+    }
+
+    /// Feeds one sample (as [`ProductBank::update`]); the noise estimate is updated with its
+    /// unwrapped angle and the gains follow the estimates (see the type).
+    pub fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<ProductOutput<T>, SampleError> {
+        let out = self.bank.update(t_us, angle_deg)?;
+        self.after(t_us, &out);
+        Ok(out)
+    }
+
+    /// [`Self::update`] with the angle `raw * 2^exp2` deg
+    /// ([`EstimatorBank::update_scaled`](crate::EstimatorBank::update_scaled)).
+    pub fn update_scaled(
+        &mut self,
+        t_us: u64,
+        raw: i32,
+        exp2: i32,
+    ) -> Result<ProductOutput<T>, SampleError> {
+        let out = crate::EstimatorBank::update_scaled(&mut self.bank, t_us, raw, exp2)?;
+        self.after(t_us, &out);
+        Ok(out)
+    }
+
+    /// After an accepted sample: the noise estimate, and every `retune_every` samples the
+    /// gains.
+    fn after(&mut self, t_us: u64, out: &ProductOutput<T>) {
+        self.noise.update(t_us, out.unwrapped_deg());
+        self.since = self.since.saturating_add(1);
+        if self.since >= self.follow.retune_every {
+            self.since = 0;
+            self.follow_estimates();
+        }
+    }
+
+    /// ILO1's bandwidth (rad/s) and the Kalman's `(q, r)` the rule gives for the noise
+    /// variance `v` (deg^2) and the jerk power `j` ((deg/s^3)^2).
+    fn rule(&self, v: f32, j: f32) -> (f64, (f32, f32)) {
+        let r = v.max(R_FLOOR);
+        let dt = self.cfg.sample_period_s;
+        let f = &self.follow;
+        let zeta = f64::from(f.ilo1_zeta);
+        let wn_max = 0.8 * core::f64::consts::PI / (f64::from(dt) * libm::sqrt(1.0 - zeta * zeta));
+        let index = libm::pow(f64::from(j) / (f64::from(r) * f64::from(dt)), 1.0 / 6.0);
+        let wn = (f64::from(f.ilo1_c) * index).clamp(WN_MIN, wn_max.max(WN_MIN));
+        let dt5 = dt * dt * dt * dt * dt;
+        let lambda = (f.kappa_s * j / r * dt5).clamp(LAMBDA_RANGE.0, LAMBDA_RANGE.1);
+        (wn, (lambda * r / dt5, r))
+    }
+
+    /// Moves ILO1's gains to the rule's when its `wn` moved by more than its ratio, and the
+    /// Kalman's when its `q / r` did: each law changes only on its own move (a change of
+    /// ILO1's gains costs it a transient, so the Kalman's moves leave it alone).
+    fn follow_estimates(&mut self) {
+        let (Some(v), Some(j)) = (self.noise.variance(), self.jerk.power()) else {
+            return;
+        };
+        let (wn, (q, r)) = self.rule(v, j);
+        let moved = |now: Option<f64>, want: f64, ratio: f32| {
+            let ratio = f64::from(ratio);
+            now.is_none_or(|now| want > now * ratio || want * ratio < now)
+        };
+        let mut cfg = self.cfg;
+        let ilo1 = moved(self.wn, wn, self.follow.ilo1_ratio);
+        if ilo1 {
+            let (h, dt) = (f64::from(cfg.h), f64::from(cfg.sample_period_s));
+            match IloConfig::per_sample(wn, f64::from(self.follow.ilo1_zeta), h, dt) {
+                Ok(c) => cfg.velocity.ilo[0] = c,
+                Err(_) => return,
+            }
+        }
+        let kalman = moved(
+            self.q_over_r.map(f64::from),
+            f64::from(q / r),
+            self.follow.kalman_ratio,
+        );
+        if kalman {
+            cfg.acceleration.kf = KalmanNoise { q, r };
+        }
+        if !(ilo1 || kalman) || self.bank.set_gains(&cfg).is_err() {
+            return;
+        }
+        self.cfg = cfg;
+        if ilo1 {
+            self.wn = Some(wn);
+            self.ilo1_retunes = self.ilo1_retunes.saturating_add(1);
+        }
+        if kalman {
+            self.q_over_r = Some(q / r);
+        }
+        self.retunes = self.retunes.saturating_add(1);
+    }
+
+    /// How many times the gains changed (either law's).
+    pub fn retune_count(&self) -> u32 {
+        self.retunes
+    }
+
+    /// How many times ILO1's gains changed.
+    pub fn ilo1_retune_count(&self) -> u32 {
+        self.ilo1_retunes
+    }
+
+    /// The configuration with the current gains.
+    pub fn config(&self) -> &BankConfig {
+        &self.cfg
+    }
+
+    /// ILO1's current bandwidth by the rule, rad/s (`None` while the initial gains run).
+    pub fn ilo1_wn(&self) -> Option<f64> {
+        self.wn
+    }
+
+    /// The noise estimate, deg^2, and the jerk estimate, (deg/s^3)^2 (`None` before the
+    /// first of each).
+    pub fn estimates(&self) -> (Option<f32>, Option<f32>) {
+        (self.noise.variance(), self.jerk.power())
+    }
+
+    /// The bank.
+    pub fn bank(&self) -> &ProductBank<T, S> {
+        &self.bank
+    }
+
+    /// See [`ProductBank::new_epoch`] (the noise and jerk estimators restart their
+    /// differences too).
+    pub fn new_epoch(&mut self) {
+        self.bank.new_epoch();
+        self.noise.restart();
+        self.jerk.restart();
+    }
+
+    /// See [`ProductBank::reinit_count`].
+    pub fn reinit_count(&self) -> u32 {
+        self.bank.reinit_count()
+    }
+}
+
+/// The motion-adaptive product bank as a bank: [`ProductBank`]'s channels and output;
+/// `update` is [`AdaptiveProductBank::update`], `observe_rate`
+/// [`AdaptiveProductBank::observe_rate`].
+impl<T: Real, S: SqrtFn<T>> crate::EstimatorBank for AdaptiveProductBank<T, S> {
+    type Output = ProductOutput<T>;
+
+    #[inline]
+    fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<ProductOutput<T>, SampleError> {
+        AdaptiveProductBank::update(self, t_us, angle_deg)
+    }
+
+    #[inline]
+    fn update_scaled(
+        &mut self,
+        t_us: u64,
+        raw: i32,
+        exp2: i32,
+    ) -> Result<ProductOutput<T>, SampleError> {
+        AdaptiveProductBank::update_scaled(self, t_us, raw, exp2)
+    }
+
+    fn observe_rate(&mut self, t_us: u64, rate_deg_s: f32) {
+        AdaptiveProductBank::observe_rate(self, t_us, rate_deg_s)
+    }
+
+    fn new_epoch(&mut self) {
+        AdaptiveProductBank::new_epoch(self)
+    }
+
+    fn reinit_count(&self) -> u32 {
+        AdaptiveProductBank::reinit_count(self)
+    }
+
+    /// The inner bank's take-over (unwrapper, re-init count); the estimates and the gains
+    /// start again, as the bank is new.
+    fn take_over(&mut self, old: &Self) {
+        self.bank.take_over(&old.bank);
+    }
+}
