@@ -119,6 +119,19 @@ const WN_MIN: f64 = 2.0;
 /// the bank), so it suits a host or a core with the time for it.
 ///
 /// The output, the channels and the errors are [`ProductBank`]'s.
+///
+/// ```
+/// use estimators::{AdaptiveProductBank, AdaptiveProductConfig, BankConfig};
+/// let mut bank =
+///     AdaptiveProductBank::<f32>::new(&BankConfig::NAV440, &AdaptiveProductConfig::DEFAULT)
+///         .unwrap();
+/// // Per sample: the rate about the axis (deg/s), then the angle (deg, wrapped as the
+/// // bank's `BankConfig::wrap` says) at the same time (us).
+/// bank.observe_rate(0, 30.0);
+/// let out = bank.update(0, 12.5).unwrap();
+/// let (v, a) = (out.values[0], out.values[1]); // ILO1 deg/s, Kalman deg/s^2
+/// assert_eq!((v, a), (0.0, 0.0)); // the first sample initialises the laws
+/// ```
 #[derive(Clone, Debug)]
 pub struct AdaptiveProductBank<T: Real, S: SqrtFn<T> = NativeSqrt> {
     bank: ProductBank<T, S>,
