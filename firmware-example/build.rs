@@ -101,7 +101,11 @@ fn main() {
 /// back equals the one `nav440 estimate --bank product` (`--fixed`) builds.
 fn prebuilt_banks() -> Option<String> {
     let feature = |f: &str| env::var_os(format!("CARGO_FEATURE_{f}")).is_some();
-    if !feature("BANK_PRODUCT") || feature("TUNED_GAINS") || feature("ADAPTIVE_GAINS") {
+    if !feature("BANK_PRODUCT")
+        || feature("TUNED_GAINS")
+        || feature("ADAPTIVE_GAINS")
+        || feature("FOLLOW")
+    {
         return None;
     }
     let fixed =

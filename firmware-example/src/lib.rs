@@ -76,8 +76,13 @@ compile_error!("`bank-product` and `adaptive-gains` are two different banks: pic
 pub type Bank = estimators::PaperBank<Num, BankSqrt>;
 /// The estimator bank the firmware runs on each axis: with `bank-product`, the product bank
 /// (`estimators::ProductBank`: ILO1 velocity and Kalman acceleration).
-#[cfg(feature = "bank-product")]
+#[cfg(all(feature = "bank-product", not(feature = "follow")))]
 pub type Bank = estimators::ProductBank<Num, BankSqrt>;
+/// The estimator bank the firmware runs on each axis: with `follow`, the product bank whose
+/// gains follow the measured noise and the motion's jerk (`estimators::AdaptiveProductBank`,
+/// fed each row's rate about the axis by the pipeline).
+#[cfg(feature = "follow")]
+pub type Bank = estimators::AdaptiveProductBank<Num, BankSqrt>;
 /// The estimator bank the firmware runs on each axis: with `adaptive-gains`, the
 /// noise-adaptive bank (`estimators::AdaptiveBank`, gains from [`pipeline::SCHEDULE`]).
 #[cfg(feature = "adaptive-gains")]

@@ -29,13 +29,26 @@ pub type ConfigError = estimators::ConfigError;
 /// Builds an axis's bank for the measured packet period (out of line: the constructor is
 /// large): with [`FOLLOW_RATE`], the shipped preset's gains for that period
 /// (`BankConfig::with_nav440_gains`, as `nav440 estimate` does).
-#[cfg(not(any(feature = "adaptive-gains", prebuilt_banks)))]
+#[cfg(not(any(feature = "adaptive-gains", feature = "follow", prebuilt_banks)))]
 #[inline(never)]
 fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
     if FOLLOW_RATE {
         nav440_pipeline::axis_bank(axis, &cfg.with_nav440_gains())
     } else {
         nav440_pipeline::axis_bank(axis, cfg)
+    }
+}
+
+/// Builds an axis's following product bank (feature `follow`) for the measured packet period:
+/// with [`FOLLOW_RATE`], starting with the shipped preset's gains for that period, as `nav440
+/// estimate --bank product --follow` does (`nav440_pipeline::adaptive_product_axis_bank`).
+#[cfg(feature = "follow")]
+#[inline(never)]
+fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
+    if FOLLOW_RATE {
+        nav440_pipeline::adaptive_product_axis_bank(axis, &cfg.with_nav440_gains())
+    } else {
+        nav440_pipeline::adaptive_product_axis_bank(axis, cfg)
     }
 }
 

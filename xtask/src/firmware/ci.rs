@@ -17,7 +17,7 @@ use super::size::{build_noref, euler_symbols, size, soft_float_symbols, NOREF_BO
 use super::soak::CI_SOAK;
 use super::unit_cases::{short_capture, uart_rows_ci, unit_ci};
 use super::{
-    read_file, root, work_dir, BankChoice, ADAPTIVE, BENCH_BIN, FW, FW_BIN, NO_REFERENCE,
+    read_file, root, work_dir, BankChoice, ADAPTIVE, BENCH_BIN, FOLLOW, FW, FW_BIN, NO_REFERENCE,
     NO_REFERENCE_ARG, ONE_AXIS, PRODUCT, STM32_FEATURE, TUNED, TUNED_GAINS, UART_ROWS,
 };
 use crate::pool::Pool;
@@ -543,6 +543,26 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
         check_map(&elf, "mps2")?;
         if qemu_ok {
             queue_adaptive(pool, board, &elf, &switch, &bundled);
+        }
+    }
+    // The following product firmware (M4F) prints the CSV of `nav440 estimate --bank product
+    // --follow --axis all`, byte for byte: on the noise switch (its gains follow the noise and
+    // the motion) and on the noise-free bundled capture.
+    clippy_firmware(m4f_board.target, Some(FOLLOW))?;
+    let follow = build(m4f_board.target, BankChoice::Follow.features(), FW_BIN)?;
+    check_map(&follow, "mps2")?;
+    if qemu_ok {
+        let host = firmware_host_args(m4f_board.target, BankChoice::Follow);
+        for capture in [&switch, &bundled] {
+            spawn_equivalence(
+                pool,
+                EQUIVALENCE_STEP,
+                m4f_board,
+                &follow,
+                capture,
+                &host,
+                |_| Ok(()),
+            );
         }
     }
     if !qemu_ok {

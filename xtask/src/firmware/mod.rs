@@ -81,14 +81,22 @@ const TUNED: &str = "tuned-gains";
 /// firmware includes (relative to the workspace root).
 const TUNED_GAINS: &str = "host-tests/data/gains/product_fig5.toml";
 
-/// The bank a firmware image runs (`--bank`): the paper's 14 estimators (default) or the
-/// product bank (feature `bank-product`).
+/// Feature of the firmware whose product bank's gains follow the noise and the motion
+/// (`estimators::AdaptiveProductBank`).
+const FOLLOW: &str = "follow";
+
+/// The bank a firmware image runs (`--bank`): the paper's 14 estimators (default), the
+/// product bank (feature `bank-product`) or the product bank whose gains follow the noise and
+/// the motion (feature `follow`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum BankChoice {
     /// The paper bank (14 estimators per axis).
     Paper,
     /// The product bank (ILO1 velocity + Kalman acceleration per axis).
     Product,
+    /// The product bank whose gains follow the measured noise and the motion's jerk (feature
+    /// `follow`; `nav440 estimate --bank product --follow`).
+    Follow,
 }
 
 impl BankChoice {
@@ -97,6 +105,7 @@ impl BankChoice {
         match self {
             BankChoice::Paper => &[],
             BankChoice::Product => &[PRODUCT],
+            BankChoice::Follow => &[PRODUCT, FOLLOW],
         }
     }
 
@@ -105,6 +114,7 @@ impl BankChoice {
         match self {
             BankChoice::Paper => &[],
             BankChoice::Product => &["--bank", "product"],
+            BankChoice::Follow => &["--bank", "product", "--follow"],
         }
     }
 
@@ -113,6 +123,7 @@ impl BankChoice {
         match self {
             BankChoice::Paper => "paper",
             BankChoice::Product => "product",
+            BankChoice::Follow => "follow",
         }
     }
 }
