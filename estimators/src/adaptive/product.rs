@@ -215,9 +215,15 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
         let zeta = f64::from(f.ilo1_zeta);
         let wn_max = 0.8 * core::f64::consts::PI / (f64::from(dt) * libm::sqrt(1.0 - zeta * zeta));
         let index = libm::pow(f64::from(j) / (f64::from(r) * f64::from(dt)), 1.0 / 6.0);
-        let wn = (f64::from(f.ilo1_c) * index).clamp(WN_MIN, wn_max.max(WN_MIN));
+        // `max` then `min`, not `clamp`: no panic path (whose message formats floats), and a
+        // NaN index gives the lowest bandwidth.
+        let wn = (f64::from(f.ilo1_c) * index)
+            .max(WN_MIN)
+            .min(wn_max.max(WN_MIN));
         let dt5 = dt * dt * dt * dt * dt;
-        let lambda = (f.kappa_s * j / r * dt5).clamp(LAMBDA_RANGE.0, LAMBDA_RANGE.1);
+        let lambda = (f.kappa_s * j / r * dt5)
+            .max(LAMBDA_RANGE.0)
+            .min(LAMBDA_RANGE.1);
         (wn, (lambda * r / dt5, r))
     }
 
