@@ -303,6 +303,20 @@ fn jerk_power(samples: &[replay::Sample], rate: &[f64]) -> f64 {
     f64::from(e.power().unwrap())
 }
 
+/// The acceleration reference (deg/s^2, one per sample) that `bank_mse` scores against: the
+/// reference AVE run on the rate.
+fn acceleration_reference(samples: &[replay::Sample]) -> Vec<f64> {
+    ave_on_rate(
+        samples,
+        &REFERENCE_AVE,
+        &EstimateOptions::default().paper_law(),
+    )
+    .unwrap()
+    .into_iter()
+    .map(f64::from)
+    .collect()
+}
+
 /// `estimators::AdaptiveKalman` (its defaults but `kappa`, s) run online on the angle `noisy`
 /// (deg, wrapped; unwrapped here) with the rate `rate` (deg/s): the noise and the jerk it
 /// follows are its own estimates, nothing known in advance. Its velocity (deg/s) and
@@ -492,16 +506,7 @@ fn the_motions_jerk_as_a_second_index() {
         let samples = a2_samples(profile, seed, 100, 30.0).unwrap();
         let reference = reference(&samples);
         let j = jerk_power(&samples, &reference);
-        // The acceleration reference bank_mse scores against.
-        let acc_ref: Vec<f64> = ave_on_rate(
-            &samples,
-            &REFERENCE_AVE,
-            &EstimateOptions::default().paper_law(),
-        )
-        .unwrap()
-        .into_iter()
-        .map(f64::from)
-        .collect();
+        let acc_ref = acceleration_reference(&samples);
         for var in NOISE {
             let (bd, _) = backward_difference(&samples, &reference, var);
             let v_eq = var * j_fig5 / j;
@@ -765,22 +770,13 @@ fn the_following_product_bank_beats_the_backward_difference_on_every_motion() {
     for (profile, seed, label) in MOTIONS {
         let samples = a2_samples(profile, seed, 100, 30.0).unwrap();
         let reference = reference(&samples);
-        let acc_ref: Vec<f64> = ave_on_rate(
-            &samples,
-            &REFERENCE_AVE,
-            &EstimateOptions::default().paper_law(),
-        )
-        .unwrap()
-        .into_iter()
-        .map(f64::from)
-        .collect();
+        let acc_ref = acceleration_reference(&samples);
         for var in NOISE {
             let (bd, _) = backward_difference(&samples, &reference, var);
             let noisy = noisy_angle(&samples, Axis::Yaw, Some(Noise { var, seed: 1 })).unwrap();
-            let (follow, retunes) =
-                following_product_mse(&samples, &noisy, &reference, &reference, RANGE);
-            let (out, _) = following_product(&samples, &noisy, &reference);
-            let a: Vec<f64> = out.iter().map(|o| o.1).collect();
+            let (out, retunes) = following_product(&samples, &noisy, &reference);
+            let (v, a): (Vec<f64>, Vec<f64>) = out.into_iter().unzip();
+            let follow = mse_of(&samples, &v, &reference, RANGE);
             let follow_a = mse_of(&samples, &a, &acc_ref, RANGE);
             let (fixed, fixed_a) = bank_mse(&samples, BankConfig::NAV440, var, 1, RANGE).unwrap();
             println!(
