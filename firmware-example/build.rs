@@ -105,6 +105,7 @@ fn prebuilt_banks() -> Option<String> {
         || feature("TUNED_GAINS")
         || feature("ADAPTIVE_GAINS")
         || feature("FOLLOW")
+        || feature("SELF_TUNE")
     {
         return None;
     }

@@ -106,7 +106,7 @@ pub use adapter::{SampleAdapter, SampleClock, Tick};
 pub use adaptive::{
     AdaptiveBank, AdaptiveConfig, AdaptiveKalman, AdaptiveKalmanConfig, AdaptiveProductBank,
     AdaptiveProductConfig, AveDeltahat, Blend, GainSchedule, JerkEstimator, NoiseEstimator,
-    ObserverSwitch, ScheduleLevel,
+    ObserverSwitch, ScheduleLevel, SelfTuneConfig, SelfTuningProductBank, Settled,
 };
 pub use ave::{
     Ave, AveConfig, AveFamily, AveParams, AveState, DeltaLaw, DeltaMode, COARSE_STABILITY_MARGIN,

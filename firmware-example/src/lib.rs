@@ -68,6 +68,14 @@ compile_error!(
     "`uart-rows`: only the QEMU mps2 boards have the rows' output UART (docs/UART-ROWS.md)"
 );
 
+#[cfg(all(feature = "follow", feature = "self-tune"))]
+compile_error!("`follow` and `self-tune` are two ways to move the product bank's gains: pick one");
+
+#[cfg(all(feature = "self-tune", feature = "no-reference"))]
+compile_error!(
+    "`self-tune` tunes ILO1 against the Euler reference rate: it needs the reference (drop `no-reference`)"
+);
+
 #[cfg(all(feature = "bank-product", feature = "adaptive-gains"))]
 compile_error!("`bank-product` and `adaptive-gains` are two different banks: pick one");
 
@@ -76,13 +84,21 @@ compile_error!("`bank-product` and `adaptive-gains` are two different banks: pic
 pub type Bank = estimators::PaperBank<Num, BankSqrt>;
 /// The estimator bank the firmware runs on each axis: with `bank-product`, the product bank
 /// (`estimators::ProductBank`: ILO1 velocity and Kalman acceleration).
-#[cfg(all(feature = "bank-product", not(feature = "follow")))]
+#[cfg(all(
+    feature = "bank-product",
+    not(any(feature = "follow", feature = "self-tune"))
+))]
 pub type Bank = estimators::ProductBank<Num, BankSqrt>;
 /// The estimator bank the firmware runs on each axis: with `follow`, the product bank whose
 /// gains follow the measured noise and the motion's jerk (`estimators::AdaptiveProductBank`,
 /// fed each row's rate about the axis by the pipeline).
 #[cfg(feature = "follow")]
 pub type Bank = estimators::AdaptiveProductBank<Num, BankSqrt>;
+/// The estimator bank the firmware runs on each axis: with `self-tune`, the product bank that
+/// tunes ILO1 online against each row's Euler reference rate
+/// (`estimators::SelfTuningProductBank`, fed the valid rates by the pipeline).
+#[cfg(feature = "self-tune")]
+pub type Bank = estimators::SelfTuningProductBank<Num, BankSqrt>;
 /// The estimator bank the firmware runs on each axis: with `adaptive-gains`, the
 /// noise-adaptive bank (`estimators::AdaptiveBank`, gains from [`pipeline::SCHEDULE`]).
 #[cfg(feature = "adaptive-gains")]

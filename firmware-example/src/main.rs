@@ -224,6 +224,8 @@ fn stream(
     let process = |pipe: &mut pipeline::Pipeline, bytes: &[u8]| -> Flow {
         let flow = report::feed(pipe, bytes, time::now_ms(), &mut out::row)
             .unwrap_or_else(|e| bank_failed(&e));
+        #[cfg(feature = "self-tune")]
+        self_tune_report(pipe);
         if flow == Flow::Reset && !board::RETRY_FOREVER {
             fail(Status::UnitReset)
         }
@@ -327,6 +329,11 @@ fn finish(pipe: &mut pipeline::Pipeline, uart: &Uart0, unit_bytes: u64) -> ! {
     }
     #[cfg(feature = "adaptive-gains")]
     adaptive_summary(pipe);
+    #[cfg(feature = "self-tune")]
+    {
+        self_tune_report(pipe);
+        self_tune_summary(pipe);
+    }
     out::summary(pipe, uart, unit_bytes);
     host::exit(true)
 }
@@ -347,6 +354,62 @@ fn adaptive_summary(pipe: &pipeline::Pipeline) {
                 b.gain_level(),
                 axis.name(),
                 u32::from(!b.period_fits())
+            );
+        }
+    }
+}
+
+/// How many settlings of each axis's self-tuning bank were reported (only `main`'s thread
+/// touches them: load/store pairs, thumbv6m has no atomic read-modify-write).
+#[cfg(feature = "self-tune")]
+static SETTLES_REPORTED: [core::sync::atomic::AtomicU32; 3] =
+    [const { core::sync::atomic::AtomicU32::new(0) }; 3];
+
+/// With `self-tune`: one line for each new settling of an axis's bank, the gains it settled at
+/// (`nav440 estimate --self-tune` prints where each axis ended on stderr).
+#[cfg(feature = "self-tune")]
+fn self_tune_report(pipe: &pipeline::Pipeline) {
+    for axis in pipeline::AXES.iter() {
+        let Some(b) = pipe.estimation().bank(axis) else {
+            continue;
+        };
+        let reported = &SETTLES_REPORTED[axis.index()];
+        if b.settle_count() == reported.load(Ordering::Relaxed) {
+            continue;
+        }
+        reported.store(b.settle_count(), Ordering::Relaxed);
+        if let Some(s) = b.settled() {
+            defmt::println!(
+                "firmware: self-tune: {=str}: ILO1 settled at wn={=f32} rad/s zeta={=f32} (K1 {=f32}, L {=f32} 1/s, K2 {=f32}; window MSE {=f32} (deg/s)^2 against the rate) after {=u32} moves",
+                axis.name(),
+                s.wn_rad_s,
+                s.zeta,
+                s.ilo1.k1,
+                s.ilo1.l,
+                s.ilo1.k2,
+                s.mse,
+                s.moves
+            );
+        }
+    }
+}
+
+/// With `self-tune`: one line per axis at the end, where its gains are; `{axis}_moves` and
+/// `{axis}_settles` are counters for `xtask`.
+#[cfg(feature = "self-tune")]
+fn self_tune_summary(pipe: &pipeline::Pipeline) {
+    for axis in pipeline::AXES.iter() {
+        if let Some(b) = pipe.estimation().bank(axis) {
+            let (wn, zeta) = b.gains();
+            defmt::println!(
+                "firmware: self-tune, {=str}: wn={=f32} rad/s zeta={=f32} {=str}_moves={=u32} {=str}_settles={=u32}",
+                axis.name(),
+                wn as f32,
+                zeta as f32,
+                axis.name(),
+                b.move_count(),
+                axis.name(),
+                b.settle_count()
             );
         }
     }

@@ -26,17 +26,34 @@ pub const AXES: Axes = Axes::only(Axis::Yaw);
 /// The bank could not be built (from the defaults, or for the measured packet period).
 pub type ConfigError = estimators::ConfigError;
 
+/// The configuration the banks run for the measured packet period's `cfg`: with
+/// [`FOLLOW_RATE`], the shipped preset's gains for that period (`BankConfig::with_nav440_gains`,
+/// as `nav440 estimate` does); else `cfg`.
+#[cfg(any(
+    feature = "follow",
+    feature = "self-tune",
+    not(any(feature = "adaptive-gains", prebuilt_banks))
+))]
+fn at_rate(cfg: &BankConfig) -> BankConfig {
+    if FOLLOW_RATE {
+        cfg.with_nav440_gains()
+    } else {
+        *cfg
+    }
+}
+
 /// Builds an axis's bank for the measured packet period (out of line: the constructor is
 /// large): with [`FOLLOW_RATE`], the shipped preset's gains for that period
 /// (`BankConfig::with_nav440_gains`, as `nav440 estimate` does).
-#[cfg(not(any(feature = "adaptive-gains", feature = "follow", prebuilt_banks)))]
+#[cfg(not(any(
+    feature = "adaptive-gains",
+    feature = "follow",
+    feature = "self-tune",
+    prebuilt_banks
+)))]
 #[inline(never)]
 fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
-    if FOLLOW_RATE {
-        nav440_pipeline::axis_bank(axis, &cfg.with_nav440_gains())
-    } else {
-        nav440_pipeline::axis_bank(axis, cfg)
-    }
+    nav440_pipeline::axis_bank(axis, &at_rate(cfg))
 }
 
 /// Builds an axis's following product bank (feature `follow`) for the measured packet period:
@@ -45,11 +62,17 @@ fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
 #[cfg(feature = "follow")]
 #[inline(never)]
 fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
-    if FOLLOW_RATE {
-        nav440_pipeline::adaptive_product_axis_bank(axis, &cfg.with_nav440_gains())
-    } else {
-        nav440_pipeline::adaptive_product_axis_bank(axis, cfg)
-    }
+    nav440_pipeline::adaptive_product_axis_bank(axis, &at_rate(cfg))
+}
+
+/// Builds an axis's self-tuning product bank (feature `self-tune`) for the measured packet
+/// period: ILO1 at `estimators::SelfTuneConfig::DEFAULT`'s start, the Kalman with the shipped
+/// preset's gains for that period ([`FOLLOW_RATE`]), as `nav440 estimate --bank product
+/// --self-tune` does (`nav440_pipeline::self_tuning_product_axis_bank`).
+#[cfg(feature = "self-tune")]
+#[inline(never)]
+fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
+    nav440_pipeline::self_tuning_product_axis_bank(axis, &at_rate(cfg))
 }
 
 /// The banks build.rs built on the host for the product images with the shipped preset

@@ -24,15 +24,16 @@
 //! index, and `an_online_ilo1_by_the_jerk_index` (ignored, about 70 s) does it online from
 //! the bank's own estimates (docs/MOTION-FAMILY.md, "ILO1 by the jerk index").
 
-use estimators::{BankConfig, Hold};
+use estimators::BankConfig;
 use nav440_cli::motion::ProfileKind;
-use nav440_cli::optim::Method;
 use nav440_cli::paper::{ave_on_rate, COLUMNS, REFERENCE_AVE};
 use nav440_cli::replay::{self, noisy_angle, unwrap_deg, Axis, EstimateOptions, Noise};
 use nav440_cli::synth::a2_samples;
-use nav440_cli::tune::{bank_mse, tune_with, Families, TuneSpec};
+use nav440_cli::tune::{bank_mse, Families};
 
+mod family;
 mod runs;
+use family::{mse_of, reference, tuned_over};
 use runs::{mse_over, schedule};
 
 /// The motions: (profile, shape seed, label).
@@ -52,21 +53,6 @@ const RANGE: (f64, f64) = (1.0, 30.0);
 
 /// The packets' period, s (100 Hz).
 const DT_S: f64 = 0.01;
-
-/// The yaw reference rate (deg/s) at each sample: the rows of a replay without noise, one per
-/// sample (none rejected).
-fn reference(samples: &[replay::Sample]) -> Vec<f64> {
-    let (rows, rejected) = replay::estimate(samples, &EstimateOptions::default()).unwrap();
-    assert_eq!(rejected, 0);
-    assert_eq!(rows.len(), samples.len());
-    rows.iter()
-        .zip(samples)
-        .map(|(r, s)| {
-            assert_eq!(r.t_us, s.t_us);
-            f64::from(r.axis(Axis::Yaw).unwrap().reference_deg_s.unwrap())
-        })
-        .collect()
-}
 
 /// The velocity MSE of the backward difference `(y_k - y_(k-1)) / dt` of the noisy angle
 /// (noise seed 1, as `bank_mse`) against `reference` (one value per sample), and its closed
@@ -344,20 +330,6 @@ fn adaptive_kalman(
     (out, k.retune_count())
 }
 
-/// The MSE over `range` (s) of `values` (one per sample) against `reference` (one per sample;
-/// a NaN reference sample is left out).
-fn mse_of(samples: &[replay::Sample], values: &[f64], reference: &[f64], range: (f64, f64)) -> f64 {
-    let (mut sum, mut n) = (0.0, 0usize);
-    for ((s, x), r) in samples.iter().zip(values).zip(reference) {
-        let t = s.t_us as f64 * 1e-6;
-        if t >= range.0 && t <= range.1 && r.is_finite() {
-            sum += (x - r).powi(2);
-            n += 1;
-        }
-    }
-    sum / n as f64
-}
-
 /// The velocity MSE (deg/s)^2 over `range` of [`adaptive_kalman`] with its default `kappa`,
 /// against `reference`.
 fn adaptive_kalman_mse(
@@ -385,22 +357,7 @@ const KF: usize = 6;
 /// The families `families` tuned on `samples` at noise `var` (one seed, linear hold,
 /// [`RANGE`]), over the shipped gains, as a bank configuration.
 fn tuned(samples: &[replay::Sample], var: f64, families: Families) -> BankConfig {
-    tune_with(
-        samples,
-        &EstimateOptions::default(),
-        &TuneSpec {
-            noise_var: var,
-            seeds: 1,
-            train: RANGE,
-            test: None,
-            method: Method::Search,
-            holds: vec![Hold::Linear],
-            families,
-        },
-    )
-    .unwrap()
-    .gains
-    .apply(BankConfig::NAV440)
+    tuned_over(samples, var, families, RANGE)
 }
 
 /// ILO1 and the Kalman (velocity), and the Kalman (acceleration), tuned on `samples` at noise

@@ -1,9 +1,11 @@
-//! `nav440 estimate --bank product --follow`: the product bank whose gains follow the measured
-//! noise and the motion's jerk (`estimators::AdaptiveProductBank`), through the real binary.
-//! Its CSV has the product bank's columns; the time, angle and rate columns are the fixed
-//! bank's, byte for byte (only the estimates differ); and on a noisy capture its ILO1 velocity
-//! is much closer to the reference rate than the shipped fixed gains' (the same noise draws).
-//! `--follow` is refused where it cannot apply.
+//! The product bank's moving gains through the real binary: `nav440 estimate --bank product
+//! --follow` (gains that follow the measured noise and the motion's jerk,
+//! `estimators::AdaptiveProductBank`) and `--self-tune` (ILO1 tuned online against the Euler
+//! reference rate, `estimators::SelfTuningProductBank`). Their CSV has the product bank's
+//! columns; the time, angle and rate columns are the fixed bank's, byte for byte (only the
+//! estimates differ); and on a noisy capture their ILO1 velocity is much closer to the
+//! reference rate than the shipped fixed gains' (the same noise draws). Both are refused where
+//! they cannot apply.
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -57,8 +59,20 @@ fn mse(rows: &[Vec<String>], a: usize, b: usize) -> f64 {
 /// At 0.5 deg^2 of added noise on the bundled fig5 capture, the following ILO1's velocity
 /// MSE is under a third of the shipped gains' (they were tuned at 0.01 deg^2; measured 4.8x
 /// lower), with the same header, rows, times, angles and rates; in f32 and in fixed point.
+/// The same for the self-tuning bank (measured 4.7x lower), which says on stderr where each
+/// axis's ILO1 is at the end.
 #[test]
 fn follow_runs_the_product_bank_that_follows_the_noise() {
+    moving_gains_beat_the_shipped_gains("--follow");
+}
+
+#[test]
+fn self_tune_runs_the_product_bank_that_tunes_ilo1_against_the_rate() {
+    moving_gains_beat_the_shipped_gains("--self-tune");
+}
+
+/// [`follow_runs_the_product_bank_that_follows_the_noise`] with `flag`.
+fn moving_gains_beat_the_shipped_gains(flag: &str) {
     let cap = data("fig5_a2_100hz.bin");
     for fixed in [false, true] {
         let mut args = vec![
@@ -75,8 +89,17 @@ fn follow_runs_the_product_bank_that_follows_the_noise() {
             args.push("--fixed");
         }
         let shipped = ok(&args);
-        args.push("--follow");
-        let follow = ok(&args);
+        args.push(flag);
+        let o = run(&args);
+        assert!(o.status.success(), "{args:?}");
+        let follow = String::from_utf8(o.stdout).unwrap();
+        let err = String::from_utf8(o.stderr).unwrap();
+        if flag == "--self-tune" {
+            assert!(
+                err.starts_with("nav440: self-tune: yaw: ILO1 "),
+                "the self-tuning bank's line: {err}"
+            );
+        }
         assert_eq!(
             follow.lines().next(),
             Some("t,yaw,yaw_rate,ilo1_v,kf_a"),
@@ -89,24 +112,31 @@ fn follow_runs_the_product_bank_that_follows_the_noise() {
         }
         // ilo1_v (column 3) against yaw_rate (column 2).
         let (ms, mf) = (mse(&s, 3, 2), mse(&f, 3, 2));
-        assert!(
-            mf < ms / 3.0,
-            "fixed {fixed}: following {mf} vs shipped {ms}"
-        );
+        assert!(mf < ms / 3.0, "{flag}, fixed {fixed}: {mf} vs shipped {ms}");
     }
 }
 
-/// The fixed-point run follows the same gains as the f32 run: its velocity differs from the
+/// The fixed-point run moves the gains as the f32 run does: its velocity differs from the
 /// f32 run's by far less than either differs from the reference.
 #[test]
 fn follow_in_fixed_point_tracks_the_f32_run() {
+    fixed_point_tracks_the_f32_run("--follow");
+}
+
+#[test]
+fn self_tune_in_fixed_point_tracks_the_f32_run() {
+    fixed_point_tracks_the_f32_run("--self-tune");
+}
+
+/// [`follow_in_fixed_point_tracks_the_f32_run`] with `flag`.
+fn fixed_point_tracks_the_f32_run(flag: &str) {
     let cap = data("fig5_a2_100hz.bin");
     let args = [
         "estimate",
         cap.as_str(),
         "--bank",
         "product",
-        "--follow",
+        flag,
         "--noise-var",
         "0.1",
     ];
@@ -144,8 +174,9 @@ fn follow_runs_on_every_axis_with_the_body_rates() {
     assert!(rows(&csv).len() > 1000);
 }
 
-/// `--follow` needs the product bank and one sample per packet: a usage error (exit 2)
-/// naming what to use otherwise.
+/// `--follow` needs the product bank and one sample per packet, `--self-tune` too and the
+/// Euler reference, and the two exclude each other: a usage error (exit 2) naming what to use
+/// otherwise.
 #[test]
 fn follow_is_refused_where_it_cannot_apply() {
     let cap = data("fig5_a2_100hz.bin");
@@ -154,6 +185,19 @@ fn follow_is_refused_where_it_cannot_apply() {
         (
             &["--follow", "--bank", "product", "--noise-at", "step"][..],
             "--noise-at sample",
+        ),
+        (&["--self-tune"][..], "--bank product"),
+        (
+            &["--self-tune", "--bank", "product", "--noise-at", "step"][..],
+            "--noise-at sample",
+        ),
+        (
+            &["--self-tune", "--bank", "product", "--no-reference"][..],
+            "drop --no-reference",
+        ),
+        (
+            &["--self-tune", "--bank", "product", "--follow"][..],
+            "pick one",
         ),
     ] {
         let o = run(&[&["estimate", cap.as_str()][..], extra].concat());

@@ -66,8 +66,9 @@ pub mod wire;
 
 pub use axis::{Axes, Axis};
 pub use pipeline::{
-    adaptive_axis_bank, adaptive_product_axis_bank, axis_bank, axis_config, AxisRow, Counters,
-    CsvLine, Estimation, Pipeline, Rejections, Row, ROW_CAPACITY,
+    adaptive_axis_bank, adaptive_product_axis_bank, axis_bank, axis_config,
+    self_tuning_product_axis_bank, AxisRow, Counters, CsvLine, Estimation, Pipeline, Rejections,
+    Row, ROW_CAPACITY,
 };
 pub use reference::{BodyRates, EulerReference, RateColumn, Reference};
 pub use sample::{attitude, Attitude, FrameSeen, FrontCounters, Frontend, Sample};

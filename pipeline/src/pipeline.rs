@@ -46,8 +46,8 @@ use crate::{Axes, Axis};
 use core::marker::PhantomData;
 use estimators::{
     AdaptiveBank, AdaptiveConfig, AdaptiveProductBank, AdaptiveProductConfig, Bank, BankConfig,
-    EstimatorBank, EstimatorOutput, GainSchedule, PaperOutput, Real, Rows, SampleError, SqrtFn,
-    Wrap,
+    EstimatorBank, EstimatorOutput, GainSchedule, PaperOutput, Real, Rows, SampleError,
+    SelfTuneConfig, SelfTuningProductBank, SqrtFn, Wrap,
 };
 use nav440_proto::{PacketRate, PacketType};
 
@@ -91,6 +91,18 @@ pub fn adaptive_product_axis_bank<T: Real, S: SqrtFn<T>>(
     cfg: &BankConfig,
 ) -> Result<AdaptiveProductBank<T, S>, estimators::ConfigError> {
     AdaptiveProductBank::new(&axis_config(axis, cfg), &AdaptiveProductConfig::DEFAULT)
+}
+
+/// The self-tuning product bank of one axis (what `nav440 estimate --bank product
+/// --self-tune` runs): `SelfTuningProductBank::new` with `cfg` (unwrapping as [`axis_bank`])
+/// and [`SelfTuneConfig::DEFAULT`]. The pipeline gives it each row's valid rate about the axis
+/// ([`EstimatorBank::observe_rate`]): the Euler reference rate, `None` near gimbal lock, and
+/// no sample at all for a packet whose BIT word flags a failure.
+pub fn self_tuning_product_axis_bank<T: Real, S: SqrtFn<T>>(
+    axis: Axis,
+    cfg: &BankConfig,
+) -> Result<SelfTuningProductBank<T, S>, estimators::ConfigError> {
+    SelfTuningProductBank::new(&axis_config(axis, cfg), &SelfTuneConfig::DEFAULT)
 }
 
 /// One axis of a row: the rate column and the bank's output `O` (e.g.

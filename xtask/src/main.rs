@@ -462,6 +462,8 @@ fn release_tests() -> Result<(), String> {
         "preset_rates",
         "--test",
         "schedule",
+        "--test",
+        "self_tune",
     ])?;
     firmware::adopt_nav440()
 }

@@ -15,6 +15,7 @@ mod kalman;
 mod noise;
 mod product;
 mod schedule;
+mod selftune;
 #[cfg(test)]
 mod tests;
 
@@ -23,6 +24,7 @@ pub use kalman::*;
 pub use noise::*;
 pub use product::*;
 pub use schedule::*;
+pub use selftune::*;
 
 use crate::bank::{BankConfig, PaperBank, PaperOutput};
 use crate::{ConfigError, NativeSqrt, Real, SampleError, SqrtFn};

@@ -839,3 +839,158 @@ fn the_adaptive_product_bank_takes_scaled_angles() {
     }
     assert!(a.retune_count() >= 1);
 }
+
+/// What [`SelfTuneConfig`] refuses.
+#[test]
+fn self_tune_config_is_checked() {
+    let cfg = crate::BankConfig::NAV440;
+    let with = |f: fn(&mut SelfTuneConfig)| {
+        let mut c = SelfTuneConfig::DEFAULT;
+        f(&mut c);
+        SelfTuningProductBank::<f32>::new(&cfg, &c).err()
+    };
+    assert_eq!(with(|_| {}), None);
+    assert_eq!(
+        with(|c| c.wn0_rad_s = f32::NAN),
+        Some(ConfigError::NotFinite("wn0_rad_s"))
+    );
+    assert_eq!(
+        with(|c| c.zeta = 0.0),
+        Some(ConfigError::NotPositive("zeta"))
+    );
+    assert_eq!(with(|c| c.zeta = 1.0), Some(ConfigError::ObserverPoles));
+    assert_eq!(
+        with(|c| c.step = 1.0),
+        Some(ConfigError::NotPositive("step"))
+    );
+    assert_eq!(
+        with(|c| c.min_step = 2.0),
+        Some(ConfigError::NotPositive("step - min_step"))
+    );
+    assert_eq!(
+        with(|c| c.margin = -0.1),
+        Some(ConfigError::Negative("margin"))
+    );
+    assert_eq!(
+        with(|c| c.margin = 1.0),
+        Some(ConfigError::NotPositive("1 - margin"))
+    );
+    assert_eq!(
+        with(|c| c.window = 0),
+        Some(ConfigError::NotPositive("window"))
+    );
+    assert_eq!(
+        with(|c| c.settled_after = 0),
+        Some(ConfigError::NotPositive("settled_after"))
+    );
+}
+
+/// The product bank with ILO1's per-sample poles at `wn` rad/s and `zeta`.
+fn product_at<T: Real>(cfg: &crate::BankConfig, wn: f64, zeta: f64) -> crate::ProductBank<T> {
+    let mut c = *cfg;
+    c.velocity.ilo[0] = IloConfig::per_sample(wn, zeta, f64::from(c.h), 0.01).unwrap();
+    crate::ProductBank::new(&c).unwrap()
+}
+
+/// Without a rate, or with rates of other times only, the self-tuning bank never moves and is
+/// the product bank at its starting poles, bit for bit (f32 and `Fx`; the angle as `f32` and
+/// as a sensor's integers).
+#[test]
+fn without_a_valid_rate_the_self_tuning_bank_never_moves() {
+    fn check<T: Real>() {
+        use crate::EstimatorBank;
+        let cfg = crate::BankConfig::NAV440;
+        let tune = SelfTuneConfig::DEFAULT;
+        let mut a = SelfTuningProductBank::<T>::new(&cfg, &tune).unwrap();
+        let mut b = SelfTuningProductBank::<T>::new(&cfg, &tune).unwrap();
+        let mut c = product_at::<T>(&cfg, 25.5, 0.25);
+        let mut g = Gauss::new(21);
+        for k in 0..3000 {
+            let (t, y, r) = noisy_sine(k, 300.0, 2.0, 0.01, &mut g);
+            // a: no rate; b: the rate of the time before, or not finite.
+            b.observe_rate(t.saturating_sub(1), r);
+            if k % 2 == 0 {
+                b.observe_rate(t, f32::NAN);
+            }
+            let lsb = libm::round(f64::from(y) / (360.0 / 65536.0)) as i32;
+            let oa = EstimatorBank::update_scaled(&mut a, t, 45 * lsb, -13).unwrap();
+            let ob = EstimatorBank::update_scaled(&mut b, t, 45 * lsb, -13).unwrap();
+            let oc = EstimatorBank::update_scaled(&mut c, t, 45 * lsb, -13).unwrap();
+            assert_eq!((oa, ob), (oc, oc), "sample {k}");
+        }
+        for s in [&a, &b] {
+            assert_eq!((s.move_count(), s.settle_count()), (0, 0));
+            assert_eq!(s.gains(), (25.5, 0.25));
+        }
+    }
+    check::<f32>();
+    check::<crate::Fx>();
+}
+
+/// With the exact rate of a fast noise-free motion (2 Hz, 380 deg/s), the self-tuning bank
+/// climbs from its default start, one step per window at most, within the validated range; the bank that
+/// runs is a [`crate::ProductBank`] whose gains are set ([`crate::ProductBank::set_gains`],
+/// bumpless) at the same samples, bit for bit; and over the last 10 s its velocity error is a
+/// fraction of what the starting gains give on the same samples.
+#[test]
+fn the_self_tuning_bank_climbs_to_a_fast_motion_one_step_per_window() {
+    let cfg = crate::BankConfig::NAV440;
+    let tune = SelfTuneConfig::DEFAULT;
+    let mut a = SelfTuningProductBank::<f32>::new(&cfg, &tune).unwrap();
+    let mut replica = product_at::<f32>(&cfg, 25.5, 0.25);
+    let mut start = product_at::<f32>(&cfg, 25.5, 0.25);
+    let mut g = Gauss::new(22);
+    let (mut err_a, mut err_start, mut moves) = (0.0, 0.0, 0);
+    let n = 4000;
+    for k in 0..n {
+        let (t, y, r) = noisy_sine(k, 30.0, 2.0, 0.0, &mut g);
+        a.observe_rate(t, r);
+        let before = a.move_count();
+        let oa = a.update(t, y).unwrap();
+        let or = replica.update(t, y).unwrap();
+        assert_eq!(oa, or, "sample {k}");
+        if a.move_count() != before {
+            moves += 1;
+            replica.set_gains(&a.config()).unwrap();
+        }
+        let os = start.update(t, y).unwrap();
+        if k >= n - 1000 {
+            err_a += (f64::from(oa.values[0]) - f64::from(r)).powi(2);
+            err_start += (f64::from(os.values[0]) - f64::from(r)).powi(2);
+        }
+        let (wn, zeta) = a.gains();
+        assert!((2.0..=0.8 * 100.0 * core::f64::consts::PI).contains(&wn));
+        assert!((0.05..=0.9).contains(&zeta));
+    }
+    // A window is 50 settling and 200 compared samples: at most one move per 250 samples.
+    assert!(moves >= 3 && moves <= n / 250, "{moves} moves");
+    assert_eq!(a.move_count(), moves as u32);
+    let (wn, _) = a.gains();
+    assert!(wn > 50.0, "wn {wn}");
+    assert!(err_a < err_start / 10.0, "{err_a} vs {err_start}");
+}
+
+/// On a slow motion under heavy noise, started far too fast (200 rad/s), the self-tuning bank
+/// descends and settles; the gains it reports are those it runs.
+#[test]
+fn the_self_tuning_bank_descends_under_noise_and_settles() {
+    let cfg = crate::BankConfig::NAV440;
+    let tune = SelfTuneConfig {
+        wn0_rad_s: 200.0,
+        ..SelfTuneConfig::DEFAULT
+    };
+    let mut a = SelfTuningProductBank::<f32>::new(&cfg, &tune).unwrap();
+    let mut g = Gauss::new(23);
+    for k in 0..12_000 {
+        let (t, y, r) = noisy_sine(k, 30.0, 0.2, 0.5, &mut g);
+        a.observe_rate(t, r);
+        a.update(t, y).unwrap();
+    }
+    let (wn, zeta) = a.gains();
+    assert!(wn < 50.0, "wn {wn}");
+    assert!(a.settle_count() >= 1);
+    if let Some(s) = a.settled() {
+        assert_eq!((s.wn_rad_s, s.zeta), (wn as f32, zeta as f32));
+        assert_eq!(a.config().velocity.ilo[0], s.ilo1);
+    }
+}

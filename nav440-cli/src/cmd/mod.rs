@@ -255,6 +255,12 @@ pub struct EstimateArgs {
     /// (`--noise-at sample`).
     #[arg(long)]
     pub(crate) follow: bool,
+    /// With `--bank product`: ILO1's gains tune themselves online against each row's Euler
+    /// reference rate, a step per window towards the lowest error (bounded, bumpless;
+    /// `estimators::SelfTuningProductBank`, docs/SELF-TUNE.md), and the gains each axis
+    /// settled at are printed on stderr at the end. Not with `--follow` or `--no-reference`.
+    #[arg(long)]
+    pub(crate) self_tune: bool,
 }
 
 impl EstimateArgs {
@@ -269,6 +275,7 @@ impl EstimateArgs {
             opts.rate_column = replay::RateColumn::Body;
         }
         opts.follow_motion = self.follow;
+        opts.self_tune = self.self_tune;
         replay::check_bank_options(&opts)?;
         Ok(opts)
     }
@@ -367,6 +374,7 @@ pub(crate) fn bank_options(
         bank: replay::BankKind::Paper,
         rate_column: replay::RateColumn::Euler,
         follow_motion: false,
+        self_tune: false,
     })
 }
 

@@ -95,12 +95,64 @@ pub type PaperHostBank = Either<
     Either<PaperBank<f32>, PaperBank<Fx>>,
     Either<estimators::AdaptiveBank<f32>, estimators::AdaptiveBank<Fx>>,
 >;
-/// The product bank as the host runs it: fixed gains (f32 or `Fx`) or gains that follow the
-/// noise and the motion (`--follow`: `estimators::AdaptiveProductBank`, f32 or `Fx`).
+/// The product bank as the host runs it: fixed gains (f32 or `Fx`), gains that follow the
+/// noise and the motion (`--follow`: `estimators::AdaptiveProductBank`, f32 or `Fx`) or ILO1
+/// tuned online against the rate (`--self-tune`: `estimators::SelfTuningProductBank`).
 pub type ProductHostBank = Either<
     Either<ProductBank<f32>, ProductBank<Fx>>,
-    Either<estimators::AdaptiveProductBank<f32>, estimators::AdaptiveProductBank<Fx>>,
+    Either<
+        Either<estimators::AdaptiveProductBank<f32>, estimators::AdaptiveProductBank<Fx>>,
+        Either<estimators::SelfTuningProductBank<f32>, estimators::SelfTuningProductBank<Fx>>,
+    >,
 >;
+
+/// Where a self-tuning product bank's ILO1 is (`--self-tune`), for the line `nav440 estimate`
+/// prints on stderr at the end.
+pub trait SelfTuneStatus {
+    /// The line for `axis`, `None` for a bank that does not tune itself.
+    fn self_tune_line(&self, axis: Axis) -> Option<String> {
+        let _ = axis;
+        None
+    }
+}
+
+impl SelfTuneStatus for PaperHostBank {}
+
+impl SelfTuneStatus for ProductHostBank {
+    fn self_tune_line(&self, axis: Axis) -> Option<String> {
+        match self {
+            Either::B(Either::B(Either::A(b))) => Some(self_tune_line(axis, b)),
+            Either::B(Either::B(Either::B(b))) => Some(self_tune_line(axis, b)),
+            _ => None,
+        }
+    }
+}
+
+/// The end-of-run line of a self-tuning bank: where it settled, or where it is.
+pub fn self_tune_line<T: estimators::Real>(
+    axis: Axis,
+    b: &estimators::SelfTuningProductBank<T>,
+) -> String {
+    let (wn, zeta) = b.gains();
+    match b.settled() {
+        Some(s) => format!(
+            "self-tune: {}: ILO1 settled at wn {:.2} rad/s, zeta {:.3} (K1 {}, L {} 1/s, K2 {}; window MSE {:.2} (deg/s)^2 against the rate) after {} moves",
+            axis.name(),
+            s.wn_rad_s,
+            s.zeta,
+            s.ilo1.k1,
+            s.ilo1.l,
+            s.ilo1.k2,
+            s.mse,
+            s.moves
+        ),
+        None => format!(
+            "self-tune: {}: ILO1 not settled: wn {wn:.2} rad/s, zeta {zeta:.3} after {} moves",
+            axis.name(),
+            b.move_count()
+        ),
+    }
+}
 
 /// A built host bank: the bank, and for a noise-adaptive bank whose schedule was tuned at
 /// another sample period (`AdaptiveBank::period_fits`): (the schedule's period, the bank's), s.
@@ -149,6 +201,9 @@ pub fn paper_bank(
     if opts.follow_motion {
         return Err(FOLLOW_PAPER.to_string());
     }
+    if opts.self_tune {
+        return Err(SELF_TUNE_PAPER.to_string());
+    }
     if let Some(sched) = opts.schedule.as_ref() {
         return Ok(if fixed {
             let b: estimators::AdaptiveBank<Fx> =
@@ -180,21 +235,38 @@ pub fn product_bank(
         return Err(PRODUCT_SCHEDULE.to_string());
     }
     let bad = |e| bad_config(cfg, e);
-    let bank = match (opts.follow_motion, opts.fixed) {
-        (false, false) => Either::A(Either::A(axis_bank(axis, cfg).map_err(bad)?)),
-        (false, true) => Either::A(Either::B(axis_bank(axis, cfg).map_err(bad)?)),
-        (true, false) => Either::B(Either::A(
+    let bank = match (opts.follow_motion, opts.self_tune, opts.fixed) {
+        (true, true, _) => return Err(FOLLOW_SELF_TUNE.to_string()),
+        (false, false, false) => Either::A(Either::A(axis_bank(axis, cfg).map_err(bad)?)),
+        (false, false, true) => Either::A(Either::B(axis_bank(axis, cfg).map_err(bad)?)),
+        (true, false, false) => Either::B(Either::A(Either::A(
             adaptive_product_axis_bank(axis, cfg).map_err(bad)?,
-        )),
-        (true, true) => Either::B(Either::B(
+        ))),
+        (true, false, true) => Either::B(Either::A(Either::B(
             adaptive_product_axis_bank(axis, cfg).map_err(bad)?,
-        )),
+        ))),
+        (false, true, false) => Either::B(Either::B(Either::A(
+            self_tuning_product_axis_bank(axis, cfg).map_err(bad)?,
+        ))),
+        (false, true, true) => Either::B(Either::B(Either::B(
+            self_tuning_product_axis_bank(axis, cfg).map_err(bad)?,
+        ))),
     };
     Ok((bank, None))
 }
 
 /// Why the paper bank refuses `--follow`.
 pub(crate) const FOLLOW_PAPER: &str = "--follow makes the product bank's gains follow the noise and the motion (estimators::AdaptiveProductBank): use it with --bank product";
+
+/// Why the paper bank refuses `--self-tune`.
+pub(crate) const SELF_TUNE_PAPER: &str = "--self-tune tunes the product bank's ILO1 online against the rate (estimators::SelfTuningProductBank): use it with --bank product";
+
+/// Why `--follow` and `--self-tune` do not go together.
+pub(crate) const FOLLOW_SELF_TUNE: &str =
+    "--follow and --self-tune are two ways to move the product bank's gains: pick one";
+
+/// Why `--self-tune` needs the Euler reference.
+pub(crate) const SELF_TUNE_BODY: &str = "--self-tune tunes ILO1 against the Euler reference rate of each angle; --no-reference gives the body rates, which are not the angles' rates when the unit is tilted: drop --no-reference";
 
 /// Why `--bank product` refuses a gain schedule.
 pub(crate) const PRODUCT_SCHEDULE: &str = "--bank product runs fixed gains; a gain schedule (a --gains file written by `nav440 tune --schedule`) runs the noise-adaptive paper bank: use --bank paper, or a fixed gains file";
@@ -250,6 +322,7 @@ pub(crate) struct StepState {
 /// `EstimatorBank`.
 pub struct HostBank<B = PaperHostBank> {
     bank: B,
+    axis: Axis,
     /// A new epoch was announced ([`EstimatorBank::new_epoch`]) for the next sample.
     new_epoch: bool,
     misfit: Option<(f32, f32)>,
@@ -293,6 +366,7 @@ impl<B: EstimatorBank> HostBank<B> {
         let (bank, misfit) = build(axis, &cfg, opts)?;
         Ok(HostBank {
             bank,
+            axis,
             new_epoch: false,
             misfit,
             noise,
@@ -304,6 +378,13 @@ impl<B: EstimatorBank> HostBank<B> {
     /// (`AdaptiveBank::period_fits`): (the schedule's period, the bank's), s.
     pub(crate) fn schedule_misfit(&self) -> Option<(f32, f32)> {
         self.misfit
+    }
+}
+
+impl<B: SelfTuneStatus> HostBank<B> {
+    /// The self-tuning bank's end-of-run line ([`SelfTuneStatus`]).
+    pub(crate) fn self_tune_line(&self) -> Option<String> {
+        self.bank.self_tune_line(self.axis)
     }
 }
 
@@ -434,8 +515,27 @@ pub fn check_bank_options(opts: &EstimateOptions) -> Result<()> {
     if opts.follow_motion && opts.noise_at == NoiseAt::Step {
         return Err(Error::Usage(FOLLOW_STEP.to_string()));
     }
+    if opts.self_tune {
+        let refused = if opts.bank != BankKind::Product {
+            Some(SELF_TUNE_PAPER)
+        } else if opts.follow_motion {
+            Some(FOLLOW_SELF_TUNE)
+        } else if opts.rate_column != RateColumn::Euler {
+            Some(SELF_TUNE_BODY)
+        } else if opts.noise_at == NoiseAt::Step {
+            Some(SELF_TUNE_STEP)
+        } else {
+            None
+        };
+        if let Some(m) = refused {
+            return Err(Error::Usage(m.to_string()));
+        }
+    }
     Ok(())
 }
+
+/// Why `--self-tune` refuses `--noise-at step`.
+pub(crate) const SELF_TUNE_STEP: &str = "--self-tune compares one sample per packet with the packet's rate; --noise-at step feeds the bank every observer step: use --noise-at sample";
 
 /// Why `--follow` refuses `--noise-at step`.
 pub(crate) const FOLLOW_STEP: &str = "--follow estimates the noise and the jerk from one sample per packet; --noise-at step feeds the bank every observer step: use --noise-at sample";

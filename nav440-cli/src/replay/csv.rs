@@ -186,7 +186,7 @@ pub fn estimate_stream<'a, W: std::io::Write + ?Sized>(
 /// [`estimate_stream`] with the banks `build` builds and the rate column `R`.
 pub(crate) fn stream_bank<
     'a,
-    B: EstimatorBank + 'static,
+    B: EstimatorBank + SelfTuneStatus + 'static,
     W: std::io::Write + ?Sized,
     R: nav440_pipeline::Reference,
 >(
@@ -218,6 +218,15 @@ pub(crate) fn stream_bank<
     check_front(pipe.front())?;
     res.map_err(Error::Usage)?;
     sink.end()?;
+    for axis in opts.axes.iter() {
+        if let Some(line) = pipe
+            .estimation()
+            .bank(axis)
+            .and_then(HostBank::self_tune_line)
+        {
+            eprintln!("nav440: {line}");
+        }
+    }
     let c = pipe.estimation().counters();
     Ok(StreamReport {
         summary: EstimationSummary::of(c),

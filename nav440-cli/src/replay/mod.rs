@@ -28,7 +28,8 @@ pub use nav440_pipeline::bit::BitCounts;
 use nav440_pipeline::period::PeriodEstimator;
 pub use nav440_pipeline::period::WARMUP_SAMPLES;
 use nav440_pipeline::{
-    adaptive_axis_bank, adaptive_product_axis_bank, axis_bank, Frontend, Pipeline,
+    adaptive_axis_bank, adaptive_product_axis_bank, axis_bank, self_tuning_product_axis_bank,
+    Frontend, Pipeline,
 };
 use nav440_proto::Parser;
 pub use nav440_proto::TimeFaults;

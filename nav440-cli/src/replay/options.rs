@@ -50,6 +50,10 @@ pub struct EstimateOptions {
     /// `estimators::AdaptiveProductBank`, fed each row's rate about the axis; product bank
     /// only, one sample per packet). Default `false`: fixed gains.
     pub follow_motion: bool,
+    /// The product bank tunes ILO1 online against each row's Euler reference rate
+    /// (`--self-tune`: `estimators::SelfTuningProductBank`; product bank, Euler reference, one
+    /// sample per packet, not with [`Self::follow_motion`]). Default `false`.
+    pub self_tune: bool,
 }
 
 /// Which estimator bank `nav440 estimate` runs (`--bank`).
@@ -105,6 +109,7 @@ impl Default for EstimateOptions {
             bank: BankKind::Paper,
             rate_column: RateColumn::Euler,
             follow_motion: false,
+            self_tune: false,
         }
     }
 }

@@ -18,7 +18,7 @@ use super::soak::CI_SOAK;
 use super::unit_cases::{short_capture, uart_rows_ci, unit_ci};
 use super::{
     read_file, root, work_dir, BankChoice, ADAPTIVE, BENCH_BIN, FOLLOW, FW, FW_BIN, NO_REFERENCE,
-    NO_REFERENCE_ARG, ONE_AXIS, PRODUCT, STM32_FEATURE, TUNED, TUNED_GAINS, UART_ROWS,
+    NO_REFERENCE_ARG, ONE_AXIS, PRODUCT, SELF_TUNE, STM32_FEATURE, TUNED, TUNED_GAINS, UART_ROWS,
 };
 use crate::pool::Pool;
 use crate::qemu::{self, Board, Output};
@@ -559,6 +559,29 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
                 EQUIVALENCE_STEP,
                 m4f_board,
                 &follow,
+                capture,
+                &host,
+                |_| Ok(()),
+            );
+        }
+    }
+    // The self-tuning product firmware (M4F) prints the CSV of `nav440 estimate --bank product
+    // --self-tune --axis all`, byte for byte: on every bundled capture (the time faults
+    // included), on the noise switch, through gimbal lock (the tumble: no rate, no tuning) and
+    // with BIT failures (no sample, no tuning).
+    clippy_firmware(m4f_board.target, Some(SELF_TUNE))?;
+    let self_tune = build(m4f_board.target, BankChoice::SelfTune.features(), FW_BIN)?;
+    check_map(&self_tune, "mps2")?;
+    if qemu_ok {
+        let host = firmware_host_args(m4f_board.target, BankChoice::SelfTune);
+        let mut runs = data_captures();
+        runs.extend([switch.clone(), tumble.clone(), bit_fail.clone()]);
+        for capture in &runs {
+            spawn_equivalence(
+                pool,
+                EQUIVALENCE_STEP,
+                m4f_board,
+                &self_tune,
                 capture,
                 &host,
                 |_| Ok(()),

@@ -85,9 +85,13 @@ const TUNED_GAINS: &str = "host-tests/data/gains/product_fig5.toml";
 /// (`estimators::AdaptiveProductBank`).
 const FOLLOW: &str = "follow";
 
+/// Feature of the firmware whose product bank tunes ILO1 online against the Euler reference
+/// rate (`estimators::SelfTuningProductBank`).
+const SELF_TUNE: &str = "self-tune";
+
 /// The bank a firmware image runs (`--bank`): the paper's 14 estimators (default), the
-/// product bank (feature `bank-product`) or the product bank whose gains follow the noise and
-/// the motion (feature `follow`).
+/// product bank (feature `bank-product`), the product bank whose gains follow the noise and
+/// the motion (feature `follow`) or the one that tunes ILO1 against the rate (`self-tune`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum BankChoice {
     /// The paper bank (14 estimators per axis).
@@ -97,6 +101,9 @@ pub enum BankChoice {
     /// The product bank whose gains follow the measured noise and the motion's jerk (feature
     /// `follow`; `nav440 estimate --bank product --follow`).
     Follow,
+    /// The product bank that tunes ILO1 online against each row's Euler reference rate
+    /// (feature `self-tune`; `nav440 estimate --bank product --self-tune`).
+    SelfTune,
 }
 
 impl BankChoice {
@@ -106,6 +113,7 @@ impl BankChoice {
             BankChoice::Paper => &[],
             BankChoice::Product => &[PRODUCT],
             BankChoice::Follow => &[PRODUCT, FOLLOW],
+            BankChoice::SelfTune => &[PRODUCT, SELF_TUNE],
         }
     }
 
@@ -115,6 +123,7 @@ impl BankChoice {
             BankChoice::Paper => &[],
             BankChoice::Product => &["--bank", "product"],
             BankChoice::Follow => &["--bank", "product", "--follow"],
+            BankChoice::SelfTune => &["--bank", "product", "--self-tune"],
         }
     }
 
@@ -124,6 +133,7 @@ impl BankChoice {
             BankChoice::Paper => "paper",
             BankChoice::Product => "product",
             BankChoice::Follow => "follow",
+            BankChoice::SelfTune => "self-tune",
         }
     }
 }

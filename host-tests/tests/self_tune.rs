@@ -1,0 +1,92 @@
+//! The product bank that tunes ILO1 online against the rate (`estimators::SelfTuningProductBank`,
+//! what `nav440 estimate --bank product --self-tune` and the firmware feature `self-tune` run)
+//! on the violent motion of the family (strokes of 600 deg/s, docs/MOTION-FAMILY.md), at three
+//! noise levels: after 60 s of tuning, its ILO1 velocity MSE over the last 29 s is within 1.2x
+//! of ILO1 tuned offline on that span (`nav440 tune`'s search, ILO1's three gains) and below
+//! the shipped fixed gains', and each axis settled.
+//!
+//! The yardsticks are independent of the code under test: the offline tuning searches ILO1's
+//! gains on the same samples with the replay's own bank; the reference is the exact rate the
+//! packets carry. Release only (three tunings, about 15 s):
+//! `cargo test --release -p host-tests --test self_tune -- --nocapture` (docs/SELF-TUNE.md).
+
+use estimators::{BankConfig, SelfTuneConfig, SelfTuningProductBank};
+use nav440_cli::motion::ProfileKind;
+use nav440_cli::paper::COLUMNS;
+use nav440_cli::replay::{self, noisy_angle, Axis, Noise};
+use nav440_cli::synth::a2_samples;
+use nav440_cli::tune::{bank_mse, Families};
+
+mod family;
+use family::{mse_of, reference, tuned_over};
+
+/// ILO1's column in the paper bank's MSE.
+const ILO1: usize = 1;
+
+/// The run, s, and the span scored after the tuning, s.
+const DURATION_S: f64 = 90.0;
+const SCORED: (f64, f64) = (61.0, 90.0);
+
+/// The self-tuning bank (defaults, `f32`) on the angle `noisy` with the rate `rate`: its ILO1
+/// velocity at each sample, and the bank at the end.
+fn self_tuning(
+    samples: &[replay::Sample],
+    noisy: &[f32],
+    rate: &[f64],
+) -> (Vec<f64>, SelfTuningProductBank<f32>) {
+    let mut bank =
+        SelfTuningProductBank::<f32>::new(&BankConfig::NAV440, &SelfTuneConfig::DEFAULT).unwrap();
+    let v = samples
+        .iter()
+        .zip(noisy)
+        .zip(rate)
+        .map(|((s, y), r)| {
+            bank.observe_rate(s.t_us, *r as f32);
+            f64::from(bank.update(s.t_us, *y).unwrap().to_f32().values[0])
+        })
+        .collect();
+    (v, bank)
+}
+
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "release only: cargo test --release -p host-tests --test self_tune"
+)]
+fn converges_on_the_violent_motion_within_1_2x_of_ilo1_tuned_offline() {
+    let samples = a2_samples(ProfileKind::Violent, 1, 100, DURATION_S).unwrap();
+    let reference = reference(&samples);
+    let mut families = [[false; COLUMNS.len()]; 2];
+    families[0][ILO1] = true;
+    for var in [0.01, 0.1, 0.5] {
+        let noisy = noisy_angle(&samples, Axis::Yaw, Some(Noise { var, seed: 1 })).unwrap();
+        let (v, bank) = self_tuning(&samples, &noisy, &reference);
+        let online = mse_of(&samples, &v, &reference, SCORED);
+        let offline = tuned_over(&samples, var, Families(families), SCORED);
+        let (tuned, _) = bank_mse(&samples, offline, var, 1, SCORED).unwrap();
+        let (shipped, _) = bank_mse(&samples, BankConfig::NAV440, var, 1, SCORED).unwrap();
+        let (wn, zeta) = bank.gains();
+        let ratio = online / tuned[ILO1];
+        println!(
+            "violent {var:>5} deg^2: self-tuned {online:>7.1} (wn {wn:.1} rad/s, zeta {zeta:.3}, {} moves, settled {} times), tuned offline {:>7.1} ({ratio:.2}x), shipped {:>7.1} (deg/s)^2",
+            bank.move_count(),
+            bank.settle_count(),
+            tuned[ILO1],
+            shipped[ILO1]
+        );
+        assert!(ratio <= 1.2, "{var}: {online} vs tuned {}", tuned[ILO1]);
+        assert!(
+            online < shipped[ILO1],
+            "{var}: {online} vs shipped {}",
+            shipped[ILO1]
+        );
+        assert!(bank.settle_count() >= 1, "{var}: never settled");
+        let s = bank.settled().expect("settled at the end");
+        // The gains it reports are the per-sample poles it runs.
+        assert_eq!(
+            (f64::from(s.wn_rad_s), f64::from(s.zeta)),
+            (wn as f32 as f64, zeta as f32 as f64)
+        );
+        assert_eq!(bank.config().velocity.ilo[0], s.ilo1);
+    }
+}
