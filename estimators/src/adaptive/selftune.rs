@@ -113,6 +113,30 @@ const CANDIDATES: usize = 3;
 /// The gains tuned: ILO1's bandwidth and damping, one at a time.
 const GAINS: usize = 2;
 
+/// `gains` (`wn` rad/s, `zeta`) with gain `i` brought within its range and then within the
+/// damped frequency's limit `wd_max` (rad/s) given the other gain, which stays. The other gain
+/// in its range keeps the result in range: `wn` no lower than `WN_MIN <= wd_max`, `zeta` no
+/// higher than it was.
+fn fit(
+    mut gains: [f64; GAINS],
+    i: usize,
+    ranges: &[(f64, f64); GAINS],
+    wd_max: f64,
+) -> [f64; GAINS] {
+    // `max` then `min`, not `clamp`: no panic path (whose message formats floats).
+    gains[i] = gains[i].max(ranges[i].0).min(ranges[i].1);
+    let [wn, zeta] = gains;
+    if wn * libm::sqrt(1.0 - zeta * zeta) > wd_max {
+        if i == 0 {
+            gains[0] = wd_max / libm::sqrt(1.0 - zeta * zeta);
+        } else {
+            let r = wd_max / wn;
+            gains[1] = libm::sqrt(1.0 - r * r);
+        }
+    }
+    gains
+}
+
 /// ILO1's gains where a [`SelfTuningProductBank`] settled.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -142,8 +166,9 @@ pub struct Settled {
 /// halves its step in ratio (its square root), down to [`SelfTuneConfig::min_step`]: the
 /// search closes in on the gains whose error against the rate is lowest, and stays there.
 ///
-/// - **Bounded:** one step per window; `wn` within 2 rad/s and 80 % of the Nyquist frequency,
-///   `zeta` within 0.05 and 0.9 (the range `IloConfig::per_sample` is valid on).
+/// - **Bounded:** one step per window; `wn` at least 2 rad/s, `zeta` within 0.05 and 0.9, and
+///   the damped frequency `wn sqrt(1 - zeta^2)` within 80 % of the Nyquist frequency (where
+///   `IloConfig::per_sample` is valid).
 /// - **Only against a valid rate:** a sample is compared only when a finite rate was given for
 ///   its very time and it continues a steady stream (its interval within a quarter of the
 ///   last one). The first [`SelfTuneConfig::settle`] samples of each window, and after a
@@ -181,6 +206,9 @@ pub struct SelfTuningProductBank<T: Real, S: SqrtFn<T> = NativeSqrt> {
     /// the direction of their last moves (-1, 0, 1).
     gains: [f64; GAINS],
     ranges: [(f64, f64); GAINS],
+    /// The limit on the damped frequency `wn sqrt(1 - zeta^2)`, rad/s: 80 % of the Nyquist
+    /// frequency.
+    wd_max: f64,
     steps: [f64; GAINS],
     last_move: [i8; GAINS],
     /// The gain the candidates differ in.
@@ -208,15 +236,12 @@ impl<T: Real, S: SqrtFn<T>> SelfTuningProductBank<T, S> {
     pub fn new(cfg: &BankConfig, tune: &SelfTuneConfig) -> Result<Self, ConfigError> {
         tune.validate()?;
         let dt = f64::from(cfg.sample_period_s);
-        // The highest damping gives the lowest limit on `wn`.
-        let z = ZETA_RANGE.1;
-        let wn_max = 0.8 * core::f64::consts::PI / (dt * libm::sqrt(1.0 - z * z));
-        let ranges = [(WN_MIN, wn_max.max(WN_MIN)), ZETA_RANGE];
-        let mut gains = [f64::from(tune.wn0_rad_s), f64::from(tune.zeta)];
-        for (g, r) in gains.iter_mut().zip(ranges) {
-            // `max` then `min`, not `clamp`: no panic path (whose message formats floats).
-            *g = g.max(r.0).min(r.1);
-        }
+        let wd_max = (0.8 * core::f64::consts::PI / dt).max(WN_MIN);
+        // The lowest damping gives the highest `wn` within the damped frequency's limit.
+        let z = ZETA_RANGE.0;
+        let ranges = [(WN_MIN, wd_max / libm::sqrt(1.0 - z * z)), ZETA_RANGE];
+        let start = [f64::from(tune.wn0_rad_s), f64::from(tune.zeta)];
+        let gains = fit(fit(start, 1, &ranges, wd_max), 0, &ranges, wd_max);
         let step = f64::from(tune.step);
         let bank = ProductBank::new(cfg)?;
         let mut this = Self {
@@ -225,6 +250,7 @@ impl<T: Real, S: SqrtFn<T>> SelfTuningProductBank<T, S> {
             tune: *tune,
             gains,
             ranges,
+            wd_max,
             steps: [step; GAINS],
             last_move: [0; GAINS],
             tuning: 0,
@@ -359,14 +385,15 @@ impl<T: Real, S: SqrtFn<T>> SelfTuningProductBank<T, S> {
         }
     }
 
-    /// Gain `i` one step in direction `dir`, within its range.
+    /// Gain `i` one step in direction `dir`, within its range and the damped frequency's limit.
     fn candidate(&self, i: usize, dir: i8) -> f64 {
-        let g = if dir < 0 {
-            self.gains[i] / self.steps[i]
+        let mut gains = self.gains;
+        if dir < 0 {
+            gains[i] /= self.steps[i];
         } else {
-            self.gains[i] * self.steps[i]
-        };
-        g.max(self.ranges[i].0).min(self.ranges[i].1)
+            gains[i] *= self.steps[i];
+        }
+        fit(gains, i, &self.ranges, self.wd_max)[i]
     }
 
     /// The bank to `gains` (when `bank`), the candidates a step either side of them in the
@@ -515,10 +542,12 @@ impl<T: Real, S: SqrtFn<T>> crate::EstimatorBank for SelfTuningProductBank<T, S>
             bank.take_over(old);
         }
         self.reinits = self.banks[0].reinit_count();
-        let mut gains = old.gains;
-        for (g, r) in gains.iter_mut().zip(self.ranges) {
-            *g = g.max(r.0).min(r.1);
-        }
+        let gains = fit(
+            fit(old.gains, 1, &self.ranges, self.wd_max),
+            0,
+            &self.ranges,
+            self.wd_max,
+        );
         self.steps = old.steps;
         self.last_move = old.last_move;
         self.moves = old.moves;
