@@ -5,7 +5,7 @@
 //! packets carry, over 1-30 s of a 30 s capture at 100 Hz, noise seed 1.
 //!
 //! Printed with `cargo test --release -p host-tests --test motion_family -- --nocapture`
-//! (docs/MOTION-FAMILY.md, "The shipped gains against the backward difference"). The
+//! (docs/ADAPTIVE-RESULTS.md, "The shipped gains against the backward difference"). The
 //! assertions check the backward difference against its own closed form, so that the
 //! yardstick is right; whether the gains beat it is the measurement, not asserted.
 //!

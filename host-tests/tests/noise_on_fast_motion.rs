@@ -5,7 +5,7 @@
 //! `(jerk dt^3)^2 / 20`: negligible at 100 Hz unless the jerk reaches about 1e5 deg/s^3.
 //!
 //! Printed with `cargo test -p host-tests --test noise_on_fast_motion -- --nocapture`; the
-//! assertions are the finding (docs/MOTION-FAMILY.md, "Fast motion and the noise estimate").
+//! assertions are the finding (docs/ADAPTIVE-RESULTS.md, "Fast motion and the noise estimate").
 
 use estimators::NoiseEstimator;
 use nav440_cli::motion::ProfileKind;
