@@ -1,10 +1,10 @@
 //! [`SelfTuningProductBank`]: the product bank that tunes its velocity gains online against
 //! the rate a gyro measures.
 
-use super::steady_interval;
+use super::{steady_interval, AdaptiveProductConfig, JerkEstimator, NoiseEstimator};
 use crate::{
-    BankConfig, ConfigError, IloConfig, NativeSqrt, ProductBank, ProductOutput, Real, SampleError,
-    SqrtFn,
+    BankConfig, ConfigError, EstimatorOutput, IloConfig, NativeSqrt, ProductBank, ProductOutput,
+    Real, SampleError, SqrtFn,
 };
 
 /// How a [`SelfTuningProductBank`] tunes ILO1.
@@ -19,7 +19,8 @@ pub struct SelfTuneConfig {
     pub zeta: f32,
     /// The first step of each gain: the candidates run at `wn / step` and `wn * step` (or the
     /// damping's), and a move changes it by that factor (> 1; default 1.5). A gain's step
-    /// becomes its square root each time its moves change direction ...
+    /// becomes its square root each time its moves change direction, and its square (up to
+    /// this one) on two moves the same way ...
     pub step: f32,
     /// ... down to this one (> 1, at most `step`; default 1.05).
     pub min_step: f32,
@@ -33,6 +34,11 @@ pub struct SelfTuneConfig {
     pub settle: u32,
     /// Windows without a move after which the gains count as settled (>= 1; default 2).
     pub settled_after: u32,
+    /// Once the bank has its own noise and jerk estimates, `wn` stays within this factor
+    /// either way of the bandwidth the jerk index gives them
+    /// ([`AdaptiveProductBank`](crate::AdaptiveProductBank)'s rule, `c (J / (V dt))^(1/6)`)
+    /// (>= 1; default 4): the search does not leave the region where ILO1 follows the motion.
+    pub span: f32,
 }
 
 impl SelfTuneConfig {
@@ -51,6 +57,7 @@ impl SelfTuneConfig {
         window: 200,
         settle: 50,
         settled_after: 2,
+        span: 4.0,
     };
 
     fn validate(&self) -> Result<(), ConfigError> {
@@ -90,6 +97,12 @@ impl SelfTuneConfig {
         }
         if self.settled_after == 0 {
             return Err(ConfigError::NotPositive("settled_after"));
+        }
+        if !self.span.is_finite() {
+            return Err(ConfigError::NotFinite("span"));
+        }
+        if self.span < 1.0 {
+            return Err(ConfigError::NotPositive("span - 1"));
         }
         Ok(())
     }
@@ -163,12 +176,19 @@ pub struct Settled {
 /// ILO1 velocity with the rate of the same sample; after [`SelfTuneConfig::window`] compared
 /// samples the bank takes the candidate with the lowest squared error if it beats the bank's
 /// by more than [`SelfTuneConfig::margin`], or stays. A gain whose moves change direction
-/// halves its step in ratio (its square root), down to [`SelfTuneConfig::min_step`]: the
-/// search closes in on the gains whose error against the rate is lowest, and stays there.
+/// halves its step in ratio (its square root), down to [`SelfTuneConfig::min_step`]; two
+/// moves the same way double it, up to [`SelfTuneConfig::step`]. The search closes in on the
+/// gains whose error against the rate is lowest and stays there, and follows them at the
+/// first step's pace when the motion changes.
 ///
 /// - **Bounded:** one step per window; `wn` at least 2 rad/s, `zeta` within 0.05 and 0.9, and
 ///   the damped frequency `wn sqrt(1 - zeta^2)` within 80 % of the Nyquist frequency (where
-///   `IloConfig::per_sample` is valid).
+///   `IloConfig::per_sample` is valid). Once the bank has its own noise estimate `V` (from its
+///   unwrapped angle) and jerk estimate `J` (from the valid rates), `wn` stays within
+///   [`SelfTuneConfig::span`] of the jerk index's bandwidth `c (J / (V dt))^(1/6)`
+///   ([`AdaptiveProductConfig::ILO1_C_FIG5`]): far below a fast motion's bandwidth ILO1 lags
+///   so much that a lower bandwidth, nearer a zero output, errs less, and the search alone
+///   would descend there.
 /// - **Only against a valid rate:** a sample is compared only when a finite rate was given for
 ///   its very time and it continues a steady stream (its interval within a quarter of the
 ///   last one). The first [`SelfTuneConfig::settle`] samples of each window, and after a
@@ -213,6 +233,12 @@ pub struct SelfTuningProductBank<T: Real, S: SqrtFn<T> = NativeSqrt> {
     last_move: [i8; GAINS],
     /// The gain the candidates differ in.
     tuning: usize,
+    /// `wn`'s range without the bank's estimates.
+    wn_range: (f64, f64),
+    /// The noise estimate (from the unwrapped angle) and the jerk estimate (from the valid
+    /// rates) that anchor `wn`'s range.
+    noise: NoiseEstimator,
+    jerk: JerkEstimator,
     /// The rate given for the next sample: (time, deg/s).
     rate: Option<(u64, f32)>,
     /// The sum of each candidate's squared velocity error in this window, (deg/s)^2.
@@ -254,6 +280,12 @@ impl<T: Real, S: SqrtFn<T>> SelfTuningProductBank<T, S> {
             steps: [step; GAINS],
             last_move: [0; GAINS],
             tuning: 0,
+            wn_range: ranges[0],
+            noise: NoiseEstimator::new(
+                AdaptiveProductConfig::DEFAULT.noise_tau_s,
+                cfg.sample_period_s,
+            )?,
+            jerk: JerkEstimator::new(JerkEstimator::DEFAULT_TAU_S, cfg.sample_period_s)?,
             rate: None,
             sums: [0.0; CANDIDATES],
             compared: 0,
@@ -312,6 +344,10 @@ impl<T: Real, S: SqrtFn<T>> SelfTuningProductBank<T, S> {
                 *v = o.channel(crate::ProductChannel::Ilo1V);
             }
         }
+        self.noise.update(t_us, out.unwrapped_deg());
+        if let Some(r) = rate {
+            self.jerk.update(t_us, r);
+        }
         let dt = self.t_prev.map_or(0, |p| t_us.saturating_sub(p));
         let steady = steady_interval(dt, self.dt_prev);
         (self.t_prev, self.dt_prev) = (Some(t_us), dt);
@@ -349,11 +385,20 @@ impl<T: Real, S: SqrtFn<T>> SelfTuningProductBank<T, S> {
         if wins {
             gains[i] = self.candidate(i, dir);
         }
+        // The range of `wn` around the jerk index's bandwidth, and `wn` within it.
+        self.ranges[0] = self.anchored_range();
+        gains = fit(gains, 0, &self.ranges, self.wd_max);
         let moved = gains[i] != self.gains[i];
         if moved {
+            // A reversal halves the step (in ratio); a second move the same way doubles it
+            // again, up to the first step: a motion that changes hours later is followed at
+            // the first step's pace.
             if self.last_move[i] == -dir {
                 let min = f64::from(self.tune.min_step);
                 self.steps[i] = libm::sqrt(self.steps[i]).max(min);
+            } else if self.last_move[i] == dir {
+                let max = f64::from(self.tune.step);
+                self.steps[i] = (self.steps[i] * self.steps[i]).min(max);
             }
             self.last_move[i] = dir;
         }
@@ -383,6 +428,24 @@ impl<T: Real, S: SqrtFn<T>> SelfTuningProductBank<T, S> {
                 self.settles = self.settles.saturating_add(1);
             }
         }
+    }
+
+    /// `wn`'s range: within [`SelfTuneConfig::span`] of the jerk index's bandwidth for the
+    /// bank's noise and jerk estimates, inside the range without them (that range until both
+    /// estimates exist).
+    fn anchored_range(&self) -> (f64, f64) {
+        let (lo, hi) = self.wn_range;
+        let (Some(v), Some(j)) = (self.noise.variance(), self.jerk.power()) else {
+            return (lo, hi);
+        };
+        let dt = f64::from(self.cfg.sample_period_s);
+        let index = libm::pow(f64::from(j) / (f64::from(v).max(1e-12) * dt), 1.0 / 6.0);
+        let anchor = f64::from(AdaptiveProductConfig::ILO1_C_FIG5) * index;
+        let span = f64::from(self.tune.span);
+        // A NaN anchor keeps the whole range (`max` and `min` return the other operand).
+        let lo2 = (anchor / span).max(lo).min(hi);
+        let hi2 = (anchor * span).min(hi).max(lo2);
+        (lo2, hi2)
     }
 
     /// Gain `i` one step in direction `dir`, within its range and the damped frequency's limit.
@@ -494,6 +557,8 @@ impl<T: Real, S: SqrtFn<T>> SelfTuningProductBank<T, S> {
         }
         self.t_prev = None;
         self.dt_prev = 0;
+        self.noise.restart();
+        self.jerk.restart();
         self.restart_window();
     }
 

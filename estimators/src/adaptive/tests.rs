@@ -883,6 +883,10 @@ fn self_tune_config_is_checked() {
         with(|c| c.settled_after = 0),
         Some(ConfigError::NotPositive("settled_after"))
     );
+    assert_eq!(
+        with(|c| c.span = 0.5),
+        Some(ConfigError::NotPositive("span - 1"))
+    );
 }
 
 /// The product bank with ILO1's per-sample poles at `wn` rad/s and `zeta`.
@@ -997,4 +1001,37 @@ fn the_self_tuning_bank_descends_under_noise_and_settles() {
         assert_eq!((s.wn_rad_s, s.zeta), (wn as f32, zeta as f32));
         assert_eq!(a.config().velocity.ilo[0], s.ilo1);
     }
+}
+
+/// Settled on a slow noisy motion, the self-tuning bank follows when the motion turns fast
+/// and quiet: its step grows back on moves the same way, and within 60 s its velocity error is
+/// a fraction of what the gains it had settled at give on the same samples.
+#[test]
+fn the_self_tuning_bank_follows_a_change_of_motion() {
+    let cfg = crate::BankConfig::NAV440;
+    let mut a = SelfTuningProductBank::<f32>::new(&cfg, &SelfTuneConfig::DEFAULT).unwrap();
+    let mut g = Gauss::new(24);
+    let n = 6000;
+    for k in 0..n {
+        let (t, y, r) = noisy_sine(k, 30.0, 0.2, 0.5, &mut g);
+        a.observe_rate(t, r);
+        a.update(t, y).unwrap();
+    }
+    assert!(a.settle_count() >= 1);
+    let (slow_wn, slow_zeta) = a.gains();
+    let mut before = product_at::<f32>(&cfg, slow_wn, slow_zeta);
+    let (mut err_a, mut err_before) = (0.0, 0.0);
+    for k in n..2 * n {
+        let (t, y, r) = noisy_sine(k, 30.0, 2.0, 0.01, &mut g);
+        a.observe_rate(t, r);
+        let oa = a.update(t, y).unwrap();
+        let ob = before.update(t, y).unwrap();
+        if k >= 2 * n - 1000 {
+            err_a += (f64::from(oa.values[0]) - f64::from(r)).powi(2);
+            err_before += (f64::from(ob.values[0]) - f64::from(r)).powi(2);
+        }
+    }
+    let (wn, _) = a.gains();
+    assert!(wn > 2.0 * slow_wn, "wn {slow_wn} -> {wn}");
+    assert!(err_a < err_before / 5.0, "{err_a} vs {err_before}");
 }
