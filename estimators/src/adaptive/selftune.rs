@@ -25,7 +25,8 @@ pub struct SelfTuneConfig {
     /// ... down to this one (> 1, at most `step`; default 1.05).
     pub min_step: f32,
     /// A candidate takes over only when its squared error is below the running bank's by more
-    /// than this fraction of it (in [0, 1); default 0.01): against the window's noise.
+    /// than this fraction of it (in [0, 1); default 0.05): against the window's noise, and
+    /// against moves whose transient costs more than they gain.
     pub margin: f32,
     /// Samples compared with the rate per decision (>= 1; default 200: 2 s at 100 Hz).
     pub window: u32,
@@ -53,7 +54,7 @@ impl SelfTuneConfig {
         zeta: crate::AdaptiveProductConfig::ILO1_ZETA,
         step: 1.5,
         min_step: 1.05,
-        margin: 0.01,
+        margin: 0.05,
         window: 200,
         settle: 50,
         settled_after: 2,
