@@ -95,6 +95,13 @@ impl Default for AdaptiveProductConfig {
 /// The lowest ILO1 bandwidth taken, rad/s.
 const WN_MIN: f64 = 2.0;
 
+/// ILO1's bandwidth by the jerk index, `c (J / (V dt))^(1/6)` rad/s, for the jerk power `j`
+/// ((deg/s^3)^2), the noise variance `v` (deg^2) and the sample period `dt` (s): the rule of
+/// [`AdaptiveProductBank`], and the anchor of [`crate::SelfTuningProductBank`]'s search.
+pub(super) fn jerk_index_wn(c: f64, j: f64, v: f64, dt: f64) -> f64 {
+    c * libm::pow(j / (v * dt), 1.0 / 6.0)
+}
+
 /// The product bank ([`ProductBank`]: ILO1 velocity, Kalman acceleration) whose gains follow
 /// what it measures: the angle's noise variance `V` ([`NoiseEstimator`], from the unwrapped
 /// angle) and the motion's jerk power `J` ([`JerkEstimator`], from the rate a gyro measures
@@ -214,12 +221,15 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
         let f = &self.follow;
         let zeta = f64::from(f.ilo1_zeta);
         let wn_max = 0.8 * core::f64::consts::PI / (f64::from(dt) * libm::sqrt(1.0 - zeta * zeta));
-        let index = libm::pow(f64::from(j) / (f64::from(r) * f64::from(dt)), 1.0 / 6.0);
+        let wn = jerk_index_wn(
+            f64::from(f.ilo1_c),
+            f64::from(j),
+            f64::from(r),
+            f64::from(dt),
+        );
         // `max` then `min`, not `clamp`: no panic path (whose message formats floats), and a
         // NaN index gives the lowest bandwidth.
-        let wn = (f64::from(f.ilo1_c) * index)
-            .max(WN_MIN)
-            .min(wn_max.max(WN_MIN));
+        let wn = wn.max(WN_MIN).min(wn_max.max(WN_MIN));
         let dt5 = dt * dt * dt * dt * dt;
         let lambda = (f.kappa_s * j / r * dt5)
             .max(LAMBDA_RANGE.0)

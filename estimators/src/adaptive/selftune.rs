@@ -1,6 +1,7 @@
 //! [`SelfTuningProductBank`]: the product bank that tunes its velocity gains online against
 //! the rate a gyro measures.
 
+use super::product::jerk_index_wn;
 use super::{steady_interval, AdaptiveProductConfig, JerkEstimator, NoiseEstimator};
 use crate::{
     BankConfig, ConfigError, EstimatorOutput, IloConfig, NativeSqrt, ProductBank, ProductOutput,
@@ -151,6 +152,11 @@ fn fit(
     gains
 }
 
+/// [`fit`] of the damping, then of the bandwidth given it.
+fn fit_both(gains: [f64; GAINS], ranges: &[(f64, f64); GAINS], wd_max: f64) -> [f64; GAINS] {
+    fit(fit(gains, 1, ranges, wd_max), 0, ranges, wd_max)
+}
+
 /// ILO1's gains where a [`SelfTuningProductBank`] settled.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -268,7 +274,7 @@ impl<T: Real, S: SqrtFn<T>> SelfTuningProductBank<T, S> {
         let z = ZETA_RANGE.0;
         let ranges = [(WN_MIN, wd_max / libm::sqrt(1.0 - z * z)), ZETA_RANGE];
         let start = [f64::from(tune.wn0_rad_s), f64::from(tune.zeta)];
-        let gains = fit(fit(start, 1, &ranges, wd_max), 0, &ranges, wd_max);
+        let gains = fit_both(start, &ranges, wd_max);
         let step = f64::from(tune.step);
         let bank = ProductBank::new(cfg)?;
         let mut this = Self {
@@ -439,9 +445,12 @@ impl<T: Real, S: SqrtFn<T>> SelfTuningProductBank<T, S> {
         let (Some(v), Some(j)) = (self.noise.variance(), self.jerk.power()) else {
             return (lo, hi);
         };
-        let dt = f64::from(self.cfg.sample_period_s);
-        let index = libm::pow(f64::from(j) / (f64::from(v).max(1e-12) * dt), 1.0 / 6.0);
-        let anchor = f64::from(AdaptiveProductConfig::ILO1_C_FIG5) * index;
+        let anchor = jerk_index_wn(
+            f64::from(AdaptiveProductConfig::ILO1_C_FIG5),
+            f64::from(j),
+            f64::from(v).max(1e-12),
+            f64::from(self.cfg.sample_period_s),
+        );
         let span = f64::from(self.tune.span);
         // A NaN anchor keeps the whole range (`max` and `min` return the other operand).
         let lo2 = (anchor / span).max(lo).min(hi);
@@ -608,12 +617,7 @@ impl<T: Real, S: SqrtFn<T>> crate::EstimatorBank for SelfTuningProductBank<T, S>
             bank.take_over(old);
         }
         self.reinits = self.banks[0].reinit_count();
-        let gains = fit(
-            fit(old.gains, 1, &self.ranges, self.wd_max),
-            0,
-            &self.ranges,
-            self.wd_max,
-        );
+        let gains = fit_both(old.gains, &self.ranges, self.wd_max);
         self.steps = old.steps;
         self.last_move = old.last_move;
         self.moves = old.moves;

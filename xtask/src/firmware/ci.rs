@@ -548,46 +548,29 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
     // The following product firmware (M4F) prints the CSV of `nav440 estimate --bank product
     // --follow --axis all`, byte for byte: on the noise switch (its gains follow the noise and
     // the motion) and on the noise-free bundled capture.
-    clippy_firmware(m4f_board.target, Some(FOLLOW))?;
-    let follow = build(m4f_board.target, BankChoice::Follow.features(), FW_BIN)?;
-    check_map(&follow, "mps2")?;
-    if qemu_ok {
-        let host = firmware_host_args(m4f_board.target, BankChoice::Follow);
-        for capture in [&switch, &bundled] {
-            spawn_equivalence(
-                pool,
-                EQUIVALENCE_STEP,
-                m4f_board,
-                &follow,
-                capture,
-                &host,
-                |_| Ok(()),
-            );
-        }
-    }
+    let follow_runs = [switch.clone(), bundled.clone()];
+    moving_gains_image(
+        pool,
+        m4f_board,
+        BankChoice::Follow,
+        FOLLOW,
+        &follow_runs,
+        qemu_ok,
+    )?;
     // The self-tuning product firmware (M4F) prints the CSV of `nav440 estimate --bank product
     // --self-tune --axis all`, byte for byte: on every bundled capture (the time faults
     // included), on the noise switch, through gimbal lock (the tumble: no rate, no tuning) and
     // with BIT failures (no sample, no tuning).
-    clippy_firmware(m4f_board.target, Some(SELF_TUNE))?;
-    let self_tune = build(m4f_board.target, BankChoice::SelfTune.features(), FW_BIN)?;
-    check_map(&self_tune, "mps2")?;
-    if qemu_ok {
-        let host = firmware_host_args(m4f_board.target, BankChoice::SelfTune);
-        let mut runs = data_captures();
-        runs.extend([switch.clone(), tumble.clone(), bit_fail.clone()]);
-        for capture in &runs {
-            spawn_equivalence(
-                pool,
-                EQUIVALENCE_STEP,
-                m4f_board,
-                &self_tune,
-                capture,
-                &host,
-                |_| Ok(()),
-            );
-        }
-    }
+    let mut self_tune_runs = data_captures();
+    self_tune_runs.extend([switch.clone(), tumble.clone(), bit_fail.clone()]);
+    moving_gains_image(
+        pool,
+        m4f_board,
+        BankChoice::SelfTune,
+        SELF_TUNE,
+        &self_tune_runs,
+        qemu_ok,
+    )?;
     if !qemu_ok {
         return Ok(());
     }
@@ -603,6 +586,31 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
             format!("bench {} on {}", bank.name(), board.name),
             run,
         );
+    }
+    Ok(())
+}
+
+/// A product image whose gains move (`bank`, selected by the firmware feature `feature`) on
+/// `board`: linted, built and map-checked; with QEMU, its CSV compared byte for byte with
+/// `nav440 estimate`'s on each of `captures`.
+fn moving_gains_image(
+    pool: &Pool,
+    board: Board,
+    bank: BankChoice,
+    feature: &str,
+    captures: &[std::path::PathBuf],
+    qemu_ok: bool,
+) -> Result<(), String> {
+    clippy_firmware(board.target, Some(feature))?;
+    let elf = build(board.target, bank.features(), FW_BIN)?;
+    check_map(&elf, "mps2")?;
+    if qemu_ok {
+        let host = firmware_host_args(board.target, bank);
+        for capture in captures {
+            spawn_equivalence(pool, EQUIVALENCE_STEP, board, &elf, capture, &host, |_| {
+                Ok(())
+            });
+        }
     }
     Ok(())
 }
