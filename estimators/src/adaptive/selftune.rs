@@ -129,9 +129,10 @@ const CANDIDATES: usize = 3;
 const GAINS: usize = 2;
 
 /// `gains` (`wn` rad/s, `zeta`) with gain `i` brought within its range and then within the
-/// damped frequency's limit `wd_max` (rad/s) given the other gain, which stays. The other gain
-/// in its range keeps the result in range: `wn` no lower than `WN_MIN <= wd_max`, `zeta` no
-/// higher than it was.
+/// damped frequency's limit `wd_max` (rad/s) given the other gain, which stays. `wn`'s
+/// projection lowers it, no lower than `wd_max >= WN_MIN`; `zeta`'s raises it, and stays
+/// within its range only when `wn` is within its own (at most `wd_max / sqrt(1 - 0.05^2)`), so
+/// [`fit_both`] fits `wn` first.
 fn fit(
     mut gains: [f64; GAINS],
     i: usize,
@@ -152,9 +153,10 @@ fn fit(
     gains
 }
 
-/// [`fit`] of the damping, then of the bandwidth given it.
+/// [`fit`] of the bandwidth, then of the damping given it: both within their ranges and the
+/// damped frequency's limit.
 fn fit_both(gains: [f64; GAINS], ranges: &[(f64, f64); GAINS], wd_max: f64) -> [f64; GAINS] {
-    fit(fit(gains, 1, ranges, wd_max), 0, ranges, wd_max)
+    fit(fit(gains, 0, ranges, wd_max), 1, ranges, wd_max)
 }
 
 /// ILO1's gains where a [`SelfTuningProductBank`] settled.

@@ -1035,3 +1035,33 @@ fn the_self_tuning_bank_follows_a_change_of_motion() {
     assert!(wn > 2.0 * slow_wn, "wn {slow_wn} -> {wn}");
     assert!(err_a < err_before / 5.0, "{err_a} vs {err_before}");
 }
+
+/// At the NAV440's lowest packet rate (2 Hz) the start (25.5 rad/s) is beyond the damped
+/// frequency's limit (80 % of Nyquist, 5.03 rad/s): the bank starts within every bound, the
+/// damping in [0.05, 0.9]; and so does a bank that takes over from one tuned at 100 Hz.
+#[test]
+fn the_self_tuning_bank_starts_within_its_bounds_at_2_hz() {
+    use crate::EstimatorBank;
+    let within = |b: &SelfTuningProductBank<f32>, dt: f64| {
+        let (wn, zeta) = b.gains();
+        let wd = wn * libm::sqrt(1.0 - zeta * zeta);
+        assert!((0.05..=0.9).contains(&zeta), "zeta {zeta}");
+        assert!(wn >= 2.0 && wd <= 0.8 * core::f64::consts::PI / dt * (1.0 + 1e-12));
+    };
+    let mut slow = crate::BankConfig::NAV440;
+    slow.sample_period_s = 0.5;
+    let slow = slow.with_nav440_gains();
+    let tune = SelfTuneConfig::DEFAULT;
+    let mut a = SelfTuningProductBank::<f32>::new(&slow, &tune).unwrap();
+    within(&a, f64::from(0.5f32));
+    let fast = SelfTuningProductBank::<f32>::new(
+        &crate::BankConfig::NAV440,
+        &SelfTuneConfig {
+            wn0_rad_s: 129.0,
+            ..tune
+        },
+    )
+    .unwrap();
+    a.take_over(&fast);
+    within(&a, f64::from(0.5f32));
+}
