@@ -94,8 +94,9 @@ fn main() {
 /// (`PeriodEstimator` over a steady stream, an `f32` in s, by its bits), the value the bank
 /// `nav440_pipeline::axis_bank` builds for it for an axis that wraps at +-180 deg (yaw), with
 /// the preset's gains for that rate (`BankConfig::NAV440.with_nav440_gains()`, what
-/// `src/pipeline.rs` builds without the table), as postcard bytes (`estimators`' `serde`
-/// form: the input stage and the laws). An axis that does not wrap (pitch) reads the same
+/// `src/pipeline.rs` builds without the table), as its words (`Bank::put_words`: the input
+/// stage and the laws, `estimators::words`), each an `i64` in postcard's form (a zigzag
+/// varint: a small or zero word takes one byte). An axis that does not wrap (pitch) reads the same
 /// entry back and switches its unwrapping off (`Bank::set_wrap`: the laws do not depend on
 /// it). The same `Bank::new` runs in the host tools, in IEEE `f64` as here, so a bank read
 /// back equals the one `nav440 estimate --bank product` (`--fixed`) builds.
@@ -119,7 +120,7 @@ fn prebuilt_banks() -> Option<String> {
 }
 
 /// The source of the table of [`prebuilt_banks`] for banks in `T`.
-fn bank_table<T: estimators::Real + serde::Serialize>() -> String {
+fn bank_table<T: estimators::Real + estimators::words::Words>() -> String {
     use estimators::{BankConfig, ProductBank};
     use nav440_pipeline::{period::PeriodEstimator, period::WARMUP_SAMPLES, Axis};
     use std::fmt::Write;
@@ -137,12 +138,15 @@ fn bank_table<T: estimators::Real + serde::Serialize>() -> String {
             .with_nav440_gains();
         let bank: ProductBank<T> = nav440_pipeline::axis_bank(Axis::Yaw, &cfg)
             .unwrap_or_else(|e| panic!("firmware-example: the bank at {rate:?}: {e}"));
-        let bytes = postcard::to_stdvec(&bank).expect("a bank serializes");
+        let mut bytes = Vec::new();
+        bank.put_words(&mut |w| {
+            bytes.extend(postcard::to_stdvec(&w).expect("an i64 serializes"));
+        });
         entries.push((cfg.sample_period_s, bytes));
     }
     let mut src = String::from(
         "/// The product banks build.rs built (`prebuilt_banks`): (the nominal period's `f32` \
-         /// bits, the postcard bytes of the bank of an axis that wraps at +-180 deg).\n",
+         /// bits, the words of the bank of an axis that wraps at +-180 deg, as postcard `i64`s).\n",
     );
     let _ = writeln!(
         src,

@@ -1,5 +1,6 @@
 //! From samples at the sensor rate to steps of size `h`.
 
+use crate::words::{WordReader, Words};
 use crate::{ConfigError, Estimator, Hold, Real, SampleError};
 
 /// What the sample clock decided for one accepted sample.
@@ -22,7 +23,6 @@ pub enum Tick {
 /// `max_gap` gives [`Tick::Gap`]. A timestamp not later than the previous one is refused and
 /// leaves the clock unchanged.
 #[derive(Clone, Copy, Debug)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct SampleClock {
     h_us: u64,
     max_gap_us: u64,
@@ -103,6 +103,24 @@ impl SampleClock {
     /// Forgets the last sample (the next one is a k = 0 sample).
     pub fn clear(&mut self) {
         self.last = None;
+    }
+}
+
+/// Its words ([`crate::words`]): the step and the gap rule, in us; it reads back with no
+/// sample seen, as [`SampleClock::new`] builds it.
+impl Words for SampleClock {
+    fn put_words(&self, out: &mut dyn FnMut(i64)) {
+        self.h_us.put_words(out);
+        self.max_gap_us.put_words(out);
+    }
+    fn take_words(r: &mut WordReader<'_>) -> Self {
+        Self {
+            h_us: u64::take_words(r),
+            max_gap_us: u64::take_words(r),
+            last: None,
+            last_dt: 0,
+            last_n: 0,
+        }
     }
 }
 

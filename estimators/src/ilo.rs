@@ -7,6 +7,7 @@ use crate::error::positive;
 use crate::family::{geometric, Family, Gains, LawVisitor, Scheduling};
 use crate::law::{Law, Stateful};
 use crate::linear::{LinearLaw, LIN_MAX};
+use crate::words::{WordReader, Words};
 use crate::{ConfigError, Real};
 
 /// Parameters of the ILO velocity estimator in physical units.
@@ -99,7 +100,6 @@ impl IloConfig {
 /// Output: `v` (deg/s for `y` in deg). `D = 0` does not compile. The validated coefficients
 /// ([`crate::Law`]); the state is [`IloState`].
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct IloParams<T: Real, const D: usize> {
     hl: T,
     h: T,
@@ -122,6 +122,17 @@ pub struct IloState<T: Real, const D: usize> {
 /// The ILO as one object (parameters and state, [`crate::Estimator`]).
 /// RAM: `(D + 6)` words of `T` plus the ring index (see [`crate::ram`]).
 pub type Ilo<T, const D: usize> = Stateful<IloParams<T, D>>;
+
+/// Its words ([`crate::words`]): `h L`, `h`, `K1`, `K2` in `T`.
+impl<T: Real + Words, const D: usize> Words for IloParams<T, D> {
+    fn put_words(&self, out: &mut dyn FnMut(i64)) {
+        [self.hl, self.h, self.k1, self.k2].put_words(out);
+    }
+    fn take_words(r: &mut WordReader<'_>) -> Self {
+        let [hl, h, k1, k2] = <[T; 4]>::take_words(r);
+        Self { hl, h, k1, k2 }
+    }
+}
 
 impl<T: Real, const D: usize> IloParams<T, D> {
     const D_POSITIVE: () = assert!(

@@ -37,6 +37,7 @@
 use crate::error::positive;
 use crate::family::{geometric, Gains, LawVisitor};
 use crate::law::Law;
+use crate::words::{WordReader, Words};
 use crate::{ConfigError, Hold, Real};
 
 /// Longest sample interval the tracker integrates across, in nominal periods: an interval of
@@ -228,8 +229,6 @@ fn predict_update<T: Real>(k: &[T; 3], s: &mut KalmanState<T>, y: T, dt: T) {
 /// Which estimate a [`KalmanParams`] law reports as its output.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum KalmanOutput {
     /// The velocity estimate `v` (unit/s).
     #[default]
@@ -249,7 +248,6 @@ pub enum KalmanOutput {
 /// `k >` [`MAX_SUBSTEPS`]: the state is re-initialised at `y_new` (a bank's gap rule acts
 /// before). One [`Law::step`] is one predict + update with `dt = h`. State: [`KalmanState`].
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct KalmanParams<T: Real> {
     k: [T; 3],
     h: T,
@@ -269,6 +267,26 @@ pub struct KalmanState<T: Real> {
     pub v: T,
     /// Acceleration (unit/s^2).
     pub a: T,
+}
+
+/// Its words ([`crate::words`]): the gain `K`, `h`, `n0`, `n0 h` and the reported estimate.
+impl<T: Real + Words> Words for KalmanParams<T> {
+    fn put_words(&self, out: &mut dyn FnMut(i64)) {
+        self.k.put_words(out);
+        self.h.put_words(out);
+        self.n0.put_words(out);
+        self.dt0.put_words(out);
+        self.output.put_words(out);
+    }
+    fn take_words(r: &mut WordReader<'_>) -> Self {
+        Self {
+            k: Words::take_words(r),
+            h: T::take_words(r),
+            n0: u32::take_words(r),
+            dt0: T::take_words(r),
+            output: KalmanOutput::take_words(r),
+        }
+    }
 }
 
 impl<T: Real> KalmanParams<T> {

@@ -100,6 +100,7 @@ mod real;
 mod series;
 mod traits;
 mod unwrap;
+pub mod words;
 
 pub use ad::{Ad, AdConfig, AdFamily, AdParams, AdState};
 pub use adapter::{SampleAdapter, SampleClock, Tick};

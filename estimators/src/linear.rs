@@ -18,6 +18,7 @@
 //! small (an error, not an absolute angle) so nothing cancels.
 
 use crate::law::{Law, Stateful};
+use crate::words::{WordReader, Words};
 use crate::{Hold, Real};
 
 /// The largest state dimension a closed-form map supports (a series of two ILOs with `D = 1`).
@@ -48,20 +49,36 @@ pub trait LinearLaw: Law {
 /// RAM (parameters): the inner law plus `(LIN_MAX^2 + LIN_MAX)` words of `T` and the
 /// `n`/mode tag.
 #[derive(Clone, Copy, Debug)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[cfg_attr(
-    feature = "serde",
-    serde(bound(
-        serialize = "E: serde::Serialize, E::Num: serde::Serialize",
-        deserialize = "E: serde::Deserialize<'de>, E::Num: serde::Deserialize<'de>"
-    ))
-)]
 pub struct ClosedForm<E: LinearLaw> {
     inner: E,
     n: u32,
     hold: Hold,
     phi: [[E::Num; LIN_MAX]; LIN_MAX],
     g: [E::Num; LIN_MAX],
+}
+
+/// Its words ([`crate::words`]): the inner law's, `n`, the hold, the map's matrix (row by row)
+/// and its input vector.
+impl<E: LinearLaw + Words> Words for ClosedForm<E>
+where
+    E::Num: Words,
+{
+    fn put_words(&self, out: &mut dyn FnMut(i64)) {
+        self.inner.put_words(out);
+        self.n.put_words(out);
+        self.hold.put_words(out);
+        self.phi.put_words(out);
+        self.g.put_words(out);
+    }
+    fn take_words(r: &mut WordReader<'_>) -> Self {
+        Self {
+            inner: E::take_words(r),
+            n: u32::take_words(r),
+            hold: Hold::take_words(r),
+            phi: Words::take_words(r),
+            g: Words::take_words(r),
+        }
+    }
 }
 
 impl<E: LinearLaw> ClosedForm<E> {

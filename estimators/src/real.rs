@@ -38,22 +38,6 @@ impl Fx {
     }
 }
 
-/// Serialized as its raw bits ([`Fx::to_bits`], an `i64`): exact, and integer-only both ways.
-#[cfg(feature = "serde")]
-impl serde::Serialize for Fx {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_i64(self.to_bits())
-    }
-}
-
-/// Read back from its raw bits ([`Fx::from_bits`]).
-#[cfg(feature = "serde")]
-impl<'de> serde::Deserialize<'de> for Fx {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        <i64 as serde::Deserialize>::deserialize(d).map(Fx::from_bits)
-    }
-}
-
 impl Debug for Fx {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         Debug::fmt(&self.0, f)

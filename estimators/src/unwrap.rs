@@ -13,7 +13,6 @@ use crate::Real;
 /// the same way (at most one turn per sample). Computed in `T` (no floating point for
 /// [`crate::Fx`]). RAM: one word of `T`, an `i64` and a flag.
 #[derive(Clone, Copy, Debug, Default)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Unwrapper<T: Real> {
     prev: T,
     turns: i64,

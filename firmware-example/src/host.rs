@@ -217,11 +217,17 @@ unsafe fn DefaultHandler(irqn: i16) {
     }
 }
 
-/// Reports an interrupt nothing handles and exits. Out of line, so the line buffer is not in
-/// the frame every receive interrupt stacks on `main`'s (the soak's stack bound counts it).
+/// Reports an interrupt nothing handles and exits: on the host's standard error under QEMU, and
+/// on a chip (no semihosting host) through defmt, after which the core parks. Out of line, so
+/// the line buffer is not in the frame every receive interrupt stacks on `main`'s (the soak's
+/// stack bound counts it).
 #[cold]
 #[inline(never)]
 fn unexpected_irq(irqn: i16) -> ! {
+    if !crate::board::host_present() {
+        defmt::println!("firmware: unexpected exception/IRQ {=i16}", irqn);
+        park()
+    }
     let mut line = Line::new();
     line.str("firmware: unexpected exception/IRQ ");
     if irqn < 0 {

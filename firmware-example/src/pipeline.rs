@@ -96,9 +96,14 @@ fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
         .iter()
         .find(|(k, _)| *k == key)
         .ok_or(ConfigError::SamplePeriodNotPrebuilt)?;
-    // Cannot fail: the bytes are the serialized form of this very type (build.rs).
-    let mut bank: Bank =
-        postcard::from_bytes(bytes).map_err(|_| ConfigError::SamplePeriodNotPrebuilt)?;
+    // Cannot fail: the bytes are the words of this very type (build.rs).
+    let mut rest: &[u8] = bytes;
+    let mut next = || {
+        let (w, r) = postcard::take_from_bytes::<i64>(rest).ok()?;
+        rest = r;
+        Some(w)
+    };
+    let mut bank = Bank::from_words(&mut next).ok_or(ConfigError::SamplePeriodNotPrebuilt)?;
     // The table holds the banks of the axes that wrap; the others unwrap nothing.
     if !axis.wraps() {
         bank.set_wrap(estimators::Wrap::None);
@@ -158,8 +163,17 @@ pub type Reference = nav440_pipeline::EulerReference;
 #[cfg(feature = "no-reference")]
 pub type Reference = nav440_pipeline::BodyRates;
 
+/// The packets the front end decodes: every type (the default), as `nav440 estimate` does.
+#[cfg(not(feature = "only-a2"))]
+pub type Decoder = nav440_pipeline::AllPackets;
+/// The packets the front end decodes (feature `only-a2`): A2 only, the type the firmware
+/// configures (`TARGET`); another type's frames are not estimated from.
+#[cfg(feature = "only-a2")]
+pub type Decoder = nav440_pipeline::OnlyA2;
+
 /// The firmware's pipeline with the rate column `R` (the bench measures both).
-pub type PipelineWith<R> = nav440_pipeline::Pipeline<Bank, ConfigError, BuildFn, BANK_SLOTS, R>;
+pub type PipelineWith<R> =
+    nav440_pipeline::Pipeline<Bank, ConfigError, BuildFn, BANK_SLOTS, R, Decoder>;
 
 /// The firmware's pipeline.
 pub type Pipeline = PipelineWith<Reference>;

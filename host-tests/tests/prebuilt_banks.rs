@@ -1,11 +1,12 @@
-//! A product bank read back from its serialized form (the table of banks the fixed-point
-//! firmware images carry, built by `firmware-example/build.rs` on the host) is the bank
-//! `Bank::new` builds: the same parameters and state, and bit for bit the same outputs on a
+//! A product bank read back from its words (`Bank::put_words`, `Bank::from_words`: the table of
+//! banks the product firmware images carry, built by `firmware-example/build.rs` on the host,
+//! each word a postcard varint) is the bank `Bank::new` builds: the same parameters and state, and bit for bit the same outputs on a
 //! stream with turns, a gap and a rate change. Checked for every NAV440 packet rate, both
 //! kinds of axis (wrapping at +-180 deg or not), in `Fx` and in `f32`. The table holds the
 //! wrapping axes' banks only: one read back and switched to `Wrap::None` (`Bank::set_wrap`)
 //! is the bank built for pitch.
 
+use estimators::words::Words;
 use estimators::{BankConfig, Fx, ProductBank, Real};
 use nav440_pipeline::period::{PeriodEstimator, WARMUP_SAMPLES};
 use nav440_pipeline::{axis_bank, Axis};
@@ -66,37 +67,61 @@ fn assert_same_run<T: Real>(
     }
 }
 
-fn round_trip<T: Real + serde::Serialize + for<'de> serde::Deserialize<'de>>() {
+/// The bank's words.
+fn words<T: Real + Words>(bank: &ProductBank<T>) -> Vec<i64> {
+    let mut w = Vec::new();
+    bank.put_words(&mut |x| w.push(x));
+    w
+}
+
+/// The bank `words` give (`None`: refused).
+fn read<T: Real + Words>(words: &[i64]) -> Option<ProductBank<T>> {
+    let mut it = words.iter().copied();
+    ProductBank::<T>::from_words(&mut || it.next())
+}
+
+/// A table entry as build.rs stores it: every word as a postcard `i64`.
+fn table_bytes(words: &[i64]) -> Vec<u8> {
+    words
+        .iter()
+        .flat_map(|w| postcard::to_stdvec(w).unwrap())
+        .collect()
+}
+
+fn round_trip<T: Real + Words>() {
     for divider in dividers() {
         let cfg = config(divider);
         for axis in [Axis::Yaw, Axis::Pitch] {
             let built: ProductBank<T> = axis_bank(axis, &cfg).unwrap();
-            let bytes = postcard::to_stdvec(&built).unwrap();
-            let mut read: ProductBank<T> = postcard::from_bytes(&bytes).unwrap();
+            let w = words(&built);
+            let mut back: ProductBank<T> = read(&w).unwrap();
             assert_eq!(
-                format!("{read:?}"),
+                format!("{back:?}"),
                 format!("{built:?}"),
                 "{divider} {axis:?}"
             );
-            // What a table entry costs in flash (build.rs stores one per rate and axis kind).
-            assert!(bytes.len() <= 160, "{} bytes", bytes.len());
+            // What a table entry costs in flash (build.rs stores one per rate).
+            assert!(
+                table_bytes(&w).len() <= 160,
+                "{} bytes",
+                table_bytes(&w).len()
+            );
+            // A word missing or one too many is refused.
+            assert!(read::<T>(&w[..w.len() - 1]).is_none());
+            let mut long = w.clone();
+            long.push(0);
+            assert!(read::<T>(&long).is_none());
             let mut fresh = built;
             assert_same_run(
                 &mut fresh,
-                &mut read,
+                &mut back,
                 10_000 * u64::from(divider),
                 turning_yaw,
             );
-            // A bank that has run serializes its laws, not their state: it reads back
-            // restarted (`Bank::restart`; the input stage keeps its re-init count).
-            let after = postcard::to_stdvec(&fresh).unwrap();
-            let again: ProductBank<T> = postcard::from_bytes(&after).unwrap();
-            fresh.restart();
-            assert_eq!(
-                format!("{again:?}"),
-                format!("{fresh:?}"),
-                "{divider} {axis:?}"
-            );
+            // A bank that has run has the words of the bank built: its laws, not their state
+            // (it reads back restarted, with no re-initialisation counted).
+            assert!(fresh.reinit_count() > 0);
+            assert_eq!(words(&fresh), w, "{divider} {axis:?}");
         }
     }
 }
@@ -105,17 +130,16 @@ fn round_trip<T: Real + serde::Serialize + for<'de> serde::Deserialize<'de>>() {
 /// (`Bank::set_wrap`, what the firmware does for pitch), is the bank built for pitch: the
 /// same parameters, state and configuration, and bit for bit the same outputs on a pitch that
 /// swings within +-90 deg with a gap and a rate change ([`assert_same_run`]).
-fn set_wrap_is_the_pitch_bank<T: Real + serde::Serialize + for<'de> serde::Deserialize<'de>>() {
+fn set_wrap_is_the_pitch_bank<T: Real + Words>() {
     for divider in dividers() {
         let cfg = config(divider);
         let yaw: ProductBank<T> = axis_bank(Axis::Yaw, &cfg).unwrap();
         let mut pitch: ProductBank<T> = axis_bank(Axis::Pitch, &cfg).unwrap();
-        let bytes = postcard::to_stdvec(&yaw).unwrap();
-        let read: ProductBank<T> = postcard::from_bytes(&bytes).unwrap();
-        let mut switched = read;
+        let back: ProductBank<T> = read(&words(&yaw)).unwrap();
+        let mut switched = back;
         switched.set_wrap(estimators::Wrap::None);
         assert_eq!(format!("{switched:?}"), format!("{pitch:?}"), "{divider}");
-        assert_ne!(format!("{read:?}"), format!("{pitch:?}"), "{divider}");
+        assert_ne!(format!("{back:?}"), format!("{pitch:?}"), "{divider}");
         assert_same_run(
             &mut switched,
             &mut pitch,

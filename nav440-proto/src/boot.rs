@@ -51,7 +51,7 @@ use crate::driver::{
 use crate::encode::EncodeError;
 #[cfg(feature = "defmt")]
 use crate::text::Defmt;
-use crate::text::Text;
+use crate::text::{lit, Text};
 use crate::types::{Baud, FieldId, PacketRate, PacketType};
 use crate::FRAME_OVERHEAD;
 
@@ -238,12 +238,12 @@ impl Bauds {
         let mut first = true;
         for b in SEARCH_ORDER.iter().filter(|b| self.contains(**b)) {
             if !first {
-                w.str(", ")?;
+                lit!(w, ", ")?;
             }
             w.dec(b.bits_per_second())?;
             first = false;
         }
-        w.str(" Bd")
+        lit!(w, " Bd")
     }
 }
 
@@ -307,50 +307,49 @@ impl FieldList {
 
 /// Writes `value` of field `id` with its meaning, e.g. `packet type 0x0003=0x4132 (A2)`.
 fn write_field<W: Text + ?Sized>(w: &mut W, id: FieldId, value: Option<u16>) -> fmt::Result {
-    let name = match id.0 {
-        0x0001 => "rate divider",
-        0x0002 => "baud",
-        0x0003 => "packet type",
-        0x0007 => "orientation",
-        _ => "field",
-    };
-    w.str(name)?;
-    w.str(" 0x")?;
+    match id.0 {
+        0x0001 => lit!(w, "rate divider"),
+        0x0002 => lit!(w, "baud"),
+        0x0003 => lit!(w, "packet type"),
+        0x0007 => lit!(w, "orientation"),
+        _ => lit!(w, "field"),
+    }?;
+    lit!(w, " 0x")?;
     w.hex4(id.0)?;
-    w.str("=")?;
+    lit!(w, "=")?;
     let Some(v) = value else {
-        return w.str("(missing)");
+        return lit!(w, "(missing)");
     };
     match id.0 {
         0x0001 => {
             w.dec(v.into())?;
             match PacketRate::from_divider(v) {
-                Some(PacketRate::Quiet) => w.str(" (quiet)"),
+                Some(PacketRate::Quiet) => lit!(w, " (quiet)"),
                 Some(r) => {
-                    w.str(" (")?;
+                    lit!(w, " (")?;
                     w.dec((100 / r.divider()).into())?;
-                    w.str(" Hz)")
+                    lit!(w, " Hz)")
                 }
-                None => w.str(" (undefined)"),
+                None => lit!(w, " (undefined)"),
             }
         }
         0x0002 => {
             w.dec(v.into())?;
             match Baud::from_code(v) {
                 Some(b) => {
-                    w.str(" (")?;
+                    lit!(w, " (")?;
                     w.dec(b.bits_per_second())?;
-                    w.str(" Bd)")
+                    lit!(w, " Bd)")
                 }
-                None => w.str(" (undefined)"),
+                None => lit!(w, " (undefined)"),
             }
         }
         0x0003 => {
-            w.str("0x")?;
+            lit!(w, "0x")?;
             w.hex4(v)?;
-            w.str(" (")?;
+            lit!(w, " (")?;
             w.str(PacketType::from_code(v).name())?;
-            w.str(")")
+            lit!(w, ")")
         }
         _ => w.dec(v.into()),
     }
@@ -360,18 +359,16 @@ impl FieldList {
     /// The fields with their meanings (see [`write_field`]), or `fields 0x0001, 0x0002` for IDs.
     fn text<W: Text + ?Sized>(&self, w: &mut W) -> fmt::Result {
         if self.ids_only {
-            w.str("fields")?;
+            lit!(w, "fields")?;
         }
         for (i, (id, v)) in self.iter().enumerate() {
-            w.str(if i > 0 {
-                ", "
+            if i > 0 {
+                lit!(w, ", ")?;
             } else if self.ids_only {
-                " "
-            } else {
-                ""
-            })?;
+                lit!(w, " ")?;
+            }
             if self.ids_only {
-                w.str("0x")?;
+                lit!(w, "0x")?;
                 w.hex4(id.0)?;
             } else {
                 write_field(w, id, Some(v))?;
@@ -457,27 +454,27 @@ impl<E> BootError<E> {
                 attempts,
                 timeout_ms,
             } => {
-                w.str("no answer from the unit: ")?;
+                lit!(w, "no answer from the unit: ")?;
                 w.str(request.name())?;
-                w.str(" unanswered at ")?;
+                lit!(w, " unanswered at ")?;
                 tried.text(w)?;
-                w.str(" (")?;
+                lit!(w, " (")?;
                 w.dec((*attempts).into())?;
-                w.str(" x ")?;
+                lit!(w, " x ")?;
                 w.dec(*timeout_ms)?;
-                w.str(" ms each)")
+                lit!(w, " ms each)")
             }
             BootError::Nak { request, fields } => {
-                w.str("unit rejected (NAK) ")?;
+                lit!(w, "unit rejected (NAK) ")?;
                 w.str(request.name())?;
                 if fields.is_empty() {
-                    w.str(if *request == PacketType::PK {
-                        " (ping)"
+                    if *request == PacketType::PK {
+                        lit!(w, " (ping)")
                     } else {
-                        " (request without fields)"
-                    })
+                        lit!(w, " (request without fields)")
+                    }
                 } else {
-                    w.str(": ")?;
+                    lit!(w, ": ")?;
                     fields.text(w)
                 }
             }
@@ -486,11 +483,11 @@ impl<E> BootError<E> {
                 fields,
                 accepted,
             } => {
-                w.str("unit accepted only ")?;
+                lit!(w, "unit accepted only ")?;
                 w.dec((*accepted).into())?;
-                w.str(" of the fields of ")?;
+                lit!(w, " of the fields of ")?;
                 w.str(request.name())?;
-                w.str(": ")?;
+                lit!(w, ": ")?;
                 fields.text(w)
             }
             BootError::WrongReadBack {
@@ -498,22 +495,25 @@ impl<E> BootError<E> {
                 expected,
                 got,
             } => {
-                w.str("wrong read-back (GF): expected ")?;
+                lit!(w, "wrong read-back (GF): expected ")?;
                 write_field(w, *field, Some(*expected))?;
-                w.str(", got ")?;
+                lit!(w, ", got ")?;
                 write_field(w, *field, *got)
             }
             BootError::UndefinedValue { field, value } => {
-                w.str("the unit's configuration (GF) holds an undefined value: ")?;
+                lit!(
+                    w,
+                    "the unit's configuration (GF) holds an undefined value: "
+                )?;
                 write_field(w, *field, Some(*value))
             }
             BootError::Serial(e) => {
-                w.str("serial port error: ")?;
+                lit!(w, "serial port error: ")?;
                 serial(w, e)
             }
-            BootError::WriteZero => w.str("serial port error: it accepted no byte"),
+            BootError::WriteZero => lit!(w, "serial port error: it accepted no byte"),
             BootError::Encode(e) => {
-                w.str("request could not be encoded: ")?;
+                lit!(w, "request could not be encoded: ")?;
                 e.text(w)
             }
         }
@@ -787,15 +787,15 @@ async fn sequence<L: Link>(
     }
 
     // 3./4. Baud and output, in the order that keeps the budget.
+    // Up: the baud first; down: the output first (one await of each step).
     let switched = unit_baud != target.baud;
-    if switched && target.baud.bits_per_second() > unit_baud.bits_per_second() {
+    let up = switched && target.baud.bits_per_second() > unit_baud.bits_per_second();
+    if up {
         s.switch(target.baud).await?;
-        s.set_output(target).await?;
-    } else if switched {
-        s.set_output(target).await?;
+    }
+    s.set_output(target).await?;
+    if switched && !up {
         s.switch(target.baud).await?;
-    } else {
-        s.set_output(target).await?;
     }
     if target.persist {
         let fields = target.persist_fields();

@@ -19,8 +19,9 @@
 //! cache the 16-lane loop saves few cycles per byte (every look-up is a flash load either way)
 //! while the byte loop costs a few instructions per byte (`cargo xtask bench` reports the
 //! parser's instructions per byte, CRC included). The cargo feature `crc-table16` forces
-//! `Table<16>` on bare metal too (e.g. a Cortex-M7 with caches). Any of the three can be
-//! picked per parser with [`Parser::with_crc_table`](crate::Parser::with_crc_table).
+//! `Table<16>` on bare metal too (e.g. a Cortex-M7 with caches), and `crc-no-table` picks
+//! `Table<0>` there (a part with little flash: 32 KiB). Any of the three can be picked per
+//! parser with [`Parser::with_crc_table`](crate::Parser::with_crc_table).
 
 use crc::{Crc, Table, CRC_16_SPI_FUJITSU};
 
@@ -142,9 +143,24 @@ impl Crc16Table for Table<16> {
 pub type DefaultCrcTable = Table<16>;
 
 /// The table variant used by [`Parser::new`](crate::Parser::new) and the encoders
-/// (`Table<16>` on hosted targets or with feature `crc-table16`, else `Table<1>`).
-#[cfg(all(not(feature = "crc-table16"), target_os = "none"))]
+/// (`Table<16>` on hosted targets or with feature `crc-table16`, `Table<0>` with feature
+/// `crc-no-table`, else `Table<1>`).
+#[cfg(all(
+    not(feature = "crc-table16"),
+    not(feature = "crc-no-table"),
+    target_os = "none"
+))]
 pub type DefaultCrcTable = Table<1>;
+
+/// The table variant used by [`Parser::new`](crate::Parser::new) and the encoders
+/// (`Table<16>` on hosted targets or with feature `crc-table16`, `Table<0>` with feature
+/// `crc-no-table`, else `Table<1>`).
+#[cfg(all(
+    not(feature = "crc-table16"),
+    feature = "crc-no-table",
+    target_os = "none"
+))]
+pub type DefaultCrcTable = Table<0>;
 
 /// CRC-16 of a NAV440 message (type + length + payload, i.e. a frame without its preamble and
 /// CRC), with the [`DefaultCrcTable`].

@@ -181,7 +181,8 @@ impl<'f> ReplyWait<'f> {
     /// Takes one frame; `Break` once the outcome is known.
     fn on_frame(&mut self, frame: Frame<'_>) -> ControlFlow<()> {
         let mine = frame.packet_type == self.request;
-        match (Packet::decode(frame), &self.want) {
+        // Only the replies are decoded: every other frame is unsolicited whatever it holds.
+        match (Packet::decode_reply(frame), &self.want) {
             (Ok(Packet::Nak(n)), _) if n.failed_type() == self.request => self.nak = true,
             (Ok(Packet::Ping), Want::Ping) => self.accepted = Some(1),
             (Ok(Packet::SetFields(ids) | Packet::WriteFields(ids)), Want::Fields(f)) if mine => {

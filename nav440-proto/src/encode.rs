@@ -3,7 +3,7 @@
 use crate::crc16::{Crc16Table, DefaultCrcTable};
 use crate::packets::{DecodeError, FieldIds, FieldValues};
 use crate::parser::Frame;
-use crate::text::Text;
+use crate::text::{lit, Text};
 use crate::types::{FieldId, PacketType};
 use crate::{copy_bytes, FRAME_OVERHEAD, MAX_PAYLOAD, PREAMBLE_BYTE};
 
@@ -29,16 +29,16 @@ impl EncodeError {
         let n = |v: usize| u32::try_from(v).unwrap_or(u32::MAX);
         match self {
             EncodeError::PayloadTooLong { len } => {
-                w.str("payload of ")?;
+                lit!(w, "payload of ")?;
                 w.dec(n(*len))?;
-                w.str(" bytes exceeds the maximum of ")?;
+                lit!(w, " bytes exceeds the maximum of ")?;
                 w.dec(n(MAX_PAYLOAD))?;
-                w.str(" bytes")
+                lit!(w, " bytes")
             }
             EncodeError::BufferTooSmall { needed } => {
-                w.str("output buffer too small: the frame needs ")?;
+                lit!(w, "output buffer too small: the frame needs ")?;
                 w.dec(n(*needed))?;
-                w.str(" bytes")
+                lit!(w, " bytes")
             }
         }
     }

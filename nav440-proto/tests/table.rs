@@ -351,3 +351,31 @@ fn bit_flags_are_named_as_in_the_document() {
     // Reserved bits (4-7, 13-15) have no name but show in the hex.
     assert_eq!(Bit(0x00F0).to_string(), "0x00F0");
 }
+
+proptest! {
+    /// The reply decoder the driver's wait links (`Packet::decode_reply`) gives what the full
+    /// decoder gives for the replies (NAK, PK, SF, WF, GF, RF: the packet or the same error),
+    /// and leaves every other type undecoded (`Packet::Unknown` of the same frame).
+    #[test]
+    fn the_reply_decoder_is_the_full_one_for_replies(
+        k in 0..PacketType::KNOWN.len() + 1,
+        payload in proptest::collection::vec(any::<u8>(), 0..40),
+    ) {
+        let t = PacketType::KNOWN.get(k).copied().unwrap_or(PacketType(*b"zz"));
+        let frame = Frame { packet_type: t, payload: &payload };
+        let replies = [
+            PacketType::NAK,
+            PacketType::PK,
+            PacketType::SF,
+            PacketType::WF,
+            PacketType::GF,
+            PacketType::RF,
+        ];
+        let reply = Packet::decode_reply(frame);
+        if replies.contains(&t) {
+            prop_assert_eq!(reply, Packet::decode(frame));
+        } else {
+            prop_assert_eq!(reply, Ok(Packet::Unknown(frame)));
+        }
+    }
+}

@@ -71,7 +71,9 @@ pub use pipeline::{
     Row, ROW_CAPACITY,
 };
 pub use reference::{BodyRates, EulerReference, RateColumn, Reference};
-pub use sample::{attitude, Attitude, FrameSeen, FrontCounters, Frontend, Sample};
+pub use sample::{
+    attitude, AllPackets, Attitude, Decoder, FrameSeen, FrontCounters, Frontend, OnlyA2, Sample,
+};
 
 /// The examples of the crate README, compiled and run as doc tests.
 #[cfg(doctest)]

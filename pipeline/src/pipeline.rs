@@ -40,7 +40,7 @@
 
 use crate::period::{PeriodEstimator, WARMUP_SAMPLES};
 use crate::reference::{EulerReference, Reference};
-use crate::sample::{Frontend, Sample};
+use crate::sample::{AllPackets, Decoder, Frontend, Sample};
 use crate::watch::{Event, StreamWatch};
 use crate::{Axes, Axis};
 use core::marker::PhantomData;
@@ -573,14 +573,16 @@ pub type CsvLine = heapless::String<ROW_CAPACITY>;
 ///     .unwrap();
 /// assert_eq!(header, "t,yaw,yaw_body_rate,ilo1_v,kf_a");
 /// ```
-pub struct Pipeline<B, E, F, const N: usize = 3, R = EulerReference> {
-    front: Frontend,
+pub struct Pipeline<B, E, F, const N: usize = 3, R = EulerReference, D = AllPackets> {
+    front: Frontend<D>,
     est: Estimation<B, E, F, N, R>,
     format_errors: u64,
     watch: Option<StreamWatch>,
 }
 
-impl<B, E, F, const N: usize, R> core::fmt::Debug for Pipeline<B, E, F, N, R> {
+impl<B, E, F, const N: usize, R, D: core::fmt::Debug> core::fmt::Debug
+    for Pipeline<B, E, F, N, R, D>
+{
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("Pipeline")
             .field("front", &self.front)
@@ -596,13 +598,14 @@ impl<
         F: FnMut(Axis, &BankConfig) -> Result<B, E>,
         const N: usize,
         R: Reference,
-    > Pipeline<B, E, F, N, R>
+        D: Decoder + Default,
+    > Pipeline<B, E, F, N, R, D>
 {
     /// A pipeline with `N` bank slots estimating the first `N` of `axes`, rows with the rate
     /// column `R` (see [`Estimation::with_slots`]).
     pub fn with_slots(axes: Axes, cfg: BankConfig, build: F) -> Self {
         Self {
-            front: Frontend::new(),
+            front: Frontend::default(),
             est: Estimation::with_slots(axes, cfg, build),
             format_errors: 0,
             watch: None,
@@ -713,7 +716,7 @@ impl<
     }
 
     /// The front end (parser statistics, front counters, time faults).
-    pub fn front(&self) -> &Frontend {
+    pub fn front(&self) -> &Frontend<D> {
         &self.front
     }
 

@@ -43,8 +43,9 @@ pub fn feed<
     F: FnMut(crate::Axis, &estimators::BankConfig) -> Result<B, E>,
     const N: usize,
     R: crate::Reference,
+    D: crate::Decoder + Default,
 >(
-    pipe: &mut Pipeline<B, E, F, N, R>,
+    pipe: &mut Pipeline<B, E, F, N, R, D>,
     bytes: &[u8],
     now_ms: u32,
     emit: &mut dyn FnMut(&Row<B::Output>),
@@ -77,8 +78,9 @@ pub fn finish<
     F: FnMut(crate::Axis, &estimators::BankConfig) -> Result<B, E>,
     const N: usize,
     R: crate::Reference,
+    D: crate::Decoder + Default,
 >(
-    pipe: &mut Pipeline<B, E, F, N, R>,
+    pipe: &mut Pipeline<B, E, F, N, R, D>,
     emit: &mut dyn FnMut(&Row<B::Output>),
 ) -> Result<(), E> {
     let changes = pipe.estimation().counters().period_changes;
@@ -96,8 +98,9 @@ pub fn silence<
     F: FnMut(crate::Axis, &estimators::BankConfig) -> Result<B, E>,
     const N: usize,
     R: crate::Reference,
+    D: crate::Decoder + Default,
 >(
-    pipe: &mut Pipeline<B, E, F, N, R>,
+    pipe: &mut Pipeline<B, E, F, N, R, D>,
     now_ms: u32,
 ) -> bool {
     match pipe.poll_watch(now_ms) {
@@ -158,8 +161,9 @@ pub fn period_change<
     F: FnMut(crate::Axis, &estimators::BankConfig) -> Result<B, E>,
     const N: usize,
     R: crate::Reference,
+    D: crate::Decoder + Default,
 >(
-    pipe: &Pipeline<B, E, F, N, R>,
+    pipe: &Pipeline<B, E, F, N, R, D>,
     before: u32,
 ) {
     if pipe.estimation().counters().period_changes != before {
@@ -187,8 +191,9 @@ pub fn summary<
     F: FnMut(crate::Axis, &estimators::BankConfig) -> Result<B, E>,
     const N: usize,
     R: crate::Reference,
+    D: crate::Decoder + Default,
 >(
-    pipe: &Pipeline<B, E, F, N, R>,
+    pipe: &Pipeline<B, E, F, N, R, D>,
     uart_overruns: u32,
     uart_stalls: u32,
     unit_bytes: u64,

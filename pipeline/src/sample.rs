@@ -4,8 +4,9 @@
 use crate::bit::BitCounts;
 use crate::reference::{EulerReference, Reference};
 use crate::Axis;
+use core::marker::PhantomData;
 use nav440_proto::{
-    Bit, Frame, Packet, PacketType, Parser, TimeBase, TimeFaults, TimeStamp, Timed,
+    Bit, DecodeError, Frame, Packet, PacketType, Parser, TimeBase, TimeFaults, TimeStamp, Timed, A2,
 };
 
 /// What the pipeline takes from a packet that carries the attitude.
@@ -25,6 +26,13 @@ pub struct Attitude {
 /// The attitude of a packet that carries one (A0, A1, A2, N0, N1, B1), from the packets'
 /// public accessors; `None` for any other packet.
 pub fn attitude(packet: &Packet<'_>) -> Option<Attitude> {
+    attitude_of(packet)
+}
+
+/// [`attitude`], inlined where it is called: a caller that knows the packet's type keeps that
+/// type's arm only ([`OnlyA2`]).
+#[inline(always)]
+fn attitude_of(packet: &Packet<'_>) -> Option<Attitude> {
     macro_rules! att {
         ($p:expr, $yaw:ident) => {
             (
@@ -203,9 +211,61 @@ pub struct FrameSeen {
     pub time: Option<TimeStamp>,
 }
 
-/// One CRC-valid frame through the decoder, the BIT check and the time base; `seen` gets
+/// The packets the front end decodes and estimates from ([`Frontend`]'s `D`).
+pub trait Decoder {
+    /// Decodes a CRC-valid frame: [`Packet::Unknown`] for a type this decoder does not decode
+    /// (counted as a frame only), `Err` for one of its types that does not decode (a wrong
+    /// payload length, counted in [`FrontCounters::decode_errors`]).
+    fn decode(frame: Frame<'_>) -> Result<Packet<'_>, DecodeError>;
+    /// The attitude of a packet [`Self::decode`] gave ([`attitude`]).
+    fn attitude(packet: &Packet<'_>) -> Option<Attitude>;
+}
+
+/// Every packet type of the protocol ([`Packet::decode`], then [`attitude`]): the host tools'
+/// and the firmware images' front end.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct AllPackets;
+
+impl Decoder for AllPackets {
+    #[inline]
+    fn decode(frame: Frame<'_>) -> Result<Packet<'_>, DecodeError> {
+        Packet::decode(frame)
+    }
+    #[inline]
+    fn attitude(packet: &Packet<'_>) -> Option<Attitude> {
+        attitude(packet)
+    }
+}
+
+/// A2 only, the packet type the firmware configures (`nav440_proto::boot::Target::DEFAULT`): A2's
+/// decoder alone is linked, not the packet table's. Every other frame is counted as a frame
+/// and not estimated from, as [`AllPackets`] treats a packet without the attitude; an A2
+/// stream gives the same samples as with [`AllPackets`]. For a part with little flash (the
+/// NUCLEO-G031K8's image, docs/PORTING.md).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct OnlyA2;
+
+impl Decoder for OnlyA2 {
+    #[inline]
+    fn decode(frame: Frame<'_>) -> Result<Packet<'_>, DecodeError> {
+        if frame.packet_type == PacketType::A2 {
+            A2::new(frame.payload).map(Packet::A2)
+        } else {
+            Ok(Packet::Unknown(frame))
+        }
+    }
+    #[inline]
+    fn attitude(packet: &Packet<'_>) -> Option<Attitude> {
+        match packet {
+            Packet::A2(_) => attitude_of(packet),
+            _ => None,
+        }
+    }
+}
+
+/// One CRC-valid frame through the decoder `D`, the BIT check and the time base; `seen` gets
 /// the frame first.
-fn on_frame(
+fn on_frame<D: Decoder>(
     frame: Frame<'_>,
     clock: &mut TimeBase<Payload>,
     counters: &mut FrontCounters,
@@ -214,7 +274,7 @@ fn on_frame(
 ) {
     counters.frames = counters.frames.saturating_add(1);
     let packet_type = frame.packet_type;
-    let packet = match Packet::decode(frame) {
+    let packet = match D::decode(frame) {
         Ok(p) => p,
         Err(_) => {
             counters.decode_errors = counters.decode_errors.saturating_add(1);
@@ -225,7 +285,7 @@ fn on_frame(
             return;
         }
     };
-    let Some(a) = attitude(&packet) else {
+    let Some(a) = D::attitude(&packet) else {
         seen(&FrameSeen {
             packet_type,
             time: None,
@@ -249,19 +309,24 @@ fn on_frame(
 /// bytes -> parser -> attitude packets -> BIT check -> time base -> [`Sample`]s, in any
 /// chunking; samples come out in stream order (a suspicious time stamp is released one
 /// sample late, see `TimeBase`). Call [`Frontend::finish`] at the end of a finite input.
+/// `D`: the packets it decodes ([`Decoder`]; every type by default).
 #[derive(Debug, Default)]
-pub struct Frontend {
+pub struct Frontend<D = AllPackets> {
     parser: Parser,
     clock: TimeBase<Payload>,
     counters: FrontCounters,
+    decoder: PhantomData<D>,
 }
 
 impl Frontend {
-    /// A front end at the start of a stream.
+    /// A front end at the start of a stream, decoding every packet type ([`AllPackets`];
+    /// another decoder: `Frontend::<D>::default()`).
     pub fn new() -> Self {
         Self::default()
     }
+}
 
+impl<D: Decoder> Frontend<D> {
     /// Feeds bytes; `out` gets every sample released.
     pub fn feed(&mut self, bytes: &[u8], out: impl FnMut(Sample)) {
         self.feed_frames(bytes, |_| {}, out);
@@ -279,9 +344,10 @@ impl Frontend {
             parser,
             clock,
             counters,
+            ..
         } = self;
         parser.feed(bytes, |frame| {
-            on_frame(frame, clock, counters, &mut seen, &mut out)
+            on_frame::<D>(frame, clock, counters, &mut seen, &mut out)
         });
     }
 
@@ -294,9 +360,10 @@ impl Frontend {
             parser,
             clock,
             counters,
+            ..
         } = self;
         let dropped =
-            parser.finish(|frame| on_frame(frame, clock, counters, &mut |_| {}, &mut out));
+            parser.finish(|frame| on_frame::<D>(frame, clock, counters, &mut |_| {}, &mut out));
         counters.end_dropped_bytes = counters.end_dropped_bytes.saturating_add(dropped as u64);
         if let Some(t) = clock.finish() {
             counters.samples = counters.samples.saturating_add(1);

@@ -2,6 +2,7 @@
 
 use super::{BankConfig, Wrap};
 use crate::adapter::{SampleClock, Tick};
+use crate::words::{WordReader, Words};
 use crate::{ConfigError, Hold, Real, SampleError, Unwrapper};
 
 /// What [`BankInput::accept`] decided for one accepted sample.
@@ -46,7 +47,6 @@ pub struct Accepted<T: Real> {
 /// The input stage every generated bank shares: input checks, sample clock (gap rule),
 /// unwrapping into a local frame (per [`Wrap`]), the previous sample and the re-init count.
 #[derive(Clone, Copy, Debug)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct BankInput<T: Real> {
     clock: SampleClock,
     hold: Hold,
@@ -212,5 +212,25 @@ impl<T: Real> BankInput<T> {
     pub fn set_wrap(&mut self, wrap: Wrap) {
         self.wrap = wrap;
         self.restart();
+    }
+}
+
+/// Its words ([`crate::words`]): the clock's step and gap rule, the hold and the unwrapping;
+/// it reads back as [`BankInput::new`] builds it (no sample seen, no re-initialisation).
+impl<T: Real> Words for BankInput<T> {
+    fn put_words(&self, out: &mut dyn FnMut(i64)) {
+        self.clock.put_words(out);
+        self.hold.put_words(out);
+        self.wrap.put_words(out);
+    }
+    fn take_words(r: &mut WordReader<'_>) -> Self {
+        Self {
+            clock: SampleClock::take_words(r),
+            hold: Hold::take_words(r),
+            wrap: Wrap::take_words(r),
+            unwrap: Unwrapper::new(),
+            y_prev: T::ZERO,
+            reinits: 0,
+        }
     }
 }

@@ -45,6 +45,7 @@
 //! assert_eq!(<AdBank as estimators::EstimatorBank>::CSV_COLUMNS, "ad_v");
 //! ```
 
+use crate::words::{WordReader, Words};
 use core::marker::PhantomData;
 
 use super::{BankConfig, BankInput, Fed, Feed, Wrap};
@@ -219,9 +220,19 @@ impl<X> core::fmt::Debug for RowsDebug<'_, X> {
     }
 }
 
-/// Implements [`Channels`] and [`Rows`] for a tuple of rows.
+/// Implements [`Channels`] and [`Rows`] for a tuple of rows, and [`Words`] for a tuple (a
+/// bank's laws: `Rows::Params`).
 macro_rules! tuple_rows {
     ($($R:ident $i:tt),+) => {
+        /// A tuple's words ([`crate::words`]): its elements' words, in order (a bank's laws).
+        impl<$($R: Words),+> Words for ($($R,)+) {
+            fn put_words(&self, out: &mut dyn FnMut(i64)) {
+                $(self.$i.put_words(out);)+
+            }
+            fn take_words(r: &mut WordReader<'_>) -> Self {
+                ($($R::take_words(r),)+)
+            }
+        }
         impl<$($R: Channels),+> ChannelLists for ($($R,)+) {
             const VELOCITY: &'static [&'static [&'static str]] = &[$($R::VELOCITY),+];
             const ACCELERATION: &'static [&'static [&'static str]] = &[$($R::ACCELERATION),+];
@@ -592,61 +603,38 @@ impl<R: Rows<T, S>, const N: usize, T: Real, S: SqrtFn<T>> core::fmt::Debug for 
     }
 }
 
-/// What a bank's serialized form holds (feature `serde`): its input stage and every row's law.
-#[cfg(feature = "serde")]
-#[derive(serde::Serialize, serde::Deserialize)]
-#[serde(bound(
-    serialize = "T: serde::Serialize, R::Params: serde::Serialize",
-    deserialize = "T: serde::Deserialize<'de>, R::Params: serde::Deserialize<'de>"
-))]
-struct BankParts<R: Rows<T, S>, T: Real, S: SqrtFn<T>> {
-    input: BankInput<T>,
-    params: R::Params,
-}
-
-/// A bank serializes as what building it computed (feature `serde`): the input stage (step,
-/// gap rule, hold, unwrapping) and every row's law (gains, closed-form maps, the Kalman's
-/// gain), not the laws' state. So a bank built on a host (`Bank::new`, with `f64` and `libm`)
-/// can be stored, and read back on a device with integer operations only: the device's
-/// firmware holds such a table of banks, one per packet period (docs/FOOTPRINT.md).
-#[cfg(feature = "serde")]
-impl<R: Rows<T, S>, const N: usize, T: Real + serde::Serialize, S: SqrtFn<T>> serde::Serialize
-    for Bank<R, N, T, S>
+/// A bank's words ([`crate::words`]): its input stage's (step, gap rule, hold, unwrapping),
+/// then every row's law's (gains, closed-form maps, the Kalman's gain), not the laws' state.
+/// So a bank built on a host ([`Bank::new`], with `f64` and `libm`) can be stored, and read
+/// back on a device with integer moves only ([`Bank::from_words`]): the project's firmware
+/// holds such a table of banks, one per packet period (docs/FOOTPRINT.md).
+impl<R: Rows<T, S>, const N: usize, T: Real, S: SqrtFn<T>> Bank<R, N, T, S>
 where
-    R::Params: serde::Serialize,
+    R::Params: Words,
 {
-    fn serialize<Z: serde::Serializer>(&self, z: Z) -> Result<Z::Ok, Z::Error> {
-        BankParts::<R, T, S> {
-            input: self.input,
-            params: self.params,
-        }
-        .serialize(z)
+    /// Writes the bank's words, in order (see the `impl` block).
+    pub fn put_words(&self, out: &mut dyn FnMut(i64)) {
+        self.input.put_words(out);
+        self.params.put_words(out);
     }
-}
 
-/// Read back, the bank is restarted ([`Bank::restart`]): its laws at rest, the next sample
-/// treated as the first. A bank serialized straight after [`Bank::new`] reads back equal to
-/// it.
-///
-/// The form is not validated again when it is read: read only what a `Bank` of the same type
-/// and crate version serialized (a table built with the image, as the project's firmware
-/// does). Bytes from elsewhere can give a bank whose parameters [`Bank::new`] would have
-/// refused (a step of 0 us, an unstable gain), and such a bank can panic or diverge.
-#[cfg(feature = "serde")]
-impl<'de, R: Rows<T, S>, const N: usize, T: Real + serde::Deserialize<'de>, S: SqrtFn<T>>
-    serde::Deserialize<'de> for Bank<R, N, T, S>
-where
-    R::Params: serde::Deserialize<'de>,
-{
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        let parts = BankParts::<R, T, S>::deserialize(d)?;
-        let mut bank = Self {
-            input: parts.input,
-            state: R::init(&parts.params, T::ZERO),
-            params: parts.params,
-        };
-        bank.restart();
-        Ok(bank)
+    /// Reads back a bank [`Bank::put_words`] wrote, from the words `next` yields (`None` when
+    /// it is exhausted): the bank as [`Bank::new`] built it, before its first sample (a bank
+    /// that had run reads back restarted, with no re-initialisation counted). `None` when the
+    /// words run out early or some are left over. Read only what `put_words` of the same type
+    /// and crate version wrote ([`crate::words`]: the words are not validated again).
+    pub fn from_words(next: &mut dyn FnMut() -> Option<i64>) -> Option<Self> {
+        let mut r = WordReader::new(next);
+        let input = BankInput::take_words(&mut r);
+        let params = R::Params::take_words(&mut r);
+        if !r.read_exactly() {
+            return None;
+        }
+        Some(Self {
+            input,
+            state: R::init(&params, T::ZERO),
+            params,
+        })
     }
 }
 

@@ -277,10 +277,11 @@ macro_rules! packet_table {
                 Ok(match t {
                     $( PacketType::$ptype => Packet::$view($view::new(p)?), )*
                     PacketType::ID => Packet::Id(Id::new(p)?),
-                    PacketType::PK => {
-                        empty(t, p)?;
-                        Packet::Ping
-                    }
+                    PacketType::PK
+                    | PacketType::SF
+                    | PacketType::WF
+                    | PacketType::GF
+                    | PacketType::RF => return Self::decode_reply(frame),
                     PacketType::CH => Packet::Echo(p),
                     PacketType::GP => match <[u8; 2]>::try_from(p) {
                         Ok(b) => Packet::GetPacket(PacketType(b)),
@@ -299,6 +300,23 @@ macro_rules! packet_table {
                     PacketType::SR => {
                         empty(t, p)?;
                         Packet::SoftwareReset
+                    }
+                    _ => Packet::Unknown(frame),
+                })
+            }
+
+            /// [`Packet::decode`] of the replies a host awaits after a command (NAK, PK, SF,
+            /// WF, GF, RF): the same packet or error for those types, [`Packet::Unknown`]
+            /// (not decoded) for every other. The driver's reply wait links this decoder,
+            /// not the whole packet table.
+            pub fn decode_reply(frame: Frame<'a>) -> Result<Packet<'a>, DecodeError> {
+                let p = frame.payload;
+                let t = frame.packet_type;
+                Ok(match t {
+                    PacketType::NAK => Packet::Nak(Nak::new(p)?),
+                    PacketType::PK => {
+                        empty(t, p)?;
+                        Packet::Ping
                     }
                     PacketType::SF => Packet::SetFields(FieldIds::new(t, p)?),
                     PacketType::WF => Packet::WriteFields(FieldIds::new(t, p)?),
