@@ -126,7 +126,9 @@ fn main() -> ! {
     }
 }
 
-/// `replay` is on the semihosting command line (`cargo xtask qemu FILE`).
+/// `replay` is on the semihosting command line (`cargo xtask qemu FILE`). Out of line (as
+/// [`replay`]): its buffer is not in `main`'s frame.
+#[inline(never)]
 fn replay_requested() -> bool {
     // A real board always talks to a unit (and a probe may not serve the call).
     if !board::REPLAY {
@@ -426,6 +428,7 @@ fn bank_failed(e: &pipeline::ConfigError) -> ! {
 }
 
 /// Replay mode: `N4LP` + length, then exactly that many capture bytes (see the module doc).
+#[inline(never)]
 fn replay(mut uart: Uart0, pipe: &mut pipeline::Pipeline) -> ! {
     let mut prefix = [0u8; 8];
     read_prefix(&mut uart, &mut prefix);

@@ -238,8 +238,9 @@ pub struct Estimation<B, E, F, const N: usize = 3, R = EulerReference> {
     banks: heapless::Vec<B, N>,
     /// A bank could not be built for the measured period.
     failed: Option<E>,
-    /// The configuration the banks were built with (`None` before the first build).
-    built: Option<BankConfig>,
+    /// The nominal sample period the banks were built for, s (`None` before the first
+    /// build): they run `cfg` with this period.
+    built: Option<f32>,
     /// The measured period the banks were built for, us (`None` before the first build, or
     /// when they run the configuration's own period: fewer than two samples).
     built_us: Option<u64>,
@@ -309,7 +310,7 @@ impl<
     /// The nominal sample period the banks run with, s (`None` before they are built): the
     /// one measured at the start or at the last epoch whose period changed.
     pub fn period_s(&self) -> Option<f32> {
-        self.built.map(|c| c.sample_period_s)
+        self.built
     }
 
     /// [`Estimation::period_s`] as the period rule measured it, us (`None` before the banks
@@ -383,9 +384,12 @@ impl<
             return Ok(());
         }
         // Fewer than two samples: the period in use (at the start, the configuration's).
-        let base = self.built.unwrap_or(self.cfg);
+        let base_s = self.built.unwrap_or(self.cfg.sample_period_s);
         let period = PeriodEstimator::from_times(self.held.iter().map(|s| s.t_us));
-        let cfg = period.apply(base);
+        let cfg = period.apply(BankConfig {
+            sample_period_s: base_s,
+            ..self.cfg
+        });
         self.phase = Phase::Running;
         if self.built.is_none() {
             for axis in self.axes.iter().take(N) {
@@ -397,7 +401,7 @@ impl<
                     Err(e) => return Err(self.fail(e)),
                 }
             }
-        } else if cfg.sample_period_s.to_bits() != base.sample_period_s.to_bits() {
+        } else if cfg.sample_period_s.to_bits() != base_s.to_bits() {
             // (Compared by their bits: periods are finite and >= 0, so this is `!=` without a
             // float comparison.)
             // Another period after a new epoch: every bank again, for it, one at a time in
@@ -420,7 +424,7 @@ impl<
             }
             self.counters.period_changes = self.counters.period_changes.saturating_add(1);
         }
-        self.built = Some(cfg);
+        self.built = Some(cfg.sample_period_s);
         self.built_us = period.period_us().or(self.built_us);
         for s in &self.held {
             run_sample::<B, R>(
