@@ -113,11 +113,12 @@ pub use ave::{
     Ave, AveConfig, AveFamily, AveParams, AveState, DeltaLaw, DeltaMode, COARSE_STABILITY_MARGIN,
 };
 pub use bank::{
-    columns_len, join_columns, replay, Accepted, AdA, AdAdMap, AdV, AveRow, Bank, BankConfig,
-    BankGains, BankInput, BankOutput, Channel, ChannelLists, Channels, Columns, EdRow, Fed, Feed,
-    IloA, IloV, KfA, KfV, PaperBank, PaperOutput, PaperParams, PaperRows, PaperState, ProductBank,
-    ProductChannel, ProductOutput, ProductParams, ProductRows, ProductState, Row, RowValues, Rows,
-    Warm, Wrap, GAP_PERIODS, KF_DEFAULT, MAX_GAP_PERIODS, VELOCITY_NAMES,
+    columns_len, join_columns, replay, Accepted, AdA, AdAdMap, AdMap, AdV, AveRow, Bank,
+    BankConfig, BankGains, BankInput, BankOutput, Channel, ChannelLists, Channels, Columns, EdRow,
+    Fed, Feed, IloA, IloMap, IloV, KfA, KfV, PaperBank, PaperOutput, PaperParams, PaperRows,
+    PaperState, ProductBank, ProductChannel, ProductOutput, ProductParams, ProductRows,
+    ProductState, Row, RowValues, Rows, Warm, Wrap, GAP_PERIODS, KF_DEFAULT, MAX_GAP_PERIODS,
+    VELOCITY_NAMES,
 };
 pub use ed::{Ed, EdConfig, EdFamily, EdParams, EdScheme, EdState, ED_MAX_H_ALPHA};
 pub use error::{ConfigError, SampleError};

@@ -46,20 +46,21 @@ pub trait LinearLaw: Law {
 /// stepping otherwise. `step`, `init` and `output` are the inner law's, and so is the state.
 ///
 /// Cost per sample: `DIM^2 + 3 DIM` multiply-adds instead of `n` steps.
-/// RAM (parameters): the inner law plus `(LIN_MAX^2 + LIN_MAX)` words of `T` and the
-/// `n`/mode tag.
+/// RAM (parameters): the inner law plus `(M^2 + M)` words of `T` and the `n`/mode tag, where
+/// `M` (`DIM <= M <= LIN_MAX`, checked at compile time) is the map's storage: `LIN_MAX` by
+/// default, the law's `DIM` for the least RAM (the banks' ILO and AD rows: 2).
 #[derive(Clone, Copy, Debug)]
-pub struct ClosedForm<E: LinearLaw> {
+pub struct ClosedForm<E: LinearLaw, const M: usize = LIN_MAX> {
     inner: E,
     n: u32,
     hold: Hold,
-    phi: [[E::Num; LIN_MAX]; LIN_MAX],
-    g: [E::Num; LIN_MAX],
+    phi: [[E::Num; M]; M],
+    g: [E::Num; M],
 }
 
 /// Its words ([`crate::words`]): the inner law's, `n`, the hold, the map's matrix (row by row)
 /// and its input vector.
-impl<E: LinearLaw + Words> Words for ClosedForm<E>
+impl<E: LinearLaw + Words, const M: usize> Words for ClosedForm<E, M>
 where
     E::Num: Words,
 {
@@ -82,22 +83,49 @@ where
 }
 
 impl<E: LinearLaw> ClosedForm<E> {
-    const DIM_OK: () = assert!(E::DIM <= LIN_MAX, "state too large for a closed-form map");
-
     /// Precomputes the `n`-step map of `inner` for `hold` (`n >= 1`; `n = 0` gives a map that
-    /// is never used).
+    /// is never used), stored for `LIN_MAX` states ([`ClosedForm::sized`]: for `M`).
     pub fn new(inner: E, n: u32, hold: Hold) -> Self {
+        Self::sized(inner, n, hold)
+    }
+
+    /// [`Self::new`], or a copy of `prev` when `prev` was built from the same `inner`, `n` and
+    /// `hold`: the map is a pure function of those, so the result is bit for bit what `new`
+    /// computes, without its `(DIM + 1) n` steps in `f64` (what makes a gain change of
+    /// [`crate::AdaptiveBank`] cheap when only some rows' gains change).
+    pub fn new_reusing(inner: E, n: u32, hold: Hold, prev: Option<&Self>) -> Self
+    where
+        E: PartialEq,
+    {
+        Self::sized_reusing(inner, n, hold, prev)
+    }
+
+    /// The estimator object of `inner`'s parameters with the map (state reset to 0).
+    pub fn of(inner: &Stateful<E>, n: u32, hold: Hold) -> Stateful<Self> {
+        Stateful::from_law(Self::new(*inner.law(), n, hold))
+    }
+}
+
+impl<E: LinearLaw, const M: usize> ClosedForm<E, M> {
+    const DIM_OK: () = assert!(
+        E::DIM <= M && M <= LIN_MAX,
+        "a closed-form map needs DIM <= M <= LIN_MAX"
+    );
+
+    /// [`ClosedForm::new`] with the map stored for `M` states (`DIM <= M <= LIN_MAX`, checked
+    /// at compile time).
+    pub fn sized(inner: E, n: u32, hold: Hold) -> Self {
         #[allow(clippy::let_unit_value)]
         let () = Self::DIM_OK;
         let (phi64, g64) = n_step_map(&inner, n, hold);
         let zero = <E::Num as Real>::ZERO;
-        let mut phi = [[zero; LIN_MAX]; LIN_MAX];
+        let mut phi = [[zero; M]; M];
         for (row, src) in phi.iter_mut().zip(phi64.iter()) {
             for (dst, x) in row.iter_mut().zip(src.iter()) {
                 *dst = E::Num::from_f64(*x);
             }
         }
-        let mut g = [zero; LIN_MAX];
+        let mut g = [zero; M];
         for (dst, src) in g.iter_mut().zip(g64.iter()) {
             *dst = E::Num::from_f64(*src);
         }
@@ -110,23 +138,15 @@ impl<E: LinearLaw> ClosedForm<E> {
         }
     }
 
-    /// [`Self::new`], or a copy of `prev` when `prev` was built from the same `inner`, `n` and
-    /// `hold`: the map is a pure function of those, so the result is bit for bit what `new`
-    /// computes, without its `(DIM + 1) n` steps in `f64` (what makes a gain change of
-    /// [`crate::AdaptiveBank`] cheap when only some rows' gains change).
-    pub fn new_reusing(inner: E, n: u32, hold: Hold, prev: Option<&Self>) -> Self
+    /// [`ClosedForm::new_reusing`] with the map stored for `M` states.
+    pub fn sized_reusing(inner: E, n: u32, hold: Hold, prev: Option<&Self>) -> Self
     where
         E: PartialEq,
     {
         match prev {
             Some(p) if p.inner == inner && p.n == n && p.hold == hold => *p,
-            _ => Self::new(inner, n, hold),
+            _ => Self::sized(inner, n, hold),
         }
-    }
-
-    /// The estimator object of `inner`'s parameters with the map (state reset to 0).
-    pub fn of(inner: &Stateful<E>, n: u32, hold: Hold) -> Stateful<Self> {
-        Stateful::from_law(Self::new(*inner.law(), n, hold))
     }
 
     /// The fallback of [`Law::advance`]: `n` Euler steps (an interval of another length).
@@ -250,7 +270,7 @@ fn n_step_map<E: LinearLaw>(law: &E, n: u32, hold: Hold) -> (Mat, Vector) {
     (power, g)
 }
 
-impl<E: LinearLaw> Law for ClosedForm<E> {
+impl<E: LinearLaw, const M: usize> Law for ClosedForm<E, M> {
     type Num = E::Num;
     type State = E::State;
 

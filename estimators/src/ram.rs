@@ -17,16 +17,18 @@
 //! | [`Ed`] | 44 | 88 |
 //! | [`Kalman`] (gains, nominal period, state, last input, restart count) | 36 | 72 |
 //! | [`Unwrapper`] | 16 | 24 |
-//! | [`ClosedForm`]`<IloParams<T, 1>>` (params) | 104 | 200 |
-//! | [`ClosedForm`]`<AdParams<T>>` (params) | 96 | 184 |
+//! | [`IloMap`] = [`ClosedForm`]`<IloParams<T, 1>, 2>` (params) | 48 | 88 |
+//! | [`AdMap`] = [`ClosedForm`]`<AdParams<T>, 2>` (params) | 40 | 72 |
 //! | [`ClosedForm`]`<Series<IloParams<T, 1>, IloParams<T, 1>>>` (params) | 120 | 232 |
-//! | [`PaperParams`] (all 12 rows' parameters) | 1092 | 2224 |
+//! | [`PaperParams`] (all 12 rows' parameters) | 868 | 1776 |
 //! | [`PaperState`] (all 12 rows' state, one axis) | 264 | 528 |
-//! | [`PaperBank`] (whole bank, one axis) | 1440 | 2840 |
-//! | [`ProductBank`] (ILO1 + Kalman, one axis) | 240 | 392 |
+//! | [`PaperBank`] (whole bank, one axis) | 1216 | 2392 |
+//! | [`ProductBank`] (ILO1 + Kalman, one axis) | 184 | 280 |
 //!
 //! A [`Series`] is the sum of its stages; an `Ilo<T, D>` adds `D - 1` words of `T`; a closed
-//! form adds `(LIN_MAX^2 + LIN_MAX) = 20` words of `T` plus 8 bytes to its law's parameters.
+//! form `ClosedForm<E, M>` adds `(M^2 + M)` words of `T` plus 8 bytes to its law's parameters:
+//! 6 words for the banks' ILO and AD rows (`M = 2`, their state's dimension), 20 for the
+//! default `M = LIN_MAX` (the ILO-ILO and AD-AD series, 4 states).
 
 use crate::*;
 use core::mem::size_of;
@@ -43,20 +45,20 @@ pub const ED: (usize, usize) = (44, 88);
 pub const KALMAN: (usize, usize) = (36, 72);
 /// `(f32, Fx)` of [`Unwrapper`].
 pub const UNWRAPPER: (usize, usize) = (16, 24);
-/// `(f32, Fx)` of [`ClosedForm`]`<IloParams<T, 1>>`.
-pub const CLOSED_ILO: (usize, usize) = (104, 200);
-/// `(f32, Fx)` of [`ClosedForm`]`<AdParams<T>>`.
-pub const CLOSED_AD: (usize, usize) = (96, 184);
+/// `(f32, Fx)` of [`IloMap`] (`ClosedForm<IloParams<T, 1>, 2>`).
+pub const CLOSED_ILO: (usize, usize) = (48, 88);
+/// `(f32, Fx)` of [`AdMap`] (`ClosedForm<AdParams<T>, 2>`).
+pub const CLOSED_AD: (usize, usize) = (40, 72);
 /// `(f32, Fx)` of [`ClosedForm`]`<Series<IloParams<T, 1>, IloParams<T, 1>>>`.
 pub const CLOSED_ILO_ILO: (usize, usize) = (120, 232);
 /// `(f32, Fx)` of [`PaperParams`].
-pub const PAPER_PARAMS: (usize, usize) = (1092, 2224);
+pub const PAPER_PARAMS: (usize, usize) = (868, 1776);
 /// `(f32, Fx)` of [`PaperState`].
 pub const PAPER_STATE: (usize, usize) = (264, 528);
 /// `(f32, Fx)` of the whole [`PaperBank`].
-pub const PAPER_BANK: (usize, usize) = (1440, 2840);
+pub const PAPER_BANK: (usize, usize) = (1216, 2392);
 /// `(f32, Fx)` of the [`ProductBank`].
-pub const PRODUCT_BANK: (usize, usize) = (240, 392);
+pub const PRODUCT_BANK: (usize, usize) = (184, 280);
 
 macro_rules! check {
     ($c:expr, $f:ty, $x:ty) => {
@@ -69,16 +71,8 @@ check!(AD, Ad<f32>, Ad<Fx>);
 check!(ED, Ed<f32>, Ed<Fx>);
 check!(KALMAN, Kalman<f32>, Kalman<Fx>);
 check!(UNWRAPPER, Unwrapper<f32>, Unwrapper<Fx>);
-check!(
-    CLOSED_ILO,
-    ClosedForm<IloParams<f32, 1>>,
-    ClosedForm<IloParams<Fx, 1>>
-);
-check!(
-    CLOSED_AD,
-    ClosedForm<AdParams<f32>>,
-    ClosedForm<AdParams<Fx>>
-);
+check!(CLOSED_ILO, IloMap<f32>, IloMap<Fx>);
+check!(CLOSED_AD, AdMap<f32>, AdMap<Fx>);
 check!(
     CLOSED_ILO_ILO,
     ClosedForm<Series<IloParams<f32, 1>, IloParams<f32, 1>>>,
@@ -103,10 +97,7 @@ mod tests {
             PAPER_BANK
         );
         assert_eq!(
-            (
-                size_of::<ClosedForm<IloParams<f32, 1>>>(),
-                size_of::<ClosedForm<IloParams<Fx, 1>>>()
-            ),
+            (size_of::<IloMap<f32>>(), size_of::<IloMap<Fx>>()),
             CLOSED_ILO
         );
         assert_eq!(

@@ -54,6 +54,11 @@ pub const VELOCITY_NAMES: [&str; FAMILY_COUNT] = {
     names
 };
 
+/// ILO (`D = 1`) through its closed-form map, stored for its 2 states: the banks' ILO velocity
+/// rows.
+pub type IloMap<T> = ClosedForm<IloParams<T, 1>, 2>;
+/// AD through its closed-form map, stored for its 2 states: the paper bank's AD velocity row.
+pub type AdMap<T> = ClosedForm<AdParams<T>, 2>;
 /// ILO-ILO (both stages `D = 1`) through its closed-form map: the paper bank's ILO
 /// acceleration row.
 pub type IloIloMap<T> = ClosedForm<Series<IloParams<T, 1>, IloParams<T, 1>>>;
@@ -82,11 +87,11 @@ pub(super) fn ilo_v<T: Real>(
     cfg: &BankConfig,
     i: usize,
     n0: u32,
-    prev: Option<&ClosedForm<IloParams<T, 1>>>,
-) -> Result<ClosedForm<IloParams<T, 1>>, ConfigError> {
+    prev: Option<&IloMap<T>>,
+) -> Result<IloMap<T>, ConfigError> {
     let c: &IloConfig = cfg.velocity.ilo.get(i).unwrap_or(&ILO1_TABLE2);
     let p = IloParams::new(c, cfg.h)?;
-    Ok(ClosedForm::new_reusing(p, n0, cfg.hold, prev))
+    Ok(ClosedForm::sized_reusing(p, n0, cfg.hold, prev))
 }
 
 /// ILO-ILO row `i` of the acceleration half (both stages the same gains), closed form.
@@ -129,10 +134,10 @@ fn ed_pair<T: Real, S: SqrtFn<T>>(cfg: &BankConfig) -> Result<VelAcc<EdParams<T,
 fn ad_v<T: Real>(
     cfg: &BankConfig,
     n0: u32,
-    prev: Option<&ClosedForm<AdParams<T>>>,
-) -> Result<ClosedForm<AdParams<T>>, ConfigError> {
+    prev: Option<&AdMap<T>>,
+) -> Result<AdMap<T>, ConfigError> {
     let p = AdParams::new(cfg.velocity.ad_t, cfg.h)?;
-    Ok(ClosedForm::new_reusing(p, n0, cfg.hold, prev))
+    Ok(ClosedForm::sized_reusing(p, n0, cfg.hold, prev))
 }
 
 /// AD-AD acceleration, closed form.
@@ -198,7 +203,7 @@ impl<const I: usize> Channels for IloV<I> {
 }
 
 impl<T: Real, S: SqrtFn<T>, const I: usize> Row<T, S> for IloV<I> {
-    type Law = ClosedForm<IloParams<T, 1>>;
+    type Law = IloMap<T>;
     fn build(
         cfg: &BankConfig,
         n0: u32,
@@ -255,7 +260,7 @@ impl Channels for AdV {
 }
 
 impl<T: Real, S: SqrtFn<T>> Row<T, S> for AdV {
-    type Law = ClosedForm<AdParams<T>>;
+    type Law = AdMap<T>;
     fn build(
         cfg: &BankConfig,
         n0: u32,
