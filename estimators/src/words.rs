@@ -116,7 +116,8 @@ impl<X: Words + Copy, const N: usize> Words for [X; N] {
     }
 }
 
-/// An enum as its variant's index; an index it does not have reads as its first variant.
+/// An enum as its variant's index (`as i64`); an index it does not have reads as its first
+/// variant.
 macro_rules! enum_words {
     ($t:ty: $first:path $(, $v:path)*) => {
         impl Words for $t {
@@ -125,14 +126,11 @@ macro_rules! enum_words {
             }
             fn take_words(r: &mut WordReader<'_>) -> Self {
                 let w = r.word();
-                let mut i = 0;
                 $(
-                    i += 1;
-                    if w == i {
+                    if w == $v as i64 {
                         return $v;
                     }
                 )*
-                let _ = i;
                 $first
             }
         }

@@ -602,7 +602,7 @@ impl<
         F: FnMut(Axis, &BankConfig) -> Result<B, E>,
         const N: usize,
         R: Reference,
-        D: Decoder + Default,
+        D: Decoder,
     > Pipeline<B, E, F, N, R, D>
 {
     /// A pipeline with `N` bank slots estimating the first `N` of `axes`, rows with the rate

@@ -43,7 +43,7 @@ pub fn feed<
     F: FnMut(crate::Axis, &estimators::BankConfig) -> Result<B, E>,
     const N: usize,
     R: crate::Reference,
-    D: crate::Decoder + Default,
+    D: crate::Decoder,
 >(
     pipe: &mut Pipeline<B, E, F, N, R, D>,
     bytes: &[u8],
@@ -78,7 +78,7 @@ pub fn finish<
     F: FnMut(crate::Axis, &estimators::BankConfig) -> Result<B, E>,
     const N: usize,
     R: crate::Reference,
-    D: crate::Decoder + Default,
+    D: crate::Decoder,
 >(
     pipe: &mut Pipeline<B, E, F, N, R, D>,
     emit: &mut dyn FnMut(&Row<B::Output>),
@@ -98,7 +98,7 @@ pub fn silence<
     F: FnMut(crate::Axis, &estimators::BankConfig) -> Result<B, E>,
     const N: usize,
     R: crate::Reference,
-    D: crate::Decoder + Default,
+    D: crate::Decoder,
 >(
     pipe: &mut Pipeline<B, E, F, N, R, D>,
     now_ms: u32,
@@ -161,7 +161,7 @@ pub fn period_change<
     F: FnMut(crate::Axis, &estimators::BankConfig) -> Result<B, E>,
     const N: usize,
     R: crate::Reference,
-    D: crate::Decoder + Default,
+    D: crate::Decoder,
 >(
     pipe: &Pipeline<B, E, F, N, R, D>,
     before: u32,
@@ -191,7 +191,7 @@ pub fn summary<
     F: FnMut(crate::Axis, &estimators::BankConfig) -> Result<B, E>,
     const N: usize,
     R: crate::Reference,
-    D: crate::Decoder + Default,
+    D: crate::Decoder,
 >(
     pipe: &Pipeline<B, E, F, N, R, D>,
     uart_overruns: u32,

@@ -218,8 +218,9 @@ pub struct FrameSeen {
     pub time: Option<TimeStamp>,
 }
 
-/// The packets the front end decodes and estimates from ([`Frontend`]'s `D`).
-pub trait Decoder {
+/// The packets the front end decodes and estimates from ([`Frontend`]'s `D`, a marker type:
+/// `Default` builds it).
+pub trait Decoder: Default {
     /// Decodes a CRC-valid frame: [`Packet::Unknown`] for a type this decoder does not decode
     /// (counted as a frame only), `Err` for one of its types that does not decode (a wrong
     /// payload length, counted in [`FrontCounters::decode_errors`]).

@@ -12,7 +12,7 @@ fn capture(name: &str) -> Vec<u8> {
 }
 
 /// Every sample of `bytes` through a front end with decoder `D`, and its counters.
-fn samples<D: Decoder + Default>(bytes: &[u8]) -> (Vec<Sample>, Frontend<D>) {
+fn samples<D: Decoder>(bytes: &[u8]) -> (Vec<Sample>, Frontend<D>) {
     let mut front = Frontend::<D>::default();
     let mut out = Vec::new();
     // In chunks of 100 bytes, as a UART delivers them.
