@@ -72,6 +72,23 @@ pub struct Image {
     pub profile: &'static str,
     /// `cargo xtask ci` builds and checks it; `false` leaves it out, with a line saying so.
     pub in_ci: bool,
+    /// The emulated image whose stack stands for this one's (a board no emulator runs), or
+    /// `None`.
+    pub stack_twin: Option<Twin>,
+}
+
+/// An emulated stand-in for a board image's stack: the same firmware, bank, features and
+/// profile, built for a QEMU board of the same core instead of the board, whose painted
+/// stack `cargo xtask ci` measures through a boot and a stream and through a replay. The
+/// board's image must then fit its RAM: its static RAM (from its ELF), plus the twin's
+/// high-water mark, plus a margin for the frames the two boards' code differ in.
+#[derive(Clone, Copy, Debug)]
+pub struct Twin {
+    /// The QEMU board (`cargo xtask qemu --board`), with the board's instruction set.
+    pub qemu_board: &'static str,
+    /// firmware-example features the board's feature implies beside its board code (the twin
+    /// is built with them, without the board feature).
+    pub features: &'static [&'static str],
 }
 
 impl Image {
@@ -80,6 +97,7 @@ impl Image {
         features: &[],
         profile: "release",
         in_ci: true,
+        stack_twin: None,
     };
 }
 

@@ -24,8 +24,8 @@ use core::ptr::addr_of_mut;
 use core::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 /// Bytes of the frame buffer: the largest frame the firmware copies and sends in one piece; a
-/// longer frame is handed on in pieces of this size.
-const FRAME_BUFFER: usize = 512;
+/// longer frame is handed on in pieces of this size (the board's).
+const FRAME_BUFFER: usize = crate::board::LOG_FRAME_BYTES;
 
 /// Words of the [`in_place`] payload buffer: the firmware's longest row message
 /// ([`crate::out::ROW_WORDS`]).

@@ -118,8 +118,10 @@ fn main() -> ! {
     let mut delay = time::start(core.SYST, core_clock_hz);
     let mut uart = uart;
     let mut control = control;
+    // The bytes the driver read past the read-back reply, refilled by each configuration.
+    let mut pending = Pending::new();
     loop {
-        let (configured, report, pending) = configure(uart, &mut delay);
+        let (configured, report) = configure(uart, &mut delay, &mut pending);
         // Returns after a silence, or a unit reset on the real-board profile: configure the
         // unit again.
         uart = stream(configured, &mut control, &mut pipe, &report, &pending);
@@ -146,7 +148,7 @@ type Pending = heapless::Vec<u8, { nav440_proto::MAX_FRAME }>;
 /// Runs the boot sequence until it succeeds (real board) or fails once (QEMU: exits).
 /// Out of line: its frame (driver, boot state, error text) is not live while estimating.
 #[inline(never)]
-fn configure(uart: Uart0, delay: &mut time::Delay) -> (Uart0, Report, Pending) {
+fn configure(uart: Uart0, delay: &mut time::Delay, pending: &mut Pending) -> (Uart0, Report) {
     let mut driver = IoDriver::new(uart);
     driver.set_timing(Timing {
         reply_timeout_ms: board::REPLY_TIMEOUT_MS,
@@ -167,11 +169,11 @@ fn configure(uart: Uart0, delay: &mut time::Delay) -> (Uart0, Report, Pending) {
         );
         match r {
             Ok(report) => {
-                let mut pending = Pending::new();
+                pending.clear();
                 // Cannot fail: the driver holds at most one frame's bytes.
                 let _ = pending.extend_from_slice(driver.pending_bytes());
                 let (uart, _) = driver.into_parts();
-                return (uart, report, pending);
+                return (uart, report);
             }
             Err(e) => {
                 // The error's diagnostic text, the same as its `Display` (rendered by the

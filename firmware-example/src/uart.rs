@@ -90,8 +90,9 @@ impl core::fmt::Display for BaudError {
     }
 }
 
-/// Capacity of the receive queue in bytes (the queue holds `N - 1` of its `N` slots).
-pub const RX_QUEUE_BYTES: usize = 512 - 1;
+/// Capacity of the receive queue in bytes (the queue holds `N - 1` of its `N` slots, the
+/// board's).
+pub const RX_QUEUE_BYTES: usize = crate::board::RX_QUEUE_SLOTS - 1;
 
 /// Producer end of the receive queue, owned by the RX interrupt once [`Board::take`] ran.
 static PRODUCER: Mutex<RefCell<Option<Producer<'static, u8>>>> = Mutex::new(RefCell::new(None));

@@ -38,7 +38,7 @@
 //! [`Estimation`] and [`Pipeline`] (default [`EulerReference`]: the Euler reference rate;
 //! [`crate::BodyRates`]: the unit's body rate, without the trigonometry).
 
-use crate::period::{PeriodEstimator, WARMUP_SAMPLES};
+use crate::period::{seconds, PeriodEstimator, WARMUP_SAMPLES};
 use crate::reference::{EulerReference, Reference};
 use crate::sample::{AllPackets, Decoder, Frontend, Sample};
 use crate::watch::{Event, StreamWatch};
@@ -385,15 +385,15 @@ impl<
         }
         // Fewer than two samples: the period in use (at the start, the configuration's).
         let base_s = self.built.unwrap_or(self.cfg.sample_period_s);
-        let period = PeriodEstimator::from_times(self.held.iter().map(|s| s.t_us));
-        let cfg = period.apply(BankConfig {
-            sample_period_s: base_s,
-            ..self.cfg
-        });
+        let measured_us = held_period_us(&self.held);
+        // The configuration the banks are built with is kept in place (one copy on the small
+        // parts' RAM): only its period changes, and it is read only here.
+        self.cfg.sample_period_s = measured_us.map(seconds).unwrap_or(base_s);
+        let cfg = &self.cfg;
         self.phase = Phase::Running;
         if self.built.is_none() {
             for axis in self.axes.iter().take(N) {
-                match (self.build)(axis, &cfg) {
+                match (self.build)(axis, cfg) {
                     // Cannot fail: at most `N` axes are kept.
                     Ok(b) => {
                         let _ = self.banks.push(b);
@@ -408,7 +408,7 @@ impl<
             // its slot (one bank on the stack, not `N`: the small parts' RAM).
             let mut failed = None;
             for (axis, slot) in self.axes.iter().zip(self.banks.iter_mut()) {
-                match (self.build)(axis, &cfg) {
+                match (self.build)(axis, cfg) {
                     Ok(mut b) => {
                         b.take_over(slot);
                         *slot = b;
@@ -424,8 +424,8 @@ impl<
             }
             self.counters.period_changes = self.counters.period_changes.saturating_add(1);
         }
-        self.built = Some(cfg.sample_period_s);
-        self.built_us = period.period_us().or(self.built_us);
+        self.built = Some(self.cfg.sample_period_s);
+        self.built_us = measured_us.or(self.built_us);
         for s in &self.held {
             run_sample::<B, R>(
                 &mut self.banks,
@@ -456,6 +456,14 @@ impl<B: EstimatorBank, E: Clone, F: FnMut(Axis, &BankConfig) -> Result<B, E>> Es
     pub fn new(axes: Axes, cfg: BankConfig, build: F) -> Self {
         Self::with_slots(axes, cfg, build)
     }
+}
+
+/// The nominal period the held samples' time stamps give, us (`None` with fewer than two):
+/// [`PeriodEstimator`] on their times. Out of line, so the estimator's intervals are not in
+/// the frame of [`Estimation::start`] while it builds the banks.
+#[inline(never)]
+fn held_period_us(held: &[Sample]) -> Option<u64> {
+    PeriodEstimator::from_times(held.iter().map(|s| s.t_us)).period_us()
 }
 
 /// Runs one sample through every selected axis's bank and emits its row, with `R`'s rate

@@ -9,6 +9,8 @@
 //! * behaviour: [`REPLY_TIMEOUT_MS`], [`RETRY_FOREVER`] (a real board retries a failed boot
 //!   and a unit reset; the QEMU boards end the run with a status), [`REPLAY`] (the board may
 //!   run a capture instead of a unit, `cargo xtask qemu FILE`);
+//! * buffers: [`RX_QUEUE_SLOTS`] (the NAV440 receive queue) and [`LOG_FRAME_BYTES`] (the
+//!   logger's frame buffer), sized to the board's RAM;
 //! * transport: [`RTT`] (defmt frames into an RTT up-channel that probe-rs reads; with it
 //!   `RTT_BUFFER`, the channel's bytes, sized to the board's RAM) and
 //!   [`host_present`] (a semihosting host services calls: QEMU; defmt frames, exit status);

@@ -23,6 +23,11 @@ pub const RETRY_FOREVER: bool = false;
 pub const RETRY_PAUSE_MS: u32 = 1000;
 /// The board runs captures too (`replay` on the semihosting command line).
 pub const REPLAY: bool = true;
+/// Slots of the NAV440 receive queue ([`crate::uart`], which holds one byte less): 89 ms of
+/// stream at 57,600 Bd.
+pub const RX_QUEUE_SLOTS: usize = 512;
+/// Bytes of the logger's frame buffer ([`crate::log`]): a longer frame is handed on in pieces.
+pub const LOG_FRAME_BYTES: usize = 512;
 /// No RTT: QEMU has no probe to read it.
 pub const RTT: bool = false;
 

@@ -49,10 +49,19 @@ pub const RETRY_FOREVER: bool = true;
 pub const RETRY_PAUSE_MS: u32 = 1000;
 /// Always talks to a unit.
 pub const REPLAY: bool = false;
+/// Slots of the NAV440 receive queue ([`crate::uart`], which holds one byte less), a quarter of
+/// the SRAM saved against the other boards' 512: 44 ms of stream at 57,600 Bd. The longest
+/// stretch without reading is a bank rebuild at a new packet period (three banks read back and
+/// 16 held samples run again: about 130,000 instructions, some 10 ms at 16 MHz).
+pub const RX_QUEUE_SLOTS: usize = 256;
+/// Bytes of the logger's frame buffer ([`crate::log`]), half the other boards': rows go out
+/// in place (not through it), and this image's other frames (boot report, boot errors with
+/// interned texts, counters) are under 100 bytes. A longer frame is handed on in pieces.
+pub const LOG_FRAME_BYTES: usize = 256;
 /// defmt frames go to RTT.
 pub const RTT: bool = true;
 /// Bytes of the RTT up-channel's buffer: a quarter of the other boards', for 8 KiB of SRAM;
-/// still two of the largest pieces the logger writes at once (its 512-byte frame buffer).
+/// four of the largest pieces the logger writes at once ([`LOG_FRAME_BYTES`]).
 pub const RTT_BUFFER: usize = 1024;
 
 /// Never emulated: no semihosting host (a semihosting call without a debugger faults).

@@ -23,6 +23,11 @@ pub const RETRY_FOREVER: bool = true;
 pub const RETRY_PAUSE_MS: u32 = 1000;
 /// Always talks to a unit (a probe may not serve the semihosting command line).
 pub const REPLAY: bool = false;
+/// Slots of the NAV440 receive queue ([`crate::uart`], which holds one byte less): 89 ms of
+/// stream at 57,600 Bd.
+pub const RX_QUEUE_SLOTS: usize = 512;
+/// Bytes of the logger's frame buffer ([`crate::log`]): a longer frame is handed on in pieces.
+pub const LOG_FRAME_BYTES: usize = 512;
 /// defmt frames go to RTT.
 pub const RTT: bool = true;
 /// Bytes of the RTT up-channel's buffer.

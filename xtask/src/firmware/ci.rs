@@ -88,7 +88,7 @@ fn map_check_catches_an_image_at_0(f405: &Path) -> Result<(), String> {
 
 /// Queues the equivalence of `elf` on `board` and `capture` against `nav440 estimate CAPTURE
 /// args` as a job of the step `group`; `check` then looks at the firmware's counters.
-fn spawn_equivalence(
+pub(super) fn spawn_equivalence(
     pool: &Pool,
     group: &'static str,
     board: Board,
@@ -334,6 +334,10 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
         }
         let elf = build_profile(target, &features, FW_BIN, image.profile)?;
         check_map(&elf, board.name)?;
+        // Its RAM: static RAM from the ELF, the stack measured on its emulated twin.
+        if let (Some(twin), true) = (image.stack_twin, qemu_ok) {
+            super::twin::stack_twin_ci(pool, board, &elf, image.features, twin)?;
+        }
     }
     // The rows also out of a second UART (feature `uart-rows`, the mps2 boards' UART2): linted
     // on the M4F and thumbv6m, the M4F image's map checked; it runs among the unit runs.

@@ -26,6 +26,7 @@ mod outside;
 mod qemu_run;
 mod size;
 mod soak;
+mod twin;
 mod unit_cases;
 
 pub use bench::bench;

@@ -30,6 +30,12 @@ enum Expect {
     /// The firmware reports `report` once, configures the unit again and finishes with
     /// exit 0 (a unit that reset, on the real-board profile; a unit silent for a while).
     Reconfigures { report: &'static str },
+    /// As [`Expect::Csv`], and the stack's high-water mark (`stack_peak`) at most
+    /// `stack_limit` bytes.
+    CsvStack {
+        stderr_has: &'static str,
+        stack_limit: u64,
+    },
 }
 
 /// One firmware run against `nav440 sim` (CI).
@@ -154,7 +160,7 @@ fn unit_case(
                 ))
             }
         }
-        (Expect::Csv { stderr_has }, Ok(r)) => {
+        (Expect::Csv { stderr_has } | Expect::CsvStack { stderr_has, .. }, Ok(r)) => {
             if r.code() != Some(0) {
                 return Err(format!(
                     "{what}: firmware exit status {:?}:\n{}",
@@ -175,6 +181,21 @@ fn unit_case(
             if counter(&counters(&r.stderr), "uart_overruns").unwrap_or(0) != 0 {
                 return Err(format!("{what}: UART overruns reported under QEMU"));
             }
+            let stack = match case.expect {
+                Expect::CsvStack { stack_limit, .. } => {
+                    match counter(&counters(&r.stderr), "stack_peak") {
+                        Some(p) if p <= stack_limit => {
+                            format!("; stack high-water mark {p} B, at most {stack_limit} B")
+                        }
+                        p => {
+                            return Err(format!(
+                            "{what}: stack high-water mark {p:?} B, the limit is {stack_limit} B"
+                        ))
+                        }
+                    }
+                }
+                _ => String::new(),
+            };
             let host = host_estimate(&record, host_extra)?;
             let lines = compare_csv(&r.stdout, &host).map_err(|d| {
                 format!("{what}: firmware CSV differs from `nav440 estimate` on the record: {d}")
@@ -189,7 +210,7 @@ fn unit_case(
                 String::new()
             };
             Ok(format!(
-                "{what}: IDENTICAL to `nav440 estimate{}` on the {} bytes streamed after configuration ({lines} lines; the unit sent {} bytes in all){logs}",
+                "{what}: IDENTICAL to `nav440 estimate{}` on the {} bytes streamed after configuration ({lines} lines; the unit sent {} bytes in all){logs}{stack}",
                 host_extra.iter().map(|a| format!(" {a}")).collect::<String>(),
                 std::fs::metadata(&record).map_or(0, |m| m.len()),
                 r.unit_bytes
@@ -338,6 +359,32 @@ fn spawn_case(
         Ok(())
     });
     Ok(())
+}
+
+/// `elf` on `board` against `nav440 sim` streaming `capture` (boot, configuration, stream), a
+/// job of `group` in `pool`: exit 0, `stderr_has` in its stderr, the CSV of `nav440 estimate
+/// host_extra` on what the unit streamed, and a stack high-water mark of at most `stack_limit`
+/// bytes.
+pub(super) fn spawn_stack_case(
+    pool: &Pool,
+    group: &'static str,
+    board: Board,
+    elf: &Path,
+    capture: &Path,
+    host_extra: &[&str],
+    (stderr_has, stack_limit): (&'static str, u64),
+) -> Result<(), String> {
+    let case = UnitCase {
+        name: "stack",
+        capture: capture.to_path_buf(),
+        sim_args: &["--fast"],
+        expect: Expect::CsvStack {
+            stderr_has,
+            stack_limit,
+        },
+    };
+    let extra = host_extra.iter().map(|a| (*a).to_owned()).collect();
+    spawn_case(pool, group, board, elf, case, extra)
 }
 
 /// The step of the unit runs in `cargo xtask ci`'s table.

@@ -1,0 +1,106 @@
+//! The RAM of a board no emulator runs, from its ELF and an emulated twin
+//! (`nav440_boards::Twin`): the board's image links its static RAM (`.data` + `.bss`, read from
+//! its ELF); the stack is the high-water mark of the same image built for a QEMU board of the
+//! same core, painted and measured through a boot and a stream against `nav440 sim` and
+//! through a replay. Static RAM + stack + [`STACK_MARGIN`] must fit the board's RAM.
+
+use super::ci::spawn_equivalence;
+use super::nav440_cli::firmware_host_args;
+use super::qemu_run::counter;
+use super::size::flash_ram;
+use super::unit_cases::{spawn_stack_case, UNIT_STEP};
+use super::{
+    build::build_profile, root, BankChoice, FW_BIN, NO_REFERENCE, NO_REFERENCE_ARG, PRODUCT,
+};
+use crate::pool::Pool;
+use crate::qemu;
+use std::path::Path;
+
+/// Bytes kept free beyond the twin's high-water mark: the frames in which the board's code and
+/// the twin's differ (on the NUCLEO-G031K8 the boot's frame is 88 B larger and `main`'s 16 B,
+/// by their prologues), an interrupt's frame at a deeper point than the runs reached, with
+/// room to spare: about 6 % of 8 KiB.
+pub(super) const STACK_MARGIN: u64 = 512;
+
+/// The capture the twin replays and the simulated unit streams: A2 (the type the product
+/// firmware configures, and the only one a `small-part` image decodes), with corrupted frames.
+const TWIN_CAPTURE: &str = "host-tests/data/fig5_a2_100hz_corrupt.bin";
+
+/// Builds the twin of `board`'s `image` (whose ELF is `elf`, already built and map-checked)
+/// and queues its two runs in `pool` (step [`UNIT_STEP`]): each must print the CSV of `nav440
+/// estimate` with the image's bank and reference option, and reach at most the stack the
+/// board's RAM leaves.
+pub(super) fn stack_twin_ci(
+    pool: &Pool,
+    board: &nav440_boards::Board,
+    elf: &Path,
+    features: &[&str],
+    twin: nav440_boards::Twin,
+) -> Result<(), String> {
+    let (_, static_ram) = flash_ram(elf)?;
+    let ram = board.ram.kib * 1024;
+    let limit = ram
+        .checked_sub(static_ram + STACK_MARGIN)
+        .ok_or_else(|| {
+            format!(
+                "{}: static RAM {static_ram} B and the {STACK_MARGIN} B margin exceed its {ram} B of RAM",
+                board.name
+            )
+        })?;
+    let qboard = qemu::board(twin.qemu_board)?;
+    let mut twin_features: Vec<&str> = features.to_vec();
+    twin_features.extend(twin.features);
+    let twin_elf = build_profile(
+        qboard.target,
+        &twin_features,
+        FW_BIN,
+        board.ci_image.profile,
+    )?;
+    let bank = if features.contains(&PRODUCT) {
+        BankChoice::Product
+    } else {
+        BankChoice::Paper
+    };
+    let mut host = firmware_host_args(qboard.target, bank);
+    if features.contains(&NO_REFERENCE) {
+        host.push(NO_REFERENCE_ARG);
+    }
+    let capture = root().join(TWIN_CAPTURE);
+    eprintln!(
+        "xtask: {}: static RAM {static_ram} B (its ELF); its stack may reach {limit} B of its {ram} B ({STACK_MARGIN} B kept free), measured on its twin {} on {} (features {})",
+        board.name,
+        twin_elf.display(),
+        qboard.name,
+        twin_features.join(",")
+    );
+    // Boot, configuration and stream.
+    spawn_stack_case(
+        pool,
+        UNIT_STEP,
+        qboard,
+        &twin_elf,
+        &capture,
+        &host,
+        ("unit was at 38400 Bd", limit),
+    )?;
+    // A replay (the banks built at the measured period, every row).
+    let what = format!("{}'s twin, replay of {}", board.name, capture.display());
+    spawn_equivalence(
+        pool,
+        UNIT_STEP,
+        qboard,
+        &twin_elf,
+        &capture,
+        &host,
+        move |c| match counter(c, "stack_peak") {
+            Some(p) if p <= limit => {
+                eprintln!("xtask: OK: {what}: stack high-water mark {p} B, at most {limit} B");
+                Ok(())
+            }
+            p => Err(format!(
+                "{what}: stack high-water mark {p:?} B, the limit is {limit} B"
+            )),
+        },
+    );
+    Ok(())
+}
