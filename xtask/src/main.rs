@@ -288,12 +288,18 @@ fn run_with(
     stdout: Stdio,
 ) -> Result<(), String> {
     eprintln!("+ {program} {}", args.join(" "));
+    let started = std::time::Instant::now();
     let status = Command::new(program)
         .args(args)
         .envs(env.iter().copied())
         .stdout(stdout)
         .status()
         .map_err(|e| format!("cannot start `{program}`: {e}"))?;
+    // The commands' times, for finding where CI's time goes (`grep '^xtask: took'`).
+    let took = started.elapsed().as_secs_f64();
+    if took >= 1.0 {
+        eprintln!("xtask: took {took:.0} s: {program} {}", args.join(" "));
+    }
     if status.success() {
         Ok(())
     } else {
