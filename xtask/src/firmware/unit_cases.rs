@@ -387,6 +387,24 @@ pub(super) fn spawn_stack_case(
     spawn_case(pool, group, board, elf, case, extra)
 }
 
+/// The stack high-water mark of `elf` on `board` through a boot, a configuration and the
+/// stream of `capture` from `nav440 sim` (exit 0 required), bytes.
+pub(super) fn unit_stack_peak(board: &Board, elf: &Path, capture: &Path) -> Result<u64, String> {
+    let nav440 = nav440_bin()?;
+    let sim_args = ["--fast", "--timeout", SIM_TIMEOUT];
+    let sim = Sim::start(&nav440, capture, None, &sim_args)?;
+    let bytes = std::fs::metadata(capture).map_or(0, |m| m.len() as usize);
+    let run = run_unit(board, elf, &sim.addr, false, unit_timeout(bytes));
+    let _ = sim.wait(Duration::from_secs(30));
+    let r = run?;
+    let what = format!("{} on {} against `nav440 sim`", elf.display(), board.name);
+    if r.code() != Some(0) {
+        return Err(format!("{what}: exit status {:?}:\n{}", r.code(), r.stderr));
+    }
+    counter(&counters(&r.stderr), "stack_peak")
+        .ok_or_else(|| format!("{what}: no stack_peak counter:\n{}", r.stderr))
+}
+
 /// The step of the unit runs in `cargo xtask ci`'s table.
 pub(super) const UNIT_STEP: &str = "unit runs (pool)";
 
