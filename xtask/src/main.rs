@@ -25,6 +25,7 @@
 mod defmt_out;
 mod elf;
 mod firmware;
+mod frames;
 mod package;
 mod pool;
 mod qemu;

@@ -2,7 +2,8 @@
 //! (`nav440_boards::Twin`): the board's image links its static RAM (`.data` + `.bss`, read from
 //! its ELF); the stack is the high-water mark of the same image built for a QEMU board of the
 //! same core, painted and measured through a boot and a stream against `nav440 sim` and
-//! through a replay. Static RAM + stack + [`STACK_MARGIN`] must fit the board's RAM.
+//! through a replay. Static RAM + stack + [`STACK_MARGIN`] must fit the board's RAM, and the
+//! board's frames may add at most [`STACK_MARGIN`] to the twin's (compared from the ELFs).
 
 use super::ci::spawn_equivalence;
 use super::nav440_cli::firmware_host_args;
@@ -16,10 +17,11 @@ use crate::pool::Pool;
 use crate::qemu;
 use std::path::Path;
 
-/// Bytes kept free beyond the twin's high-water mark: the frames in which the board's code and
-/// the twin's differ (on the NUCLEO-G031K8 the boot's frame is 88 B larger and `main`'s 16 B,
-/// by their prologues), an interrupt's frame at a deeper point than the runs reached, with
-/// room to spare: about 6 % of 8 KiB.
+/// Bytes kept free beyond the twin's high-water mark, for the frames in which the board's
+/// code and the twin's differ. CI checks it from the two ELFs ([`crate::frames`]): the sum of
+/// what each of the board's frames adds (larger than the twin's, or the board's own) must
+/// not exceed it. On the NUCLEO-G031K8 that sum is 440 B: the boot's frame 88 B larger,
+/// `main`'s 16 B, a stream closure's 96 B, the RTT and interrupt code's own frames.
 pub(super) const STACK_MARGIN: u64 = 512;
 
 /// The capture the twin replays and the simulated unit streams: A2 (the type the product
@@ -56,6 +58,34 @@ pub(super) fn stack_twin_ci(
         FW_BIN,
         board.ci_image.profile,
     )?;
+    // The board's own frames against the twin's, from the two ELFs.
+    if board.targets.first() != Some(&"thumbv6m-none-eabi") {
+        return Err(format!(
+            "{}: a stack twin is compared by its ARMv6-M prologues; {:?} is not thumbv6m",
+            board.name, board.targets
+        ));
+    }
+    let (excess, terms) = crate::frames::excess_over(
+        &crate::frames::thumb_frames(elf)?,
+        &crate::frames::thumb_frames(&twin_elf)?,
+    );
+    let largest: Vec<String> = terms
+        .iter()
+        .take(3)
+        .map(|(n, f)| format!("{f} +{n} B"))
+        .collect();
+    if excess > STACK_MARGIN {
+        return Err(format!(
+            "{}: its frames exceed its twin's by up to {excess} B (largest: {}), more than the {STACK_MARGIN} B kept free",
+            board.name,
+            largest.join(", ")
+        ));
+    }
+    eprintln!(
+        "xtask: OK: {}: its frames exceed its twin's by {excess} B at most (the larger frames and its own functions' summed; largest: {}), within the {STACK_MARGIN} B kept free",
+        board.name,
+        largest.join(", ")
+    );
     let bank = if features.contains(&PRODUCT) {
         BankChoice::Product
     } else {
