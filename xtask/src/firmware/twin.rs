@@ -58,11 +58,12 @@ pub(super) fn stack_twin_ci(
         FW_BIN,
         board.ci_image.profile,
     )?;
-    // The board's own frames against the twin's, from the two ELFs.
-    if board.targets.first() != Some(&"thumbv6m-none-eabi") {
+    // The board's own frames against the twin's, from the two ELFs (both thumbv6m).
+    if board.targets.first() != Some(&"thumbv6m-none-eabi") || qboard.target != "thumbv6m-none-eabi"
+    {
         return Err(format!(
-            "{}: a stack twin is compared by its ARMv6-M prologues; {:?} is not thumbv6m",
-            board.name, board.targets
+            "{}: a stack twin is compared by its ARMv6-M prologues, and {:?} (twin {}: {}) is not thumbv6m",
+            board.name, board.targets, qboard.name, qboard.target
         ));
     }
     let (excess, terms) = crate::frames::excess_over(
