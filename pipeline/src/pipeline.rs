@@ -383,11 +383,12 @@ impl<
         if self.phase == Phase::Running {
             return Ok(());
         }
-        // Fewer than two samples: the period in use (at the start, the configuration's).
-        let base_s = self.built.unwrap_or(self.cfg.sample_period_s);
-        let measured_us = held_period_us(&self.held);
         // The configuration the banks are built with is kept in place (one copy on the small
-        // parts' RAM): only its period changes, and it is read only here.
+        // parts' RAM): only its period changes, and it is read only here. So its period is
+        // the one in use: the configuration's until the first build, then the last build's.
+        // Fewer than two samples keep it.
+        let base_s = self.cfg.sample_period_s;
+        let measured_us = held_period_us(&self.held);
         self.cfg.sample_period_s = measured_us.map(seconds).unwrap_or(base_s);
         let cfg = &self.cfg;
         self.phase = Phase::Running;
