@@ -52,6 +52,17 @@ pub(super) fn counter(c: &[(String, u64)], key: &str) -> Option<u64> {
     c.iter().rev().find(|(k, _)| k == key).map(|(_, v)| *v)
 }
 
+/// The run's stack high-water mark (`stack_peak`), if it is at most `limit` bytes; an error
+/// naming `what` otherwise (or when the run printed none).
+pub(super) fn stack_within(c: &[(String, u64)], limit: u64, what: &str) -> Result<u64, String> {
+    match counter(c, "stack_peak") {
+        Some(p) if p <= limit => Ok(p),
+        p => Err(format!(
+            "{what}: stack high-water mark {p:?} B, the limit is {limit} B"
+        )),
+    }
+}
+
 /// Time limit of a unit run (the boot's worst case is a few seconds of time-outs; then as a
 /// replay of the same size).
 pub(super) fn unit_timeout(capture_bytes: usize) -> Duration {

@@ -7,7 +7,7 @@
 
 use super::ci::spawn_equivalence;
 use super::nav440_cli::firmware_host_args;
-use super::qemu_run::counter;
+use super::qemu_run::stack_within;
 use super::size::flash_ram;
 use super::unit_cases::{spawn_stack_case, UNIT_STEP};
 use super::{
@@ -123,14 +123,10 @@ pub(super) fn stack_twin_ci(
         &twin_elf,
         &capture,
         &host,
-        move |c| match counter(c, "stack_peak") {
-            Some(p) if p <= limit => {
-                eprintln!("xtask: OK: {what}: stack high-water mark {p} B, at most {limit} B");
-                Ok(())
-            }
-            p => Err(format!(
-                "{what}: stack high-water mark {p:?} B, the limit is {limit} B"
-            )),
+        move |c| {
+            let p = stack_within(c, limit, &what)?;
+            eprintln!("xtask: OK: {what}: stack high-water mark {p} B, at most {limit} B");
+            Ok(())
         },
     );
     Ok(())

@@ -6,7 +6,7 @@ use super::build::build;
 use super::captures::{data_captures, rate_drop_capture, PERIOD_CHANGE};
 use super::equivalence::compare_csv;
 use super::nav440_cli::{firmware_host_args, host_estimate, nav440_bin, Sim, FIRMWARE_AXIS};
-use super::qemu_run::{counter, counters, run_unit, run_unit_rows, unit_timeout};
+use super::qemu_run::{counter, counters, run_unit, run_unit_rows, stack_within, unit_timeout};
 use super::{root, unique_path, BankChoice, FW, FW_BIN, STM32_FEATURE, UART_ROWS};
 use crate::cargo;
 use crate::pool::Pool;
@@ -183,16 +183,8 @@ fn unit_case(
             }
             let stack = match case.expect {
                 Expect::CsvStack { stack_limit, .. } => {
-                    match counter(&counters(&r.stderr), "stack_peak") {
-                        Some(p) if p <= stack_limit => {
-                            format!("; stack high-water mark {p} B, at most {stack_limit} B")
-                        }
-                        p => {
-                            return Err(format!(
-                            "{what}: stack high-water mark {p:?} B, the limit is {stack_limit} B"
-                        ))
-                        }
-                    }
+                    let p = stack_within(&counters(&r.stderr), stack_limit, &what)?;
+                    format!("; stack high-water mark {p} B, at most {stack_limit} B")
                 }
                 _ => String::new(),
             };
