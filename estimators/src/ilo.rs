@@ -45,6 +45,24 @@ impl IloConfig {
     /// `wn_rad_s > 0` (rad/s), `0 < zeta < 1`, the damped frequency below `pi / dt_s`; `h_s`
     /// and `dt_s` in s with `dt_s >= h_s`. Computed in `f64` (`libm`).
     pub fn per_sample(wn_rad_s: f64, zeta: f64, h_s: f64, dt_s: f64) -> Result<Self, ConfigError> {
+        Self::per_sample_alias(wn_rad_s, zeta, 1, h_s, dt_s)
+    }
+
+    /// [`Self::per_sample`] through the `alias`-th alias: within one step the observer turns
+    /// `alias 2 pi / dt` rad/s faster than its sampled poles, `s + i alias 2 pi / dt`. Every
+    /// alias has the same poles at the samples and other zeros: ILO1 tuned on a fast sine
+    /// lands near the tenth, and the fifth follows the motions of docs/MOTION-FAMILY.md
+    /// within 1.5x of ILO1 tuned on each ("ILO1 by the jerk index").
+    ///
+    /// `alias >= 1` and the step's angle `(wd + alias 2 pi / dt) h` below `pi`, else
+    /// [`ConfigError::ObserverPoles`]; the rest as [`Self::per_sample`].
+    pub fn per_sample_alias(
+        wn_rad_s: f64,
+        zeta: f64,
+        alias: u32,
+        h_s: f64,
+        dt_s: f64,
+    ) -> Result<Self, ConfigError> {
         let wn = positive("wn", wn_rad_s)?;
         let h = positive("h", h_s)?;
         let dt = positive("dt", dt_s)?;
@@ -56,16 +74,19 @@ impl IloConfig {
             return Err(ConfigError::SamplePeriodTooShort);
         }
         let dt = steps * h;
-        if !(zeta > 0.0 && zeta < 1.0) {
+        if !(zeta > 0.0 && zeta < 1.0) || alias == 0 {
             return Err(ConfigError::ObserverPoles);
         }
         let wd = wn * libm::sqrt(1.0 - zeta * zeta);
         if wd * dt >= core::f64::consts::PI {
             return Err(ConfigError::ObserverPoles);
         }
-        // The step's eigenvalue: exp(h (-zeta wn + i (wd + 2 pi / dt))).
+        // The step's eigenvalue: exp(h (-zeta wn + i (wd + alias 2 pi / dt))).
         let radius = libm::exp(-zeta * wn * h);
-        let angle = (wd + 2.0 * core::f64::consts::PI / dt) * h;
+        let angle = (wd + f64::from(alias) * 2.0 * core::f64::consts::PI / dt) * h;
+        if angle >= core::f64::consts::PI {
+            return Err(ConfigError::ObserverPoles);
+        }
         let l = (1.0 - radius * radius) / h;
         let k2 = (2.0 - 2.0 * radius * libm::cos(angle)) / h - l;
         if !(h * l < 1.0 && k2 > 0.0) {
@@ -228,15 +249,18 @@ impl<T: Real, const D: usize> Law for IloParams<T, D> {
     }
 
     /// In equilibrium `v = K1 v + K2 e`, so the error `e = y - xhat` is `c v` with
-    /// `c = (1 - K1) / K2` (s): `xhat = y - c v`, the output `v` and the delay line kept; the
-    /// next step at `y` returns `K1 v + K2 c v = v`. `c` in f64 (a retune is rare). Nothing
-    /// when the gains did not change (the state is then where these gains put it).
-    fn retune_state(&self, old: &Self, s: &mut IloState<T, D>, y: T) {
+    /// `c = (1 - K1) / K2` (s). `xhat` moves by the change of that offset, `(c_old - c) v`: the
+    /// output `v` and the delay line are kept, and so is the error's deviation from
+    /// equilibrium (the filtered position the old gains carried), which the new gains then
+    /// take on from where it is. Between two sets with `K1 = 1` (no offset) the state is kept
+    /// as it is. `c` in f64 (a retune is rare). Nothing when the gains did not change.
+    fn retune_state(&self, old: &Self, s: &mut IloState<T, D>, _y: T) {
         if self == old {
             return;
         }
-        let c = (1.0 - self.k1.to_f64()) / self.k2.to_f64();
-        s.xhat = y - T::from_f64(c * s.out.to_f64());
+        let offset = |p: &Self| (1.0 - p.k1.to_f64()) / p.k2.to_f64();
+        let shift = (offset(old) - offset(self)) * s.out.to_f64();
+        s.xhat = s.xhat + T::from_f64(shift);
     }
 }
 
@@ -366,22 +390,28 @@ mod tests {
 
     /// `per_sample` places the sampled poles where asked: the map of one sample's 100 steps has
     /// the eigenvalues `exp(s dt)` (to 1e-6, the gains being `f32`), at bandwidths from 5 to
-    /// 250 rad/s and dampings from 0.1 to 0.7, at 100 Hz and at 20 Hz.
+    /// 250 rad/s and dampings from 0.1 to 0.7, at 100 Hz and at 20 Hz, through the first and
+    /// the fifth alias.
     #[test]
     fn per_sample_places_the_sampled_poles() {
-        for (h, dt) in [(1e-4, 0.01), (1e-4, 0.05)] {
+        for (h, dt, alias) in [
+            (1e-4, 0.01, 1),
+            (1e-4, 0.05, 1),
+            (1e-4, 0.01, 5),
+            (1e-4, 0.05, 5),
+        ] {
             let n = libm::round(dt / h) as u32;
             for wn in [5.0, 20.0, 60.0, 250.0] {
                 for zeta in [0.1, 0.2, 0.45, 0.7] {
                     let wd = wn * libm::sqrt(1.0 - zeta * zeta);
                     if wd * dt >= core::f64::consts::PI {
                         assert_eq!(
-                            IloConfig::per_sample(wn, zeta, h, dt),
+                            IloConfig::per_sample_alias(wn, zeta, alias, h, dt),
                             Err(ConfigError::ObserverPoles)
                         );
                         continue;
                     }
-                    let c = IloConfig::per_sample(wn, zeta, h, dt).unwrap();
+                    let c = IloConfig::per_sample_alias(wn, zeta, alias, h, dt).unwrap();
                     assert_eq!(c.k1, 1.0);
                     let r = libm::exp(-zeta * wn * dt);
                     let want = (r * libm::cos(wd * dt), r * libm::sin(wd * dt));
@@ -443,5 +473,24 @@ mod tests {
             IloConfig::per_sample(30.0, 0.2, 1e-4, 1e-5),
             Err(ConfigError::SamplePeriodTooShort)
         );
+        // No alias 0, and none whose step turns by pi or more (dt / 2h = 50 at 100 Hz).
+        let alias = |a| IloConfig::per_sample_alias(30.0, 0.2, a, 1e-4, 0.01);
+        assert_eq!(alias(0), Err(ConfigError::ObserverPoles));
+        assert!(alias(49).is_ok());
+        assert_eq!(alias(50), Err(ConfigError::ObserverPoles));
+    }
+
+    /// ILO1 tuned on the fast sine at 0.01 deg^2 (`nav440 tune`: `K1` 0.99575, `L` 7.176,
+    /// `K2` 3,904) turns by 0.636 rad per step: 63.6 rad per sample of 100 steps, ten turns
+    /// (62.8 rad) beyond its per-sample angle. It lies near the tenth alias, not the first.
+    #[test]
+    fn a_tuned_set_lies_near_a_higher_alias() {
+        let (k1, l, k2, h) = (0.995_751_44_f64, 7.176_077_f64, 3_904.464_4_f64, 1e-4);
+        // The step's matrix on (xhat, delayed v): trace 1 - h (L + K2) + K1, determinant
+        // K1 (1 - h L).
+        let (tr, det) = (1.0 - h * (l + k2) + k1, k1 * (1.0 - h * l));
+        let step_angle = libm::acos(tr / (2.0 * libm::sqrt(det)));
+        let turns = libm::floor(step_angle * 100.0 / (2.0 * core::f64::consts::PI));
+        assert_eq!(turns, 10.0, "{step_angle}");
     }
 }

@@ -57,9 +57,9 @@ fn mse(rows: &[Vec<String>], a: usize, b: usize) -> f64 {
 }
 
 /// At 0.5 deg^2 of added noise on the bundled fig5 capture, the following ILO1's velocity
-/// MSE is under a third of the shipped gains' (they were tuned at 0.01 deg^2; measured 4.8x
+/// MSE is under a third of the shipped gains' (they were tuned at 0.01 deg^2; measured 4.7x
 /// lower), with the same header, rows, times, angles and rates; in f32 and in fixed point.
-/// The same for the self-tuning bank (measured 4.6x lower), which says on stderr where each
+/// The same for the self-tuning bank (measured 4.5x lower), which says on stderr where each
 /// axis's ILO1 is at the end.
 #[test]
 fn follow_runs_the_product_bank_that_follows_the_noise() {

@@ -18,6 +18,9 @@ pub struct AdaptiveProductConfig {
     pub ilo1_c: f32,
     /// The damping of ILO1's per-sample poles, in (0, 1) (default [`Self::ILO1_ZETA`]).
     pub ilo1_zeta: f32,
+    /// The alias ILO1's poles are placed through ([`IloConfig::per_sample_alias`]; >= 1,
+    /// default [`Self::ILO1_ALIAS`]).
+    pub ilo1_alias: u32,
     /// `kappa`, s: the acceleration Kalman's process noise is `q = kappa J` (deg^2/s^5), its
     /// measurement noise `r = V` (finite, > 0). Default
     /// [`AdaptiveKalmanConfig::KAPPA_FIG5_S`].
@@ -38,17 +41,28 @@ pub struct AdaptiveProductConfig {
 
 impl AdaptiveProductConfig {
     /// `c` from ILO1 on the synthetic fig5 motion (the paper's Fig. 5) at 0.1 deg^2: the
-    /// best `wn` of a grid there (25.5 rad/s) over fig5's index (`host-tests`
+    /// best `wn` of a grid there (24.5 rad/s, with [`Self::ILO1_ZETA`] and
+    /// [`Self::ILO1_ALIAS`]) over fig5's index (`host-tests`
     /// `motion_family::ilo1_by_the_jerk_index`, docs/MOTION-FAMILY.md).
-    pub const ILO1_C_FIG5: f32 = 0.649;
-    /// The damping of ILO1's per-sample poles that holds on every motion of
-    /// docs/MOTION-FAMILY.md (the tuned sets' lie between 0.14 and 0.34).
-    pub const ILO1_ZETA: f32 = 0.25;
+    pub const ILO1_C_FIG5: f32 = 0.6245;
+    /// The damping of ILO1's per-sample poles: with [`Self::ILO1_ALIAS`], the one of a grid
+    /// (0.1 to 0.45) whose rule holds best on every motion of docs/MOTION-FAMILY.md (the
+    /// tuned sets' lie between 0.14 and 0.34).
+    pub const ILO1_ZETA: f32 = 0.3;
+    /// The alias of ILO1's poles: with [`Self::ILO1_ZETA`], the one of a grid (1 to 10)
+    /// whose rule holds best on every motion of docs/MOTION-FAMILY.md.
+    pub const ILO1_ALIAS: u32 = 5;
+    /// The jerk power ILO1's rule starts from, until the bank has its own estimates: that of
+    /// the synthetic fig5 motion, (deg/s^3)^2 (docs/MOTION-FAMILY.md).
+    pub const START_JERK: f32 = 3.68e6;
+    /// The noise variance ILO1's rule starts from, deg^2.
+    pub const START_NOISE_VAR: f32 = 0.1;
 
     /// The defaults (see the fields).
     pub const DEFAULT: Self = Self {
         ilo1_c: Self::ILO1_C_FIG5,
         ilo1_zeta: Self::ILO1_ZETA,
+        ilo1_alias: Self::ILO1_ALIAS,
         kappa_s: AdaptiveKalmanConfig::KAPPA_FIG5_S,
         noise_tau_s: 0.5,
         jerk_tau_s: JerkEstimator::DEFAULT_TAU_S,
@@ -73,7 +87,7 @@ impl AdaptiveProductConfig {
                 return Err(ConfigError::NotPositive(name));
             }
         }
-        if self.ilo1_zeta >= 1.0 {
+        if self.ilo1_zeta >= 1.0 || self.ilo1_alias == 0 {
             return Err(ConfigError::ObserverPoles);
         }
         if self.ilo1_ratio < 1.0 {
@@ -107,18 +121,20 @@ pub(super) fn jerk_index_wn(c: f64, j: f64, v: f64, dt: f64) -> f64 {
 /// angle) and the motion's jerk power `J` ([`JerkEstimator`], from the rate a gyro measures
 /// about the axis, given with [`Self::observe_rate`]).
 ///
-/// - ILO1 is [`IloConfig::per_sample`] at `wn = c (J / (V dt))^(1/6)` and the damping
-///   [`AdaptiveProductConfig::ilo1_zeta`] (`wn` within 2 rad/s and 80 % of the Nyquist
-///   frequency).
+/// - ILO1 is [`IloConfig::per_sample_alias`] at `wn = c (J / (V dt))^(1/6)`, the damping
+///   [`AdaptiveProductConfig::ilo1_zeta`] and the alias [`AdaptiveProductConfig::ilo1_alias`]
+///   (`wn` within 2 rad/s and 80 % of the Nyquist frequency).
 /// - The Kalman's noise model is `q = kappa J`, `r = V` (`q dt^5 / r` within
 ///   `[2^-40, 2^30]`), as [`crate::AdaptiveKalman`]'s.
 ///
-/// Tuned once on the paper's motion, that rule keeps ILO1 below the backward difference of
-/// the angle and within 2x of ILO1 tuned on each of five motions, from a slow spin to
+/// With `c` from the paper's motion, that rule keeps ILO1 below the backward difference of
+/// the angle and within 1.5x of ILO1 tuned on each of five motions, from a slow spin to
 /// strokes of 600 deg/s, at noise from 0.01 to 0.5 deg^2 (docs/MOTION-FAMILY.md, "ILO1 by the
 /// jerk index"), where fixed gains lose to the backward difference on the fast ones.
 ///
-/// It starts with the gains of the configuration it is built with; every
+/// ILO1 starts at the rule's gains for [`AdaptiveProductConfig::START_JERK`] and
+/// [`AdaptiveProductConfig::START_NOISE_VAR`] (so that every change is between gains of the
+/// same alias), the Kalman at the configuration's; every
 /// [`AdaptiveProductConfig::retune_every`] samples, once both estimates exist, it moves the
 /// gains to the rule's when `wn` or `q / r` moved by more than their ratios
 /// ([`ProductBank::set_gains`]: bumpless). Without a rate the gains stay. Each change
@@ -159,7 +175,7 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
     /// as `follow` says.
     pub fn new(cfg: &BankConfig, follow: &AdaptiveProductConfig) -> Result<Self, ConfigError> {
         follow.validate()?;
-        Ok(Self {
+        let mut bank = Self {
             bank: ProductBank::new(cfg)?,
             cfg: *cfg,
             follow: *follow,
@@ -170,7 +186,27 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
             since: 0,
             retunes: 0,
             ilo1_retunes: 0,
-        })
+        };
+        let (wn, _) = bank.rule(
+            AdaptiveProductConfig::START_NOISE_VAR,
+            AdaptiveProductConfig::START_JERK,
+        );
+        if let Ok(ilo1) = bank.ilo1_at(wn) {
+            bank.cfg.velocity.ilo[0] = ilo1;
+            bank.bank = ProductBank::new(&bank.cfg)?;
+            bank.wn = Some(wn);
+        }
+        Ok(bank)
+    }
+
+    /// ILO1's gains with per-sample poles at `wn` rad/s and the configured damping, through
+    /// the configured alias, or the first alias where the step cannot turn that fast (at
+    /// most 2 steps per sample per alias).
+    fn ilo1_at(&self, wn: f64) -> Result<IloConfig, ConfigError> {
+        let (h, dt) = (f64::from(self.cfg.h), f64::from(self.cfg.sample_period_s));
+        let zeta = f64::from(self.follow.ilo1_zeta);
+        IloConfig::per_sample_alias(wn, zeta, self.follow.ilo1_alias, h, dt)
+            .or_else(|_| IloConfig::per_sample(wn, zeta, h, dt))
     }
 
     /// The rate about the bank's axis at `t_us` (deg/s): what the jerk estimate is made of.
@@ -252,8 +288,7 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
         let mut cfg = self.cfg;
         let ilo1 = moved(self.wn, wn, self.follow.ilo1_ratio);
         if ilo1 {
-            let (h, dt) = (f64::from(cfg.h), f64::from(cfg.sample_period_s));
-            match IloConfig::per_sample(wn, f64::from(self.follow.ilo1_zeta), h, dt) {
+            match self.ilo1_at(wn) {
                 Ok(c) => cfg.velocity.ilo[0] = c,
                 Err(_) => return,
             }
@@ -295,7 +330,9 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
         &self.cfg
     }
 
-    /// ILO1's current bandwidth by the rule, rad/s (`None` while the initial gains run).
+    /// ILO1's current bandwidth by the rule, rad/s: the start's (fig5's jerk power at 0.1 deg^2)
+    /// until the estimates move it (`None` when that start could not be placed and the
+    /// configuration's ILO1 runs).
     pub fn ilo1_wn(&self) -> Option<f64> {
         self.wn
     }

@@ -15,8 +15,8 @@ pub struct SelfTuneConfig {
     /// ILO1's bandwidth at the start, rad/s (finite, > 0; default [`Self::WN0_FIG5`]),
     /// brought within the validated range (see [`SelfTuningProductBank`]).
     pub wn0_rad_s: f32,
-    /// The damping of ILO1's per-sample poles, in (0, 1) (default
-    /// [`AdaptiveProductConfig::ILO1_ZETA`](crate::AdaptiveProductConfig::ILO1_ZETA)).
+    /// The damping of ILO1's per-sample poles (first alias, [`IloConfig::per_sample`]), in
+    /// (0, 1) (default [`Self::ZETA`]).
     pub zeta: f32,
     /// The first step of each gain: the candidates run at `wn / step` and `wn * step` (or the
     /// damping's), and a move changes it by that factor (> 1; default 1.5). A gain's step
@@ -45,14 +45,20 @@ pub struct SelfTuneConfig {
 
 impl SelfTuneConfig {
     /// ILO1's best bandwidth on the synthetic fig5 motion (the paper's Fig. 5) at 0.1 deg^2
-    /// with the damping [`AdaptiveProductConfig::ILO1_ZETA`](crate::AdaptiveProductConfig::ILO1_ZETA),
-    /// rad/s (docs/MOTION-FAMILY.md, "ILO1 by the jerk index").
+    /// with the damping [`Self::ZETA`], rad/s (docs/MOTION-FAMILY.md, "ILO1 by the jerk
+    /// index").
     pub const WN0_FIG5: f32 = 25.5;
+    /// The damping the search starts from, with the first alias.
+    pub const ZETA: f32 = 0.25;
+    /// `c` of the jerk index's bandwidth `c (J / (V dt))^(1/6)` that anchors the search: for
+    /// [`Self::ZETA`] and the first alias, the best `wn` on fig5 at 0.1 deg^2 over fig5's
+    /// index there.
+    pub const ANCHOR_C: f32 = 0.649;
 
     /// The defaults (see the fields).
     pub const DEFAULT: Self = Self {
         wn0_rad_s: Self::WN0_FIG5,
-        zeta: crate::AdaptiveProductConfig::ILO1_ZETA,
+        zeta: Self::ZETA,
         step: 1.5,
         min_step: 1.05,
         margin: 0.05,
@@ -195,7 +201,7 @@ pub struct Settled {
 ///   `IloConfig::per_sample` is valid). Once the bank has its own noise estimate `V` (from its
 ///   unwrapped angle) and jerk estimate `J` (from the valid rates), `wn` stays within
 ///   [`SelfTuneConfig::span`] of the jerk index's bandwidth `c (J / (V dt))^(1/6)`
-///   ([`AdaptiveProductConfig::ILO1_C_FIG5`]): far below a fast motion's bandwidth ILO1 lags
+///   ([`SelfTuneConfig::ANCHOR_C`]): far below a fast motion's bandwidth ILO1 lags
 ///   so much that a lower bandwidth, nearer a zero output, errs less, and the search alone
 ///   would descend there.
 /// - **Only against a valid rate:** a sample is compared only when a finite rate was given for
@@ -448,7 +454,7 @@ impl<T: Real, S: SqrtFn<T>> SelfTuningProductBank<T, S> {
             return (lo, hi);
         };
         let anchor = jerk_index_wn(
-            f64::from(AdaptiveProductConfig::ILO1_C_FIG5),
+            f64::from(SelfTuneConfig::ANCHOR_C),
             f64::from(j),
             f64::from(v).max(1e-12),
             f64::from(self.cfg.sample_period_s),

@@ -754,13 +754,30 @@ fn adaptive_product_config_is_checked() {
     );
 }
 
-/// Without a rate the gains never move: the output is the plain product bank's, bit for bit.
+/// ILO1 starts at the rule's gains for fig5's jerk power at 0.1 deg^2 (`wn` = 0.6245 x
+/// (3.68e6 / 0.001)^(1/6) = 24.5 rad/s at 100 Hz, computed here again), the Kalman at the
+/// configuration's; without a rate the gains never move: the output is that of the plain
+/// product bank built with those gains, bit for bit.
 #[test]
 fn without_a_rate_the_adaptive_product_bank_is_the_product_bank() {
     fn check<T: Real>() {
         let cfg = crate::BankConfig::NAV440;
-        let mut a = AdaptiveProductBank::<T>::new(&cfg, &AdaptiveProductConfig::DEFAULT).unwrap();
-        let mut b = crate::ProductBank::<T>::new(&cfg).unwrap();
+        let f = AdaptiveProductConfig::DEFAULT;
+        let mut a = AdaptiveProductBank::<T>::new(&cfg, &f).unwrap();
+        let wn0 = f64::from(f.ilo1_c) * libm::pow(3.68e6 / (0.1 * 0.01), 1.0 / 6.0);
+        assert!((wn0 - 24.5).abs() < 0.1, "{wn0}");
+        assert!((a.ilo1_wn().unwrap() / wn0 - 1.0).abs() < 1e-6);
+        let mut start = cfg;
+        start.velocity.ilo[0] = IloConfig::per_sample_alias(
+            wn0,
+            f64::from(f.ilo1_zeta),
+            f.ilo1_alias,
+            f64::from(cfg.h),
+            0.01,
+        )
+        .unwrap();
+        assert_eq!(a.config(), &start);
+        let mut b = crate::ProductBank::<T>::new(&start).unwrap();
         let mut g = Gauss::new(11);
         for k in 0..2000 {
             let (t, y, _) = noisy_sine(k, 200.0, 1.0, 0.1, &mut g);
@@ -768,7 +785,7 @@ fn without_a_rate_the_adaptive_product_bank_is_the_product_bank() {
             assert_eq!(oa, ob, "sample {k}");
         }
         assert_eq!(a.retune_count(), 0);
-        assert_eq!(a.ilo1_wn(), None);
+        assert!((a.ilo1_wn().unwrap() / wn0 - 1.0).abs() < 1e-6);
         assert!(a.estimates().0.is_some() && a.estimates().1.is_none());
     }
     check::<f32>();
