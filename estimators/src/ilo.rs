@@ -249,18 +249,19 @@ impl<T: Real, const D: usize> Law for IloParams<T, D> {
     }
 
     /// In equilibrium `v = K1 v + K2 e`, so the error `e = y - xhat` is `c v` with
-    /// `c = (1 - K1) / K2` (s). `xhat` moves by the change of that offset, `(c_old - c) v`: the
-    /// output `v` and the delay line are kept, and so is the error's deviation from
-    /// equilibrium (the filtered position the old gains carried), which the new gains then
-    /// take on from where it is. Between two sets with `K1 = 1` (no offset) the state is kept
-    /// as it is. `c` in f64 (a retune is rare). Nothing when the gains did not change.
-    fn retune_state(&self, old: &Self, s: &mut IloState<T, D>, _y: T) {
-        if self == old {
+    /// `c = (1 - K1) / K2` (s): `xhat = y - c v`, the output `v` and the delay line kept; the
+    /// next step at `y` returns `K1 v + K2 c v = v`. Between two sets with `K1 = 1` (no
+    /// offset: the equilibrium does not depend on the gains) the state is kept as it is,
+    /// with the position the observer filtered: setting `xhat` to the last sample would turn
+    /// that sample's noise into a transient, large for the `K2` near 1,000 of ILO1 placed
+    /// through a higher alias ([`IloConfig::per_sample_alias`]). `c` in f64 (a retune is
+    /// rare). Nothing when the gains did not change.
+    fn retune_state(&self, old: &Self, s: &mut IloState<T, D>, y: T) {
+        if self == old || (self.k1 == T::ONE && old.k1 == T::ONE) {
             return;
         }
-        let offset = |p: &Self| (1.0 - p.k1.to_f64()) / p.k2.to_f64();
-        let shift = (offset(old) - offset(self)) * s.out.to_f64();
-        s.xhat = s.xhat + T::from_f64(shift);
+        let c = (1.0 - self.k1.to_f64()) / self.k2.to_f64();
+        s.xhat = y - T::from_f64(c * s.out.to_f64());
     }
 }
 
@@ -478,6 +479,35 @@ mod tests {
         assert_eq!(alias(0), Err(ConfigError::ObserverPoles));
         assert!(alias(49).is_ok());
         assert_eq!(alias(50), Err(ConfigError::ObserverPoles));
+    }
+
+    /// A gain change between two sets with `K1 = 1` keeps the state as it is (their
+    /// equilibrium `xhat = y` does not depend on the gains); to a leaky set (`K1 < 1`) `xhat`
+    /// goes to that set's equilibrium for the output, `y - (1 - K1) / K2 * v`, and the output
+    /// is kept either way.
+    #[test]
+    fn a_gain_change_keeps_the_state_unless_the_equilibrium_moves() {
+        let build = |c: IloConfig| IloParams::<f64, 1>::new(&c, 1e-4).unwrap();
+        let a = build(IloConfig::per_sample(30.0, 0.25, 1e-4, 0.01).unwrap());
+        let b = build(IloConfig::per_sample_alias(40.0, 0.3, 5, 1e-4, 0.01).unwrap());
+        let leaky = build(IloConfig {
+            k1: 0.99,
+            l: 5.0,
+            k2: 50.0,
+        });
+        let mut s = a.init(0.0);
+        for k in 0..300 {
+            // A ramp of 100 deg/s with an alternating 0.1 deg disturbance.
+            let y = 0.01 * f64::from(k) + if k % 2 == 0 { 0.1 } else { -0.1 };
+            a.step(&mut s, y);
+        }
+        let before = s;
+        b.retune_state(&a, &mut s, 3.5);
+        assert_eq!(s, before);
+        leaky.retune_state(&b, &mut s, 3.5);
+        assert_eq!(s.out, before.out);
+        let want = 3.5 - (1.0 - 0.99_f32 as f64) / 50.0 * before.out;
+        assert!((s.xhat - want).abs() < 1e-9, "{} vs {want}", s.xhat);
     }
 
     /// ILO1 tuned on the fast sine at 0.01 deg^2 (`nav440 tune`: `K1` 0.99575, `L` 7.176,

@@ -78,9 +78,9 @@ pub trait Law: Copy + core::fmt::Debug {
     /// `retune_state` puts the state there (`z = y + h u`, `u1 = u`, `u` the output). The
     /// AVE's equilibrium (`xhat = y`, `theta` = the rate) does not depend on its gains either,
     /// but its state is off it by the position error the old gains left, so its
-    /// `retune_state` sets `xhat = y`. The ILO's and the AD's equilibrium does depend on their
-    /// gains: kept as it is, the state of a lightly damped ILO meets the new gains with the old
-    /// steady error and rings (docs/ADAPTIVE-GAINS.md, "How a gain change keeps the
+    /// `retune_state` sets `xhat = y`. The ILO's (with `K1 < 1`) and the AD's equilibrium does
+    /// depend on their gains: kept as it is, the state of a lightly damped ILO meets the new
+    /// gains with the old steady error and rings (docs/ADAPTIVE-GAINS.md, "How a gain change keeps the
     /// estimates").
     #[inline]
     fn retune_state(&self, old: &Self, s: &mut Self::State, y: Self::Num) {
