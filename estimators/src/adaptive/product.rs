@@ -19,8 +19,18 @@ pub struct AdaptiveProductConfig {
     /// The damping of ILO1's per-sample poles, in (0, 1) (default [`Self::ILO1_ZETA`]).
     pub ilo1_zeta: f32,
     /// The alias ILO1's poles are placed through ([`IloConfig::per_sample_alias`]; >= 1,
-    /// default [`Self::ILO1_ALIAS`]).
+    /// default [`Self::ILO1_ALIAS`]) while the sample interval is steady (see
+    /// [`Self::ilo1_jitter_max`]); the first alias otherwise.
     pub ilo1_alias: u32,
+    /// The largest jitter of the sample interval at which ILO1 runs through
+    /// [`Self::ilo1_alias`] (in [0, 1); default [`Self::ILO1_JITTER_MAX`]): the mean of
+    /// `|interval / sample_period_s - 1|` over the intervals seen, at most about the last
+    /// [`JITTER_SAMPLES`] (each deviation counted at most 1). Through the `k`-th alias the observer turns `k` times per
+    /// nominal sample within its steps, so an interval off by a fraction `d` turns its
+    /// per-sample poles by `k d` of a turn: on a real recording whose interval varies by
+    /// 10 % (10 to 12 ms) the fifth alias made ILO1 7x worse than the backward difference,
+    /// the first alias 1.9x better (docs/MOTION-FAMILY.md, "ILO1 by the jerk index").
+    pub ilo1_jitter_max: f32,
     /// `kappa`, s: the acceleration Kalman's process noise is `q = kappa J` (deg^2/s^5), its
     /// measurement noise `r = V` (finite, > 0). Default
     /// [`AdaptiveKalmanConfig::KAPPA_FIG5_S`].
@@ -52,6 +62,9 @@ impl AdaptiveProductConfig {
     /// The alias of ILO1's poles: with [`Self::ILO1_ZETA`], the one of a grid (1 to 10)
     /// whose rule holds best on every motion of docs/MOTION-FAMILY.md.
     pub const ILO1_ALIAS: u32 = 5;
+    /// The default of [`Self::ilo1_jitter_max`]: 0.2 % (the fifth alias then turns its poles
+    /// by at most a hundredth of a turn).
+    pub const ILO1_JITTER_MAX: f32 = 0.002;
     /// The jerk power ILO1's rule starts from, until the bank has its own estimates: that of
     /// the synthetic fig5 motion, (deg/s^3)^2 (docs/MOTION-FAMILY.md).
     pub const START_JERK: f32 = 3.68e6;
@@ -63,6 +76,7 @@ impl AdaptiveProductConfig {
         ilo1_c: Self::ILO1_C_FIG5,
         ilo1_zeta: Self::ILO1_ZETA,
         ilo1_alias: Self::ILO1_ALIAS,
+        ilo1_jitter_max: Self::ILO1_JITTER_MAX,
         kappa_s: AdaptiveKalmanConfig::KAPPA_FIG5_S,
         noise_tau_s: 0.5,
         jerk_tau_s: JerkEstimator::DEFAULT_TAU_S,
@@ -87,6 +101,9 @@ impl AdaptiveProductConfig {
                 return Err(ConfigError::NotPositive(name));
             }
         }
+        if !(0.0..1.0).contains(&self.ilo1_jitter_max) {
+            return Err(ConfigError::NotPositive("ilo1_jitter_max"));
+        }
         if self.ilo1_zeta >= 1.0 || self.ilo1_alias == 0 {
             return Err(ConfigError::ObserverPoles);
         }
@@ -108,6 +125,10 @@ impl Default for AdaptiveProductConfig {
 
 /// The lowest ILO1 bandwidth taken, rad/s.
 const WN_MIN: f64 = 2.0;
+
+/// Intervals the jitter of [`AdaptiveProductBank`]'s sample interval is averaged over (the
+/// weight of an interval once that many were seen is the inverse).
+pub const JITTER_SAMPLES: u32 = 50;
 
 /// ILO1's bandwidth by the jerk index, `c (J / (V dt))^(1/6)` rad/s, for the jerk power `j`
 /// ((deg/s^3)^2), the noise variance `v` (deg^2) and the sample period `dt` (s): the rule of
@@ -168,6 +189,13 @@ pub struct AdaptiveProductBank<T: Real, S: SqrtFn<T> = NativeSqrt> {
     since: u32,
     retunes: u32,
     ilo1_retunes: u32,
+    /// The alias ILO1's gains are placed through now.
+    alias: u32,
+    /// The last accepted sample's time (us) in this epoch, the mean fractional deviation of
+    /// the interval from the nominal period, and how many intervals it has seen.
+    last_t_us: Option<u64>,
+    jitter: f32,
+    intervals: u32,
 }
 
 impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
@@ -186,12 +214,16 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
             since: 0,
             retunes: 0,
             ilo1_retunes: 0,
+            alias: follow.ilo1_alias,
+            last_t_us: None,
+            jitter: 0.0,
+            intervals: 0,
         };
         let (wn, _) = bank.rule(
             AdaptiveProductConfig::START_NOISE_VAR,
             AdaptiveProductConfig::START_JERK,
         );
-        if let Ok(ilo1) = bank.ilo1_at(wn) {
+        if let Ok((ilo1, _)) = bank.ilo1_at(wn, follow.ilo1_alias) {
             bank.cfg.velocity.ilo[0] = ilo1;
             bank.bank = ProductBank::new(&bank.cfg)?;
             bank.wn = Some(wn);
@@ -200,13 +232,40 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
     }
 
     /// ILO1's gains with per-sample poles at `wn` rad/s and the configured damping, through
-    /// the configured alias, or the first alias where the step cannot turn that fast (at
-    /// most 2 steps per sample per alias).
-    fn ilo1_at(&self, wn: f64) -> Result<IloConfig, ConfigError> {
+    /// `alias`, or the first alias where the step cannot turn that fast (at most 2 steps per
+    /// sample per alias); and the alias they are placed through.
+    fn ilo1_at(&self, wn: f64, alias: u32) -> Result<(IloConfig, u32), ConfigError> {
         let (h, dt) = (f64::from(self.cfg.h), f64::from(self.cfg.sample_period_s));
         let zeta = f64::from(self.follow.ilo1_zeta);
-        IloConfig::per_sample_alias(wn, zeta, self.follow.ilo1_alias, h, dt)
-            .or_else(|_| IloConfig::per_sample(wn, zeta, h, dt))
+        IloConfig::per_sample_alias(wn, zeta, alias, h, dt)
+            .map(|c| (c, alias))
+            .or_else(|_| IloConfig::per_sample(wn, zeta, h, dt).map(|c| (c, 1)))
+    }
+
+    /// The alias ILO1 should run through: the configured one while the interval's jitter is
+    /// at most [`AdaptiveProductConfig::ilo1_jitter_max`] (and before any interval), else
+    /// the first.
+    fn wanted_alias(&self) -> u32 {
+        if self.intervals == 0 || self.jitter <= self.follow.ilo1_jitter_max {
+            self.follow.ilo1_alias
+        } else {
+            1
+        }
+    }
+
+    /// The jitter of the interval from the last sample to the one at `t_us` (see
+    /// [`AdaptiveProductConfig::ilo1_jitter_max`]); a deviation counts at most 1.
+    fn observe_interval(&mut self, t_us: u64) {
+        if let Some(prev) = self.last_t_us {
+            let dt0 = self.cfg.sample_period_s;
+            let d = t_us.saturating_sub(prev) as f32 * 1e-6 / dt0;
+            let dev = (d - 1.0).abs().min(1.0);
+            // The first interval starts the mean.
+            let weight = 1.0 / (self.intervals.saturating_add(1)).min(JITTER_SAMPLES) as f32;
+            self.jitter += (dev - self.jitter) * weight;
+            self.intervals = self.intervals.saturating_add(1);
+        }
+        self.last_t_us = Some(t_us);
     }
 
     /// The rate about the bank's axis at `t_us` (deg/s): what the jerk estimate is made of.
@@ -241,6 +300,7 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
     /// After an accepted sample: the noise estimate, and every `retune_every` samples the
     /// gains.
     fn after(&mut self, t_us: u64, out: &ProductOutput<T>) {
+        self.observe_interval(t_us);
         self.noise.update(t_us, out.unwrapped_deg());
         self.since = self.since.saturating_add(1);
         if self.since >= self.follow.retune_every {
@@ -286,10 +346,11 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
             now.is_none_or(|now| want > now * ratio || want * ratio < now)
         };
         let mut cfg = self.cfg;
-        let ilo1 = moved(self.wn, wn, self.follow.ilo1_ratio);
+        let alias = self.wanted_alias();
+        let ilo1 = moved(self.wn, wn, self.follow.ilo1_ratio) || alias != self.alias;
         if ilo1 {
-            match self.ilo1_at(wn) {
-                Ok(c) => cfg.velocity.ilo[0] = c,
+            match self.ilo1_at(wn, alias) {
+                Ok((c, _)) => cfg.velocity.ilo[0] = c,
                 Err(_) => return,
             }
         }
@@ -307,6 +368,7 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
         self.cfg = cfg;
         if ilo1 {
             self.wn = Some(wn);
+            self.alias = alias;
             self.ilo1_retunes = self.ilo1_retunes.saturating_add(1);
         }
         if kalman {
@@ -318,6 +380,19 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
     /// How many times the gains changed (either law's).
     pub fn retune_count(&self) -> u32 {
         self.retunes
+    }
+
+    /// The alias ILO1's gains are placed through now: the configured one, or the first
+    /// while the interval jitters (see [`AdaptiveProductConfig::ilo1_jitter_max`]).
+    pub fn ilo1_alias(&self) -> u32 {
+        self.alias
+    }
+
+    /// The jitter of the sample interval, the mean of `|interval / sample_period_s - 1|` over
+    /// the intervals seen, at most the last [`JITTER_SAMPLES`] or so (`None` before the
+    /// first).
+    pub fn interval_jitter(&self) -> Option<f32> {
+        (self.intervals > 0).then_some(self.jitter)
     }
 
     /// How many times ILO1's gains changed.
@@ -352,6 +427,7 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
     /// differences too).
     pub fn new_epoch(&mut self) {
         self.bank.new_epoch();
+        self.last_t_us = None;
         self.noise.restart();
         self.jerk.restart();
     }

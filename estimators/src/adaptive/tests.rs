@@ -744,6 +744,11 @@ fn adaptive_product_config_is_checked() {
         Err(ConfigError::NotPositive("kappa_s"))
     );
     assert_eq!(with(|c| c.ilo1_zeta = 1.0), Err(ConfigError::ObserverPoles));
+    assert_eq!(with(|c| c.ilo1_alias = 0), Err(ConfigError::ObserverPoles));
+    assert_eq!(
+        with(|c| c.ilo1_jitter_max = 1.0),
+        Err(ConfigError::NotPositive("ilo1_jitter_max"))
+    );
     assert_eq!(
         with(|c| c.ilo1_ratio = 0.9),
         Err(ConfigError::NotPositive("ilo1_ratio"))
@@ -790,6 +795,32 @@ fn without_a_rate_the_adaptive_product_bank_is_the_product_bank() {
     }
     check::<f32>();
     check::<crate::Fx>();
+}
+
+/// ILO1 runs through the configured alias while the sample interval is steady, and through
+/// the first once it jitters: intervals of 9 and 11 ms in turn (a jitter of 0.1, computed
+/// here again from the intervals' mean deviation) against a steady 10 ms.
+#[test]
+fn a_jittering_interval_puts_ilo1_at_the_first_alias() {
+    let cfg = crate::BankConfig::NAV440;
+    let f = AdaptiveProductConfig::DEFAULT;
+    let run = |jitter_us: u64| {
+        let mut a = AdaptiveProductBank::<f32>::new(&cfg, &f).unwrap();
+        assert_eq!(a.ilo1_alias(), AdaptiveProductConfig::ILO1_ALIAS);
+        let mut g = Gauss::new(13);
+        for k in 0..600 {
+            let (t, y, r) = noisy_sine(k, 100.0, 1.0, 0.1, &mut g);
+            let t = t + (k % 2) * jitter_us;
+            a.observe_rate(t, r);
+            a.update(t, y).unwrap();
+        }
+        (a.ilo1_alias(), a.interval_jitter().unwrap())
+    };
+    let (alias, jitter) = run(0);
+    assert_eq!((alias, jitter), (AdaptiveProductConfig::ILO1_ALIAS, 0.0));
+    let (alias, jitter) = run(1_000);
+    assert_eq!(alias, 1);
+    assert!((jitter - 0.1).abs() < 1e-3, "{jitter}");
 }
 
 /// With the rate, ILO1's bandwidth is the rule's for the bank's own estimates, computed here
