@@ -25,11 +25,12 @@ pub struct AdaptiveProductConfig {
     /// The largest jitter of the sample interval at which ILO1 runs through
     /// [`Self::ilo1_alias`] (in [0, 1); default [`Self::ILO1_JITTER_MAX`]): the mean of
     /// `|interval / sample_period_s - 1|` over the intervals seen, at most about the last
-    /// [`JITTER_SAMPLES`] (each deviation counted at most 1). Through the `k`-th alias the observer turns `k` times per
-    /// nominal sample within its steps, so an interval off by a fraction `d` turns its
-    /// per-sample poles by `k d` of a turn: on a real recording whose interval varies by
-    /// 10 % (10 to 12 ms) the fifth alias made ILO1 7x worse than the backward difference,
-    /// the first alias 1.9x better (docs/MOTION-FAMILY.md, "ILO1 by the jerk index").
+    /// [`JITTER_SAMPLES`] (each deviation counted at most 1, so a dropped sample counts 1).
+    /// Through the `k`-th alias the observer turns `k` times per nominal sample within its
+    /// steps, so an interval off by a fraction `d` turns its per-sample poles by `k d` of a
+    /// turn: on a real recording whose interval varies by 10 % (10 to 12 ms) the fifth alias
+    /// made ILO1 7x worse than the backward difference, the first 2.1x better
+    /// (docs/MOTION-FAMILY.md, "ILO1 by the jerk index").
     pub ilo1_jitter_max: f32,
     /// `kappa`, s: the acceleration Kalman's process noise is `q = kappa J` (deg^2/s^5), its
     /// measurement noise `r = V` (finite, > 0). Default
