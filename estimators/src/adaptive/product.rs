@@ -23,12 +23,13 @@ pub struct AdaptiveProductConfig {
     /// [`Self::ilo1_jitter_max`]); the first alias otherwise.
     pub ilo1_alias: u32,
     /// The largest jitter of the sample interval at which ILO1 runs through
-    /// [`Self::ilo1_alias`] (in [0, 1); default [`Self::ILO1_JITTER_MAX`]): the mean of
-    /// `|interval / sample_period_s - 1|` over the intervals seen, at most about the last
-    /// [`JITTER_SAMPLES`] (each deviation counted at most 1, so a dropped sample counts 1).
-    /// Through the `k`-th alias the observer turns `k` times per nominal sample within its
-    /// steps, so an interval off by a fraction `d` turns its per-sample poles by `k d` of a
-    /// turn: on a real recording whose interval varies by 10 % (10 to 12 ms) the fifth alias
+    /// [`Self::ilo1_alias`] (in [0, 1); default [`Self::ILO1_JITTER_MAX`]): the mean over
+    /// the intervals seen, at most about the last [`JITTER_SAMPLES`], of each interval's
+    /// deviation from the nearest whole number of periods `m >= 1`, `|interval /
+    /// sample_period_s - m|` (at most 1). Through the `k`-th alias the observer turns `k`
+    /// times per nominal sample within its steps, so an interval off by a fraction `d` turns
+    /// its per-sample poles by `k d` of a turn, and one of whole periods (a dropped sample)
+    /// by whole turns, nothing: on a real recording whose interval varies by 10 % (10 to 12 ms) the fifth alias
     /// made ILO1 7x worse than the backward difference, the first 2.1x better
     /// (docs/MOTION-FAMILY.md, "ILO1 by the jerk index").
     pub ilo1_jitter_max: f32,
@@ -255,12 +256,13 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
     }
 
     /// The jitter of the interval from the last sample to the one at `t_us` (see
-    /// [`AdaptiveProductConfig::ilo1_jitter_max`]); a deviation counts at most 1.
+    /// [`AdaptiveProductConfig::ilo1_jitter_max`]): its deviation from the nearest whole
+    /// number of periods (at least one), at most 1.
     fn observe_interval(&mut self, t_us: u64) {
         if let Some(prev) = self.last_t_us {
             let dt0 = self.cfg.sample_period_s;
             let d = t_us.saturating_sub(prev) as f32 * 1e-6 / dt0;
-            let dev = (d - 1.0).abs().min(1.0);
+            let dev = (d - libm::roundf(d).max(1.0)).abs().min(1.0);
             // The first interval starts the mean.
             let weight = 1.0 / (self.intervals.saturating_add(1)).min(JITTER_SAMPLES) as f32;
             self.jitter += (dev - self.jitter) * weight;
@@ -389,9 +391,8 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
         self.alias
     }
 
-    /// The jitter of the sample interval, the mean of `|interval / sample_period_s - 1|` over
-    /// the intervals seen, at most the last [`JITTER_SAMPLES`] or so (`None` before the
-    /// first).
+    /// The jitter of the sample interval (see [`AdaptiveProductConfig::ilo1_jitter_max`];
+    /// `None` before the first interval).
     pub fn interval_jitter(&self) -> Option<f32> {
         (self.intervals > 0).then_some(self.jitter)
     }

@@ -799,7 +799,8 @@ fn without_a_rate_the_adaptive_product_bank_is_the_product_bank() {
 
 /// ILO1 runs through the configured alias while the sample interval is steady, and through
 /// the first once it jitters: intervals of 9 and 11 ms in turn (a jitter of 0.1, computed
-/// here again from the intervals' mean deviation) against a steady 10 ms.
+/// here again from the intervals' mean deviation) against a steady 10 ms. One sample in
+/// seven dropped (an interval of two periods) is no jitter.
 #[test]
 fn a_jittering_interval_puts_ilo1_at_the_first_alias() {
     let cfg = crate::BankConfig::NAV440;
@@ -811,6 +812,9 @@ fn a_jittering_interval_puts_ilo1_at_the_first_alias() {
         for k in 0..600 {
             let (t, y, r) = noisy_sine(k, 100.0, 1.0, 0.1, &mut g);
             let t = t + (k % 2) * jitter_us;
+            if jitter_us == 0 && k % 7 == 3 {
+                continue;
+            }
             a.observe_rate(t, r);
             a.update(t, y).unwrap();
         }
