@@ -645,10 +645,15 @@ const ILO1_ALIAS: u32 = 5;
 /// The shipped preset with ILO1's per-sample poles at `wn` rad/s, [`ILO1_ZETA`] and
 /// [`ILO1_ALIAS`] (`estimators::IloConfig::per_sample_alias`).
 fn ilo1_at(wn: f64) -> BankConfig {
+    ilo1_through(wn, ILO1_ZETA, ILO1_ALIAS)
+}
+
+/// The shipped preset with ILO1's per-sample poles at `wn` rad/s and the damping `zeta`,
+/// through the alias `alias`.
+fn ilo1_through(wn: f64, zeta: f64, alias: u32) -> BankConfig {
     let mut cfg = BankConfig::NAV440;
     cfg.velocity.ilo[0] =
-        estimators::IloConfig::per_sample_alias(wn, ILO1_ZETA, ILO1_ALIAS, f64::from(cfg.h), DT_S)
-            .unwrap();
+        estimators::IloConfig::per_sample_alias(wn, zeta, alias, f64::from(cfg.h), DT_S).unwrap();
     cfg
 }
 
@@ -671,11 +676,7 @@ fn ilo1_index_c_at(zeta: f64, alias: u32) -> (f64, f64) {
     let (mut best, mut wn_best) = (f64::INFINITY, 0.0);
     for i in 0..60 {
         let wn = 10.0 * 10f64.powf(f64::from(i) / 59.0);
-        let mut cfg = BankConfig::NAV440;
-        cfg.velocity.ilo[0] =
-            estimators::IloConfig::per_sample_alias(wn, zeta, alias, f64::from(cfg.h), DT_S)
-                .unwrap();
-        let (m, _) = bank_mse(&fig5, cfg, 0.1, 1, RANGE).unwrap();
+        let (m, _) = bank_mse(&fig5, ilo1_through(wn, zeta, alias), 0.1, 1, RANGE).unwrap();
         if m[ILO1] < best {
             (best, wn_best) = (m[ILO1], wn);
         }

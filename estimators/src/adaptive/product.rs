@@ -225,9 +225,9 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
             AdaptiveProductConfig::START_NOISE_VAR,
             AdaptiveProductConfig::START_JERK,
         );
-        if let Ok((ilo1, _)) = bank.ilo1_at(wn, follow.ilo1_alias) {
+        if let Ok(ilo1) = bank.ilo1_at(wn, follow.ilo1_alias) {
             bank.cfg.velocity.ilo[0] = ilo1;
-            bank.bank = ProductBank::new(&bank.cfg)?;
+            bank.bank.set_gains(&bank.cfg)?;
             bank.wn = Some(wn);
         }
         Ok(bank)
@@ -235,13 +235,12 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
 
     /// ILO1's gains with per-sample poles at `wn` rad/s and the configured damping, through
     /// `alias`, or the first alias where the step cannot turn that fast (at most 2 steps per
-    /// sample per alias); and the alias they are placed through.
-    fn ilo1_at(&self, wn: f64, alias: u32) -> Result<(IloConfig, u32), ConfigError> {
+    /// sample per alias).
+    fn ilo1_at(&self, wn: f64, alias: u32) -> Result<IloConfig, ConfigError> {
         let (h, dt) = (f64::from(self.cfg.h), f64::from(self.cfg.sample_period_s));
         let zeta = f64::from(self.follow.ilo1_zeta);
         IloConfig::per_sample_alias(wn, zeta, alias, h, dt)
-            .map(|c| (c, alias))
-            .or_else(|_| IloConfig::per_sample(wn, zeta, h, dt).map(|c| (c, 1)))
+            .or_else(|_| IloConfig::per_sample(wn, zeta, h, dt))
     }
 
     /// The alias ILO1 should run through: the configured one while the interval's jitter is
@@ -353,7 +352,7 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
         let ilo1 = moved(self.wn, wn, self.follow.ilo1_ratio) || alias != self.alias;
         if ilo1 {
             match self.ilo1_at(wn, alias) {
-                Ok((c, _)) => cfg.velocity.ilo[0] = c,
+                Ok(c) => cfg.velocity.ilo[0] = c,
                 Err(_) => return,
             }
         }
