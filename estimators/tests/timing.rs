@@ -22,8 +22,9 @@
 //! 2-4 s for the whole file in the dev profile.
 
 use estimators::{
-    AdaptiveBank, AdaptiveConfig, BankConfig, BankGains, EstimatorBank, EstimatorOutput, Fx,
-    GainSchedule, PaperBank, ProductBank, ScheduleLevel,
+    AdaptiveBank, AdaptiveConfig, AdaptiveProductBank, AdaptiveProductConfig, BankConfig,
+    BankGains, EstimatorBank, EstimatorOutput, Fx, GainSchedule, PaperBank, ProductBank,
+    ScheduleLevel,
 };
 use proptest::prelude::*;
 
@@ -194,6 +195,17 @@ proptest! {
         // The paper's gains too (the product bank's ILO1 and tracker with the paper preset).
         let paper = BankConfig { sample_period_s: nominal as f32, ..BankConfig::PAPER };
         check("ProductBank<f32> paper", run(&mut ProductBank::<f32>::new(&paper).unwrap(), &ts))?;
+        // The bank that follows the motion, given no rate: its start (ILO1 through the fifth
+        // alias) and the fall back to the first alias when the interval jitters.
+        let follow = AdaptiveProductConfig::DEFAULT;
+        check(
+            "AdaptiveProductBank<f32>",
+            run(&mut AdaptiveProductBank::<f32>::new(&cfg, &follow).unwrap(), &ts),
+        )?;
+        check(
+            "AdaptiveProductBank<Fx>",
+            run(&mut AdaptiveProductBank::<Fx>::new(&cfg, &follow).unwrap(), &ts),
+        )?;
     }
 
     #[test]

@@ -160,7 +160,8 @@ pub(super) fn jerk_index_wn(c: f64, j: f64, v: f64, dt: f64) -> f64 {
 /// same alias), the Kalman at the configuration's; every
 /// [`AdaptiveProductConfig::retune_every`] samples, once both estimates exist, it moves the
 /// gains to the rule's when `wn` or `q / r` moved by more than their ratios
-/// ([`ProductBank::set_gains`]: bumpless). Without a rate the gains stay. Each change
+/// ([`ProductBank::set_gains`]: bumpless). Without a rate the gains stay, but for ILO1's alias
+/// on an interval that jitters (see [`AdaptiveProductConfig::ilo1_jitter_max`]). Each change
 /// rebuilds ILO1's closed-form map and the Kalman's gain in `f64` (about as much as building
 /// the bank), so it suits a host or a core with the time for it.
 ///
@@ -339,41 +340,49 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
     /// Kalman's when its `q / r` did: each law changes only on its own move (a change of
     /// ILO1's gains costs it a transient, so the Kalman's moves leave it alone).
     fn follow_estimates(&mut self) {
-        let (Some(v), Some(j)) = (self.noise.variance(), self.jerk.power()) else {
-            return;
+        let rule = match (self.noise.variance(), self.jerk.power()) {
+            (Some(v), Some(j)) => Some(self.rule(v, j)),
+            _ => None,
         };
-        let (wn, (q, r)) = self.rule(v, j);
         let moved = |now: Option<f64>, want: f64, ratio: f32| {
             let ratio = f64::from(ratio);
             now.is_none_or(|now| want > now * ratio || want * ratio < now)
         };
-        let mut cfg = self.cfg;
         let alias = self.wanted_alias();
-        let ilo1 = moved(self.wn, wn, self.follow.ilo1_ratio) || alias != self.alias;
-        if ilo1 {
+        // ILO1 moves to the rule's bandwidth when that moved, and stays at its own when only
+        // the alias must change (a jittering interval needs no estimate to be seen).
+        let wn = match rule {
+            Some((wn, _)) if moved(self.wn, wn, self.follow.ilo1_ratio) => Some(wn),
+            _ if alias != self.alias => self.wn,
+            _ => None,
+        };
+        let kalman = rule.map(|(_, qr)| qr).filter(|(q, r)| {
+            moved(
+                self.q_over_r.map(f64::from),
+                f64::from(q / r),
+                self.follow.kalman_ratio,
+            )
+        });
+        let mut cfg = self.cfg;
+        if let Some(wn) = wn {
             match self.ilo1_at(wn, alias) {
                 Ok(c) => cfg.velocity.ilo[0] = c,
                 Err(_) => return,
             }
         }
-        let kalman = moved(
-            self.q_over_r.map(f64::from),
-            f64::from(q / r),
-            self.follow.kalman_ratio,
-        );
-        if kalman {
+        if let Some((q, r)) = kalman {
             cfg.acceleration.kf = KalmanNoise { q, r };
         }
-        if !(ilo1 || kalman) || self.bank.set_gains(&cfg).is_err() {
+        if (wn.is_none() && kalman.is_none()) || self.bank.set_gains(&cfg).is_err() {
             return;
         }
         self.cfg = cfg;
-        if ilo1 {
+        if let Some(wn) = wn {
             self.wn = Some(wn);
             self.alias = alias;
             self.ilo1_retunes = self.ilo1_retunes.saturating_add(1);
         }
-        if kalman {
+        if let Some((q, r)) = kalman {
             self.q_over_r = Some(q / r);
         }
         self.retunes = self.retunes.saturating_add(1);

@@ -800,12 +800,13 @@ fn without_a_rate_the_adaptive_product_bank_is_the_product_bank() {
 /// ILO1 runs through the configured alias while the sample interval is steady, and through
 /// the first once it jitters: intervals of 9 and 11 ms in turn (a jitter of 0.1, computed
 /// here again from the intervals' mean deviation) against a steady 10 ms. One sample in
-/// seven dropped (an interval of two periods) is no jitter.
+/// seven dropped (an interval of two periods) is no jitter. Without any rate (no estimate of
+/// the jerk) the alias falls back all the same, at the start's bandwidth.
 #[test]
 fn a_jittering_interval_puts_ilo1_at_the_first_alias() {
     let cfg = crate::BankConfig::NAV440;
     let f = AdaptiveProductConfig::DEFAULT;
-    let run = |jitter_us: u64| {
+    let run = |jitter_us: u64, with_rate: bool| {
         let mut a = AdaptiveProductBank::<f32>::new(&cfg, &f).unwrap();
         assert_eq!(a.ilo1_alias(), AdaptiveProductConfig::ILO1_ALIAS);
         let mut g = Gauss::new(13);
@@ -815,16 +816,21 @@ fn a_jittering_interval_puts_ilo1_at_the_first_alias() {
             if jitter_us == 0 && k % 7 == 3 {
                 continue;
             }
-            a.observe_rate(t, r);
+            if with_rate {
+                a.observe_rate(t, r);
+            }
             a.update(t, y).unwrap();
         }
-        (a.ilo1_alias(), a.interval_jitter().unwrap())
+        (a.ilo1_alias(), a.interval_jitter().unwrap(), a.ilo1_wn())
     };
-    let (alias, jitter) = run(0);
+    let (alias, jitter, _) = run(0, true);
     assert_eq!((alias, jitter), (AdaptiveProductConfig::ILO1_ALIAS, 0.0));
-    let (alias, jitter) = run(1_000);
+    let (alias, jitter, _) = run(1_000, true);
     assert_eq!(alias, 1);
     assert!((jitter - 0.1).abs() < 1e-3, "{jitter}");
+    let start = AdaptiveProductBank::<f32>::new(&cfg, &f).unwrap().ilo1_wn();
+    let (alias, _, wn) = run(1_000, false);
+    assert_eq!((alias, wn), (1, start));
 }
 
 /// With the rate, ILO1's bandwidth is the rule's for the bank's own estimates, computed here
