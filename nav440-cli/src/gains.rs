@@ -384,6 +384,12 @@ pub struct ScheduleFile {
     /// does not fit it (`estimators::GainSchedule::fits_period`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sample_period_s: Option<f64>,
+    /// The jerk power of the motion the levels were tuned on, (deg/s^3)^2 (`None`: not
+    /// recorded; the gains then follow the noise alone). With it the bank also follows the
+    /// motion: on a motion that moves far harder it takes the gains of a lower noise
+    /// (`estimators::GainSchedule::with_tuned_jerk`; the bundled fig5 capture's is 3.68e6).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tuned_jerk_power: Option<f64>,
     /// The levels, by increasing noise variance.
     pub level: Vec<ScheduleLevelFile>,
 }
@@ -414,9 +420,13 @@ impl ScheduleFile {
             })
             .collect();
         let schedule = estimators::GainSchedule::new(&levels);
-        match self.sample_period_s {
+        let schedule = match self.sample_period_s {
             None => schedule,
             Some(p) => schedule.and_then(|s| s.with_sample_period(p as f32)),
+        };
+        match self.tuned_jerk_power {
+            None => schedule,
+            Some(j) => schedule.and_then(|s| s.with_tuned_jerk(j as f32)),
         }
         .map_err(|e| Error::Usage(format!("bad schedule file: {e}")))
     }
@@ -1093,5 +1103,35 @@ mod tests {
             GainsFile::from_toml("[velocity.avx]\nk = 1.0\n").is_err(),
             "unknown table"
         );
+    }
+
+    /// The schedule file's `tuned_jerk_power` reaches the schedule (and round-trips); absent,
+    /// the schedule records none; not positive, the file is refused.
+    #[test]
+    fn a_schedule_file_records_its_tuning_jerk() {
+        let path = Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../host-tests/data/gains/schedule_fig5.toml"
+        ));
+        let Ok(Loaded::Schedule(file)) = load_any(path) else {
+            panic!("not a schedule");
+        };
+        assert_eq!(
+            file.schedule(&BankConfig::NAV440).unwrap().tuned_jerk(),
+            None
+        );
+        let with = ScheduleFile {
+            tuned_jerk_power: Some(3.68e6),
+            ..file.clone()
+        };
+        let back: ScheduleFile = toml::from_str(&with.to_toml()).unwrap();
+        assert_eq!(back.tuned_jerk_power, Some(3.68e6));
+        let s = back.schedule(&BankConfig::NAV440).unwrap();
+        assert_eq!(s.tuned_jerk(), Some(3.68e6));
+        let bad = ScheduleFile {
+            tuned_jerk_power: Some(0.0),
+            ..file
+        };
+        assert!(bad.schedule(&BankConfig::NAV440).is_err());
     }
 }

@@ -66,6 +66,17 @@ pub struct AdaptiveConfig {
     /// the new gains (warm start, [`PaperBank::set_gains_replaying`]); 0: the states are moved
     /// to the new gains' equilibrium instead (bumpless, [`PaperBank::set_gains`]).
     pub replay_samples: u32,
+    /// With a schedule that records the jerk power of the motion it was tuned on
+    /// ([`GainSchedule::tuned_jerk`]), the bank estimates the motion's jerk power `J` from the
+    /// rate it is given ([`crate::EstimatorBank::observe_rate`], [`JerkEstimator`] with its
+    /// default time constant) and picks the gains for `min(V, V x m x tuned / J)` instead of
+    /// the noise estimate `V`, `m` being this margin (default 8, at least 1): a motion that
+    /// moves more than `m` times as hard as the tuning motion gets the gains of a lower noise
+    /// (lighter filtering, less lag), as its jerk index says; any other keeps the noise's.
+    /// The margin keeps the paper-like motions, whose jerk power moves by a few times from
+    /// stroke to pause, on the noise's gains (docs/MOTION-FAMILY.md, "A schedule that follows
+    /// the motion").
+    pub jerk_margin: f32,
 }
 
 /// Most samples an [`AdaptiveBank`] keeps for a warm-start gain change.
@@ -79,6 +90,7 @@ impl AdaptiveConfig {
         retune_every: 20,
         retune_ratio: 1.5,
         replay_samples: REPLAY_CAPACITY as u32,
+        jerk_margin: 8.0,
     };
 }
 
@@ -94,7 +106,9 @@ impl Default for AdaptiveConfig {
 /// gains were interpolated for, the gains for the estimate are interpolated from the
 /// schedule and the laws' coefficients rebuilt (see [`AdaptiveBank::retune`]). Generic over
 /// [`Real`] like the bank (`AdaptiveBank<Fx>` for FPU-less cores; the noise estimate and the
-/// interpolation are f32 there too).
+/// interpolation are f32 there too). A schedule that records the jerk power of its tuning
+/// motion ([`GainSchedule::with_tuned_jerk`]) makes the bank follow the motion too, from the
+/// rate it is given (see [`AdaptiveConfig::jerk_margin`]).
 ///
 /// **Warm start.** The bank keeps what its laws were fed for the last
 /// [`AdaptiveConfig::replay_samples`] samples (at most [`REPLAY_CAPACITY`], 64: 0.64 s at
@@ -114,6 +128,9 @@ pub struct AdaptiveBank<T: Real, S: SqrtFn<T> = NativeSqrt> {
     base: BankConfig,
     schedule: GainSchedule,
     noise: NoiseEstimator,
+    /// The motion's jerk estimate, for a schedule that records its tuning motion's
+    /// ([`GainSchedule::tuned_jerk`]).
+    jerk: Option<JerkEstimator>,
     cfg: AdaptiveConfig,
     level: f32,
     since: u32,
@@ -132,9 +149,20 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
         if !(cfg.retune_ratio.is_finite() && cfg.initial_noise_var.is_finite()) {
             return Err(ConfigError::NotFinite("retune_ratio"));
         }
+        // `!(>= 1)`: NaN refused too.
+        if !(cfg.jerk_margin >= 1.0 && cfg.jerk_margin.is_finite()) {
+            return Err(ConfigError::NotPositive("jerk_margin"));
+        }
         if cfg.retune_ratio < 1.0 || cfg.initial_noise_var <= 0.0 {
             return Err(ConfigError::NotPositive("retune_ratio"));
         }
+        let jerk = match schedule.tuned_jerk() {
+            Some(_) => Some(JerkEstimator::new(
+                JerkEstimator::DEFAULT_TAU_S,
+                base.sample_period_s,
+            )?),
+            None => None,
+        };
         let level = schedule.clamp(cfg.initial_noise_var);
         let bank = PaperBank::new(&schedule.config_at(base, level))?;
         // Every level must build (so that a retune never fails half-way).
@@ -150,6 +178,7 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
             base: *base,
             schedule: *schedule,
             noise: NoiseEstimator::new(cfg.tau_s, base.sample_period_s)?,
+            jerk,
             cfg: *cfg,
             level,
             since: 0,
@@ -169,7 +198,7 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
         self.since = self.since.saturating_add(1);
         if self.since >= self.cfg.retune_every {
             self.since = 0;
-            if let Some(v) = self.noise.variance() {
+            if let Some(v) = self.index() {
                 let v = self.schedule.clamp(v);
                 let r = self.cfg.retune_ratio;
                 if v > self.level * r || v * r < self.level {
@@ -178,6 +207,37 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
             }
         }
         Ok(out)
+    }
+
+    /// The noise variance the gains are picked for, deg^2: the noise estimate `V`, or with a
+    /// schedule that records its tuning motion's jerk power ([`GainSchedule::tuned_jerk`])
+    /// and a jerk estimate `J`, `min(V, V x m x tuned / J)` (`m`:
+    /// [`AdaptiveConfig::jerk_margin`]).
+    fn index(&self) -> Option<f32> {
+        let v = self.noise.variance()?;
+        match (self.schedule.tuned_jerk(), self.jerk_power()) {
+            // `J` at least the tuned jerk (the index only lowers the noise), and finite.
+            (Some(tuned), Some(j)) if j > self.cfg.jerk_margin * tuned && j.is_finite() => {
+                Some(v * (self.cfg.jerk_margin * tuned / j))
+            }
+            _ => Some(v),
+        }
+    }
+
+    /// The rate about the bank's axis at `t_us` (deg/s), from which it estimates the motion's
+    /// jerk for a schedule that records its tuning motion's ([`GainSchedule::tuned_jerk`];
+    /// ignored without). Give it before
+    /// [`Self::update`] of the same sample.
+    pub fn observe_rate(&mut self, t_us: u64, rate_deg_s: f32) {
+        if let (Some(j), true) = (&mut self.jerk, rate_deg_s.is_finite()) {
+            j.update(t_us, rate_deg_s);
+        }
+    }
+
+    /// The motion's jerk power estimate, (deg/s^3)^2 (`None` for a schedule without
+    /// [`GainSchedule::tuned_jerk`], or before the first estimate).
+    pub fn jerk_power(&self) -> Option<f32> {
+        self.jerk.as_ref().and_then(|j| j.power())
     }
 
     /// Sets the gains for the noise variance `noise_var` (deg^2, clamped to the schedule) now.
@@ -252,6 +312,9 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
     pub fn new_epoch(&mut self) {
         self.bank.new_epoch();
         self.noise.restart();
+        if let Some(j) = &mut self.jerk {
+            j.restart();
+        }
     }
 
     /// See [`PaperBank::reinit_count`].
@@ -295,6 +358,10 @@ impl<T: Real, S: SqrtFn<T>> crate::EstimatorBank for AdaptiveBank<T, S> {
     #[inline]
     fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<PaperOutput<T>, SampleError> {
         AdaptiveBank::update(self, t_us, angle_deg)
+    }
+
+    fn observe_rate(&mut self, t_us: u64, rate_deg_s: f32) {
+        AdaptiveBank::observe_rate(self, t_us, rate_deg_s)
     }
 
     fn new_epoch(&mut self) {

@@ -146,6 +146,9 @@ pub struct GainSchedule {
     blend: Blend,
     /// The nominal sample period the levels were tuned at, s (`None`: not recorded).
     period_s: Option<f32>,
+    /// The jerk power of the motion the levels were tuned on, (deg/s^3)^2 (`None`: not
+    /// recorded).
+    jerk: Option<f32>,
 }
 
 /// A [`GainSchedule`] fits a bank whose nominal sample period is within this factor of the
@@ -212,6 +215,7 @@ impl GainSchedule {
             len: levels.len(),
             blend: Blend::default(),
             period_s: None,
+            jerk: None,
         };
         s.levels[..levels.len()].copy_from_slice(levels);
         Ok(s)
@@ -246,6 +250,32 @@ impl GainSchedule {
             period_s: Some(period_s),
             ..self
         })
+    }
+
+    /// This schedule, recorded as tuned on a motion of jerk power `jerk` ((deg/s^3)^2, finite
+    /// and positive; the bundled fig5 capture's is 3.68e6, [`crate::AdaptiveProductConfig::START_JERK`]).
+    /// An [`AdaptiveBank`](crate::AdaptiveBank) given the rate then follows the motion as well
+    /// as the noise: on a motion of jerk power `J` above it, it picks the gains for
+    /// `V x jerk / J` instead of the noise estimate `V` (lighter filtering, less lag: the jerk
+    /// index of docs/MOTION-FAMILY.md, "A schedule that follows the motion"); on a motion
+    /// below it, the noise's as without.
+    pub fn with_tuned_jerk(self, jerk: f32) -> Result<Self, ConfigError> {
+        if !jerk.is_finite() {
+            return Err(ConfigError::NotFinite("tuned_jerk_power"));
+        }
+        if jerk <= 0.0 {
+            return Err(ConfigError::NotPositive("tuned_jerk_power"));
+        }
+        Ok(Self {
+            jerk: Some(jerk),
+            ..self
+        })
+    }
+
+    /// The jerk power of the motion the schedule was tuned on, (deg/s^3)^2 (`None` if not
+    /// recorded: the gains follow the noise alone).
+    pub fn tuned_jerk(&self) -> Option<f32> {
+        self.jerk
     }
 
     /// The nominal sample period the schedule was tuned at, s (`None` if not recorded).

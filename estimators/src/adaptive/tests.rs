@@ -1123,3 +1123,68 @@ fn the_self_tuning_bank_starts_within_its_bounds_at_2_hz() {
     a.take_over(&fast);
     within(&a, f64::from(0.5f32));
 }
+
+/// A schedule that records its tuning motion's jerk power follows the motion as well as the
+/// noise: on a 1 Hz sine of 20 deg (jerk power `(20 (2 pi)^3)^2 / 2` = 1.23e7 (deg/s^3)^2)
+/// with N(0, 0.1) deg^2 of noise, tuned on a motion 100 times gentler, the gains go to the
+/// level `0.1 x 8 / 100` = 0.008 deg^2 (the margin 8 of `AdaptiveConfig::jerk_margin`);
+/// tuned on this very motion, or given no rate, or without the record, they stay at the
+/// noise's 0.1. Records that are not finite and positive, and margins below 1, are refused.
+#[test]
+fn a_schedule_with_its_tuning_jerk_follows_the_motion() {
+    let s = GainSchedule::new(&[
+        level(0.001, 100.0, ILO1_TABLE2),
+        level(0.1, 1000.0, ILO1_TABLE2),
+    ])
+    .unwrap();
+    assert_eq!(s.tuned_jerk(), None);
+    for bad in [f32::NAN, f32::INFINITY] {
+        assert_eq!(
+            s.with_tuned_jerk(bad),
+            Err(ConfigError::NotFinite("tuned_jerk_power"))
+        );
+    }
+    for bad in [0.0, -1.0] {
+        assert_eq!(
+            s.with_tuned_jerk(bad),
+            Err(ConfigError::NotPositive("tuned_jerk_power"))
+        );
+    }
+    let w = 2.0 * core::f64::consts::PI;
+    let j = (20.0 * w * w * w).powi(2) / 2.0;
+    let run = |schedule: &GainSchedule, rates: bool| {
+        let mut b =
+            AdaptiveBank::<f32>::new(&BankConfig::PAPER, schedule, &AdaptiveConfig::DEFAULT)
+                .unwrap();
+        let mut g = Gauss::new(5);
+        for k in 0..2000u64 {
+            let t = k as f64 * 0.01;
+            let y = 20.0 * libm::sin(w * t) + libm::sqrt(0.1) * g.next();
+            if rates {
+                b.observe_rate(k * 10_000, (20.0 * w * libm::cos(w * t)) as f32);
+            }
+            b.update(k * 10_000, y as f32).unwrap();
+        }
+        (b.gain_level(), b.jerk_power())
+    };
+    let gentle = s.with_tuned_jerk((j / 100.0) as f32).unwrap();
+    let (level, power) = run(&gentle, true);
+    let power = f64::from(power.unwrap());
+    assert!((power / j - 1.0).abs() < 0.05, "{power} vs {j}");
+    assert!(level > 0.005 && level < 0.012, "{level}");
+    let same = s.with_tuned_jerk(j as f32).unwrap();
+    for (schedule, rates) in [(&same, true), (&gentle, false), (&s, true)] {
+        let (level, _) = run(schedule, rates);
+        assert!(level > 0.08, "{level} {rates}");
+    }
+    for bad in [0.5, f32::NAN] {
+        let cfg = AdaptiveConfig {
+            jerk_margin: bad,
+            ..AdaptiveConfig::DEFAULT
+        };
+        assert_eq!(
+            AdaptiveBank::<f32>::new(&BankConfig::PAPER, &gentle, &cfg).err(),
+            Some(ConfigError::NotPositive("jerk_margin"))
+        );
+    }
+}

@@ -225,6 +225,8 @@ pub fn tune_schedule_on(
             hold: hold_name(hold).to_string(),
             // The f32's shortest decimal form (0.01, not 0.009999999776482582).
             sample_period_s: opts.bank_period_s(samples).to_string().parse().ok(),
+            // Not measured by the tuner: a file follows the motion once the line is added.
+            tuned_jerk_power: None,
             level,
         },
         text,
