@@ -121,10 +121,11 @@ fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
 mod schedule {
     include!("gains/schedule_fig5.rs");
 }
-/// The schedule's levels (noise variance, deg^2 -> velocity and acceleration gains) and the
-/// nominal sample period they were tuned at (s).
+/// The schedule's levels (noise variance, deg^2 -> velocity and acceleration gains), the
+/// nominal sample period they were tuned at (s) and the jerk power of the motion they were
+/// tuned on ((deg/s^3)^2: the bank follows the motion too, docs/MOTION-FAMILY.md).
 #[cfg(feature = "adaptive-gains")]
-pub use schedule::{SCHEDULE, SCHEDULE_PERIOD_S};
+pub use schedule::{SCHEDULE, SCHEDULE_PERIOD_S, SCHEDULE_TUNED_JERK};
 
 /// Builds an axis's noise-adaptive bank (out of line: the constructor is large). A schedule
 /// tuned at another packet rate than the measured one still runs, with a warning line
@@ -135,6 +136,9 @@ fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
     let mut schedule = estimators::GainSchedule::new(&SCHEDULE)?;
     if let Some(p) = SCHEDULE_PERIOD_S {
         schedule = schedule.with_sample_period(p)?;
+    }
+    if let Some(j) = SCHEDULE_TUNED_JERK {
+        schedule = schedule.with_tuned_jerk(j)?;
     }
     let bank = nav440_pipeline::adaptive_axis_bank(axis, cfg, &schedule)?;
     if !bank.period_fits() {

@@ -23,8 +23,9 @@
 //! `ilo1_by_the_jerk_index` (ignored, about 70 s) picks ILO1's per-sample poles by the jerk
 //! index, and `an_online_ilo1_by_the_jerk_index` (ignored, about 70 s) does it online from
 //! the bank's own estimates (docs/MOTION-FAMILY.md, "ILO1 by the jerk index").
-//! `a_schedule_that_follows_the_motion` (in CI) runs the bundled schedule recording fig5's
-//! jerk power on the noise switch of each motion (docs/MOTION-FAMILY.md, "A schedule that
+//! The tests above run the bundled schedule by the noise alone (without its
+//! `tuned_jerk_power`); `a_schedule_that_follows_the_motion` (in CI) runs it as the file says,
+//! following the motion too, on the noise switch of each motion (docs/MOTION-FAMILY.md, "A schedule that
 //! follows the motion").
 
 use estimators::BankConfig;
@@ -37,7 +38,7 @@ use nav440_cli::tune::{bank_mse, Families};
 mod family;
 mod runs;
 use family::{mse_of, reference, tuned_over};
-use runs::{mse_over, schedule};
+use runs::{mse_over, schedule, schedule_by_noise};
 
 /// The motions: (profile, shape seed, label).
 const MOTIONS: [(ProfileKind, u64, &str); 5] = [
@@ -108,8 +109,9 @@ fn shipped_gains_against_the_backward_difference() {
         "BD",
         COLUMNS.map(|c| format!("{c:>9}")).join("")
     );
-    // The bundled schedule as `nav440 estimate --gains schedule_fig5.toml` runs it.
-    let (_, scheduled) = schedule("gains/schedule_fig5.toml");
+    // The bundled schedule by the noise alone (without its `tuned_jerk_power`;
+    // `a_schedule_that_follows_the_motion` runs it as the file says).
+    let (_, scheduled) = schedule_by_noise("gains/schedule_fig5.toml");
     for (profile, seed, label) in MOTIONS {
         let samples = a2_samples(profile, seed, 100, 30.0).unwrap();
         let reference = reference(&samples);
@@ -162,7 +164,7 @@ fn a_noise_switch_on_each_motion() {
         "BD",
         COLUMNS.map(|c| format!("{c:>17}")).join("")
     );
-    let (_, scheduled) = schedule("gains/schedule_fig5.toml");
+    let (_, scheduled) = schedule_by_noise("gains/schedule_fig5.toml");
     let shipped = EstimateOptions {
         config: Some(BankConfig::NAV440),
         ..Default::default()
@@ -837,10 +839,9 @@ fn against_the_tuned_ilo1(mut mse: impl FnMut(&[replay::Sample], &[f64], f64) ->
     println!("within {WITHIN_TUNED}x of the tuned ILO1: {within} of 15 cells");
 }
 
-/// The bundled noise schedule (tuned on fig5) recording fig5's jerk power
-/// (`GainSchedule::with_tuned_jerk`, `AdaptiveProductConfig::START_JERK`; the line
-/// `tuned_jerk_power = 3.68e6` in the file), so that it follows the motion as well as the
-/// noise, against the same schedule following the noise alone and against its own levels at
+/// The bundled noise schedule (tuned on fig5), which records the jerk power of the capture it
+/// was tuned on (`tuned_jerk_power`, `GainSchedule::with_tuned_jerk`) and so follows the motion
+/// as well as the noise, against the same schedule following the noise alone and against its own levels at
 /// 0.01 and 0.5 deg^2 run as fixed sets (the fixed sets tuned on fig5 for the two levels), on
 /// each motion with the noise switch of [`a_noise_switch_on_each_motion`]: velocity MSE per
 /// family and half, ratios to the better fixed set in that half (docs/MOTION-FAMILY.md, "A
@@ -850,16 +851,10 @@ fn against_the_tuned_ilo1(mut mse: impl FnMut(&[replay::Sample], &[f64], f64) ->
 /// over the whole run below both fixed sets.
 #[test]
 fn a_schedule_that_follows_the_motion() {
-    let (file, noise_only) = schedule("gains/schedule_fig5.toml");
+    let (file, with_jerk) = schedule("gains/schedule_fig5.toml");
+    assert!(file.tuned_jerk_power.is_some());
+    let (_, noise_only) = schedule_by_noise("gains/schedule_fig5.toml");
     let sched = file.schedule(&BankConfig::NAV440).unwrap();
-    let with_jerk = EstimateOptions {
-        schedule: Some(
-            sched
-                .with_tuned_jerk(estimators::AdaptiveProductConfig::START_JERK)
-                .unwrap(),
-        ),
-        ..noise_only.clone()
-    };
     let fixed = |v: f32| EstimateOptions {
         config: Some(sched.config_at(&BankConfig::NAV440, v)),
         schedule: None,

@@ -837,10 +837,21 @@ fn rust_snippet_and_toml_hold_the_same_schedule() {
     assert_eq!(file.hold().unwrap(), Hold::Linear);
     assert_eq!(snippet::SCHEDULE_PERIOD_S, Some(0.01));
     assert_eq!(file.sample_period_s, Some(0.01));
+    // The bundled capture's jerk power as `nav440 tune` measures it (`motion_jerk_power`),
+    // close to fig5's 3.68e6 over 1-30 s that `AdaptiveProductConfig::START_JERK` records.
+    assert_eq!(snippet::SCHEDULE_TUNED_JERK, Some(3_850_048.0));
+    assert_eq!(file.tuned_jerk_power, Some(3_850_048.0));
+    let captured = replay::read_samples(&data("fig5_a2_100hz.bin")).unwrap();
+    assert_eq!(
+        nav440_cli::tune::motion_jerk_power(&[&captured], &EstimateOptions::default()).unwrap(),
+        file.tuned_jerk_power
+    );
     assert_eq!(
         estimators::GainSchedule::new(&snippet::SCHEDULE)
             .unwrap()
             .with_sample_period(0.01)
+            .unwrap()
+            .with_tuned_jerk(3_850_048.0)
             .unwrap(),
         file.schedule(&BankConfig::NAV440).unwrap()
     );
@@ -868,12 +879,14 @@ fn rust_snippet_and_toml_hold_the_same_schedule() {
         l.ave_deltahat = None;
         l.switch_up = None;
     }
+    old.tuned_jerk_power = None;
     let text = old.to_rust(what, &BankConfig::NAV440);
+    assert!(text.contains("SCHEDULE_TUNED_JERK: Option<f32> = None;"));
     assert!(!text.contains("AveDeltahat") && text.contains("ave_deltahat: None,"));
     assert!(!text.contains("ObserverSwitch") && text.contains("switch_up: None,"));
     // And such a file (no `[level.switch_up]`) loads, switching at the midpoints.
     let toml = old.to_toml();
-    assert!(!toml.contains("switch_up"));
+    assert!(!toml.contains("switch_up") && !toml.contains("tuned_jerk_power"));
     let reread: gains::ScheduleFile = toml::from_str(&toml).unwrap();
     assert_eq!(reread, old);
 }

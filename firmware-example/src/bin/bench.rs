@@ -386,14 +386,19 @@ mod schedule {
 }
 
 /// The noise-adaptive bank (`estimators::AdaptiveBank`): per-sample instructions of
-/// `update` with the gains held (the noise estimate's cost over the whole bank), and per call
+/// `observe_rate` and `update` with the gains held (the noise and jerk estimates' cost over the
+/// whole bank), and per call
 /// of `retune` (interpolating the schedule and rebuilding every law's coefficients), which
 /// the bank does at most once per `AdaptiveConfig::retune_every` samples.
 fn adaptive_bank(c: &mut Counter, overhead: u64, cfg: &BankConfig) {
     use estimators::{AdaptiveBank, AdaptiveConfig, GainSchedule};
-    let sched =
-        GainSchedule::new(&schedule::SCHEDULE).and_then(|s| match schedule::SCHEDULE_PERIOD_S {
+    let sched = GainSchedule::new(&schedule::SCHEDULE)
+        .and_then(|s| match schedule::SCHEDULE_PERIOD_S {
             Some(p) => s.with_sample_period(p),
+            None => Ok(s),
+        })
+        .and_then(|s| match schedule::SCHEDULE_TUNED_JERK {
+            Some(j) => s.with_tuned_jerk(j),
             None => Ok(s),
         });
     let Ok(sched) = sched else {
@@ -411,7 +416,14 @@ fn adaptive_bank(c: &mut Counter, overhead: u64, cfg: &BankConfig) {
         let y = yaw(k);
         let wrapped = if y > 180.0 { y - 360.0 } else { y };
         let t_us = u64::from(k) * DT_US;
-        let (n, r) = c.measure(|| black_box(black_box(&mut bank).update(t_us, wrapped)));
+        // The rate the pipeline gives the bank (here the angle's backward difference, deg/s):
+        // the motion's jerk estimate.
+        let rate = (y - yaw(k.saturating_sub(1))) * 1e6 / DT_US as f32;
+        let (n, r) = c.measure(|| {
+            let b = black_box(&mut bank);
+            b.observe_rate(t_us, black_box(rate));
+            black_box(b.update(t_us, wrapped))
+        });
         if r.is_err() {
             fail("an adaptive bank run without rejected samples");
         }
@@ -421,7 +433,7 @@ fn adaptive_bank(c: &mut Counter, overhead: u64, cfg: &BankConfig) {
     }
     line(
         "instr",
-        "adaptive bank, gains held (noise estimate)",
+        "adaptive bank, gains held (noise and jerk estimates)",
         total as f32 / SAMPLES as f32,
         "sample",
     );
@@ -445,7 +457,7 @@ fn adaptive_bank(c: &mut Counter, overhead: u64, cfg: &BankConfig) {
         "adaptive bank retune, same observer level (AD + Kalman rebuilt)",
     );
     ram(
-        "AdaptiveBank (bank + schedule + noise estimate)",
+        "AdaptiveBank (bank + schedule + noise and jerk estimates)",
         core::mem::size_of::<AdaptiveBank<Num, BankSqrt>>(),
     );
 }

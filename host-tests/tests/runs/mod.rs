@@ -43,6 +43,19 @@ pub fn schedule(name: &str) -> (gains::ScheduleFile, EstimateOptions) {
     let Loaded::Schedule(file) = gains::load_any(&data(name)).unwrap() else {
         panic!("not a schedule file");
     };
+    options_of(file)
+}
+
+/// [`schedule`] without the file's `tuned_jerk_power`: the gains follow the noise alone.
+#[allow(dead_code)] // not every test that includes this module uses it
+pub fn schedule_by_noise(name: &str) -> (gains::ScheduleFile, EstimateOptions) {
+    let (mut file, _) = schedule(name);
+    file.tuned_jerk_power = None;
+    options_of(file)
+}
+
+/// The options that run the schedule `file`.
+fn options_of(file: gains::ScheduleFile) -> (gains::ScheduleFile, EstimateOptions) {
     let opts = EstimateOptions {
         hold: file.hold().unwrap(),
         config: Some(BankConfig::NAV440),

@@ -225,12 +225,41 @@ pub fn tune_schedule_on(
             hold: hold_name(hold).to_string(),
             // The f32's shortest decimal form (0.01, not 0.009999999776482582).
             sample_period_s: opts.bank_period_s(samples).to_string().parse().ok(),
-            // Not measured by the tuner: a file follows the motion once the line is added.
-            tuned_jerk_power: None,
+            tuned_jerk_power: motion_jerk_power(captures, opts)?,
             level,
         },
         text,
     ))
+}
+
+/// The jerk power of the motion in `captures`, (deg/s^3)^2, as the bank measures it: an
+/// `estimators::JerkEstimator` with a time constant longer than any capture (so the plain
+/// mean over the rows) fed each row's rate about the tuned axis (the rate the pipeline gives
+/// the banks: the Euler reference, or the body rate with `--no-reference`), over every
+/// capture (each restarts the differences). Recorded in the schedule file
+/// (`tuned_jerk_power`), so that its bank follows the motion as well as the noise. `None`
+/// when no row has a rate (a capture entirely near gimbal lock) or the period is not one the
+/// estimator takes.
+pub fn motion_jerk_power(captures: &[&[Sample]], opts: &EstimateOptions) -> Result<Option<f64>> {
+    let axis = opts.axis();
+    let plain = EstimateOptions {
+        noise: None,
+        ..opts.clone()
+    };
+    let Ok(mut jerk) = estimators::JerkEstimator::new(1e12, opts.bank_period_s(captures[0])) else {
+        return Ok(None);
+    };
+    for samples in captures {
+        jerk.restart();
+        let (rows, _) = replay::estimate(samples, &plain)?;
+        for r in &rows {
+            if let Some(rate) = r.axis(axis).and_then(|a| a.reference_deg_s) {
+                jerk.update(r.t_us, rate);
+            }
+        }
+    }
+    // The shortest decimal form of the f32 (3680000, not 3679999.75).
+    Ok(jerk.power().and_then(|p| p.to_string().parse().ok()))
 }
 
 /// [`crossover`] keeps the geometric midpoint unless the two levels' MSE lines differ by more
