@@ -107,10 +107,19 @@ fn input(t_us: u64) -> f32 {
 /// Runs `bank` over `times`; returns the largest |value| of the velocity channels (the first
 /// half of the channel list ending in `_v`) and of the acceleration channels.
 fn run<B: EstimatorBank>(bank: &mut B, times: &[u64]) -> (f64, f64, String) {
+    run_rated(bank, times, false)
+}
+
+/// [`run`], giving the bank the input's exact rate (deg/s) before each sample when `rated`.
+fn run_rated<B: EstimatorBank>(bank: &mut B, times: &[u64], rated: bool) -> (f64, f64, String) {
     let names = B::CHANNEL_NAMES;
     let (mut vmax, mut amax) = (0.0f64, 0.0f64);
     let mut worst = String::new();
     for &t in times {
+        if rated {
+            let rate = A * W_SIG * (W_SIG * t as f64 * 1e-6).cos();
+            bank.observe_rate(t, rate as f32);
+        }
         let out = bank.update(t, input(t)).expect("a valid sample");
         for (name, v) in names.iter().zip(out.values()) {
             let v = f64::from(v).abs();
@@ -220,6 +229,20 @@ proptest! {
         check(
             "AdaptiveBank<Fx>",
             run(&mut AdaptiveBank::<Fx>::new(&cfg, &s, &AdaptiveConfig::DEFAULT).unwrap(), &ts),
+        )?;
+        // Following the motion too, given the rate: a schedule tuned on a motion of jerk power
+        // 1 (deg/s^3)^2, so that this one always counts as harder. The jerk estimate runs
+        // under every timing; the noise-free input already keeps the gains at the lowest
+        // level, so this checks the estimate and the index, not a gain change (those are
+        // `adaptive::tests::a_schedule_with_its_tuning_jerk_follows_the_motion`'s).
+        let hard = s.with_tuned_jerk(1.0).unwrap();
+        check(
+            "AdaptiveBank<f32> following the motion",
+            run_rated(&mut AdaptiveBank::<f32>::new(&cfg, &hard, &AdaptiveConfig::DEFAULT).unwrap(), &ts, true),
+        )?;
+        check(
+            "AdaptiveBank<Fx> following the motion",
+            run_rated(&mut AdaptiveBank::<Fx>::new(&cfg, &hard, &AdaptiveConfig::DEFAULT).unwrap(), &ts, true),
         )?;
     }
 }
