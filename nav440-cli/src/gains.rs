@@ -1110,8 +1110,9 @@ mod tests {
         );
     }
 
-    /// The schedule file's `tuned_jerk_power` reaches the schedule (and round-trips); absent,
-    /// the schedule records none; not positive, the file is refused.
+    /// The schedule file's `tuned_jerk_power` reaches the schedule (and round-trips; the
+    /// bundled file records its capture's); absent, the schedule records none; not positive,
+    /// the file is refused.
     #[test]
     fn a_schedule_file_records_its_tuning_jerk() {
         let path = Path::new(concat!(
@@ -1123,6 +1124,14 @@ mod tests {
         };
         assert_eq!(
             file.schedule(&BankConfig::NAV440).unwrap().tuned_jerk(),
+            Some(3_850_048.0)
+        );
+        let without = ScheduleFile {
+            tuned_jerk_power: None,
+            ..file.clone()
+        };
+        assert_eq!(
+            without.schedule(&BankConfig::NAV440).unwrap().tuned_jerk(),
             None
         );
         let with = ScheduleFile {

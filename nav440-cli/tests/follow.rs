@@ -206,3 +206,91 @@ fn follow_is_refused_where_it_cannot_apply() {
         assert!(err.contains(says), "{extra:?}: {err}");
     }
 }
+
+/// The CSV the firmware's pipeline prints for the capture `name` with the bank `build` builds
+/// (`nav440_pipeline::Pipeline` fed the capture's bytes, as the firmware is), the header
+/// dropped.
+fn pipeline_csv<B: estimators::EstimatorBank>(
+    name: &str,
+    build: fn(nav440_pipeline::Axis, &estimators::BankConfig) -> Result<B, estimators::ConfigError>,
+) -> String {
+    let bytes = std::fs::read(data(name)).unwrap();
+    let mut pipe = nav440_pipeline::Pipeline::new(
+        nav440_pipeline::Axes::ALL,
+        estimators::BankConfig::NAV440,
+        build,
+    );
+    let mut out = String::new();
+    for chunk in bytes.chunks(64) {
+        pipe.feed_csv(chunk, |line| out.push_str(line)).unwrap();
+    }
+    pipe.finish_csv(|line| out.push_str(line)).unwrap();
+    out
+}
+
+/// The first line where the two CSV texts differ (`None`: equal).
+fn first_difference(a: &str, b: &str) -> Option<(usize, String, String)> {
+    let (mut x, mut y) = (a.lines(), b.lines());
+    for i in 0.. {
+        match (x.next(), y.next()) {
+            (None, None) => return None,
+            (l, r) if l != r => {
+                return Some((i, l.unwrap_or("").to_owned(), r.unwrap_or("").to_owned()))
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
+/// Through time faults (a frozen stamp, jumps: new epochs), the banks that difference the
+/// rate (the following product bank's jerk estimate, and the bundled schedule's, which
+/// follows the motion) print what the firmware's pipeline prints, byte for byte: the host
+/// gives a bank its new epoch before the epoch's first rate, as the pipeline does. (Before,
+/// the host differenced the rate across the epoch: a jerk of 4e4 deg/s^3 that moved the
+/// following bank's gains three samples after the epoch and put a spike of 8e4 deg/s^2 in its
+/// acceleration, which the firmware never printed.)
+#[test]
+fn banks_that_follow_the_motion_equal_the_firmware_through_time_faults() {
+    use estimators::{AdaptiveBank, AdaptiveProductBank, BankConfig, ConfigError};
+    use nav440_pipeline::Axis;
+    let name = "time_faults_a2_100hz.bin";
+    let follow: fn(Axis, &BankConfig) -> Result<AdaptiveProductBank<f32>, ConfigError> =
+        |axis, cfg| nav440_pipeline::adaptive_product_axis_bank(axis, &cfg.with_nav440_gains());
+    let host = ok(&[
+        "estimate",
+        &data(name),
+        "--bank",
+        "product",
+        "--follow",
+        "--axis",
+        "all",
+    ]);
+    let firmware = pipeline_csv(name, follow);
+    assert_eq!(
+        first_difference(host.split_once('\n').unwrap().1, &firmware),
+        None
+    );
+    assert!(firmware.lines().count() > 900);
+    // The bundled schedule as the firmware builds it (`firmware-example/src/pipeline.rs`).
+    let schedule: fn(Axis, &BankConfig) -> Result<AdaptiveBank<f32>, ConfigError> = |axis, cfg| {
+        let text = std::fs::read_to_string(data("gains/schedule_fig5.toml")).unwrap();
+        let file: nav440_cli::gains::ScheduleFile = toml::from_str(&text).unwrap();
+        assert!(file.tuned_jerk_power.is_some());
+        let s = file.schedule(&BankConfig::NAV440).unwrap();
+        nav440_pipeline::adaptive_axis_bank(axis, cfg, &s)
+    };
+    let host = ok(&[
+        "estimate",
+        &data(name),
+        "--gains",
+        &data("gains/schedule_fig5.toml"),
+        "--axis",
+        "all",
+    ]);
+    let firmware = pipeline_csv(name, schedule);
+    assert_eq!(
+        first_difference(host.split_once('\n').unwrap().1, &firmware),
+        None
+    );
+}

@@ -190,6 +190,11 @@ pub struct AdaptiveProductBank<T: Real, S: SqrtFn<T> = NativeSqrt> {
     wn: Option<f64>,
     q_over_r: Option<f32>,
     since: u32,
+    /// Samples ILO1 keeps the start's gains after a restart (a new epoch, a gap) while it
+    /// settles.
+    settle: u32,
+    /// The bank's re-initialisations on gaps seen so far.
+    reinits: u32,
     retunes: u32,
     ilo1_retunes: u32,
     /// The alias ILO1's gains are placed through now.
@@ -215,6 +220,8 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
             wn: None,
             q_over_r: None,
             since: 0,
+            settle: 0,
+            reinits: 0,
             retunes: 0,
             ilo1_retunes: 0,
             alias: follow.ilo1_alias,
@@ -222,16 +229,50 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
             jitter: 0.0,
             intervals: 0,
         };
-        let (wn, _) = bank.rule(
+        bank.start_ilo1(follow.ilo1_alias)?;
+        bank.settle_start();
+        Ok(bank)
+    }
+
+    /// ILO1 back to the start's gains for a restart of the laws (a new epoch, or a gap the
+    /// bank re-initialises on), kept while the restart settles ([`Self::settle_start`]).
+    #[inline(never)]
+    fn restart_ilo1(&mut self) {
+        // Cannot fail: the start's gains built when the bank was made; if they did not, the
+        // gains stay.
+        let _ = self.start_ilo1(self.wanted_alias());
+        self.settle_start();
+    }
+
+    /// The start's gains are kept while the laws' start settles (within 2 % after
+    /// `4 / (zeta wn)` s); the gains are checked right after.
+    fn settle_start(&mut self) {
+        let settle_s = self
+            .wn
+            .map_or(0.0, |wn| 4.0 / (f64::from(self.follow.ilo1_zeta) * wn));
+        self.settle = libm::ceil(settle_s / f64::from(self.cfg.sample_period_s))
+            .min(f64::from(u16::MAX)) as u32;
+        self.since = self.follow.retune_every.saturating_sub(1);
+    }
+
+    /// Sets ILO1 to the start's gains (out of line: its `f64` rebuild is large, and three
+    /// paths call it): the rule's for [`AdaptiveProductConfig::START_JERK`]
+    /// and [`AdaptiveProductConfig::START_NOISE_VAR`], through `alias`.
+    #[inline(never)]
+    fn start_ilo1(&mut self, alias: u32) -> Result<(), ConfigError> {
+        let (wn, _) = self.rule(
             AdaptiveProductConfig::START_NOISE_VAR,
             AdaptiveProductConfig::START_JERK,
         );
-        if let Ok(ilo1) = bank.ilo1_at(wn, follow.ilo1_alias) {
-            bank.cfg.velocity.ilo[0] = ilo1;
-            bank.bank.set_gains(&bank.cfg)?;
-            bank.wn = Some(wn);
+        if let Ok(ilo1) = self.ilo1_at(wn, alias) {
+            let mut cfg = self.cfg;
+            cfg.velocity.ilo[0] = ilo1;
+            self.bank.set_gains(&cfg)?;
+            self.cfg = cfg;
+            self.wn = Some(wn);
+            self.alias = alias;
         }
-        Ok(bank)
+        Ok(())
     }
 
     /// ILO1's gains with per-sample poles at `wn` rad/s and the configured damping, through
@@ -303,8 +344,19 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
     /// After an accepted sample: the noise estimate, and every `retune_every` samples the
     /// gains.
     fn after(&mut self, t_us: u64, out: &ProductOutput<T>) {
+        // A gap the bank re-initialised on at this sample: ILO1 restarts from it as after a
+        // new epoch.
+        let reinits = self.bank.reinit_count();
+        if reinits != self.reinits {
+            self.reinits = reinits;
+            self.restart_ilo1();
+        }
         self.observe_interval(t_us);
         self.noise.update(t_us, out.unwrapped_deg());
+        if self.settle > 0 {
+            self.settle -= 1;
+            return;
+        }
         self.since = self.since.saturating_add(1);
         if self.since >= self.follow.retune_every {
             self.since = 0;
@@ -434,8 +486,14 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
     }
 
     /// See [`ProductBank::new_epoch`] (the noise and jerk estimators restart their
-    /// differences too).
+    /// differences too). The laws restart from the next sample, ILO1 from a velocity of 0, so
+    /// ILO1 goes back to the start's gains (a new bank's bandwidth, 24.5 rad/s): the rule's
+    /// bandwidth for the motion before the epoch can be its lowest (2 rad/s on a steady rate),
+    /// at which the restart takes seconds to converge. It keeps them while the restart
+    /// settles (`4 / (zeta wn)`: 0.54 s), then the gains follow the estimates again, between
+    /// gains of the same alias (bumpless).
     pub fn new_epoch(&mut self) {
+        self.restart_ilo1();
         self.bank.new_epoch();
         self.last_t_us = None;
         self.noise.restart();
@@ -485,5 +543,6 @@ impl<T: Real, S: SqrtFn<T>> crate::EstimatorBank for AdaptiveProductBank<T, S> {
     /// start again, as the bank is new.
     fn take_over(&mut self, old: &Self) {
         self.bank.take_over(&old.bank);
+        self.reinits = self.bank.reinit_count();
     }
 }

@@ -315,6 +315,9 @@ pub(crate) struct StepState {
     unwrap: Option<DegUnwrapper>,
     /// The previous sample's time (us) and unwrapped angle (deg).
     prev: Option<(u64, f32)>,
+    /// The pending new epoch went to the bank with the sample's rate
+    /// ([`EstimatorBank::observe_rate`]); the update still keeps it from interpolating.
+    epoch_sent: bool,
 }
 
 /// The host's bank of one axis: the bank `B` (the paper bank's by default, [`PaperHostBank`]),
@@ -359,6 +362,7 @@ impl<B: EstimatorBank> HostBank<B> {
                 gaps: 0,
                 unwrap: axis.wraps().then(DegUnwrapper::default),
                 prev: None,
+                epoch_sent: false,
             })
         } else {
             None
@@ -404,6 +408,8 @@ impl<B: EstimatorBank> EstimatorBank for HostBank<B> {
                 r.bank.update(t_us, y)
             }
             Some(st) => {
+                // The bank has had this sample's epoch already (given with its rate).
+                let sent = core::mem::take(&mut st.epoch_sent);
                 let y = match st.unwrap.as_mut() {
                     Some(u) => u.push(angle_deg),
                     None => angle_deg,
@@ -417,7 +423,9 @@ impl<B: EstimatorBank> EstimatorBank for HostBank<B> {
                         if !new_epoch {
                             st.gaps = st.gaps.saturating_add(1);
                         }
-                        r.bank.new_epoch();
+                        if !sent {
+                            r.bank.new_epoch();
+                        }
                         r.bank.update(t_us, r.noise.add(f64::from(y)))
                     }
                     Some((pt, py)) if t_us > pt => {
@@ -438,8 +446,21 @@ impl<B: EstimatorBank> EstimatorBank for HostBank<B> {
         }
     }
 
-    /// The rate goes to the bank as it is (the noise is the angle's).
+    /// The rate goes to the bank as it is (the noise is the angle's). A new epoch announced
+    /// for this sample reaches the bank first, as in the firmware (whose pipeline calls
+    /// `new_epoch`, `observe_rate`, `update` in that order): a bank that differences the rate
+    /// (the jerk estimate of `AdaptiveProductBank` and of a schedule that follows the motion)
+    /// must not difference across the epoch.
     fn observe_rate(&mut self, t_us: u64, rate_deg_s: f32) {
+        if self.new_epoch {
+            match self.step.as_mut() {
+                None => self.new_epoch = false,
+                // The update still needs the flag (no interpolation across the epoch); the
+                // bank has had its epoch.
+                Some(st) => st.epoch_sent = true,
+            }
+            self.bank.new_epoch();
+        }
         self.bank.observe_rate(t_us, rate_deg_s);
     }
 

@@ -551,8 +551,14 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
     }
     // The following product firmware (M4F) prints the CSV of `nav440 estimate --bank product
     // --follow --axis all`, byte for byte: on the noise switch (its gains follow the noise and
-    // the motion) and on the noise-free bundled capture.
-    let follow_runs = [switch.clone(), bundled.clone()];
+    // the motion), on the noise-free bundled capture and through time faults (new epochs: the
+    // jerk estimate must not difference the rate across one).
+    let mut follow_runs = vec![switch.clone(), bundled.clone()];
+    follow_runs.extend(
+        data_captures()
+            .into_iter()
+            .filter(|p| p.to_string_lossy().contains("time_faults")),
+    );
     moving_gains_image(
         pool,
         m4f_board,
