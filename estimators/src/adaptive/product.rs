@@ -157,7 +157,10 @@ pub(super) fn jerk_index_wn(c: f64, j: f64, v: f64, dt: f64) -> f64 {
 ///
 /// ILO1 starts at the rule's gains for [`AdaptiveProductConfig::START_JERK`] and
 /// [`AdaptiveProductConfig::START_NOISE_VAR`] (so that every change is between gains of the
-/// same alias), the Kalman at the configuration's; every
+/// same alias), the Kalman at the configuration's. ILO1 goes back to that start whenever its
+/// laws restart (a new epoch, a gap the bank re-initialises on) and keeps it while the start
+/// settles (`4 / (zeta wn)`, 0.54 s at 100 Hz: a restart from a velocity of 0 at the lowest
+/// bandwidth would take seconds). Every
 /// [`AdaptiveProductConfig::retune_every`] samples, once both estimates exist, it moves the
 /// gains to the rule's when `wn` or `q / r` moved by more than their ratios
 /// ([`ProductBank::set_gains`]: bumpless). Without a rate the gains stay, but for ILO1's alias
