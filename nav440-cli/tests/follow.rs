@@ -294,3 +294,33 @@ fn banks_that_follow_the_motion_equal_the_firmware_through_time_faults() {
         None
     );
 }
+
+/// Through the time faults (steady rates of 240 and -200 deg/s, two new epochs and a gap, on
+/// which every law restarts from a velocity of 0), the banks that move ILO1's gains stay
+/// within 2x of the fixed gains' yaw ILO1 MSE over the capture (measured: fixed 364.5, `--follow`
+/// 552.5, `--self-tune` 641.2 (deg/s)^2). On the steady rates their bandwidth falls to its
+/// lowest, 2 rad/s; restarting there took seconds (3,674 and 3,758) until a restart took the
+/// start's gains while it settles.
+#[test]
+fn moving_gains_restart_quickly_through_time_faults() {
+    let cap = data("time_faults_a2_100hz.bin");
+    let mse_of = |flag: Option<&str>| {
+        let mut args = vec!["estimate", cap.as_str(), "--bank", "product"];
+        args.extend(flag);
+        let rows = rows(&ok(&args));
+        let (mut sum, mut n) = (0.0, 0);
+        for r in &rows {
+            // t, yaw, yaw_rate, yaw_ilo1_v, yaw_kf_a
+            let d = r[3].parse::<f64>().unwrap() - r[2].parse::<f64>().unwrap();
+            sum += d * d;
+            n += 1;
+        }
+        sum / f64::from(n)
+    };
+    let fixed = mse_of(None);
+    assert!((fixed / 364.5 - 1.0).abs() < 0.01, "fixed {fixed}");
+    for flag in ["--follow", "--self-tune"] {
+        let moving = mse_of(Some(flag));
+        assert!(moving < 2.0 * fixed, "{flag}: {moving} against {fixed}");
+    }
+}

@@ -158,9 +158,9 @@ pub(super) fn jerk_index_wn(c: f64, j: f64, v: f64, dt: f64) -> f64 {
 /// ILO1 starts at the rule's gains for [`AdaptiveProductConfig::START_JERK`] and
 /// [`AdaptiveProductConfig::START_NOISE_VAR`] (so that every change is between gains of the
 /// same alias), the Kalman at the configuration's. ILO1 goes back to that start whenever its
-/// laws restart (a new epoch, a gap the bank re-initialises on) and keeps it while the start
-/// settles (`4 / (zeta wn)`, 0.54 s at 100 Hz: a restart from a velocity of 0 at the lowest
-/// bandwidth would take seconds). Every
+/// laws restart (a new epoch, a gap the bank re-initialises on) at a lower bandwidth, and
+/// keeps it while the start settles (`4 / (zeta wn)`, 0.54 s at 100 Hz: a restart from a
+/// velocity of 0 at the lowest bandwidth would take seconds). Every
 /// [`AdaptiveProductConfig::retune_every`] samples, once both estimates exist, it moves the
 /// gains to the rule's when `wn` or `q / r` moved by more than their ratios
 /// ([`ProductBank::set_gains`]: bumpless). Without a rate the gains stay, but for ILO1's alias
@@ -238,9 +238,17 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
     }
 
     /// ILO1 back to the start's gains for a restart of the laws (a new epoch, or a gap the
-    /// bank re-initialises on), kept while the restart settles ([`Self::settle_start`]).
+    /// bank re-initialises on), kept while the restart settles ([`Self::settle_start`]);
+    /// gains of a higher bandwidth than the start's stay (they settle sooner).
     #[inline(never)]
     fn restart_ilo1(&mut self) {
+        let (start, _) = self.rule(
+            AdaptiveProductConfig::START_NOISE_VAR,
+            AdaptiveProductConfig::START_JERK,
+        );
+        if self.wn.is_some_and(|wn| wn >= start) {
+            return;
+        }
         // Cannot fail: the start's gains built when the bank was made; if they did not, the
         // gains stay.
         let _ = self.start_ilo1(self.wanted_alias());
@@ -490,11 +498,11 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
 
     /// See [`ProductBank::new_epoch`] (the noise and jerk estimators restart their
     /// differences too). The laws restart from the next sample, ILO1 from a velocity of 0, so
-    /// ILO1 goes back to the start's gains (a new bank's bandwidth, 24.5 rad/s): the rule's
-    /// bandwidth for the motion before the epoch can be its lowest (2 rad/s on a steady rate),
-    /// at which the restart takes seconds to converge. It keeps them while the restart
-    /// settles (`4 / (zeta wn)`: 0.54 s), then the gains follow the estimates again, between
-    /// gains of the same alias (bumpless).
+    /// ILO1 goes back to the start's gains (a new bank's bandwidth, 24.5 rad/s) when it runs
+    /// slower: the rule's bandwidth for the motion before the epoch can be its lowest
+    /// (2 rad/s on a steady rate), at which the restart takes seconds to converge. It keeps
+    /// them while the restart settles (`4 / (zeta wn)`: 0.54 s), then the gains follow the
+    /// estimates again, between gains of the same alias (bumpless).
     pub fn new_epoch(&mut self) {
         self.restart_ilo1();
         self.bank.new_epoch();

@@ -211,6 +211,9 @@ pub struct Settled {
 ///   failure, gimbal lock) gives none: `nav440_pipeline` passes only the rows' valid rates,
 ///   and a sample it drops is not fed at all.
 /// - **Bumpless:** a move is [`ProductBank::set_gains`].
+/// - **A restart** (a new epoch, a gap the bank re-initialises on) starts ILO1 from a velocity
+///   of 0: below the start's bandwidth, the running bank takes the start's gains until the
+///   restart settles, then the tuned ones again.
 /// - **Settled:** after [`SelfTuneConfig::settled_after`] windows without a move,
 ///   [`Self::settled`] holds the gains (and [`Self::settle_count`] counts up: a caller reports
 ///   each new settling once); a later move starts again.
@@ -264,6 +267,8 @@ pub struct SelfTuningProductBank<T: Real, S: SqrtFn<T> = NativeSqrt> {
     t_prev: Option<u64>,
     dt_prev: u64,
     reinits: u32,
+    /// Samples the running bank keeps the start's ILO1 after a restart, while it settles.
+    hold: u32,
     quiet_windows: u32,
     moves: u32,
     settled: Option<Settled>,
@@ -308,6 +313,7 @@ impl<T: Real, S: SqrtFn<T>> SelfTuningProductBank<T, S> {
             t_prev: None,
             dt_prev: 0,
             reinits: 0,
+            hold: 0,
             quiet_windows: 0,
             moves: 0,
             settled: None,
@@ -366,9 +372,17 @@ impl<T: Real, S: SqrtFn<T>> SelfTuningProductBank<T, S> {
         let dt = self.t_prev.map_or(0, |p| t_us.saturating_sub(p));
         let steady = steady_interval(dt, self.dt_prev);
         (self.t_prev, self.dt_prev) = (Some(t_us), dt);
+        if self.hold > 0 {
+            self.hold -= 1;
+            if self.hold == 0 {
+                // Settled: the tuned gains again (bumpless).
+                let _ = self.retune(self.gains, true);
+            }
+        }
         let reinits = self.banks[0].reinit_count();
         if reinits != self.reinits {
             self.reinits = reinits;
+            self.restart_at_start();
             self.restart_window();
         }
         if let (Some(rate), true) = (rate, steady) {
@@ -531,7 +545,31 @@ impl<T: Real, S: SqrtFn<T>> SelfTuningProductBank<T, S> {
     fn restart_window(&mut self) {
         self.sums = [0.0; CANDIDATES];
         self.compared = 0;
-        self.skip = self.tune.settle;
+        self.skip = self.tune.settle.max(self.hold);
+    }
+
+    /// A restart of the laws (a new epoch, a gap the bank re-initialises on) starts ILO1 from
+    /// a velocity of 0: when the tuned bandwidth is below the start's
+    /// ([`SelfTuneConfig::wn0_rad_s`]; on a steady rate the search can reach 2 rad/s, at which
+    /// the restart takes seconds to converge), the running bank takes the start's gains while
+    /// the restart settles (`4 / (zeta wn)`: 0.63 s), then the tuned ones again. No sample is
+    /// compared meanwhile.
+    #[inline(never)]
+    fn restart_at_start(&mut self) {
+        let start = [f64::from(self.tune.wn0_rad_s), f64::from(self.tune.zeta)];
+        if self.gains[0] >= start[0] {
+            return;
+        }
+        let mut cfg = self.cfg;
+        let Ok(c) = self.ilo1(start) else {
+            return;
+        };
+        cfg.velocity.ilo[0] = c;
+        if self.banks[0].set_gains(&cfg).is_ok() {
+            let settle_s = 4.0 / (start[1] * start[0]);
+            self.hold = libm::ceil(settle_s / f64::from(self.cfg.sample_period_s))
+                .min(f64::from(u16::MAX)) as u32;
+        }
     }
 
     /// ILO1's gains now: the bandwidth of its per-sample poles (rad/s) and their damping.
@@ -568,8 +606,10 @@ impl<T: Real, S: SqrtFn<T>> SelfTuningProductBank<T, S> {
         &self.banks[0]
     }
 
-    /// See [`ProductBank::new_epoch`] (no sample is compared until the settling samples passed).
+    /// See [`ProductBank::new_epoch`] (no sample is compared until the settling samples passed;
+    /// a tuned ILO1 slower than the start's restarts at the start's gains, see the type).
     pub fn new_epoch(&mut self) {
+        self.restart_at_start();
         for bank in &mut self.banks {
             bank.new_epoch();
         }

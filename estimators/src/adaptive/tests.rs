@@ -1207,7 +1207,6 @@ fn a_schedule_with_its_tuning_jerk_follows_the_motion() {
 /// restart disabled: -74 deg/s after 0.3 s, -253 after 1 s.)
 #[test]
 fn a_restart_runs_at_the_start_gains_until_it_settles() {
-    use crate::EstimatorBank;
     let cfg = crate::BankConfig::NAV440;
     let f = AdaptiveProductConfig::DEFAULT;
     for gap in [false, true] {
