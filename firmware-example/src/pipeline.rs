@@ -133,13 +133,8 @@ pub use schedule::{SCHEDULE, SCHEDULE_PERIOD_S, SCHEDULE_TUNED_JERK};
 #[cfg(feature = "adaptive-gains")]
 #[inline(never)]
 fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
-    let mut schedule = estimators::GainSchedule::new(&SCHEDULE)?;
-    if let Some(p) = SCHEDULE_PERIOD_S {
-        schedule = schedule.with_sample_period(p)?;
-    }
-    if let Some(j) = SCHEDULE_TUNED_JERK {
-        schedule = schedule.with_tuned_jerk(j)?;
-    }
+    let schedule = estimators::GainSchedule::new(&SCHEDULE)?
+        .with_records(SCHEDULE_PERIOD_S, SCHEDULE_TUNED_JERK)?;
     let bank = nav440_pipeline::adaptive_axis_bank(axis, cfg, &schedule)?;
     if !bank.period_fits() {
         defmt::println!(

@@ -36,6 +36,13 @@ fn steady_interval(dt: u64, dt_prev: u64) -> bool {
     dt_prev > 0 && 4 * dt.abs_diff(dt_prev) <= dt_prev
 }
 
+/// Samples for an observer restarted from a velocity of 0 at the bandwidth `wn_rad_s` and the
+/// damping `zeta` to settle (within 2 % after `4 / (zeta wn)` s), at the sample period
+/// `dt_s`: how long a bank that moves ILO1's gains keeps the start's after a restart.
+fn settle_samples(wn_rad_s: f64, zeta: f64, dt_s: f32) -> u32 {
+    libm::ceil(4.0 / (zeta * wn_rad_s) / f64::from(dt_s)).min(f64::from(u16::MAX)) as u32
+}
+
 /// Takes the term `x` into the exponentially weighted mean `mean` of `count` terms so far:
 /// weight `1 / count` (a plain mean while it starts), at least `alpha` (`dt / tau`).
 fn mean_step(mean: &mut f32, count: &mut u32, alpha: f32, x: f32) {

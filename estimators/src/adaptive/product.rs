@@ -232,7 +232,7 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
             jitter: 0.0,
             intervals: 0,
         };
-        bank.start_ilo1(follow.ilo1_alias)?;
+        bank.start_ilo1(bank.start_wn(), follow.ilo1_alias)?;
         bank.settle_start();
         Ok(bank)
     }
@@ -242,39 +242,39 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
     /// gains of a higher bandwidth than the start's stay (they settle sooner).
     #[inline(never)]
     fn restart_ilo1(&mut self) {
-        let (start, _) = self.rule(
-            AdaptiveProductConfig::START_NOISE_VAR,
-            AdaptiveProductConfig::START_JERK,
-        );
+        let start = self.start_wn();
         if self.wn.is_some_and(|wn| wn >= start) {
             return;
         }
         // Cannot fail: the start's gains built when the bank was made; if they did not, the
         // gains stay.
-        let _ = self.start_ilo1(self.wanted_alias());
+        let _ = self.start_ilo1(start, self.wanted_alias());
         self.settle_start();
     }
 
-    /// The start's gains are kept while the laws' start settles (within 2 % after
-    /// `4 / (zeta wn)` s); the gains are checked right after.
+    /// The start's bandwidth, rad/s: the rule's for [`AdaptiveProductConfig::START_JERK`]
+    /// and [`AdaptiveProductConfig::START_NOISE_VAR`].
+    fn start_wn(&self) -> f64 {
+        self.rule(
+            AdaptiveProductConfig::START_NOISE_VAR,
+            AdaptiveProductConfig::START_JERK,
+        )
+        .0
+    }
+
+    /// The start's gains are kept while the laws' start settles ([`super::settle_samples`]);
+    /// the gains are checked right after.
     fn settle_start(&mut self) {
-        let settle_s = self
-            .wn
-            .map_or(0.0, |wn| 4.0 / (f64::from(self.follow.ilo1_zeta) * wn));
-        self.settle = libm::ceil(settle_s / f64::from(self.cfg.sample_period_s))
-            .min(f64::from(u16::MAX)) as u32;
+        let (zeta, dt) = (f64::from(self.follow.ilo1_zeta), self.cfg.sample_period_s);
+        self.settle = self.wn.map_or(0, |wn| super::settle_samples(wn, zeta, dt));
         self.since = self.follow.retune_every.saturating_sub(1);
     }
 
     /// Sets ILO1 to the start's gains (out of line: its `f64` rebuild is large, and three
-    /// paths call it): the rule's for [`AdaptiveProductConfig::START_JERK`]
-    /// and [`AdaptiveProductConfig::START_NOISE_VAR`], through `alias`.
+    /// paths call it): the per-sample poles at the start's bandwidth `wn` (rad/s,
+    /// [`Self::start_wn`]), through `alias`.
     #[inline(never)]
-    fn start_ilo1(&mut self, alias: u32) -> Result<(), ConfigError> {
-        let (wn, _) = self.rule(
-            AdaptiveProductConfig::START_NOISE_VAR,
-            AdaptiveProductConfig::START_JERK,
-        );
+    fn start_ilo1(&mut self, wn: f64, alias: u32) -> Result<(), ConfigError> {
         if let Ok(ilo1) = self.ilo1_at(wn, alias) {
             let mut cfg = self.cfg;
             cfg.velocity.ilo[0] = ilo1;

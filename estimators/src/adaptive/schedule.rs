@@ -252,8 +252,27 @@ impl GainSchedule {
         })
     }
 
+    /// This schedule with what a schedule file or its Rust twin records, each when it does:
+    /// the sample period tuned at ([`Self::with_sample_period`]) and the tuning motion's jerk
+    /// power ([`Self::with_tuned_jerk`]).
+    pub fn with_records(
+        self,
+        period_s: Option<f32>,
+        tuned_jerk: Option<f32>,
+    ) -> Result<Self, ConfigError> {
+        let s = match period_s {
+            Some(p) => self.with_sample_period(p)?,
+            None => self,
+        };
+        match tuned_jerk {
+            Some(j) => s.with_tuned_jerk(j),
+            None => Ok(s),
+        }
+    }
+
     /// This schedule, recorded as tuned on a motion of jerk power `jerk` ((deg/s^3)^2, finite
-    /// and positive; the bundled fig5 capture's is 3.68e6, [`crate::AdaptiveProductConfig::START_JERK`]).
+    /// and positive; fig5's is about 3.7e6: [`crate::AdaptiveProductConfig::START_JERK`] over
+    /// 1-30 s of the synthetic motion, 3.85e6 over the whole bundled capture).
     /// An [`AdaptiveBank`](crate::AdaptiveBank) given the rate then follows the motion as well
     /// as the noise: on a motion of jerk power `J` above it, it picks the gains for
     /// `V x jerk / J` instead of the noise estimate `V` (lighter filtering, less lag: the jerk

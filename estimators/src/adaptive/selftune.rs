@@ -566,9 +566,7 @@ impl<T: Real, S: SqrtFn<T>> SelfTuningProductBank<T, S> {
         };
         cfg.velocity.ilo[0] = c;
         if self.banks[0].set_gains(&cfg).is_ok() {
-            let settle_s = 4.0 / (start[1] * start[0]);
-            self.hold = libm::ceil(settle_s / f64::from(self.cfg.sample_period_s))
-                .min(f64::from(u16::MAX)) as u32;
+            self.hold = super::settle_samples(start[0], start[1], self.cfg.sample_period_s);
         }
     }
 

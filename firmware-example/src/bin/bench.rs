@@ -393,14 +393,7 @@ mod schedule {
 fn adaptive_bank(c: &mut Counter, overhead: u64, cfg: &BankConfig) {
     use estimators::{AdaptiveBank, AdaptiveConfig, GainSchedule};
     let sched = GainSchedule::new(&schedule::SCHEDULE)
-        .and_then(|s| match schedule::SCHEDULE_PERIOD_S {
-            Some(p) => s.with_sample_period(p),
-            None => Ok(s),
-        })
-        .and_then(|s| match schedule::SCHEDULE_TUNED_JERK {
-            Some(j) => s.with_tuned_jerk(j),
-            None => Ok(s),
-        });
+        .and_then(|s| s.with_records(schedule::SCHEDULE_PERIOD_S, schedule::SCHEDULE_TUNED_JERK));
     let Ok(sched) = sched else {
         fail("the gain schedule")
     };

@@ -238,15 +238,18 @@ pub fn tune_schedule_on(
 /// the banks: the Euler reference, or the body rate with `--no-reference`), over every
 /// capture (each restarts the differences). Recorded in the schedule file
 /// (`tuned_jerk_power`), so that its bank follows the motion as well as the noise. `None`
-/// when no row has a rate (a capture entirely near gimbal lock) or the period is not one the
-/// estimator takes.
+/// when there is no capture, no row has a rate (a capture entirely near gimbal lock) or the
+/// period is not one the estimator takes.
 pub fn motion_jerk_power(captures: &[&[Sample]], opts: &EstimateOptions) -> Result<Option<f64>> {
     let axis = opts.axis();
     let plain = EstimateOptions {
         noise: None,
         ..opts.clone()
     };
-    let Ok(mut jerk) = estimators::JerkEstimator::new(1e12, opts.bank_period_s(captures[0])) else {
+    let Some(first) = captures.first() else {
+        return Ok(None);
+    };
+    let Ok(mut jerk) = estimators::JerkEstimator::new(1e12, opts.bank_period_s(first)) else {
         return Ok(None);
     };
     for samples in captures {
