@@ -52,6 +52,10 @@ fn main() {
     println!("cargo:rerun-if-changed=../boards/src");
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo::rustc-check-cfg=cfg(prebuilt_banks)");
+    println!("cargo::rustc-check-cfg=cfg(follow_gains)");
+    if follow_gains() {
+        println!("cargo:rustc-cfg=follow_gains");
+    }
     if !target.starts_with("thumb") {
         // Host builds (e.g. `cargo clippy --workspace` by mistake) get no linker script.
         return;
@@ -83,10 +87,21 @@ fn main() {
     }
 }
 
+/// Whether the image runs the product bank whose gains follow the noise and the motion
+/// (`estimators::AdaptiveProductBank`, cfg `follow_gains`): with the feature `follow`, or
+/// `bank-product` alone (neither `fixed-gains`, `tuned-gains` nor `self-tune`).
+fn follow_gains() -> bool {
+    let feature = |f: &str| env::var_os(format!("CARGO_FEATURE_{f}")).is_some();
+    feature("FOLLOW")
+        || (feature("BANK_PRODUCT")
+            && !feature("FIXED_GAINS")
+            && !feature("TUNED_GAINS")
+            && !feature("SELF_TUNE"))
+}
+
 /// The product images' banks, built here on the host: `Some(source)` of the table `BANKS`
-/// for an image with the feature `bank-product` and the shipped preset (neither
-/// `tuned-gains` nor `adaptive-gains`); `None` for every other image, which builds its banks
-/// itself. The banks are in the image's number type: `Fx` with the `fixed-point` feature or
+/// for an image with the feature `fixed-gains` (the product bank with the shipped preset's
+/// fixed gains); `None` for every other image, which builds its banks itself. The banks are in the image's number type: `Fx` with the `fixed-point` feature or
 /// on a target without an FPU, `f32` otherwise (`src/lib.rs`, `Num`).
 ///
 /// One entry per NAV440 packet rate (`PacketRate`, dividers 1 to 50 of 100 Hz): the key is
@@ -102,7 +117,7 @@ fn main() {
 /// back equals the one `nav440 estimate --bank product` (`--fixed`) builds.
 fn prebuilt_banks() -> Option<String> {
     let feature = |f: &str| env::var_os(format!("CARGO_FEATURE_{f}")).is_some();
-    if !feature("BANK_PRODUCT")
+    if !feature("FIXED_GAINS")
         || feature("TUNED_GAINS")
         || feature("ADAPTIVE_GAINS")
         || feature("FOLLOW")

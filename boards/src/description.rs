@@ -178,7 +178,7 @@ pub const BOARDS: &[Board] = &[
         // STM32G031: its stack is measured on the same image for the emulated Cortex-M0
         // (docs/PORTING.md).
         ci_image: Image {
-            features: &["bank-product", "no-reference"],
+            features: &["fixed-gains", "no-reference"],
             profile: "small",
             in_ci: true,
             stack_twin: Some(Twin {

@@ -326,7 +326,7 @@ fn the_built_only_boards_images() {
     let g031 = find("nucleo-g031k8").unwrap().ci_image;
     assert_eq!(
         (g031.features, g031.profile),
-        (&["bank-product", "no-reference"][..], "small")
+        (&["fixed-gains", "no-reference"][..], "small")
     );
     for name in ["nucleo-f411re", "rp-pico"] {
         let i = find(name).unwrap().ci_image;

@@ -14,8 +14,9 @@
 //!    `embassy_time::Delay`, the baud switch through `BufferedUart::set_baudrate`. A failed
 //!    boot is retried every second, one `boot failed` message per attempt.
 //! 4. Every byte after the read-back goes through `nav440_pipeline` with the product bank
-//!    (`estimators::ProductBank`: ILO1 velocity and Kalman acceleration per axis, the
-//!    `BankConfig::NAV440` gains for the measured packet rate), as firmware-example's
+//!    (`estimators::AdaptiveProductBank`: ILO1 velocity and Kalman acceleration per axis,
+//!    starting with the `BankConfig::NAV440` gains for the measured packet rate, then
+//!    following the measured noise and the motion's jerk), as firmware-example's
 //!    `bank-product` image and `nav440 estimate --bank product` do, and through the
 //!    pipeline's stream watchdog (armed after every configuration, polled every
 //!    [`POLL_MS`] ms while no byte arrives). A silence or a frame of another type (a unit

@@ -13,8 +13,10 @@
 use estimators::{BankConfig, EstimatorBank, EstimatorOutput};
 use nav440_pipeline::{Axes, Axis};
 
-/// The bank of each axis: the product bank (ILO1 velocity + Kalman acceleration) in `f32`.
-pub type Bank = estimators::ProductBank<f32>;
+/// The bank of each axis: the product bank (ILO1 velocity + Kalman acceleration) in `f32`
+/// whose gains follow the angle's measured noise and the motion's jerk (the product default,
+/// `estimators::AdaptiveProductBank`; the pipeline gives it each row's rate about the axis).
+pub type Bank = estimators::AdaptiveProductBank<f32>;
 
 /// What the bank gives per sample.
 pub type Output = <Bank as EstimatorBank>::Output;
@@ -31,12 +33,12 @@ pub type Pipeline = nav440_pipeline::Pipeline<Bank, estimators::ConfigError, Bui
 /// Values per axis in a [`row`] message: the angle and the bank's channels.
 const AXIS_VALUES: usize = 1 + <Bank as EstimatorBank>::CHANNELS;
 
-/// Builds an axis's bank for the measured packet period with the NAV440 preset's gains for
-/// that period (`BankConfig::with_nav440_gains`, as `nav440 estimate --bank product` does).
-/// Out of line: the constructor is large.
+/// Builds an axis's bank for the measured packet period, starting with the NAV440 preset's
+/// gains for that period (`BankConfig::with_nav440_gains`), as `nav440 estimate --bank
+/// product` does. Out of line: the constructor is large.
 #[inline(never)]
 fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, estimators::ConfigError> {
-    nav440_pipeline::axis_bank(axis, &cfg.with_nav440_gains())
+    nav440_pipeline::adaptive_product_axis_bank(axis, &cfg.with_nav440_gains())
 }
 
 /// A pipeline with the NAV440 preset on all three axes (built in place).

@@ -71,6 +71,14 @@ compile_error!(
 #[cfg(all(feature = "follow", feature = "self-tune"))]
 compile_error!("`follow` and `self-tune` are two ways to move the product bank's gains: pick one");
 
+#[cfg(all(
+    feature = "fixed-gains",
+    any(feature = "follow", feature = "self-tune", feature = "tuned-gains")
+))]
+compile_error!(
+    "`fixed-gains` keeps the shipped gains fixed: not with `follow`, `self-tune` or `tuned-gains`"
+);
+
 #[cfg(all(feature = "self-tune", feature = "no-reference"))]
 compile_error!(
     "`self-tune` tunes ILO1 against the Euler reference rate: it needs the reference (drop `no-reference`)"
@@ -82,17 +90,18 @@ compile_error!("`bank-product` and `adaptive-gains` are two different banks: pic
 /// The estimator bank the firmware runs on each axis: the paper's 14 estimators (the default).
 #[cfg(not(any(feature = "adaptive-gains", feature = "bank-product")))]
 pub type Bank = estimators::PaperBank<Num, BankSqrt>;
-/// The estimator bank the firmware runs on each axis: with `bank-product`, the product bank
-/// (`estimators::ProductBank`: ILO1 velocity and Kalman acceleration).
+/// The estimator bank the firmware runs on each axis: with `fixed-gains` or `tuned-gains`,
+/// the product bank with fixed gains (`estimators::ProductBank`: ILO1 velocity and Kalman
+/// acceleration).
 #[cfg(all(
     feature = "bank-product",
-    not(any(feature = "follow", feature = "self-tune"))
+    not(any(follow_gains, feature = "self-tune"))
 ))]
 pub type Bank = estimators::ProductBank<Num, BankSqrt>;
-/// The estimator bank the firmware runs on each axis: with `follow`, the product bank whose
-/// gains follow the measured noise and the motion's jerk (`estimators::AdaptiveProductBank`,
-/// fed each row's rate about the axis by the pipeline).
-#[cfg(feature = "follow")]
+/// The estimator bank the firmware runs on each axis: with `bank-product` alone (or
+/// `follow`), the product bank whose gains follow the measured noise and the motion's jerk
+/// (`estimators::AdaptiveProductBank`, fed each row's rate about the axis by the pipeline).
+#[cfg(follow_gains)]
 pub type Bank = estimators::AdaptiveProductBank<Num, BankSqrt>;
 /// The estimator bank the firmware runs on each axis: with `self-tune`, the product bank that
 /// tunes ILO1 online against each row's Euler reference rate

@@ -30,7 +30,7 @@ pub type ConfigError = estimators::ConfigError;
 /// [`FOLLOW_RATE`], the shipped preset's gains for that period (`BankConfig::with_nav440_gains`,
 /// as `nav440 estimate` does); else `cfg`.
 #[cfg(any(
-    feature = "follow",
+    follow_gains,
     feature = "self-tune",
     not(any(feature = "adaptive-gains", prebuilt_banks))
 ))]
@@ -47,7 +47,7 @@ fn at_rate(cfg: &BankConfig) -> BankConfig {
 /// (`BankConfig::with_nav440_gains`, as `nav440 estimate` does).
 #[cfg(not(any(
     feature = "adaptive-gains",
-    feature = "follow",
+    follow_gains,
     feature = "self-tune",
     prebuilt_banks
 )))]
@@ -56,10 +56,10 @@ fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
     nav440_pipeline::axis_bank(axis, &at_rate(cfg))
 }
 
-/// Builds an axis's following product bank (feature `follow`) for the measured packet period:
+/// Builds an axis's following product bank (`bank-product` alone, or `follow`) for the measured packet period:
 /// with [`FOLLOW_RATE`], starting with the shipped preset's gains for that period, as `nav440
 /// estimate --bank product --follow` does (`nav440_pipeline::adaptive_product_axis_bank`).
-#[cfg(feature = "follow")]
+#[cfg(follow_gains)]
 #[inline(never)]
 fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
     nav440_pipeline::adaptive_product_axis_bank(axis, &at_rate(cfg))

@@ -210,8 +210,8 @@ fn euler_rate_matches_the_derivative_of_a_real_tilted_recording() {
     }
 }
 
-/// The product bank that follows the noise and the motion (`nav440 estimate --bank product
-/// --follow`), with the shipped gains as its configuration and the recording's mean interval
+/// The product bank that follows the noise and the motion (the default of `nav440 estimate
+/// --bank product`), with the shipped gains as its configuration and the recording's mean interval
 /// as its period, on the recorded yaw angle (wrapped, f32 as from a packet) with the Euler
 /// yaw rate given as the rate about the axis; scored against that rate (velocity MSE after
 /// the first second, rows beyond the pitch limit left out). The interval varies from 10 to

@@ -736,8 +736,8 @@ const TUNED_ILO1: [[f64; 3]; 5] = [
 /// this factor of ILO1 tuned on the motion.
 const WITHIN_TUNED: f64 = 1.5;
 
-/// The product bank that follows the noise and the motion (`nav440 estimate --bank product
-/// --follow`), on every motion and noise level: its ILO1 velocity is below the backward
+/// The product bank that follows the noise and the motion (the default of `nav440 estimate
+/// --bank product` and of the firmware's `bank-product`), on every motion and noise level: its ILO1 velocity is below the backward
 /// difference of the angle and within [`WITHIN_TUNED`] of ILO1 tuned on that motion
 /// ([`TUNED_ILO1`]) in every cell, where the shipped fixed gains lose to the backward
 /// difference on the fast sine and the violent strokes at 0.01 deg^2 (printed beside).

@@ -449,7 +449,8 @@ fn linear_hold_equals_explicit_interpolation_on_the_step_grid() {
     );
 }
 
-/// The library's `--bank product`: `estimate_csv` prints the product bank's columns (its
+/// The library's `--bank product` (fixed gains: `EstimateOptions::follow_motion` is off by
+/// default): `estimate_csv` prints the product bank's columns (its
 /// `ilo1_v` and `kf_a` are the paper CSV's columns of the same name, text for text), and the
 /// row APIs, which are the paper bank's, refuse it.
 #[test]

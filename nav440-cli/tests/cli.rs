@@ -1029,7 +1029,11 @@ fn estimate_product_bank_prints_the_paper_banks_ilo1_v_and_kf_a() {
         };
         let paper = ok(&args(None));
         assert_eq!(ok(&args(Some("paper"))), paper, "{extra:?}");
-        let product = ok(&args(Some("product")));
+        // The shipped gains fixed: the paper bank's (the default `--bank product` follows
+        // the motion, `follow.rs`).
+        let mut fixed = args(Some("product"));
+        fixed.push("--fixed-gains");
+        let product = ok(&fixed);
         assert_eq!(product.lines().count(), paper.lines().count(), "{extra:?}");
         assert!(product.lines().count() > 3000, "{extra:?}");
         let header = product.lines().next().unwrap();
@@ -1074,7 +1078,7 @@ fn estimate_product_bank_prints_the_paper_banks_ilo1_v_and_kf_a() {
     }
 }
 
-/// `--bank product` runs fixed gains: a gain schedule is a usage error, named; an unknown
+/// `--bank product` runs no gain schedule: a gain schedule is a usage error, named; an unknown
 /// bank is refused by the argument parser.
 #[test]
 fn estimate_product_bank_refuses_a_schedule() {

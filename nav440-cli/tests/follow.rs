@@ -88,7 +88,7 @@ fn moving_gains_beat_the_shipped_gains(flag: &str) {
         if fixed {
             args.push("--fixed");
         }
-        let shipped = ok(&args);
+        let shipped = ok(&[&args[..], &["--fixed-gains"]].concat());
         args.push(flag);
         let o = run(&args);
         assert!(o.status.success(), "{args:?}");
@@ -156,6 +156,40 @@ fn fixed_point_tracks_the_f32_run(flag: &str) {
     );
 }
 
+/// The product bank's default: with the shipped gains, `--bank product` is `--follow`, byte
+/// for byte, in f32 and in fixed point; `--fixed-gains` keeps the shipped gains fixed, and so
+/// do gains given by `--preset` or `--gains` (the paper bank's ILO1 and Kalman rows with
+/// those gains, `cli.rs`).
+#[test]
+fn the_product_banks_shipped_gains_follow_by_default() {
+    let cap = data("fig5_a2_100hz.bin");
+    let gains = data("gains/fig5_var0.01.toml");
+    let base = [
+        "estimate",
+        cap.as_str(),
+        "--bank",
+        "product",
+        "--noise-var",
+        "0.1",
+    ];
+    for fixed in [&[][..], &["--fixed"][..]] {
+        let with = |extra: &[&str]| ok(&[&base[..], fixed, extra].concat());
+        let default = with(&[]);
+        assert_eq!(default, with(&["--follow"]), "{fixed:?}");
+        assert_ne!(default, with(&["--fixed-gains"]), "{fixed:?}");
+        for given in [
+            &["--preset", "nav440"][..],
+            &["--gains", gains.as_str()][..],
+        ] {
+            assert_eq!(
+                with(given),
+                with(&[given, &["--fixed-gains"]].concat()),
+                "{fixed:?} {given:?}"
+            );
+        }
+    }
+}
+
 /// `--follow` with every axis and the body rates as the rate column (what it follows then).
 #[test]
 fn follow_runs_on_every_axis_with_the_body_rates() {
@@ -174,9 +208,10 @@ fn follow_runs_on_every_axis_with_the_body_rates() {
     assert!(rows(&csv).len() > 1000);
 }
 
-/// `--follow` needs the product bank and one sample per packet, `--self-tune` too and the
-/// Euler reference, and the two exclude each other: a usage error (exit 2) naming what to use
-/// otherwise.
+/// `--follow` (and the default of `--bank product`) needs the product bank and one sample per
+/// packet, `--self-tune` too and the Euler reference, the two exclude each other, and
+/// `--fixed-gains` excludes both and needs the product bank: a usage error (exit 2) naming
+/// what to use otherwise.
 #[test]
 fn follow_is_refused_where_it_cannot_apply() {
     let cap = data("fig5_a2_100hz.bin");
@@ -185,6 +220,20 @@ fn follow_is_refused_where_it_cannot_apply() {
         (
             &["--follow", "--bank", "product", "--noise-at", "step"][..],
             "--noise-at sample",
+        ),
+        // The default of `--bank product` follows too.
+        (
+            &["--bank", "product", "--noise-at", "step"][..],
+            "--fixed-gains",
+        ),
+        (&["--fixed-gains"][..], "--bank product"),
+        (
+            &["--fixed-gains", "--bank", "product", "--follow"][..],
+            "cannot be used with",
+        ),
+        (
+            &["--fixed-gains", "--bank", "product", "--self-tune"][..],
+            "cannot be used with",
         ),
         (&["--self-tune"][..], "--bank product"),
         (
@@ -317,7 +366,7 @@ fn moving_gains_restart_quickly_through_time_faults() {
         }
         sum / f64::from(n)
     };
-    let fixed = mse_of(None);
+    let fixed = mse_of(Some("--fixed-gains"));
     assert!((fixed / 364.5 - 1.0).abs() < 0.01, "fixed {fixed}");
     for flag in ["--follow", "--self-tune"] {
         let moving = mse_of(Some(flag));

@@ -16,7 +16,8 @@
 //! * The paper bank (`estimators::PaperBank`, the default of `nav440 estimate`): the 7
 //!   velocity estimates (`ave_v, ilo1_v, ilo2_v, ilo3_v, ad_v, ed_v, kf_v`) and the 7
 //!   acceleration estimates (`ave_a, ..., kf_a`); yaw alone is [`HEADER`].
-//! * The product bank (`estimators::ProductBank`, `nav440 estimate --bank product`):
+//! * The product bank (`estimators::AdaptiveProductBank` by default, `ProductBank` with
+//!   fixed gains; `nav440 estimate --bank product`):
 //!   `t,yaw,yaw_rate,ilo1_v,kf_a`; all axes
 //!   `t,roll,roll_rate,roll_ilo1_v,roll_kf_a,pitch,...,yaw_kf_a`.
 //!

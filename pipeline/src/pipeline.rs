@@ -82,8 +82,8 @@ pub fn adaptive_axis_bank<T: Real, S: SqrtFn<T>>(
     AdaptiveBank::new(&axis_config(axis, cfg), schedule, &AdaptiveConfig::DEFAULT)
 }
 
-/// The motion-adaptive product bank of one axis (what `nav440 estimate --bank product
-/// --follow` runs): `AdaptiveProductBank::new` with `cfg` (unwrapping as [`axis_bank`]) and
+/// The motion-adaptive product bank of one axis (what `nav440 estimate --bank product`
+/// runs by default, and the firmware feature `bank-product`): `AdaptiveProductBank::new` with `cfg` (unwrapping as [`axis_bank`]) and
 /// [`AdaptiveProductConfig::DEFAULT`]. The pipeline gives it each row's rate about the axis
 /// ([`EstimatorBank::observe_rate`]).
 pub fn adaptive_product_axis_bank<T: Real, S: SqrtFn<T>>(

@@ -125,9 +125,12 @@ enum Cmd {
         /// (`--fixed` without FPU).
         #[arg(long, conflicts_with = "bank")]
         adaptive: bool,
-        /// The bank the firmware runs: `paper` (the paper's 14 estimators, the default) or
-        /// `product` (feature `bank-product`: ILO1 velocity + Kalman acceleration), printing
-        /// the CSV of `nav440 estimate --bank ...`.
+        /// The bank the firmware runs: `paper` (the paper's 14 estimators, the default),
+        /// `product` (feature `bank-product`: ILO1 velocity + Kalman acceleration, the gains
+        /// following the noise and the motion; `nav440 estimate --bank product`; alias
+        /// `follow`), `fixed-gains` (feature `fixed-gains`: the same bank with the shipped
+        /// gains fixed, float-free; `nav440 estimate --bank product --fixed-gains`) or
+        /// `self-tune`, printing the CSV of the `nav440 estimate` arguments named.
         #[arg(long, value_enum, default_value = "paper")]
         bank: firmware::BankChoice,
         /// The firmware without the Euler reference (feature `no-reference`: each axis's

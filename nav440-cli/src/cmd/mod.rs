@@ -246,15 +246,22 @@ pub struct EstimateArgs {
     pub(crate) fixed: bool,
     /// No Euler reference: each axis's rate column is the unit's body rate about it (roll p,
     /// pitch q, yaw r, deg/s as sent), named `<axis>_body_rate`, as the firmware built with
-    /// the feature `no-reference` prints. The estimates do not change.
+    /// the feature `no-reference` prints. Fixed gains' estimates do not change; gains that
+    /// follow the motion follow that rate.
     #[arg(long)]
     pub(crate) no_reference: bool,
     /// With `--bank product`: the gains follow the angle's measured noise and the motion's
     /// jerk (from each row's rate about the axis) instead of staying fixed
-    /// (`estimators::AdaptiveProductBank`, docs/ADAPTIVE-GAINS.md). One sample per packet
+    /// (`estimators::AdaptiveProductBank`, docs/ADAPTIVE-GAINS.md). The default of `--bank
+    /// product` with the shipped gains (no `--preset`, no `--gains`); one sample per packet
     /// (`--noise-at sample`).
     #[arg(long)]
     pub(crate) follow: bool,
+    /// With `--bank product`: the shipped preset's gains for the packet rate stay fixed
+    /// (`estimators::ProductBank`), as the float-free product images (firmware feature
+    /// `fixed-gains`) run them, instead of following the noise and the motion.
+    #[arg(long, conflicts_with_all = ["follow", "self_tune"])]
+    pub(crate) fixed_gains: bool,
     /// With `--bank product`: ILO1's gains tune themselves online against each row's Euler
     /// reference rate, a step per window towards the lowest error (bounded, bumpless;
     /// `estimators::SelfTuningProductBank`, docs/SELF-TUNE.md), and the gains each axis
@@ -274,12 +281,23 @@ impl EstimateArgs {
         if self.no_reference {
             opts.rate_column = replay::RateColumn::Body;
         }
-        opts.follow_motion = self.follow;
+        let product = self.bank_kind == BankArg::Product;
+        if self.fixed_gains && !product {
+            return Err(Error::Usage(FIXED_GAINS_PAPER.to_string()));
+        }
+        // The product bank's shipped gains follow the motion unless told otherwise; gains
+        // given by `--preset` or `--gains` stay as given.
+        let shipped = self.bank.preset.is_none() && self.bank.gains.is_none();
+        opts.follow_motion =
+            self.follow || (product && shipped && !self.fixed_gains && !self.self_tune);
         opts.self_tune = self.self_tune;
         replay::check_bank_options(&opts)?;
         Ok(opts)
     }
 }
+
+/// Why `--fixed-gains` is refused without `--bank product`.
+const FIXED_GAINS_PAPER: &str = "--fixed-gains keeps the product bank's shipped gains fixed instead of following the motion: use it with --bank product (the paper bank's gains are fixed, or scheduled by --gains)";
 
 /// Prints the warnings of an estimation on stderr, one line each.
 pub(crate) fn print_warnings(report: &replay::StreamReport) {

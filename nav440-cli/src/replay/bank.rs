@@ -95,8 +95,9 @@ pub type PaperHostBank = Either<
     Either<PaperBank<f32>, PaperBank<Fx>>,
     Either<estimators::AdaptiveBank<f32>, estimators::AdaptiveBank<Fx>>,
 >;
-/// The product bank as the host runs it: fixed gains (f32 or `Fx`), gains that follow the
-/// noise and the motion (`--follow`: `estimators::AdaptiveProductBank`, f32 or `Fx`) or ILO1
+/// The product bank as the host runs it: fixed gains (`--fixed-gains`, `--preset`, `--gains`;
+/// f32 or `Fx`), gains that follow the noise and the motion (the default, `--follow`:
+/// `estimators::AdaptiveProductBank`, f32 or `Fx`) or ILO1
 /// tuned online against the rate (`--self-tune`: `estimators::SelfTuningProductBank`).
 pub type ProductHostBank = Either<
     Either<ProductBank<f32>, ProductBank<Fx>>,
@@ -269,7 +270,7 @@ pub(crate) const FOLLOW_SELF_TUNE: &str =
 pub(crate) const SELF_TUNE_BODY: &str = "--self-tune tunes ILO1 against the Euler reference rate of each angle; --no-reference gives the body rates, which are not the angles' rates when the unit is tilted: drop --no-reference";
 
 /// Why `--bank product` refuses a gain schedule.
-pub(crate) const PRODUCT_SCHEDULE: &str = "--bank product runs fixed gains; a gain schedule (a --gains file written by `nav440 tune --schedule`) runs the noise-adaptive paper bank: use --bank paper, or a fixed gains file";
+pub(crate) const PRODUCT_SCHEDULE: &str = "--bank product runs ILO1 and the Kalman (gains that follow the motion, or fixed); a gain schedule (a --gains file written by `nav440 tune --schedule`) runs the noise-adaptive paper bank: use --bank paper, or a fixed gains file";
 
 /// The added noise: N(0, var) draws from xoshiro256++ seeded with the seed, in order.
 #[derive(Clone)]
@@ -559,4 +560,4 @@ pub fn check_bank_options(opts: &EstimateOptions) -> Result<()> {
 pub(crate) const SELF_TUNE_STEP: &str = "--self-tune compares one sample per packet with the packet's rate; --noise-at step feeds the bank every observer step: use --noise-at sample";
 
 /// Why `--follow` refuses `--noise-at step`.
-pub(crate) const FOLLOW_STEP: &str = "--follow estimates the noise and the jerk from one sample per packet; --noise-at step feeds the bank every observer step: use --noise-at sample";
+pub(crate) const FOLLOW_STEP: &str = "the product bank's gains follow the motion (by default, or with --follow) from one sample per packet; --noise-at step feeds the bank every observer step: use --noise-at sample, or --fixed-gains";

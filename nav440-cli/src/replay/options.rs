@@ -46,9 +46,10 @@ pub struct EstimateOptions {
     /// column than the Euler reference; the row APIs score against it and refuse another (a
     /// usage error).
     pub rate_column: RateColumn,
-    /// The product bank's gains follow the measured noise and the motion's jerk (`--follow`:
-    /// `estimators::AdaptiveProductBank`, fed each row's rate about the axis; product bank
-    /// only, one sample per packet). Default `false`: fixed gains.
+    /// The product bank's gains follow the measured noise and the motion's jerk
+    /// (`estimators::AdaptiveProductBank`, fed each row's rate about the axis; product bank
+    /// only, one sample per packet). Default `false`: fixed gains. `nav440 estimate --bank
+    /// product` sets it unless `--fixed-gains`, `--self-tune`, `--preset` or `--gains`.
     pub follow_motion: bool,
     /// The product bank tunes ILO1 online against each row's Euler reference rate
     /// (`--self-tune`: `estimators::SelfTuningProductBank`; product bank, Euler reference, one

@@ -169,7 +169,7 @@ pub(super) fn prepare(
 fn guards(board: Board, small: bool, bank: BankChoice, m: &[Measure]) -> Vec<String> {
     let mut broken = Vec::new();
     let find = |prefix: &str| m.iter().find(|x| x.label.starts_with(prefix));
-    if bank == BankChoice::Product && board.target == "thumbv6m-none-eabi" && !small {
+    if bank == BankChoice::FixedGains && board.target == "thumbv6m-none-eabi" && !small {
         for (label, what, guard) in [
             (
                 "pipeline, A2 frame",
@@ -263,7 +263,7 @@ fn report(board: Board, small: bool, bank: BankChoice, m: &[Measure]) -> String 
     }
     // The product firmware's pipeline on a Cortex-M0+: 20,000 instructions per A2 frame for
     // three axes is 4 % of a 48 MHz core at 100 Hz.
-    if bank == BankChoice::Product && board.target == "thumbv6m-none-eabi" && !small {
+    if bank == BankChoice::FixedGains && board.target == "thumbv6m-none-eabi" && !small {
         for (label, what, goal) in [
             ("pipeline, A2 frame", "", PRODUCT_PIPELINE_GOAL),
             (
@@ -284,7 +284,7 @@ fn report(board: Board, small: bool, bank: BankChoice, m: &[Measure]) -> String 
     }
     // Building the three axes' banks after the warm-up (or a period change) stops the stream:
     // the receive queue must hold what arrives meanwhile, on a 48 MHz part at CPI 1.
-    if bank == BankChoice::Product && board.target == "thumbv6m-none-eabi" && !small {
+    if bank == BankChoice::FixedGains && board.target == "thumbv6m-none-eabi" && !small {
         if let Some(b) = m.iter().find(|x| x.label.starts_with("bank construction")) {
             let queue_s = rx_queue_s();
             let goal = queue_s * SMALL_PART_HZ;

@@ -17,8 +17,9 @@ use super::size::{build_noref, euler_symbols, size, soft_float_symbols, NOREF_BO
 use super::soak::CI_SOAK;
 use super::unit_cases::{short_capture, uart_rows_ci, unit_ci};
 use super::{
-    read_file, root, work_dir, BankChoice, ADAPTIVE, BENCH_BIN, FOLLOW, FW, FW_BIN, NO_REFERENCE,
-    NO_REFERENCE_ARG, ONE_AXIS, PRODUCT, SELF_TUNE, STM32_FEATURE, TUNED, TUNED_GAINS, UART_ROWS,
+    read_file, root, work_dir, BankChoice, ADAPTIVE, BENCH_BIN, FIXED_GAINS, FW, FW_BIN,
+    NO_REFERENCE, NO_REFERENCE_ARG, ONE_AXIS, PRODUCT, SELF_TUNE, STM32_FEATURE, TUNED,
+    TUNED_GAINS, UART_ROWS,
 };
 use crate::pool::Pool;
 use crate::qemu::{self, Board, Output};
@@ -361,10 +362,11 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
         let soak = super::soak::prepare(minutes, window, 1)?;
         pool.spawn(SOAK_STEP, format!("{minutes} min of stream"), soak);
     }
-    // The product firmware (feature `bank-product`) prints the CSV of `nav440 estimate --bank
-    // product --axis all` (`--fixed` without FPU), byte for byte, on every capture and board.
+    // The product firmware with the shipped gains fixed (feature `fixed-gains`) prints the CSV
+    // of `nav440 estimate --bank product --fixed-gains --axis all` (`--fixed` without FPU),
+    // byte for byte, on every capture and board.
     for board in qemu::BOARDS {
-        clippy_firmware(board.target, Some(PRODUCT))?;
+        clippy_firmware(board.target, Some(FIXED_GAINS))?;
         // The product bench (thumbv6m) shares its image's cargo run.
         let bins: &[&str] = if board.target == "thumbv6m-none-eabi" {
             &[FW_BIN, BENCH_BIN]
@@ -373,7 +375,7 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
         };
         let elf = build_bins(
             board.target,
-            BankChoice::Product.features(),
+            BankChoice::FixedGains.features(),
             bins,
             "release",
         )?
@@ -382,7 +384,7 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
         .ok_or("no image built")?;
         check_map(&elf, "mps2")?;
         if qemu_ok {
-            let host = firmware_host_args(board.target, BankChoice::Product);
+            let host = firmware_host_args(board.target, BankChoice::FixedGains);
             for capture in captures.iter().filter(|c| **c != rate_drop) {
                 spawn_equivalence(pool, EQUIVALENCE_STEP, *board, &elf, capture, &host, |_| {
                     Ok(())
@@ -404,13 +406,14 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
             ));
         }
     }
-    // The product firmware without the Euler reference (feature `no-reference`; thumbv6m,
+    // The product firmware with fixed gains without the Euler reference (features
+    // `fixed-gains`, `no-reference`; thumbv6m,
     // profile `small`, the image `cargo xtask size` lists as `product-thumbv6m-3axis-small-noref`):
     // it links no Euler kinematics (no `euler_rates_deg`, no sine or cosine; the product image above
-    // does) and prints the CSV of `nav440 estimate --bank product --axis all --fixed
-    // --no-reference`, byte for byte, on every capture; on the tumble it pauses near gimbal
+    // does) and prints the CSV of `nav440 estimate --bank product --fixed-gains --axis all
+    // --fixed --no-reference`, byte for byte, on every capture; on the tumble it pauses near gimbal
     // lock as the images with the reference do.
-    let no_reference = format!("{PRODUCT},{NO_REFERENCE}");
+    let no_reference = format!("{FIXED_GAINS},{NO_REFERENCE}");
     clippy_firmware(NOREF_BOARD.target, Some(&no_reference))?;
     let noref = build_noref()?;
     check_map(&noref, "mps2")?;
@@ -431,7 +434,7 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
     let float = soft_float_symbols(&noref)?;
     if !float.is_empty() {
         return Err(format!(
-            "{} (features `{PRODUCT}`, `{NO_REFERENCE}`) must be float-free and links {} soft-float or libm symbols: {}",
+            "{} (features `{FIXED_GAINS}`, `{NO_REFERENCE}`) must be float-free and links {} soft-float or libm symbols: {}",
             noref.display(),
             float.len(),
             float.join(", ")
@@ -442,7 +445,7 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
         noref.display()
     );
     if qemu_ok {
-        let mut host = firmware_host_args(NOREF_BOARD.target, BankChoice::Product);
+        let mut host = firmware_host_args(NOREF_BOARD.target, BankChoice::FixedGains);
         host.push(NO_REFERENCE_ARG);
         for capture in captures.iter().filter(|c| **c != rate_drop) {
             let what = format!(
@@ -504,7 +507,7 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
             .ok_or_else(|| format!("{TUNED_GAINS} names no --hold in its header"))?
             .to_owned();
         let gains = gains.display().to_string();
-        let mut host = firmware_host_args(m4f_board.target, BankChoice::Product);
+        let mut host = firmware_host_args(m4f_board.target, BankChoice::FixedGains);
         host.extend(["--gains", &gains, "--hold", &hold]);
         for capture in [&bundled, &tumble] {
             spawn_equivalence(
@@ -549,8 +552,8 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
             queue_adaptive(pool, board, &elf, &switch, &bundled);
         }
     }
-    // The following product firmware (M4F) prints the CSV of `nav440 estimate --bank product
-    // --follow --axis all`, byte for byte: on the noise switch (its gains follow the noise and
+    // The product firmware with its default gains, which follow (M4F, feature `bank-product`
+    // alone), prints the CSV of `nav440 estimate --bank product --axis all`, byte for byte: on the noise switch (its gains follow the noise and
     // the motion), on the noise-free bundled capture and through time faults (new epochs: the
     // jerk estimate must not difference the rate across one).
     let mut follow_runs = vec![switch.clone(), bundled.clone()];
@@ -562,8 +565,8 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
     moving_gains_image(
         pool,
         m4f_board,
-        BankChoice::Follow,
-        FOLLOW,
+        BankChoice::Product,
+        PRODUCT,
         &follow_runs,
         qemu_ok,
     )?;
@@ -588,7 +591,7 @@ fn queue_firmware(pool: &Pool) -> Result<(), String> {
     // The benches: instruction counts of the paper bank (M4F) and the product bank (thumbv6m).
     for (board, bank) in [
         (qemu::BOARDS[0], BankChoice::Paper),
-        (qemu::BOARDS[2], BankChoice::Product),
+        (qemu::BOARDS[2], BankChoice::FixedGains),
     ] {
         let run = super::bench::prepare(board, false, bank)?;
         pool.spawn(

@@ -56,8 +56,13 @@ const BENCH_BIN: &str = "bench";
 /// Feature of the STM32F405 board image (run on QEMU `netduinoplus2` too).
 const STM32_FEATURE: &str = "board-stm32f405";
 
-/// The firmware feature of the product bank.
+/// The firmware feature of the product bank (its gains follow the noise and the motion
+/// unless [`FIXED_GAINS`] or another gains feature says otherwise).
 const PRODUCT: &str = "bank-product";
+
+/// The firmware feature of the product bank with the shipped preset's gains fixed, built on
+/// the host (float-free).
+const FIXED_GAINS: &str = "fixed-gains";
 
 /// Feature of the firmware without the Euler reference (rows with the body rates, no
 /// trigonometry linked; `nav440 estimate --no-reference` prints its CSV).
@@ -82,26 +87,27 @@ const TUNED: &str = "tuned-gains";
 /// firmware includes (relative to the workspace root).
 const TUNED_GAINS: &str = "host-tests/data/gains/product_fig5.toml";
 
-/// Feature of the firmware whose product bank's gains follow the noise and the motion
-/// (`estimators::AdaptiveProductBank`).
-const FOLLOW: &str = "follow";
-
 /// Feature of the firmware whose product bank tunes ILO1 online against the Euler reference
 /// rate (`estimators::SelfTuningProductBank`).
 const SELF_TUNE: &str = "self-tune";
 
 /// The bank a firmware image runs (`--bank`): the paper's 14 estimators (default), the
-/// product bank (feature `bank-product`), the product bank whose gains follow the noise and
-/// the motion (feature `follow`) or the one that tunes ILO1 against the rate (`self-tune`).
+/// product bank whose gains follow the noise and the motion (feature `bank-product` alone),
+/// the product bank with the shipped gains fixed (feature `fixed-gains`) or the one that tunes
+/// ILO1 against the rate (`self-tune`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum BankChoice {
     /// The paper bank (14 estimators per axis).
     Paper,
-    /// The product bank (ILO1 velocity + Kalman acceleration per axis).
+    /// The product bank (ILO1 velocity + Kalman acceleration per axis) whose gains follow the
+    /// measured noise and the motion's jerk: the product default (feature `bank-product`;
+    /// `nav440 estimate --bank product`).
+    #[value(alias = "follow")]
     Product,
-    /// The product bank whose gains follow the measured noise and the motion's jerk (feature
-    /// `follow`; `nav440 estimate --bank product --follow`).
-    Follow,
+    /// The product bank with the shipped preset's gains fixed, float-free (feature
+    /// `fixed-gains`; `nav440 estimate --bank product --fixed-gains`): the image of the small
+    /// parts.
+    FixedGains,
     /// The product bank that tunes ILO1 online against each row's Euler reference rate
     /// (feature `self-tune`; `nav440 estimate --bank product --self-tune`).
     SelfTune,
@@ -112,8 +118,8 @@ impl BankChoice {
     fn features(self) -> &'static [&'static str] {
         match self {
             BankChoice::Paper => &[],
+            BankChoice::FixedGains => &[PRODUCT, FIXED_GAINS],
             BankChoice::Product => &[PRODUCT],
-            BankChoice::Follow => &[PRODUCT, FOLLOW],
             BankChoice::SelfTune => &[PRODUCT, SELF_TUNE],
         }
     }
@@ -122,8 +128,8 @@ impl BankChoice {
     fn host_args(self) -> &'static [&'static str] {
         match self {
             BankChoice::Paper => &[],
+            BankChoice::FixedGains => &["--bank", "product", "--fixed-gains"],
             BankChoice::Product => &["--bank", "product"],
-            BankChoice::Follow => &["--bank", "product", "--follow"],
             BankChoice::SelfTune => &["--bank", "product", "--self-tune"],
         }
     }
@@ -132,8 +138,8 @@ impl BankChoice {
     fn name(self) -> &'static str {
         match self {
             BankChoice::Paper => "paper",
+            BankChoice::FixedGains => "fixed-gains",
             BankChoice::Product => "product",
-            BankChoice::Follow => "follow",
             BankChoice::SelfTune => "self-tune",
         }
     }

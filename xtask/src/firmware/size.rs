@@ -5,7 +5,7 @@ use super::bench::run_bench;
 use super::build::{build, build_profile, build_small, small_boards, SMALL_PROFILE};
 use super::qemu_run::{counter, counters, run_capture};
 use super::unit_cases::unit_stack_peak;
-use super::{root, BankChoice, FW_BIN, NO_REFERENCE, ONE_AXIS, PRODUCT};
+use super::{root, BankChoice, FIXED_GAINS, FW_BIN, NO_REFERENCE, ONE_AXIS, PRODUCT};
 use crate::qemu::{self, Output};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -90,7 +90,7 @@ pub fn size_components() -> Result<(), String> {
             image_name("product", board.target, 3, "-small"),
             build_profile(
                 board.target,
-                BankChoice::Product.features(),
+                BankChoice::FixedGains.features(),
                 FW_BIN,
                 SMALL_PROFILE,
             )?,
@@ -168,13 +168,13 @@ pub(super) const NOREF_BOARD: qemu::Board = qemu::BOARDS[2];
 /// The image name suffix of the product image without the Euler reference.
 const NOREF_SUFFIX: &str = "-small-noref";
 
-/// Builds the product image without the Euler reference (features `bank-product`,
+/// Builds the product image without the Euler reference (features `fixed-gains`,
 /// `no-reference`; thumbv6m, profile `small`): the one `size` lists and `ci` compares with
 /// `nav440 estimate --no-reference`.
 pub(super) fn build_noref() -> Result<PathBuf, String> {
     build_profile(
         NOREF_BOARD.target,
-        &[PRODUCT, NO_REFERENCE],
+        &[PRODUCT, FIXED_GAINS, NO_REFERENCE],
         FW_BIN,
         SMALL_PROFILE,
     )
@@ -296,7 +296,7 @@ pub fn size() -> Result<(), String> {
     }
     // The product firmware (three axes), release and `small`.
     for board in qemu::BOARDS {
-        let elf = build(board.target, BankChoice::Product.features(), FW_BIN)?;
+        let elf = build(board.target, BankChoice::FixedGains.features(), FW_BIN)?;
         builds.push((
             image_name("product", board.target, 3, ""),
             *board,
@@ -308,7 +308,7 @@ pub fn size() -> Result<(), String> {
     for (board, _) in small_boards() {
         let elf = build_profile(
             board.target,
-            BankChoice::Product.features(),
+            BankChoice::FixedGains.features(),
             FW_BIN,
             SMALL_PROFILE,
         )?;

@@ -105,7 +105,7 @@ pub(super) fn prepare(
     let start = Instant::now();
     let board = qemu::STM32_BOARD;
     let mut features = board.features.to_vec();
-    features.extend(BankChoice::Product.features());
+    features.extend(BankChoice::FixedGains.features());
     let elf = build(board.target, &features, FW_BIN)?;
     let nav440 = nav440_bin()?;
     let dir = work_dir()?;
@@ -127,7 +127,7 @@ fn run(
     start: Instant,
 ) -> Result<(), String> {
     let dir = work_dir()?;
-    let host_extra = firmware_host_args(board.target, BankChoice::Product);
+    let host_extra = firmware_host_args(board.target, BankChoice::FixedGains);
     // The stack baseline: a short run of the same image with one fault of each kind.
     let short = super::root().join("host-tests/data/fig5_a2_100hz.bin");
     let base = {

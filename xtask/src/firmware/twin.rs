@@ -11,7 +11,8 @@ use super::qemu_run::stack_within;
 use super::size::flash_ram;
 use super::unit_cases::{spawn_stack_case, UNIT_STEP};
 use super::{
-    build::build_profile, root, BankChoice, FW_BIN, NO_REFERENCE, NO_REFERENCE_ARG, PRODUCT,
+    build::build_profile, root, BankChoice, FIXED_GAINS, FW_BIN, NO_REFERENCE, NO_REFERENCE_ARG,
+    PRODUCT,
 };
 use crate::pool::Pool;
 use crate::qemu;
@@ -87,7 +88,9 @@ pub(super) fn stack_twin_ci(
         board.name,
         largest.join(", ")
     );
-    let bank = if features.contains(&PRODUCT) {
+    let bank = if features.contains(&FIXED_GAINS) {
+        BankChoice::FixedGains
+    } else if features.contains(&PRODUCT) {
         BankChoice::Product
     } else {
         BankChoice::Paper

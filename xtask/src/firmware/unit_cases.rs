@@ -516,9 +516,9 @@ pub(super) fn unit_ci(
         // product` (the replay boards are compared on every capture in `ci_steps`).
         if stm32 {
             let mut features = board.features.to_vec();
-            features.extend(BankChoice::Product.features());
+            features.extend(BankChoice::FixedGains.features());
             let elf = build(board.target, &features, FW_BIN)?;
-            let extra: Vec<String> = firmware_host_args(board.target, BankChoice::Product)
+            let extra: Vec<String> = firmware_host_args(board.target, BankChoice::FixedGains)
                 .into_iter()
                 .map(str::to_owned)
                 .collect();
