@@ -2,7 +2,7 @@
 //! motion's jerk.
 
 use super::kalman::{LAMBDA_RANGE, R_FLOOR};
-use super::{AdaptiveKalmanConfig, JerkEstimator, NoiseEstimator};
+use super::{JerkEstimator, NoiseEstimator};
 use crate::{
     BankConfig, ConfigError, EstimatorOutput, IloConfig, KalmanNoise, NativeSqrt, ProductBank,
     ProductOutput, Real, SampleError, SqrtFn,
@@ -34,8 +34,7 @@ pub struct AdaptiveProductConfig {
     /// (docs/MOTION-FAMILY.md, "ILO1 by the jerk index").
     pub ilo1_jitter_max: f32,
     /// `kappa`, s: the acceleration Kalman's process noise is `q = kappa J` (deg^2/s^5), its
-    /// measurement noise `r = V` (finite, > 0). Default
-    /// [`AdaptiveKalmanConfig::KAPPA_FIG5_S`].
+    /// measurement noise `r = V` (finite, > 0). Default [`Self::KAPPA_ACCEL_S`].
     pub kappa_s: f32,
     /// Time constant of the noise estimate, s ([`NoiseEstimator`]; default 0.5).
     pub noise_tau_s: f32,
@@ -64,6 +63,14 @@ impl AdaptiveProductConfig {
     /// The alias of ILO1's poles: with [`Self::ILO1_ZETA`], the one of a grid (1 to 10)
     /// whose rule holds best on every motion of docs/MOTION-FAMILY.md.
     pub const ILO1_ALIAS: u32 = 5;
+    /// `kappa` for the Kalman's acceleration, s: the product bank's Kalman gives the
+    /// acceleration alone, so its `kappa` is picked on that, online. Of a grid from 0.02 to
+    /// 0.05 s, the one whose worst ratio of the bank's acceleration MSE to the shipped fixed
+    /// gains' over the 15 cells of docs/MOTION-FAMILY.md (five motions at 0.01, 0.1 and
+    /// 0.5 deg^2) is least: 1.13x (fig5 at 0.01 deg^2). The velocity's
+    /// [`crate::AdaptiveKalmanConfig::KAPPA_FIG5_S`] (0.1146 s) reached 1.91x there (the hand
+    /// strokes at 0.01 deg^2).
+    pub const KAPPA_ACCEL_S: f32 = 0.035;
     /// The default of [`Self::ilo1_jitter_max`]: 0.2 % (the fifth alias then turns its poles
     /// by at most a hundredth of a turn).
     pub const ILO1_JITTER_MAX: f32 = 0.002;
@@ -79,7 +86,7 @@ impl AdaptiveProductConfig {
         ilo1_zeta: Self::ILO1_ZETA,
         ilo1_alias: Self::ILO1_ALIAS,
         ilo1_jitter_max: Self::ILO1_JITTER_MAX,
-        kappa_s: AdaptiveKalmanConfig::KAPPA_FIG5_S,
+        kappa_s: Self::KAPPA_ACCEL_S,
         noise_tau_s: 0.5,
         jerk_tau_s: JerkEstimator::DEFAULT_TAU_S,
         retune_every: 20,
