@@ -57,7 +57,7 @@ fn mse(rows: &[Vec<String>], a: usize, b: usize) -> f64 {
 }
 
 /// At 0.5 deg^2 of added noise on the bundled fig5 capture, the following ILO1's velocity
-/// MSE is under a third of the shipped gains' (they were tuned at 0.01 deg^2; measured 4.7x
+/// MSE is under a third of the shipped gains' (they were tuned at 0.01 deg^2; measured 4.6x
 /// lower), with the same header, rows, times, angles and rates; in f32 and in fixed point.
 /// The same for the self-tuning bank (measured 4.5x lower), which says on stderr where each
 /// axis's ILO1 is at the end.
@@ -347,7 +347,7 @@ fn banks_that_follow_the_motion_equal_the_firmware_through_time_faults() {
 /// Through the time faults (steady rates of 240 and -200 deg/s, two new epochs and a gap, on
 /// which every law restarts from a velocity of 0), the banks that move ILO1's gains stay
 /// within 2x of the fixed gains' yaw ILO1 MSE over the capture (measured: fixed 364.5, `--follow`
-/// 552.5, `--self-tune` 641.2 (deg/s)^2). On the steady rates their bandwidth falls to its
+/// 299.3, `--self-tune` 641.2 (deg/s)^2). On the steady rates their bandwidth falls to its
 /// lowest, 2 rad/s; restarting there took seconds (3,674 and 3,758) until a restart took the
 /// start's gains while it settles.
 #[test]

@@ -67,8 +67,8 @@ impl AdaptiveProductConfig {
     /// acceleration alone, so its `kappa` is picked on that, online. Of a grid from 0.02 to
     /// 0.05 s, the one whose worst ratio of the bank's acceleration MSE to the shipped fixed
     /// gains' over the 15 cells of docs/MOTION-FAMILY.md (five motions at 0.01, 0.1 and
-    /// 0.5 deg^2) is least: 1.13x (fig5 at 0.01 deg^2). The velocity's
-    /// [`crate::AdaptiveKalmanConfig::KAPPA_FIG5_S`] (0.1146 s) reached 1.91x there (the hand
+    /// 0.5 deg^2) is least: 1.14x (fig5 at 0.01 deg^2). The velocity's
+    /// [`crate::AdaptiveKalmanConfig::KAPPA_FIG5_S`] (0.1146 s) reached 1.93x there (the hand
     /// strokes at 0.01 deg^2).
     pub const KAPPA_ACCEL_S: f32 = 0.035;
     /// The default of [`Self::ilo1_jitter_max`]: 0.2 % (the fifth alias then turns its poles
@@ -77,8 +77,13 @@ impl AdaptiveProductConfig {
     /// The jerk power ILO1's rule starts from, until the bank has its own estimates: that of
     /// the synthetic fig5 motion, (deg/s^3)^2 (docs/MOTION-FAMILY.md).
     pub const START_JERK: f32 = 3.68e6;
-    /// The noise variance ILO1's rule starts from, deg^2.
-    pub const START_NOISE_VAR: f32 = 0.1;
+    /// The noise variance ILO1's rule starts from (and restarts from, after a new epoch or a
+    /// gap), deg^2: the lowest level the bundled schedule is tuned at; the start is 52.9 rad/s
+    /// at 100 Hz (24.5 at 0.1 deg^2). A start runs from a velocity of 0 to the rate, a step a
+    /// high bandwidth settles soonest: yaw ILO1 MSE through the bundled time faults 552.5
+    /// (deg/s)^2 at 0.1 deg^2, 299.3 at 0.001, 260.4 at 0.0003 (fixed gains 364.5), with fig5
+    /// at 0.5 deg^2 of noise 120.8, 112.1 and 113.0 (docs/MOTION-FAMILY.md, "A restart").
+    pub const START_NOISE_VAR: f32 = 0.001;
 
     /// The defaults (see the fields).
     pub const DEFAULT: Self = Self {
@@ -166,7 +171,7 @@ pub(super) fn jerk_index_wn(c: f64, j: f64, v: f64, dt: f64) -> f64 {
 /// [`AdaptiveProductConfig::START_NOISE_VAR`] (so that every change is between gains of the
 /// same alias), the Kalman at the configuration's. ILO1 goes back to that start whenever its
 /// laws restart (a new epoch, a gap the bank re-initialises on) at a lower bandwidth, and
-/// keeps it while the start settles (`4 / (zeta wn)`, 0.54 s at 100 Hz: a restart from a
+/// keeps it while the start settles (`4 / (zeta wn)`, 0.26 s at 100 Hz: a restart from a
 /// velocity of 0 at the lowest bandwidth would take seconds). Every
 /// [`AdaptiveProductConfig::retune_every`] samples, once both estimates exist, it moves the
 /// gains to the rule's when `wn` or `q / r` moved by more than their ratios
@@ -485,7 +490,7 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
         &self.cfg
     }
 
-    /// ILO1's current bandwidth by the rule, rad/s: the start's (fig5's jerk power at 0.1 deg^2)
+    /// ILO1's current bandwidth by the rule, rad/s: the start's (fig5's jerk power at 0.001 deg^2)
     /// until the estimates move it (`None` when that start could not be placed and the
     /// configuration's ILO1 runs).
     pub fn ilo1_wn(&self) -> Option<f64> {
@@ -505,10 +510,10 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
 
     /// See [`ProductBank::new_epoch`] (the noise and jerk estimators restart their
     /// differences too). The laws restart from the next sample, ILO1 from a velocity of 0, so
-    /// ILO1 goes back to the start's gains (a new bank's bandwidth, 24.5 rad/s) when it runs
+    /// ILO1 goes back to the start's gains (a new bank's bandwidth, 52.9 rad/s) when it runs
     /// slower: the rule's bandwidth for the motion before the epoch can be its lowest
     /// (2 rad/s on a steady rate), at which the restart takes seconds to converge. It keeps
-    /// them while the restart settles (`4 / (zeta wn)`: 0.54 s), then the gains follow the
+    /// them while the restart settles (`4 / (zeta wn)`: 0.26 s), then the gains follow the
     /// estimates again, between gains of the same alias (bumpless).
     pub fn new_epoch(&mut self) {
         self.restart_ilo1();
