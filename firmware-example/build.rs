@@ -87,11 +87,15 @@ fn main() {
     }
 }
 
+/// Whether the firmware is built with the cargo feature `name` (upper case, `_` for `-`).
+fn feature(name: &str) -> bool {
+    env::var_os(format!("CARGO_FEATURE_{name}")).is_some()
+}
+
 /// Whether the image runs the product bank whose gains follow the noise and the motion
 /// (`estimators::AdaptiveProductBank`, cfg `follow_gains`): with the feature `follow`, or
 /// `bank-product` alone (neither `fixed-gains`, `tuned-gains` nor `self-tune`).
 fn follow_gains() -> bool {
-    let feature = |f: &str| env::var_os(format!("CARGO_FEATURE_{f}")).is_some();
     feature("FOLLOW")
         || (feature("BANK_PRODUCT")
             && !feature("FIXED_GAINS")
@@ -101,8 +105,9 @@ fn follow_gains() -> bool {
 
 /// The product images' banks, built here on the host: `Some(source)` of the table `BANKS`
 /// for an image with the feature `fixed-gains` (the product bank with the shipped preset's
-/// fixed gains); `None` for every other image, which builds its banks itself. The banks are in the image's number type: `Fx` with the `fixed-point` feature or
-/// on a target without an FPU, `f32` otherwise (`src/lib.rs`, `Num`).
+/// fixed gains); `None` for every other image, which builds its banks itself. The banks are
+/// in the image's number type: `Fx` with the `fixed-point` feature or on a target without an
+/// FPU, `f32` otherwise (`src/lib.rs`, `Num`).
 ///
 /// One entry per NAV440 packet rate (`PacketRate`, dividers 1 to 50 of 100 Hz): the key is
 /// the nominal period as the pipeline's period rule gives it for that rate
@@ -114,9 +119,8 @@ fn follow_gains() -> bool {
 /// varint: a small or zero word takes one byte). An axis that does not wrap (pitch) reads the same
 /// entry back and switches its unwrapping off (`Bank::set_wrap`: the laws do not depend on
 /// it). The same `Bank::new` runs in the host tools, in IEEE `f64` as here, so a bank read
-/// back equals the one `nav440 estimate --bank product` (`--fixed`) builds.
+/// back equals the one `nav440 estimate --bank product --fixed-gains` (`--fixed`) builds.
 fn prebuilt_banks() -> Option<String> {
-    let feature = |f: &str| env::var_os(format!("CARGO_FEATURE_{f}")).is_some();
     if !feature("FIXED_GAINS")
         || feature("TUNED_GAINS")
         || feature("ADAPTIVE_GAINS")
