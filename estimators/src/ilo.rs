@@ -27,6 +27,17 @@ pub struct IloConfig {
 }
 
 impl IloConfig {
+    /// The fraction of a constant rate the velocity estimate settles at (dimensionless): on
+    /// `y = r t` the observer settles with a constant error `e = y - xhat`, `v = K1 v + K2 e`
+    /// gives `v = K2 e / (1 - K1)` and `L e + v = r`, so `v = r K2 / (K2 + L (1 - K1))`.
+    /// 1 with `K1 = 1` (the integral update holds any constant rate); below 1 for a leaky
+    /// update (`K1 < 1`), which reads a sustained rotation low by `1 -` this fraction: the
+    /// paper's ILO2 (Table 2: `K1` 0.9, `L` 5, `K2` 10) by 4.8 %. Computed in `f64`.
+    pub fn constant_rate_gain(&self) -> f64 {
+        let (k1, l, k2) = (f64::from(self.k1), f64::from(self.l), f64::from(self.k2));
+        k2 / (k2 + l * (1.0 - k1))
+    }
+
     /// ILO1's gains (`K1 = 1`, learning delay `tau = h`) whose dynamics seen at the samples are
     /// those of the second-order observer `s^2 + 2 zeta wn s + wn^2` sampled every `dt_s`:
     /// the one-step map of the `N = round(dt_s / h_s)` Euler steps of one sample has the
@@ -508,6 +519,41 @@ mod tests {
         assert_eq!(s.out, before.out);
         let want = 3.5 - (1.0 - 0.99_f32 as f64) / 50.0 * before.out;
         assert!((s.xhat - want).abs() < 1e-9, "{} vs {want}", s.xhat);
+    }
+
+    /// The law run on a ramp of 200 deg/s (steps of `h` = 1e-4 s, 40 s) settles at the rate
+    /// times [`IloConfig::constant_rate_gain`]: the paper's ILO2 at 95.2 % (`10 / (10 + 5 x
+    /// 0.1)`), a leaky set with little `K2` (the form `nav440 tune` gives on a zero-mean motion
+    /// at high noise, `K1` 0.99966, `L` 3.52, `K2` 0.0345) at 96.7 %, ILO1 (`K1` = 1) at 100 %.
+    #[test]
+    fn a_constant_rate_settles_at_the_constant_rate_gain() {
+        let rate = 200.0;
+        for (c, want) in [
+            (crate::presets::ILO2_TABLE2, 10.0 / 10.5),
+            (
+                IloConfig {
+                    k1: 0.999_664_07,
+                    l: 3.523_521_4,
+                    k2: 0.034_486_07,
+                },
+                0.9668,
+            ),
+            (crate::presets::ILO1_TABLE2, 1.0),
+        ] {
+            let gain = c.constant_rate_gain();
+            assert!((gain - want).abs() < 1e-4, "{c:?}: {gain} vs {want}");
+            let law = IloParams::<f64, 1>::new(&c, 1e-4).unwrap();
+            let mut s = law.init(0.0);
+            let mut v = 0.0;
+            for k in 0..400_000 {
+                v = law.step(&mut s, rate * 1e-4 * f64::from(k));
+            }
+            assert!(
+                (v / rate - gain).abs() < 1e-5,
+                "{c:?}: {} vs {gain}",
+                v / rate
+            );
+        }
     }
 
     /// ILO1 tuned on the fast sine at 0.01 deg^2 (`nav440 tune`: `K1` 0.99575, `L` 7.176,

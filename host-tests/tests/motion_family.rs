@@ -859,9 +859,22 @@ fn against_the_tuned_ilo1(mut mse: impl FnMut(&[replay::Sample], &[f64], f64) ->
 /// each motion with the noise switch of [`a_noise_switch_on_each_motion`]: velocity MSE per
 /// family and half, ratios to the better fixed set in that half (docs/MOTION-FAMILY.md, "A
 /// schedule that follows the motion"). Asserted: following the motion never costs more than
-/// 10 % against the noise alone in any cell; on the two fast motions (jerk power 500 and
-/// 1,500 times fig5's) every family is within 1.2x of the better fixed set in each half, and
-/// over the whole run below both fixed sets.
+/// 10 % against the noise alone in any cell; on every motion but fig5 (the motion it was
+/// tuned on), every family within 1.1x of the better fixed set in each half but the cells of
+/// [`SHORT_OF_TRAVEL`] (within 1.2x), and over the whole run not above the better fixed set
+/// by more than 2 % (where the schedule takes one level's gains in both halves it can only tie
+/// with that level run fixed); on the two fast motions (jerk power 500 and 1,500 times fig5's)
+/// below both fixed sets over the whole run.
+/// The cells (motion, half: 0 for 1-15 s, 1 for 16-30 s, family) where the bundled schedule
+/// following the motion is between 1.1x and 1.2x the better fixed set: the spin's Kalman in
+/// its quiet half (the raised level's `q`, interpolated towards the 0.1 deg^2 level, is
+/// lighter than the 0.5 level's, which the smooth spin prefers) and the violent strokes' AD in
+/// their noisy half (the lowered level's time constant is lighter than the 0.01 deg^2 level's).
+const SHORT_OF_TRAVEL: [(ProfileKind, usize, &str); 2] = [
+    (ProfileKind::Spin, 0, "KF"),
+    (ProfileKind::Violent, 1, "AD"),
+];
+
 #[test]
 fn a_schedule_that_follows_the_motion() {
     let (file, with_jerk) = schedule("gains/schedule_fig5.toml");
@@ -903,10 +916,21 @@ fn a_schedule_that_follows_the_motion() {
                     m[h][i],
                     n[h][i]
                 );
-                if fast && h < 2 {
+                let travels = profile != ProfileKind::Fig5;
+                if travels && h < 2 {
+                    let short = SHORT_OF_TRAVEL.contains(&(profile, h, COLUMNS[i]));
+                    let bound = if short { 1.2 } else { 1.1 };
                     assert!(
-                        m[h][i] <= 1.2 * best,
+                        m[h][i] <= bound * best,
                         "{label} {r:?} {}: following {} fixed {best}",
+                        COLUMNS[i],
+                        m[h][i]
+                    );
+                }
+                if travels && h == 2 {
+                    assert!(
+                        m[h][i] <= 1.02 * best,
+                        "{label} whole {}: following {} fixed {best}",
                         COLUMNS[i],
                         m[h][i]
                     );

@@ -76,13 +76,14 @@ pub struct AdaptiveConfig {
     /// With a schedule that records the jerk power of the motion it was tuned on
     /// ([`GainSchedule::tuned_jerk`]), the bank estimates the motion's jerk power `J` from the
     /// rate it is given ([`crate::EstimatorBank::observe_rate`], [`JerkEstimator`] with its
-    /// default time constant) and picks the gains for `min(V, V x m x tuned / J)` instead of
-    /// the noise estimate `V`, `m` being this margin (default 8, at least 1): a motion that
-    /// moves more than `m` times as hard as the tuning motion gets the gains of a lower noise
-    /// (lighter filtering, less lag), as its jerk index says; any other keeps the noise's.
-    /// The margin keeps the paper-like motions, whose jerk power moves by a few times from
-    /// stroke to pause, on the noise's gains (docs/MOTION-FAMILY.md, "A schedule that follows
-    /// the motion").
+    /// default time constant) and picks the gains for the noise estimate `V` scaled by the
+    /// jerk index beyond this margin `m` (default 8, at least 1): `V x m x tuned / J` for a
+    /// motion that moves more than `m` times as hard as the tuning motion (the gains of a
+    /// lower noise: lighter filtering, less lag), `V x tuned / (m x J)` for one that moves
+    /// less than `1 / m` times as hard (the gains of a higher noise: heavier filtering, which
+    /// a smooth motion such as a steady spin can afford), `V` for any other. The margin keeps
+    /// the paper-like motions, whose jerk power moves by a few times from stroke to pause, on
+    /// the noise's gains (docs/MOTION-FAMILY.md, "A schedule that follows the motion").
     pub jerk_margin: f32,
 }
 
@@ -209,7 +210,11 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
                 let v = self.schedule.clamp(v);
                 let r = self.cfg.retune_ratio;
                 if v > self.level * r || v * r < self.level {
-                    self.retune(v);
+                    // The AVEs' switching gains follow the error they switch on, which the
+                    // noise sets: those recorded for the noise estimate, whatever level the
+                    // jerk index picks.
+                    let noise = self.noise.variance().unwrap_or(v);
+                    self.retune_with(v, noise);
                 }
             }
         }
@@ -218,15 +223,19 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
 
     /// The noise variance the gains are picked for, deg^2: the noise estimate `V`, or with a
     /// schedule that records its tuning motion's jerk power ([`GainSchedule::tuned_jerk`])
-    /// and a jerk estimate `J`, `min(V, V x m x tuned / J)` (`m`:
-    /// [`AdaptiveConfig::jerk_margin`]).
+    /// and a jerk estimate `J`, `V x m x tuned / J` when `J > m x tuned` and
+    /// `V x tuned / (m x J)` when `J < tuned / m` (`m`: [`AdaptiveConfig::jerk_margin`]).
     fn index(&self) -> Option<f32> {
         let v = self.noise.variance()?;
+        let m = self.cfg.jerk_margin;
         match (self.schedule.tuned_jerk(), self.jerk_power()) {
-            // `J` at least the tuned jerk (the index only lowers the noise), and finite.
-            (Some(tuned), Some(j)) if j > self.cfg.jerk_margin * tuned && j.is_finite() => {
-                Some(v * (self.cfg.jerk_margin * tuned / j))
-            }
+            (Some(tuned), Some(j)) if j > m * tuned && j.is_finite() => Some(v * (m * tuned / j)),
+            // A motion that does not move at all (`J` = 0) takes the top level.
+            (Some(tuned), Some(j)) if j * m < tuned && j >= 0.0 => Some(if j > 0.0 {
+                v * (tuned / (m * j))
+            } else {
+                f32::MAX
+            }),
             _ => Some(v),
         }
     }
@@ -261,6 +270,12 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
     /// the AVE gains change and the schedule records switching gains, the AVEs' `deltahat` are
     /// set to those for `noise_var`; otherwise they are kept.
     pub fn retune(&mut self, noise_var: f32) {
+        self.retune_with(noise_var, noise_var);
+    }
+
+    /// [`Self::retune`] to the gains for `noise_var` with the AVEs' switching gains recorded
+    /// for `deltahat_var` (deg^2; the noise estimate when the jerk index moved the level).
+    fn retune_with(&mut self, noise_var: f32, deltahat_var: f32) {
         let v = self.schedule.clamp(noise_var);
         let old = self.schedule.gains_at(self.level);
         let new = self.schedule.config_at(&self.base, v);
@@ -273,14 +288,14 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
                 acceleration: old.1,
                 ..new
             };
-            let d = self.schedule.ave_deltahat_at(v);
+            let d = self.schedule.ave_deltahat_at(deltahat_var);
             let history = self
                 .history
                 .oldest_ordered()
                 .skip(self.history.len() - keep);
             self.bank.set_gains_warm(&old, &new, history, d).is_ok()
         } else if self.bank.set_gains(&new).is_ok() {
-            if let Some(d) = self.schedule.ave_deltahat_at(v) {
+            if let Some(d) = self.schedule.ave_deltahat_at(deltahat_var) {
                 let mut now = self.bank.ave_deltahat();
                 if new.velocity.ave != old.0.ave {
                     now.velocity = d.velocity;

@@ -1136,7 +1136,8 @@ fn the_self_tuning_bank_starts_within_its_bounds_at_2_hz() {
 /// noise: on a 1 Hz sine of 20 deg (jerk power `(20 (2 pi)^3)^2 / 2` = 1.23e7 (deg/s^3)^2)
 /// with N(0, 0.1) deg^2 of noise, tuned on a motion 100 times gentler, the gains go to the
 /// level `0.1 x 8 / 100` = 0.008 deg^2 (the margin 8 of `AdaptiveConfig::jerk_margin`);
-/// tuned on this very motion, or given no rate, or without the record, they stay at the
+/// tuned on a motion 40 times harder, up to `0.1 x 40 / 8` = 0.5 deg^2; tuned on this very
+/// motion or one 4 times harder, or given no rate, or without the record, they stay at the
 /// noise's 0.1. Records that are not finite and positive, and margins below 1, are refused.
 #[test]
 fn a_schedule_with_its_tuning_jerk_follows_the_motion() {
@@ -1175,6 +1176,12 @@ fn a_schedule_with_its_tuning_jerk_follows_the_motion() {
         }
         (b.gain_level(), b.jerk_power())
     };
+    let wide = GainSchedule::new(&[
+        level(0.001, 100.0, ILO1_TABLE2),
+        level(0.1, 1000.0, ILO1_TABLE2),
+        level(1.0, 2000.0, ILO1_TABLE2),
+    ])
+    .unwrap();
     let gentle = s.with_tuned_jerk((j / 100.0) as f32).unwrap();
     let (level, power) = run(&gentle, true);
     let power = f64::from(power.unwrap());
@@ -1185,6 +1192,13 @@ fn a_schedule_with_its_tuning_jerk_follows_the_motion() {
         let (level, _) = run(schedule, rates);
         assert!(level > 0.08, "{level} {rates}");
     }
+    // Tuned on a motion 40 times harder (this one moves less than 1/8 as hard): the gains go
+    // up to the level `0.1 x 40 / 8` = 0.5 deg^2; 4 times harder (within the margin): the
+    // noise's 0.1; each within the retune band (`AdaptiveConfig::retune_ratio`, 1.5).
+    let (up, _) = run(&wide.with_tuned_jerk((j * 40.0) as f32).unwrap(), true);
+    assert!(up > 0.5 / 1.5 && up < 0.5 * 1.5, "{up}");
+    let (kept, _) = run(&wide.with_tuned_jerk((j * 4.0) as f32).unwrap(), true);
+    assert!(kept > 0.1 / 1.5 && kept < 0.1 * 1.5, "{kept}");
     for bad in [0.5, f32::NAN] {
         let cfg = AdaptiveConfig {
             jerk_margin: bad,

@@ -124,9 +124,9 @@ pub const SCHEDULE: [ScheduleLevel; 5] = [
         velocity: BankGains {
             ave: AveConfig { k: 4.2401114, gamma1: 438.62088, delta: DeltaMode::Leaky { sigma: 0.1 } },
             ilo: [
-                IloConfig { k1: 0.99966407, l: 3.5235214, k2: 0.03448607 },
-                IloConfig { k1: 0.99966407, l: 3.5235214, k2: 0.03448607 },
-                IloConfig { k1: 0.99966407, l: 3.5235214, k2: 0.03448607 },
+                IloConfig { k1: 0.9992413, l: 0.5064639, k2: 36.988247 },
+                IloConfig { k1: 0.9992413, l: 0.5064639, k2: 36.988247 },
+                IloConfig { k1: 0.9992413, l: 0.5064639, k2: 36.988247 },
             ],
             ad_t: 0.051089697,
             ed: EdConfig { lambda: 13.442735, alpha: 767.00336 },

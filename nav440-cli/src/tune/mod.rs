@@ -774,6 +774,18 @@ pub fn tune_on(
             }
         }
     }
+    // A tuned leaky ILO that reads a constant rate low (on a zero-mean motion at high noise the
+    // search can trade that bias for less noise): said on stderr, because a sustained rotation
+    // (a spin) then reads low by as much.
+    for (col, name) in NAMES.iter().enumerate() {
+        let g = schedule::constant_rate_gain(&gains.velocity, col);
+        if spec.families.tunes(false, col) && !schedule::holds_constant_rate(&gains.velocity, col) {
+            warnings.push(format!(
+                "{name} velocity: the tuned gains read a constant rate {:.2} % low (K2 / (K2 + L (1 - K1)) = {g:.5}); a sustained rotation reads low by as much",
+                100.0 * (1.0 - g)
+            ));
+        }
+    }
     Ok(TuneResult {
         noise_var,
         seeds,

@@ -149,18 +149,35 @@ pub fn tune_schedule_on(
     let mut source: Vec<[usize; FAMILY_COUNT]> =
         (0..levels.len()).map(|j| [j; FAMILY_COUNT]).collect();
     let before = tuned.clone();
+    // Gains that read a constant rate low are taken only when no level's gains hold it
+    // ([`holds_constant_rate`]): a motion of sustained rate (a spin) finds them biased.
+    let holds: Vec<[bool; FAMILY_COUNT]> = before
+        .iter()
+        .map(|g| std::array::from_fn(|col| holds_constant_rate(&g.velocity, col)))
+        .collect();
     for (j, &v) in levels.iter().enumerate() {
         for col in observer_columns() {
+            let any_holds = holds.iter().any(|h| h[col]);
             let best = (0..levels.len())
+                .filter(|&i| holds[i][col] || !any_holds)
                 .min_by(|&a, &b| at[a][j][col].total_cmp(&at[b][j][col]))
                 .unwrap_or(j);
-            if best == j || at[best][j][col] >= at[j][j][col] {
+            let own_holds = holds[j][col] || !any_holds;
+            if best == j || (own_holds && at[best][j][col] >= at[j][j][col]) {
                 continue;
             }
             source[j][col] = best;
             tuned[j].velocity.set_column(col, &before[best].velocity);
+            let why = if own_holds {
+                String::new()
+            } else {
+                format!(
+                    "; its own read a constant rate {:.2} % low",
+                    100.0 * (1.0 - constant_rate_gain(&before[j].velocity, col))
+                )
+            };
             text.push_str(&format!(
-                "level {v} deg^2: {} velocity gains of level {} deg^2 (MSE {:.4} instead of {:.4} at {v} deg^2)\n",
+                "level {v} deg^2: {} velocity gains of level {} deg^2 (MSE {:.4} instead of {:.4} at {v} deg^2{why})\n",
                 NAMES[col], levels[best], at[best][j][col], at[j][j][col]
             ));
         }
@@ -271,6 +288,32 @@ pub const SWITCH_MATTERS: f64 = 1.2;
 
 /// The columns of the observer families ([`Scheduling::Observer`]): those a schedule gives
 /// per-level gains and switch points.
+/// The largest shortfall on a constant rate a schedule level's velocity gains may have: 0.1 %
+/// (0.3 deg/s at 300 deg/s; [`estimators::IloConfig::constant_rate_gain`]).
+pub const CONSTANT_RATE_SHORTFALL: f64 = 1e-3;
+
+/// The fraction of a constant rate the velocity gains of column `col` in `g` settle at:
+/// [`estimators::IloConfig::constant_rate_gain`] for ILO1-3, 1 for the other families (their
+/// laws hold a constant rate) and for gains not present.
+pub fn constant_rate_gain(g: &FamilyGains, col: usize) -> f64 {
+    let Some(i) = ["ILO1", "ILO2", "ILO3"]
+        .iter()
+        .position(|n| *n == NAMES[col])
+    else {
+        return 1.0;
+    };
+    if !g.has_column(col) {
+        return 1.0;
+    }
+    g.apply(estimators::BankGains::PAPER_VELOCITY).ilo[i].constant_rate_gain()
+}
+
+/// `true` if the velocity gains of column `col` in `g` read a constant rate within
+/// [`CONSTANT_RATE_SHORTFALL`].
+pub fn holds_constant_rate(g: &FamilyGains, col: usize) -> bool {
+    constant_rate_gain(g, col) >= 1.0 - CONSTANT_RATE_SHORTFALL
+}
+
 pub(super) fn observer_columns() -> impl Iterator<Item = usize> {
     (0..FAMILY_COUNT).filter(|&c| FAMILIES[c].scheduling == Scheduling::Observer)
 }
