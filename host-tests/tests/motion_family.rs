@@ -970,3 +970,77 @@ fn switched_noise(samples: &[replay::Sample]) -> Vec<replay::Sample> {
         })
         .collect()
 }
+
+/// A unit that rests for a minute and then moves, under the bundled schedule that follows the
+/// motion (raised to its top level while at rest, where the jerk power is that of the rate's
+/// quantisation) against the same schedule by the noise alone: fig5 (which starts with a
+/// 1.5 s ramp) and the violent strokes (600 deg/s within 0.15 s of the start), at 0.01 and
+/// 0.5 deg^2. Velocity MSE per family over the last 10 s of rest and the first 4 s of motion
+/// (the jerk estimate, time constant 5 s, takes about 0.6 s of a fig5-like motion to leave the
+/// raised level). Asserted: at rest never above the noise alone (2 % for rounding), and over
+/// the first 4 s of motion within 1.25x of it (docs/MOTION-FAMILY.md, "A schedule that follows
+/// the motion").
+#[test]
+fn a_unit_at_rest_then_moving() {
+    let (_, with_jerk) = schedule("gains/schedule_fig5.toml");
+    let (_, noise_only) = schedule_by_noise("gains/schedule_fig5.toml");
+    const REST_S: u64 = 60;
+    let ranges = [
+        (REST_S as f64 - 10.0, REST_S as f64),
+        (REST_S as f64, REST_S as f64 + 4.0),
+    ];
+    println!("velocity MSE ratio, following the motion / by the noise alone: last 10 s of rest | first 4 s of motion");
+    println!(
+        "{:<36} {}",
+        "motion",
+        COLUMNS.map(|c| format!("{c:>14}")).join("")
+    );
+    for profile in [ProfileKind::Fig5, ProfileKind::Violent] {
+        let motion = a2_samples(profile, 1, 100, 30.0).unwrap();
+        let rest = (0..REST_S * 100).map(|k| {
+            let mut s = motion[0];
+            s.t_us = k * 10_000;
+            s
+        });
+        let moving = motion.iter().map(|m| {
+            let mut s = *m;
+            s.t_us += REST_S * 1_000_000;
+            s
+        });
+        let samples: Vec<_> = rest.chain(moving).collect();
+        for var in [0.01, 0.5] {
+            let angles = noisy_angle(&samples, Axis::Yaw, Some(Noise { var, seed: 1 })).unwrap();
+            let noisy: Vec<_> = samples
+                .iter()
+                .zip(&angles)
+                .map(|(s, a)| {
+                    let mut o = *s;
+                    o.set_angle_deg(Axis::Yaw, *a);
+                    o
+                })
+                .collect();
+            let n = mse_over(&noisy, &noise_only, &ranges);
+            let m = mse_over(&noisy, &with_jerk, &ranges);
+            let line: String = (0..COLUMNS.len())
+                .map(|i| {
+                    format!(
+                        "{:>14}",
+                        format!("{:.2} | {:.2}", m[0][i] / n[0][i], m[1][i] / n[1][i])
+                    )
+                })
+                .collect();
+            println!("{:<36} {line}", format!("{profile:?}, {var} deg^2"));
+            for i in 0..COLUMNS.len() {
+                assert!(
+                    m[0][i] <= 1.02 * n[0][i] && m[1][i] <= 1.25 * n[1][i],
+                    "{profile:?} {var} {}: rest {} / {}, moving {} / {}",
+                    COLUMNS[i],
+                    m[0][i],
+                    n[0][i],
+                    m[1][i],
+                    n[1][i]
+                );
+            }
+        }
+    }
+}
