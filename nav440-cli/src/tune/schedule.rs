@@ -286,8 +286,6 @@ pub fn motion_jerk_power(captures: &[&[Sample]], opts: &EstimateOptions) -> Resu
 /// than this factor there.
 pub const SWITCH_MATTERS: f64 = 1.2;
 
-/// The columns of the observer families ([`Scheduling::Observer`]): those a schedule gives
-/// per-level gains and switch points.
 /// The largest shortfall on a constant rate a schedule level's velocity gains may have: 0.1 %
 /// (0.3 deg/s at 300 deg/s; [`estimators::IloConfig::constant_rate_gain`]).
 pub const CONSTANT_RATE_SHORTFALL: f64 = 1e-3;
@@ -314,6 +312,8 @@ pub fn holds_constant_rate(g: &FamilyGains, col: usize) -> bool {
     constant_rate_gain(g, col) >= 1.0 - CONSTANT_RATE_SHORTFALL
 }
 
+/// The columns of the observer families ([`Scheduling::Observer`]): those a schedule gives
+/// per-level gains and switch points.
 pub(super) fn observer_columns() -> impl Iterator<Item = usize> {
     (0..FAMILY_COUNT).filter(|&c| FAMILIES[c].scheduling == Scheduling::Observer)
 }
