@@ -480,3 +480,61 @@ fn tune_warns_for_every_family_it_makes_worse() {
         "nav440: warning: AD velocity: the tuned gains score worse than the starting gains on 0-3 s (MSE 66.651 before, 3551.415 after, hold linear); keep the starting [velocity.ad] table if that matters"
     ), "{}", stderr(&o));
 }
+
+/// A tuned ILO velocity set that reads a constant rate more than 0.1 % low gets a warning
+/// with its shortfall, computed here from the written gains file by the steady state of the
+/// law (`v = K2 e / (1 - K1)` and `L e + v = r`: `K2 / (K2 + L (1 - K1))` of the rate), and the
+/// file is still written. A 3-point grid at 0.5 deg^2 on 3 s ends at `L` 9,900, `K2` 3.16,
+/// `K1` 0.99969: half the rate.
+#[test]
+fn tune_warns_for_an_ilo_that_reads_a_constant_rate_low() {
+    let d = scratch("tune_constant_rate");
+    let out = d.join("g.toml");
+    let o = Command::new(BIN)
+        .args([
+            "tune",
+            p(&data("fig5_a2_100hz.bin")),
+            "--bank",
+            "product",
+            "--noise-var",
+            "0.5",
+            "--seeds",
+            "1",
+            "--exhaustive",
+            "3",
+            "--hold",
+            "linear",
+            "--window",
+            "3",
+            "-o",
+            p(&out),
+        ])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&out).unwrap();
+    let ilo = text.split("[velocity.ilo1]").nth(1).unwrap();
+    let value = |key: &str| -> f64 {
+        let line = ilo
+            .lines()
+            .find(|l| l.starts_with(&format!("{key} = ")))
+            .unwrap();
+        f64::from(line[key.len() + 3..].parse::<f32>().unwrap())
+    };
+    let (k1, l, k2) = (value("k1"), value("l"), value("k2"));
+    let gain = k2 / (k2 + l * (1.0 - k1));
+    assert!(gain < 0.6, "{k1} {l} {k2}");
+    let warned: Vec<String> = stderr(&o)
+        .lines()
+        .filter(|l| l.contains("constant rate"))
+        .map(str::to_owned)
+        .collect();
+    assert_eq!(
+        warned,
+        [format!(
+            "nav440: warning: ILO1 velocity: the tuned gains read a constant rate {:.2} % low (K2 / (K2 + L (1 - K1)) = {gain:.5}); a sustained rotation reads low by as much",
+            100.0 * (1.0 - gain)
+        )]
+    );
+    let _ = std::fs::remove_dir_all(&d);
+}
