@@ -386,7 +386,8 @@ pub struct ScheduleFile {
     pub sample_period_s: Option<f64>,
     /// The jerk power of the motion the levels were tuned on, (deg/s^3)^2 (`None`: not
     /// recorded; the gains then follow the noise alone). With it the bank also follows the
-    /// motion: on a motion that moves far harder it takes the gains of a lower noise
+    /// motion: on a motion that moves far harder it takes the gains of a lower noise, on one
+    /// that moves far more gently those of a higher noise
     /// (`estimators::GainSchedule::with_tuned_jerk`; the bundled fig5 capture's is 3.85e6).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tuned_jerk_power: Option<f64>,

@@ -274,10 +274,11 @@ impl GainSchedule {
     /// and positive; fig5's is about 3.7e6: [`crate::AdaptiveProductConfig::START_JERK`] over
     /// 1-30 s of the synthetic motion, 3.85e6 over the whole bundled capture).
     /// An [`AdaptiveBank`](crate::AdaptiveBank) given the rate then follows the motion as well
-    /// as the noise: on a motion of jerk power `J` above it, it picks the gains for
-    /// `V x jerk / J` instead of the noise estimate `V` (lighter filtering, less lag: the jerk
-    /// index of docs/MOTION-FAMILY.md, "A schedule that follows the motion"); on a motion
-    /// below it, the noise's as without.
+    /// as the noise: on a motion of jerk power `J` more than `m` times above it, it picks the
+    /// gains for `V x m x jerk / J` instead of the noise estimate `V` (lighter filtering, less
+    /// lag); more than `m` times below it, for `V x jerk / (m x J)` (heavier filtering); in
+    /// between, the noise's as without (`m`: [`crate::AdaptiveConfig::jerk_margin`]; the jerk
+    /// index of docs/MOTION-FAMILY.md, "A schedule that follows the motion").
     pub fn with_tuned_jerk(self, jerk: f32) -> Result<Self, ConfigError> {
         if !jerk.is_finite() {
             return Err(ConfigError::NotFinite("tuned_jerk_power"));
