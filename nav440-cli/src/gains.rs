@@ -699,12 +699,6 @@ impl FamilyGains {
         self.get_at::<F>(column::<F>())
     }
 
-    /// `true` if the family of column `column` (the order of `estimators::FAMILIES`) has
-    /// gains here.
-    pub fn has_column(&self, column: usize) -> bool {
-        self.present.get(column).copied().unwrap_or(false)
-    }
-
     /// Sets (or, with `None`, removes) the family `F`'s gains.
     pub fn set<F: Family>(&mut self, gains: Option<F::Gains>) {
         self.set_at::<F>(column::<F>(), gains);

@@ -779,7 +779,7 @@ pub fn tune_on(
     // (a spin) then reads low by as much.
     for (col, name) in NAMES.iter().enumerate() {
         let g = schedule::constant_rate_gain(&gains.velocity, col);
-        if spec.families.tunes(false, col) && !schedule::holds_constant_rate(&gains.velocity, col) {
+        if spec.families.tunes(false, col) && !schedule::holds(g) {
             warnings.push(format!(
                 "{name} velocity: the tuned gains read a constant rate {:.2} % low (K2 / (K2 + L (1 - K1)) = {g:.5}); a sustained rotation reads low by as much",
                 100.0 * (1.0 - g)

@@ -294,22 +294,26 @@ pub const CONSTANT_RATE_SHORTFALL: f64 = 1e-3;
 /// [`estimators::IloConfig::constant_rate_gain`] for ILO1-3, 1 for the other families (their
 /// laws hold a constant rate) and for gains not present.
 pub fn constant_rate_gain(g: &FamilyGains, col: usize) -> f64 {
-    let Some(i) = ["ILO1", "ILO2", "ILO3"]
-        .iter()
-        .position(|n| *n == NAMES[col])
-    else {
-        return 1.0;
+    use estimators::IloFamily;
+    let ilo = match NAMES[col] {
+        "ILO1" => g.get::<IloFamily<0>>(),
+        "ILO2" => g.get::<IloFamily<1>>(),
+        "ILO3" => g.get::<IloFamily<2>>(),
+        _ => None,
     };
-    if !g.has_column(col) {
-        return 1.0;
-    }
-    g.apply(estimators::BankGains::PAPER_VELOCITY).ilo[i].constant_rate_gain()
+    ilo.map_or(1.0, |c| c.constant_rate_gain())
+}
+
+/// `true` if a constant rate gain (from [`constant_rate_gain`]) is within
+/// [`CONSTANT_RATE_SHORTFALL`] of 1.
+pub(super) fn holds(constant_rate_gain: f64) -> bool {
+    constant_rate_gain >= 1.0 - CONSTANT_RATE_SHORTFALL
 }
 
 /// `true` if the velocity gains of column `col` in `g` read a constant rate within
 /// [`CONSTANT_RATE_SHORTFALL`].
 pub fn holds_constant_rate(g: &FamilyGains, col: usize) -> bool {
-    constant_rate_gain(g, col) >= 1.0 - CONSTANT_RATE_SHORTFALL
+    holds(constant_rate_gain(g, col))
 }
 
 /// The columns of the observer families ([`Scheduling::Observer`]): those a schedule gives
