@@ -434,6 +434,18 @@ struct Files {
 
 const KEPT: &str = "an existing file\n";
 
+/// What a walk over some of [`NUMERIC`] found.
+#[derive(Default)]
+struct Walked {
+    cases: usize,
+    refused: usize,
+    failures: Vec<String>,
+}
+
+/// The walk's threads: each case waits mostly on a child process (a valid serial command on
+/// its time-out), so the threads share the machine's cores well.
+const WALKERS: usize = 4;
+
 #[test]
 fn every_numeric_flag_refuses_bad_values_before_any_side_effect() {
     let d = scratch();
@@ -443,20 +455,61 @@ fn every_numeric_flag_refuses_bad_values_before_any_side_effect() {
         .output()
         .unwrap();
     assert!(made.status.success());
+    let args = value_args();
+    // Each walker takes every WALKERS-th flag, with its own output files and its own
+    // pseudo-terminal pair for the unit.
+    let walked: Vec<Walked> = std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..WALKERS)
+            .map(|w| {
+                let (d, tiny, args) = (&d, &tiny, &args);
+                scope.spawn(move || {
+                    let flags = NUMERIC.iter().skip(w).step_by(WALKERS);
+                    walk(flags, &d.join(format!("walker{w}")), tiny, args)
+                })
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    let _ = std::fs::remove_dir_all(&d);
+    let failures: Vec<&String> = walked.iter().flat_map(|w| &w.failures).collect();
+    let cases: usize = walked.iter().map(|w| w.cases).sum();
+    let refused: usize = walked.iter().map(|w| w.refused).sum();
+    assert!(
+        failures.is_empty(),
+        "{}",
+        failures
+            .iter()
+            .map(|f| f.as_str())
+            .collect::<Vec<_>>()
+            .join("\n")
+    );
+    assert_eq!(cases, NUMERIC.len() * VALUES.len());
+    assert_eq!(
+        refused,
+        cases - VALID.len(),
+        "every VALID entry is a walked case"
+    );
+}
+
+/// Walks `flags` with every value of [`VALUES`], writing under `dir`.
+fn walk<'a>(
+    flags: impl Iterator<Item = &'a (&'static str, &'static str, &'static str)>,
+    dir: &Path,
+    tiny: &Path,
+    args: &[(String, String, Option<&'static str>)],
+) -> Walked {
+    std::fs::create_dir_all(dir).unwrap();
     // A pseudo-terminal pair stands for the unit: the commands open the slave; a byte on the
     // master is a request that reached the "unit".
     let (mut master, slave) = serialport::TTYPort::pair().expect("pty pair");
     let files = Files {
-        tiny,
-        out: d.join("out"),
-        kept: d.join("kept.rs"),
+        tiny: tiny.to_path_buf(),
+        out: dir.join("out"),
+        kept: dir.join("kept.rs"),
         port: slave.name().expect("pty name"),
     };
-    let args = value_args();
-    let mut cases = 0;
-    let mut refused = 0;
-    let mut failures = Vec::new();
-    for &(cmd, flag, template) in NUMERIC {
+    let mut walked = Walked::default();
+    for &(cmd, flag, template) in flags {
         let max = args
             .iter()
             .find(|(c, f, _)| c == cmd && f == flag)
@@ -476,7 +529,7 @@ fn every_numeric_flag_refuses_bad_values_before_any_side_effect() {
             let _ = std::fs::remove_file(&files.out);
             std::fs::write(&files.kept, KEPT).unwrap();
             let line = command_line(cmd, flag, &value, &files);
-            cases += 1;
+            walked.cases += 1;
             let limit = if valid {
                 VALID_LIMIT
             } else {
@@ -484,6 +537,7 @@ fn every_numeric_flag_refuses_bad_values_before_any_side_effect() {
             };
             let (out, err) = run_limited(&line, limit);
             let what = format!("nav440 {}", line.join(" "));
+            let failures = &mut walked.failures;
             if err.contains("panicked") {
                 failures.push(format!("{what}: panicked: {err}"));
                 continue;
@@ -499,7 +553,7 @@ fn every_numeric_flag_refuses_bad_values_before_any_side_effect() {
                 drain(&mut master);
                 continue;
             }
-            refused += 1;
+            walked.refused += 1;
             let Some(o) = out else {
                 failures.push(format!("{what}: still running after 20 s"));
                 continue;
@@ -531,14 +585,7 @@ fn every_numeric_flag_refuses_bad_values_before_any_side_effect() {
         }
     }
     drop(slave);
-    let _ = std::fs::remove_dir_all(&d);
-    assert!(failures.is_empty(), "{}", failures.join("\n"));
-    assert_eq!(cases, NUMERIC.len() * VALUES.len());
-    assert_eq!(
-        refused,
-        cases - VALID.len(),
-        "every VALID entry is a walked case"
-    );
+    walked
 }
 
 /// `tune -o` and `--rust`: a path that cannot be written is an output error before the input

@@ -381,9 +381,10 @@ fn ci_steps(steps: &steps::Steps) -> Result<(), String> {
     })?;
     steps.run("clippy thumb libraries", thumb_libraries)?;
     steps.run("tmux", qemu::ensure_tmux)?;
-    steps.run("host tests", || cargo(&["test", "--all-targets"]))?;
-    steps.run("doc tests", || cargo(&["test", "--doc"]))?;
-    steps.run("release tests", release_tests)?;
+    steps.run("host tests", host_tests)?;
+    steps.run("doc tests", || {
+        cargo(&["test", "--profile", firmware::NAV440_PROFILE, "--doc"])
+    })?;
     // From here on every QEMU run is a job of the pool, queued as soon as its image is built,
     // while this thread goes on building.
     let pool = pool::Pool::new(firmware::POOL_THREADS, steps.clone())?;
@@ -439,41 +440,19 @@ fn thumb_libraries() -> Result<(), String> {
     Ok(())
 }
 
-/// The release-mode tests: 10^6 random parser streams, constant-memory streaming of 200+ MiB,
-/// the 24 h run of the whole bank (f32 and fixed point, 8.64 M samples each), and the tuner's
-/// search against its exhaustive grid on slices of the bundled captures, the NAV440 preset
-/// against the paper's (at the bundled captures' rates and, its rate table, below 20 Hz), and
-/// the noise-adaptive bank on a noise switch. Built with the profile of the `nav440` binary the
-/// firmware checks run (`fast-release`): one build serves both.
-fn release_tests() -> Result<(), String> {
+/// Every host test in one build, in the profile of the `nav440` binary the firmware checks run
+/// (`fast-release`: optimised, integer overflow checked): the tests and the checks share that
+/// build, and the release-only tests run with the others (they skip in a debug build, which
+/// has `debug_assertions`): 10^6 random parser streams, constant-memory streaming of 200+ MiB,
+/// the 24 h run of the whole bank (f32 and fixed point, 8.64 M samples each), the tuner's
+/// search against its exhaustive grid, the NAV440 preset against the paper's, and the
+/// noise-adaptive bank on a noise switch.
+fn host_tests() -> Result<(), String> {
     cargo(&[
         "test",
         "--profile",
         firmware::NAV440_PROFILE,
-        "-p",
-        "nav440-proto",
-        "-p",
-        "nav440-cli",
-        "-p",
-        "host-tests",
-        "-p",
-        "velocity-estimators",
-        "--test",
-        "fuzz_equivalent",
-        "--test",
-        "streaming",
-        "--test",
-        "long_run",
-        "--test",
-        "tune_search",
-        "--test",
-        "preset",
-        "--test",
-        "preset_rates",
-        "--test",
-        "schedule",
-        "--test",
-        "self_tune",
+        "--all-targets",
     ])?;
     firmware::adopt_nav440()
 }

@@ -1,6 +1,7 @@
 //! The libraries as users get them: their examples run, their declared minimum supported Rust
 //! version checked with that very toolchain, and `cargo publish --dry-run` of each.
 
+use crate::firmware::NAV440_PROFILE;
 use crate::{cargo, run};
 use std::path::Path;
 use std::process::Command;
@@ -23,7 +24,7 @@ pub const LIBRARIES: &[(&str, &str)] = &[
 ];
 
 /// Runs every example of the libraries (each checks its own result and exits non-zero on a
-/// failure), then `cargo publish --dry-run` of the three libraries together (`--allow-dirty`:
+/// failure; in the profile of the host tests, whose build they share), then `cargo publish --dry-run` of the three libraries together (`--allow-dirty`:
 /// CI's checkout may hold build products; the dry run packages, verifies that each package
 /// builds on its own with its registry dependencies, and uploads nothing).
 pub fn package() -> Result<(), String> {
@@ -31,6 +32,8 @@ pub fn package() -> Result<(), String> {
     cargo(&[
         "run",
         "-q",
+        "--profile",
+        NAV440_PROFILE,
         "-p",
         "velocity-estimators",
         "--example",
@@ -39,6 +42,8 @@ pub fn package() -> Result<(), String> {
     cargo(&[
         "run",
         "-q",
+        "--profile",
+        NAV440_PROFILE,
         "-p",
         "nav440-proto",
         "--example",
@@ -47,6 +52,8 @@ pub fn package() -> Result<(), String> {
     cargo(&[
         "run",
         "-q",
+        "--profile",
+        NAV440_PROFILE,
         "-p",
         "nav440-proto",
         "--example",
@@ -58,6 +65,8 @@ pub fn package() -> Result<(), String> {
     // linted, on the Cortex-M4F target.
     cargo(&[
         "test",
+        "--profile",
+        NAV440_PROFILE,
         "-p",
         "nav440-proto",
         "--features",
@@ -80,6 +89,8 @@ pub fn package() -> Result<(), String> {
     cargo(&[
         "run",
         "-q",
+        "--profile",
+        NAV440_PROFILE,
         "-p",
         "nav440-pipeline",
         "--example",
