@@ -60,6 +60,7 @@ fn print_nav440_preset() {
         &BankConfig::DEFAULT,
         Some(&BankConfig::PAPER),
         Method::Search,
+        None,
     )
     .unwrap();
     let cfg = gains.apply(BankConfig::DEFAULT);

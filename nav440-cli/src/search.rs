@@ -16,7 +16,7 @@
 //! The gains file's check ([`crate::gains::FamilyGains::check`]) builds each table's law the
 //! same way.
 
-use std::any::TypeId;
+use std::any::{Any, TypeId};
 
 use estimators::{AdConfig, AveConfig, BankGains, EdConfig, Family, IloConfig, KalmanNoise};
 use serde_json::{Map, Number, Value};
@@ -211,6 +211,34 @@ pub fn with_search_point<F: Family>(g: &F::Gains, x: &[f64]) -> F::Gains {
     serde_json::from_value(Value::Object(f)).unwrap_or(*g)
 }
 
+/// `g` held to a constant rate: for an ILO ([`IloConfig`]) whose velocity estimate settles
+/// below `1 - shortfall` of a constant rate ([`IloConfig::constant_rate_gain`]), `K1` raised
+/// (its leak `1 - K1` lowered) to the smallest `f32` at which it settles within `shortfall`,
+/// `L (1 - K1) <= K2 shortfall / (1 - shortfall)`; other gains, and an ILO that already
+/// holds, unchanged. `shortfall` is a fraction (0.001: 0.1 %).
+pub fn holding_constant_rate<F: Family>(g: &F::Gains, shortfall: f64) -> F::Gains {
+    let Some(c) = (g as &dyn Any).downcast_ref::<IloConfig>() else {
+        return *g;
+    };
+    let holds = |c: &IloConfig| c.constant_rate_gain() >= 1.0 - shortfall;
+    if holds(c) {
+        return *g;
+    }
+    let leak = f64::from(c.k2) * shortfall / (1.0 - shortfall) / f64::from(c.l);
+    let mut held = IloConfig {
+        k1: (1.0 - leak) as f32,
+        ..*c
+    };
+    // The rounding to f32 may leave it a step short.
+    while !holds(&held) && held.k1 < 1.0 {
+        held.k1 = held.k1.next_up().min(1.0);
+    }
+    (&held as &dyn Any)
+        .downcast_ref::<F::Gains>()
+        .copied()
+        .unwrap_or(*g)
+}
+
 /// The search range `(lowest, highest)` of each coordinate of [`search_point`] at the step
 /// `h_s` (s).
 pub fn search_box<F: Family>(h_s: f64) -> (Vec<f64>, Vec<f64>) {
@@ -364,5 +392,28 @@ mod tests {
             Other { t: 0.5 }
         );
         assert_eq!(describe(&g), "t=0.01");
+    }
+
+    /// The paper's ILO2 (Table 2: `K1` 0.9, `L` 5, `K2` 10) settles at 10 / 10.5 of a constant
+    /// rate; held to 0.1 %, its `K1` rises to the smallest `f32` at which
+    /// `K2 / (K2 + L (1 - K1)) >= 0.999` (`1 - K1 <= 10 x 0.001 / 0.999 / 5 = 0.002002`), with
+    /// `L` and `K2` kept. ILO1 (`K1` 1) and a family without `K1` are unchanged.
+    #[test]
+    fn holding_a_constant_rate_raises_k1_just_enough() {
+        let ilo2 = BankConfig::PAPER.velocity.ilo[1];
+        assert!((ilo2.constant_rate_gain() - 10.0 / 10.5).abs() < 1e-6);
+        let held = holding_constant_rate::<IloFamily<1>>(&ilo2, 1e-3);
+        assert_eq!((held.l, held.k2), (ilo2.l, ilo2.k2));
+        assert!(held.constant_rate_gain() >= 0.999);
+        let below = IloConfig {
+            k1: held.k1.next_down(),
+            ..held
+        };
+        assert!(below.constant_rate_gain() < 0.999);
+        assert!((f64::from(held.k1) - (1.0 - 0.002 / 0.999)).abs() < 1e-7);
+        let ilo1 = BankConfig::PAPER.velocity.ilo[0];
+        assert_eq!(holding_constant_rate::<IloFamily<0>>(&ilo1, 1e-3), ilo1);
+        let ed = BankConfig::PAPER.velocity.ed;
+        assert_eq!(holding_constant_rate::<estimators::EdFamily>(&ed, 1e-3), ed);
     }
 }

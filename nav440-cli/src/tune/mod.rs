@@ -216,6 +216,12 @@ trait Eval: Sync {
     fn kf(&self, i: usize, q: f32, r: f32, acc: bool) -> f64;
     /// A family's fit is done.
     fn fitted(&self) {}
+    /// The largest shortfall on a constant rate the velocity ILOs may have (a fraction; the
+    /// search then runs every candidate held to it, [`search::holding_constant_rate`]), or
+    /// `None`.
+    fn constant_rate(&self) -> Option<f64> {
+        None
+    }
 }
 
 impl Eval for Problem<'_> {
@@ -281,6 +287,8 @@ struct Problems<'a> {
     problems: &'a [Problem<'a>],
     baselines: Option<&'a [[[f64; FAMILY_COUNT]; 2]]>,
     hinge: bool,
+    /// [`Eval::constant_rate`].
+    constant_rate: Option<f64>,
 }
 
 impl Problems<'_> {
@@ -325,6 +333,9 @@ impl Eval for Problems<'_> {
     }
     fn kf(&self, i: usize, q: f32, r: f32, acc: bool) -> f64 {
         self.combine(i, acc, |p| p.kf(i, q, r, acc))
+    }
+    fn constant_rate(&self) -> Option<f64> {
+        self.constant_rate
     }
 }
 
@@ -476,18 +487,23 @@ fn tune_family(
                 column,
                 acc: self.acc,
             };
-            let f = |x: &[f64]| {
+            // The gains at a point of the search, held to a constant rate if asked
+            // (velocity half).
+            let at = |x: &[f64]| {
                 let g = search::with_search_point::<F>(&g0, x);
-                g.build(h, objective).unwrap_or(f64::INFINITY)
+                match (self.acc, self.p.constant_rate()) {
+                    (false, Some(s)) => search::holding_constant_rate::<F>(&g, s),
+                    _ => g,
+                }
             };
+            let f = |x: &[f64]| at(x).build(h, objective).unwrap_or(f64::INFINITY);
             let x0 = search::search_point::<F>(&g0);
             let r = fit::<F>(self.method, f64::from(h), &x0, &f);
             self.stats[column] = (r.cost, r.evals, r.secs);
             self.p.fitted();
             // Nothing finite to minimise: the family keeps the gains it started from.
             if r.cost.is_finite() {
-                self.out
-                    .set::<F>(Some(search::with_search_point::<F>(&g0, &r.x)));
+                self.out.set::<F>(Some(at(&r.x)));
             }
         }
     }
@@ -679,6 +695,7 @@ pub fn tune_on(
                     problems: many,
                     baselines: None,
                     hinge: false,
+                    constant_rate: None,
                 },
                 &paper,
                 spec,

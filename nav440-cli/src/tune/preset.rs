@@ -65,6 +65,10 @@ pub fn synth_family(
 /// larger; otherwise the first is kept (the hinge objective does not reward a case beyond
 /// 1 %, so it may lose quality everywhere to win one case).
 ///
+/// With `constant_rate` (a fraction: [`CONSTANT_RATE_SHORTFALL`] for 0.1 %), both searches
+/// run every velocity ILO held to it ([`crate::search::holding_constant_rate`]), so the tuned
+/// ILOs read a constant rate within it; the acceleration half is searched as without.
+///
 /// Returns the gains, per family (velocity, acceleration) the kept search's objective, and a
 /// report of the second search's selection (cases lost and geometric mean ratio of both
 /// results, per family searched twice; empty without `beat`).
@@ -73,6 +77,7 @@ pub fn tune_preset(
     base: &BankConfig,
     beat: Option<&BankConfig>,
     method: Method,
+    constant_rate: Option<f64>,
 ) -> Result<(GainsFile, [[f64; FAMILY_COUNT]; 2], String)> {
     let opts = EstimateOptions {
         hold: base.hold,
@@ -125,6 +130,7 @@ pub fn tune_preset(
         problems: &problems,
         baselines: beat.map(|_| baselines.as_slice()),
         hinge: false,
+        constant_rate,
     };
     let (mut gains, mut cost) = tune_both(&first, &start, |_, _| true, method)?;
     if beat.is_none() {
@@ -136,6 +142,7 @@ pub fn tune_preset(
         problems: &problems,
         baselines: Some(&baselines),
         hinge: true,
+        constant_rate,
     };
     let (hinged, hinge_cost) = tune_both(
         &second,

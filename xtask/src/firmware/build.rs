@@ -86,9 +86,19 @@ pub(super) fn build_bins(
         .collect()
 }
 
-/// `cargo clippy -D warnings` on the firmware's binaries for `target`, with `feature`.
+/// `cargo clippy -D warnings` on the firmware's binaries for `target`, with `feature`, in the
+/// `release` profile of the images: the host-built build scripts and procedural macros are
+/// then those of the image builds, compiled once for both.
 pub(super) fn clippy_firmware(target: &str, feature: Option<&str>) -> Result<(), String> {
-    let mut args = vec!["clippy", "-p", FW, "--target", target, "--bins"];
+    let mut args = vec![
+        "clippy",
+        "-p",
+        FW,
+        "--target",
+        target,
+        "--bins",
+        "--release",
+    ];
     if let Some(f) = feature {
         args.extend(["--features", f]);
     }

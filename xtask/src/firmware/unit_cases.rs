@@ -676,12 +676,14 @@ pub fn embassy_jobs(pool: &Pool) -> Result<(), String> {
         .iter()
         .find(|b| b.name == "an386")
         .ok_or("board an386 missing")?;
+    // In the image's profile, as `clippy_firmware`.
     cargo(&[
         "clippy",
         "-p",
         FW,
         "--target",
         board.target,
+        "--release",
         "--features",
         "embassy",
         "--bin",
