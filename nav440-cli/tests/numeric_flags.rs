@@ -471,18 +471,14 @@ fn every_numeric_flag_refuses_bad_values_before_any_side_effect() {
         handles.into_iter().map(|h| h.join().unwrap()).collect()
     });
     let _ = std::fs::remove_dir_all(&d);
-    let failures: Vec<&String> = walked.iter().flat_map(|w| &w.failures).collect();
+    let failures: Vec<&str> = walked
+        .iter()
+        .flat_map(|w| &w.failures)
+        .map(String::as_str)
+        .collect();
     let cases: usize = walked.iter().map(|w| w.cases).sum();
     let refused: usize = walked.iter().map(|w| w.refused).sum();
-    assert!(
-        failures.is_empty(),
-        "{}",
-        failures
-            .iter()
-            .map(|f| f.as_str())
-            .collect::<Vec<_>>()
-            .join("\n")
-    );
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
     assert_eq!(cases, NUMERIC.len() * VALUES.len());
     assert_eq!(
         refused,

@@ -23,44 +23,34 @@ pub const LIBRARIES: &[(&str, &str)] = &[
     ("pipeline", "nav440-pipeline"),
 ];
 
+/// `cargo run --example example -p package -- args`, in the profile of the host tests, whose
+/// build it shares.
+fn run_example(package: &str, example: &str, args: &[&str]) -> Result<(), String> {
+    let mut all = vec![
+        "run",
+        "-q",
+        "--profile",
+        NAV440_PROFILE,
+        "-p",
+        package,
+        "--example",
+        example,
+        "--",
+    ];
+    all.extend(args);
+    cargo(&all)
+}
+
 /// Runs every example of the libraries (each checks its own result and exits non-zero on a
-/// failure; in the profile of the host tests, whose build they share), then `cargo publish --dry-run` of the three libraries together (`--allow-dirty`:
+/// failure), then `cargo publish --dry-run` of the three libraries together (`--allow-dirty`:
 /// CI's checkout may hold build products; the dry run packages, verifies that each package
 /// builds on its own with its registry dependencies, and uploads nothing).
 pub fn package() -> Result<(), String> {
     to_root()?;
-    cargo(&[
-        "run",
-        "-q",
-        "--profile",
-        NAV440_PROFILE,
-        "-p",
-        "velocity-estimators",
-        "--example",
-        "sampled_signal",
-    ])?;
-    cargo(&[
-        "run",
-        "-q",
-        "--profile",
-        NAV440_PROFILE,
-        "-p",
-        "nav440-proto",
-        "--example",
-        "configure_unit",
-    ])?;
-    cargo(&[
-        "run",
-        "-q",
-        "--profile",
-        NAV440_PROFILE,
-        "-p",
-        "nav440-proto",
-        "--example",
-        "parse_capture",
-        "--",
-        "host-tests/data/fig5_a2_100hz.bin",
-    ])?;
+    const CAPTURE: &str = "host-tests/data/fig5_a2_100hz.bin";
+    run_example("velocity-estimators", "sampled_signal", &[])?;
+    run_example("nav440-proto", "configure_unit", &[])?;
+    run_example("nav440-proto", "parse_capture", &[CAPTURE])?;
     // The driver over embedded-io 0.6 ports (feature `embedded-io-06`), on the host and,
     // linted, on the Cortex-M4F target.
     cargo(&[
@@ -86,18 +76,7 @@ pub fn package() -> Result<(), String> {
         "-D",
         "warnings",
     ])?;
-    cargo(&[
-        "run",
-        "-q",
-        "--profile",
-        NAV440_PROFILE,
-        "-p",
-        "nav440-pipeline",
-        "--example",
-        "estimate_capture",
-        "--",
-        "host-tests/data/fig5_a2_100hz.bin",
-    ])?;
+    run_example("nav440-pipeline", "estimate_capture", &[CAPTURE])?;
     // All three in one dry run: `nav440-pipeline` depends on the other two by version, which
     // cargo resolves against the packages it has just made (not against crates.io).
     forget_unpacked_packages()?;
