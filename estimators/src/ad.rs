@@ -2,7 +2,7 @@
 
 use crate::bank::{BankGains, Channel};
 use crate::error::positive;
-use crate::family::{geometric, Family, Gains, LawVisitor, Scheduling};
+use crate::family::{geometric, Family, Follows, Gains, LawVisitor, Scheduling};
 use crate::law::{Law, Stateful};
 use crate::linear::{LinearLaw, LIN_MAX};
 use crate::{ConfigError, Real};
@@ -145,6 +145,7 @@ impl Family for AdFamily {
     const VELOCITY: Channel = Channel::AdV;
     const ACCELERATION: Channel = Channel::AdA;
     const SCHEDULING: Scheduling = Scheduling::Smooth;
+    const FOLLOWS: Follows = Follows::Acceleration;
 
     fn get(half: &BankGains) -> AdConfig {
         AdConfig { t: half.ad_t }

@@ -88,6 +88,9 @@ pub trait Family {
     const ACCELERATION: Channel;
     /// How a gain schedule blends this family's gains between two levels.
     const SCHEDULING: Scheduling;
+    /// Which measure of the motion a schedule that follows the motion scales this family's
+    /// noise level by (default: the jerk power).
+    const FOLLOWS: Follows = Follows::Jerk;
 
     /// The family's gains in the bank half `half`.
     fn get(half: &BankGains) -> Self::Gains;
@@ -122,6 +125,24 @@ pub enum Scheduling {
     Smooth,
 }
 
+/// Which measure of the motion a gain schedule that records its tuning motion's
+/// ([`crate::GainSchedule::with_tuned_jerk`], [`crate::GainSchedule::with_tuned_acceleration`])
+/// scales a family's noise level by
+/// ([`crate::AdaptiveBank`], [`crate::AdaptiveConfig::jerk_margin`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Follows {
+    /// The jerk power, beyond a margin (the observers: [`crate::AdaptiveConfig::jerk_margin`];
+    /// the tracker, whose best process noise grows with the jerk:
+    /// [`crate::AdaptiveConfig::smooth_jerk_margin`]).
+    Jerk,
+    /// The acceleration power, without a margin: the AD, whose lag costs about `T^2 A` and
+    /// whose noise `V / T^2` (time constant `T`, acceleration power `A`, noise variance `V`),
+    /// so that its best `T` goes as `(V / A)^(1/4)` and a motion of acceleration power `A`
+    /// wants the gains tuned for `V x A_tuned / A`. With a schedule that records no
+    /// acceleration power, as [`Self::Jerk`].
+    Acceleration,
+}
+
 /// The plain facts of a [`Family`] (its consts), for const contexts: see [`FAMILIES`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct FamilyInfo {
@@ -135,6 +156,8 @@ pub struct FamilyInfo {
     pub acceleration: Channel,
     /// [`Family::SCHEDULING`].
     pub scheduling: Scheduling,
+    /// [`Family::FOLLOWS`].
+    pub follows: Follows,
 }
 
 impl FamilyInfo {
@@ -146,6 +169,7 @@ impl FamilyInfo {
             velocity: F::VELOCITY,
             acceleration: F::ACCELERATION,
             scheduling: F::SCHEDULING,
+            follows: F::FOLLOWS,
         }
     }
 }

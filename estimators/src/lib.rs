@@ -106,7 +106,7 @@ pub use ad::{Ad, AdConfig, AdFamily, AdParams, AdState};
 pub use adapter::{SampleAdapter, SampleClock, Tick};
 pub use adaptive::{
     AdaptiveBank, AdaptiveConfig, AdaptiveKalman, AdaptiveKalmanConfig, AdaptiveProductBank,
-    AdaptiveProductConfig, AveDeltahat, Blend, GainSchedule, JerkEstimator, NoiseEstimator,
+    AdaptiveProductConfig, AveDeltahat, Blend, GainSchedule, JerkEstimator, Levels, NoiseEstimator,
     ObserverSwitch, ScheduleLevel, SelfTuneConfig, SelfTuningProductBank, Settled,
 };
 pub use ave::{
@@ -124,8 +124,8 @@ pub use ed::{Ed, EdConfig, EdFamily, EdParams, EdScheme, EdState, ED_MAX_H_ALPHA
 pub use error::{ConfigError, SampleError};
 pub use estimator::{advance_by_steps, Estimator, Hold};
 pub use family::{
-    for_each_family, Family, FamilyInfo, FamilyVisitor, Gains, LawVisitor, Scheduling, FAMILIES,
-    FAMILY_COUNT,
+    for_each_family, Family, FamilyInfo, FamilyVisitor, Follows, Gains, LawVisitor, Scheduling,
+    FAMILIES, FAMILY_COUNT,
 };
 pub use ilo::{Ilo, IloConfig, IloFamily, IloParams, IloState};
 pub use kalman::{

@@ -122,10 +122,11 @@ mod schedule {
     include!("gains/schedule_fig5.rs");
 }
 /// The schedule's levels (noise variance, deg^2 -> velocity and acceleration gains), the
-/// nominal sample period they were tuned at (s) and the jerk power of the motion they were
-/// tuned on ((deg/s^3)^2: the bank follows the motion too, docs/MOTION-FAMILY.md).
+/// nominal sample period they were tuned at (s) and the jerk and acceleration powers of the
+/// motion they were tuned on ((deg/s^3)^2 and (deg/s^2)^2: the bank follows the motion too,
+/// docs/MOTION-FAMILY.md).
 #[cfg(feature = "adaptive-gains")]
-pub use schedule::{SCHEDULE, SCHEDULE_PERIOD_S, SCHEDULE_TUNED_JERK};
+pub use schedule::{SCHEDULE, SCHEDULE_PERIOD_S, SCHEDULE_TUNED_ACCELERATION, SCHEDULE_TUNED_JERK};
 
 /// Builds an axis's noise-adaptive bank (out of line: the constructor is large). A schedule
 /// tuned at another packet rate than the measured one still runs, with a warning line
@@ -133,8 +134,11 @@ pub use schedule::{SCHEDULE, SCHEDULE_PERIOD_S, SCHEDULE_TUNED_JERK};
 #[cfg(feature = "adaptive-gains")]
 #[inline(never)]
 fn build_bank(axis: Axis, cfg: &BankConfig) -> Result<Bank, ConfigError> {
-    let schedule = estimators::GainSchedule::new(&SCHEDULE)?
-        .with_records(SCHEDULE_PERIOD_S, SCHEDULE_TUNED_JERK)?;
+    let schedule = estimators::GainSchedule::new(&SCHEDULE)?.with_records(
+        SCHEDULE_PERIOD_S,
+        SCHEDULE_TUNED_JERK,
+        SCHEDULE_TUNED_ACCELERATION,
+    )?;
     let bank = nav440_pipeline::adaptive_axis_bank(axis, cfg, &schedule)?;
     if !bank.period_fits() {
         defmt::println!(

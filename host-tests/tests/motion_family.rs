@@ -852,27 +852,27 @@ fn against_the_tuned_ilo1(mut mse: impl FnMut(&[replay::Sample], &[f64], f64) ->
     println!("within {WITHIN_TUNED}x of the tuned ILO1: {within} of 15 cells");
 }
 
-/// The bundled noise schedule (tuned on fig5), which records the jerk power of the capture it
-/// was tuned on (`tuned_jerk_power`, `GainSchedule::with_tuned_jerk`) and so follows the motion
-/// as well as the noise, against the same schedule following the noise alone and against its own levels at
-/// 0.01 and 0.5 deg^2 run as fixed sets (the fixed sets tuned on fig5 for the two levels), on
-/// each motion with the noise switch of [`a_noise_switch_on_each_motion`]: velocity MSE per
-/// family and half, ratios to the better fixed set in that half (docs/MOTION-FAMILY.md, "A
-/// schedule that follows the motion"). Asserted: following the motion never costs more than
-/// 10 % against the noise alone in any cell; on every motion but fig5 (the motion it was
-/// tuned on), every family within 1.1x of the better fixed set in each half but the cells of
-/// [`SHORT_OF_TRAVEL`] (within 1.2x), and over the whole run not above the better fixed set
-/// by more than 2 % (where the schedule takes one level's gains in both halves it can only tie
-/// with that level run fixed); on the two fast motions (jerk power 500 and 1,500 times fig5's)
-/// below both fixed sets over the whole run.
-/// The cells (motion, half: 0 for 1-15 s, 1 for 16-30 s, family) where the bundled schedule
-/// following the motion is between 1.1x and 1.2x the better fixed set: the spin's Kalman in
-/// its quiet half (the raised level's `q`, interpolated towards the 0.1 deg^2 level, is
-/// lighter than the 0.5 level's, which the smooth spin prefers) and the violent strokes' AD in
-/// their noisy half (the lowered level's time constant is lighter than the 0.01 deg^2 level's).
-const SHORT_OF_TRAVEL: [(ProfileKind, usize, &str); 2] = [
-    (ProfileKind::Spin, 0, "KF"),
-    (ProfileKind::Violent, 1, "AD"),
+/// The bundled noise schedule (tuned on fig5), which records the jerk and acceleration powers
+/// of the capture it was tuned on (`tuned_jerk_power`, `tuned_acceleration_power`,
+/// `GainSchedule::with_tuned_jerk`, `with_tuned_acceleration`) and so follows the motion as
+/// well as the noise, against the same schedule following the noise alone and against its own
+/// levels at 0.01 and 0.5 deg^2 run as fixed sets (the fixed sets tuned on fig5 for the two
+/// levels), on each motion with the noise switch of [`a_noise_switch_on_each_motion`]:
+/// velocity MSE per family and half, ratios to the better fixed set in that half
+/// (docs/MOTION-FAMILY.md, "A schedule that follows the motion"). Asserted: following the
+/// motion never costs more than 10 % against the noise alone in any cell; on every motion but
+/// fig5 (the motion it was tuned on), every family within 1.1x of the better fixed set in
+/// each half, and over the whole run below both fixed sets but in the cells of [`TIES`].
+/// The cells (motion, family) where the bundled schedule following the motion can only tie
+/// with the better fixed set over the whole run, within 2 %: on the spin, which moves far more
+/// gently than fig5, the index raises the observers to the top level (1 deg^2) in both halves,
+/// whose ILO1-3 gains are the 0.5 deg^2 level's (the same set: the scheduled run is that fixed
+/// set), and whose ED's differ from the 0.5 level's by under 10 % in `lambda` (1 % more MSE).
+const TIES: [(ProfileKind, &str); 4] = [
+    (ProfileKind::Spin, "ILO1"),
+    (ProfileKind::Spin, "ILO2"),
+    (ProfileKind::Spin, "ILO3"),
+    (ProfileKind::Spin, "ED"),
 ];
 
 #[test]
@@ -899,7 +899,6 @@ fn a_schedule_that_follows_the_motion() {
         let ranges = [HALVES[0], HALVES[1], (HALVES[0].0, HALVES[1].1)];
         let [n, m, q, l] = [&noise_only, &with_jerk, &fixed_quiet, &fixed_loud]
             .map(|opts| mse_over(&noisy, opts, &ranges));
-        let fast = matches!(profile, ProfileKind::FastSine | ProfileKind::Violent);
         let mut cells = Vec::new();
         for (h, r) in ranges.iter().enumerate() {
             let mut line = String::new();
@@ -918,26 +917,21 @@ fn a_schedule_that_follows_the_motion() {
                 );
                 let travels = profile != ProfileKind::Fig5;
                 if travels && h < 2 {
-                    let short = SHORT_OF_TRAVEL.contains(&(profile, h, COLUMNS[i]));
-                    let bound = if short { 1.2 } else { 1.1 };
                     assert!(
-                        m[h][i] <= bound * best,
+                        m[h][i] <= 1.1 * best,
                         "{label} {r:?} {}: following {} fixed {best}",
                         COLUMNS[i],
                         m[h][i]
                     );
                 }
                 if travels && h == 2 {
+                    let tie = TIES.contains(&(profile, COLUMNS[i]));
                     assert!(
-                        m[h][i] <= 1.02 * best,
-                        "{label} whole {}: following {} fixed {best}",
-                        COLUMNS[i],
-                        m[h][i]
-                    );
-                }
-                if fast && h == 2 {
-                    assert!(
-                        m[h][i] < best,
+                        if tie {
+                            m[h][i] <= 1.02 * best
+                        } else {
+                            m[h][i] < best
+                        },
                         "{label} whole {}: following {} fixed {best}",
                         COLUMNS[i],
                         m[h][i]
@@ -977,7 +971,8 @@ fn switched_noise(samples: &[replay::Sample]) -> Vec<replay::Sample> {
 /// 1.5 s ramp) and the violent strokes (600 deg/s within 0.15 s of the start), at 0.01 and
 /// 0.5 deg^2. Velocity MSE per family over the last 10 s of rest and the first 4 s of motion
 /// (the jerk estimate, time constant 5 s, takes about 0.6 s of a fig5-like motion to leave the
-/// raised level). Asserted: at rest never above the noise alone (2 % for rounding), and over
+/// observers' raised level and longer for the Kalman's narrower margin; the AD's acceleration
+/// estimate, 0.5 s, a fraction of a second). Asserted: at rest never above the noise alone (2 % for rounding), and over
 /// the first 4 s of motion within 1.25x of it (docs/MOTION-FAMILY.md, "A schedule that follows
 /// the motion").
 #[test]

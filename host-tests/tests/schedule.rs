@@ -837,14 +837,17 @@ fn rust_snippet_and_toml_hold_the_same_schedule() {
     assert_eq!(file.hold().unwrap(), Hold::Linear);
     assert_eq!(snippet::SCHEDULE_PERIOD_S, Some(0.01));
     assert_eq!(file.sample_period_s, Some(0.01));
-    // The bundled capture's jerk power as `nav440 tune` measures it (`motion_jerk_power`),
-    // close to fig5's 3.68e6 over 1-30 s that `AdaptiveProductConfig::START_JERK` records.
+    // The bundled capture's jerk and acceleration powers as `nav440 tune` measures them
+    // (`motion_powers`); the jerk power is close to fig5's 3.68e6 over 1-30 s that
+    // `AdaptiveProductConfig::START_JERK` records.
     assert_eq!(snippet::SCHEDULE_TUNED_JERK, Some(3_850_048.0));
     assert_eq!(file.tuned_jerk_power, Some(3_850_048.0));
+    assert_eq!(snippet::SCHEDULE_TUNED_ACCELERATION, Some(142_703.13));
+    assert_eq!(file.tuned_acceleration_power, Some(142_703.13));
     let captured = replay::read_samples(&data("fig5_a2_100hz.bin")).unwrap();
     assert_eq!(
-        nav440_cli::tune::motion_jerk_power(&[&captured], &EstimateOptions::default()).unwrap(),
-        file.tuned_jerk_power
+        nav440_cli::tune::motion_powers(&[&captured], &EstimateOptions::default()).unwrap(),
+        file.tuned_jerk_power.zip(file.tuned_acceleration_power)
     );
     assert_eq!(
         estimators::GainSchedule::new(&snippet::SCHEDULE)
@@ -852,6 +855,8 @@ fn rust_snippet_and_toml_hold_the_same_schedule() {
             .with_sample_period(0.01)
             .unwrap()
             .with_tuned_jerk(3_850_048.0)
+            .unwrap()
+            .with_tuned_acceleration(142_703.13)
             .unwrap(),
         file.schedule(&BankConfig::NAV440).unwrap()
     );

@@ -1,4 +1,5 @@
-//! [`JerkEstimator`]: the online estimate of a motion's jerk power, from its rate.
+//! [`JerkEstimator`]: the online estimate of a motion's jerk power (and acceleration power),
+//! from its rate.
 
 use crate::ConfigError;
 
@@ -15,19 +16,29 @@ use crate::ConfigError;
 /// adds under 6 deg/s^3 of noise at 100 Hz, and a gyro's noise of 0.1 deg/s about
 /// 100 deg/s^3, against a hand's motion of 10^3 to 10^5. The estimate is the exponentially
 /// weighted mean of `j^2` with time constant `tau_s` (the first `tau / dt` terms averaged with
-/// weight `1/k`, so that it starts at once). A sample interval that differs from the previous
+/// weight `1/k`, so that it starts at once). Over the same samples it estimates the
+/// acceleration power, (deg/s^2)^2: the exponentially weighted mean of `a^2` for the central
+/// difference `a = (r[k] - r[k-2L]) / (2 L dt)`, with time constant
+/// `tau_s x` [`Self::ACCELERATION_TAU`] ([`Self::acceleration_power`]; the AD's best time
+/// constant follows it). A sample interval that differs from the previous
 /// one by more than a quarter (a lost packet, a gap, a new epoch) restarts the differences
 /// (the estimate is kept), as [`NoiseEstimator`](crate::NoiseEstimator) does.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct JerkEstimator {
     /// Weight of a new term once started, `dt / tau`.
     alpha: f32,
+    /// The same for the acceleration power, `dt / (tau x ACCELERATION_TAU)`.
+    accel_alpha: f32,
     /// The lag, samples (1 to [`Self::MAX_LAG`]).
     lag: usize,
     /// `1 / (lag dt)^2` at the nominal period, 1/s^2.
     scale: f32,
+    /// `1 / (2 lag dt)` at the nominal period, 1/s.
+    accel_scale: f32,
     /// Estimate, (deg/s^3)^2.
     power: f32,
+    /// Acceleration power estimate, (deg/s^2)^2.
+    accel_power: f32,
     /// Terms averaged so far (saturates).
     count: u32,
     /// The last rates, deg/s, newest at `head`; `filled` of them valid (in a row, at a steady
@@ -41,6 +52,12 @@ pub struct JerkEstimator {
 }
 
 impl JerkEstimator {
+    /// The acceleration power's time constant, as a fraction of the jerk power's (0.5 s for
+    /// the default 5 s): the AD's best time constant follows the acceleration of the moment,
+    /// which a unit that starts to move after a rest must reach within a fraction of a
+    /// second (docs/MOTION-FAMILY.md, "A schedule that follows the motion").
+    pub const ACCELERATION_TAU: f32 = 0.1;
+
     /// The lag the second difference aims at, s.
     pub const LAG_S: f32 = 0.05;
 
@@ -65,9 +82,12 @@ impl JerkEstimator {
         let span = lag as f32 * sample_period_s;
         Ok(JerkEstimator {
             alpha: (sample_period_s / tau_s).min(1.0),
+            accel_alpha: (sample_period_s / (tau_s * Self::ACCELERATION_TAU)).min(1.0),
             lag,
             scale: 1.0 / (span * span),
+            accel_scale: 0.5 / span,
             power: 0.0,
+            accel_power: 0.0,
             count: 0,
             rates: [0.0; 2 * Self::MAX_LAG + 1],
             head: 0,
@@ -75,6 +95,11 @@ impl JerkEstimator {
             t_prev: None,
             dt_prev: 0,
         })
+    }
+
+    /// The acceleration power estimate, (deg/s^2)^2 (`None` before the first difference).
+    pub fn acceleration_power(&self) -> Option<f32> {
+        (self.count > 0).then_some(self.accel_power)
     }
 
     /// The lag of the second difference, samples.
@@ -108,6 +133,9 @@ impl JerkEstimator {
         if self.filled > 2 * self.lag {
             let at = |back: usize| self.rates[(self.head + n - back) % n];
             let j = (at(0) - 2.0 * at(self.lag) + at(2 * self.lag)) * self.scale;
+            let a = (at(0) - at(2 * self.lag)) * self.accel_scale;
+            let mut count = self.count;
+            super::mean_step(&mut self.accel_power, &mut count, self.accel_alpha, a * a);
             super::mean_step(&mut self.power, &mut self.count, self.alpha, j * j);
         }
     }
@@ -143,16 +171,25 @@ mod tests {
         let expected = (4.0 * s * s / (l * l)).powi(2) * a * a / 2.0;
         let got = f64::from(e.power().unwrap());
         assert!((got / expected - 1.0).abs() < 0.01, "{got} vs {expected}");
+        // The central difference over 2L of `A sin(w t)` is `A sin(w L dt) / (L dt)
+        // cos(w (t - L dt))`: mean square `(A sin(w L dt) / (L dt))^2 / 2`.
+        let expected = (a * (w * l).sin() / l).powi(2) / 2.0;
+        let got = f64::from(e.acceleration_power().unwrap());
+        assert!((got / expected - 1.0).abs() < 0.01, "{got} vs {expected}");
     }
 
+    /// A ramp of 2 deg/s per 10 ms sample is an acceleration of 200 deg/s^2 and no jerk.
     #[test]
     fn a_constant_rate_and_a_ramp_read_zero() {
         let mut e = JerkEstimator::new(1.0, 0.01).unwrap();
         assert_eq!(e.power(), None);
+        assert_eq!(e.acceleration_power(), None);
         for k in 0..100u64 {
             e.update(k * 10_000, 100.0 + 2.0 * k as f32);
         }
         assert!(e.power().unwrap() < 1e-3, "{:?}", e.power());
+        let a = e.acceleration_power().unwrap();
+        assert!((a / 40_000.0 - 1.0).abs() < 1e-3, "{a}");
     }
 
     #[test]

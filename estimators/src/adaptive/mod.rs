@@ -27,6 +27,7 @@ pub use schedule::*;
 pub use selftune::*;
 
 use crate::bank::{BankConfig, PaperBank, PaperOutput};
+use crate::family::{Follows, Scheduling};
 use crate::{ConfigError, NativeSqrt, Real, SampleError, SqrtFn};
 
 /// Whether a sample interval `dt` (µs) continues a steady stream whose previous interval was
@@ -76,8 +77,10 @@ pub struct AdaptiveConfig {
     /// With a schedule that records the jerk power of the motion it was tuned on
     /// ([`GainSchedule::tuned_jerk`]), the bank estimates the motion's jerk power `J` from the
     /// rate it is given ([`crate::EstimatorBank::observe_rate`], [`JerkEstimator`] with its
-    /// default time constant) and picks the gains for the noise estimate `V` scaled by the
-    /// jerk index beyond this margin `m` (default 8, at least 1): `V x m x tuned / J` for a
+    /// default time constant) and picks the observers' gains (the AVE, the ILOs, the ED) for
+    /// the noise estimate `V` scaled by the jerk index beyond this margin `m` (default 8, at
+    /// least 1; the smooth families: [`Self::smooth_jerk_margin`] and
+    /// [`crate::Follows`]): `V x m x tuned / J` for a
     /// motion that moves more than `m` times as hard as the tuning motion (the gains of a
     /// lower noise: lighter filtering, less lag), `V x tuned / (m x J)` for one that moves
     /// less than `1 / m` times as hard (the gains of a higher noise: heavier filtering, which
@@ -85,6 +88,14 @@ pub struct AdaptiveConfig {
     /// the paper-like motions, whose jerk power moves by a few times from stroke to pause, on
     /// the noise's gains (docs/MOTION-FAMILY.md, "A schedule that follows the motion").
     pub jerk_margin: f32,
+    /// The margin of [`Self::jerk_margin`] for the smooth families that follow the jerk
+    /// ([`crate::Follows::Jerk`], [`crate::Scheduling::Smooth`]: the tracker; default 4, at
+    /// least 1). The tracker's best process noise grows with the jerk power (`q = kappa J`,
+    /// [`crate::AdaptiveKalman`]), so it follows a motion from closer than the observers,
+    /// whose tuned gains hold over a wider band; a margin of 1 would move it with every
+    /// stroke and pause of a hand's motion (docs/MOTION-FAMILY.md, "A schedule that follows
+    /// the motion").
+    pub smooth_jerk_margin: f32,
 }
 
 /// Most samples an [`AdaptiveBank`] keeps for a warm-start gain change.
@@ -99,6 +110,7 @@ impl AdaptiveConfig {
         retune_ratio: 1.5,
         replay_samples: REPLAY_CAPACITY as u32,
         jerk_margin: 8.0,
+        smooth_jerk_margin: 4.0,
     };
 }
 
@@ -140,7 +152,7 @@ pub struct AdaptiveBank<T: Real, S: SqrtFn<T> = NativeSqrt> {
     /// ([`GainSchedule::tuned_jerk`]).
     jerk: Option<JerkEstimator>,
     cfg: AdaptiveConfig,
-    level: f32,
+    level: Levels,
     since: u32,
     retunes: u32,
     history: heapless::HistoryBuf<crate::Fed<T>, REPLAY_CAPACITY>,
@@ -161,6 +173,9 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
         if !(cfg.jerk_margin >= 1.0 && cfg.jerk_margin.is_finite()) {
             return Err(ConfigError::NotPositive("jerk_margin"));
         }
+        if !(cfg.smooth_jerk_margin >= 1.0 && cfg.smooth_jerk_margin.is_finite()) {
+            return Err(ConfigError::NotPositive("smooth_jerk_margin"));
+        }
         if cfg.retune_ratio < 1.0 || cfg.initial_noise_var <= 0.0 {
             return Err(ConfigError::NotPositive("retune_ratio"));
         }
@@ -171,8 +186,8 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
             )?),
             None => None,
         };
-        let level = schedule.clamp(cfg.initial_noise_var);
-        let bank = PaperBank::new(&schedule.config_at(base, level))?;
+        let level = Levels::all(schedule.clamp(cfg.initial_noise_var));
+        let bank = PaperBank::new(&schedule.config_for(base, level))?;
         // Every level must build (so that a retune never fails half-way).
         for l in schedule.levels() {
             <crate::PaperRows as crate::Rows<T, S>>::build(
@@ -206,38 +221,82 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
         self.since = self.since.saturating_add(1);
         if self.since >= self.cfg.retune_every {
             self.since = 0;
-            if let Some(v) = self.index() {
-                let v = self.schedule.clamp(v);
+            if let Some((v, noise)) = self.index() {
+                // Each family's level moves when its index leaves the band around it; the
+                // others keep theirs.
                 let r = self.cfg.retune_ratio;
-                if v > self.level * r || v * r < self.level {
+                let mut next = self.level;
+                let mut left = false;
+                for (l, v) in next.0.iter_mut().zip(self.clamp(v).0) {
+                    if v > *l * r || v * r < *l {
+                        *l = v;
+                        left = true;
+                    }
+                }
+                if left {
                     // The AVEs' switching gains follow the error they switch on, which the
                     // noise sets: those recorded for the noise estimate, whatever level the
                     // jerk index picks.
-                    let noise = self.noise.variance().unwrap_or(v);
-                    self.retune_with(v, noise);
+                    self.retune_with(next, noise);
                 }
             }
         }
         Ok(out)
     }
 
-    /// The noise variance the gains are picked for, deg^2: the noise estimate `V`, or with a
-    /// schedule that records its tuning motion's jerk power ([`GainSchedule::tuned_jerk`])
-    /// and a jerk estimate `J`, `V x m x tuned / J` when `J > m x tuned` and
-    /// `V x tuned / (m x J)` when `J < tuned / m` (`m`: [`AdaptiveConfig::jerk_margin`]).
-    fn index(&self) -> Option<f32> {
+    /// The noise variances each family's gains are picked for, deg^2, and the noise estimate
+    /// `V`: `V` for every family, or with a schedule that records its tuning motion's jerk
+    /// power ([`GainSchedule::tuned_jerk`]) and a jerk estimate `J`, `V` scaled by the motion
+    /// the family follows ([`crate::Follows`]): by the jerk index beyond a margin `m`,
+    /// `V x m x tuned / J` when `J > m x tuned` and `V x tuned / (m x J)` when
+    /// `J < tuned / m` ([`AdaptiveConfig::jerk_margin`] for the observers,
+    /// [`AdaptiveConfig::smooth_jerk_margin`] for the smooth families), or, for a family that
+    /// follows the acceleration and a schedule that records its tuning motion's
+    /// ([`GainSchedule::tuned_acceleration`]), `V x tuned / A` for an acceleration power `A`.
+    fn index(&self) -> Option<(Levels, f32)> {
         let v = self.noise.variance()?;
-        let m = self.cfg.jerk_margin;
-        match (self.schedule.tuned_jerk(), self.jerk_power()) {
-            (Some(tuned), Some(j)) if j > m * tuned && j.is_finite() => Some(v * (m * tuned / j)),
+        let Some(jerk) = self.jerk.as_ref() else {
+            return Some((Levels::all(v), v));
+        };
+        let by = |tuned: Option<f32>, now: Option<f32>, m: f32| match (tuned, now) {
+            (Some(tuned), Some(j)) if j > m * tuned && j.is_finite() => v * (m * tuned / j),
             // A motion that does not move at all (`J` = 0) takes the top level.
-            (Some(tuned), Some(j)) if j * m < tuned && j >= 0.0 => Some(if j > 0.0 {
-                v * (tuned / (m * j))
-            } else {
-                f32::MAX
-            }),
-            _ => Some(v),
+            (Some(tuned), Some(j)) if j * m < tuned && j >= 0.0 => {
+                if j > 0.0 {
+                    v * (tuned / (m * j))
+                } else {
+                    f32::MAX
+                }
+            }
+            _ => v,
+        };
+        let s = &self.schedule;
+        let by_jerk = |m: f32| by(s.tuned_jerk(), jerk.power(), m);
+        let (observers, smooth) = (
+            by_jerk(self.cfg.jerk_margin),
+            by_jerk(self.cfg.smooth_jerk_margin),
+        );
+        let acceleration = match s.tuned_acceleration() {
+            Some(a) => by(Some(a), jerk.acceleration_power(), 1.0),
+            None => smooth,
+        };
+        let mut levels = Levels::all(v);
+        for (l, f) in levels.0.iter_mut().zip(crate::FAMILIES) {
+            *l = match (f.follows, f.scheduling) {
+                (Follows::Acceleration, _) => acceleration,
+                (Follows::Jerk, Scheduling::Observer) => observers,
+                (Follows::Jerk, Scheduling::Smooth) => smooth,
+            };
         }
+        Some((levels, v))
+    }
+
+    /// `levels` clamped to the schedule's range.
+    fn clamp(&self, mut levels: Levels) -> Levels {
+        for l in &mut levels.0 {
+            *l = self.schedule.clamp(*l);
+        }
+        levels
     }
 
     /// The rate about the bank's axis at `t_us` (deg/s), from which it estimates the motion's
@@ -270,15 +329,15 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
     /// the AVE gains change and the schedule records switching gains, the AVEs' `deltahat` are
     /// set to those for `noise_var`; otherwise they are kept.
     pub fn retune(&mut self, noise_var: f32) {
-        self.retune_with(noise_var, noise_var);
+        self.retune_with(Levels::all(noise_var), noise_var);
     }
 
     /// [`Self::retune`] to the gains for `noise_var` with the AVEs' switching gains recorded
     /// for `deltahat_var` (deg^2; the noise estimate when the jerk index moved the level).
-    fn retune_with(&mut self, noise_var: f32, deltahat_var: f32) {
-        let v = self.schedule.clamp(noise_var);
-        let old = self.schedule.gains_at(self.level);
-        let new = self.schedule.config_at(&self.base, v);
+    fn retune_with(&mut self, levels: Levels, deltahat_var: f32) {
+        let v = self.clamp(levels);
+        let old = self.schedule.gains_for(self.level);
+        let new = self.schedule.config_for(&self.base, v);
         let keep = (self.cfg.replay_samples as usize).min(self.history.len());
         // Interpolated between levels that all build: a gain change cannot fail but for
         // rounding at a constraint's edge; then the current gains are kept.
@@ -320,8 +379,15 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
         self.noise.variance()
     }
 
-    /// The noise variance the current gains were interpolated for, deg^2.
+    /// The noise variance the current observers' gains were interpolated for, deg^2 (the
+    /// AVE's column of [`Self::gain_levels`]; every family's without a schedule that follows
+    /// the motion).
     pub fn gain_level(&self) -> f32 {
+        self.level.0[0]
+    }
+
+    /// The noise variance each family's current gains were interpolated for, deg^2.
+    pub fn gain_levels(&self) -> Levels {
         self.level
     }
 

@@ -149,6 +149,8 @@ pub struct GainSchedule {
     /// The jerk power of the motion the levels were tuned on, (deg/s^3)^2 (`None`: not
     /// recorded).
     jerk: Option<f32>,
+    /// Its acceleration power, (deg/s^2)^2 (`None`: not recorded).
+    acceleration: Option<f32>,
 }
 
 /// A [`GainSchedule`] fits a bank whose nominal sample period is within this factor of the
@@ -157,6 +159,20 @@ pub struct GainSchedule {
 /// 1.2 accepts the rate a schedule was tuned at (and the warm-up's measured period of it) and
 /// no other.
 pub const PERIOD_TOLERANCE: f32 = 1.2;
+
+/// The noise variances (deg^2) a [`GainSchedule`] picks each family's gains for, in column
+/// order ([`crate::FAMILIES`]): the noise estimate for every family of a bank that follows the
+/// noise alone, and each scaled by the measure of the motion the family follows
+/// ([`crate::Follows`]) for one that follows the motion too.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Levels(pub [f32; FAMILY_COUNT]);
+
+impl Levels {
+    /// `noise_var` (deg^2) for every family.
+    pub const fn all(noise_var: f32) -> Self {
+        Levels([noise_var; FAMILY_COUNT])
+    }
+}
 
 /// How a [`GainSchedule`] blends two levels' gains between them.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -216,6 +232,7 @@ impl GainSchedule {
             blend: Blend::default(),
             period_s: None,
             jerk: None,
+            acceleration: None,
         };
         s.levels[..levels.len()].copy_from_slice(levels);
         Ok(s)
@@ -253,19 +270,24 @@ impl GainSchedule {
     }
 
     /// This schedule with what a schedule file or its Rust twin records, each when it does:
-    /// the sample period tuned at ([`Self::with_sample_period`]) and the tuning motion's jerk
-    /// power ([`Self::with_tuned_jerk`]).
+    /// the sample period tuned at ([`Self::with_sample_period`]), the tuning motion's jerk
+    /// power ([`Self::with_tuned_jerk`]) and its acceleration power
+    /// ([`Self::with_tuned_acceleration`]).
     pub fn with_records(
         self,
         period_s: Option<f32>,
         tuned_jerk: Option<f32>,
+        tuned_acceleration: Option<f32>,
     ) -> Result<Self, ConfigError> {
-        let s = match period_s {
-            Some(p) => self.with_sample_period(p)?,
-            None => self,
-        };
-        match tuned_jerk {
-            Some(j) => s.with_tuned_jerk(j),
+        let mut s = self;
+        if let Some(p) = period_s {
+            s = s.with_sample_period(p)?;
+        }
+        if let Some(j) = tuned_jerk {
+            s = s.with_tuned_jerk(j)?;
+        }
+        match tuned_acceleration {
+            Some(a) => s.with_tuned_acceleration(a),
             None => Ok(s),
         }
     }
@@ -274,11 +296,14 @@ impl GainSchedule {
     /// and positive; fig5's is about 3.7e6: [`crate::AdaptiveProductConfig::START_JERK`] over
     /// 1-30 s of the synthetic motion, 3.85e6 over the whole bundled capture).
     /// An [`AdaptiveBank`](crate::AdaptiveBank) given the rate then follows the motion as well
-    /// as the noise: on a motion of jerk power `J` more than `m` times above it, it picks the
-    /// gains for `V x m x jerk / J` instead of the noise estimate `V` (lighter filtering, less
-    /// lag); more than `m` times below it, for `V x jerk / (m x J)` (heavier filtering); in
-    /// between, the noise's as without (`m`: [`crate::AdaptiveConfig::jerk_margin`]; the jerk
-    /// index of docs/MOTION-FAMILY.md, "A schedule that follows the motion").
+    /// as the noise: on a motion of jerk power `J` more than `m` times above it, it picks a
+    /// family's gains for `V x m x jerk / J` instead of the noise estimate `V` (lighter
+    /// filtering, less lag); more than `m` times below it, for `V x jerk / (m x J)` (heavier
+    /// filtering); in between, the noise's as without (`m`:
+    /// [`crate::AdaptiveConfig::jerk_margin`] for the observers,
+    /// [`crate::AdaptiveConfig::smooth_jerk_margin`] for the tracker; the AD follows the
+    /// acceleration power instead when it is recorded too, [`Self::with_tuned_acceleration`];
+    /// docs/MOTION-FAMILY.md, "A schedule that follows the motion").
     pub fn with_tuned_jerk(self, jerk: f32) -> Result<Self, ConfigError> {
         if !jerk.is_finite() {
             return Err(ConfigError::NotFinite("tuned_jerk_power"));
@@ -290,6 +315,31 @@ impl GainSchedule {
             jerk: Some(jerk),
             ..self
         })
+    }
+
+    /// This schedule, recorded as tuned on a motion of acceleration power `acceleration`
+    /// ((deg/s^2)^2, finite and positive; the bundled fig5 capture's is 1.3e5). With a
+    /// recorded jerk power ([`Self::with_tuned_jerk`]) too, an
+    /// [`AdaptiveBank`](crate::AdaptiveBank) given the rate picks the gains of the families
+    /// that follow the acceleration ([`crate::Follows::Acceleration`]: the AD) for
+    /// `V x acceleration / A` on a motion of acceleration power `A`, without a margin.
+    pub fn with_tuned_acceleration(self, acceleration: f32) -> Result<Self, ConfigError> {
+        if !acceleration.is_finite() {
+            return Err(ConfigError::NotFinite("tuned_acceleration_power"));
+        }
+        if acceleration <= 0.0 {
+            return Err(ConfigError::NotPositive("tuned_acceleration_power"));
+        }
+        Ok(Self {
+            acceleration: Some(acceleration),
+            ..self
+        })
+    }
+
+    /// The acceleration power of the motion the schedule was tuned on, (deg/s^2)^2 (`None` if
+    /// not recorded).
+    pub fn tuned_acceleration(&self) -> Option<f32> {
+        self.acceleration
     }
 
     /// The jerk power of the motion the schedule was tuned on, (deg/s^3)^2 (`None` if not
@@ -332,37 +382,36 @@ impl GainSchedule {
     /// gains between the two levels around it ([`Gains::interpolate`]) with the family's
     /// weight ([`Self::family_weight`]).
     pub fn gains_at(&self, noise_var: f32) -> (BankGains, BankGains) {
-        let (a, upper) = self.bracket(noise_var);
-        let Some((b, w)) = upper else {
-            return (a.velocity, a.acceleration);
-        };
+        self.gains_for(Levels::all(noise_var))
+    }
+
+    /// [`Self::gains_at`] with each family's gains for its own noise variance in `levels`.
+    pub fn gains_for(&self, levels: Levels) -> (BankGains, BankGains) {
         /// Interpolates each family's gains into `out` (velocity, acceleration).
         struct Blended<'a> {
             schedule: &'a GainSchedule,
-            a: &'a ScheduleLevel,
-            b: &'a ScheduleLevel,
-            noise_var: f32,
-            w: f32,
+            levels: Levels,
             out: (BankGains, BankGains),
         }
         impl FamilyVisitor for Blended<'_> {
-            fn family<F: Family>(&mut self, _column: usize) {
-                let (a, b) = (self.a, self.b);
-                let w = self
-                    .schedule
-                    .family_weight::<F>(a, b, self.noise_var, self.w);
+            fn family<F: Family>(&mut self, column: usize) {
+                let s = self.schedule;
+                let v = self.levels.0[column];
+                let (a, upper) = s.bracket(v);
+                let (b, w) = match upper {
+                    Some((b, w)) => (b, s.family_weight::<F>(a, b, v, w)),
+                    None => (a, 0.0),
+                };
                 let blend = |x: &BankGains, y: &BankGains| F::get(x).interpolate(&F::get(y), w);
                 F::set(&mut self.out.0, blend(&a.velocity, &b.velocity));
                 F::set(&mut self.out.1, blend(&a.acceleration, &b.acceleration));
             }
         }
+        let first = &self.levels()[0];
         let mut blended = Blended {
             schedule: self,
-            a,
-            b,
-            noise_var,
-            w,
-            out: (a.velocity, a.acceleration),
+            levels,
+            out: (first.velocity, first.acceleration),
         };
         for_each_family(&mut blended);
         blended.out
@@ -437,7 +486,12 @@ impl GainSchedule {
 
     /// `base` with the gains for `noise_var` (deg^2).
     pub fn config_at(&self, base: &BankConfig, noise_var: f32) -> BankConfig {
-        let (velocity, acceleration) = self.gains_at(noise_var);
+        self.config_for(base, Levels::all(noise_var))
+    }
+
+    /// `base` with the gains for `levels` ([`Self::gains_for`]).
+    pub fn config_for(&self, base: &BankConfig, levels: Levels) -> BankConfig {
+        let (velocity, acceleration) = self.gains_for(levels);
         BankConfig {
             velocity,
             acceleration,

@@ -1132,6 +1132,24 @@ fn the_self_tuning_bank_starts_within_its_bounds_at_2_hz() {
     within(&a, f64::from(0.5f32));
 }
 
+/// The paper bank following `schedule` on 20 s of a 1 Hz sine of 20 deg at 100 Hz with
+/// N(0, 0.1) deg^2 of noise (seed 5), given the sine's rate when `rates`.
+fn on_the_sine(schedule: &GainSchedule, rates: bool) -> AdaptiveBank<f32> {
+    let w = 2.0 * core::f64::consts::PI;
+    let mut b =
+        AdaptiveBank::<f32>::new(&BankConfig::PAPER, schedule, &AdaptiveConfig::DEFAULT).unwrap();
+    let mut g = Gauss::new(5);
+    for k in 0..2000u64 {
+        let t = k as f64 * 0.01;
+        let y = 20.0 * libm::sin(w * t) + libm::sqrt(0.1) * g.next();
+        if rates {
+            b.observe_rate(k * 10_000, (20.0 * w * libm::cos(w * t)) as f32);
+        }
+        b.update(k * 10_000, y as f32).unwrap();
+    }
+    b
+}
+
 /// A schedule that records its tuning motion's jerk power follows the motion as well as the
 /// noise: on a 1 Hz sine of 20 deg (jerk power `(20 (2 pi)^3)^2 / 2` = 1.23e7 (deg/s^3)^2)
 /// with N(0, 0.1) deg^2 of noise, tuned on a motion 100 times gentler, the gains go to the
@@ -1162,18 +1180,7 @@ fn a_schedule_with_its_tuning_jerk_follows_the_motion() {
     let w = 2.0 * core::f64::consts::PI;
     let j = (20.0 * w * w * w).powi(2) / 2.0;
     let run = |schedule: &GainSchedule, rates: bool| {
-        let mut b =
-            AdaptiveBank::<f32>::new(&BankConfig::PAPER, schedule, &AdaptiveConfig::DEFAULT)
-                .unwrap();
-        let mut g = Gauss::new(5);
-        for k in 0..2000u64 {
-            let t = k as f64 * 0.01;
-            let y = 20.0 * libm::sin(w * t) + libm::sqrt(0.1) * g.next();
-            if rates {
-                b.observe_rate(k * 10_000, (20.0 * w * libm::cos(w * t)) as f32);
-            }
-            b.update(k * 10_000, y as f32).unwrap();
-        }
+        let b = on_the_sine(schedule, rates);
         (b.gain_level(), b.jerk_power())
     };
     let wide = GainSchedule::new(&[
@@ -1209,6 +1216,131 @@ fn a_schedule_with_its_tuning_jerk_follows_the_motion() {
             Some(ConfigError::NotPositive("jerk_margin"))
         );
     }
+}
+
+/// Each family follows its own measure of the motion (`Follows`): on the sine of
+/// [`a_schedule_with_its_tuning_jerk_follows_the_motion`] with N(0, 0.1) deg^2 of noise, a
+/// schedule that records a jerk power 16 times this motion's and an acceleration power 4 times
+/// its own (both as a `JerkEstimator` measures them over the run) raises the observers to
+/// `0.1 x 16 / 8` = 0.2 deg^2 (margin 8), the tracker to `0.1 x 16 / 4` = 0.4 (margin 4,
+/// `AdaptiveConfig::smooth_jerk_margin`) and the AD to `0.1 x 4` = 0.4 (the acceleration, no
+/// margin); with a jerk power twice this motion's (within both margins) and an acceleration
+/// power a tenth of its own, the observers and the tracker stay at the noise's 0.1 and the AD
+/// goes down to 0.01; without the acceleration record the AD follows the jerk as the tracker
+/// does. Each level within the retune band (`AdaptiveConfig::retune_ratio`, 1.5). A smooth
+/// margin below 1 and an acceleration record that is not finite and positive are refused.
+#[test]
+fn each_family_follows_its_own_measure_of_the_motion() {
+    let s = GainSchedule::new(&[
+        level(0.001, 100.0, ILO1_TABLE2),
+        level(0.1, 1000.0, ILO1_TABLE2),
+        level(1.0, 2000.0, ILO1_TABLE2),
+    ])
+    .unwrap();
+    assert_eq!(s.tuned_acceleration(), None);
+    assert_eq!(
+        s.with_tuned_acceleration(f32::NAN),
+        Err(ConfigError::NotFinite("tuned_acceleration_power"))
+    );
+    assert_eq!(
+        s.with_tuned_acceleration(0.0),
+        Err(ConfigError::NotPositive("tuned_acceleration_power"))
+    );
+    let w = 2.0 * core::f64::consts::PI;
+    let mut measured = JerkEstimator::new(1e12, 0.01).unwrap();
+    for k in 0..2000u64 {
+        let t = k as f64 * 0.01;
+        measured.update(k * 10_000, (20.0 * w * libm::cos(w * t)) as f32);
+    }
+    let (j, a) = (
+        measured.power().unwrap(),
+        measured.acceleration_power().unwrap(),
+    );
+    let run = |schedule: &GainSchedule| on_the_sine(schedule, true).gain_levels();
+    let column = |label: &str| {
+        crate::FAMILIES
+            .iter()
+            .position(|f| f.label == label)
+            .unwrap()
+    };
+    let (ave, ilo1, ad, ed, kf) = (
+        column("AVE"),
+        column("ILO1"),
+        column("AD"),
+        column("ED"),
+        column("KF"),
+    );
+    let near = |levels: &Levels, col: usize, want: f32| {
+        let l = levels.0[col];
+        assert!(l > want / 1.5 && l < want * 1.5, "{col}: {l} vs {want}");
+    };
+    let harder = s
+        .with_tuned_jerk(16.0 * j)
+        .unwrap()
+        .with_tuned_acceleration(4.0 * a)
+        .unwrap();
+    let l = run(&harder);
+    for col in [ave, ilo1, ed] {
+        near(&l, col, 0.2);
+    }
+    near(&l, kf, 0.4);
+    near(&l, ad, 0.4);
+    let gentler = s
+        .with_tuned_jerk(2.0 * j)
+        .unwrap()
+        .with_tuned_acceleration(0.1 * a)
+        .unwrap();
+    let l = run(&gentler);
+    for col in [ave, ilo1, ed, kf] {
+        near(&l, col, 0.1);
+    }
+    near(&l, ad, 0.01);
+    let jerk_only = run(&s.with_tuned_jerk(16.0 * j).unwrap());
+    near(&jerk_only, ad, 0.4);
+    near(&jerk_only, kf, 0.4);
+    let cfg = AdaptiveConfig {
+        smooth_jerk_margin: 0.5,
+        ..AdaptiveConfig::DEFAULT
+    };
+    assert_eq!(
+        AdaptiveBank::<f32>::new(&BankConfig::PAPER, &harder, &cfg).err(),
+        Some(ConfigError::NotPositive("smooth_jerk_margin"))
+    );
+}
+
+/// The gains of each family come from the level its own noise variance picks
+/// (`GainSchedule::gains_for`): the AD's from the upper level and every other family's from
+/// the lower one, or the other way round, as `gains_at` gives each level's.
+#[test]
+fn gains_for_takes_each_family_from_its_own_level() {
+    let with_ad = |mut l: ScheduleLevel, t: f32| {
+        l.velocity.ad_t = t;
+        l.acceleration.ad_t = 2.0 * t;
+        l
+    };
+    let s = GainSchedule::new(&[
+        with_ad(level(0.01, 100.0, ILO1_TABLE2), 0.01),
+        with_ad(level(1.0, 2000.0, ILO3_TABLE2), 0.05),
+    ])
+    .unwrap();
+    let ad = crate::FAMILIES
+        .iter()
+        .position(|f| f.label == "AD")
+        .unwrap();
+    let (lo, hi) = (s.gains_at(0.01), s.gains_at(1.0));
+    let mut levels = Levels::all(0.01);
+    levels.0[ad] = 1.0;
+    let (v, acc) = s.gains_for(levels);
+    assert_eq!((hi.0.ad_t, hi.1.ad_t), (0.05, 0.1));
+    assert_eq!(v.ad_t, hi.0.ad_t);
+    assert_eq!(acc.ad_t, hi.1.ad_t);
+    assert_eq!((v.ave, v.ilo), (lo.0.ave, lo.0.ilo));
+    let mut levels = Levels::all(1.0);
+    levels.0[ad] = 0.01;
+    let (v, _) = s.gains_for(levels);
+    assert_eq!(v.ad_t, lo.0.ad_t);
+    assert_eq!((v.ave, v.ilo), (hi.0.ave, hi.0.ilo));
+    assert_eq!(s.gains_for(Levels::all(0.3)), s.gains_at(0.3));
 }
 
 /// A restart of the laws: a steady rate (no jerk: the rule's bandwidth falls to its lowest,

@@ -392,8 +392,13 @@ mod schedule {
 /// the bank does at most once per `AdaptiveConfig::retune_every` samples.
 fn adaptive_bank(c: &mut Counter, overhead: u64, cfg: &BankConfig) {
     use estimators::{AdaptiveBank, AdaptiveConfig, GainSchedule};
-    let sched = GainSchedule::new(&schedule::SCHEDULE)
-        .and_then(|s| s.with_records(schedule::SCHEDULE_PERIOD_S, schedule::SCHEDULE_TUNED_JERK));
+    let sched = GainSchedule::new(&schedule::SCHEDULE).and_then(|s| {
+        s.with_records(
+            schedule::SCHEDULE_PERIOD_S,
+            schedule::SCHEDULE_TUNED_JERK,
+            schedule::SCHEDULE_TUNED_ACCELERATION,
+        )
+    });
     let Ok(sched) = sched else {
         fail("the gain schedule")
     };

@@ -237,27 +237,29 @@ pub fn tune_schedule_on(
             points.join(", ")
         ));
     }
+    let motion = motion_powers(captures, opts)?;
     Ok((
         crate::gains::ScheduleFile {
             hold: hold_name(hold).to_string(),
             // The f32's shortest decimal form (0.01, not 0.009999999776482582).
             sample_period_s: opts.bank_period_s(samples).to_string().parse().ok(),
-            tuned_jerk_power: motion_jerk_power(captures, opts)?,
+            tuned_jerk_power: motion.map(|m| m.0),
+            tuned_acceleration_power: motion.map(|m| m.1),
             level,
         },
         text,
     ))
 }
 
-/// The jerk power of the motion in `captures`, (deg/s^3)^2, as the bank measures it: an
-/// `estimators::JerkEstimator` with a time constant longer than any capture (so the plain
-/// mean over the rows) fed each row's rate about the tuned axis (the rate the pipeline gives
-/// the banks: the Euler reference, or the body rate with `--no-reference`), over every
-/// capture (each restarts the differences). Recorded in the schedule file
-/// (`tuned_jerk_power`), so that its bank follows the motion as well as the noise. `None`
-/// when there is no capture, no row has a rate (a capture entirely near gimbal lock) or the
-/// period is not one the estimator takes.
-pub fn motion_jerk_power(captures: &[&[Sample]], opts: &EstimateOptions) -> Result<Option<f64>> {
+/// The jerk power, (deg/s^3)^2, and the acceleration power, (deg/s^2)^2, of the motion in
+/// `captures` as the bank measures them: an `estimators::JerkEstimator` with a time constant
+/// longer than any capture (so the plain means over the rows) fed each row's rate about the
+/// tuned axis (the rate the pipeline gives the banks: the Euler reference, or the body rate
+/// with `--no-reference`), over every capture (each restarts the differences). Recorded in
+/// the schedule file (`tuned_jerk_power`, `tuned_acceleration_power`), so that its bank
+/// follows the motion as well as the noise. `None` when there is no capture, no row has a
+/// rate (a capture entirely near gimbal lock) or the period is not one the estimator takes.
+pub fn motion_powers(captures: &[&[Sample]], opts: &EstimateOptions) -> Result<Option<(f64, f64)>> {
     let axis = opts.axis();
     let plain = EstimateOptions {
         noise: None,
@@ -278,8 +280,12 @@ pub fn motion_jerk_power(captures: &[&[Sample]], opts: &EstimateOptions) -> Resu
             }
         }
     }
-    // The shortest decimal form of the f32 (3680000, not 3679999.75).
-    Ok(jerk.power().and_then(|p| p.to_string().parse().ok()))
+    // The shortest decimal forms of the f32s (3850048, not 3850047.75).
+    let shortest = |p: f32| p.to_string().parse().ok();
+    Ok(jerk
+        .power()
+        .and_then(shortest)
+        .zip(jerk.acceleration_power().and_then(shortest)))
 }
 
 /// [`crossover`] keeps the geometric midpoint unless the two levels' MSE lines differ by more
