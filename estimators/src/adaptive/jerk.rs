@@ -16,19 +16,20 @@ use crate::ConfigError;
 /// adds under 6 deg/s^3 of noise at 100 Hz, and a gyro's noise of 0.1 deg/s about
 /// 100 deg/s^3, against a hand's motion of 10^3 to 10^5. The estimate is the exponentially
 /// weighted mean of `j^2` with time constant `tau_s` (the first `tau / dt` terms averaged with
-/// weight `1/k`, so that it starts at once). Over the same samples it estimates the
-/// acceleration power, (deg/s^2)^2: the exponentially weighted mean of `a^2` for the central
-/// difference `a = (r[k] - r[k-2L]) / (2 L dt)`, with time constant
-/// `tau_s x` [`Self::ACCELERATION_TAU`] ([`Self::acceleration_power`]; the AD's best time
-/// constant follows it). A sample interval that differs from the previous
+/// weight `1/k`, so that it starts at once). Built [`Self::with_acceleration`], it also
+/// estimates over the same samples the acceleration power, (deg/s^2)^2: the exponentially
+/// weighted mean of `a^2` for the central difference `a = (r[k] - r[k-2L]) / (2 L dt)`, with
+/// time constant `tau_s x` [`Self::ACCELERATION_TAU`] ([`Self::acceleration_power`]; the AD's
+/// best time constant follows it). A sample interval that differs from the previous
 /// one by more than a quarter (a lost packet, a gap, a new epoch) restarts the differences
 /// (the estimate is kept), as [`NoiseEstimator`](crate::NoiseEstimator) does.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct JerkEstimator {
     /// Weight of a new term once started, `dt / tau`.
     alpha: f32,
-    /// The same for the acceleration power, `dt / (tau x ACCELERATION_TAU)`.
-    accel_alpha: f32,
+    /// The same for the acceleration power, `dt / (tau x ACCELERATION_TAU)`; `None`: not
+    /// estimated.
+    accel_alpha: Option<f32>,
     /// The lag, samples (1 to [`Self::MAX_LAG`]).
     lag: usize,
     /// `1 / (lag dt)^2` at the nominal period, 1/s^2.
@@ -82,7 +83,7 @@ impl JerkEstimator {
         let span = lag as f32 * sample_period_s;
         Ok(JerkEstimator {
             alpha: (sample_period_s / tau_s).min(1.0),
-            accel_alpha: (sample_period_s / (tau_s * Self::ACCELERATION_TAU)).min(1.0),
+            accel_alpha: None,
             lag,
             scale: 1.0 / (span * span),
             accel_scale: 0.5 / span,
@@ -97,9 +98,22 @@ impl JerkEstimator {
         })
     }
 
-    /// The acceleration power estimate, (deg/s^2)^2 (`None` before the first difference).
+    /// This estimator, estimating the acceleration power too (time constant `tau_s x`
+    /// [`Self::ACCELERATION_TAU`]; a bank whose schedule records no acceleration power, and
+    /// the product banks, leave it out and save its arithmetic per sample).
+    pub fn with_acceleration(self) -> Self {
+        // `alpha` is `dt / tau` capped at 1.
+        let dt_over_tau = self.alpha;
+        Self {
+            accel_alpha: Some((dt_over_tau / Self::ACCELERATION_TAU).min(1.0)),
+            ..self
+        }
+    }
+
+    /// The acceleration power estimate, (deg/s^2)^2 (`None` before the first difference, or
+    /// when not estimated: [`Self::with_acceleration`]).
     pub fn acceleration_power(&self) -> Option<f32> {
-        (self.count > 0).then_some(self.accel_power)
+        (self.count > 0 && self.accel_alpha.is_some()).then_some(self.accel_power)
     }
 
     /// The lag of the second difference, samples.
@@ -133,9 +147,11 @@ impl JerkEstimator {
         if self.filled > 2 * self.lag {
             let at = |back: usize| self.rates[(self.head + n - back) % n];
             let j = (at(0) - 2.0 * at(self.lag) + at(2 * self.lag)) * self.scale;
-            let a = (at(0) - at(2 * self.lag)) * self.accel_scale;
-            let mut count = self.count;
-            super::mean_step(&mut self.accel_power, &mut count, self.accel_alpha, a * a);
+            if let Some(alpha) = self.accel_alpha {
+                let a = (at(0) - at(2 * self.lag)) * self.accel_scale;
+                let mut count = self.count;
+                super::mean_step(&mut self.accel_power, &mut count, alpha, a * a);
+            }
             super::mean_step(&mut self.power, &mut self.count, self.alpha, j * j);
         }
     }
@@ -158,7 +174,9 @@ mod tests {
     #[test]
     fn a_sine_reads_its_closed_form() {
         let (a, f_hz, dt) = (300.0f64, 2.0f64, 0.01f64);
-        let mut e = JerkEstimator::new(1000.0, dt as f32).unwrap();
+        let mut e = JerkEstimator::new(1000.0, dt as f32)
+            .unwrap()
+            .with_acceleration();
         assert_eq!(e.lag(), 5);
         let w = 2.0 * core::f64::consts::PI * f_hz;
         // 20 s: 40 periods, the first 2L samples feed no term.
@@ -178,10 +196,11 @@ mod tests {
         assert!((got / expected - 1.0).abs() < 0.01, "{got} vs {expected}");
     }
 
-    /// A ramp of 2 deg/s per 10 ms sample is an acceleration of 200 deg/s^2 and no jerk.
+    /// A ramp of 2 deg/s per 10 ms sample is an acceleration of 200 deg/s^2 and no jerk; an
+    /// estimator built without [`JerkEstimator::with_acceleration`] reads no acceleration.
     #[test]
     fn a_constant_rate_and_a_ramp_read_zero() {
-        let mut e = JerkEstimator::new(1.0, 0.01).unwrap();
+        let mut e = JerkEstimator::new(1.0, 0.01).unwrap().with_acceleration();
         assert_eq!(e.power(), None);
         assert_eq!(e.acceleration_power(), None);
         for k in 0..100u64 {
@@ -190,6 +209,13 @@ mod tests {
         assert!(e.power().unwrap() < 1e-3, "{:?}", e.power());
         let a = e.acceleration_power().unwrap();
         assert!((a / 40_000.0 - 1.0).abs() < 1e-3, "{a}");
+        // Without `with_acceleration`, none.
+        let mut plain = JerkEstimator::new(1.0, 0.01).unwrap();
+        for k in 0..100u64 {
+            plain.update(k * 10_000, 100.0 + 2.0 * k as f32);
+        }
+        assert!(plain.power().is_some());
+        assert_eq!(plain.acceleration_power(), None);
     }
 
     #[test]

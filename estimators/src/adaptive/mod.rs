@@ -180,10 +180,13 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
             return Err(ConfigError::NotPositive("retune_ratio"));
         }
         let jerk = match schedule.tuned_jerk() {
-            Some(_) => Some(JerkEstimator::new(
-                JerkEstimator::DEFAULT_TAU_S,
-                base.sample_period_s,
-            )?),
+            Some(_) => {
+                let j = JerkEstimator::new(JerkEstimator::DEFAULT_TAU_S, base.sample_period_s)?;
+                Some(match schedule.tuned_acceleration() {
+                    Some(_) => j.with_acceleration(),
+                    None => j,
+                })
+            }
             None => None,
         };
         let level = Levels::all(schedule.clamp(cfg.initial_noise_var));

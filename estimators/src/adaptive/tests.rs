@@ -1247,7 +1247,7 @@ fn each_family_follows_its_own_measure_of_the_motion() {
         Err(ConfigError::NotPositive("tuned_acceleration_power"))
     );
     let w = 2.0 * core::f64::consts::PI;
-    let mut measured = JerkEstimator::new(1e12, 0.01).unwrap();
+    let mut measured = JerkEstimator::new(1e12, 0.01).unwrap().with_acceleration();
     for k in 0..2000u64 {
         let t = k as f64 * 0.01;
         measured.update(k * 10_000, (20.0 * w * libm::cos(w * t)) as f32);

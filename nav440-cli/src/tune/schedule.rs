@@ -268,9 +268,10 @@ pub fn motion_powers(captures: &[&[Sample]], opts: &EstimateOptions) -> Result<O
     let Some(first) = captures.first() else {
         return Ok(None);
     };
-    let Ok(mut jerk) = estimators::JerkEstimator::new(1e12, opts.bank_period_s(first)) else {
+    let Ok(jerk) = estimators::JerkEstimator::new(1e12, opts.bank_period_s(first)) else {
         return Ok(None);
     };
+    let mut jerk = jerk.with_acceleration();
     for samples in captures {
         jerk.restart();
         let (rows, _) = replay::estimate(samples, &plain)?;
