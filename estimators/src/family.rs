@@ -62,7 +62,9 @@
 //! ([`crate::BankConfig::NAV440_RATES`], `rates.rs`) run the paper's gains for a family their
 //! tables do not list. Optional: an observer that records its own switch point per schedule
 //! level needs a field in [`ObserverSwitch`] (with its line in [`ObserverSwitch::all`])
-//! returned by [`Family::switch_up_mut`]. docs/HOWTO-ESTIMATOR.md has the details.
+//! returned by [`Family::switch_up_mut`]; a family whose best gains follow the motion's
+//! acceleration rather than its jerk sets [`Family::FOLLOWS`] (`follows: Acceleration` in
+//! `family!`, as the AD's). docs/HOWTO-ESTIMATOR.md has the details.
 
 use crate::adaptive::ObserverSwitch;
 use crate::bank::{BankGains, Channel};
@@ -306,7 +308,8 @@ pub(crate) use families;
 /// A family marker whose gains are one field of each [`BankGains`] half: the marker type
 /// (with its docs) and its [`Family`] implementation. `switch:` names the field of
 /// [`ObserverSwitch`] an observer records its switch point in ([`Family::switch_up_mut`]);
-/// without it the family has none.
+/// without it the family has none. `follows:` names the [`Follows`] variant of
+/// [`Family::FOLLOWS`]; without it the default (the jerk).
 macro_rules! family {
     (
         $(#[$m:meta])*
@@ -316,6 +319,7 @@ macro_rules! family {
             label: $label:literal,
             channels: $velocity:ident, $acceleration:ident,
             scheduling: $scheduling:ident,
+            $(follows: $follows:ident,)?
             $(switch: ObserverSwitch::$switch:ident,)?
         }
     ) => {
@@ -331,6 +335,7 @@ macro_rules! family {
             const ACCELERATION: $crate::bank::Channel = $crate::bank::Channel::$acceleration;
             const SCHEDULING: $crate::family::Scheduling =
                 $crate::family::Scheduling::$scheduling;
+            $(const FOLLOWS: $crate::family::Follows = $crate::family::Follows::$follows;)?
 
             fn get(half: &$crate::bank::BankGains) -> $gains {
                 half.$field
@@ -358,8 +363,34 @@ pub use crate::bank::{for_each_family, FAMILIES, FAMILY_COUNT};
 mod tests {
     extern crate std;
     use super::*;
-    use crate::BankConfig;
+    use crate::{BankConfig, EdConfig};
     use std::{format, vec::Vec};
+
+    family! {
+        /// A family declared with `follows:` (the ED's gains and channels).
+        FollowsAcceleration {
+            gains: EdConfig = BankGains::ed,
+            name: "fa",
+            label: "FA",
+            channels: EdV, EdA,
+            scheduling: Observer,
+            follows: Acceleration,
+        }
+    }
+
+    /// `family!` sets `Family::FOLLOWS` from `follows:`, and leaves the default (the jerk)
+    /// without it; the AD follows the acceleration, every other family of the bank the jerk.
+    #[test]
+    fn follows_is_the_jerk_unless_declared() {
+        assert_eq!(FollowsAcceleration::FOLLOWS, Follows::Acceleration);
+        assert_eq!(crate::EdFamily::FOLLOWS, Follows::Jerk);
+        let following: Vec<&str> = FAMILIES
+            .iter()
+            .filter(|f| f.follows == Follows::Acceleration)
+            .map(|f| f.label)
+            .collect();
+        assert_eq!(following, ["AD"]);
+    }
 
     /// The families' facts as the visitor sees them.
     struct Collect(Vec<(usize, FamilyInfo)>);
