@@ -395,7 +395,7 @@ pub struct ScheduleFile {
     /// not recorded; the AD then follows the jerk power as the tracker does). With it and
     /// `tuned_jerk_power`, the AD's gains follow the motion's acceleration power
     /// (`estimators::GainSchedule::with_tuned_acceleration`; the bundled fig5 capture's is
-    /// 1.3e5).
+    /// 1.43e5).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tuned_acceleration_power: Option<f64>,
     /// The levels, by increasing noise variance.

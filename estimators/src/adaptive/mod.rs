@@ -170,11 +170,13 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
             return Err(ConfigError::NotFinite("retune_ratio"));
         }
         // `!(>= 1)`: NaN refused too.
-        if !(cfg.jerk_margin >= 1.0 && cfg.jerk_margin.is_finite()) {
-            return Err(ConfigError::NotPositive("jerk_margin"));
-        }
-        if !(cfg.smooth_jerk_margin >= 1.0 && cfg.smooth_jerk_margin.is_finite()) {
-            return Err(ConfigError::NotPositive("smooth_jerk_margin"));
+        for (m, name) in [
+            (cfg.jerk_margin, "jerk_margin"),
+            (cfg.smooth_jerk_margin, "smooth_jerk_margin"),
+        ] {
+            if !(m >= 1.0 && m.is_finite()) {
+                return Err(ConfigError::NotPositive(name));
+            }
         }
         if cfg.retune_ratio < 1.0 || cfg.initial_noise_var <= 0.0 {
             return Err(ConfigError::NotPositive("retune_ratio"));

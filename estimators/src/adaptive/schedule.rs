@@ -1,6 +1,7 @@
 //! [`GainSchedule`]: noise level -> gains.
 
 use crate::bank::{BankConfig, BankGains};
+use crate::error::positive;
 use crate::family::{for_each_family, geometric, Family, FamilyVisitor, Gains, Scheduling};
 use crate::FAMILY_COUNT;
 use crate::{AveFamily, ConfigError};
@@ -257,12 +258,7 @@ impl GainSchedule {
     /// schedule still runs at any rate; [`AdaptiveBank::period_fits`](crate::AdaptiveBank::period_fits) tells whether it was
     /// tuned for its bank's.
     pub fn with_sample_period(self, period_s: f32) -> Result<Self, ConfigError> {
-        if !period_s.is_finite() {
-            return Err(ConfigError::NotFinite("sample_period_s"));
-        }
-        if period_s <= 0.0 {
-            return Err(ConfigError::NotPositive("sample_period_s"));
-        }
+        positive("sample_period_s", f64::from(period_s))?;
         Ok(Self {
             period_s: Some(period_s),
             ..self
@@ -305,12 +301,7 @@ impl GainSchedule {
     /// acceleration power instead when it is recorded too, [`Self::with_tuned_acceleration`];
     /// docs/MOTION-FAMILY.md, "A schedule that follows the motion").
     pub fn with_tuned_jerk(self, jerk: f32) -> Result<Self, ConfigError> {
-        if !jerk.is_finite() {
-            return Err(ConfigError::NotFinite("tuned_jerk_power"));
-        }
-        if jerk <= 0.0 {
-            return Err(ConfigError::NotPositive("tuned_jerk_power"));
-        }
+        positive("tuned_jerk_power", f64::from(jerk))?;
         Ok(Self {
             jerk: Some(jerk),
             ..self
@@ -318,18 +309,13 @@ impl GainSchedule {
     }
 
     /// This schedule, recorded as tuned on a motion of acceleration power `acceleration`
-    /// ((deg/s^2)^2, finite and positive; the bundled fig5 capture's is 1.3e5). With a
+    /// ((deg/s^2)^2, finite and positive; the bundled fig5 capture's is 1.43e5). With a
     /// recorded jerk power ([`Self::with_tuned_jerk`]) too, an
     /// [`AdaptiveBank`](crate::AdaptiveBank) given the rate picks the gains of the families
     /// that follow the acceleration ([`crate::Follows::Acceleration`]: the AD) for
     /// `V x acceleration / A` on a motion of acceleration power `A`, without a margin.
     pub fn with_tuned_acceleration(self, acceleration: f32) -> Result<Self, ConfigError> {
-        if !acceleration.is_finite() {
-            return Err(ConfigError::NotFinite("tuned_acceleration_power"));
-        }
-        if acceleration <= 0.0 {
-            return Err(ConfigError::NotPositive("tuned_acceleration_power"));
-        }
+        positive("tuned_acceleration_power", f64::from(acceleration))?;
         Ok(Self {
             acceleration: Some(acceleration),
             ..self
