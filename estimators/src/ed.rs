@@ -440,7 +440,25 @@ impl Gains for EdConfig {
     fn build<V: LawVisitor>(&self, h: f32, to: V) -> Result<V::Output, ConfigError> {
         Ok(to.law(EdParams::<f32>::new(self, h, EdScheme::Euler)?))
     }
+
+    const PAST_TOP: bool = true;
+
+    /// `alpha` scaled by the root of the acceleration ratio `k = sqrt(A / A_tuned)` (at
+    /// least [`ED_PAST_TOP_MIN`], at most 1: never raised), `lambda` by `sqrt(k)` (Levant's
+    /// `lambda` goes as `sqrt(alpha)`): `alpha` bounds the input's second derivative, and
+    /// the top level's stands to the tuning motion's RMS acceleration as these do to the
+    /// motion's.
+    fn past_top(&self, rule: &crate::family::PastTop) -> Self {
+        let k = libm::sqrtf(rule.acceleration_ratio).clamp(ED_PAST_TOP_MIN, 1.0);
+        EdConfig {
+            lambda: self.lambda * libm::sqrtf(k),
+            alpha: self.alpha * k,
+        }
+    }
 }
+
+/// The least factor [`EdConfig::past_top`] scales `alpha` by.
+pub const ED_PAST_TOP_MIN: f32 = 0.5;
 
 crate::family::family! {
     /// The ED family of the paper bank: Levant ED velocity, ED-ED acceleration (one

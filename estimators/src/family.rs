@@ -64,7 +64,9 @@
 //! level needs a field in [`ObserverSwitch`] (with its line in [`ObserverSwitch::all`])
 //! returned by [`Family::switch_up_mut`]; a family whose best gains follow the motion's
 //! acceleration rather than its jerk sets [`Family::FOLLOWS`] (`follows: Acceleration` in
-//! `family!`, as the AD's). docs/HOWTO-ESTIMATOR.md has the details.
+//! `family!`, as the AD's); one whose gains should go on past a schedule's top level on a
+//! gentle motion sets [`Gains::PAST_TOP`] and [`Gains::past_top`] (as the ILOs' and the
+//! ED's). docs/HOWTO-ESTIMATOR.md has the details.
 
 use crate::adaptive::ObserverSwitch;
 use crate::bank::{BankGains, Channel};
@@ -160,6 +162,8 @@ pub struct FamilyInfo {
     pub scheduling: Scheduling,
     /// [`Family::FOLLOWS`].
     pub follows: Follows,
+    /// [`Gains::PAST_TOP`] of the family's gains.
+    pub past_top: bool,
 }
 
 impl FamilyInfo {
@@ -172,6 +176,7 @@ impl FamilyInfo {
             acceleration: F::ACCELERATION,
             scheduling: F::SCHEDULING,
             follows: F::FOLLOWS,
+            past_top: <F::Gains as Gains>::PAST_TOP,
         }
     }
 }
@@ -199,6 +204,36 @@ pub trait Gains: Copy + PartialEq + core::fmt::Debug + SerdeIfEnabled + 'static 
     /// ([`LawVisitor::tracker`]). The error of the law's constructor if these gains do not
     /// build one at `h`.
     fn build<V: LawVisitor>(&self, h: f32, to: V) -> Result<V::Output, ConfigError>;
+
+    /// `true` if the family's velocity gains go on past a gain schedule's top level
+    /// ([`Self::past_top`]); `false` (the default): they stay the top level's.
+    const PAST_TOP: bool = false;
+
+    /// The velocity gains for a motion that moves more gently, or a noise that is larger, than
+    /// the top level of a schedule that follows the motion reaches ([`PastTop`]), from `self`,
+    /// the top level's: `self` (the default) for a family whose [`Self::PAST_TOP`] is
+    /// `false`.
+    fn past_top(&self, _rule: &PastTop) -> Self {
+        *self
+    }
+}
+
+/// Where an observer's gains go past a gain schedule's top level ([`Gains::past_top`]): per-sample
+/// poles at the bandwidth `wn_rad_s` (rad/s) with the damping `zeta`, for the law's step
+/// `h_s` and the sample period `dt_s` (s) ([`crate::IloConfig::per_sample`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PastTop {
+    /// The bandwidth, rad/s.
+    pub wn_rad_s: f64,
+    /// The damping, in (0, 1).
+    pub zeta: f64,
+    /// The law's step, s.
+    pub h_s: f64,
+    /// The nominal sample period, s.
+    pub dt_s: f64,
+    /// The motion's acceleration power over that of the motion the schedule was tuned on
+    /// (dimensionless, >= 0; 1 where either is not known).
+    pub acceleration_ratio: f32,
 }
 
 /// What receives the estimator a family's gains build ([`Gains::build`]).

@@ -368,6 +368,14 @@ impl Gains for IloConfig {
     fn build<V: LawVisitor>(&self, h: f32, to: V) -> Result<V::Output, ConfigError> {
         Ok(to.law(IloParams::<f32, 1>::new(self, h)?))
     }
+
+    const PAST_TOP: bool = true;
+
+    /// [`IloConfig::per_sample`] at the rule's bandwidth and damping (`K1 = 1`: it holds a
+    /// constant rate); `self` where that fails.
+    fn past_top(&self, rule: &crate::family::PastTop) -> Self {
+        IloConfig::per_sample(rule.wn_rad_s, rule.zeta, rule.h_s, rule.dt_s).unwrap_or(*self)
+    }
 }
 
 #[cfg(test)]

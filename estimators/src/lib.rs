@@ -107,7 +107,7 @@ pub use adapter::{SampleAdapter, SampleClock, Tick};
 pub use adaptive::{
     AdaptiveBank, AdaptiveConfig, AdaptiveKalman, AdaptiveKalmanConfig, AdaptiveProductBank,
     AdaptiveProductConfig, AveDeltahat, Blend, GainSchedule, JerkEstimator, Levels, NoiseEstimator,
-    ObserverSwitch, ScheduleLevel, SelfTuneConfig, SelfTuningProductBank, Settled,
+    ObserverSwitch, ScheduleLevel, SelfTuneConfig, SelfTuningProductBank, Settled, PAST_TOP_FACTOR,
 };
 pub use ave::{
     Ave, AveConfig, AveFamily, AveParams, AveState, DeltaLaw, DeltaMode, COARSE_STABILITY_MARGIN,
@@ -120,12 +120,14 @@ pub use bank::{
     ProductState, Row, RowValues, Rows, Warm, Wrap, GAP_PERIODS, KF_DEFAULT, MAX_GAP_PERIODS,
     VELOCITY_NAMES,
 };
-pub use ed::{Ed, EdConfig, EdFamily, EdParams, EdScheme, EdState, ED_MAX_H_ALPHA};
+pub use ed::{
+    Ed, EdConfig, EdFamily, EdParams, EdScheme, EdState, ED_MAX_H_ALPHA, ED_PAST_TOP_MIN,
+};
 pub use error::{ConfigError, SampleError};
 pub use estimator::{advance_by_steps, Estimator, Hold};
 pub use family::{
-    for_each_family, Family, FamilyInfo, FamilyVisitor, Follows, Gains, LawVisitor, Scheduling,
-    FAMILIES, FAMILY_COUNT,
+    for_each_family, Family, FamilyInfo, FamilyVisitor, Follows, Gains, LawVisitor, PastTop,
+    Scheduling, FAMILIES, FAMILY_COUNT,
 };
 pub use ilo::{Ilo, IloConfig, IloFamily, IloParams, IloState};
 pub use kalman::{

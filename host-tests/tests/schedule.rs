@@ -1040,12 +1040,12 @@ fn the_schedule_runs_for_hours_without_degrading() {
 /// between 0.2 and 1.4 deg^2 and the bank retuned 13 times), the retune at 5.95 s from the
 /// 0.68 to the 0.21 deg^2 level swung the AVE to 981 deg/s (true rate 295) and its MSE over
 /// 6-8 s was 19,835 (deg/s)^2: the adaptive AVE was 5.74 x NAV440's over the capture (1716
-/// against 299). Now every family is within 1.2 x NAV440's (measured: AVE 0.79; 1.02 before
+/// against 299). Now every family is within 1.2 x NAV440's (measured: AVE 0.71; 1.02 before
 /// the schedule recorded the AVEs' switching gains, 1.06 before the 50-sample floor; the ILO1
-/// 0.20, the noise-adaptive gains' gain at 0.5 deg^2). The
+/// 0.05: past the schedule's top level on this spin, far gentler than fig5). The
 /// schedule was tuned at 100 Hz and runs off its rate here on purpose (`nav440 estimate`
-/// warns); at 10 Hz its AVE and ILO1 reach 1.20-1.98 x NAV440's, which a schedule tuned at
-/// 10 Hz fixes (`a_schedule_tuned_at_10_hz_fits_10_hz`).
+/// warns); at 10 Hz its AVE reaches 1.37-1.53 x NAV440's and its ILO1 on fig5 1.28 x, which
+/// a schedule tuned at 10 Hz fixes (`a_schedule_tuned_at_10_hz_fits_10_hz`).
 #[test]
 #[cfg_attr(
     debug_assertions,
@@ -1066,14 +1066,18 @@ fn the_100_hz_schedule_survives_retunes_at_20_hz() {
 }
 
 /// A schedule tuned at the unit's rate is the remedy for a low rate: at 10 Hz with 0.5 deg^2
-/// the 100 Hz schedule's AVE and ILO1 reach 1.20-1.98 x fixed `BankConfig::NAV440`'s (the
-/// adaptive bank runs the schedule's 0.5 level there: its gains, tuned at 100 Hz, not the
-/// noise estimate, are the cause), while `data/gains/schedule_fig5_10hz.toml`, tuned at 10 Hz
+/// the 100 Hz schedule's AVE reaches 1.37-1.53 x fixed `BankConfig::NAV440`'s and its ILO1 on
+/// fig5 1.28 x (the adaptive bank runs the schedule's 0.5 level there: its gains, tuned at
+/// 100 Hz, not the noise estimate, are the cause), while `data/gains/schedule_fig5_10hz.toml`, tuned at 10 Hz
 /// on another fig5 motion (`nav440 synth --profile fig5 --rate 10 --duration 35 --seed 3 -o
 /// fig5_10hz.bin`, then `nav440 tune fig5_10hz.bin --schedule 0.001,0.01,0.1,0.5,1 --seeds 8
 /// -o schedule_fig5_10hz.toml`: 7.1 min), keeps them within 1.1x (measured: 0.17 to 1.08) on
 /// the fig5 and spin motions of seed 21 at 10 Hz, 0.01 and 0.5 deg^2 (noise seed 5), and is
-/// better than the 100 Hz schedule in each of those AVE and ILO1 cells at 0.5 deg^2.
+/// better than the 100 Hz schedule in each of those AVE and ILO1 cells at 0.5 deg^2 but the
+/// spin's ILO1: on that motion, far gentler than fig5, the 100 Hz schedule (which records its
+/// tuning motion's jerk; the 10 Hz one does not) runs ILO1 past its top level, whose rule
+/// places the poles for the unit's own period (0.69x `NAV440`'s, against the 10 Hz
+/// schedule's 1.08x).
 #[test]
 #[cfg_attr(
     debug_assertions,
@@ -1098,7 +1102,7 @@ fn a_schedule_tuned_at_10_hz_fits_10_hz() {
             );
             for i in [0, 1] {
                 assert!(a10[i] <= 1.1 * f[i], "{}: {} vs {}", NAMES[i], a10[i], f[i]);
-                if var_deg2 == 0.5 {
+                if var_deg2 == 0.5 && !(profile == ProfileKind::Spin && i == 1) {
                     assert!(a10[i] < a100[i], "{}: {} vs {}", NAMES[i], a10[i], a100[i]);
                 }
             }

@@ -116,6 +116,12 @@ impl JerkEstimator {
         (self.count > 0 && self.accel_alpha.is_some()).then_some(self.accel_power)
     }
 
+    /// `true` once the estimate has averaged a time constant's worth of terms (it then holds
+    /// the motion's intensity, not only its start's).
+    pub fn settled(&self) -> bool {
+        self.count as f32 * self.alpha >= 1.0
+    }
+
     /// The lag of the second difference, samples.
     pub fn lag(&self) -> usize {
         self.lag

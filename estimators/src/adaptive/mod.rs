@@ -26,9 +26,49 @@ pub use product::*;
 pub use schedule::*;
 pub use selftune::*;
 
-use crate::bank::{BankConfig, PaperBank, PaperOutput};
-use crate::family::{Follows, Scheduling};
+use crate::bank::{BankConfig, BankGains, PaperBank, PaperOutput};
+use crate::family::{Family, FamilyVisitor, Follows, Scheduling};
 use crate::{ConfigError, NativeSqrt, Real, SampleError, SqrtFn};
+
+/// The bandwidth (rad/s) of the observers' gains past a schedule's top level, at the level
+/// `v` (deg^2): the jerk index's rule `c (J / (V dt))^(1/6)` ([`SelfTuneConfig::ANCHOR_C`],
+/// the first alias) for the schedule's tuning motion (`J` its recorded jerk power `tuned`,
+/// (deg/s^3)^2) at the noise `v`, the level being that motion's equivalent noise; at least
+/// 2 rad/s and at most 80 % of the Nyquist frequency, the sample period `dt` in s.
+fn past_top_wn(tuned: f32, v: f32, dt: f32) -> f64 {
+    let zeta = f64::from(SelfTuneConfig::ZETA);
+    let dt = f64::from(dt);
+    let wn_max = 0.8 * core::f64::consts::PI / (dt * libm::sqrt(1.0 - zeta * zeta));
+    let c = f64::from(SelfTuneConfig::ANCHOR_C);
+    product::jerk_index_wn(c, f64::from(tuned), f64::from(v), dt)
+        .max(product::WN_MIN)
+        .min(wn_max.max(product::WN_MIN))
+}
+
+/// How far past a schedule's top level (as a factor of its noise variance) the families that
+/// go on past it ([`crate::Gains::PAST_TOP`]: the ILOs and the ED) leave its gains for their
+/// own ([`crate::Gains::past_top`]). Just past the top the ILO rule's per-sample poles lag a
+/// unit that starts to move more than the top level's tuned set (fig5 after a minute at rest,
+/// first 4 s of motion at 0.01 deg^2: ILO1 1.30x the noise alone from the top level on,
+/// 1.15x from 8 times it; docs/MOTION-FAMILY.md, "Past the top level").
+pub const PAST_TOP_FACTOR: f32 = 8.0;
+
+/// Sets the columns of `dst` that `mask` marks (bank column order) to `src`'s.
+fn copy_columns(dst: &mut BankGains, src: &BankGains, mask: [bool; crate::FAMILY_COUNT]) {
+    struct Copy<'a>(
+        &'a mut BankGains,
+        &'a BankGains,
+        [bool; crate::FAMILY_COUNT],
+    );
+    impl FamilyVisitor for Copy<'_> {
+        fn family<F: Family>(&mut self, column: usize) {
+            if self.2[column] {
+                F::set(self.0, F::get(self.1));
+            }
+        }
+    }
+    crate::for_each_family(&mut Copy(dst, src, mask));
+}
 
 /// Whether a sample interval `dt` (µs) continues a steady stream whose previous interval was
 /// `dt_prev` (µs; 0: none yet): within a quarter of it. A lost packet, a gap, a new epoch or
@@ -130,6 +170,16 @@ impl Default for AdaptiveConfig {
 /// motion ([`GainSchedule::with_tuned_jerk`]) makes the bank follow the motion too, from the
 /// rate it is given (see [`AdaptiveConfig::jerk_margin`]).
 ///
+/// **Past the top level.** A motion far gentler than the tuning motion (a steady spin) takes
+/// its observers' level past the schedule's top one. More than [`PAST_TOP_FACTOR`] times it,
+/// once the jerk estimate has run for its time constant, the ILOs take per-sample poles at the
+/// jerk index's bandwidth for that level (`K1 = 1`: they hold a constant rate, where a
+/// schedule tuned on a back-and-forth motion may not), and the ED a lower `alpha` for the
+/// motion's lower acceleration ([`crate::Gains::past_top`]; the other families keep the top
+/// level's). Those gains move bumplessly (their bandwidth is below what a replay settles)
+/// unless the level falls by more than the jerk margin, and they follow the acceleration
+/// power too (docs/MOTION-FAMILY.md, "Past the top level").
+///
 /// **Warm start.** The bank keeps what its laws were fed for the last
 /// [`AdaptiveConfig::replay_samples`] samples (at most [`REPLAY_CAPACITY`], 64: 0.64 s at
 /// 100 Hz, 3.2 s at 20 Hz; `64 * size_of::<Fed<T>>()` bytes: 1,536 for f32, 2,560 for `Fx`),
@@ -153,6 +203,10 @@ pub struct AdaptiveBank<T: Real, S: SqrtFn<T> = NativeSqrt> {
     jerk: Option<JerkEstimator>,
     cfg: AdaptiveConfig,
     level: Levels,
+    /// The gains (velocity, acceleration) the bank runs.
+    gains: (BankGains, BankGains),
+    /// The acceleration ratio they were made with ([`Self::acceleration_ratio`]).
+    ratio: f32,
     since: u32,
     retunes: u32,
     history: heapless::HistoryBuf<crate::Fed<T>, REPLAY_CAPACITY>,
@@ -192,7 +246,12 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
             None => None,
         };
         let level = Levels::all(schedule.clamp(cfg.initial_noise_var));
-        let bank = PaperBank::new(&schedule.config_for(base, level))?;
+        let gains = schedule.gains_for(level);
+        let bank = PaperBank::new(&BankConfig {
+            velocity: gains.0,
+            acceleration: gains.1,
+            ..*base
+        })?;
         // Every level must build (so that a retune never fails half-way).
         for l in schedule.levels() {
             <crate::PaperRows as crate::Rows<T, S>>::build(
@@ -209,6 +268,8 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
             jerk,
             cfg: *cfg,
             level,
+            gains,
+            ratio: 1.0,
             since: 0,
             retunes: 0,
             history: heapless::HistoryBuf::new(),
@@ -237,6 +298,17 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
                         *l = v;
                         left = true;
                     }
+                }
+                // Past the top level the gains follow the acceleration too
+                // ([`crate::PastTop::acceleration_ratio`]): they move when it leaves the band
+                // around the one they were made with.
+                let a = self.acceleration_ratio();
+                let from = self.past_top_from();
+                let past = (self.level.0.iter())
+                    .zip(crate::FAMILIES)
+                    .any(|(l, f)| f.past_top && *l > from);
+                if past && (a > self.ratio * r || a * r < self.ratio) {
+                    left = true;
                 }
                 if left {
                     // The AVEs' switching gains follow the error they switch on, which the
@@ -296,12 +368,99 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
         Some((levels, v))
     }
 
-    /// `levels` clamped to the schedule's range.
+    /// `levels` clamped to the schedule's range; with a schedule that records its tuning
+    /// motion's jerk power, the levels of the families that go on past the top level
+    /// ([`crate::Gains::PAST_TOP`]) only from below, and from above at [`Self::past_top_max`].
     fn clamp(&self, mut levels: Levels) -> Levels {
-        for l in &mut levels.0 {
-            *l = self.schedule.clamp(*l);
+        let max = self.past_top_max();
+        for (l, f) in levels.0.iter_mut().zip(crate::FAMILIES) {
+            *l = match max {
+                Some(max) if f.past_top && *l > max => max,
+                Some(_) if f.past_top && *l > self.past_top_from() => *l,
+                _ => self.schedule.clamp(*l),
+            };
         }
         levels
+    }
+
+    /// The motion's acceleration power over the schedule's tuning motion's
+    /// ([`GainSchedule::tuned_acceleration`]); 1 where either is not known.
+    fn acceleration_ratio(&self) -> f32 {
+        let now = self.jerk.as_ref().and_then(|j| j.acceleration_power());
+        match (self.schedule.tuned_acceleration(), now) {
+            (Some(tuned), Some(a)) if a.is_finite() && a >= 0.0 => a / tuned,
+            _ => 1.0,
+        }
+    }
+
+    /// The level (deg^2) past which the families that go on past the top level take
+    /// [`crate::Gains::past_top`]: [`PAST_TOP_FACTOR`] times the top level's.
+    fn past_top_from(&self) -> f32 {
+        self.schedule.top() * PAST_TOP_FACTOR
+    }
+
+    /// The highest level (deg^2) past the schedule's top one that changes gains: where
+    /// [`past_top_wn`] reaches its lowest bandwidth. `None` (no family goes past the top)
+    /// without a recorded tuning jerk, or before the jerk estimate has run for its time
+    /// constant ([`JerkEstimator::settled`]: a motion that has just started, or a unit that
+    /// starts at rest, is not yet known to be gentle).
+    fn past_top_max(&self) -> Option<f32> {
+        let tuned = self.schedule.tuned_jerk()?;
+        if !self.jerk.as_ref().is_some_and(JerkEstimator::settled) {
+            return None;
+        }
+        let c = f64::from(SelfTuneConfig::ANCHOR_C) / product::WN_MIN;
+        let dt = f64::from(self.base.sample_period_s);
+        let max = f64::from(tuned) / dt * libm::pow(c, 6.0);
+        Some((max as f32).max(self.past_top_from()))
+    }
+
+    /// The gains (velocity, acceleration) for `levels`: the schedule's
+    /// ([`GainSchedule::gains_for`]); for a family that goes on past the top level
+    /// ([`crate::Gains::PAST_TOP`]) at a level more than [`PAST_TOP_FACTOR`] times it,
+    /// [`crate::Gains::past_top`] of the top level's velocity gains, at the bandwidth of
+    /// [`past_top_wn`] and the motion's acceleration ratio ([`Self::acceleration_ratio`]).
+    fn gains(&self, levels: Levels) -> (BankGains, BankGains) {
+        let (velocity, acceleration) = self.schedule.gains_for(levels);
+        let Some(tuned) = self.schedule.tuned_jerk() else {
+            return (velocity, acceleration);
+        };
+        struct Past {
+            levels: Levels,
+            top: f32,
+            tuned: f32,
+            h_s: f32,
+            dt_s: f32,
+            acceleration_ratio: f32,
+            velocity: BankGains,
+        }
+        impl FamilyVisitor for Past {
+            fn family<F: Family>(&mut self, column: usize) {
+                let v = self.levels.0[column];
+                if <F::Gains as crate::Gains>::PAST_TOP && v > self.top {
+                    let rule = crate::PastTop {
+                        wn_rad_s: past_top_wn(self.tuned, v, self.dt_s),
+                        zeta: f64::from(SelfTuneConfig::ZETA),
+                        h_s: f64::from(self.h_s),
+                        dt_s: f64::from(self.dt_s),
+                        acceleration_ratio: self.acceleration_ratio,
+                    };
+                    let top = F::get(&self.velocity);
+                    F::set(&mut self.velocity, crate::Gains::past_top(&top, &rule));
+                }
+            }
+        }
+        let mut past = Past {
+            levels,
+            top: self.past_top_from(),
+            tuned,
+            h_s: self.base.h,
+            dt_s: self.base.sample_period_s,
+            acceleration_ratio: self.acceleration_ratio(),
+            velocity,
+        };
+        crate::for_each_family(&mut past);
+        (past.velocity, acceleration)
     }
 
     /// The rate about the bank's axis at `t_us` (deg/s), from which it estimates the motion's
@@ -341,12 +500,31 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
     /// for `deltahat_var` (deg^2; the noise estimate when the jerk index moved the level).
     fn retune_with(&mut self, levels: Levels, deltahat_var: f32) {
         let v = self.clamp(levels);
-        let old = self.schedule.gains_for(self.level);
-        let new = self.schedule.config_for(&self.base, v);
+        let old = self.gains;
+        let ratio = self.acceleration_ratio();
+        let (velocity, acceleration) = self.gains(v);
+        let new = BankConfig {
+            velocity,
+            acceleration,
+            ..self.base
+        };
         let keep = (self.cfg.replay_samples as usize).min(self.history.len());
         // Interpolated between levels that all build: a gain change cannot fail but for
         // rounding at a constraint's edge; then the current gains are kept.
         let changed = if keep > 0 {
+            // A family that stays past the top level, or goes there, moves bumplessly after
+            // the others (its bandwidth is below what the replay settles), unless its level
+            // fell by more than the jerk margin: the motion picked up (a unit at rest that
+            // starts to move), and the replay rebuilds its state from the history.
+            let top = self.past_top_from();
+            let m = self.cfg.jerk_margin;
+            let mut bumpless = [false; crate::FAMILY_COUNT];
+            for (c, f) in crate::FAMILIES.iter().enumerate() {
+                let (was, will) = (self.level.0[c], v.0[c]);
+                bumpless[c] = f.past_top && will > top && will * m >= was;
+            }
+            let mut first = new;
+            copy_columns(&mut first.velocity, &old.0, bumpless);
             let old = BankConfig {
                 velocity: old.0,
                 acceleration: old.1,
@@ -357,7 +535,15 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
                 .history
                 .oldest_ordered()
                 .skip(self.history.len() - keep);
-            self.bank.set_gains_warm(&old, &new, history, d).is_ok()
+            if self.bank.set_gains_warm(&old, &first, history, d).is_err() {
+                false
+            } else if first == new || self.bank.set_gains(&new).is_ok() {
+                true
+            } else {
+                // The bank runs the first step's gains; the level is tried again.
+                self.gains = (first.velocity, first.acceleration);
+                false
+            }
         } else if self.bank.set_gains(&new).is_ok() {
             if let Some(d) = self.schedule.ave_deltahat_at(deltahat_var) {
                 let mut now = self.bank.ave_deltahat();
@@ -375,6 +561,8 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
         };
         if changed {
             self.level = v;
+            self.gains = (velocity, acceleration);
+            self.ratio = ratio;
             self.retunes = self.retunes.saturating_add(1);
         }
     }

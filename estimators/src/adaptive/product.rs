@@ -138,7 +138,7 @@ impl Default for AdaptiveProductConfig {
 }
 
 /// The lowest ILO1 bandwidth taken, rad/s.
-const WN_MIN: f64 = 2.0;
+pub(super) const WN_MIN: f64 = 2.0;
 
 /// Intervals the jitter of [`AdaptiveProductBank`]'s sample interval is averaged over (the
 /// weight of an interval once that many were seen is the inverse).

@@ -353,6 +353,11 @@ impl GainSchedule {
         &self.levels[..self.len]
     }
 
+    /// The top level's noise variance, deg^2.
+    pub fn top(&self) -> f32 {
+        self.levels()[self.len - 1].noise_var
+    }
+
     /// `noise_var` (deg^2) clamped to the schedule's range.
     pub fn clamp(&self, noise_var: f32) -> f32 {
         let l = self.levels();

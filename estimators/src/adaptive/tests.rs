@@ -1132,14 +1132,33 @@ fn the_self_tuning_bank_starts_within_its_bounds_at_2_hz() {
     within(&a, f64::from(0.5f32));
 }
 
+/// The jerk power and the acceleration power of [`on_the_sine`]'s motion, measured.
+fn sine_powers() -> (f32, f32) {
+    let w = 2.0 * core::f64::consts::PI;
+    let mut measured = JerkEstimator::new(1e12, 0.01).unwrap().with_acceleration();
+    for k in 0..2000u64 {
+        let t = k as f64 * 0.01;
+        measured.update(k * 10_000, (20.0 * w * libm::cos(w * t)) as f32);
+    }
+    (
+        measured.power().unwrap(),
+        measured.acceleration_power().unwrap(),
+    )
+}
+
 /// The paper bank following `schedule` on 20 s of a 1 Hz sine of 20 deg at 100 Hz with
 /// N(0, 0.1) deg^2 of noise (seed 5), given the sine's rate when `rates`.
 fn on_the_sine(schedule: &GainSchedule, rates: bool) -> AdaptiveBank<f32> {
+    on_the_sine_for(schedule, rates, 2000)
+}
+
+/// [`on_the_sine`] for `samples` samples.
+fn on_the_sine_for(schedule: &GainSchedule, rates: bool, samples: u64) -> AdaptiveBank<f32> {
     let w = 2.0 * core::f64::consts::PI;
     let mut b =
         AdaptiveBank::<f32>::new(&BankConfig::PAPER, schedule, &AdaptiveConfig::DEFAULT).unwrap();
     let mut g = Gauss::new(5);
-    for k in 0..2000u64 {
+    for k in 0..samples {
         let t = k as f64 * 0.01;
         let y = 20.0 * libm::sin(w * t) + libm::sqrt(0.1) * g.next();
         if rates {
@@ -1246,16 +1265,7 @@ fn each_family_follows_its_own_measure_of_the_motion() {
         s.with_tuned_acceleration(0.0),
         Err(ConfigError::NotPositive("tuned_acceleration_power"))
     );
-    let w = 2.0 * core::f64::consts::PI;
-    let mut measured = JerkEstimator::new(1e12, 0.01).unwrap().with_acceleration();
-    for k in 0..2000u64 {
-        let t = k as f64 * 0.01;
-        measured.update(k * 10_000, (20.0 * w * libm::cos(w * t)) as f32);
-    }
-    let (j, a) = (
-        measured.power().unwrap(),
-        measured.acceleration_power().unwrap(),
-    );
+    let (j, a) = sine_powers();
     let run = |schedule: &GainSchedule| on_the_sine(schedule, true).gain_levels();
     let column = |label: &str| {
         crate::FAMILIES
@@ -1398,4 +1408,68 @@ fn a_restart_runs_at_the_start_gains_until_it_settles() {
         assert!(a.ilo1_wn().unwrap() < 2.5, "gap {gap}: {:?}", a.ilo1_wn());
         assert!((v + 200.0).abs() < 20.0, "gap {gap}: {v} deg/s after 1 s");
     }
+}
+
+/// Past the top level (beyond 8 times its noise variance) the ILOs and the ED go on: on the
+/// 1 Hz sine of 20 deg with N(0, 0.1) deg^2 of noise, tuned on a motion 1,000 times harder
+/// (level `0.1 x 1000 / 8` = 12.5 deg^2, past `8 x 0.1`), once the jerk estimate has run for
+/// its time constant (5 s), each ILO runs `IloConfig::per_sample` at the rule's bandwidth
+/// (`K1 = 1`: it holds a constant rate), the ED the top level's `alpha` halved (the
+/// acceleration ratio 1/16 gives `sqrt` 1/4, floored at `ED_PAST_TOP_MIN`) and `lambda` by
+/// `sqrt(1/2)`, every other family the top level's. Before the jerk estimate has run that
+/// long, or for a motion only 40 times gentler (0.5 deg^2: past the top, within 8 times it), or for a schedule without a
+/// recorded tuning jerk, every family has the top level's gains.
+#[test]
+fn past_the_top_level_the_ilos_and_the_ed_go_on() {
+    let s = GainSchedule::new(&[
+        level(0.001, 100.0, ILO1_TABLE2),
+        level(0.1, 1000.0, ILO1_TABLE2),
+    ])
+    .unwrap();
+    let top = s.gains_at(0.1);
+    let (j, a) = sine_powers();
+    let gentle = s
+        .with_tuned_jerk(1000.0 * j)
+        .unwrap()
+        .with_tuned_acceleration(16.0 * a)
+        .unwrap();
+    let run = |schedule: &GainSchedule, samples: u64| on_the_sine_for(schedule, true, samples);
+    let b = run(&gentle, 2000);
+    let ilo1 = crate::FAMILIES
+        .iter()
+        .position(|f| f.label == "ILO1")
+        .unwrap();
+    let level = b.gain_levels().0[ilo1];
+    assert!(level > 12.5 / 1.5 && level < 12.5 * 1.5, "{level}");
+    let wn = past_top_wn(1000.0 * j, level, 0.01);
+    let zeta = f64::from(SelfTuneConfig::ZETA);
+    let rule = IloConfig::per_sample(wn, zeta, 1e-4, 0.01).unwrap();
+    let (velocity, acceleration) = b.gains;
+    assert_eq!(velocity.ilo, [rule; 3]);
+    assert_eq!(rule.k1, 1.0);
+    assert_eq!(rule.constant_rate_gain(), 1.0);
+    assert!(
+        wn > product::WN_MIN && wn < 0.5 * core::f64::consts::PI / 0.01,
+        "{wn}"
+    );
+    let floor = crate::ed::ED_PAST_TOP_MIN;
+    assert_eq!(velocity.ed.alpha, top.0.ed.alpha * floor);
+    let lambda = top.0.ed.lambda * libm::sqrtf(floor);
+    assert!((velocity.ed.lambda / lambda - 1.0).abs() < 1e-6);
+    let rest = |g: &BankGains| BankGains {
+        ilo: top.0.ilo,
+        ed: top.0.ed,
+        ..*g
+    };
+    assert_eq!(rest(&velocity), top.0);
+    assert_eq!(acceleration, top.1);
+    // The jerk estimate after 3 s has not run its 5 s time constant.
+    assert_eq!(run(&gentle, 300).gains, top);
+    let nearer = s
+        .with_tuned_jerk(40.0 * j)
+        .unwrap()
+        .with_tuned_acceleration(16.0 * a)
+        .unwrap();
+    assert_eq!(run(&nearer, 2000).gains, top);
+    assert_eq!(run(&s, 2000).gains, top);
 }
