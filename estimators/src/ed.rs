@@ -457,7 +457,10 @@ impl Gains for EdConfig {
     }
 }
 
-/// The least factor [`EdConfig::past_top`] scales `alpha` by.
+/// The least factor [`EdConfig::past_top`] scales `alpha` by: a choice for robustness, not a
+/// measured optimum. `alpha` must stay above the motion's largest acceleration, which the
+/// acceleration power (a 0.5 s mean square) does not bound (docs/MOTION-FAMILY.md, "Past
+/// the top level").
 pub const ED_PAST_TOP_MIN: f32 = 0.5;
 
 crate::family::family! {

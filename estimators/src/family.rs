@@ -218,9 +218,10 @@ pub trait Gains: Copy + PartialEq + core::fmt::Debug + SerdeIfEnabled + 'static 
     }
 }
 
-/// Where an observer's gains go past a gain schedule's top level ([`Gains::past_top`]): per-sample
-/// poles at the bandwidth `wn_rad_s` (rad/s) with the damping `zeta`, for the law's step
-/// `h_s` and the sample period `dt_s` (s) ([`crate::IloConfig::per_sample`]).
+/// Where an observer's gains go past a gain schedule's top level ([`Gains::past_top`]): the
+/// ILOs to per-sample poles at the bandwidth `wn_rad_s` (rad/s) with the damping `zeta`, for
+/// the law's step `h_s` and the sample period `dt_s` (s) ([`crate::IloConfig::per_sample`]);
+/// the ED by the motion's acceleration ratio.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PastTop {
     /// The bandwidth, rad/s.

@@ -301,14 +301,17 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
                 }
                 // Past the top level the gains follow the acceleration too
                 // ([`crate::PastTop::acceleration_ratio`]): they move when it leaves the band
-                // around the one they were made with.
+                // around the one they were made with and that changes them.
                 let a = self.acceleration_ratio();
                 let from = self.past_top_from();
-                let past = (self.level.0.iter())
-                    .zip(crate::FAMILIES)
+                let past = (self.level.0.iter().zip(crate::FAMILIES))
                     .any(|(l, f)| f.past_top && *l > from);
-                if past && (a > self.ratio * r || a * r < self.ratio) {
-                    left = true;
+                if !left && past && (a > self.ratio * r || a * r < self.ratio) {
+                    if self.gains(self.level) == self.gains {
+                        self.ratio = a;
+                    } else {
+                        left = true;
+                    }
                 }
                 if left {
                     // The AVEs' switching gains follow the error they switch on, which the
@@ -479,7 +482,8 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
         self.jerk.as_ref().and_then(|j| j.power())
     }
 
-    /// Sets the gains for the noise variance `noise_var` (deg^2, clamped to the schedule) now.
+    /// Sets the gains for the noise variance `noise_var` (deg^2, clamped to the schedule; past
+    /// its top level as the type's "Past the top level" says) now.
     ///
     /// With a history (the default, see the type's warm start): the rows whose gains changed
     /// are replayed over it ([`PaperBank::set_gains_warm`]), the AVEs starting with the
@@ -579,7 +583,8 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
         self.level.0[0]
     }
 
-    /// The noise variance each family's current gains were interpolated for, deg^2.
+    /// The noise variance each family's current gains were interpolated for, deg^2 (above the
+    /// schedule's top level for a family past it: the type's "Past the top level").
     pub fn gain_levels(&self) -> Levels {
         self.level
     }
