@@ -31,14 +31,14 @@
 use estimators::BankConfig;
 use nav440_cli::motion::ProfileKind;
 use nav440_cli::paper::{ave_on_rate, COLUMNS, REFERENCE_AVE};
-use nav440_cli::replay::{self, noisy_angle, unwrap_deg, Axis, EstimateOptions, Noise};
+use nav440_cli::replay::{self, noisy_angle, unwrap_deg, Axes, Axis, EstimateOptions, Noise};
 use nav440_cli::synth::a2_samples;
 use nav440_cli::tune::{bank_mse, Families};
 
 mod family;
 mod runs;
 use family::{mse_of, reference, tuned_over};
-use runs::{mse_over, schedule, schedule_by_noise};
+use runs::{mse_over, mse_over_axis, schedule, schedule_by_noise};
 
 /// The motions: (profile, shape seed, label).
 const MOTIONS: [(ProfileKind, u64, &str); 5] = [
@@ -852,6 +852,21 @@ fn against_the_tuned_ilo1(mut mse: impl FnMut(&[replay::Sample], &[f64], f64) ->
     println!("within {WITHIN_TUNED}x of the tuned ILO1: {within} of 15 cells");
 }
 
+/// The cells (motion, family, half: 0 for 1-15 s) where the bundled schedule following the
+/// motion is short of 1.1x the better fixed set and of 1.1x the noise alone, held within
+/// 1.2x: the tumble's quiet half, scored on its pitch, for ILO1-3 (1.15x) and the AD (1.14x,
+/// both against the better fixed set). Its nods through the vertical
+/// are brief bursts of 50 times fig5's jerk power between pauses of several seconds: the jerk
+/// estimate (5 s) holds a burst's intensity through the next pause, whose observers then run
+/// a lower level's lighter gains, and the AD's acceleration estimate (0.5 s) lags each burst
+/// (docs/MOTION-FAMILY.md, "A schedule that follows the motion").
+const SHORT_OF_TRAVEL: [(ProfileKind, &str, usize); 4] = [
+    (ProfileKind::Tumble, "ILO1", 0),
+    (ProfileKind::Tumble, "ILO2", 0),
+    (ProfileKind::Tumble, "ILO3", 0),
+    (ProfileKind::Tumble, "AD", 0),
+];
+
 /// The bundled noise schedule (tuned on fig5), which records the jerk and acceleration powers
 /// of the capture it was tuned on (`tuned_jerk_power`, `tuned_acceleration_power`,
 /// `GainSchedule::with_tuned_jerk`, `with_tuned_acceleration`) and so follows the motion as
@@ -864,7 +879,9 @@ fn against_the_tuned_ilo1(mut mse: impl FnMut(&[replay::Sample], &[f64], f64) ->
 /// fig5 (the motion it was tuned on), every family within 1.1x of the better fixed set in
 /// each half, and over the whole run below both fixed sets (on the spin, far gentler than
 /// fig5, the ILOs and the ED by going on past the schedule's top level:
-/// `estimators::Gains::past_top`).
+/// `estimators::Gains::past_top`). The motions are those of [`MOTIONS`], scored on the yaw,
+/// and the tumble, scored on its pitch (its yaw is fed through gimbal lock); the cells of
+/// [`SHORT_OF_TRAVEL`] are held within 1.2x instead of 1.1x.
 #[test]
 fn a_schedule_that_follows_the_motion() {
     let (file, with_jerk) = schedule("gains/schedule_fig5.toml");
@@ -883,12 +900,19 @@ fn a_schedule_that_follows_the_motion() {
         "motion",
         COLUMNS.map(|c| format!("{c:>26}")).join("")
     );
-    for (profile, seed, label) in MOTIONS {
+    let yaw = MOTIONS.map(|(profile, seed, label)| (profile, seed, label, Axis::Yaw));
+    let tumble = (ProfileKind::Tumble, 1, "tumble (pitch)", Axis::Pitch);
+    for (profile, seed, label, axis) in yaw.into_iter().chain([tumble]) {
         let samples = a2_samples(profile, seed, 100, 30.0).unwrap();
-        let noisy = switched_noise(&samples);
+        let noisy = switched_noise_on(&samples, axis);
         let ranges = [HALVES[0], HALVES[1], (HALVES[0].0, HALVES[1].1)];
-        let [n, m, q, l] = [&noise_only, &with_jerk, &fixed_quiet, &fixed_loud]
-            .map(|opts| mse_over(&noisy, opts, &ranges));
+        let [n, m, q, l] = [&noise_only, &with_jerk, &fixed_quiet, &fixed_loud].map(|opts| {
+            let opts = EstimateOptions {
+                axes: Axes::only(axis),
+                ..opts.clone()
+            };
+            mse_over_axis(&noisy, &opts, &ranges, axis)
+        });
         let mut cells = Vec::new();
         for (h, r) in ranges.iter().enumerate() {
             let mut line = String::new();
@@ -898,17 +922,19 @@ fn a_schedule_that_follows_the_motion() {
                     "{:>26}",
                     format!("{:.2} -> {:.2}", n[h][i] / best, m[h][i] / best)
                 ));
+                let travels = profile != ProfileKind::Fig5;
+                let short = SHORT_OF_TRAVEL.contains(&(profile, COLUMNS[i], h));
+                let bound = if short { 1.2 } else { 1.1 };
                 assert!(
-                    m[h][i] <= 1.1 * n[h][i],
+                    m[h][i] <= bound * n[h][i],
                     "{label} {r:?} {}: following {} noise alone {}",
                     COLUMNS[i],
                     m[h][i],
                     n[h][i]
                 );
-                let travels = profile != ProfileKind::Fig5;
                 if travels && h < 2 {
                     assert!(
-                        m[h][i] <= 1.1 * best,
+                        m[h][i] <= bound * best,
                         "{label} {r:?} {}: following {} fixed {best}",
                         COLUMNS[i],
                         m[h][i]
@@ -936,15 +962,20 @@ fn a_schedule_that_follows_the_motion() {
 /// two noise draws (seeds 1 and 2, as noise_on_fast_motion's lag test), 0.01 deg^2 until
 /// [`SWITCH_S`], then 0.5.
 fn switched_noise(samples: &[replay::Sample]) -> Vec<replay::Sample> {
-    let quiet = noisy_angle(samples, Axis::Yaw, Some(Noise { var: 0.01, seed: 1 })).unwrap();
-    let loud = noisy_angle(samples, Axis::Yaw, Some(Noise { var: 0.5, seed: 2 })).unwrap();
+    switched_noise_on(samples, Axis::Yaw)
+}
+
+/// [`switched_noise`] on the angle of `axis`.
+fn switched_noise_on(samples: &[replay::Sample], axis: Axis) -> Vec<replay::Sample> {
+    let quiet = noisy_angle(samples, axis, Some(Noise { var: 0.01, seed: 1 })).unwrap();
+    let loud = noisy_angle(samples, axis, Some(Noise { var: 0.5, seed: 2 })).unwrap();
     let switch_us = (SWITCH_S * 1e6) as u64;
     samples
         .iter()
         .zip(quiet.iter().zip(&loud))
         .map(|(s, (q, l))| {
             let mut o = *s;
-            o.set_angle_deg(Axis::Yaw, if s.t_us < switch_us { *q } else { *l });
+            o.set_angle_deg(axis, if s.t_us < switch_us { *q } else { *l });
             o
         })
         .collect()

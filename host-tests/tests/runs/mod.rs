@@ -13,16 +13,26 @@ pub fn mse_over(
     opts: &EstimateOptions,
     ranges: &[(f64, f64)],
 ) -> Vec<[f64; estimators::FAMILY_COUNT]> {
+    mse_over_axis(samples, opts, ranges, Axis::Yaw)
+}
+
+/// [`mse_over`] of the estimates about `axis` (which `opts` must estimate).
+pub fn mse_over_axis(
+    samples: &[Sample],
+    opts: &EstimateOptions,
+    ranges: &[(f64, f64)],
+    axis: Axis,
+) -> Vec<[f64; estimators::FAMILY_COUNT]> {
     let (rows, rejected) = replay::estimate(samples, opts).unwrap();
     assert_eq!(rejected, 0);
     let t: Vec<u64> = rows.iter().map(|r| r.t_us).collect();
     let reference: Vec<f32> = rows
         .iter()
-        .map(|r| r.axis(Axis::Yaw).unwrap().reference_deg_s.unwrap())
+        .map(|r| r.axis(axis).unwrap().reference_deg_s.unwrap())
         .collect();
     let velocities: Vec<[f32; estimators::FAMILY_COUNT]> = rows
         .iter()
-        .map(|r| r.axis(Axis::Yaw).unwrap().out.velocities())
+        .map(|r| r.axis(axis).unwrap().out.velocities())
         .collect();
     ranges
         .iter()
