@@ -36,13 +36,13 @@ use crate::{ConfigError, NativeSqrt, Real, SampleError, SqrtFn};
 /// (deg/s^3)^2) at the noise `v`, the level being that motion's equivalent noise; at least
 /// 2 rad/s and at most 80 % of the Nyquist frequency, the sample period `dt` in s.
 fn past_top_wn(tuned: f32, v: f32, dt: f32) -> f64 {
-    let zeta = f64::from(SelfTuneConfig::ZETA);
-    let dt = f64::from(dt);
-    let wn_max = 0.8 * core::f64::consts::PI / (dt * libm::sqrt(1.0 - zeta * zeta));
-    let c = f64::from(SelfTuneConfig::ANCHOR_C);
-    product::jerk_index_wn(c, f64::from(tuned), f64::from(v), dt)
-        .max(product::WN_MIN)
-        .min(wn_max.max(product::WN_MIN))
+    product::bounded_jerk_index_wn(
+        f64::from(SelfTuneConfig::ANCHOR_C),
+        f64::from(tuned),
+        f64::from(v),
+        f64::from(dt),
+        f64::from(SelfTuneConfig::ZETA),
+    )
 }
 
 /// How far past a schedule's top level (as a factor of its noise variance) the families that

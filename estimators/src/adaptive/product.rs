@@ -151,6 +151,18 @@ pub(super) fn jerk_index_wn(c: f64, j: f64, v: f64, dt: f64) -> f64 {
     c * libm::pow(j / (v * dt), 1.0 / 6.0)
 }
 
+/// [`jerk_index_wn`] held to the bandwidths ILO1's per-sample poles take: at least [`WN_MIN`],
+/// and a damped frequency `wn sqrt(1 - zeta^2)` at most 80 % of the Nyquist frequency `pi /
+/// dt` (`zeta` the damping, `dt` the sample period in s).
+pub(super) fn bounded_jerk_index_wn(c: f64, j: f64, v: f64, dt: f64, zeta: f64) -> f64 {
+    let wn_max = 0.8 * core::f64::consts::PI / (dt * libm::sqrt(1.0 - zeta * zeta));
+    // `max` then `min`, not `clamp`: no panic path (whose message formats floats), and a NaN
+    // index gives the lowest bandwidth.
+    jerk_index_wn(c, j, v, dt)
+        .max(WN_MIN)
+        .min(wn_max.max(WN_MIN))
+}
+
 /// The product bank ([`ProductBank`]: ILO1 velocity, Kalman acceleration) whose gains follow
 /// what it measures: the angle's noise variance `V` ([`NoiseEstimator`], from the unwrapped
 /// angle) and the motion's jerk power `J` ([`JerkEstimator`], from the rate a gyro measures
@@ -393,17 +405,13 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
         let r = v.max(R_FLOOR);
         let dt = self.cfg.sample_period_s;
         let f = &self.follow;
-        let zeta = f64::from(f.ilo1_zeta);
-        let wn_max = 0.8 * core::f64::consts::PI / (f64::from(dt) * libm::sqrt(1.0 - zeta * zeta));
-        let wn = jerk_index_wn(
+        let wn = bounded_jerk_index_wn(
             f64::from(f.ilo1_c),
             f64::from(j),
             f64::from(r),
             f64::from(dt),
+            f64::from(f.ilo1_zeta),
         );
-        // `max` then `min`, not `clamp`: no panic path (whose message formats floats), and a
-        // NaN index gives the lowest bandwidth.
-        let wn = wn.max(WN_MIN).min(wn_max.max(WN_MIN));
         let dt5 = dt * dt * dt * dt * dt;
         let lambda = (f.kappa_s * j / r * dt5)
             .max(LAMBDA_RANGE.0)

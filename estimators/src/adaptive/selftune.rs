@@ -1,7 +1,7 @@
 //! [`SelfTuningProductBank`]: the product bank that tunes its velocity gains online against
 //! the rate a gyro measures.
 
-use super::product::jerk_index_wn;
+use super::product::{jerk_index_wn, WN_MIN};
 use super::{steady_interval, AdaptiveProductConfig, JerkEstimator, NoiseEstimator};
 use crate::{
     BankConfig, ConfigError, EstimatorOutput, IloConfig, NativeSqrt, ProductBank, ProductOutput,
@@ -122,8 +122,6 @@ impl Default for SelfTuneConfig {
     }
 }
 
-/// The lowest ILO1 bandwidth taken, rad/s.
-const WN_MIN: f64 = 2.0;
 /// The range of the damping taken.
 const ZETA_RANGE: (f64, f64) = (0.05, 0.9);
 
