@@ -7,7 +7,8 @@
 //! Everything here is `no_std`, heap-free and bounded: the noise estimate costs a few f32
 //! operations per sample (in f32 for every [`Real`]: the input angle is an f32 anyway); the
 //! gains are re-interpolated and the laws' coefficients rebuilt at most once every
-//! [`AdaptiveConfig::retune_every`] samples, and only when the estimate moved by more than
+//! [`AdaptiveConfig::retune_every`] samples (twice for a schedule that follows the motion,
+//! when the motion picks up: [`AdaptiveBank`]), and only when the estimate moved by more than
 //! the factor [`AdaptiveConfig::retune_ratio`] from the level the current gains were made for.
 
 mod jerk;
@@ -101,8 +102,9 @@ pub struct AdaptiveConfig {
     pub tau_s: f32,
     /// Noise variance the gains start at, deg^2 (default 0.01, the paper's small noise).
     pub initial_noise_var: f32,
-    /// The gains are reconsidered every this many samples at most (default 20: 0.2 s at
-    /// 100 Hz).
+    /// The gains are reconsidered every this many samples (default 20: 0.2 s at 100 Hz),
+    /// and, with a schedule that follows the motion, once in between when the motion picks
+    /// up (see [`AdaptiveBank`], "A motion that picks up").
     pub retune_every: u32,
     /// ... and changed only when the estimate (clamped to the schedule) differs from the level
     /// of the current gains by more than this factor either way (default 1.5, above the
@@ -170,6 +172,18 @@ impl Default for AdaptiveConfig {
 /// motion ([`GainSchedule::with_tuned_jerk`]) makes the bank follow the motion too, from the
 /// rate it is given (see [`AdaptiveConfig::jerk_margin`]).
 ///
+/// **A motion that picks up.** Once its noise estimate has settled
+/// ([`NoiseEstimator::settled`]), such a bank also computes the levels at every sample
+/// between two retune ticks, and retunes at once, once per interval, when a level falls by
+/// more than the jerk margin: a motion that starts, or a sharp turn after a pause (a
+/// tumble's pitch that reverses in a few samples as the unit nods through the vertical),
+/// takes its lighter gains within a sample or two of its onset, and the warm start replays
+/// the samples before it through them. (At the default interval the settled noise estimate
+/// alone falls by at most `0.98^20` = 0.67 between two ticks: a fall by the margin is the
+/// motion's.) The check costs the levels' arithmetic per sample (no `libm` call); a bank
+/// then changes its gains at most twice per [`AdaptiveConfig::retune_every`] samples
+/// (docs/MOTION-FAMILY.md, "A schedule that follows the motion").
+///
 /// **Past the top level.** A motion far gentler than the tuning motion (a steady spin) takes
 /// its observers' level past the schedule's top one. More than [`PAST_TOP_FACTOR`] times it,
 /// once the jerk estimate has run for its time constant, the ILOs take per-sample poles at the
@@ -208,6 +222,10 @@ pub struct AdaptiveBank<T: Real, S: SqrtFn<T> = NativeSqrt> {
     /// The acceleration ratio they were made with ([`Self::acceleration_ratio`]).
     ratio: f32,
     since: u32,
+    /// An early retune came since the last tick (see [`Self::update`]).
+    early: bool,
+    /// [`Self::past_top_max`] once the jerk estimate has settled.
+    past_top_max: Option<f32>,
     retunes: u32,
     history: heapless::HistoryBuf<crate::Fed<T>, REPLAY_CAPACITY>,
 }
@@ -245,6 +263,14 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
             }
             None => None,
         };
+        // Where the ILO rule past the top reaches its lowest bandwidth
+        // ([`Self::past_top_max`]).
+        let past_top_max = schedule.tuned_jerk().map(|tuned| {
+            let c = f64::from(SelfTuneConfig::ANCHOR_C) / product::WN_MIN;
+            let dt = f64::from(base.sample_period_s);
+            let max = f64::from(tuned) / dt * libm::pow(c, 6.0);
+            (max as f32).max(schedule.top() * PAST_TOP_FACTOR)
+        });
         let level = Levels::all(schedule.clamp(cfg.initial_noise_var));
         let gains = schedule.gains_for(level);
         let bank = PaperBank::new(&BankConfig {
@@ -271,13 +297,15 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
             gains,
             ratio: 1.0,
             since: 0,
+            early: false,
+            past_top_max,
             retunes: 0,
             history: heapless::HistoryBuf::new(),
         })
     }
 
     /// Feeds one sample (as [`PaperBank::update`]); the noise estimate is updated with it and
-    /// the gains follow it (see the type).
+    /// the gains follow it, at the retune ticks and when the motion picks up (see the type).
     pub fn update(&mut self, t_us: u64, angle_deg: f32) -> Result<PaperOutput<T>, SampleError> {
         let (out, fed) = self.bank.update_fed(t_us, angle_deg)?;
         if self.cfg.replay_samples > 0 {
@@ -285,15 +313,31 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
         }
         self.noise.update(t_us, angle_deg);
         self.since = self.since.saturating_add(1);
-        if self.since >= self.cfg.retune_every {
+        let tick = self.since >= self.cfg.retune_every;
+        if tick {
             self.since = 0;
+            self.early = false;
+        }
+        // Between ticks, with a schedule that follows the motion and a settled noise
+        // estimate, once: a motion that picks up (a level falls by more than the jerk
+        // margin) is retuned at once.
+        let early = !tick && !self.early && self.jerk.is_some() && self.noise.settled();
+        if tick || early {
             if let Some((v, noise)) = self.index() {
+                let v = self.clamp(v);
+                if early {
+                    let m = self.cfg.jerk_margin;
+                    if !v.0.iter().zip(self.level.0).any(|(v, l)| *v * m < l) {
+                        return Ok(out);
+                    }
+                    self.early = true;
+                }
                 // Each family's level moves when its index leaves the band around it; the
                 // others keep theirs.
                 let r = self.cfg.retune_ratio;
                 let mut next = self.level;
                 let mut left = false;
-                for (l, v) in next.0.iter_mut().zip(self.clamp(v).0) {
+                for (l, v) in next.0.iter_mut().zip(v.0) {
                     if v > *l * r || v * r < *l {
                         *l = v;
                         left = true;
@@ -408,14 +452,8 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
     /// constant ([`JerkEstimator::settled`]: a motion that has just started, or a unit that
     /// starts at rest, is not yet known to be gentle).
     fn past_top_max(&self) -> Option<f32> {
-        let tuned = self.schedule.tuned_jerk()?;
-        if !self.jerk.as_ref().is_some_and(JerkEstimator::settled) {
-            return None;
-        }
-        let c = f64::from(SelfTuneConfig::ANCHOR_C) / product::WN_MIN;
-        let dt = f64::from(self.base.sample_period_s);
-        let max = f64::from(tuned) / dt * libm::pow(c, 6.0);
-        Some((max as f32).max(self.past_top_from()))
+        self.past_top_max
+            .filter(|_| self.jerk.as_ref().is_some_and(JerkEstimator::settled))
     }
 
     /// The gains (velocity, acceleration) for `levels`: the schedule's

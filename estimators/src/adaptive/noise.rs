@@ -76,6 +76,13 @@ impl NoiseEstimator {
         (self.count > 0).then_some(self.var)
     }
 
+    /// `true` once the estimate has averaged a time constant's worth of terms: from then on
+    /// it falls by at most the factor `1 - dt / tau` a sample (0.98 at the least time
+    /// constant, [`Self::MIN_TAU_SAMPLES`]).
+    pub fn settled(&self) -> bool {
+        self.count as f32 * self.alpha >= 1.0
+    }
+
     /// Takes the sample `angle_deg` (deg, wrapped at +-180 or not) at `t_us` (µs, increasing).
     pub fn update(&mut self, t_us: u64, angle_deg: f32) {
         let Some((tp, yp)) = self.prev.replace((t_us, angle_deg)) else {

@@ -1473,3 +1473,60 @@ fn past_the_top_level_the_ilos_and_the_ed_go_on() {
     assert_eq!(run(&nearer, 2000).gains, top);
     assert_eq!(run(&s, 2000).gains, top);
 }
+
+/// A motion that picks up between two retune ticks is retuned at once: a unit at rest for
+/// 10 s (N(0, 0.1) deg^2 of noise, rate 0) that starts a 1 Hz sine of 20 deg (its rate
+/// steps from 0 to 126 deg/s) at a sample 14 samples before the next tick (ticks every
+/// `retune_every` = 20 samples), under a schedule tuned on a motion 10^4 times gentler:
+/// the observers' level falls from the top (at rest) by more than the jerk margin, and the
+/// gains change within 2 samples of the onset, not at the tick. Between two ticks there is
+/// at most one early retune (at most two gain changes per 20 samples); a schedule that
+/// follows the noise alone waits for the tick.
+#[test]
+fn a_motion_that_picks_up_is_retuned_at_once() {
+    let s = GainSchedule::new(&[
+        level(0.001, 100.0, ILO1_TABLE2),
+        level(0.1, 1000.0, ILO1_TABLE2),
+    ])
+    .unwrap();
+    let (j, _) = sine_powers();
+    let gentle = s.with_tuned_jerk(j / 1e4).unwrap();
+    let w = 2.0 * core::f64::consts::PI;
+    const ONSET: u64 = 1005;
+    // The retune count after each sample.
+    let counts = |schedule: &GainSchedule| {
+        let mut b =
+            AdaptiveBank::<f32>::new(&BankConfig::PAPER, schedule, &AdaptiveConfig::DEFAULT)
+                .unwrap();
+        let mut g = Gauss::new(5);
+        let mut counts = [0u32; 1400];
+        for (k, count) in (0..1400u64).zip(counts.iter_mut()) {
+            let t = k.saturating_sub(ONSET) as f64 * 0.01;
+            let moving = k >= ONSET;
+            let x = if moving { 20.0 * libm::sin(w * t) } else { 0.0 };
+            let r = if moving {
+                20.0 * w * libm::cos(w * t)
+            } else {
+                0.0
+            };
+            b.observe_rate(k * 10_000, r as f32);
+            b.update(k * 10_000, (x + libm::sqrt(0.1) * g.next()) as f32)
+                .unwrap();
+            *count = b.retune_count();
+        }
+        counts
+    };
+    let tick = |k: u64| (k + 1).is_multiple_of(20);
+    let c = counts(&gentle);
+    let first = (ONSET as usize..c.len())
+        .find(|&k| c[k] > c[k - 1])
+        .unwrap() as u64;
+    assert!(first <= ONSET + 2 && !tick(first), "{first}");
+    for k in (19..c.len() - 20).step_by(20) {
+        assert!(c[k + 20] - c[k] <= 2, "{k}: {} -> {}", c[k], c[k + 20]);
+    }
+    let c = counts(&s);
+    for k in 1..c.len() {
+        assert!(c[k] == c[k - 1] || tick(k as u64), "{k}");
+    }
+}
