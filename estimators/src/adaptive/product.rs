@@ -41,7 +41,10 @@ pub struct AdaptiveProductConfig {
     /// Time constant of the jerk estimate, s ([`JerkEstimator`]; default
     /// [`JerkEstimator::DEFAULT_TAU_S`]).
     pub jerk_tau_s: f32,
-    /// The gains are reconsidered every this many samples (default 20: 0.2 s at 100 Hz) ...
+    /// The gains are reconsidered every this many samples (default 20: 0.2 s at 100 Hz), and
+    /// once in between when the motion picks up (the jerk estimate rose by more than
+    /// `ilo1_ratio^6` since the last check, with a settled noise estimate: a nod through the
+    /// vertical, a stroke after a pause) ...
     pub retune_every: u32,
     /// ... and changed when ILO1's `wn` moved by more than this factor either way (default
     /// 1.2) ...
@@ -216,6 +219,10 @@ pub struct AdaptiveProductBank<T: Real, S: SqrtFn<T> = NativeSqrt> {
     /// The current rule's ILO1 bandwidth, rad/s (`None`: the initial gains), and `q / r`.
     wn: Option<f64>,
     q_over_r: Option<f32>,
+    /// The jerk power the gains were last checked at, (deg/s^3)^2, and whether a check came
+    /// early since the last tick (see [`Self::after`]).
+    jerk_at: Option<f32>,
+    early: bool,
     since: u32,
     /// Samples ILO1 keeps the start's gains after a restart (a new epoch, a gap) while it
     /// settles.
@@ -246,6 +253,8 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
             jerk: JerkEstimator::new(follow.jerk_tau_s, cfg.sample_period_s)?,
             wn: None,
             q_over_r: None,
+            jerk_at: None,
+            early: false,
             since: 0,
             settle: 0,
             reinits: 0,
@@ -377,7 +386,7 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
     }
 
     /// After an accepted sample: the noise estimate, and every `retune_every` samples the
-    /// gains.
+    /// gains, or once in between when the motion picks up ([`Self::picked_up`]).
     fn after(&mut self, t_us: u64, out: &ProductOutput<T>) {
         // A gap the bank re-initialised on at this sample: ILO1 restarts from it as after a
         // new epoch.
@@ -395,7 +404,24 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
         self.since = self.since.saturating_add(1);
         if self.since >= self.follow.retune_every {
             self.since = 0;
+            self.early = false;
             self.follow_estimates();
+        } else if !self.early && self.picked_up() {
+            // Once between ticks: a motion that picks up is followed at once.
+            self.early = true;
+            self.follow_estimates();
+        }
+    }
+
+    /// Whether the jerk estimate has risen, since the gains were last checked, by more than
+    /// would move ILO1's bandwidth by its ratio at a steady noise (`ilo1_ratio^6`: the rule's
+    /// `wn` goes as `J^(1/6)`), with a settled noise estimate.
+    fn picked_up(&self) -> bool {
+        let r = self.follow.ilo1_ratio;
+        let (r2, r3) = (r * r, r * r * r);
+        match (self.jerk.power(), self.jerk_at) {
+            (Some(j), Some(at)) => self.noise.settled() && j > at * r3 * r2 * r,
+            _ => false,
         }
     }
 
@@ -423,6 +449,7 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
     /// Kalman's when its `q / r` did: each law changes only on its own move (a change of
     /// ILO1's gains costs it a transient, so the Kalman's moves leave it alone).
     fn follow_estimates(&mut self) {
+        self.jerk_at = self.jerk.power();
         let rule = match (self.noise.variance(), self.jerk.power()) {
             (Some(v), Some(j)) => Some(self.rule(v, j)),
             _ => None,

@@ -1474,6 +1474,21 @@ fn past_the_top_level_the_ilos_and_the_ed_go_on() {
     assert_eq!(run(&s, 2000).gains, top);
 }
 
+/// Sample `k` at 100 Hz of a unit at rest until sample `onset` that then starts a 1 Hz sine
+/// of 20 deg (its rate steps from 0 to 126 deg/s), with N(0, 0.1) deg^2 of noise on the
+/// angle: time (us), angle (deg) and the exact rate (deg/s).
+fn rest_then_sine(k: u64, onset: u64, g: &mut Gauss) -> (u64, f32, f32) {
+    let w = 2.0 * core::f64::consts::PI;
+    let t = k.saturating_sub(onset) as f64 * 0.01;
+    let (x, r) = if k >= onset {
+        (20.0 * libm::sin(w * t), 20.0 * w * libm::cos(w * t))
+    } else {
+        (0.0, 0.0)
+    };
+    let y = x + libm::sqrt(0.1) * g.next();
+    (k * 10_000, y as f32, r as f32)
+}
+
 /// A motion that picks up between two retune ticks is retuned at once: a unit at rest for
 /// 10 s (N(0, 0.1) deg^2 of noise, rate 0) that starts a 1 Hz sine of 20 deg (its rate
 /// steps from 0 to 126 deg/s) at a sample 14 samples before the next tick (ticks every
@@ -1491,7 +1506,6 @@ fn a_motion_that_picks_up_is_retuned_at_once() {
     .unwrap();
     let (j, _) = sine_powers();
     let gentle = s.with_tuned_jerk(j / 1e4).unwrap();
-    let w = 2.0 * core::f64::consts::PI;
     const ONSET: u64 = 1005;
     // The retune count after each sample.
     let counts = |schedule: &GainSchedule| {
@@ -1501,17 +1515,9 @@ fn a_motion_that_picks_up_is_retuned_at_once() {
         let mut g = Gauss::new(5);
         let mut counts = [0u32; 1400];
         for (k, count) in (0..1400u64).zip(counts.iter_mut()) {
-            let t = k.saturating_sub(ONSET) as f64 * 0.01;
-            let moving = k >= ONSET;
-            let x = if moving { 20.0 * libm::sin(w * t) } else { 0.0 };
-            let r = if moving {
-                20.0 * w * libm::cos(w * t)
-            } else {
-                0.0
-            };
-            b.observe_rate(k * 10_000, r as f32);
-            b.update(k * 10_000, (x + libm::sqrt(0.1) * g.next()) as f32)
-                .unwrap();
+            let (t_us, y, r) = rest_then_sine(k, ONSET, &mut g);
+            b.observe_rate(t_us, r);
+            b.update(t_us, y).unwrap();
             *count = b.retune_count();
         }
         counts
@@ -1528,5 +1534,35 @@ fn a_motion_that_picks_up_is_retuned_at_once() {
     let c = counts(&s);
     for k in 1..c.len() {
         assert!(c[k] == c[k - 1] || tick(k as u64), "{k}");
+    }
+}
+
+/// The product bank that follows the motion checks its gains at once when the motion picks
+/// up: the unit of [`a_motion_that_picks_up_is_retuned_at_once`] (at rest for 10 s, then a
+/// 1 Hz sine of 20 deg whose rate steps from 0 to 126 deg/s): ILO1's gains change within 2
+/// samples of the onset, for two onsets 10 samples apart (ticks come every `retune_every` =
+/// 20 samples, so at most one of them can be that close to a tick), and never more than
+/// twice per 20 samples.
+#[test]
+fn the_adaptive_product_bank_follows_a_motion_that_picks_up_at_once() {
+    let f = AdaptiveProductConfig::DEFAULT;
+    assert_eq!(f.retune_every, 20);
+    for onset in [1005u64, 1015] {
+        let mut a = AdaptiveProductBank::<f32>::new(&crate::BankConfig::NAV440, &f).unwrap();
+        let mut g = Gauss::new(5);
+        let mut counts = [0u32; 1400];
+        for (k, count) in (0..1400u64).zip(counts.iter_mut()) {
+            let (t_us, y, r) = rest_then_sine(k, onset, &mut g);
+            a.observe_rate(t_us, r);
+            a.update(t_us, y).unwrap();
+            *count = a.ilo1_retune_count();
+        }
+        let first = (onset as usize..counts.len())
+            .find(|&k| counts[k] > counts[k - 1])
+            .unwrap() as u64;
+        assert!(first <= onset + 2, "{onset}: {first}");
+        for k in 0..counts.len() - 20 {
+            assert!(counts[k + 20] - counts[k] <= 2, "{onset}: {k}");
+        }
     }
 }
