@@ -910,9 +910,8 @@ fn a_schedule_that_follows_the_motion() {
                     format!("{:.2} -> {:.2}", n[h][i] / best, m[h][i] / best)
                 ));
                 let travels = profile != ProfileKind::Fig5;
-                let bound = 1.1;
                 assert!(
-                    m[h][i] <= bound * n[h][i],
+                    m[h][i] <= 1.1 * n[h][i],
                     "{label} {r:?} {}: following {} noise alone {}",
                     COLUMNS[i],
                     m[h][i],
@@ -920,7 +919,7 @@ fn a_schedule_that_follows_the_motion() {
                 );
                 if travels && h < 2 {
                     assert!(
-                        m[h][i] <= bound * best,
+                        m[h][i] <= 1.1 * best,
                         "{label} {r:?} {}: following {} fixed {best}",
                         COLUMNS[i],
                         m[h][i]

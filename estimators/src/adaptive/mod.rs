@@ -54,6 +54,45 @@ fn past_top_wn(tuned: f32, v: f32, dt: f32) -> f64 {
 /// 1.15x from 8 times it; docs/MOTION-FAMILY.md, "Past the top level").
 pub const PAST_TOP_FACTOR: f32 = 8.0;
 
+/// When a bank that follows its estimates checks its gains: at a tick every `every` samples,
+/// and at most once in between, early, when the motion picks up ([`AdaptiveBank`],
+/// [`AdaptiveProductBank`]): so at most twice per `every` samples.
+#[derive(Clone, Copy, Debug, Default)]
+struct Cadence {
+    /// Samples since the last tick.
+    since: u32,
+    /// An early check came since the last tick.
+    early: bool,
+}
+
+impl Cadence {
+    /// Counts a sample: `true` at a tick (every `every` samples), which opens a new interval.
+    fn tick(&mut self, every: u32) -> bool {
+        self.since = self.since.saturating_add(1);
+        let tick = self.since >= every;
+        if tick {
+            self.since = 0;
+            self.early = false;
+        }
+        tick
+    }
+
+    /// Whether this interval still has its early check.
+    fn early_open(&self) -> bool {
+        !self.early
+    }
+
+    /// This interval's early check came.
+    fn take_early(&mut self) {
+        self.early = true;
+    }
+
+    /// The next sample is a tick (of an interval of `every` samples).
+    fn tick_next(&mut self, every: u32) {
+        self.since = every.saturating_sub(1);
+    }
+}
+
 /// Sets the columns of `dst` that `mask` marks (bank column order) to `src`'s.
 fn copy_columns(dst: &mut BankGains, src: &BankGains, mask: [bool; crate::FAMILY_COUNT]) {
     struct Copy<'a>(
@@ -221,9 +260,8 @@ pub struct AdaptiveBank<T: Real, S: SqrtFn<T> = NativeSqrt> {
     gains: (BankGains, BankGains),
     /// The acceleration ratio they were made with ([`Self::acceleration_ratio`]).
     ratio: f32,
-    since: u32,
-    /// An early retune came since the last tick (see [`Self::update`]).
-    early: bool,
+    /// The retune ticks and the early retune (see [`Self::update`]).
+    cadence: Cadence,
     /// [`Self::past_top_max`] once the jerk estimate has settled.
     past_top_max: Option<f32>,
     retunes: u32,
@@ -296,8 +334,7 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
             level,
             gains,
             ratio: 1.0,
-            since: 0,
-            early: false,
+            cadence: Cadence::default(),
             past_top_max,
             retunes: 0,
             history: heapless::HistoryBuf::new(),
@@ -312,16 +349,12 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
             self.history.write(fed);
         }
         self.noise.update(t_us, angle_deg);
-        self.since = self.since.saturating_add(1);
-        let tick = self.since >= self.cfg.retune_every;
-        if tick {
-            self.since = 0;
-            self.early = false;
-        }
+        let tick = self.cadence.tick(self.cfg.retune_every);
         // Between ticks, with a schedule that follows the motion and a settled noise
         // estimate, once: a motion that picks up (a level falls by more than the jerk
         // margin) is retuned at once.
-        let early = !tick && !self.early && self.jerk.is_some() && self.noise.settled();
+        let early =
+            !tick && self.cadence.early_open() && self.jerk.is_some() && self.noise.settled();
         if tick || early {
             if let Some((v, noise)) = self.index() {
                 let v = self.clamp(v);
@@ -330,7 +363,7 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveBank<T, S> {
                     if !v.0.iter().zip(self.level.0).any(|(v, l)| *v * m < l) {
                         return Ok(out);
                     }
-                    self.early = true;
+                    self.cadence.take_early();
                 }
                 // Each family's level moves when its index leaves the band around it; the
                 // others keep theirs.

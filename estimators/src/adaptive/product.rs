@@ -219,11 +219,10 @@ pub struct AdaptiveProductBank<T: Real, S: SqrtFn<T> = NativeSqrt> {
     /// The current rule's ILO1 bandwidth, rad/s (`None`: the initial gains), and `q / r`.
     wn: Option<f64>,
     q_over_r: Option<f32>,
-    /// The jerk power the gains were last checked at, (deg/s^3)^2, and whether a check came
-    /// early since the last tick (see [`Self::after`]).
+    /// The jerk power the gains were last checked at, (deg/s^3)^2 ([`Self::picked_up`]).
     jerk_at: Option<f32>,
-    early: bool,
-    since: u32,
+    /// The gain checks' ticks and the early check (see [`Self::after`]).
+    cadence: super::Cadence,
     /// Samples ILO1 keeps the start's gains after a restart (a new epoch, a gap) while it
     /// settles.
     settle: u32,
@@ -254,8 +253,7 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
             wn: None,
             q_over_r: None,
             jerk_at: None,
-            early: false,
-            since: 0,
+            cadence: super::Cadence::default(),
             settle: 0,
             reinits: 0,
             retunes: 0,
@@ -300,7 +298,7 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
     fn settle_start(&mut self) {
         let (zeta, dt) = (f64::from(self.follow.ilo1_zeta), self.cfg.sample_period_s);
         self.settle = self.wn.map_or(0, |wn| super::settle_samples(wn, zeta, dt));
-        self.since = self.follow.retune_every.saturating_sub(1);
+        self.cadence.tick_next(self.follow.retune_every);
     }
 
     /// Sets ILO1 to the start's gains (out of line: its `f64` rebuild is large, and three
@@ -401,14 +399,11 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
             self.settle -= 1;
             return;
         }
-        self.since = self.since.saturating_add(1);
-        if self.since >= self.follow.retune_every {
-            self.since = 0;
-            self.early = false;
+        if self.cadence.tick(self.follow.retune_every) {
             self.follow_estimates();
-        } else if !self.early && self.picked_up() {
+        } else if self.cadence.early_open() && self.picked_up() {
             // Once between ticks: a motion that picks up is followed at once.
-            self.early = true;
+            self.cadence.take_early();
             self.follow_estimates();
         }
     }
@@ -418,9 +413,9 @@ impl<T: Real, S: SqrtFn<T>> AdaptiveProductBank<T, S> {
     /// `wn` goes as `J^(1/6)`), with a settled noise estimate.
     fn picked_up(&self) -> bool {
         let r = self.follow.ilo1_ratio;
-        let (r2, r3) = (r * r, r * r * r);
+        let r3 = r * r * r;
         match (self.jerk.power(), self.jerk_at) {
-            (Some(j), Some(at)) => self.noise.settled() && j > at * r3 * r2 * r,
+            (Some(j), Some(at)) => self.noise.settled() && j > at * r3 * r3,
             _ => false,
         }
     }
